@@ -1,0 +1,110 @@
+"""The preference Gaussian process: a grid, a kernel, a probit noise, and Laplace posteriors.
+
+Chu & Ghahramani (2005) as the paper uses it (Section "Modeling Utilities from Preference Data",
+eq. (1)): prior ``f ~ N(0, K)`` over the ``A`` grid actions, likelihood
+``P(w > l | f) = Phi((f_w - f_l) / (sqrt(2) sigma_k))`` per preference, and the Laplace posterior
+``N(f_hat, (K^-1 + Lambda)^-1)`` computed in the visited subspace (``laplace.py``) and read over
+all actions (``posterior.py``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.laplace import fit_laplace
+from gaitpref.model.likelihood import PairLikelihood, Probit
+from gaitpref.model.posterior import KroneckerPriorSampler, Posterior
+from gaitpref.space import IntArray, Space
+
+
+def _as_indices(space: Space, values: ArrayLike, name: str) -> IntArray:
+    arr = np.asarray(values)
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be a 1-D sequence of grid indices")
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
+    idx = arr.astype(np.intp)
+    bad = (idx < 0) | (idx >= len(space))
+    if np.any(bad):
+        raise IndexError(
+            f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
+            f"(0..{len(space) - 1})"
+        )
+    return idx
+
+
+class PreferenceGP:
+    """A preference GP over the grid ``space`` with ``kernel`` and default probit ``noise``."""
+
+    def __init__(self, space: Space, kernel: SquaredExponential, noise: float) -> None:
+        if not (np.isfinite(noise) and noise > 0):
+            raise ValueError(f"preference noise must be positive, got {noise!r}")
+        kernel.lengthscales(space.ndim)  # checks the count
+        self.space = space
+        self.kernel = kernel
+        self.noise = float(noise)
+
+    @cached_property
+    def prior_sampler(self) -> KroneckerPriorSampler:
+        return KroneckerPriorSampler(self.space, self.kernel)
+
+    def prior(self) -> Posterior:
+        """The prior as a :class:`Posterior` (no data)."""
+        return Posterior(self.space, self.kernel, None, self.prior_sampler)
+
+    def posterior(
+        self,
+        winners: ArrayLike,
+        losers: ArrayLike,
+        noise: ArrayLike | None = None,
+        *,
+        init: Posterior | None = None,
+    ) -> Posterior:
+        """Laplace posterior given preferences ``winners[k] > losers[k]`` (grid indices).
+
+        ``noise`` overrides the default probit noise per comparison; ``init`` is a previous
+        posterior whose mean warm-starts Newton's method.
+        """
+        w = _as_indices(self.space, winners, "winners")
+        loser_idx = _as_indices(self.space, losers, "losers")
+        if w.shape != loser_idx.shape:
+            raise ValueError(f"{w.size} winners but {loser_idx.size} losers")
+        if noise is None:
+            sigma = np.full(w.size, self.noise)
+        else:
+            sigma = np.broadcast_to(np.asarray(noise, dtype=np.float64), w.shape).copy()
+            if not np.all(np.isfinite(sigma) & (sigma > 0)):
+                raise ValueError("every comparison's noise must be positive and finite")
+        return self.posterior_from(w, loser_idx, Probit(sigma), init=init)
+
+    def posterior_from(
+        self,
+        first: IntArray,
+        second: IntArray,
+        likelihood: PairLikelihood,
+        *,
+        init: Posterior | None = None,
+    ) -> Posterior:
+        """Laplace posterior for any pairwise likelihood of ``f[first] - f[second]``."""
+        if first.size == 0:
+            return self.prior()
+        visited, inverse = np.unique(np.concatenate([first, second]), return_inverse=True)
+        visited = visited.astype(np.intp)
+        a, b = inverse[: first.size].astype(np.intp), inverse[first.size :].astype(np.intp)
+        k_vv = self.kernel.cross(self.space, visited, rows=visited)
+        start = None if init is None else np.asarray(init.mean)[visited]
+        fit = fit_laplace(k_vv, visited, a, b, likelihood, start)
+        return Posterior(self.space, self.kernel, fit, self.prior_sampler)
+
+
+def preferences_to_arrays(pairs: Sequence[tuple[int, int]]) -> tuple[IntArray, IntArray]:
+    """``[(winner, loser), ...]`` as two index arrays."""
+    if not pairs:
+        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+    arr = np.asarray(pairs, dtype=np.intp)
+    return arr[:, 0].copy(), arr[:, 1].copy()

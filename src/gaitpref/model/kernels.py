@@ -1,0 +1,91 @@
+"""Squared-exponential product kernel over a gait grid, with its Kronecker structure.
+
+The paper's prior (Section "Modeling Utilities from Preference Data"): ``f ~ N(0, K)`` with
+``K_ij = s^2 prod_f exp(-(x_if - x_jf)^2 / (2 l_f^2)) + jitter [i == j]``.  The jitter (the paper's
+"noise variance") belongs to the prior over grid points: it appears wherever a row and a column
+are the same grid point, also in a cross-covariance ``K_{:,V}`` (``design/algorithm.md``).
+
+On a Cartesian grid the kernel factorises, ``K = s^2 (K_1 (x) ... (x) K_d) + jitter I`` with the
+per-feature ``n_f x n_f`` correlation matrices ``K_f``; any block ``K[rows, cols]`` is the product
+of per-feature gathers, so no ``A x A`` matrix is ever needed.
+
+Notation: ``A`` grid points, ``m`` columns asked for, ``d`` features.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitpref.space import FloatArray, IntArray, Space
+
+
+@dataclass(frozen=True)
+class SquaredExponential:
+    """Squared-exponential product kernel: per-feature lengthscales (feature units), signal
+    variance ``variance`` and a grid jitter ``jitter`` added on the diagonal."""
+
+    lengthscale: tuple[float, ...] | float
+    variance: float
+    jitter: float = 0.0
+
+    def __post_init__(self) -> None:
+        ls = self.lengthscale
+        ls_t: tuple[float, ...] | float
+        if isinstance(ls, int | float | np.floating):
+            ls_t = float(ls)
+            values: Sequence[float] = [ls_t]
+        else:
+            ls_t = tuple(float(v) for v in ls)
+            values = ls_t
+        if not values or not all(np.isfinite(v) and v > 0 for v in values):
+            raise ValueError(f"lengthscale must be positive and finite, got {ls!r}")
+        if not (np.isfinite(self.variance) and self.variance > 0):
+            raise ValueError(f"signal variance must be positive, got {self.variance!r}")
+        if not (np.isfinite(self.jitter) and self.jitter >= 0):
+            raise ValueError(f"jitter must be >= 0, got {self.jitter!r}")
+        object.__setattr__(self, "lengthscale", ls_t)
+        object.__setattr__(self, "variance", float(self.variance))
+        object.__setattr__(self, "jitter", float(self.jitter))
+
+    def lengthscales(self, ndim: int) -> tuple[float, ...]:
+        """One lengthscale per feature (a scalar is shared by all)."""
+        if isinstance(self.lengthscale, float):
+            return (self.lengthscale,) * ndim
+        if len(self.lengthscale) != ndim:
+            raise ValueError(
+                f"kernel has {len(self.lengthscale)} lengthscales but the space has {ndim} features"
+            )
+        return self.lengthscale
+
+    def factors(self, space: Space) -> list[FloatArray]:
+        """Per-feature correlation matrices ``K_f`` (``n_f x n_f``, unit diagonal)."""
+        out = []
+        for f, ell in zip(space.features, self.lengthscales(space.ndim), strict=True):
+            x = f.array
+            out.append(np.exp(-0.5 * ((x[:, None] - x[None, :]) / ell) ** 2))
+        return out
+
+    def cross(self, space: Space, cols: IntArray, rows: IntArray | None = None) -> FloatArray:
+        """``K[rows, cols]`` (all rows when ``rows`` is None), jitter where row == col."""
+        cols = np.asarray(cols, dtype=np.intp)
+        mi = space.multi_index
+        row_mi = mi if rows is None else mi[np.asarray(rows, dtype=np.intp)]
+        col_mi = mi[cols]
+        out = np.full((row_mi.shape[0], cols.shape[0]), self.variance)
+        for k, kf in enumerate(self.factors(space)):
+            out *= kf[np.ix_(row_mi[:, k], col_mi[:, k])]
+        if self.jitter:
+            row_idx = np.arange(len(space)) if rows is None else np.asarray(rows, dtype=np.intp)
+            out += self.jitter * (row_idx[:, None] == cols[None, :])
+        return out
+
+    def diagonal(self, space: Space) -> FloatArray:
+        """Prior variance of every action, ``s^2 + jitter``."""
+        return np.full(len(space), self.variance + self.jitter)
+
+    def dense(self, space: Space) -> FloatArray:
+        """The full ``A x A`` prior covariance (small grids only: tests, dense covariance)."""
+        return self.cross(space, np.arange(len(space)))

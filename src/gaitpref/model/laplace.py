@@ -1,0 +1,170 @@
+"""Laplace mode of the preference GP by Newton's method in the visited subspace.
+
+Chu & Ghahramani (2005), Section 3; ``design/algorithm.md``, "Laplace approximation".  The
+negative log posterior ``S(f) = 1/2 f^T K^-1 f - sum_k log p_k(f_a - f_b)`` depends on ``f`` off
+the ``m`` visited actions ``V`` only through the prior, so its mode is ``f_hat = K_{:,V} a`` and we
+solve for ``f_V`` alone, in whitened coordinates ``f_V = L u`` (``K_VV = L L^T``):
+
+    S(u) = 1/2 u^T u - sum_k log p_k(d_k),     d = G L u
+    grad = u - L^T G^T g,                       Hess = I + H^T H,  H = diag(sqrt(c)) G L
+
+(``G``: ``N x m`` signed incidence, ``g`` and ``c`` the likelihood's derivative and curvature).
+``Hess >= I``, so each Newton step is a well-conditioned Cholesky solve (GPML Algorithm 3.1 in
+the comparison form, no ``W^-1``, no ``K^-1``).  A backtracking (Armijo) line search keeps every
+step a descent step, and the loop stops when the gradient is below tolerance; otherwise it raises
+:class:`ConvergenceError`.  It never returns the prior silently.
+
+Notation: ``N`` observations, ``m`` visited actions, ``u`` and ``f_V`` length ``m``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
+
+from gaitpref.model.likelihood import PairLikelihood
+from gaitpref.space import FloatArray, IntArray
+
+
+class ConvergenceError(RuntimeError):
+    """The Newton iteration for the Laplace mode did not converge."""
+
+
+class PriorNotPositiveDefiniteError(ValueError):
+    """``K_VV`` could not be factorised: the kernel needs a (larger) jitter."""
+
+
+@dataclass(frozen=True)
+class LaplaceMode:
+    """The Laplace fit on the visited set: everything the posterior needs, nothing over ``A``."""
+
+    visited: IntArray  # (m,) sorted grid indices
+    chol_prior: FloatArray  # (m, m) lower L, K_VV = L L^T
+    chol_hessian: FloatArray  # (m, m) lower R, I + H^T H = R R^T at the mode
+    whitened_mode: FloatArray  # (m,) u_hat, f_V = L u_hat
+    iterations: int
+    gradient_norm: float
+    log_likelihood: float  # sum_k log p_k at the mode
+
+    @property
+    def mode(self) -> FloatArray:
+        """``f_hat`` on the visited actions."""
+        return self.chol_prior @ self.whitened_mode
+
+    @property
+    def alpha(self) -> FloatArray:
+        """``K_VV^-1 f_hat_V`` (so that the mean everywhere is ``K_{:,V} alpha``)."""
+        return solve_triangular(self.chol_prior, self.whitened_mode, lower=True, trans="T")
+
+    @property
+    def log_evidence(self) -> float:
+        """Laplace approximation of ``log p(D)``: ``sum log p - u^T u / 2 - log|I + H^T H| / 2``."""
+        u = self.whitened_mode
+        logdet = 2.0 * float(np.sum(np.log(np.diag(self.chol_hessian))))
+        return self.log_likelihood - 0.5 * float(u @ u) - 0.5 * logdet
+
+
+def _factor_prior(k_vv: FloatArray) -> FloatArray:
+    try:
+        return cholesky(k_vv, lower=True, check_finite=False)
+    except LinAlgError:
+        raise PriorNotPositiveDefiniteError(
+            f"the prior covariance of the {k_vv.shape[0]} visited actions is not positive "
+            "definite; increase the kernel's jitter"
+        ) from None
+
+
+_Objective = Callable[[FloatArray], tuple[float, FloatArray, FloatArray, FloatArray]]
+
+
+def _line_search(
+    objective: _Objective, u: FloatArray, value: float, step: FloatArray, slope: float
+) -> tuple[Any, float, Any, Any, Any]:
+    """Backtracking with the Armijo condition; ``(None, ...)`` if no step decreases ``S``."""
+    t = 1.0
+    for _ in range(60):
+        trial = u + t * step
+        new_value, logp, g, c = objective(trial)
+        if np.isfinite(new_value) and new_value <= value + 1e-4 * t * slope:
+            return trial, new_value, logp, g, c
+        t *= 0.5
+    return None, value, None, None, None
+
+
+def fit_laplace(
+    k_vv: FloatArray,
+    visited: IntArray,
+    first: IntArray,
+    second: IntArray,
+    likelihood: PairLikelihood,
+    init: FloatArray | None = None,
+    *,
+    tol: float = 1e-9,
+    max_iter: int = 100,
+) -> LaplaceMode:
+    """Newton's method for ``u_hat``; observations are ``d_k = f[first_k] - f[second_k]``.
+
+    ``k_vv`` is the prior covariance of the grid actions ``visited``; ``first``/``second`` index
+    into the visited set (``0..m-1``); ``init`` is a starting ``f_V`` (the previous posterior's
+    mean there).
+    """
+    m = k_vv.shape[0]
+    L = _factor_prior(k_vv)
+    u = (
+        np.zeros(m)
+        if init is None
+        else solve_triangular(L, np.asarray(init, dtype=np.float64), lower=True)
+    )
+    if not np.all(np.isfinite(u)):
+        u = np.zeros(m)
+
+    def objective(u_: FloatArray) -> tuple[float, FloatArray, FloatArray, FloatArray]:
+        f = L @ u_
+        logp, g, c = likelihood.terms(f[first] - f[second])
+        return 0.5 * float(u_ @ u_) - float(np.sum(logp)), logp, g, c
+
+    value, logp, g, c = objective(u)
+    gnorm = last_full_step_gnorm = np.inf
+    for iteration in range(1, max_iter + 1):
+        grad_f = np.bincount(first, g, m) - np.bincount(second, g, m)
+        grad = u - L.T @ grad_f
+        gnorm = float(np.max(np.abs(grad))) if m else 0.0
+        H = np.sqrt(c)[:, None] * (L[first] - L[second])
+        hess = H.T @ H
+        hess[np.diag_indices_from(hess)] += 1.0
+        R = cholesky(hess, lower=True, check_finite=False)
+        scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
+        if gnorm <= tol * scale:
+            return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
+        step = -cho_solve((R, True), grad, check_finite=False)
+        slope = float(grad @ step)
+        # Once the predicted decrease is below the objective's rounding, a line search cannot
+        # see progress: take the full Newton step while the gradient keeps shrinking.
+        if -slope <= 64 * np.finfo(float).eps * max(1.0, abs(value)):
+            if gnorm >= last_full_step_gnorm:
+                if gnorm <= 1e3 * tol * scale:  # at the mode to rounding
+                    return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
+                raise ConvergenceError(
+                    f"Laplace fit stalled at Newton iteration {iteration} (gradient "
+                    f"{gnorm:.3e}; {first.shape[0]} observations over {m} actions)"
+                )
+            last_full_step_gnorm = gnorm
+            trial = u + step
+            new_value, new_logp, new_g, new_c = objective(trial)
+        else:
+            trial, new_value, new_logp, new_g, new_c = _line_search(objective, u, value, step, slope)
+            if trial is None:
+                raise ConvergenceError(
+                    f"Laplace fit: line search failed at Newton iteration {iteration} "
+                    f"(gradient {gnorm:.3e}, {first.shape[0]} observations over {m} actions)"
+                )
+        u, value, logp, g, c = trial, new_value, new_logp, new_g, new_c
+    raise ConvergenceError(
+        f"Laplace fit did not converge in {max_iter} Newton iterations "
+        f"(gradient {gnorm:.3e} > tolerance {tol:.1e}; {first.shape[0]} observations over "
+        f"{m} actions)"
+    )

@@ -1,0 +1,222 @@
+"""Named gait features and the finite grid of actions CoSpar chooses from.
+
+The action set of the paper (Section "Preference-based Learning Algorithm") is a finite grid
+``X`` of ``A`` points over ``d`` named features.  The grid is the Cartesian product of the
+features' values in **C order over the features as declared**: the last feature varies fastest,
+so the point with per-feature value indices ``(i_1, ..., i_d)`` has the flat index
+``numpy.ravel_multi_index((i_1, ..., i_d), shape)``.
+
+Coactive moves ("longer step", "slightly shorter step") follow the paper's experiments: a move is
+a signed fraction of the feature's range; the suggestion is the grid value nearest to
+``current + fraction * (max - min)``, clipped to the grid, and a move that lands back on the current
+point carries no feedback (``None``).
+
+Notation: ``A`` actions, ``d`` features, feature ``f`` has ``n_f`` values; ``points`` is ``A x d``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Literal, get_args
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Move = Literal["+big", "+small", "-small", "-big"]
+MOVES: tuple[Move, ...] = get_args(Move)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+@dataclass(frozen=True)
+class Feature:
+    """One gait feature: its grid values (strictly increasing), unit and coactive fractions.
+
+    ``coactive = (small, big)`` are the fractions of the feature's range that "slightly longer"
+    and "longer" move by.  ``words = (increase, decrease)`` name the direction for an operator
+    ("longer", "shorter").
+    """
+
+    name: str
+    values: tuple[float, ...]
+    unit: str = ""
+    coactive: tuple[float, float] = (0.1, 0.2)
+    words: tuple[str, str] = ("more", "less")
+
+    def __init__(
+        self,
+        name: str,
+        values: ArrayLike,
+        unit: str = "",
+        coactive: Sequence[float] = (0.1, 0.2),
+        words: Sequence[str] = ("more", "less"),
+    ) -> None:
+        if not isinstance(name, str) or not name.isidentifier():
+            raise ValueError(f"feature name must be an identifier, got {name!r}")
+        arr = np.asarray(values, dtype=np.float64).ravel()
+        if arr.size == 0:
+            raise ValueError(f"feature {name!r}: needs at least one value")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"feature {name!r}: values must be finite")
+        if arr.size > 1 and not np.all(np.diff(arr) > 0):
+            raise ValueError(f"feature {name!r}: values must be strictly increasing")
+        small, big = (float(c) for c in coactive)
+        if not (0 < small <= big <= 1):
+            raise ValueError(
+                f"feature {name!r}: coactive must be (small, big) with 0 < small <= big <= 1, "
+                f"got {tuple(coactive)!r}"
+            )
+        if len(words) != 2 or not all(isinstance(w, str) and w for w in words):
+            raise ValueError(f"feature {name!r}: words must be two non-empty strings")
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "values", tuple(float(v) for v in arr))
+        object.__setattr__(self, "unit", str(unit))
+        object.__setattr__(self, "coactive", (small, big))
+        object.__setattr__(self, "words", (str(words[0]), str(words[1])))
+
+    @classmethod
+    def linspace(cls, name: str, lo: float, hi: float, num: int, **kwargs: object) -> Feature:
+        """A feature with ``num`` equally spaced values from ``lo`` to ``hi`` inclusive."""
+        if num < 1:
+            raise ValueError(f"feature {name!r}: num must be >= 1, got {num}")
+        if num > 1 and not hi > lo:
+            raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
+        return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+    @property
+    def array(self) -> FloatArray:
+        return np.asarray(self.values, dtype=np.float64)
+
+    @property
+    def span(self) -> float:
+        """``max - min`` of the values (0 for a single value)."""
+        return self.values[-1] - self.values[0]
+
+    def move(self, value_index: int, move: Move) -> int | None:
+        """Value index after a coactive move, or ``None`` when it clips back to the same value."""
+        if move not in MOVES:
+            raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
+        fraction = self.coactive[1] if move.endswith("big") else self.coactive[0]
+        sign = 1.0 if move.startswith("+") else -1.0
+        target = self.values[value_index] + sign * fraction * self.span
+        target = min(max(target, self.values[0]), self.values[-1])
+        new = int(np.argmin(np.abs(self.array - target)))
+        return None if new == value_index else new
+
+
+@dataclass(frozen=True)
+class Space:
+    """The Cartesian grid over ``features`` (C order: the last feature varies fastest)."""
+
+    features: tuple[Feature, ...]
+    _names: dict[str, int] = field(init=False, repr=False, compare=False)
+
+    def __init__(self, features: Sequence[Feature]) -> None:
+        feats = tuple(features)
+        if not feats:
+            raise ValueError("a space needs at least one feature")
+        names = [f.name for f in feats]
+        if len(set(names)) != len(names):
+            raise ValueError(f"feature names must be unique, got {names}")
+        object.__setattr__(self, "features", feats)
+        object.__setattr__(self, "_names", {n: i for i, n in enumerate(names)})
+
+    def __len__(self) -> int:
+        return int(np.prod(self.shape))
+
+    def __iter__(self) -> Iterator[Feature]:
+        return iter(self.features)
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(f) for f in self.features)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(f.name for f in self.features)
+
+    @property
+    def ndim(self) -> int:
+        return len(self.features)
+
+    @cached_property
+    def points(self) -> FloatArray:
+        """All grid points, ``A x d``, row ``a`` is the point with flat index ``a``."""
+        grids = np.meshgrid(*(f.array for f in self.features), indexing="ij")
+        return np.stack([g.ravel() for g in grids], axis=1)
+
+    @cached_property
+    def multi_index(self) -> IntArray:
+        """Per-feature value indices of every point, ``A x d``."""
+        return np.stack(np.unravel_index(np.arange(len(self)), self.shape), axis=1).astype(np.intp)
+
+    def feature_index(self, name: str) -> int:
+        try:
+            return self._names[name]
+        except KeyError:
+            raise KeyError(
+                f"unknown feature {name!r}; this space has {', '.join(self.names)}"
+            ) from None
+
+    def check_index(self, index: object) -> int:
+        """``index`` as an ``int`` if it is a valid flat grid index, else ``IndexError``."""
+        if isinstance(index, bool) or not isinstance(index, int | np.integer):
+            raise TypeError(f"action index must be an integer, got {index!r}")
+        i = int(index)
+        if not 0 <= i < len(self):
+            raise IndexError(f"action index {i} is off the grid (0..{len(self) - 1})")
+        return i
+
+    def point(self, index: int) -> FloatArray:
+        """Feature values of the action with flat index ``index``."""
+        return self.points[self.check_index(index)].copy()
+
+    def values_of(self, index: int) -> dict[str, float]:
+        """Feature name -> value of one action."""
+        return dict(zip(self.names, self.point(index).tolist(), strict=True))
+
+    def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
+        """Flat index of the grid point equal (within ``atol``) to ``point``."""
+        if isinstance(point, dict):
+            missing = set(self.names) - set(point)
+            if missing:
+                raise KeyError(f"point is missing features {sorted(missing)}")
+            coords = [float(point[n]) for n in self.names]
+        else:
+            coords = [float(v) for v in point]
+        if len(coords) != self.ndim:
+            raise ValueError(f"point has {len(coords)} coordinates, space has {self.ndim}")
+        idx = []
+        for f, v in zip(self.features, coords, strict=True):
+            k = int(np.argmin(np.abs(f.array - v)))
+            if abs(f.values[k] - v) > atol:
+                raise ValueError(f"{f.name} = {v} is not a grid value of this space")
+            idx.append(k)
+        return int(np.ravel_multi_index(tuple(idx), self.shape))
+
+    def coactive_move(self, index: int, feature: str | int, move: Move) -> int | None:
+        """Flat index after moving one feature of action ``index``; ``None`` if it clips back."""
+        i = self.check_index(index)
+        f = self.feature_index(feature) if isinstance(feature, str) else int(feature)
+        if not 0 <= f < self.ndim:
+            raise IndexError(f"feature number {f} out of range (0..{self.ndim - 1})")
+        multi = list(np.unravel_index(i, self.shape))
+        new = self.features[f].move(int(multi[f]), move)
+        if new is None:
+            return None
+        multi[f] = new
+        return int(np.ravel_multi_index(tuple(int(m) for m in multi), self.shape))
+
+    def describe(self, index: int) -> str:
+        """Human-readable feature values, e.g. ``step_length=0.130 m, step_duration=0.95 s``."""
+        parts = []
+        for f, v in zip(self.features, self.point(index), strict=True):
+            unit = f" {f.unit}" if f.unit else ""
+            parts.append(f"{f.name}={v:.4g}{unit}")
+        return ", ".join(parts)
