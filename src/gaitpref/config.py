@@ -1,0 +1,245 @@
+"""Experiment configs: a TOML file describing the grid, the model and the CoSpar settings.
+
+    [space.step_length]            # one table per feature, in grid order (C order)
+    min = 0.08                     # or: values = [...]
+    max = 0.18
+    num = 15
+    unit = "m"
+    coactive = [0.1, 0.2]          # small and big moves, fractions of the range
+    words = ["longer", "shorter"]  # optional: how an operator says + and -
+
+    [model]
+    lengthscale = { step_length = 0.03 }   # per feature, in its own units (or one number)
+    signal_variance = 0.005
+    jitter = 1e-7
+    noise = 0.02
+
+    [cospar]
+    n = 1
+    buffer = 1
+    coactive_weight = 1.0
+    seed = 0
+
+Every error names the key and what is allowed.  Shipped configs (the paper's settings) live in
+``gaitpref/configs/`` and load by name: ``load_config("exo-1d-step-length")``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gaitpref.cospar import CoSpar
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.space import Feature, Space
+
+
+class ConfigError(ValueError):
+    """A config that cannot be used; the message names the key."""
+
+
+_TOP_KEYS = {"name", "description", "space", "model", "cospar"}
+_FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
+_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise"}
+_COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed"}
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """A parsed experiment config and the exact text it came from."""
+
+    name: str
+    space: Space
+    kernel: SquaredExponential
+    noise: float
+    n: int
+    buffer: int
+    coactive_weight: float
+    seed: int
+    text: str = field(repr=False)
+    description: str = ""
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the config text as given (sessions store it to detect changes)."""
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+    def make_loop(self, seed: int | np.random.Generator | None = None) -> CoSpar:
+        """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's)."""
+        return CoSpar(
+            self.space,
+            self.kernel,
+            self.noise,
+            n=self.n,
+            buffer=self.buffer,
+            coactive_weight=self.coactive_weight,
+            seed=self.seed if seed is None else seed,
+        )
+
+
+def shipped_configs() -> list[str]:
+    """Names of the configs shipped with gaitpref."""
+    root = resources.files("gaitpref") / "configs"
+    return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def _read(source: str | Path) -> tuple[str, str]:
+    path = Path(source)
+    if path.is_file():
+        return path.read_text(encoding="utf-8"), path.stem
+    name = str(source)
+    if path.suffix == "" and "/" not in name and name in shipped_configs():
+        text = (resources.files("gaitpref") / "configs" / f"{name}.toml").read_text("utf-8")
+        return text, name
+    hint = f"; shipped configs are {', '.join(shipped_configs())}"
+    raise ConfigError(f"config {name!r}: no such file{hint}")
+
+
+def load_config(source: str | Path) -> ExperimentConfig:
+    """Load a config file, or a shipped config by name."""
+    text, stem = _read(source)
+    return parse_config(text, default_name=stem)
+
+
+def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfig:
+    """Parse config TOML text (see the module docstring for the format)."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"config is not valid TOML: {exc}") from None
+    _only(raw, _TOP_KEYS, "top level")
+    space = _parse_space(raw.get("space"))
+    model = _table(raw, "model")
+    _only(model, _MODEL_KEYS, "[model]")
+    kernel = SquaredExponential(
+        _lengthscales(model, space),
+        _positive(model, "signal_variance", "[model]"),
+        _number(model, "jitter", "[model]", default=0.0, minimum=0.0),
+    )
+    cospar = _table(raw, "cospar")
+    _only(cospar, _COSPAR_KEYS, "[cospar]")
+    n = _integer(cospar, "n", "[cospar]", default=1, minimum=1)
+    buffer = _integer(cospar, "buffer", "[cospar]", default=0, minimum=0)
+    if n == 1 and buffer == 0:
+        raise ConfigError("[cospar]: n = 1 with buffer = 0 never compares anything")
+    return ExperimentConfig(
+        name=str(raw.get("name", default_name)),
+        description=str(raw.get("description", "")),
+        space=space,
+        kernel=kernel,
+        noise=_positive(model, "noise", "[model]"),
+        n=n,
+        buffer=buffer,
+        coactive_weight=_number(cospar, "coactive_weight", "[cospar]", default=1.0, minimum=0.0)
+        or _fail("[cospar].coactive_weight must be > 0"),
+        seed=_integer(cospar, "seed", "[cospar]", default=0, minimum=0),
+        text=text,
+    )
+
+
+# -- helpers -----------------------------------------------------------------------------------
+def _fail(message: str) -> Any:
+    raise ConfigError(message)
+
+
+def _only(table: dict[str, Any], allowed: set[str], where: str) -> None:
+    unknown = sorted(set(table) - allowed)
+    if unknown:
+        raise ConfigError(
+            f"{where}: unknown key {unknown[0]!r}; allowed keys are {', '.join(sorted(allowed))}"
+        )
+
+
+def _table(raw: dict[str, Any], key: str) -> dict[str, Any]:
+    value = raw.get(key)
+    if not isinstance(value, dict):
+        raise ConfigError(f"[{key}]: missing table (it is required)")
+    return value
+
+
+def _number(
+    table: dict[str, Any], key: str, where: str, default: float | None = None, minimum: float = 0.0
+) -> float:
+    if key not in table:
+        if default is None:
+            raise ConfigError(f"{where}.{key}: missing (a number is required)")
+        return default
+    value = table[key]
+    if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
+        raise ConfigError(f"{where}.{key}: must be a finite number, got {value!r}")
+    if value < minimum:
+        raise ConfigError(f"{where}.{key}: must be >= {minimum}, got {value!r}")
+    return float(value)
+
+
+def _positive(table: dict[str, Any], key: str, where: str) -> float:
+    value = _number(table, key, where)
+    if value <= 0:
+        raise ConfigError(f"{where}.{key}: must be > 0, got {value!r}")
+    return value
+
+
+def _integer(table: dict[str, Any], key: str, where: str, default: int, minimum: int) -> int:
+    value = table.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+        raise ConfigError(f"{where}.{key}: must be an integer >= {minimum}, got {value!r}")
+    return value
+
+
+def _parse_space(raw: object) -> Space:
+    if not isinstance(raw, dict) or not raw:
+        raise ConfigError("[space]: needs one table per feature, e.g. [space.step_length]")
+    features = []
+    for name, spec in raw.items():
+        where = f"[space.{name}]"
+        if not isinstance(spec, dict):
+            raise ConfigError(f"{where}: must be a table with min/max/num or values")
+        _only(spec, _FEATURE_KEYS, where)
+        try:
+            if "values" in spec:
+                if {"min", "max", "num"} & set(spec):
+                    raise ConfigError(f"{where}: give either values or min/max/num, not both")
+                values = spec["values"]
+                if not isinstance(values, list) or not values:
+                    raise ConfigError(f"{where}.values: must be a non-empty list of numbers")
+            else:
+                lo, hi = _number(spec, "min", where, minimum=-np.inf), _number(
+                    spec, "max", where, minimum=-np.inf
+                )
+                num = _integer(spec, "num", where, default=0, minimum=1)
+                if num > 1 and hi <= lo:
+                    raise ConfigError(f"{where}: max must be greater than min")
+                values = np.linspace(lo, hi, num).tolist()
+            features.append(
+                Feature(
+                    name,
+                    values,
+                    unit=spec.get("unit", ""),
+                    coactive=spec.get("coactive", (0.1, 0.2)),
+                    words=spec.get("words", ("more", "less")),
+                )
+            )
+        except (ValueError, TypeError) as exc:
+            if isinstance(exc, ConfigError):
+                raise
+            raise ConfigError(f"{where}: {exc}") from None
+    return Space(features)
+
+
+def _lengthscales(model: dict[str, Any], space: Space) -> tuple[float, ...]:
+    value = model.get("lengthscale")
+    if value is None:
+        raise ConfigError("[model].lengthscale: missing (a number or {feature = number})")
+    if isinstance(value, dict):
+        _only(value, set(space.names), "[model].lengthscale")
+        missing = [n for n in space.names if n not in value]
+        if missing:
+            raise ConfigError(f"[model].lengthscale: missing a value for {', '.join(missing)}")
+        return tuple(_positive(value, n, "[model].lengthscale") for n in space.names)
+    return (_positive(model, "lengthscale", "[model]"),) * space.ndim

@@ -1,0 +1,223 @@
+"""The CoSpar loop (the paper's Algorithm 1) behind an ask/tell interface.
+
+Each iteration: draw ``n`` joint posterior samples and propose their argmaxes (exact ties broken at
+random with the loop's generator); the user compares the new actions with each other and with the
+``b`` previously executed ones and may suggest an improvement per executed action; suggestions
+``a~ > a`` enter the data with noise ``sigma / beta`` (``beta``: the coactive weight); "no
+preference" is stored and not modelled; the posterior is refitted, warm-started from the last one.
+
+    loop = CoSpar(space, kernel, noise, n=1, buffer=1)
+    query = loop.ask()              # query.actions: run these; query.buffer: compare with these
+    loop.tell(query, [(query.actions[0], query.buffer[0], "first")], [(a, "step_length", "+small")])
+
+``tell`` checks everything first and changes nothing when it raises.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitpref.feedback import (
+    Comparison,
+    FeedbackError,
+    Preference,
+    Suggestion,
+    Tie,
+    parse_comparisons,
+    parse_suggestions,
+)
+from gaitpref.model.gp import PreferenceGP
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.space import Space
+
+
+class QueryError(ValueError):
+    """A ``tell`` for a query that is unknown, stale or already answered; nothing was changed."""
+
+
+@dataclass(frozen=True)
+class Query:
+    """One iteration's proposal: run ``actions`` now; compare with the buffered ``buffer``."""
+
+    id: int
+    actions: tuple[int, ...]
+    buffer: tuple[int, ...]
+
+    @property
+    def members(self) -> tuple[int, ...]:
+        """Every action a comparison of this query may name (executed, then buffered)."""
+        return self.actions + self.buffer
+
+
+@dataclass(frozen=True)
+class Answer:
+    """A told query: what the user said and what entered the model."""
+
+    query: Query
+    comparisons: tuple[Comparison, ...]
+    suggestions: tuple[Suggestion, ...]
+    preferences: tuple[Preference, ...]
+    ties: tuple[Tie, ...]
+    ignored_suggestions: tuple[Suggestion, ...]  # moves that clip back to the same point
+    posterior_before: Posterior = dataclasses.field(repr=False, compare=False)
+
+
+def _light(posterior: Posterior) -> Posterior:
+    """The same posterior without its cached ``A``-sized arrays (cheap to keep for undo)."""
+    return dataclasses.replace(posterior)
+
+
+class CoSpar:
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials."""
+
+    def __init__(
+        self,
+        space: Space,
+        kernel: SquaredExponential,
+        noise: float,
+        n: int = 1,
+        buffer: int = 0,
+        coactive_weight: float = 1.0,
+        seed: int | np.random.Generator = 0,
+    ) -> None:
+        if not isinstance(n, int) or n < 1:
+            raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
+        if not isinstance(buffer, int) or buffer < 0:
+            raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
+        if n == 1 and buffer == 0:
+            raise ValueError("n = 1 with buffer = 0 never compares anything: use n >= 2 or b >= 1")
+        if not (np.isfinite(coactive_weight) and coactive_weight > 0):
+            raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        self.space = space
+        self.gp = PreferenceGP(space, kernel, noise)
+        self.n = n
+        self.buffer_size = buffer
+        self.coactive_weight = float(coactive_weight)
+        self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self.posterior: Posterior = self.gp.prior()
+        self.answers: list[Answer] = []
+        self.pending: Query | None = None
+        self._next_id = 1
+        self._buffer: tuple[int, ...] = ()
+        self._rng_before_pending: dict[str, object] | None = None
+
+    # -- state -------------------------------------------------------------------------------
+    @property
+    def preferences(self) -> list[Preference]:
+        return [p for a in self.answers for p in a.preferences]
+
+    @property
+    def ties(self) -> list[Tie]:
+        return [t for a in self.answers for t in a.ties]
+
+    @property
+    def executed(self) -> list[int]:
+        """Every executed action, in order (one entry per trial)."""
+        return [x for a in self.answers for x in a.query.actions]
+
+    @property
+    def buffer(self) -> tuple[int, ...]:
+        """The ``b`` most recently executed actions, oldest first."""
+        return self._buffer
+
+    # -- ask / tell --------------------------------------------------------------------------
+    def ask(self) -> Query:
+        """The next query; the same pending query again until it is told."""
+        if self.pending is not None:
+            return self.pending
+        self._rng_before_pending = self.rng.bit_generator.state
+        samples = self.posterior.sample(self.rng, self.n)
+        actions = tuple(random_argmax(s, self.rng) for s in samples)
+        self.pending = Query(self._next_id, actions, self._buffer)
+        self._next_id += 1
+        return self.pending
+
+    def tell(
+        self,
+        query: Query | int,
+        comparisons: Iterable[object] = (),
+        suggestions: Iterable[object] = (),
+    ) -> Answer:
+        """Record the answer to ``query`` and refit the posterior.
+
+        ``comparisons``: ``(i, j, outcome)`` with ``i``, ``j`` grid indices of actions in the
+        query and ``outcome`` one of ``"first"``, ``"second"``, ``"none"``.  ``suggestions``:
+        ``(action, feature, move)`` for executed actions; a move that clips back to the same
+        point is ignored.  Raises :class:`QueryError` / :class:`FeedbackError` and changes
+        nothing on bad input.
+        """
+        q = self._check_query(query)
+        comps = parse_comparisons(self.space, comparisons, q.members, q.actions)
+        suggs = parse_suggestions(self.space, suggestions, q.actions)
+        prefs: list[Preference] = []
+        ties: list[Tie] = []
+        for c in comps:
+            pair = c.as_preference()
+            if pair is not None:
+                prefs.append(Preference(pair[0], pair[1], self.gp.noise, "comparison", q.id))
+            elif c.is_tie and c.first != c.second:
+                ties.append(Tie(c.first, c.second, q.id))
+        ignored: list[Suggestion] = []
+        coactive_noise = self.gp.noise / self.coactive_weight
+        for s in suggs:
+            target = self.space.coactive_move(s.action, s.feature, s.move)
+            if target is None:
+                ignored.append(s)
+            else:
+                prefs.append(Preference(target, s.action, coactive_noise, "coactive", q.id))
+        answer = Answer(
+            q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
+        )
+        new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
+        self.answers.append(answer)
+        self.posterior = new_posterior
+        self.pending = None
+        self._rng_before_pending = None
+        recent = self._buffer + q.actions
+        self._buffer = recent[max(0, len(recent) - self.buffer_size) :]
+        return answer
+
+    def undo(self) -> Answer:
+        """Take back the last answer: its query is pending again, as it was before the answer."""
+        if not self.answers:
+            raise QueryError("nothing to undo: no query has been answered")
+        if self.pending is not None and self._rng_before_pending is not None:
+            self.rng.bit_generator.state = self._rng_before_pending
+            self._next_id = self.pending.id
+        answer = self.answers.pop()
+        self.posterior = answer.posterior_before
+        self.pending = answer.query
+        self._rng_before_pending = None
+        self._buffer = answer.query.buffer
+        return answer
+
+    # -- internals ---------------------------------------------------------------------------
+    def _check_query(self, query: Query | int) -> Query:
+        qid = query.id if isinstance(query, Query) else query
+        if isinstance(qid, bool) or not isinstance(qid, int | np.integer):
+            raise QueryError(f"query must be a Query or its integer id, got {query!r}")
+        if any(a.query.id == qid for a in self.answers):
+            raise QueryError(f"query {qid} was already answered")
+        if self.pending is None or self.pending.id != qid:
+            pending = "none is pending" if self.pending is None else f"pending is {self.pending.id}"
+            raise QueryError(f"unknown query id {qid} ({pending})")
+        if isinstance(query, Query) and query != self.pending:
+            raise QueryError(f"query {qid} does not match the pending query {self.pending}")
+        return self.pending
+
+    def _fit(self, answers: list[Answer]) -> Posterior:
+        prefs = [p for a in answers for p in a.preferences]
+        if not prefs:
+            return self.gp.prior()
+        winners = np.array([p.winner for p in prefs], dtype=np.intp)
+        losers = np.array([p.loser for p in prefs], dtype=np.intp)
+        noise = np.array([p.noise for p in prefs])
+        return self.gp.posterior(winners, losers, noise, init=self.posterior)
+
+
+__all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

@@ -1,0 +1,1 @@
+"""Simulated users, objectives and simulated experiments."""
