@@ -31,11 +31,15 @@ from gaitpref.feedback import (
     parse_comparisons,
     parse_suggestions,
 )
+from gaitpref.learning import Learning, pair_data
+from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
+from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.model.posterior import Posterior
 from gaitpref.model.threads import blas_threads
 from gaitpref.space import Space
+from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
 
 
 class QueryError(ValueError):
@@ -67,6 +71,7 @@ class Answer:
     ties: tuple[Tie, ...]
     ignored_suggestions: tuple[Suggestion, ...]  # moves that clip back to the same point
     posterior_before: Posterior = dataclasses.field(repr=False, compare=False)
+    refit: HyperFit | None = None  # the hyperparameter fit this answer triggered, if any
 
 
 def _light(posterior: Posterior) -> Posterior:
@@ -86,6 +91,8 @@ class CoSpar:
         buffer: int = 0,
         coactive_weight: float = 1.0,
         seed: int | np.random.Generator = 0,
+        strategy: Strategy | None = None,
+        learning: Learning | None = None,
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -97,9 +104,23 @@ class CoSpar:
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
         self.gp = PreferenceGP(space, kernel, noise)
+        self.learning = Learning() if learning is None else learning
+        band = self.learning.tie_band
+        if self.learning.learns_band:
+            band = noise  # the starting band of the fit (the default prior's median)
+        self.hyper = Hyperparameters.from_kernel(kernel, space.ndim, band or 0.0)
+        self.prior: HyperPrior = self.learning.prior or default_prior(
+            space, kernel.variance, noise, fit_band=self.learning.learns_band
+        )
+        if len(self.prior.lengthscale) != space.ndim:
+            raise ValueError(
+                f"the hyperparameter prior has {len(self.prior.lengthscale)} lengthscales; "
+                f"the space has {space.ndim} features"
+            )
         self.n = n
         self.buffer_size = buffer
         self.coactive_weight = float(coactive_weight)
+        self.strategy: Strategy = SelfSparring() if strategy is None else strategy
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
         self.posterior: Posterior = self.gp.prior()
         self.answers: list[Answer] = []
@@ -123,6 +144,11 @@ class CoSpar:
         return [x for a in self.answers for x in a.query.actions]
 
     @property
+    def refits(self) -> list[HyperFit]:
+        """Every hyperparameter fit so far, in order (each also on its :class:`Answer`)."""
+        return [a.refit for a in self.answers if a.refit is not None]
+
+    @property
     def buffer(self) -> tuple[int, ...]:
         """The ``b`` most recently executed actions, oldest first."""
         return self._buffer
@@ -133,9 +159,9 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
+        context = AskContext(self.posterior, self.n, self._buffer, len(self.executed), self.rng)
         with blas_threads(len(self.space)):
-            samples = self.posterior.sample(self.rng, self.n)
-        actions = tuple(random_argmax(s, self.rng) for s in samples)
+            actions = tuple(int(a) for a in self.strategy.propose(context))
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
         return self.pending
@@ -176,10 +202,17 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        with blas_threads(len(self.space)):
-            new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
+        answers = [*self.answers, answer]
+        with blas_threads(len(self.space)):  # may raise: nothing changed yet
+            refit = self._refit(answers)
+            hyper = self.hyper if refit is None else refit.after
+            gp = self.gp if hyper == self.hyper else self._gp(hyper)
+            new_posterior = self._fit(answers, gp, hyper.band)
+        if refit is not None:
+            answer = dataclasses.replace(answer, refit=refit)
         self.answers.append(answer)
         self.posterior = new_posterior
+        self.gp, self.hyper = gp, hyper
         self.pending = None
         self._rng_before_pending = None
         recent = self._buffer + q.actions
@@ -195,6 +228,9 @@ class CoSpar:
             self._next_id = self.pending.id
         answer = self.answers.pop()
         self.posterior = answer.posterior_before
+        if answer.refit is not None and answer.refit.before != self.hyper:
+            self.hyper = answer.refit.before
+            self.gp = self._gp(self.hyper)
         self.pending = answer.query
         self._rng_before_pending = None
         self._buffer = answer.query.buffer
@@ -214,14 +250,38 @@ class CoSpar:
             raise QueryError(f"query {qid} does not match the pending query {self.pending}")
         return self.pending
 
-    def _fit(self, answers: list[Answer]) -> Posterior:
+    def _gp(self, hyper: Hyperparameters) -> PreferenceGP:
+        return PreferenceGP(self.space, hyper.kernel(), self.gp.noise)
+
+    def _data(self, answers: list[Answer]) -> PairData:
         prefs = [p for a in answers for p in a.preferences]
-        if not prefs:
-            return self.gp.prior()
-        winners = np.array([p.winner for p in prefs], dtype=np.intp)
-        losers = np.array([p.loser for p in prefs], dtype=np.intp)
-        noise = np.array([p.noise for p in prefs])
-        return self.gp.posterior(winners, losers, noise, init=self.posterior)
+        ties = [t for a in answers for t in a.ties]
+        return pair_data(prefs, ties, self.gp.noise, self.learning.ties == "model")
+
+    def _refit(self, answers: list[Answer]) -> HyperFit | None:
+        """A hyperparameter fit when the schedule says so (every ``refit_every`` answers)."""
+        if self.learning.fit != "evidence" or len(answers) % self.learning.refit_every:
+            return None
+        data = self._data(answers)
+        if data.size == 0:
+            return None
+        return fit_hyperparameters(self.space, self.hyper, data, self.prior)
+
+    def _fit(self, answers: list[Answer], gp: PreferenceGP, band: float) -> Posterior:
+        if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
+            prefs = [p for a in answers for p in a.preferences]
+            if not prefs:
+                return gp.prior()
+            winners = np.array([p.winner for p in prefs], dtype=np.intp)
+            losers = np.array([p.loser for p in prefs], dtype=np.intp)
+            noise = np.array([p.noise for p in prefs])
+            return gp.posterior(winners, losers, noise, init=self.posterior)
+        data = self._data(answers)
+        if data.size == 0:
+            return gp.prior()
+        return gp.posterior_from(
+            data.first, data.second, data.likelihood(band), init=self.posterior
+        )
 
 
 __all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
-from scipy.special import erfcx, log_ndtr
+from numpy.typing import NDArray
+from scipy.special import erf, erfcx, log_ndtr
 
 from gaitpref.space import FloatArray
 
@@ -59,3 +60,125 @@ class Probit:
         # r (r + z) lies in (0, 1); clip the rounding of r + z for z -> -inf.
         curv = np.clip(r * (r + z), 0.0, 1.0) / scale**2
         return logp, grad, curv
+
+    def third(self, diff: FloatArray) -> FloatArray:
+        """``d c / d d = -d^3 log p / d d^3`` (the Laplace evidence's gradient needs it)."""
+        scale = _SQRT2 * self.sigma
+        z = diff / scale
+        r = mills_ratio(z)
+        out: FloatArray = -r * ((r + z) * (2.0 * r + z) - 1.0) / scale**3
+        return out
+
+
+def _tie_ratios(
+    lo: FloatArray, hi: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """For ``lo < hi`` with ``lo + hi <= 0``: ``log Z``, ``phi(hi) / Z``, ``phi(lo) / Z`` and
+    ``hi + phi(hi) / Z``, where ``Z = Phi(hi) - Phi(lo)``, accurate far into the left tail."""
+    log_z, rho_hi, rho_lo, u_hi = (np.empty_like(lo) for _ in range(4))
+    left = hi <= 0.0
+    # left tail: Z = Phi(hi) (1 - q), q = Phi(lo) / Phi(hi), through Mills ratios (no underflow)
+    lh, ll = hi[left], lo[left]
+    log_hi = log_ndtr(lh)
+    log_q = log_ndtr(ll) - log_hi
+    one_minus_q = -np.expm1(log_q)
+    r_hi = mills_ratio(lh)
+    log_z[left] = log_hi + np.log(one_minus_q)
+    rho_hi[left] = r_hi / one_minus_q
+    rho_lo[left] = mills_ratio(ll) * np.exp(log_q) / one_minus_q
+    u_hi[left] = (lh + r_hi) + r_hi * np.exp(log_q) / one_minus_q
+    # lo < 0 < hi: erf(hi) and -erf(lo) add without cancellation
+    mid = ~left
+    mh, ml = hi[mid], lo[mid]
+    log_z[mid] = np.log(0.5 * (erf(mh / _SQRT2) - erf(ml / _SQRT2)))
+    rho_hi[mid] = np.exp(-0.5 * mh**2 - _LOG_SQRT_2PI - log_z[mid])
+    rho_lo[mid] = np.exp(-0.5 * ml**2 - _LOG_SQRT_2PI - log_z[mid])
+    u_hi[mid] = mh + rho_hi[mid]
+    return log_z, rho_hi, rho_lo, u_hi
+
+
+_LOG_SQRT_2PI = 0.5 * float(np.log(2.0 * np.pi))
+
+
+@dataclass(frozen=True)
+class OrderedProbit:
+    """Preferences and "no preference" answers with an indifference band (ordered probit).
+
+    The subject perceives ``d + e``, ``e ~ N(0, 2 sigma^2)``, and says "no preference" when
+    ``|d + e| < band``.  With ``s = sqrt(2) sigma``, an observation of ``d = f_a - f_b`` has
+
+    - ``P(a preferred) = Phi((d - band) / s)``            (``tie`` False);
+    - ``P(no preference) = Phi((d + band) / s) - Phi((d - band) / s)``  (``tie`` True).
+
+    ``band = 0`` gives the paper's :class:`Probit` exactly (coactive suggestions use it).  Both
+    forms are log-concave in ``d``, and ``c = -d^2 log p / d d^2`` lies in ``[0, 1 / s^2]`` (one
+    minus the variance of a truncated standard normal), so the Laplace problem stays convex.
+    Besides :meth:`terms`, the Laplace evidence's gradient uses :meth:`third` (``d c / d d``)
+    and :meth:`band_terms` (derivatives with respect to ``log band``).
+    """
+
+    sigma: FloatArray
+    band: FloatArray
+    tie: NDArray[np.bool_]
+
+    def __post_init__(self) -> None:
+        if not (self.sigma.shape == self.band.shape == self.tie.shape):
+            raise ValueError("sigma, band and tie must have one entry per observation")
+        if np.any(self.band < 0) or np.any(self.tie & (self.band <= 0)):
+            raise ValueError("bands must be >= 0, and > 0 for 'no preference' observations")
+
+    def _derivatives(self, diff: FloatArray, band_terms: bool) -> tuple[FloatArray, ...]:
+        """``(h, h1, h2, h3)`` in units of ``s`` and, with ``band_terms``, ``d(h, h1, h2)/de``."""
+        scale = _SQRT2 * self.sigma
+        x, e = diff / scale, self.band / scale
+        n = x.size
+        h, h1, h2, h3 = (np.zeros(n) for _ in range(4))
+        dh, dh1, dh2 = (np.zeros(n) for _ in range(3))
+        pref = ~self.tie
+        a = x[pref] - e[pref]
+        r = mills_ratio(a)
+        h[pref] = log_ndtr(a)
+        h1[pref] = r
+        h2[pref] = -np.clip(r * (r + a), 0.0, 1.0)
+        h3[pref] = r * ((r + a) * (2.0 * r + a) - 1.0)
+        if band_terms:
+            dh[pref], dh1[pref], dh2[pref] = -r, -h2[pref], -h3[pref]
+        if np.any(self.tie):
+            # symmetric in x: work at -|x| and flip the odd derivatives back
+            sign = np.where(x[self.tie] >= 0.0, -1.0, 1.0)
+            xm, et = -np.abs(x[self.tie]), e[self.tie]
+            lo, hi = xm - et, xm + et
+            log_z, rho_hi, rho_lo, u_hi = _tie_ratios(lo, hi)
+            t1 = rho_hi - rho_lo
+            # -d2: one minus a truncated normal's variance, in [0, 1]
+            t2 = np.clip(-rho_hi * u_hi + rho_lo * (lo + 2.0 * rho_hi - rho_lo), -1.0, 0.0)
+            d_hi, d_lo = -rho_hi * (u_hi - rho_lo), -rho_lo * (lo + t1)
+            t3 = -rho_hi - hi * d_hi + rho_lo + lo * d_lo - 2.0 * t1 * t2
+            h[self.tie], h1[self.tie], h2[self.tie], h3[self.tie] = log_z, sign * t1, t2, sign * t3
+            if band_terms:
+                s_sum = rho_hi + rho_lo
+                e_hi = -rho_hi * (u_hi + rho_lo)
+                e_lo = lo * rho_lo - rho_lo * s_sum
+                e1 = e_hi - e_lo
+                e2 = -rho_hi - hi * e_hi - rho_lo + lo * e_lo - 2.0 * t1 * e1
+                dh[self.tie], dh1[self.tie], dh2[self.tie] = s_sum, sign * e1, e2
+        return h, h1, h2, h3, dh, dh1, dh2
+
+    def terms(self, diff: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        scale = _SQRT2 * self.sigma
+        h, h1, h2, *_ = self._derivatives(diff, band_terms=False)
+        return h, h1 / scale, -h2 / scale**2
+
+    def third(self, diff: FloatArray) -> FloatArray:
+        """``d c / d d = -d^3 log p / d d^3`` per observation."""
+        scale = _SQRT2 * self.sigma
+        h3 = self._derivatives(diff, band_terms=False)[3]
+        out: FloatArray = -h3 / scale**3
+        return out
+
+    def band_terms(self, diff: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Derivatives of ``(log p, g, c)`` (as :meth:`terms`) with respect to ``log band``."""
+        scale = _SQRT2 * self.sigma
+        e = self.band / scale
+        _, _, _, _, dh, dh1, dh2 = self._derivatives(diff, band_terms=True)
+        return e * dh, e * dh1 / scale, -e * dh2 / scale**2

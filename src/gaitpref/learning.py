@@ -1,0 +1,93 @@
+"""What the CoSpar loop learns from its answers besides the utilities: ties and hyperparameters.
+
+- ``ties``: ``"drop"`` stores "no preference" answers without modelling them (the paper);
+  ``"model"`` makes every answer to a comparison an ordered-probit observation with an
+  indifference band (``model/likelihood.py``, :class:`~gaitpref.model.likelihood.OrderedProbit`):
+  a preference ``a > b`` has probability ``Phi((d - band) / (sqrt(2) sigma))``, a "no preference"
+  ``Phi((d + band) / s) - Phi((d - band) / s)``.  Coactive suggestions stay plain probit
+  preferences (``sigma / coactive_weight``, no band): they are not answers to a comparison.
+- ``tie_band``: the band in utility units (a number), or None to learn it with the other
+  hyperparameters (needs ``fit="evidence"``).
+- ``fit``: ``"fixed"`` keeps the config's kernel (the paper); ``"evidence"`` refits lengthscales,
+  signal variance (and a learned band) every ``refit_every`` answers by maximising the Laplace
+  evidence plus priors (``model/hyperfit.py``), warm-started from the current values.
+
+:func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from gaitpref.feedback import Preference, Tie
+from gaitpref.model.evidence import PairData
+from gaitpref.model.hyperfit import HyperPrior
+
+TiesMode = Literal["drop", "model"]
+FitMode = Literal["fixed", "evidence"]
+TIES_MODES: tuple[TiesMode, ...] = ("drop", "model")
+FIT_MODES: tuple[FitMode, ...] = ("fixed", "evidence")
+
+
+@dataclass(frozen=True)
+class Learning:
+    """How ties and hyperparameters are learned (the defaults are the paper's model)."""
+
+    ties: TiesMode = "drop"
+    tie_band: float | None = None
+    fit: FitMode = "fixed"
+    refit_every: int = 10
+    prior: HyperPrior | None = None  # None: model.hyperfit.default_prior
+
+    def __post_init__(self) -> None:
+        if self.ties not in TIES_MODES:
+            raise ValueError(f"ties must be one of {', '.join(TIES_MODES)}; got {self.ties!r}")
+        if self.fit not in FIT_MODES:
+            raise ValueError(f"fit must be one of {', '.join(FIT_MODES)}; got {self.fit!r}")
+        if isinstance(self.refit_every, bool) or not (
+            isinstance(self.refit_every, int) and self.refit_every >= 1
+        ):
+            raise ValueError(f"refit_every must be an integer >= 1, got {self.refit_every!r}")
+        if self.tie_band is not None:
+            if self.ties == "drop":
+                raise ValueError("tie_band is only used with ties = 'model'")
+            if not (np.isfinite(self.tie_band) and self.tie_band > 0):
+                raise ValueError(f"tie_band must be positive, got {self.tie_band!r}")
+        elif self.ties == "model" and self.fit == "fixed":
+            raise ValueError("ties = 'model' with fit = 'fixed' needs a tie_band (a number)")
+
+    @property
+    def learns_band(self) -> bool:
+        return self.ties == "model" and self.tie_band is None
+
+    @property
+    def is_paper(self) -> bool:
+        """True when the loop behaves exactly as the paper's (ties dropped, kernel fixed)."""
+        return self.ties == "drop" and self.fit == "fixed"
+
+
+def pair_data(
+    preferences: Sequence[Preference], ties: Sequence[Tie], tie_noise: float, model_ties: bool
+) -> PairData:
+    """Observations for the model: preferences (winner first), then ties when modelled.
+
+    Answers to comparisons are banded when ties are modelled; coactive suggestions never are.
+    """
+    kept_ties = list(ties) if model_ties else []
+    first = [p.winner for p in preferences] + [t.first for t in kept_ties]
+    second = [p.loser for p in preferences] + [t.second for t in kept_ties]
+    sigma = [p.noise for p in preferences] + [tie_noise] * len(kept_ties)
+    banded = [model_ties and p.source == "comparison" for p in preferences]
+    banded += [True] * len(kept_ties)
+    tie = [False] * len(preferences) + [True] * len(kept_ties)
+    return PairData(
+        np.asarray(first, dtype=np.intp),
+        np.asarray(second, dtype=np.intp),
+        np.asarray(sigma, dtype=np.float64),
+        np.asarray(banded, dtype=bool),
+        np.asarray(tie, dtype=bool),
+    )

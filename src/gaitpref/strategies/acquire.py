@@ -1,0 +1,138 @@
+"""EUBO-based strategies for the CoSpar loop (``base.py``'s :class:`Strategy` protocol).
+
+- :class:`Eubo`: each new action maximises ``EUBO(x, r)`` (``eubo.py``) against the reference
+  ``r``, the buffered or already chosen action with the highest posterior mean; with no buffer the
+  first two actions are the best pair among the top ``candidates`` actions by ``mu + 2 sd``.
+  Buffered and already chosen actions are never proposed again (while others exist), so every
+  query yields a comparison: EUBO cannot lock in on a winner that is never compared.
+- :class:`PlausibleEubo`: the same, restricted to the plausible maximisers, the argmaxes of
+  ``samples`` joint posterior samples.  Early the set is wide and EUBO picks the most useful of
+  them; late it shrinks to near-best actions, so the executed gaits stay good (the spirit of
+  MaxInP, Saha 2021: duel only among actions that may still be best).  When every sample's
+  argmax is already in the query, it falls back to :class:`Eubo` over all actions.
+- :class:`Switch`: one strategy for the first ``trials`` trials, another after.
+
+Notation: ``A`` actions, ``n`` new actions per query, ``b`` buffered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.space import IntArray
+from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+from gaitpref.strategies.eubo import best_pair, eubo_against
+
+
+def _top_candidates(posterior: Posterior, k: int, rng: np.random.Generator) -> IntArray:
+    """The ``k`` actions with the highest ``mu + 2 sd`` (exact ties in random order)."""
+    score = np.asarray(posterior.mean) + 2.0 * np.asarray(posterior.std)
+    order = np.lexsort((rng.permutation(score.shape[0]), -score))
+    return order[: min(k, score.shape[0])].astype(np.intp)
+
+
+def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Generator) -> int:
+    mu = np.asarray(posterior.mean)[np.asarray(refs, dtype=np.intp)]
+    return refs[random_argmax(mu, rng)]
+
+
+def _eubo_fill(
+    context: AskContext, chosen: list[int], allowed: IntArray | None
+) -> tuple[int, ...]:
+    """Add actions one at a time, each the EUBO maximiser against the best reference."""
+    post, rng = context.posterior, context.rng
+    size = len(post.space)
+    while len(chosen) < context.n:
+        refs = [*context.buffer, *chosen]
+        ref = _best_reference(post, refs, rng)
+        values = eubo_against(post, ref)
+        mask = np.zeros(size, dtype=bool)
+        if allowed is None:
+            mask[:] = True
+        else:
+            mask[allowed] = True
+        mask[np.asarray(refs, dtype=np.intp)] = False
+        if not mask.any():  # nothing new left in the allowed set: use every other action
+            mask[:] = True
+            mask[np.asarray(refs, dtype=np.intp)] = False
+        if not mask.any():  # a grid smaller than the query: repeat the reference
+            chosen.append(ref)
+            continue
+        chosen.append(random_argmax(np.where(mask, values, -np.inf), rng))
+    return tuple(chosen)
+
+
+def _start(context: AskContext, candidates: int) -> list[int]:
+    """With no buffer: the best EUBO pair of the top candidates (n >= 2) or one sample's argmax."""
+    if context.buffer:
+        return []
+    if context.n == 1 or len(context.posterior.space) < 2:
+        return [int(context.posterior.argmax_samples(context.rng, 1)[0])]
+    top = _top_candidates(context.posterior, candidates, context.rng)
+    x, y, _ = best_pair(context.posterior, top)
+    return [x, y]
+
+
+@dataclass(frozen=True)
+class Eubo:
+    """Greedy EUBO against the best buffered or chosen action (see the module docstring)."""
+
+    candidates: int = 64
+    name: str = "eubo"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        return _eubo_fill(context, _start(context, self.candidates)[: context.n], None)
+
+
+@dataclass(frozen=True)
+class PlausibleEubo:
+    """EUBO among the argmaxes of ``samples`` posterior samples (see the module docstring)."""
+
+    samples: int = 32
+    candidates: int = 64
+    name: str = "plausible-eubo"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        chosen = _start(context, self.candidates)[: context.n]
+        plausible = np.unique(context.posterior.argmax_samples(context.rng, self.samples))
+        return _eubo_fill(context, chosen, plausible.astype(np.intp))
+
+
+@dataclass(frozen=True)
+class Switch:
+    """``early`` for the first ``trials`` trials, ``late`` after."""
+
+    trials: int = 20
+    early: Strategy = Eubo()  # noqa: RUF009 (frozen, immutable default)
+    late: Strategy = SelfSparring()  # noqa: RUF009
+    name: str = "eubo-then-sparring"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        chosen = self.early if context.trial < self.trials else self.late
+        return chosen.propose(context)
+
+
+@dataclass(frozen=True)
+class ConfidentEubo:
+    """EUBO among actions whose ``mu + beta sd`` reaches the best ``mu - beta sd``."""
+
+    beta: float = 1.0
+    candidates: int = 64
+    name: str = "confident-eubo"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        post = context.posterior
+        chosen = _start(context, self.candidates)[: context.n]
+        mu, sd = np.asarray(post.mean), np.asarray(post.std)
+        ucb = mu + self.beta * sd
+        plausible = np.flatnonzero(ucb >= np.max(mu - self.beta * sd))
+        refs = np.asarray([*context.buffer, *chosen], dtype=np.intp)
+        rest = np.setdiff1d(plausible, refs)
+        if rest.size == 0:  # only the references are plausible: the most plausible challenger
+            masked = ucb.copy()
+            masked[refs] = -np.inf
+            rest = np.array([int(np.argmax(masked))], dtype=np.intp)
+        return _eubo_fill(context, chosen, rest.astype(np.intp))

@@ -1,0 +1,53 @@
+"""How CoSpar picks the actions of a query: the strategy protocol and its context.
+
+The paper's Algorithm 1 (Tucker, Novoseller et al., ICRA 2020) proposes the argmaxes of ``n``
+posterior samples (self-sparring).  A :class:`Strategy` replaces only that step: the query's
+buffer, the comparisons, coactive feedback and the refit are the loop's (``cospar.py``), the same
+for every strategy.  A strategy is deterministic given the context's generator, so a loop
+replays exactly from its seed.
+
+Notation: ``A`` actions; ``n`` new actions per query; ``b`` buffered (previously executed) ones.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from gaitpref.model.posterior import Posterior
+
+
+@dataclass(frozen=True)
+class AskContext:
+    """What a strategy may use: the posterior, the query's shape, the trial count, the RNG."""
+
+    posterior: Posterior
+    n: int
+    buffer: tuple[int, ...]
+    trial: int  # actions executed before this query
+    rng: np.random.Generator
+
+
+class Strategy(Protocol):
+    """Proposes the ``n`` actions of the next query."""
+
+    @property
+    def name(self) -> str: ...
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        """``context.n`` grid indices (repeats allowed only where the strategy says so)."""
+        ...
+
+
+@dataclass(frozen=True)
+class SelfSparring:
+    """The paper's rule: the argmax of each of ``n`` joint posterior samples (Thompson
+    sampling; exact ties broken at random).  An action may repeat the buffered one."""
+
+    name: str = "self-sparring"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        picks = context.posterior.argmax_samples(context.rng, context.n)
+        return tuple(int(a) for a in picks)
