@@ -13,14 +13,26 @@
     signal_variance = 0.005
     jitter = 1e-7
     noise = 0.02
+    ties = "model"                 # optional: "drop" (the paper) or "model" (ordered probit)
+    tie_band = "fit"               # optional with ties = "model": a number, or "fit"
+    fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
+    refit_every = 10               # optional: answers between hyperparameter refits
+
+    [model.prior]                  # optional: log-normal priors as [median, sd of the log]
+    lengthscale = { step_length = [0.025, 0.7] }
+    signal_variance = [0.005, 0.0] # sd 0 holds the parameter fixed
+    tie_band = [0.02, 1.0]
 
     [cospar]
     n = 1
     buffer = 1
     coactive_weight = 1.0
     seed = 0
+    strategy = "eubo"              # optional: see gaitpref.strategies.STRATEGIES
 
-Every error names the key and what is allowed.  Shipped configs (the paper's settings) live in
+Every error names the key and what is allowed.  The optional learning keys default to
+:data:`DEFAULT_LEARNING` and :data:`DEFAULT_STRATEGY` (``docs/learning.md`` says why); the
+shipped paper configs set them explicitly to the paper's choices.  Shipped configs (the paper's settings) live in
 ``gaitpref/configs/`` and load by name: ``load_config("exo-1d-step-length")``.
 """
 
@@ -31,11 +43,14 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from gaitpref.cospar import CoSpar
+from gaitpref.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode
+from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
+from gaitpref.strategies import STRATEGIES, make_strategy
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Feature, Space
 
@@ -46,8 +61,25 @@ class ConfigError(ValueError):
 
 _TOP_KEYS = {"name", "description", "space", "model", "cospar"}
 _FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
-_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise"}
-_COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed"}
+_MODEL_KEYS = {
+    "lengthscale",
+    "signal_variance",
+    "jitter",
+    "noise",
+    "ties",
+    "tie_band",
+    "fit",
+    "refit_every",
+    "prior",
+}
+_PRIOR_KEYS = {"lengthscale", "signal_variance", "tie_band"}
+_COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed", "strategy"}
+
+#: What a config that omits the learning keys gets (the study in docs/results/learning).
+DEFAULT_TIES: TiesMode = "model"
+DEFAULT_FIT: FitMode = "evidence"
+DEFAULT_REFIT_EVERY = 10
+DEFAULT_STRATEGY = "eubo"
 
 
 @dataclass(frozen=True)
@@ -64,6 +96,8 @@ class ExperimentConfig:
     seed: int
     text: str = field(repr=False)
     description: str = ""
+    strategy: str = "self-sparring"
+    learning: Learning = field(default_factory=Learning)
 
     @property
     def sha256(self) -> str:
@@ -80,6 +114,8 @@ class ExperimentConfig:
             buffer=self.buffer,
             coactive_weight=self.coactive_weight,
             seed=self.seed if seed is None else seed,
+            strategy=make_strategy(self.strategy),
+            learning=self.learning,
         )
 
 
@@ -122,6 +158,8 @@ def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfi
         _positive(model, "signal_variance", "[model]"),
         _number(model, "jitter", "[model]", default=0.0, minimum=0.0),
     )
+    noise = _positive(model, "noise", "[model]")
+    learning = _learning(model, space, kernel.variance, noise)
     cospar = _table(raw, "cospar")
     _only(cospar, _COSPAR_KEYS, "[cospar]")
     n = _integer(cospar, "n", "[cospar]", default=1, minimum=1)
@@ -133,13 +171,15 @@ def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfi
         description=str(raw.get("description", "")),
         space=space,
         kernel=kernel,
-        noise=_positive(model, "noise", "[model]"),
+        noise=noise,
         n=n,
         buffer=buffer,
         coactive_weight=_number(cospar, "coactive_weight", "[cospar]", default=1.0, minimum=0.0)
         or _fail("[cospar].coactive_weight must be > 0"),
         seed=_integer(cospar, "seed", "[cospar]", default=0, minimum=0),
         text=text,
+        strategy=_choice(cospar, "strategy", "[cospar]", STRATEGIES, DEFAULT_STRATEGY),
+        learning=learning,
     )
 
 
@@ -244,3 +284,72 @@ def _lengthscales(model: dict[str, Any], space: Space) -> tuple[float, ...]:
             raise ConfigError(f"[model].lengthscale: missing a value for {', '.join(missing)}")
         return tuple(_positive(value, n, "[model].lengthscale") for n in space.names)
     return (_positive(model, "lengthscale", "[model]"),) * space.ndim
+
+
+def _choice(
+    table: dict[str, Any], key: str, where: str, allowed: tuple[str, ...], default: str
+) -> str:
+    value = table.get(key, default)
+    if value not in allowed:
+        raise ConfigError(f"{where}.{key}: must be one of {', '.join(allowed)}; got {value!r}")
+    return str(value)
+
+
+def _log_normal(value: object, where: str) -> LogNormal:
+    if (
+        not isinstance(value, list)
+        or len(value) != 2
+        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
+    ):
+        raise ConfigError(f"{where}: must be [median, sd] (two numbers), got {value!r}")
+    try:
+        return LogNormal(float(value[0]), float(value[1]))
+    except ValueError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _learning(model: dict[str, Any], space: Space, variance: float, noise: float) -> Learning:
+    ties = cast(TiesMode, _choice(model, "ties", "[model]", TIES_MODES, DEFAULT_TIES))
+    fit = cast(FitMode, _choice(model, "fit", "[model]", FIT_MODES, DEFAULT_FIT))
+    refit_every = _integer(model, "refit_every", "[model]", DEFAULT_REFIT_EVERY, minimum=1)
+    raw_band = model.get("tie_band", "fit" if fit == "evidence" else None)
+    band: float | None = None
+    if ties == "drop":
+        if "tie_band" in model:
+            raise ConfigError('[model].tie_band: only used with ties = "model"')
+    elif raw_band == "fit":
+        if fit != "evidence":
+            raise ConfigError('[model].tie_band = "fit" needs fit = "evidence"')
+    elif raw_band is None:
+        raise ConfigError('[model].tie_band: ties = "model" with fit = "fixed" needs a number')
+    else:
+        band = _positive(model, "tie_band", "[model]")
+    prior = default_prior(space, variance, noise, fit_band=ties == "model" and band is None)
+    raw_prior = model.get("prior", {})
+    if not isinstance(raw_prior, dict):
+        raise ConfigError("[model.prior]: must be a table")
+    _only(raw_prior, _PRIOR_KEYS, "[model.prior]")
+    scales = list(prior.lengthscale)
+    if "lengthscale" in raw_prior:
+        table = raw_prior["lengthscale"]
+        if not isinstance(table, dict):
+            raise ConfigError("[model.prior].lengthscale: must be { feature = [median, sd] }")
+        _only(table, set(space.names), "[model.prior].lengthscale")
+        for name, value in table.items():
+            scales[space.feature_index(name)] = _log_normal(
+                value, f"[model.prior].lengthscale.{name}"
+            )
+    var_prior = prior.variance
+    if "signal_variance" in raw_prior:
+        var_prior = _log_normal(raw_prior["signal_variance"], "[model.prior].signal_variance")
+    band_prior = prior.band
+    if "tie_band" in raw_prior:
+        if band_prior is None:
+            raise ConfigError('[model.prior].tie_band: only used with tie_band = "fit"')
+        band_prior = _log_normal(raw_prior["tie_band"], "[model.prior].tie_band")
+    try:
+        return Learning(
+            ties, band, fit, refit_every, HyperPrior(tuple(scales), var_prior, band_prior)
+        )
+    except ValueError as exc:
+        raise ConfigError(f"[model]: {exc}") from None

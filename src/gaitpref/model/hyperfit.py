@@ -9,9 +9,12 @@ and a lengthscale never goes below half its feature's smallest grid step (shorte
 neighbours independent, which no gait data can support).
 
 Default priors (:func:`default_prior`), in each feature's own units: lengthscale median a quarter
-of the feature's range, ``sd = 0.7`` (95% within a factor 4: 0.06-1.0 of the range); signal
-variance median the config's, ``sd = 1``; band median the probit noise ``sigma``
-(``P(no preference | equal utilities) = 0.52``), ``sd = 1``.
+of the feature's range, ``sd = 0.7`` (95% within a factor 4: 0.06-1.0 of the range); band median
+the probit noise ``sigma`` (``P(no preference | equal utilities) = 0.52``), ``sd = 1``.  The
+signal variance (that is, ``s / sigma``) is held at the config's value by default (``sd = 0``):
+with consistent answers the evidence keeps raising ``s / sigma``, the posterior grows
+overconfident and the loop explores too little; the study in ``docs/results/learning`` measured
+it (``variance_sd = 1`` lost late in the session).
 
 :func:`fit_hyperparameters` never fails silently: a fit that raises, produces non-finite values
 or does not improve the objective keeps the previous hyperparameters, and the returned
@@ -25,11 +28,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.laplace import ConvergenceError, PriorNotPositiveDefiniteError
+from gaitpref.model.threads import blas_threads
 from gaitpref.space import FloatArray, Space
 
 
@@ -69,7 +74,7 @@ def default_prior(
     fit_band: bool = False,
     *,
     lengthscale_sd: float = 0.7,
-    variance_sd: float = 1.0,
+    variance_sd: float = 0.0,
     band_sd: float = 1.0,
 ) -> HyperPrior:
     """The weakly informative defaults (module docstring); single-valued features are fixed."""
@@ -148,74 +153,93 @@ def fit_hyperparameters(
     max_evaluations: int = 60,
 ) -> HyperFit:
     """MAP hyperparameters for ``data`` by L-BFGS-B from ``start`` (see the module docstring)."""
-    theta0 = start.log_vector()
-    priors = prior.all()
-    free = np.array([p is not None and p.sd > 0 for p in priors])
+    free = np.array([p is not None and p.sd > 0 for p in prior.all()])
     if prior.band is not None and start.band <= 0:
         raise ValueError("fitting the band needs a positive starting band")
     if data.size == 0 or not np.any(free):
         return HyperFit(start, start, False, True, "nothing to fit", 0, 0, np.nan, np.nan, 0)
-    bounds = [b for b, keep in zip(_bounds(space, prior), free, strict=True) if keep]
-    centre = np.array([np.log(p.median) if p is not None else 0.0 for p in priors])[free]
-    sd = np.array([p.sd if p is not None else 1.0 for p in priors])[free]
-    x0 = np.clip(theta0[free], [b[0] for b in bounds], [b[1] for b in bounds])
-    state: dict[str, object] = {"mode": None, "evals": 0, "failed": 0}
+    with blas_threads(len(space)):
+        return _fit(space, start, data, prior, free, max_evaluations)
 
-    def hyper_at(x: FloatArray) -> Hyperparameters:
-        theta = theta0.copy()
-        theta[free] = x
-        return start.with_log_vector(theta)
 
-    def negative(x: FloatArray) -> tuple[float, FloatArray]:
-        state["evals"] = int(state["evals"]) + 1  # type: ignore[call-overload]
-        mode = state["mode"]
+class _Objective:
+    """``-(log evidence + log prior)`` over the free log-parameters, warm-starting each mode."""
+
+    def __init__(
+        self,
+        space: Space,
+        start: Hyperparameters,
+        data: PairData,
+        prior: HyperPrior,
+        free: NDArray[np.bool_],
+    ) -> None:
+        self.space, self.start, self.data, self.free = space, start, data, free
+        self.theta0 = start.log_vector()
+        priors = prior.all()
+        self.centre = np.array([np.log(p.median) if p else 0.0 for p in priors])[free]
+        self.sd = np.array([p.sd if p else 1.0 for p in priors])[free]
+        self.mode: FloatArray | None = None
+        self.evaluations = 0
+        self.failures = 0
+        self.best: tuple[float, FloatArray] = (np.inf, self.theta0[free])
+
+    def hyper(self, x: FloatArray) -> Hyperparameters:
+        theta = self.theta0.copy()
+        theta[self.free] = x
+        return self.start.with_log_vector(theta)
+
+    def __call__(self, x: FloatArray) -> tuple[float, FloatArray]:
+        self.evaluations += 1
         try:
-            ev = laplace_evidence(space, hyper_at(x), data, mode)  # type: ignore[arg-type]
+            ev = laplace_evidence(self.space, self.hyper(x), self.data, self.mode)
             if not (np.isfinite(ev.value) and np.all(np.isfinite(ev.gradient))):
                 raise FloatingPointError("non-finite evidence")
         except _FAILURES:
-            state["failed"] = int(state["failed"]) + 1  # type: ignore[call-overload]
-            return 1e10, np.zeros_like(x)
-        state["mode"] = ev.fit.mode
-        z = (x - centre) / sd
-        value = ev.value - 0.5 * float(z @ z)
-        grad = ev.gradient[free] - z / sd
-        return -value, -grad
+            self.failures += 1
+            return _FAILED, np.zeros_like(x)
+        self.mode = ev.fit.mode
+        z = (x - self.centre) / self.sd
+        value = -(ev.value - 0.5 * float(z @ z))
+        if value < self.best[0]:
+            self.best = (value, np.array(x, dtype=np.float64))
+        return value, -(ev.gradient[self.free] - z / self.sd)
 
-    first, _ = negative(x0)
-    before_value = -first
-    if not np.isfinite(before_value) or int(state["failed"]) > 0:  # type: ignore[call-overload]
-        return HyperFit(
-            start, start, False, False, "the evidence cannot be evaluated at the start",
-            1, 1, np.nan, np.nan, data.size,
-        )  # fmt: skip
-    start_value = -first
+
+_FAILED = 1e10  # what a failed evaluation reports to L-BFGS-B: far worse than any real value
+
+
+def _fit(
+    space: Space,
+    start: Hyperparameters,
+    data: PairData,
+    prior: HyperPrior,
+    free: NDArray[np.bool_],
+    max_evaluations: int,
+) -> HyperFit:
+    bounds = [b for b, keep in zip(_bounds(space, prior), free, strict=True) if keep]
+    objective = _Objective(space, start, data, prior, free)
+    x0 = np.clip(objective.theta0[free], [b[0] for b in bounds], [b[1] for b in bounds])
+    first, _ = objective(x0)
+    if objective.failures:
+        message = "kept the previous hyperparameters: the evidence cannot be evaluated at the start"
+        return HyperFit(start, start, False, False, message, 1, 1, np.nan, np.nan, data.size)
     res = minimize(
-        negative,
+        objective,
         x0,
         jac=True,
         method="L-BFGS-B",
         bounds=bounds,
         options={"maxfun": max_evaluations, "maxiter": max_evaluations},
     )
-    evals, failed = int(state["evals"]), int(state["failed"])  # type: ignore[call-overload]
-    final, _ = negative(np.asarray(res.x)) if np.all(np.isfinite(res.x)) else (np.inf, None)
-    after_value = -final
-    message = str(res.message)
-    if not np.isfinite(after_value) or after_value < start_value - 1e-9:
-        reason = f"kept the previous hyperparameters: the fit did not improve ({message})"
-        return HyperFit(
-            start, start, False, False, reason, evals, failed, start_value, start_value, data.size
-        )
+    # the best point evaluated (L-BFGS-B may stop elsewhere after a failed line search)
+    best_value, best_x = objective.best
+    before, after = -first, -best_value
+    evals, failed = objective.evaluations, objective.failures
+    if not after >= before:
+        message = f"kept the previous hyperparameters: the fit did not improve ({res.message})"
+        return HyperFit(start, start, False, False, message, evals, failed, before, before, data.size)
+    message = str(res.message) + (f"; {failed} evaluations failed" if failed else "")
     return HyperFit(
-        start,
-        hyper_at(np.asarray(res.x)),
-        True,
-        bool(res.success),
-        message,
-        evals,
-        failed,
-        start_value,
-        after_value,
-        data.size,
-    )
+        start, objective.hyper(best_x), True, bool(res.success) and not failed, message, evals,
+        failed, before, after, data.size,
+    )  # fmt: skip

@@ -1,16 +1,16 @@
-"""EUBO-based strategies for the CoSpar loop (``base.py``'s :class:`Strategy` protocol).
+"""EUBO strategies for the CoSpar loop (``base.py``'s :class:`Strategy` protocol).
 
 - :class:`Eubo`: each new action maximises ``EUBO(x, r)`` (``eubo.py``) against the reference
-  ``r``, the buffered or already chosen action with the highest posterior mean; with no buffer the
-  first two actions are the best pair among the top ``candidates`` actions by ``mu + 2 sd``.
-  Buffered and already chosen actions are never proposed again (while others exist), so every
+  ``r``, the buffered or already chosen action with the highest posterior mean.  With no buffer
+  and ``n >= 2`` the first two actions are the best pair among the top ``candidates`` actions by
+  ``mu + 2 sd`` (all pairs of the whole grid would need its ``A x A`` covariance); with no buffer
+  and ``n = 1`` (the first query of ``b >= 1``) the first action is a posterior sample's argmax.
+  Buffered and already chosen actions are never proposed again while others exist, so every
   query yields a comparison: EUBO cannot lock in on a winner that is never compared.
-- :class:`PlausibleEubo`: the same, restricted to the plausible maximisers, the argmaxes of
-  ``samples`` joint posterior samples.  Early the set is wide and EUBO picks the most useful of
-  them; late it shrinks to near-best actions, so the executed gaits stay good (the spirit of
-  MaxInP, Saha 2021: duel only among actions that may still be best).  When every sample's
-  argmax is already in the query, it falls back to :class:`Eubo` over all actions.
-- :class:`Switch`: one strategy for the first ``trials`` trials, another after.
+- :class:`ConfidentEubo`: the same, restricted to the plausible maximisers by confidence bounds,
+  ``{x : mu_x + beta sd_x >= max_y (mu_y - beta sd_y)}``, as MaxInP (Saha, NeurIPS 2021) duels
+  only among arms that may still be best.  When only the references are plausible it takes the
+  non-reference action with the highest upper bound.
 
 Notation: ``A`` actions, ``n`` new actions per query, ``b`` buffered.
 """
@@ -39,7 +39,7 @@ def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Genera
     return refs[random_argmax(mu, rng)]
 
 
-def _eubo_fill(
+def eubo_fill(
     context: AskContext, chosen: list[int], allowed: IntArray | None
 ) -> tuple[int, ...]:
     """Add actions one at a time, each the EUBO maximiser against the best reference."""
@@ -84,35 +84,7 @@ class Eubo:
     name: str = "eubo"
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
-        return _eubo_fill(context, _start(context, self.candidates)[: context.n], None)
-
-
-@dataclass(frozen=True)
-class PlausibleEubo:
-    """EUBO among the argmaxes of ``samples`` posterior samples (see the module docstring)."""
-
-    samples: int = 32
-    candidates: int = 64
-    name: str = "plausible-eubo"
-
-    def propose(self, context: AskContext) -> tuple[int, ...]:
-        chosen = _start(context, self.candidates)[: context.n]
-        plausible = np.unique(context.posterior.argmax_samples(context.rng, self.samples))
-        return _eubo_fill(context, chosen, plausible.astype(np.intp))
-
-
-@dataclass(frozen=True)
-class Switch:
-    """``early`` for the first ``trials`` trials, ``late`` after."""
-
-    trials: int = 20
-    early: Strategy = Eubo()  # noqa: RUF009 (frozen, immutable default)
-    late: Strategy = SelfSparring()  # noqa: RUF009
-    name: str = "eubo-then-sparring"
-
-    def propose(self, context: AskContext) -> tuple[int, ...]:
-        chosen = self.early if context.trial < self.trials else self.late
-        return chosen.propose(context)
+        return eubo_fill(context, _start(context, self.candidates)[: context.n], None)
 
 
 @dataclass(frozen=True)
@@ -135,4 +107,5 @@ class ConfidentEubo:
             masked = ucb.copy()
             masked[refs] = -np.inf
             rest = np.array([int(np.argmax(masked))], dtype=np.intp)
-        return _eubo_fill(context, chosen, rest.astype(np.intp))
+        return eubo_fill(context, chosen, rest.astype(np.intp))
+

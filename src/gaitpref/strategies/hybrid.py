@@ -1,0 +1,64 @@
+"""Strategies that are strong both early and late in a short session.
+
+Measured on the paper's benchmark (``docs/results/learning``): EUBO (``acquire.py``) finds good
+gaits far sooner than self-sparring, but with ``n = 1, b = 1`` it keeps pairing the best gait with
+an exploratory one, so late in a session half the executed gaits are exploratory; self-sparring
+(Thompson sampling) executes near-best gaits late but explores widely early.
+
+- :class:`GatedEubo` (``"gated-eubo"``): a Thompson gate decides whether to exploit.  Draw
+  ``gates`` posterior samples; if one of their argmaxes is a buffered action, run that action
+  again (as self-sparring would, with probability ``P(buffered action is best)``); otherwise run
+  the EUBO challenger of the best buffered action.  Early the posterior is wide, the gate rarely
+  fires and the loop behaves like EUBO; late the buffered gait is usually the best, and the loop
+  behaves like self-sparring.  A repeat brings no comparison, but the gate is random and
+  re-drawn every trial, so the loop cannot lock in (EUBO's failure when it may re-propose the
+  winner: once every challenger's value is below rounding it repeats the winner forever).
+  With no buffer the first action is the first sample's argmax and the others are EUBO's.
+- :class:`Switch` (``"eubo-then-sparring"``): one strategy for the first ``trials`` trials
+  (EUBO), another after (self-sparring).
+
+Notation: ``n`` new actions per query, ``b`` buffered.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from gaitpref.strategies.acquire import Eubo, eubo_fill
+from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+
+
+@dataclass(frozen=True)
+class GatedEubo:
+    """Thompson-gated EUBO (see the module docstring)."""
+
+    gates: int = 1
+    name: str = "gated-eubo"
+
+    def __post_init__(self) -> None:
+        if self.gates < 1:
+            raise ValueError(f"gates must be >= 1, got {self.gates!r}")
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        picks = [int(a) for a in context.posterior.argmax_samples(context.rng, self.gates)]
+        if not context.buffer:
+            return eubo_fill(context, picks[:1], None)
+        if context.n == 1:
+            for pick in picks:
+                if pick in context.buffer:
+                    return (pick,)
+        return eubo_fill(context, [], None)
+
+
+@dataclass(frozen=True)
+class Switch:
+    """``early`` for the first ``trials`` trials, ``late`` after."""
+
+    trials: int = 20
+    early: Strategy = field(default_factory=Eubo)
+    late: Strategy = field(default_factory=SelfSparring)
+    name: str = "eubo-then-sparring"
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        chosen = self.early if context.trial < self.trials else self.late
+        return chosen.propose(context)
