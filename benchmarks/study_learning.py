@@ -1,0 +1,341 @@
+"""The learning study (issue 8): query strategies, modelled ties and fitted hyperparameters.
+
+Every arm is CoSpar with ``n = 1, b = 1`` and the paper's simulated coactive feedback, 150
+trials, on the paper's synthetic 2-D benchmark (``synthetic-2d``: 30 x 30 grid, the authors' 100
+objectives), against two subjects:
+
+- ``noiseless``: the paper's subject (prefers the higher objective, exact ties at random);
+- ``noisy``: :class:`gaitpref.simulate.noisy.IndifferentUser` with probit noise 0.05 and an
+  indifference band 0.05 on the objectives' scale (GP samples of variance 0.1): it answers "no
+  preference" to about a third of the comparisons.
+
+An arm is a set of config keys (``[model]`` and ``[cospar]``) over the synthetic-2d config, so the
+study runs exactly what a config selects.  Run ``k`` of every arm uses objective ``k`` and the
+same seeds (paired comparisons).  The score of a trial is the normalised objective of its
+executed action; each run reports its means over trials 1-20 and 31-150 and the normalised
+objective of its final posterior-mean argmax.
+
+    python benchmarks/study_learning.py run --objectives 100 [--arms a,b] [--scenarios s]
+    python benchmarks/study_learning.py report
+
+``run`` caches each (scenario, arm) under ``out/learning-study/`` (so a long study can be run in
+parts); ``report`` writes ``docs/results/learning/``: ``runs.csv`` (one row per run),
+``curves.csv`` (mean and standard error per trial), ``summary.md`` and ``learning.png``.
+Workers use one BLAS thread each (``joblib``, ``n_jobs`` = ``--jobs``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from joblib import Parallel, delayed
+
+from gaitpref.config import ExperimentConfig, parse_config
+from gaitpref.data import paper_objectives, published_curves
+from gaitpref.simulate.noisy import IndifferentUser
+from gaitpref.simulate.run import run_simulation
+from gaitpref.simulate.users import GradientCoactive, SimulatedUser
+
+try:
+    from _machine import machine_description, machine_markdown
+except ImportError:  # run as a module
+    from benchmarks._machine import machine_description, machine_markdown
+
+ROOT = Path(__file__).resolve().parent.parent
+CACHE = ROOT / "out" / "learning-study"
+RESULTS = ROOT / "docs" / "results" / "learning"
+TRIALS = 150
+STUDY_SEED = 20260508
+NOISE, BAND = 0.05, 0.05  # the noisy subject, on the objectives' scale
+
+_TEMPLATE = """
+name = "learning-study"
+
+[space.x]
+min = 0.0
+max = 1.0
+num = 30
+coactive = [0.06, 0.10]
+
+[space.y]
+min = 0.0
+max = 1.0
+num = 30
+coactive = [0.06, 0.10]
+
+[model]
+lengthscale = {{ x = {ls}, y = {ls} }}
+signal_variance = 1e-4
+jitter = 1e-5
+noise = 0.01
+{model}
+
+[cospar]
+n = 1
+buffer = 1
+coactive_weight = 1.0
+seed = 0
+strategy = "{strategy}"
+"""
+
+PAPER = 'ties = "drop"\nfit = "fixed"'
+TIES_BAND_ONLY = (
+    'ties = "model"\nfit = "evidence"\ntie_band = "fit"\n'
+    "[model.prior]\nlengthscale = { x = [0.25, 0.0], y = [0.25, 0.0] }"
+)
+FIT = 'ties = "drop"\nfit = "evidence"'
+TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"'
+FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
+
+
+@dataclass(frozen=True)
+class Arm:
+    name: str
+    strategy: str
+    model: str
+    lengthscale: float = 0.15
+    note: str = ""
+
+    def config(self) -> ExperimentConfig:
+        text = _TEMPLATE.format(ls=self.lengthscale, model=self.model, strategy=self.strategy)
+        return parse_config(text)
+
+
+ARMS = [
+    Arm("paper", "self-sparring", PAPER, note="the paper: self-sparring, ties dropped, fixed"),
+    Arm("eubo", "eubo", PAPER, note="EUBO against the buffered action"),
+    Arm("eubo-then-sparring", "eubo-then-sparring", PAPER, note="EUBO for 20 trials, then TS"),
+    Arm("gated", "gated-eubo", PAPER, note="Thompson-gated EUBO"),
+    Arm("gated+ties", "gated-eubo", TIES_BAND_ONLY, note="ties modelled, band learned"),
+    Arm("gated+fit", "gated-eubo", FIT, note="lengthscales fitted"),
+    Arm("gated+ties+fit", "gated-eubo", TIES_FIT, note="ties modelled, lengthscales + band"),
+    Arm("gated+fit+s2", "gated-eubo", FIT_S2, note="lengthscales and signal variance fitted"),
+    Arm("paper+ties+fit", "self-sparring", TIES_FIT, note="self-sparring with both additions"),
+    Arm("paper@2x", "self-sparring", PAPER, 0.30, "the paper, lengthscale wrong by 2x"),
+    Arm("paper+fit@2x", "self-sparring", FIT, 0.30, "fitted, starting 2x wrong"),
+    Arm("gated@2x", "gated-eubo", PAPER, 0.30, "gated, lengthscale wrong by 2x"),
+    Arm("gated+ties+fit@2x", "gated-eubo", TIES_FIT, 0.30, "gated + both, starting 2x wrong"),
+]
+SCENARIOS = ("noiseless", "noisy")
+
+
+def run_one(arm: Arm, scenario: str, k: int) -> dict[str, object]:
+    """One 150-trial run of ``arm`` on objective ``k`` against the ``scenario`` subject."""
+    cfg = arm.config()
+    objective = paper_objectives()[k]
+    loop_seed, user_seed = np.random.SeedSequence([STUDY_SEED, k]).spawn(2)
+    loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
+    rng = np.random.default_rng(user_seed)
+    user: SimulatedUser
+    if scenario == "noisy":
+        user = IndifferentUser(cfg.space, objective, rng, noise=NOISE, band=BAND)
+    else:
+        user = SimulatedUser(cfg.space, objective, rng)
+    start = time.perf_counter()
+    result = run_simulation(loop, user, TRIALS, GradientCoactive(cfg.space, objective))
+    seconds = time.perf_counter() - start
+    refits = loop.refits
+    last = loop.hyper
+    return {
+        "scores": result.normalized_objective,
+        "argmax": result.argmax_normalized_objective,
+        "seconds": seconds,
+        "ties": len(loop.ties),
+        "comparisons": sum(len(a.comparisons) for a in loop.answers),
+        "repeats": sum(1 for a in loop.answers if not a.comparisons and a.query.buffer),
+        "refits": len(refits),
+        "refits_rejected": sum(1 for r in refits if not r.accepted),
+        "lengthscale_x": last.lengthscale[0],
+        "lengthscale_y": last.lengthscale[1],
+        "band": last.band,
+    }
+
+
+def _cache(scenario: str, arm: str) -> Path:
+    return CACHE / scenario / f"{arm.replace('@', '_at_').replace('+', '_')}.json"
+
+
+def run(arms: list[Arm], scenarios: list[str], objectives: int, jobs: int) -> None:
+    for scenario in scenarios:
+        for arm in arms:
+            path = _cache(scenario, arm.name)
+            start = time.perf_counter()
+            out = Parallel(n_jobs=jobs)(
+                delayed(run_one)(arm, scenario, k) for k in range(objectives)
+            )
+            rows = [{**o, "scores": np.asarray(o["scores"]).tolist()} for o in out]
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps({"arm": arm.name, "scenario": scenario, "runs": rows}))
+            s = np.array([r["scores"] for r in rows])
+            print(
+                f"{scenario:9s} {arm.name:20s} {time.perf_counter() - start:6.0f} s  "
+                f"1-20 {s[:, :20].mean():.3f}  31-150 {s[:, 30:].mean():.3f}",
+                flush=True,
+            )
+
+
+def _load() -> dict[tuple[str, str], list[dict[str, object]]]:
+    out = {}
+    for scenario in SCENARIOS:
+        for arm in ARMS:
+            path = _cache(scenario, arm.name)
+            if path.is_file():
+                out[(scenario, arm.name)] = json.loads(path.read_text())["runs"]
+    return out
+
+
+def _phase(runs: list[dict[str, object]]) -> dict[str, np.ndarray]:
+    s = np.array([r["scores"] for r in runs])
+    return {
+        "early": s[:, :20].mean(axis=1),
+        "late": s[:, 30:].mean(axis=1),
+        "argmax": np.array([r["argmax"] for r in runs], dtype=float),
+    }
+
+
+def _se(x: np.ndarray) -> float:
+    return float(np.std(x, ddof=1) / np.sqrt(x.size)) if x.size > 1 else float("nan")
+
+
+def report() -> None:
+    data = _load()
+    if not data:
+        raise SystemExit(f"no cached runs under {CACHE}: run the study first")
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    keys = ["scenario", "arm", "objective", "mean_1_20", "mean_31_150", "argmax"]
+    extra = ["seconds", "ties", "comparisons", "repeats", "refits", "refits_rejected"]
+    extra += ["lengthscale_x", "lengthscale_y", "band"]
+    with (RESULTS / "runs.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(keys + extra)
+        for (scenario, arm), runs in data.items():
+            for k, r in enumerate(runs):
+                s = np.asarray(r["scores"])
+                w.writerow(
+                    [scenario, arm, k, f"{s[:20].mean():.5f}", f"{s[30:].mean():.5f}"]
+                    + [f"{float(r['argmax']):.5f}"]  # type: ignore[arg-type]
+                    + [r[e] if not isinstance(r[e], float) else f"{r[e]:.6g}" for e in extra]
+                )
+    with (RESULTS / "curves.csv").open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["scenario", "arm", "trial", "mean_normalized_objective", "standard_error"])
+        for (scenario, arm), runs in data.items():
+            s = np.array([r["scores"] for r in runs])
+            mean, se = s.mean(axis=0), s.std(axis=0, ddof=1) / np.sqrt(s.shape[0])
+            for t in range(s.shape[1]):
+                w.writerow([scenario, arm, t + 1, f"{mean[t]:.5f}", f"{se[t]:.5f}"])
+    _summary(data)
+    _figure(data)
+
+
+def _summary(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
+    lines = ["# Learning study: results", ""]
+    lines += [
+        "Generated by `python benchmarks/study_learning.py report` from the cached runs; see",
+        "`docs/learning.md` for what the arms are and what the defaults became.  Each cell is the",
+        "mean over runs (objectives) with its standard error; `vs paper` is the paired difference",
+        "from the `paper` arm of the same scenario (same objectives and seeds), with its standard",
+        "error.  `argmax` is the normalised objective of the final posterior mean's best action.",
+        "",
+    ]
+    for scenario in SCENARIOS:
+        rows = [(a, data[(scenario, a.name)]) for a in ARMS if (scenario, a.name) in data]
+        if not rows:
+            continue
+        base = _phase(data[(scenario, "paper")]) if (scenario, "paper") in data else None
+        n = len(rows[0][1])
+        lines += [f"## {scenario} subject ({n} objectives)", ""]
+        lines += [
+            "| arm | trials 1-20 | vs paper | trials 31-150 | vs paper | argmax | s/run | "
+            "ties | repeats | refits (rejected) | what |",
+            "|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for arm, runs in rows:
+            p = _phase(runs)
+            cells = [arm.name]
+            for phase in ("early", "late"):
+                cells.append(f"{p[phase].mean():.3f} ± {_se(p[phase]):.3f}")
+                if base is not None and base[phase].size == p[phase].size:
+                    d = p[phase] - base[phase]
+                    cells.append(f"{d.mean():+.3f} ± {_se(d):.3f}")
+                else:
+                    cells.append("")
+            mean = lambda key: float(np.mean([float(r[key]) for r in runs]))  # noqa: E731
+            refits = sum(int(r["refits"]) for r in runs)
+            rejected = sum(int(r["refits_rejected"]) for r in runs)
+            cells += [
+                f"{p['argmax'].mean():.3f}",
+                f"{mean('seconds'):.1f}",
+                f"{mean('ties'):.0f}",
+                f"{mean('repeats'):.0f}",
+                f"{refits} ({rejected})",
+                arm.note,
+            ]
+            lines.append("| " + " | ".join(cells) + " |")
+        lines.append("")
+    curves = published_curves()
+    if "n1_b1_coactive" in curves:
+        pub = curves["n1_b1_coactive"][0]
+        lines += [
+            "The published curve of the paper's n = 1, b = 1 with coactive feedback (authors' 100",
+            f"runs): trials 1-20 {pub[:20].mean():.3f}, trials 31-150 {pub[30:].mean():.3f}.",
+            "",
+        ]
+    lines += ["## Machine", "", machine_markdown(machine_description()), ""]
+    (RESULTS / "summary.md").write_text("\n".join(lines))
+
+
+def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    shown = ["paper", "eubo", "eubo-then-sparring", "gated", "gated+ties+fit", "paper@2x"]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
+    for ax, scenario in zip(axes, SCENARIOS, strict=True):
+        for name in shown:
+            if (scenario, name) not in data:
+                continue
+            s = np.array([r["scores"] for r in data[(scenario, name)]])
+            mean = s.mean(axis=0)
+            se = s.std(axis=0, ddof=1) / np.sqrt(s.shape[0])
+            t = np.arange(1, s.shape[1] + 1)
+            ax.plot(t, mean, label=name, lw=1.4)
+            ax.fill_between(t, mean - se, mean + se, alpha=0.2)
+        ax.set_title(f"{scenario} subject, n = 1, b = 1, coactive")
+        ax.set_xlabel("trial")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("mean normalised objective of the executed action")
+    axes[0].legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(RESULTS / "learning.png", dpi=120)
+    plt.close(fig)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run")
+    r.add_argument("--objectives", type=int, default=100)
+    r.add_argument("--arms", default="all", help="comma-separated arm names, or 'all'")
+    r.add_argument("--scenarios", default=",".join(SCENARIOS))
+    r.add_argument("--jobs", type=int, default=2)
+    sub.add_parser("report")
+    args = parser.parse_args()
+    if args.command == "report":
+        report()
+        return
+    names = {a.name: a for a in ARMS}
+    arms = ARMS if args.arms == "all" else [names[n] for n in args.arms.split(",")]
+    run(arms, args.scenarios.split(","), args.objectives, args.jobs)
+
+
+if __name__ == "__main__":
+    main()
