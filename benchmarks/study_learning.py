@@ -266,7 +266,10 @@ def _summary(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
                     cells.append(f"{d.mean():+.3f} ± {_se(d):.3f}")
                 else:
                     cells.append("")
-            mean = lambda key: float(np.mean([float(r[key]) for r in runs]))  # noqa: E731
+
+            def mean(key: str, runs: list[dict[str, object]] = runs) -> float:
+                return float(np.mean([float(r[key]) for r in runs]))  # type: ignore[arg-type]
+
             refits = sum(int(r["refits"]) for r in runs)
             rejected = sum(int(r["refits_rejected"]) for r in runs)
             cells += [

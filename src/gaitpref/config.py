@@ -31,9 +31,10 @@
     strategy = "eubo"              # optional: see gaitpref.strategies.STRATEGIES
 
 Every error names the key and what is allowed.  The optional learning keys default to
-:data:`DEFAULT_LEARNING` and :data:`DEFAULT_STRATEGY` (``docs/learning.md`` says why); the
-shipped paper configs set them explicitly to the paper's choices.  Shipped configs (the paper's settings) live in
-``gaitpref/configs/`` and load by name: ``load_config("exo-1d-step-length")``.
+:data:`DEFAULT_TIES`, :data:`DEFAULT_FIT` and :data:`DEFAULT_STRATEGY` (``docs/learning.md``
+says why); the shipped paper configs set them explicitly to the paper's choices.  Shipped configs
+(the paper's settings) live in ``gaitpref/configs/`` and load by name:
+``load_config("exo-1d-step-length")``.
 """
 
 from __future__ import annotations
@@ -50,9 +51,9 @@ import numpy as np
 from gaitpref.cospar import CoSpar
 from gaitpref.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
-from gaitpref.strategies import STRATEGIES, make_strategy
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Feature, Space
+from gaitpref.strategies import STRATEGIES, make_strategy
 
 
 class ConfigError(ValueError):

@@ -80,7 +80,9 @@ def test_jitter_keeps_its_ratio_and_the_scale_redundancy_holds(small_space: Spac
     assert moved.jitter / moved.variance == pytest.approx(hyper.jitter / hyper.variance)
     c = 3.0
     scaled_data = PairData(data.first, data.second, c * data.sigma, data.banded, data.tie)
-    scaled = Hyperparameters(hyper.lengthscale, c**2 * hyper.variance, c**2 * hyper.jitter, c * 0.01)
+    scaled = Hyperparameters(
+        hyper.lengthscale, c**2 * hyper.variance, c**2 * hyper.jitter, c * 0.01
+    )
     a = laplace_evidence(small_space, hyper, data)
     b = laplace_evidence(small_space, scaled, scaled_data)
     assert a.value == pytest.approx(b.value, rel=1e-9)

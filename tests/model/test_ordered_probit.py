@@ -62,7 +62,8 @@ def test_zero_band_is_the_papers_probit_bit_for_bit() -> None:
     for a, b in zip(ours, Probit(sigma).terms(d), strict=True):
         assert np.array_equal(a, b)
     assert np.array_equal(
-        OrderedProbit(sigma, np.zeros(50), np.zeros(50, dtype=bool)).third(d), Probit(sigma).third(d)
+        OrderedProbit(sigma, np.zeros(50), np.zeros(50, dtype=bool)).third(d),
+        Probit(sigma).third(d),
     )
 
 

@@ -94,7 +94,8 @@ class Hyperparameters:
     def log_vector(self) -> FloatArray:
         """``(log l_1, ..., log l_d, log s^2, log band)`` (``log band = -inf`` for no band)."""
         with np.errstate(divide="ignore"):
-            return np.log(np.array([*self.lengthscale, self.variance, self.band]))
+            out: FloatArray = np.log(np.array([*self.lengthscale, self.variance, self.band]))
+        return out
 
     def with_log_vector(self, theta: FloatArray) -> Hyperparameters:
         """New values from a log vector; the jitter keeps its ratio to the signal variance."""

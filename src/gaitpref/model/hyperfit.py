@@ -237,7 +237,9 @@ def _fit(
     evals, failed = objective.evaluations, objective.failures
     if not after >= before:
         message = f"kept the previous hyperparameters: the fit did not improve ({res.message})"
-        return HyperFit(start, start, False, False, message, evals, failed, before, before, data.size)
+        return HyperFit(
+            start, start, False, False, message, evals, failed, before, before, data.size
+        )
     message = str(res.message) + (f"; {failed} evaluations failed" if failed else "")
     return HyperFit(
         start, objective.hyper(best_x), True, bool(res.success) and not failed, message, evals,

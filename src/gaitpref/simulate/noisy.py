@@ -36,7 +36,7 @@ class IndifferentUser(SimulatedUser):
             raise ValueError(f"band must be >= 0, got {self.band!r}")
 
     def compare(self, i: int, j: int) -> Outcome:
-        """"first", "second" or "none" for actions ``i`` and ``j`` (see the module docstring)."""
+        """ "first", "second" or "none" for actions ``i`` and ``j`` (see the module docstring)."""
         perceived = float(self.utility[i] - self.utility[j])
         if self.noise > 0:
             perceived += float(np.sqrt(2.0) * self.noise * self.rng.standard_normal())

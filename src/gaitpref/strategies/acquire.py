@@ -23,7 +23,7 @@ import numpy as np
 
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import IntArray
-from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+from gaitpref.strategies.base import AskContext
 from gaitpref.strategies.eubo import best_pair, eubo_against
 
 
@@ -39,9 +39,7 @@ def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Genera
     return refs[random_argmax(mu, rng)]
 
 
-def eubo_fill(
-    context: AskContext, chosen: list[int], allowed: IntArray | None
-) -> tuple[int, ...]:
+def eubo_fill(context: AskContext, chosen: list[int], allowed: IntArray | None) -> tuple[int, ...]:
     """Add actions one at a time, each the EUBO maximiser against the best reference."""
     post, rng = context.posterior, context.rng
     size = len(post.space)
@@ -108,4 +106,3 @@ class ConfidentEubo:
             masked[refs] = -np.inf
             rest = np.array([int(np.argmax(masked))], dtype=np.intp)
         return eubo_fill(context, chosen, rest.astype(np.intp))
-

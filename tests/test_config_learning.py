@@ -1,0 +1,98 @@
+"""Config keys for strategies, ties and hyperparameter fitting."""
+
+from __future__ import annotations
+
+import pytest
+
+from gaitpref import ConfigError
+from gaitpref.config import (
+    DEFAULT_FIT,
+    DEFAULT_STRATEGY,
+    DEFAULT_TIES,
+    parse_config,
+)
+from gaitpref.model.hyperfit import LogNormal
+from gaitpref.strategies import GatedEubo, SelfSparring
+
+BASE = """
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+
+[space.step_width]
+min = 0.25
+max = 0.30
+num = 6
+
+[model]
+lengthscale = {{ step_length = 0.03, step_width = 0.03 }}
+signal_variance = 0.005
+jitter = 1e-7
+noise = 0.02
+{model}
+
+[cospar]
+n = 1
+buffer = 1
+{cospar}
+"""
+
+
+def _cfg(model: str = "", cospar: str = "") -> object:
+    return parse_config(BASE.format(model=model, cospar=cospar))
+
+
+def test_a_config_without_the_keys_gets_the_defaults() -> None:
+    cfg = _cfg()
+    assert (cfg.strategy, cfg.learning.ties, cfg.learning.fit) == (
+        DEFAULT_STRATEGY, DEFAULT_TIES, DEFAULT_FIT,
+    )  # fmt: skip
+    loop = cfg.make_loop()
+    assert loop.strategy.name == DEFAULT_STRATEGY and loop.learning == cfg.learning
+
+
+def test_every_key_is_read() -> None:
+    cfg = _cfg(
+        'ties = "model"\ntie_band = "fit"\nfit = "evidence"\nrefit_every = 4\n'
+        "[model.prior]\nlengthscale = { step_width = [0.02, 0.5] }\n"
+        "signal_variance = [0.005, 1.0]\ntie_band = [0.01, 0.5]",
+        'strategy = "gated-eubo"',
+    )
+    learning = cfg.learning
+    assert learning.ties == "model" and learning.tie_band is None and learning.fit == "evidence"
+    assert learning.refit_every == 4 and learning.prior is not None
+    assert learning.prior.lengthscale[1] == LogNormal(0.02, 0.5)
+    assert learning.prior.lengthscale[0].median == pytest.approx(0.025)  # default: range / 4
+    assert learning.prior.variance == LogNormal(0.005, 1.0)
+    assert learning.prior.band == LogNormal(0.01, 0.5)
+    assert isinstance(cfg.make_loop().strategy, GatedEubo)
+    fixed = _cfg('ties = "model"\ntie_band = 0.01\nfit = "fixed"', 'strategy = "self-sparring"')
+    assert fixed.learning.tie_band == 0.01 and isinstance(fixed.make_loop().strategy, SelfSparring)
+
+
+@pytest.mark.parametrize(
+    ("model", "cospar", "message"),
+    [
+        ("", 'strategy = "ucb"', r"\[cospar\].strategy: must be one of self-sparring, eubo"),
+        ('ties = "keep"', "", r"\[model\].ties: must be one of drop, model"),
+        ('fit = "mle"', "", r"\[model\].fit: must be one of fixed, evidence"),
+        ('ties = "drop"\ntie_band = 0.1', "", r'tie_band: only used with ties = "model"'),
+        ('ties = "model"\nfit = "fixed"', "", "needs a number"),
+        ('ties = "model"\nfit = "fixed"\ntie_band = "fit"', "", 'needs fit = "evidence"'),
+        ('ties = "model"\ntie_band = -1', "", r"\[model\].tie_band: must be >= 0"),
+        ("refit_every = 0", "", r"\[model\].refit_every: must be an integer >= 1"),
+        ("[model.prior]\nnoise = [1, 1]", "", r"\[model.prior\]: unknown key 'noise'"),
+        ("[model.prior]\nsignal_variance = 1", "", r"must be \[median, sd\]"),
+        ("[model.prior]\nsignal_variance = [0, 1]", "", "median must be positive"),
+        ("[model.prior]\nlengthscale = { speed = [1, 1] }", "", "unknown key 'speed'"),
+        (
+            'ties = "drop"\n[model.prior]\ntie_band = [0.1, 1]',
+            "",
+            'only used with tie_band = "fit"',
+        ),
+    ],
+)
+def test_bad_learning_keys_name_the_key(model: str, cospar: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        _cfg(model, cospar)
