@@ -6,26 +6,33 @@ The public API::
     kernel = gaitpref.SquaredExponential(lengthscale=0.03, variance=0.005, jitter=1e-7)
     posterior = gaitpref.PreferenceGP(space, kernel, noise=0.02).posterior(winners, losers)
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0)   # ask() / tell()
+    loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0,
+                           strategy=gaitpref.make_strategy("gated-eubo"),
+                           learning=gaitpref.Learning(ties="model", fit="evidence"))
     config = gaitpref.load_config("exo-1d-step-length")                    # or a TOML path
 """
 
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.feedback import Comparison, FeedbackError, Preference, Suggestion, Tie
+from gaitpref.learning import Learning
 from gaitpref.model import (
     ConvergenceError,
     Posterior,
     PreferenceGP,
     SquaredExponential,
 )
+from gaitpref.simulate.noisy import IndifferentUser
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import MOVES, Feature, Move, Space
+from gaitpref.strategies import STRATEGIES, Strategy, make_strategy
 
 __version__ = "0.1.0"
 
 __all__ = [
     "MOVES",
+    "STRATEGIES",
     "Answer",
     "CoSpar",
     "Comparison",
@@ -35,6 +42,8 @@ __all__ = [
     "Feature",
     "FeedbackError",
     "GradientCoactive",
+    "IndifferentUser",
+    "Learning",
     "Move",
     "Posterior",
     "Preference",
@@ -45,10 +54,12 @@ __all__ = [
     "SimulationResult",
     "Space",
     "SquaredExponential",
+    "Strategy",
     "Suggestion",
     "Tie",
     "__version__",
     "load_config",
+    "make_strategy",
     "run_simulation",
     "shipped_configs",
 ]

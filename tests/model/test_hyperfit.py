@@ -7,10 +7,10 @@ import pytest
 
 import gaitpref.model.hyperfit as hf
 from gaitpref import Feature, Space, SquaredExponential
+from gaitpref.model import KroneckerPriorSampler
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hyperfit import LogNormal, default_prior, fit_hyperparameters
 from gaitpref.model.laplace import ConvergenceError
-from gaitpref.model.posterior import KroneckerPriorSampler
 
 SPACE = Space([Feature.linspace("x", 0.0, 1.0, 12), Feature.linspace("y", 0.0, 2.0, 12)])
 

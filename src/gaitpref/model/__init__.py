@@ -1,19 +1,37 @@
 """Pure numerics of the preference GP: kernels, likelihoods, the Laplace fit, the posterior."""
 
+from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.gp import PreferenceGP
+from gaitpref.model.hyperfit import (
+    HyperFit,
+    HyperPrior,
+    LogNormal,
+    default_prior,
+    fit_hyperparameters,
+)
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import ConvergenceError, LaplaceMode, PriorNotPositiveDefiniteError
-from gaitpref.model.likelihood import PairLikelihood, Probit
+from gaitpref.model.likelihood import OrderedProbit, PairLikelihood, Probit
 from gaitpref.model.posterior import KroneckerPriorSampler, Posterior
 
 __all__ = [
     "ConvergenceError",
+    "Evidence",
+    "HyperFit",
+    "HyperPrior",
+    "Hyperparameters",
     "KroneckerPriorSampler",
     "LaplaceMode",
+    "LogNormal",
+    "OrderedProbit",
+    "PairData",
     "PairLikelihood",
     "Posterior",
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
     "Probit",
     "SquaredExponential",
+    "default_prior",
+    "fit_hyperparameters",
+    "laplace_evidence",
 ]
