@@ -91,7 +91,14 @@ TIES_BAND_ONLY = (
 )
 FIT = 'ties = "drop"\nfit = "evidence"'
 TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"'
+FIT20 = FIT + "\nrefit_every = 20"
 FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
+
+
+def _fit_centred(lengthscale: float) -> str:
+    """Lengthscales fitted with the prior centred on the config's guess (sd 0.7)."""
+    guess = f"[{lengthscale}, 0.7]"
+    return FIT + f"\n[model.prior]\nlengthscale = {{ x = {guess}, y = {guess} }}"
 
 
 @dataclass(frozen=True)
@@ -120,9 +127,38 @@ ARMS = [
     Arm("paper@2x", "self-sparring", PAPER, 0.30, "the paper, lengthscale wrong by 2x"),
     Arm("paper+fit@2x", "self-sparring", FIT, 0.30, "fitted, starting 2x wrong"),
     Arm("gated@2x", "gated-eubo", PAPER, 0.30, "gated, lengthscale wrong by 2x"),
+    Arm("gated+fit@2x", "gated-eubo", FIT, 0.30, "gated + fitted, starting 2x wrong"),
+    Arm("gated@0.5x", "gated-eubo", PAPER, 0.075, "gated, lengthscale wrong by 0.5x"),
+    Arm("gated+fit@0.5x", "gated-eubo", FIT, 0.075, "gated + fitted, starting 0.5x wrong"),
+    Arm("gated+fit20", "gated-eubo", FIT20, note="fitted every 20 answers"),
+    Arm("gated+fit20@2x", "gated-eubo", FIT20, 0.30, "fitted every 20, starting 2x wrong"),
+    Arm("gated+fit20@0.5x", "gated-eubo", FIT20, 0.075, "fitted every 20, starting 0.5x"),
+    Arm("gated+fitc", "gated-eubo", _fit_centred(0.15), 0.15, "fitted, prior at the guess"),
+    Arm("gated+fitc@2x", "gated-eubo", _fit_centred(0.3), 0.3, "prior at a 2x wrong guess"),
+    Arm("gated+fitc@0.5x", "gated-eubo", _fit_centred(0.075), 0.075, "prior at a 0.5x guess"),
     Arm("gated+ties+fit@2x", "gated-eubo", TIES_FIT, 0.30, "gated + both, starting 2x wrong"),
 ]
 SCENARIOS = ("noiseless", "noisy")
+DEFAULT_ARM = "gated+fit20"  # what a config that omits the learning keys runs (docs/learning.md)
+ADDITIONS = [  # (what is added, arm with it, arm without it)
+    ("gated-eubo instead of self-sparring", "gated", "paper"),
+    ("EUBO instead of self-sparring", "eubo", "paper"),
+    ("ties modelled (band learned)", "gated+ties", "gated"),
+    ("lengthscales fitted", "gated+fit", "gated"),
+    ("ties modelled + lengthscales fitted", "gated+ties+fit", "gated"),
+    ("signal variance fitted too", "gated+fit+s2", "gated+fit"),
+    ("lengthscales fitted, kernel 2x wrong", "gated+fit@2x", "gated@2x"),
+    ("lengthscales fitted, kernel 0.5x wrong", "gated+fit@0.5x", "gated@0.5x"),
+    ("fitted every 20 answers", "gated+fit20", "gated"),
+    ("fitted every 20 answers, kernel 2x wrong", "gated+fit20@2x", "gated@2x"),
+    ("fitted every 20 answers, kernel 0.5x wrong", "gated+fit20@0.5x", "gated@0.5x"),
+    ("fitted, prior at the guess", "gated+fitc", "gated"),
+    ("fitted, prior at the guess, 2x wrong", "gated+fitc@2x", "gated@2x"),
+    ("fitted, prior at the guess, 0.5x wrong", "gated+fitc@0.5x", "gated@0.5x"),
+    ("ties + fit, kernel 2x wrong", "gated+ties+fit@2x", "gated@2x"),
+    ("self-sparring: fitted, kernel 2x wrong", "paper+fit@2x", "paper@2x"),
+    ("self-sparring: ties + fit", "paper+ties+fit", "paper"),
+]
 
 
 def run_one(arm: Arm, scenario: str, k: int) -> dict[str, object]:
@@ -195,6 +231,7 @@ def _phase(runs: list[dict[str, object]]) -> dict[str, np.ndarray]:
     return {
         "early": s[:, :20].mean(axis=1),
         "late": s[:, 30:].mean(axis=1),
+        "end": s[:, 120:].mean(axis=1),
         "argmax": np.array([r["argmax"] for r in runs], dtype=float),
     }
 
@@ -252,14 +289,14 @@ def _summary(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
         n = len(rows[0][1])
         lines += [f"## {scenario} subject ({n} objectives)", ""]
         lines += [
-            "| arm | trials 1-20 | vs paper | trials 31-150 | vs paper | argmax | s/run | "
-            "ties | repeats | refits (rejected) | what |",
-            "|---|---|---|---|---|---|---|---|---|---|---|",
+            "| arm | trials 1-20 | vs paper | trials 31-150 | vs paper | trials 121-150 | vs paper "
+            "| argmax | s/run | ties | repeats | refits (rejected) | what |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         ]
         for arm, runs in rows:
             p = _phase(runs)
-            cells = [arm.name]
-            for phase in ("early", "late"):
+            cells = [f"**{arm.name}** (default)" if arm.name == DEFAULT_ARM else arm.name]
+            for phase in ("early", "late", "end"):
                 cells.append(f"{p[phase].mean():.3f} ± {_se(p[phase]):.3f}")
                 if base is not None and base[phase].size == p[phase].size:
                     d = p[phase] - base[phase]
@@ -282,6 +319,24 @@ def _summary(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
             ]
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
+    lines += [
+        "## Each addition against its base (paired differences, same scenario)",
+        "",
+        "| addition | arm - base | subject | trials 1-20 | trials 31-150 | trials 121-150 "
+        "| argmax |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for label, arm, base_arm in ADDITIONS:
+        for scenario in SCENARIOS:
+            if (scenario, arm) not in data or (scenario, base_arm) not in data:
+                continue
+            a, b = _phase(data[(scenario, arm)]), _phase(data[(scenario, base_arm)])
+            cells = [label, f"{arm} - {base_arm}", scenario]
+            for phase in ("early", "late", "end", "argmax"):
+                d = a[phase] - b[phase]
+                cells.append(f"{d.mean():+.3f} ± {_se(d):.3f}")
+            lines.append("| " + " | ".join(cells) + " |")
+    lines.append("")
     curves = published_curves()
     if "n1_b1_coactive" in curves:
         pub = curves["n1_b1_coactive"][0]
@@ -300,7 +355,7 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["paper", "eubo", "eubo-then-sparring", "gated", "gated+ties+fit", "paper@2x"]
+    shown = ["paper", "eubo", "eubo-then-sparring", "gated", "gated+ties", "gated+fit20"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, scenario in zip(axes, SCENARIOS, strict=True):
         for name in shown:
@@ -310,7 +365,8 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
             mean = s.mean(axis=0)
             se = s.std(axis=0, ddof=1) / np.sqrt(s.shape[0])
             t = np.arange(1, s.shape[1] + 1)
-            ax.plot(t, mean, label=name, lw=1.4)
+            label = f"{name} (the default)" if name == DEFAULT_ARM else name
+            ax.plot(t, mean, label=label, lw=2.2 if name == DEFAULT_ARM else 1.2)
             ax.fill_between(t, mean - se, mean + se, alpha=0.2)
         ax.set_title(f"{scenario} subject, n = 1, b = 1, coactive")
         ax.set_xlabel("trial")

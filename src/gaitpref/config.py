@@ -13,22 +13,21 @@
     signal_variance = 0.005
     jitter = 1e-7
     noise = 0.02
-    ties = "model"                 # optional: "drop" (the paper) or "model" (ordered probit)
-    tie_band = "fit"               # optional with ties = "model": a number, or "fit"
+    ties = "drop"                  # optional: "drop" (the paper) or "model" (ordered probit)
+    # tie_band = "fit"             # with ties = "model": a number, or "fit"
     fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
-    refit_every = 10               # optional: answers between hyperparameter refits
+    refit_every = 20               # optional: answers between hyperparameter refits
 
     [model.prior]                  # optional: log-normal priors as [median, sd of the log]
     lengthscale = { step_length = [0.025, 0.7] }
     signal_variance = [0.005, 0.0] # sd 0 holds the parameter fixed
-    tie_band = [0.02, 1.0]
 
     [cospar]
     n = 1
     buffer = 1
     coactive_weight = 1.0
     seed = 0
-    strategy = "eubo"              # optional: see gaitpref.strategies.STRATEGIES
+    strategy = "gated-eubo"        # optional: see gaitpref.strategies.STRATEGIES
 
 Every error names the key and what is allowed.  The optional learning keys default to
 :data:`DEFAULT_TIES`, :data:`DEFAULT_FIT` and :data:`DEFAULT_STRATEGY` (``docs/learning.md``
@@ -77,10 +76,10 @@ _PRIOR_KEYS = {"lengthscale", "signal_variance", "tie_band"}
 _COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed", "strategy"}
 
 #: What a config that omits the learning keys gets (the study in docs/results/learning).
-DEFAULT_TIES: TiesMode = "model"
+DEFAULT_TIES: TiesMode = "drop"
 DEFAULT_FIT: FitMode = "evidence"
-DEFAULT_REFIT_EVERY = 10
-DEFAULT_STRATEGY = "eubo"
+DEFAULT_REFIT_EVERY = 20
+DEFAULT_STRATEGY = "gated-eubo"
 
 
 @dataclass(frozen=True)

@@ -40,7 +40,7 @@ class Learning:
     ties: TiesMode = "drop"
     tie_band: float | None = None
     fit: FitMode = "fixed"
-    refit_every: int = 10
+    refit_every: int = 20
     prior: HyperPrior | None = None  # None: model.hyperfit.default_prior
 
     def __post_init__(self) -> None:
