@@ -37,10 +37,7 @@ def test_exclude_equals_never_having_the_preferences() -> None:
     target = loop.answers[2]
     loop.exclude({target.query.id: range(len(target.preferences))})
     keep = [
-        (a.query.id, i)
-        for a in loop.answers
-        if a is not target
-        for i in range(len(a.preferences))
+        (a.query.id, i) for a in loop.answers if a is not target for i in range(len(a.preferences))
     ]
     np.testing.assert_allclose(loop.posterior.mean, _refit(loop, keep), atol=1e-8)
     assert len(loop.answers) == 6  # the record stays
@@ -72,10 +69,7 @@ def test_undo_after_excluding_an_earlier_answer_refits_without_it() -> None:
     loop.exclude({early.query.id: range(len(early.preferences))})
     loop.undo()  # the last answer's posterior_before still held the excluded preferences
     keep = [
-        (a.query.id, i)
-        for a in loop.answers
-        if a is not early
-        for i in range(len(a.preferences))
+        (a.query.id, i) for a in loop.answers if a is not early for i in range(len(a.preferences))
     ]
     np.testing.assert_allclose(loop.posterior.mean, _refit(loop, keep), atol=1e-8)
 
