@@ -87,3 +87,36 @@ def test_undo_of_an_answer_with_its_own_exclusion_is_exact() -> None:
     # answering the same query again starts with no exclusion
     again = loop.tell(loop.ask(), [], [])
     assert loop.excluded == {} and again.query == answer.query
+
+
+def _run(ops: list[str], seed: int = 5) -> tuple[object, object, np.ndarray]:
+    loop = load_config("exo-1d-step-length").make_loop(seed=seed)
+    for op in ops:
+        if op == "undo":
+            loop.undo()
+            continue
+        q = loop.ask()
+        loop.tell(q, [(q.actions[0], b, op) for b in q.buffer if b != q.actions[0]], [])
+    return loop.ask(), loop.rng.bit_generator.state, np.asarray(loop.posterior.mean)
+
+
+@pytest.mark.parametrize(
+    "ops",
+    [
+        ["first", "second", "first", "undo", "undo", "second", "second"],
+        ["first", "second", "first", "undo", "undo", "undo", "second", "second", "second"],
+        ["first", "first", "undo", "undo", "second", "first", "undo", "second"],
+    ],
+)
+def test_several_undos_in_a_row_go_back_exactly(ops: list[str]) -> None:
+    """Undoing k answers and answering again equals never having given them (RNG included)."""
+    kept: list[str] = []
+    for op in ops:
+        if op == "undo":
+            kept.pop()
+        else:
+            kept.append(op)
+    q1, rng1, mean1 = _run(ops)
+    q2, rng2, mean2 = _run(kept)
+    assert q1 == q2 and rng1 == rng2
+    np.testing.assert_array_equal(mean1, mean2)

@@ -107,6 +107,7 @@ class CoSpar:
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
         self._rng_before_pending: dict[str, object] | None = None
+        self._rng_before: dict[int, dict[str, object]] = {}  # answered query id -> RNG before ask
         self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
@@ -186,6 +187,8 @@ class CoSpar:
         new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
+        if self._rng_before_pending is not None:
+            self._rng_before[q.id] = self._rng_before_pending
         self.pending = None
         self._rng_before_pending = None
         recent = self._buffer + q.actions
@@ -208,7 +211,8 @@ class CoSpar:
         else:
             self.posterior = answer.posterior_before
         self.pending = answer.query
-        self._rng_before_pending = None
+        # so that a further undo can put the generator back to before this query was drawn
+        self._rng_before_pending = self._rng_before.pop(answer.query.id, None)
         self._buffer = answer.query.buffer
         return answer
 
