@@ -7,6 +7,7 @@ The public API::
     posterior = gaitpref.PreferenceGP(space, kernel, noise=0.02).posterior(winners, losers)
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0)   # ask() / tell()
     config = gaitpref.load_config("exo-1d-step-length")                    # or a TOML path
+    session = gaitpref.Session.create("sqlite:///lab.db", config, subject="S01")  # durable
 """
 
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
@@ -18,6 +19,8 @@ from gaitpref.model import (
     PreferenceGP,
     SquaredExponential,
 )
+from gaitpref.session import Session, SessionQuery
+from gaitpref.session_log import REASONS, ReplayError, SessionStateError
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import MOVES, Feature, Move, Space
@@ -26,6 +29,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "MOVES",
+    "REASONS",
     "Answer",
     "CoSpar",
     "Comparison",
@@ -41,6 +45,10 @@ __all__ = [
     "PreferenceGP",
     "Query",
     "QueryError",
+    "ReplayError",
+    "Session",
+    "SessionQuery",
+    "SessionStateError",
     "SimulatedUser",
     "SimulationResult",
     "Space",

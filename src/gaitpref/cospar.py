@@ -10,15 +10,16 @@ preference" is stored and not modelled; the posterior is refitted, warm-started 
     query = loop.ask()              # query.actions: run these; query.buffer: compare with these
     loop.tell(query, [(query.actions[0], query.buffer[0], "first")], [(a, "step_length", "+small")])
 
-``tell`` checks everything first and changes nothing when it raises.
+``tell`` checks everything first and changes nothing when it raises.  ``exclude`` takes chosen
+preferences of earlier answers out of the model (their records stay in ``answers``), as a session
+does for a trial spoiled by a device fault or a stumble.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -106,12 +107,21 @@ class CoSpar:
         self.pending: Query | None = None
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
-        self._rng_before_pending: Mapping[str, Any] | None = None
+        self._rng_before_pending: dict[str, object] | None = None
+        self._rng_before: dict[int, dict[str, object]] = {}  # answered query id -> RNG before ask
+        self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
+        self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
     # -- state -------------------------------------------------------------------------------
     @property
     def preferences(self) -> list[Preference]:
-        return [p for a in self.answers for p in a.preferences]
+        """The preferences in the model (every answer's, less the excluded ones)."""
+        return [p for a in self.answers for p in self._kept(a)]
+
+    @property
+    def excluded(self) -> dict[int, frozenset[int]]:
+        """Query id -> indices into that answer's ``preferences`` taken out by :meth:`exclude`."""
+        return dict(self._dropped)
 
     @property
     def ties(self) -> list[Tie]:
@@ -180,6 +190,8 @@ class CoSpar:
             new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
+        if self._rng_before_pending is not None:
+            self._rng_before[q.id] = self._rng_before_pending
         self.pending = None
         self._rng_before_pending = None
         recent = self._buffer + q.actions
@@ -194,13 +206,62 @@ class CoSpar:
             self.rng.bit_generator.state = self._rng_before_pending
             self._next_id = self.pending.id
         answer = self.answers.pop()
-        self.posterior = answer.posterior_before
+        self._dropped.pop(answer.query.id, None)
+        if answer.query.id in self._stale_before:
+            # an exclusion in an earlier answer came after this one: refit what remains
+            self._stale_before.discard(answer.query.id)
+            self.posterior = self._fit(self.answers)
+        else:
+            self.posterior = answer.posterior_before
         self.pending = answer.query
-        self._rng_before_pending = None
+        # so that a further undo can put the generator back to before this query was drawn
+        self._rng_before_pending = self._rng_before.pop(answer.query.id, None)
         self._buffer = answer.query.buffer
         return answer
 
+    def exclude(self, drops: Mapping[int, Collection[int]]) -> Posterior:
+        """Take preferences out of the model and refit; the answers themselves stay recorded.
+
+        ``drops`` maps an answered query's id to indices into that answer's ``preferences``.
+        Exclusions add up (excluding twice is harmless) and are dropped with their answer by
+        :meth:`undo`.  Raises :class:`QueryError` / ``IndexError`` and changes nothing on bad
+        input.
+        """
+        position = {a.query.id: k for k, a in enumerate(self.answers)}
+        new = dict(self._dropped)
+        for qid, indices in drops.items():
+            if qid not in position:
+                raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
+            size = len(self.answers[position[qid]].preferences)
+            chosen = {int(i) for i in indices}
+            bad = sorted(i for i in chosen if not 0 <= i < size)
+            if bad:
+                raise IndexError(
+                    f"query {qid} has {size} preferences; cannot exclude index {bad[0]}"
+                )
+            new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
+        if new == self._dropped:
+            return self.posterior
+        old = self._dropped
+        self._dropped = new
+        try:
+            posterior = self._fit(self.answers)
+        except Exception:
+            self._dropped = old
+            raise
+        self.posterior = posterior
+        touched = [position[q] for q in drops if new.get(q) != old.get(q)]
+        if touched:
+            self._stale_before.update(a.query.id for a in self.answers[min(touched) + 1 :])
+        return posterior
+
     # -- internals ---------------------------------------------------------------------------
+    def _kept(self, answer: Answer) -> tuple[Preference, ...]:
+        dropped = self._dropped.get(answer.query.id)
+        if not dropped:
+            return answer.preferences
+        return tuple(p for k, p in enumerate(answer.preferences) if k not in dropped)
+
     def _check_query(self, query: Query | int) -> Query:
         qid = query.id if isinstance(query, Query) else query
         if isinstance(qid, bool) or not isinstance(qid, int | np.integer):
@@ -215,7 +276,7 @@ class CoSpar:
         return self.pending
 
     def _fit(self, answers: list[Answer]) -> Posterior:
-        prefs = [p for a in answers for p in a.preferences]
+        prefs = [p for a in answers for p in self._kept(a)]
         if not prefs:
             return self.gp.prior()
         winners = np.array([p.winner for p in prefs], dtype=np.intp)
