@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -107,8 +108,8 @@ class CoSpar:
         self.pending: Query | None = None
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
-        self._rng_before_pending: dict[str, object] | None = None
-        self._rng_before: dict[int, dict[str, object]] = {}  # answered query id -> RNG before ask
+        self._rng_before_pending: Mapping[str, Any] | None = None
+        self._rng_before: dict[int, Mapping[str, Any]] = {}  # answered query id -> RNG before ask
         self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
