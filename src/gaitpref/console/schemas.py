@@ -111,8 +111,13 @@ class UndoIn(_Request):
 
 
 class UndoneOut(BaseModel):
-    undone_query_id: int
-    pending_query_id: int
+    pending_query_id: int = Field(
+        description="the query whose answer was taken back, pending again"
+    )
+    trials: list[int] = Field(description="its trial numbers (they will be given again)")
+    discarded_query_id: int | None = Field(
+        description="the query that was pending before the undo (withdrawn)"
+    )
 
 
 class NoteIn(_Request):
@@ -136,15 +141,59 @@ class PosteriorOut(BaseModel):
     trials: list[int] = Field(description="executed actions in trial order")
 
 
-class SessionOut(BaseModel):
+class SessionItemOut(BaseModel):
+    """A session as listed: its row, without replaying its log."""
+
     id: int
     subject: str
     config: str
     status: str
-    trials: int
-    pending_query_id: int | None
+    events: int = Field(description="events in its log")
     created_at: str
     updated_at: str
+
+
+class SessionOut(SessionItemOut):
+    """A session with what its log says now."""
+
+    seed: int
+    trials: int = Field(description="trials in force (answered, not undone)")
+    pending_query_id: int | None
+    validation_open: bool
+    features: list[FeatureOut]
+
+
+class TrialOut(BaseModel):
+    """An executed trial (the chronology)."""
+
+    trial: int
+    query_id: int
+    gait: GaitOut
+    excluded: str | None = Field(description="the exclusion reason, if excluded")
+
+
+class ConfigOut(BaseModel):
+    name: str
+    grid: list[int]
+    n: int
+    buffer: int
+    description: str
+
+
+class AckOut(BaseModel):
+    query_id: int
+    acknowledged: bool = Field(description="false when it had been acknowledged before")
+
+
+class NoteOut(BaseModel):
+    seq: int
+
+
+class EventOut(BaseModel):
+    seq: int
+    kind: str
+    at: str
+    payload: dict[str, object]
 
 
 class StatusIn(_Request):
@@ -180,23 +229,29 @@ class ErrorOut(BaseModel):
 
 __all__ = [
     "SUBJECT_PATTERN",
+    "AckOut",
     "AnswerIn",
     "AnsweredOut",
     "ComparisonTriple",
+    "ConfigOut",
     "CreateSessionIn",
     "CreatedOut",
     "ErrorOut",
+    "EventOut",
     "ExcludeIn",
     "FeatureOut",
     "GaitOut",
     "Move",
     "NoteIn",
+    "NoteOut",
     "PosteriorOut",
     "QueryOut",
     "RankingIn",
+    "SessionItemOut",
     "SessionOut",
     "StatusIn",
     "SuggestionTriple",
+    "TrialOut",
     "UndoIn",
     "UndoneOut",
     "ValidationGaitOut",

@@ -52,11 +52,20 @@ def _cookies(headers: dict[str, str]) -> dict[str, str]:
     return {k: m.value for k, m in jar.items()}
 
 
-async def _send_plain(send: Send, status: int, body: dict[str, object], extra: Iterable[tuple[bytes, bytes]] = ()) -> None:
+async def _send_plain(
+    send: Send, status: int, body: dict[str, object], extra: Iterable[tuple[bytes, bytes]] = ()
+) -> None:
     data = json.dumps(body).encode()
     headers = [(b"content-type", b"application/json"), (b"content-length", str(len(data)).encode())]
     await send({"type": "http.response.start", "status": status, "headers": [*headers, *extra]})
     await send({"type": "http.response.body", "body": data})
+
+
+def _hostname(header: str) -> str:
+    """The name in a ``Host`` header, without port or IPv6 brackets."""
+    if header.startswith("["):
+        return header[1 : header.find("]")].lower() if "]" in header else header.lower()
+    return header.rsplit(":", 1)[0].lower()
 
 
 class AccessMiddleware:
@@ -82,7 +91,7 @@ class AccessMiddleware:
             return
         headers = _headers(scope)
         if self.allowed_hosts is not None:
-            host = headers.get("host", "").rsplit(":", 1)[0].strip("[]").lower()
+            host = _hostname(headers.get("host", ""))
             if host not in self.allowed_hosts:
                 await _send_plain(send, 400, {"detail": f"host {host!r} is not served here"})
                 return
@@ -154,4 +163,3 @@ class Csrf:
         if not (cookie and field and self.valid(cookie)):
             return False
         return hmac.compare_digest(cookie.encode(), field.encode())
-

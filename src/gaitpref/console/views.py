@@ -7,7 +7,7 @@ and read that form back into the triples of :meth:`gaitpref.CoSpar.tell`.
 Form fields of an answer (stateless: a field names what it answers, the query id is checked
 by the session):
 
-- ``cmp-<i>-<j>``: ``first`` | ``second`` | ``none`` for the comparison of grid actions ``i``, ``j``;
+- ``cmp-<i>-<j>``: ``first`` | ``second`` | ``none``, comparing grid actions ``i`` and ``j``;
 - ``sug-<a>-<feature>``: ``+big`` | ``+small`` | ``-small`` | ``-big`` | empty (no suggestion)
   for executed action ``a``.
 
@@ -21,6 +21,8 @@ import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
+from gaitpref.console.errors import InputError
+from gaitpref.session_log import SessionQuery
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
@@ -29,14 +31,6 @@ _BUTTON_MOVES: tuple[str, ...] = ("+big", "+small", "", "-small", "-big")
 _CMP = re.compile(r"^cmp-(\d{1,10})-(\d{1,10})$")
 _SUG = re.compile(r"^sug-(\d{1,10})-([A-Za-z_][A-Za-z0-9_]{0,99})$")
 FORM_FIELDS = ("query_id", "csrf_token", "confirmed", "note")
-
-
-class FormError(ValueError):
-    """A form field that cannot be read; ``field`` names it."""
-
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"{field}: {message}")
-        self.field = field
 
 
 def fmt_value(value: float) -> str:
@@ -143,9 +137,18 @@ def comparison_groups(
         first_label = "this one" if single else a.name
         second_label = "previous one" if single else b.name
         choices = (
-            Choice("first", first_label, COMPARISON_KEYS["first"], f"{a.name} preferred to {b.name}"),
-            Choice("second", second_label, COMPARISON_KEYS["second"], f"{b.name} preferred to {a.name}"),
-            Choice("none", "no preference", COMPARISON_KEYS["none"], f"no preference between {a.name} and {b.name}"),
+            Choice(
+                "first", first_label, COMPARISON_KEYS["first"], f"{a.name} preferred to {b.name}"
+            ),
+            Choice(
+                "second", second_label, COMPARISON_KEYS["second"], f"{b.name} preferred to {a.name}"
+            ),
+            Choice(
+                "none",
+                "no preference",
+                COMPARISON_KEYS["none"],
+                f"no preference between {a.name} and {b.name}",
+            ),
         )
         groups.append(ComparisonGroup(f"cmp-{a.index}-{b.index}", a, b, choices))
     return groups
@@ -169,8 +172,12 @@ def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[Suggest
             )
             groups.append(
                 SuggestionGroup(
-                    f"sug-{gait.index}-{feature.name}", gait, pos, feature.name,
-                    pretty(feature.name), choices,
+                    f"sug-{gait.index}-{feature.name}",
+                    gait,
+                    pos,
+                    feature.name,
+                    pretty(feature.name),
+                    choices,
                 )
             )
     return groups
@@ -179,7 +186,8 @@ def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[Suggest
 def read_answer_form(
     form: Mapping[str, str],
 ) -> tuple[list[tuple[int, int, str]], list[tuple[int, str, str]]]:
-    """Comparison and suggestion triples from an answer form; :class:`FormError` names a bad field."""
+    """Comparison and suggestion triples of an answer form (:class:`InputError` names a bad
+    field)."""
     comparisons: list[tuple[int, int, str]] = []
     suggestions: list[tuple[int, str, str]] = []
     for name, value in form.items():
@@ -187,27 +195,59 @@ def read_answer_form(
             continue
         if m := _CMP.match(name):
             if value not in COMPARISON_KEYS:
-                raise FormError(name, f"must be one of first, second, none; got {value!r}")
+                raise InputError(name, f"must be one of first, second, none; got {value!r}")
             comparisons.append((int(m.group(1)), int(m.group(2)), value))
         elif m := _SUG.match(name):
             if value == "":
                 continue
             if value not in MOVES:
-                raise FormError(name, f"must be one of {', '.join(MOVES)} or empty; got {value!r}")
+                raise InputError(name, f"must be one of {', '.join(MOVES)} or empty; got {value!r}")
             suggestions.append((int(m.group(1)), m.group(2), value))
         else:
-            raise FormError(name, "unknown field in an answer form")
+            raise InputError(name, "unknown field in an answer form")
     return comparisons, suggestions
 
 
 def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
-    """An integer form field; :class:`FormError` if it is missing or not an integer."""
+    """An integer form field; :class:`InputError` if it is missing or not an integer."""
     raw = form.get(field)
     if raw is None or raw == "":
-        raise FormError(field, "missing")
+        raise InputError(field, "missing")
     if not re.fullmatch(r"\d{1,18}", raw.strip()):
-        raise FormError(field, f"must be an integer, got {raw!r}")
+        raise InputError(field, f"must be an integer, got {raw!r}")
     value = int(raw)
     if value < minimum:
-        raise FormError(field, f"must be >= {minimum}, got {value}")
+        raise InputError(field, f"must be >= {minimum}, got {value}")
     return value
+
+
+def answer_summary(
+    space: Space,
+    query: SessionQuery,
+    comparisons: Sequence[tuple[int, int, str]],
+    suggestions: Sequence[tuple[int, str, str]],
+) -> list[str]:
+    """The answer in words, for the confirm step."""
+    trial_of = dict(zip(query.buffer, query.buffer_trials, strict=True))
+    trial_of.update(zip(query.actions, query.trials, strict=True))
+
+    def name(a: int) -> str:
+        t = trial_of.get(a)
+        return f"trial {t} (G{a})" if t is not None else f"G{a}"
+
+    lines = []
+    for i, j, outcome in comparisons:
+        if outcome == "none":
+            lines.append(f"No preference between {name(i)} and {name(j)}")
+        else:
+            win, lose = (i, j) if outcome == "first" else (j, i)
+            lines.append(f"{name(win)} preferred to {name(lose)}")
+    for a, feature, move in suggestions:
+        try:
+            words = move_words(space.features[space.feature_index(feature)])
+        except KeyError:
+            words = {}
+        lines.append(f"{name(a)}: {pretty(feature)} {words.get(move, move)}")
+    if not suggestions:
+        lines.append("No suggestions")
+    return lines

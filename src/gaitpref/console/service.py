@@ -1,0 +1,256 @@
+"""The console's one door to the session API (:class:`gaitpref.Session`).
+
+Routes never open sessions themselves: they call :class:`SessionService`, which
+
+- holds one storage handle for the whole console (a connection pool, passed to ``Session``),
+- keeps opened sessions (rebuilding one replays its whole log, so it is done once), and before
+  each use checks that no other writer (the CLI, another console) moved the session on; if one
+  did, the session is brought up to date first,
+- runs compound operations (undo of an expected query, an answer with its note) under a
+  per-session lock, so two browser tabs cannot interleave them.
+
+Stale and already-answered queries are refused by the session API itself (``QueryError``), before
+anything is written; :mod:`gaitpref.console.errors` turns that into HTTP 409.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import tempfile
+import threading
+import zipfile
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
+from gaitpref.console.errors import InputError
+from gaitpref.session import Answered, Session, SessionQuery
+from gaitpref.session_log import SessionStateError
+from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
+from gaitpref.validation import ValidationPlan, ValidationResult
+
+#: grids larger than this are refused at creation (the console draws and sends every action)
+MAX_ACTIONS = 250_000
+ExportFormat = Literal["csv", "json"]
+
+
+@dataclass(frozen=True)
+class Pending:
+    """What the trial page can show now: a query, or why there is none."""
+
+    query: SessionQuery | None
+    reason: str  # "" when there is a query; else "paused", "finished", "validation"
+
+
+class SessionService:
+    """Sessions of one database, opened once and shared by all requests (thread-safe)."""
+
+    def __init__(self, db: str | Storage | None) -> None:
+        if isinstance(db, Storage):
+            self.storage = db
+            self.url = db.url
+        else:
+            self.url = resolve_url(db)
+            self.storage = open_storage(self.url)
+        self._open: dict[int, Session] = {}
+        self._locks: dict[int, threading.RLock] = {}
+        self._guard = threading.Lock()
+
+    def close(self) -> None:
+        self.storage.close()
+
+    # -- opening -------------------------------------------------------------------------------
+    def _lock(self, session_id: int) -> threading.RLock:
+        with self._guard:
+            return self._locks.setdefault(session_id, threading.RLock())
+
+    @contextmanager
+    def locked(self, session_id: int) -> Iterator[Session]:
+        """The session, up to date, with its console lock held."""
+        with self._lock(session_id):
+            yield self._current(session_id)
+
+    def _current(self, session_id: int) -> Session:
+        session = self._open.get(session_id)
+        if session is None:
+            session = Session.open(self.storage, session_id)
+            with self._guard:
+                self._open[session_id] = session
+            return session
+        stored = self.storage.get_session(session_id)
+        if stored.last_seq != session.last_seq:
+            session.refresh()  # another writer moved it on
+        return session
+
+    def get(self, session_id: int) -> Session:
+        """The session, up to date (read-only use)."""
+        with self.locked(session_id) as session:
+            return session
+
+    # -- listing -------------------------------------------------------------------------------
+    def list_sessions(self) -> list[SessionRecord]:
+        return self.storage.list_sessions()
+
+    def list_subjects(self) -> list[SubjectRecord]:
+        return self.storage.list_subjects()
+
+    # -- creating ------------------------------------------------------------------------------
+    def create(
+        self,
+        config: str,
+        subject: str,
+        seed: int | None = None,
+        *,
+        config_name: str | None = None,
+    ) -> Session:
+        """A new session from a shipped config's name or a config's TOML text."""
+        cfg = read_config(config, config_name)
+        if len(cfg.space) > MAX_ACTIONS:
+            raise InputError(
+                "config",
+                f"the grid has {len(cfg.space)} actions; the console serves at most {MAX_ACTIONS}",
+            )
+        session = Session.create(self.storage, cfg, subject, seed=seed)
+        with self._guard:
+            self._open[session.id] = session
+        return session
+
+    # -- the loop ------------------------------------------------------------------------------
+    def pending(self, session_id: int) -> Pending:
+        """The query to run now (issued and logged if new), or why there is none."""
+        with self.locked(session_id) as session:
+            if session.status != "active":
+                return Pending(None, session.status)
+            if session.validation_plan is not None:
+                return Pending(None, "validation")
+            return Pending(session.next_query(), "")
+
+    def query(self, session_id: int) -> SessionQuery:
+        """The pending query (the same one until it is answered); 409 when there can be none."""
+        with self.locked(session_id) as session:
+            return session.next_query()
+
+    def answer(
+        self,
+        session_id: int,
+        query_id: int,
+        comparisons: Sequence[object],
+        suggestions: Sequence[object],
+        note: str | None = None,
+    ) -> Answered:
+        """Answer ``query_id``; a non-empty ``note`` is logged right after the answer."""
+        text = (note or "").strip()
+        if len(text) > 2000:
+            raise InputError("note", "a note has at most 2000 characters")
+        with self.locked(session_id) as session:
+            answered = session.answer(query_id, comparisons, suggestions)
+            if text:
+                session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
+            return answered
+
+    def undo(self, session_id: int, expected_query: int | None = None) -> SessionQuery:
+        """Take back the last answer; with ``expected_query``, only if that query is pending."""
+        with self.locked(session_id) as session:
+            if expected_query is not None:
+                pending = session.pending
+                if pending is None or pending.id != expected_query:
+                    now = "no query is pending" if pending is None else f"query {pending.id} is"
+                    raise SessionStateError(
+                        f"the undo was asked while query {expected_query} was pending, but now "
+                        f"{now} pending (another tab answered or undid first); nothing was undone"
+                    )
+            return session.undo()
+
+    def acknowledge(self, session_id: int, query_id: int) -> bool:
+        """A device controller loaded the gaits of ``query_id``: logged once as a note.
+
+        Returns False when it was acknowledged before.  Refused (409) unless pending.
+        """
+        with self.locked(session_id) as session:
+            pending = session.pending
+            if pending is None or pending.id != query_id:
+                raise session_query_error(session, query_id)
+            text = ack_text(session, pending)
+            if any(t == text for _, t in session.notes()):
+                return False
+            session.note(text)
+            return True
+
+    def note(self, session_id: int, text: str) -> int:
+        with self.locked(session_id) as session:
+            return session.note(text)
+
+    def exclude(self, session_id: int, trial: int, reason: str, detail: str = "") -> None:
+        with self.locked(session_id) as session:
+            session.exclude(trial, reason, detail)
+
+    def set_status(self, session_id: int, status: str) -> None:
+        with self.locked(session_id) as session:
+            if status == session.status:
+                return
+            if status == "paused":
+                session.pause()
+            elif status == "finished":
+                session.finish()
+            elif status == "active":
+                session.resume()
+            else:
+                raise InputError("status", "must be active, paused or finished")
+
+    # -- validation ----------------------------------------------------------------------------
+    def start_validation(self, session_id: int) -> ValidationPlan:
+        with self.locked(session_id) as session:
+            return session.start_validation()
+
+    def rank(self, session_id: int, round_: int, ranking: Sequence[str]) -> ValidationResult:
+        with self.locked(session_id) as session:
+            return session.answer_validation(round_, list(ranking))
+
+    # -- export --------------------------------------------------------------------------------
+    def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:
+        """The session's export folder (``session export``) as a zip archive."""
+        from gaitpref.session_export import export_session
+
+        with self.locked(session_id) as session, tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) / f"session-{session_id}"
+            export_session(session, folder, fmt)
+            buf = io.BytesIO()
+            with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+                for path in sorted(folder.iterdir()):
+                    zf.write(path, f"{folder.name}/{path.name}")
+            return buf.getvalue()
+
+
+def read_config(source: str, name: str | None = None) -> ExperimentConfig:
+    """A shipped config by name, else config TOML text (never a path: the console reads no files
+    a client names)."""
+    if source in shipped_configs():
+        return load_config(source)
+    if "\n" not in source and "=" not in source:
+        raise InputError(
+            "config",
+            f"{source[:80]!r} is neither a shipped config ({', '.join(shipped_configs())}) "
+            "nor TOML config text",
+        )
+    stem = re.sub(r"[^A-Za-z0-9._-]", "_", name or "uploaded")[:100] or "uploaded"
+    return parse_config(source, default_name=stem)
+
+
+def ack_text(session: Session, query: SessionQuery) -> str:
+    gaits = ", ".join(session.gait_id(a) or f"G{a}" for a in query.actions)
+    return f"device acknowledged query {query.id} (gaits {gaits})"
+
+
+def session_query_error(session: Session, query_id: int) -> Exception:
+    """The session API's own refusal for a query that is not pending."""
+    from gaitpref.cospar import QueryError
+
+    pending = session.pending
+    now = "none is pending" if pending is None else f"the pending query is {pending.id}"
+    answered = any(t.query == query_id for t in session.trials())
+    what = "was already answered" if answered else "is not the pending query"
+    return QueryError(f"query {query_id} {what} ({now})")
