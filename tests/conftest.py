@@ -1,4 +1,4 @@
-"""Shared fixtures: a throwaway PostgreSQL server, and the rule that CI runs everything.
+"""Shared fixtures: small grids, a throwaway PostgreSQL server, and the rule that CI runs all.
 
 The PostgreSQL server is started once per test run from Debian's server binaries
 (``/usr/lib/postgresql/*/bin``, installed by ``make test`` through ``.ci/system-deps``), in a
@@ -22,8 +22,10 @@ from collections.abc import Callable, Iterator
 from itertools import count
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from gaitpref import Feature, Space, SquaredExponential
 from gaitpref.storage import MemoryStorage, Storage, open_storage
 
 _HOW = (
@@ -164,3 +166,24 @@ def open_db(backend_url: str) -> Iterator[Callable[[], Storage]]:
     yield opener
     for store in opened:
         store.close()
+
+
+@pytest.fixture
+def small_space() -> Space:
+    """A 7 x 5 grid with units, small enough for dense references."""
+    return Space(
+        [
+            Feature.linspace("step_length", 0.08, 0.18, 7, unit="m"),
+            Feature.linspace("step_duration", 0.85, 1.15, 5, unit="s"),
+        ]
+    )
+
+
+@pytest.fixture
+def small_kernel() -> SquaredExponential:
+    return SquaredExponential((0.03, 0.08), 0.005, 1e-7)
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(12345)

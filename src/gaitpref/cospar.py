@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +36,7 @@ from gaitpref.feedback import (
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.model.threads import blas_threads
 from gaitpref.space import Space
 
 
@@ -106,8 +108,8 @@ class CoSpar:
         self.pending: Query | None = None
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
-        self._rng_before_pending: dict[str, object] | None = None
-        self._rng_before: dict[int, dict[str, object]] = {}  # answered query id -> RNG before ask
+        self._rng_before_pending: Mapping[str, Any] | None = None
+        self._rng_before: dict[int, Mapping[str, Any]] = {}  # answered query id -> RNG before ask
         self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
@@ -142,7 +144,8 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        samples = self.posterior.sample(self.rng, self.n)
+        with blas_threads(len(self.space)):
+            samples = self.posterior.sample(self.rng, self.n)
         actions = tuple(random_argmax(s, self.rng) for s in samples)
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
@@ -184,7 +187,8 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
+        with blas_threads(len(self.space)):
+            new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
         if self._rng_before_pending is not None:
@@ -207,7 +211,8 @@ class CoSpar:
         if answer.query.id in self._stale_before:
             # an exclusion in an earlier answer came after this one: refit what remains
             self._stale_before.discard(answer.query.id)
-            self.posterior = self._fit(self.answers)
+            with blas_threads(len(self.space)):
+                self.posterior = self._fit(self.answers)
         else:
             self.posterior = answer.posterior_before
         self.pending = answer.query
@@ -242,7 +247,8 @@ class CoSpar:
         old = self._dropped
         self._dropped = new
         try:
-            posterior = self._fit(self.answers)
+            with blas_threads(len(self.space)):
+                posterior = self._fit(self.answers)
         except Exception:
             self._dropped = old
             raise
