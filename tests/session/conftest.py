@@ -5,11 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from sessionkit import CONFIG, Drive
 
 from gaitpref import Session, load_config
 from gaitpref.session_demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage, Storage
+from tests.session.sessionkit import CONFIG, Drive
 
 
 @pytest.fixture

@@ -6,7 +6,6 @@ import sqlite3
 from pathlib import Path
 
 import pytest
-from sessionkit import CONFIG, Drive
 
 from gaitpref import ConfigError, FeedbackError, QueryError, Session, SessionStateError
 from gaitpref.storage import (
@@ -17,6 +16,7 @@ from gaitpref.storage import (
     StorageConnectError,
     StorageError,
 )
+from tests.session.sessionkit import CONFIG, Drive
 
 
 def test_unknown_session(db: str | Storage) -> None:

@@ -8,11 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sessionkit import CONFIG, Drive
 
 from gaitpref import ReplayError, Session
 from gaitpref.session_export import ExportError, export_session, import_session
 from gaitpref.storage import MemoryStorage
+from tests.session.sessionkit import CONFIG, Drive
 
 
 def _session(url: str, drive: Drive) -> Session:

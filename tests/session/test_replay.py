@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from sessionkit import CONFIG, Drive, state_of
 
 import gaitpref.cospar
 import gaitpref.session
 from gaitpref import ReplayError, Session, load_config
 from gaitpref.storage import Storage
+from tests.session.sessionkit import CONFIG, Drive, state_of
 
 
 def _busy_session(db: str | Storage, drive: Drive) -> Session:

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sessionkit import CONFIG, Drive, state_of
 
 from gaitpref import Session, SessionStateError
 from gaitpref.storage import MemoryStorage, Storage
+from tests.session.sessionkit import CONFIG, Drive, state_of
 
 
 def _comparisons(q: object, outcome: str) -> list[tuple[int, int, str]]:

@@ -7,7 +7,6 @@ from dataclasses import fields
 
 import numpy as np
 import pytest
-from sessionkit import CONFIG, Drive
 
 from gaitpref import Session, SessionStateError
 from gaitpref.session_demo import SimulatedSubject
@@ -20,6 +19,7 @@ from gaitpref.validation import (
     kendall_tau,
     validation_actions,
 )
+from tests.session.sessionkit import CONFIG, Drive
 
 
 def test_validation_actions() -> None:

@@ -6,10 +6,10 @@ import threading
 
 import numpy as np
 import pytest
-from sessionkit import CONFIG, Drive
 
 from gaitpref import QueryError, Session
 from gaitpref.storage import ConflictError
+from tests.session.sessionkit import CONFIG, Drive
 
 
 def test_a_second_writer_is_brought_up_to_date(sqlite_url: str, drive: Drive) -> None:
