@@ -1,4 +1,4 @@
-"""Shared fixtures: a throwaway PostgreSQL server, and the rule that CI runs everything.
+"""Shared fixtures: small grids, a throwaway PostgreSQL server, and the rule that CI runs all.
 
 The PostgreSQL server is started once per test run from Debian's server binaries
 (``/usr/lib/postgresql/*/bin``, installed by ``make test`` through ``.ci/system-deps``), in a

@@ -211,7 +211,8 @@ class CoSpar:
         if answer.query.id in self._stale_before:
             # an exclusion in an earlier answer came after this one: refit what remains
             self._stale_before.discard(answer.query.id)
-            self.posterior = self._fit(self.answers)
+            with blas_threads(len(self.space)):
+                self.posterior = self._fit(self.answers)
         else:
             self.posterior = answer.posterior_before
         self.pending = answer.query
@@ -246,7 +247,8 @@ class CoSpar:
         old = self._dropped
         self._dropped = new
         try:
-            posterior = self._fit(self.answers)
+            with blas_threads(len(self.space)):
+                posterior = self._fit(self.answers)
         except Exception:
             self._dropped = old
             raise

@@ -398,6 +398,16 @@ class Session:
         """Every coactive suggestion ever given, with ``undone``/``excluded`` flags."""
         return list(self._state.suggestions_log)
 
+    def history(self) -> list[tuple[SessionQuery, Posterior]]:
+        """Each answer in force with the posterior right after it (as it was then)."""
+
+        def run() -> list[tuple[SessionQuery, Posterior]]:
+            told = self._state.told
+            after = [k.answer.posterior_before for k in told[1:]] + [self._state.loop.posterior]
+            return [(k.query, p) for k, p in zip(told, after, strict=True)]
+
+        return self._locked(run)
+
     def notes(self) -> list[tuple[int, str]]:
         """``(sequence number, text)`` of every note."""
         return list(self._state.notes)
