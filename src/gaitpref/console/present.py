@@ -87,7 +87,6 @@ def session_out(session: Session) -> SessionOut:
         status=session.status,
         events=session.last_seq,
         created_at=record.created_at.isoformat(),
-        updated_at=record.updated_at.isoformat(),
         seed=session.seed,
         trials=len(session.trials()),
         pending_query_id=None if pending is None else pending.id,

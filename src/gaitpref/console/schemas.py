@@ -153,9 +153,15 @@ class SessionItemOut(BaseModel):
     updated_at: str
 
 
-class SessionOut(SessionItemOut):
+class SessionOut(BaseModel):
     """A session with what its log says now."""
 
+    id: int
+    subject: str
+    config: str
+    status: str
+    events: int = Field(description="events in its log")
+    created_at: str
     seed: int
     trials: int = Field(description="trials in force (answered, not undone)")
     pending_query_id: int | None

@@ -207,7 +207,17 @@ class SessionService:
             return session.start_validation()
 
     def rank(self, session_id: int, round_: int, ranking: Sequence[str]) -> ValidationResult:
+        """Record the blind ranking (labels, best first) of the open round ``round_``."""
         with self.locked(session_id) as session:
+            plan = session.validation_plan
+            if plan is not None and plan.round == round_:
+                labels = [str(r).upper() for r in ranking]
+                if sorted(labels) != sorted(plan.labels):
+                    raise InputError(
+                        "ranking",
+                        f"name each of {', '.join(plan.labels)} exactly once, best first; "
+                        f"got {', '.join(labels) or 'nothing'}",
+                    )
             return session.answer_validation(round_, list(ranking))
 
     # -- export --------------------------------------------------------------------------------
