@@ -17,9 +17,7 @@ if TYPE_CHECKING:  # imported after pytest_configure below, which quiets its war
 
 def pytest_configure(config: pytest.Config) -> None:
     # Starlette >= 1.0 suggests httpx2 for its test client; httpx is what the project installs.
-    config.addinivalue_line(
-        "filterwarnings", "ignore:Using `httpx` with `starlette.testclient`"
-    )
+    config.addinivalue_line("filterwarnings", "ignore:Using `httpx` with `starlette.testclient`")
 
 
 @pytest.fixture
