@@ -74,7 +74,7 @@ def test_a_second_post_of_the_same_answer_is_a_409_page_and_writes_nothing(
     r = post(client, f"/sessions/{sid}/answer", data)
     assert r.status_code == 409
     assert "already answered" in r.text and "Nothing was written" in r.text
-    assert 'href="/sessions/%d"' % sid in r.text
+    assert f'href="/sessions/{sid}"' in r.text
     assert event_count(client, sid) == events
 
 
