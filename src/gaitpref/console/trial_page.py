@@ -82,7 +82,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
             for a, t in zip(query.buffer, query.buffer_trials, strict=True)
         ]
     post = session.posterior()
-    mean = np.asarray(post.mean)
+    mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
     best = int(np.argmax(mean))
     trials = session.trials()
     return {
@@ -99,7 +99,6 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "notes": list(reversed(session.notes()))[:20],
         "best": views.gait_view(space, best, gait_id=session.gait_id(best)),
         "best_mean": float(mean[best]),
-        "best_sd": float(np.asarray(post.std)[best]),
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",
         "features": space.features,
