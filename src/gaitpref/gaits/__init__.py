@@ -1,0 +1,1 @@
+"""Compass-gait model, HZD gait optimization and the gait library (issue 4)."""
