@@ -63,7 +63,7 @@ class HZDSettings:
     """
 
     degree: int = 6
-    n_points: int = 101
+    n_points: int = 201
     n_constraint_points: int = 41
     clearance_start: float = 0.6
     clearance: float = 0.01
@@ -79,8 +79,8 @@ class HZDSettings:
     def __post_init__(self) -> None:
         if not isinstance(self.degree, int) or not 3 <= self.degree <= 12:
             raise ValueError(f"degree must be an integer in 3..12, got {self.degree!r}")
-        if self.n_points < 5 or self.n_points % 2 == 0:
-            raise ValueError(f"n_points must be odd and >= 5, got {self.n_points}")
+        if not isinstance(self.n_points, int) or self.n_points < 5:
+            raise ValueError(f"n_points must be an integer >= 5, got {self.n_points!r}")
         if not 3 <= self.n_constraint_points <= self.n_points:
             raise ValueError(f"n_constraint_points must be in 3..n_points, got {self.n_constraint_points}")
         if not 0.0 <= self.clearance_start < 1.0:

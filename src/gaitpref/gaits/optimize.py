@@ -51,20 +51,23 @@ class _Problem:
         self.nodes = np.unique(np.linspace(0, n - 1, nc).round().astype(int))
         tau = self.nodes / (n - 1)
         self.late = self.nodes[(tau >= self.s.clearance_start) & (tau < 1.0)]
-        self._key: bytes | None = None
-        self._profile: StepProfile | None = None
+        self._cache: dict[bytes, StepProfile] = {}
 
     def alpha(self, x: FloatArray) -> FloatArray:
         return self.geo.complete(x[:-1] * self.scale)
 
     def profile(self, x: FloatArray) -> StepProfile:
+        # SLSQP differentiates objective and constraints at the same points: keep a few profiles
         key = x.tobytes()
-        if key != self._key or self._profile is None:
-            self._profile = step_profile(
+        found = self._cache.get(key)
+        if found is None:
+            found = step_profile(
                 self.p, self.geo, self.alpha(x), float(x[-1]), self.s.n_points, self.s.smoothing
             )
-            self._key = key
-        return self._profile
+            if len(self._cache) >= 4 * self.s.degree:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = found
+        return found
 
     def objective(self, x: FloatArray) -> float:
         return 100.0 * self.profile(x).smooth_work / (self.weight * self.geo.step_length)

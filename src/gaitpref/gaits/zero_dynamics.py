@@ -24,7 +24,7 @@ Along the orbit everything else follows from ``theta`` and ``zeta``: ``thetad = 
 the time ``t = int dtheta / thetad`` and the mechanical cost of transport (Reher et al. 2016,
 eqs. 17-18) ``COT = int |u q2d| dt / (m_total g L) = int |u h'| dtheta / (m_total g L)``.
 
-Notation: ``N`` phase grid points (odd, for Simpson's rule); ``M`` Bezier degree; profiles are
+Notation: ``N`` phase grid points (uniform in ``theta``); ``M`` Bezier degree; profiles are
 ``(N,)`` arrays over ``theta``.
 """
 
@@ -35,7 +35,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import cumulative_simpson, simpson
 
 from gaitpref.gaits import bezier
 from gaitpref.gaits.dynamics import (
@@ -45,12 +44,22 @@ from gaitpref.gaits.dynamics import (
     mass_matrix,
     swing_foot_height,
 )
-from gaitpref.gaits.impact import impact, impact_velocity_map
+from gaitpref.gaits.impact import impact
 from gaitpref.gaits.params import CompassGaitParams
 from gaitpref.space import FloatArray
 
 
 _ZETA_FLOOR = 1e-6
+
+
+def _cumulative(f: FloatArray, h: float) -> FloatArray:
+    """Cumulative integral on a uniform grid, 0 at the start, fourth order: each interval
+    integrates the cubic through four neighbouring nodes (one-sided at the ends)."""
+    inner = -f[:-3] + 13.0 * (f[1:-2] + f[2:-1]) - f[3:]
+    first = 9.0 * f[0] + 19.0 * f[1] - 5.0 * f[2] + f[3]
+    last = f[-4] - 5.0 * f[-3] + 19.0 * f[-2] + 9.0 * f[-1]
+    pieces = np.concatenate([[0.0, first], inner, [last]]) * (h / 24.0)
+    return np.cumsum(pieces)
 
 
 def guard_angle(p: CompassGaitParams, step_length: float) -> float:
@@ -71,13 +80,23 @@ class StepGeometry:
     step_length: float
     theta_start: float  # -theta_0
     theta_end: float  # +theta_0
-    velocity_map: FloatArray  # (2, 2) P at the pre-impact configuration
+    velocity_map: FloatArray  # (2, 2) P: relabelled qd+ = P qd-
+    impulse_map: FloatArray  # (2, 2) ground impulse = F qd-
+    lift_off_map: FloatArray  # (2, 2) old stance foot's velocity = V qd-
 
     @classmethod
     def create(cls, p: CompassGaitParams, step_length: float) -> StepGeometry:
+        """The impact is linear in ``qd-``: its maps are built from the basis vectors."""
         th0 = guard_angle(p, step_length)
-        pmap = impact_velocity_map(p, np.array([th0, -2.0 * th0]))
-        return cls(step_length, -th0, th0, pmap)
+        hits = [impact(p, np.array([th0, -2.0 * th0]), e) for e in np.eye(2)]
+        return cls(
+            step_length,
+            -th0,
+            th0,
+            np.column_stack([h.qd for h in hits]),
+            np.column_stack([h.impulse for h in hits]),
+            np.column_stack([h.lift_off_velocity for h in hits]),
+        )
 
     @property
     def span(self) -> float:
@@ -148,9 +167,9 @@ def step_profile(
     n_points: int = 201,
     smoothing: float = 1e-3,
 ) -> StepProfile:
-    """Evaluate one step of the zero dynamics on an ``n_points`` phase grid (odd)."""
-    if n_points < 5 or n_points % 2 == 0:
-        raise ValueError(f"n_points must be odd and >= 5, got {n_points}")
+    """Evaluate one step of the zero dynamics on a uniform grid of ``n_points`` phases."""
+    if n_points < 5:
+        raise ValueError(f"n_points must be >= 5, got {n_points}")
     coef = np.asarray(alpha, dtype=np.float64)
     degree = coef.size - 1
     tau = np.linspace(0.0, 1.0, n_points)
@@ -169,10 +188,10 @@ def step_profile(
 
     # impact restricted to the surface: per unit pre-impact phase velocity
     pre = np.array([1.0, dh[-1]])
-    hit = impact(p, np.array([theta[-1], h[-1]]), pre)
-    delta = float((d11[0] * hit.qd[0] + d12[0] * hit.qd[1]) / inertia[-1])
+    post = geometry.velocity_map @ pre
+    delta = float((d11[0] * post[0] + d12[0] * post[1]) / inertia[-1])
     zeta_minus = 0.5 * (inertia[-1] * thetad_minus) ** 2
-    work = cumulative_simpson(inertia * g1, x=theta, initial=0.0)
+    work = _cumulative(inertia * g1, theta[1] - theta[0])
     zeta = delta**2 * zeta_minus - work
 
     # a floor keeps times finite where the orbit stalls (zeta <= 0); callers check zeta itself
@@ -184,7 +203,7 @@ def step_profile(
     qdd = np.stack([thetadd, q2dd], -1)
     torque = hip_torque(p, q, qd, qdd)
     force = ground_reaction(p, q, qd, qdd)
-    time = cumulative_simpson(1.0 / thetad, x=theta, initial=0.0)
+    time = _cumulative(1.0 / thetad, theta[1] - theta[0])
     power = torque * dh  # u q2d / thetad: per unit phase
     return StepProfile(
         theta=theta,
@@ -203,8 +222,8 @@ def step_profile(
         delta=delta,
         zeta_minus=zeta_minus,
         work_integral=float(work[-1]),
-        impact_impulse=hit.impulse,
-        lift_off_speed=float(hit.lift_off_velocity[1]),
-        abs_work=float(simpson(np.abs(power), x=theta)),
-        smooth_work=float(simpson(np.sqrt(power**2 + smoothing**2) - smoothing, x=theta)),
+        impact_impulse=geometry.impulse_map @ pre,
+        lift_off_speed=float((geometry.lift_off_map @ pre)[1]),
+        abs_work=float(_cumulative(np.abs(power), theta[1] - theta[0])[-1]),
+        smooth_work=float(_cumulative(np.sqrt(power**2 + smoothing**2) - smoothing, span / (n_points - 1))[-1]),
     )
