@@ -47,7 +47,10 @@ def _chains(
     if durations is not None:
         n_t = len(durations)
         return [
-            [(i * n_t + j, GaitRequest(lengths[i], step_duration=durations[j])) for i in range(len(lengths))]
+            [
+                (i * n_t + j, GaitRequest(lengths[i], step_duration=durations[j]))
+                for i in range(len(lengths))
+            ]
             for j in range(n_t)
         ]
     requests = [(i, GaitRequest(length, speed=speed)) for i, length in enumerate(lengths)]

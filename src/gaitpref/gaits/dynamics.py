@@ -160,9 +160,7 @@ def ground_reaction(
     """Force of the ground on the stance foot, ``(..., 2)`` as (tangential, normal)."""
     acc = _point_accelerations(p, q, qd, qdd)
     force = (
-        p.hip_mass * acc["hip"]
-        + p.leg_mass * acc["stance_mass"]
-        + p.leg_mass * acc["swing_mass"]
+        p.hip_mass * acc["hip"] + p.leg_mass * acc["stance_mass"] + p.leg_mass * acc["swing_mass"]
     )
     force[..., 1] += p.total_mass * p.gravity
     return force

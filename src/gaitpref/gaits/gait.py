@@ -82,7 +82,9 @@ class HZDSettings:
         if not isinstance(self.n_points, int) or self.n_points < 5:
             raise ValueError(f"n_points must be an integer >= 5, got {self.n_points!r}")
         if not 3 <= self.n_constraint_points <= self.n_points:
-            raise ValueError(f"n_constraint_points must be in 3..n_points, got {self.n_constraint_points}")
+            raise ValueError(
+                f"n_constraint_points must be in 3..n_points, got {self.n_constraint_points}"
+            )
         if not 0.0 <= self.clearance_start < 1.0:
             raise ValueError(f"clearance_start must be in [0, 1), got {self.clearance_start}")
         if not 0.0 < self.max_delta_squared < 1.0:
@@ -133,7 +135,9 @@ class Gait:
 
     def tau(self, phi1: FloatArray | float) -> FloatArray:
         """Phase ``tau(phi1)`` (not clipped: the polynomial extends past the step's ends)."""
-        return np.asarray((np.asarray(phi1) - self.phase_start) / (self.phase_end - self.phase_start))
+        return np.asarray(
+            (np.asarray(phi1) - self.phase_start) / (self.phase_end - self.phase_start)
+        )
 
     def constraint(self, phi1: FloatArray | float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """``h``, ``dh/dphi1`` and ``d2h/dphi1^2`` of the virtual constraint at ``phi1``."""

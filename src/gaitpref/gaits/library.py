@@ -56,7 +56,9 @@ def _check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | 
     if len(set(names)) != len(names):
         raise GaitLibraryError(f"axes repeat a name: {names}")
     if ("step_duration" in names) == (speed is not None):
-        raise GaitLibraryError("a library has a step_duration axis or a fixed speed, not both/neither")
+        raise GaitLibraryError(
+            "a library has a step_duration axis or a fixed speed, not both/neither"
+        )
     if speed is not None and not (math.isfinite(speed) and speed > 0):
         raise GaitLibraryError(f"speed must be a positive number, got {speed!r}")
     for name, values in axes:
@@ -103,13 +105,22 @@ class GaitLibrary:
             )
         if gait.degree != self.settings.degree or gait.alpha.shape != (1, gait.degree + 1):
             raise GaitLibraryError(
-                f"{where}: alpha has shape {gait.alpha.shape}, expected (1, {self.settings.degree + 1})"
+                f"{where}: alpha has shape {gait.alpha.shape}, "
+                f"expected (1, {self.settings.degree + 1})"
             )
         if gait.orbit_state.shape != (4,):
-            raise GaitLibraryError(f"{where}: orbit_state has shape {gait.orbit_state.shape}, expected (4,)")
+            raise GaitLibraryError(
+                f"{where}: orbit_state has shape {gait.orbit_state.shape}, expected (4,)"
+            )
         if not gait.feasible:
             return
-        numbers = [gait.step_duration, gait.cot, gait.delta_squared, gait.phase_start, gait.phase_end]
+        numbers = [
+            gait.step_duration,
+            gait.cot,
+            gait.delta_squared,
+            gait.phase_start,
+            gait.phase_end,
+        ]
         if not (np.all(np.isfinite(gait.alpha)) and np.all(np.isfinite(gait.orbit_state))):
             raise GaitLibraryError(f"{where}: feasible gait with non-finite coefficients or orbit")
         if not all(math.isfinite(v) for v in numbers) or not 0 < gait.delta_squared < 1:
@@ -157,9 +168,9 @@ class GaitLibrary:
 
     def index(self, point: Sequence[float] | dict[str, float] | None = None, **named: float) -> int:
         """Flat index of the grid point with these values (exact grid values, within 1e-9)."""
-        query: Sequence[float] | dict[str, float] = named if point is None else point
         if point is not None and named:
             raise GaitLibraryError("give the point positionally or by name, not both")
+        query: Sequence[float] | dict[str, float] = named if point is None else point
         try:
             return self.space().index(query)
         except (KeyError, ValueError) as exc:
@@ -170,7 +181,7 @@ class GaitLibrary:
 
     def lookup(self, **named: float) -> Gait:
         """The gait at the grid point with these named values."""
-        return self.gaits[self.index(**named)]
+        return self.gaits[self.index(dict(named))]
 
     def gait_id(self, index: int) -> str:
         """A stable short id from the grid values, e.g. ``L0.130-T0.950`` (``-V0.200`` at a fixed

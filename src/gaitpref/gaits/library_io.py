@@ -76,7 +76,11 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
 
     formulation: dict[str, Any] = dict(lib.settings.to_dict())
     formulation.update(
-        {"phase_variable": "stance_leg_angle", "outputs": ["hip_angle"], "objective": "mechanical_cot"}
+        {
+            "phase_variable": "stance_leg_angle",
+            "outputs": ["hip_angle"],
+            "objective": "mechanical_cot",
+        }
     )
     return {
         "format": FORMAT,
@@ -85,9 +89,7 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
         "model": {"name": "compass_gait", "parameters": lib.params.to_dict()},
         "formulation": formulation,
         "speed": lib.speed,
-        "axes": [
-            {"name": n, "unit": AXES[n].unit, "values": list(v)} for n, v in lib.axes
-        ],
+        "axes": [{"name": n, "unit": AXES[n].unit, "values": list(v)} for n, v in lib.axes],
         "grid_order": "C",
         "gaits": gaits,
     }
@@ -134,14 +136,18 @@ class _Reader:
         return arr
 
 
-def from_document(data: Any, source: str = "<document>", allow_infeasible: bool = False) -> GaitLibrary:
+def from_document(
+    data: Any, source: str = "<document>", allow_infeasible: bool = False
+) -> GaitLibrary:
     """Validate a parsed document and build the :class:`GaitLibrary`."""
     r = _Reader(source)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise r.fail("format", f"not a gait library (expected format {FORMAT!r})")
     version = data.get("schema_version")
     if version != SCHEMA_VERSION:
-        raise r.fail("schema_version", f"{version!r} is not supported (this gaitpref reads {SCHEMA_VERSION})")
+        raise r.fail(
+            "schema_version", f"{version!r} is not supported (this gaitpref reads {SCHEMA_VERSION})"
+        )
     model = r.get(data, "model", "")
     try:
         params = CompassGaitParams.from_dict(r.get(model, "parameters", "model."))
@@ -205,12 +211,18 @@ def _gait(r: _Reader, entry: Any, k: int, degree: int) -> Gait:
     feasible = r.get(entry, "feasible", where)
     status = r.get(entry, "solver_status", where)
     message = r.get(entry, "solver_message", where)
-    if not isinstance(feasible, bool) or not isinstance(status, int) or not isinstance(message, str):
+    if (
+        not isinstance(feasible, bool)
+        or not isinstance(status, int)
+        or not isinstance(message, str)
+    ):
         raise r.fail(where.rstrip("."), "feasible must be a boolean, solver_status an integer, "
                      "solver_message a string")  # fmt: skip
     nums = {key: r.number(entry, key, where, nullable=True) for key in _NUMBERS}
     return Gait(
-        step_length=r.number(r.get(entry, "parameters", where), "step_length", f"{where}parameters."),
+        step_length=r.number(
+            r.get(entry, "parameters", where), "step_length", f"{where}parameters."
+        ),
         alpha=r.matrix(r.get(entry, "alpha", where), (1, degree + 1), f"{where}alpha"),
         orbit_state=r.matrix(r.get(entry, "orbit_state", where), (4,), f"{where}orbit_state"),
         feasible=feasible,

@@ -28,7 +28,9 @@ class CompassGaitParams:
     def __post_init__(self) -> None:
         for name, value in asdict(self).items():
             if not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
-                raise ValueError(f"compass-gait parameter {name} must be a positive number, got {value!r}")
+                raise ValueError(
+                    f"compass-gait parameter {name} must be a positive number, got {value!r}"
+                )
         if self.leg_com >= self.leg_length:
             raise ValueError(
                 f"leg_com (hip to leg mass, {self.leg_com} m) must be shorter than "

@@ -114,7 +114,7 @@ def simulate_gait(
     horizon = 10.0 * gait.step_duration
 
     def rhs(_t: float, s: FloatArray) -> FloatArray:
-        u, qdd = _control(p, gait, s, kp, kd)
+        _u, qdd = _control(p, gait, s, kp, kd)
         return np.concatenate([s[2:], qdd])
 
     def armed(_t: float, s: FloatArray) -> float:

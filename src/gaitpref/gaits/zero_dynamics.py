@@ -38,8 +38,8 @@ from numpy.typing import ArrayLike
 
 from gaitpref.gaits import bezier
 from gaitpref.gaits.dynamics import (
-    ground_reaction,
     gravity_vector,
+    ground_reaction,
     hip_torque,
     mass_matrix,
     swing_foot_height,
@@ -47,7 +47,6 @@ from gaitpref.gaits.dynamics import (
 from gaitpref.gaits.impact import impact
 from gaitpref.gaits.params import CompassGaitParams
 from gaitpref.space import FloatArray
-
 
 _ZETA_FLOOR = 1e-6
 
@@ -225,5 +224,7 @@ def step_profile(
         impact_impulse=geometry.impulse_map @ pre,
         lift_off_speed=float((geometry.lift_off_map @ pre)[1]),
         abs_work=float(_cumulative(np.abs(power), theta[1] - theta[0])[-1]),
-        smooth_work=float(_cumulative(np.sqrt(power**2 + smoothing**2) - smoothing, span / (n_points - 1))[-1]),
+        smooth_work=float(
+            _cumulative(np.sqrt(power**2 + smoothing**2) - smoothing, span / (n_points - 1))[-1]
+        ),
     )
