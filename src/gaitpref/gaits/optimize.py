@@ -91,7 +91,7 @@ class _Problem:
         return {
             "delta^2": np.array([s.max_delta_squared - pr.delta**2, pr.delta**2]),
             "forward progress": rate_sq - s.min_phase_speed**2,
-            "momentum inertia I(theta)": pr.inertia[i] / pr.inertia[0] - 0.2,
+            "momentum inertia": pr.inertia[i] / pr.inertia[0] - 0.2,
             "normal force": fn - s.min_normal_force,
             "friction": np.concatenate([mu * fn - ft, mu * fn + ft]),
             "swing-foot clearance": (pr.swing_height[self.late] - self._clearance_needed(pr))
@@ -125,6 +125,40 @@ class _Problem:
         return np.concatenate([shape, [rate]])
 
 
+def _describe(group: str, problem: _Problem, pr: StepProfile) -> str:
+    """A violated inequality group in physical terms."""
+    s, i = problem.s, problem.nodes
+    fn, ft = pr.force[i, 1], pr.force[i, 0]
+    if group == "delta^2":
+        return f"delta^2 = {pr.delta**2:.4f}, needs 0 < delta^2 <= {s.max_delta_squared}"
+    if group == "forward progress":
+        ratio = np.sqrt(np.maximum(2.0 * pr.zeta[i], 0.0)) / pr.inertia[i] / problem.mean_rate
+        return (
+            f"forward progress: stance-leg speed falls to {ratio.min():.3f} of its mean "
+            f"(needs >= {s.min_phase_speed})"
+        )
+    if group == "normal force":
+        least = fn.min() / problem.weight
+        return f"normal force falls to {least:.2f} m g (needs >= {s.min_normal_force} m g)"
+    if group == "friction":
+        ratio = np.abs(ft) / np.where(fn > 0, fn, np.nan)
+        worst = np.nanmax(ratio) if np.isfinite(ratio).any() else math.inf
+        return f"friction ratio reaches {worst:.2f} (limit {s.friction_coefficient})"
+    if group == "swing-foot clearance":
+        gap = pr.swing_height[problem.late] - problem._clearance_needed(pr)
+        k = int(np.argmin(gap))
+        return (
+            f"swing-foot clearance short by {-1000 * gap[k]:.2f} mm at "
+            f"tau = {pr.tau[problem.late][k]:.2f}"
+        )
+    if group == "impact impulse":
+        imp = pr.impact_impulse
+        return f"impact impulse not physical (tangential {imp[0]:.3g}, normal {imp[1]:.3g})"
+    if group == "lift-off":
+        return "the old stance foot does not lift off at impact"
+    return f"{group} violated"
+
+
 def _violations(problem: _Problem, x: FloatArray) -> list[str]:
     """Every violated constraint at ``x``, with the offending value, in words."""
     tol = problem.s.feasibility_tolerance
@@ -139,11 +173,11 @@ def _violations(problem: _Problem, x: FloatArray) -> list[str]:
         out.append(f"step duration {pr.duration:.4f} s, requested {problem.duration:.4f} s")
     for name, values in problem.inequality_groups(x).items():
         if values.size and values.min() < -tol:
-            out.append(f"{name} violated (worst scaled margin {values.min():.3g})")
+            out.append(_describe(name, problem, pr))
     if pr.zeta.min() <= 0:
-        out.append("the stance leg stops or falls back (no forward progress)")
+        out.append("the stance leg stops or falls back")
     if pr.force[:, 1].min() <= 0:
-        out.append(f"normal force {pr.force[:, 1].min():.2f} N <= 0: the stance foot lifts off")
+        out.append(f"normal force {pr.force[:, 1].min():.1f} N <= 0: the stance foot lifts off")
     return out
 
 
