@@ -10,7 +10,13 @@ import numpy as np
 import pytest
 
 from gaitpref import Feature, Space
-from gaitpref.gaits import SCHEMA_VERSION, GaitLibrary, GaitLibraryError, load_library
+from gaitpref.gaits import (
+    SCHEMA_VERSION,
+    GaitLibrary,
+    GaitLibraryError,
+    build_library,
+    load_library,
+)
 
 
 def _document(lib: GaitLibrary, tmp_path: Path) -> dict[str, Any]:
@@ -162,3 +168,16 @@ def test_library_checks_its_grid(duration_library: GaitLibrary) -> None:
     swapped = (lib.axes[1], lib.axes[0])
     with pytest.raises(GaitLibraryError, match="start with step_length"):
         GaitLibrary(lib.params, lib.settings, swapped, lib.gaits)
+
+
+def test_build_rejects_a_bad_grid_before_optimizing() -> None:
+    with pytest.raises(GaitLibraryError, match="strictly increasing"):
+        build_library([0.12, 0.10], speed=0.2)
+    with pytest.raises(ValueError, match="exactly one"):
+        build_library([0.12], speed=0.2, step_durations=[1.0])
+
+
+def test_gaits_are_read_only(duration_library: GaitLibrary) -> None:
+    gait = duration_library.gait(0)
+    with pytest.raises(ValueError, match="read-only"):
+        gait.alpha[0, 0] = 1.0

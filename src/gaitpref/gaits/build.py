@@ -16,7 +16,7 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
-from gaitpref.gaits.library import GaitLibrary
+from gaitpref.gaits.library import GaitLibrary, check_axes
 from gaitpref.gaits.optimize import optimize_gait
 from gaitpref.gaits.params import CompassGaitParams
 
@@ -81,6 +81,13 @@ def build_library(
         raise ValueError(f"n_jobs must be >= 1, got {n_jobs}")
     lengths = [float(v) for v in step_lengths]
     durations = None if step_durations is None else [float(v) for v in step_durations]
+    widths = None if step_widths is None else [float(w) for w in step_widths]
+    axes: list[tuple[str, tuple[float, ...]]] = [("step_length", tuple(lengths))]
+    if durations is not None:
+        axes.append(("step_duration", tuple(durations)))
+    if widths is not None:
+        axes.append(("step_width", tuple(widths)))
+    check_axes(tuple(axes), speed)  # fail before any optimization
     chains = _chains(lengths, durations, speed, n_jobs)
     base: dict[int, Gait] = {}
     if n_jobs == 1 or len(chains) == 1:
@@ -93,12 +100,6 @@ def build_library(
             if progress is not None:
                 progress(len(done))
     n_base = len(base)
-    axes: list[tuple[str, tuple[float, ...]]] = [("step_length", tuple(lengths))]
-    if durations is not None:
-        axes.append(("step_duration", tuple(durations)))
-    widths = [float(w) for w in step_widths] if step_widths is not None else None
-    if widths is not None:
-        axes.append(("step_width", tuple(widths)))
     repeat = len(widths) if widths is not None else 1
     gaits = tuple(base[k // repeat] for k in range(n_base * repeat))
     return GaitLibrary(p, s, tuple(axes), gaits, speed)

@@ -102,7 +102,7 @@ class HZDSettings:
         return {name: getattr(self, name) for name in self.__dataclass_fields__}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Gait:
     """An optimized gait: virtual constraint, periodic orbit, cost and the solver's verdict.
 
@@ -124,6 +124,12 @@ class Gait:
     message: str
     min_normal_force: float  # N, along the orbit
     max_friction_ratio: float  # |F_t| / F_n along the orbit and at impact
+
+    def __post_init__(self) -> None:
+        for name in ("alpha", "orbit_state"):
+            arr = np.array(getattr(self, name), dtype=np.float64)  # a private, read-only copy
+            arr.flags.writeable = False
+            object.__setattr__(self, name, arr)
 
     @property
     def degree(self) -> int:

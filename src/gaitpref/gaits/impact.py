@@ -66,7 +66,7 @@ def relabel(q: ArrayLike, qd: ArrayLike) -> tuple[FloatArray, FloatArray]:
     return swap @ np.asarray(q, dtype=np.float64), swap @ np.asarray(qd, dtype=np.float64)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class ImpactResult:
     """State right after a heel strike (already relabelled) and the impact's diagnostics."""
 

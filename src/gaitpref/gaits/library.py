@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import NamedTuple
 
@@ -46,7 +47,8 @@ AXES: dict[str, AxisSpec] = {
 DURATION_RTOL = 1e-4
 
 
-def _check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | None) -> None:
+def check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | None) -> None:
+    """Raise :class:`GaitLibraryError` unless ``axes`` and ``speed`` describe a valid grid."""
     names = [name for name, _ in axes]
     known = list(AXES)
     if not names or names[0] != "step_length":
@@ -69,7 +71,7 @@ def _check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | 
             raise GaitLibraryError(f"axis {name}: values must be strictly increasing")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class GaitLibrary:
     """Gaits over a grid, with the model and formulation that produced them."""
 
@@ -83,7 +85,7 @@ class GaitLibrary:
         axes = tuple((str(n), tuple(float(v) for v in vals)) for n, vals in self.axes)
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "gaits", tuple(self.gaits))
-        _check_axes(axes, self.speed)
+        check_axes(axes, self.speed)
         if len(self.gaits) != len(self):
             raise GaitLibraryError(
                 f"the grid {self.shape} has {len(self)} points but the library has "
@@ -151,8 +153,13 @@ class GaitLibrary:
             out.append(Feature(name, values, spec.unit, spec.coactive, spec.words))
         return out
 
-    def space(self) -> Space:
+    @cached_property
+    def _space(self) -> Space:
         return Space(self.features())
+
+    def space(self) -> Space:
+        """The grid as a :class:`gaitpref.Space` (same flat indices)."""
+        return self._space
 
     def check_index(self, index: object) -> int:
         if isinstance(index, bool) or not isinstance(index, int | np.integer):
@@ -172,7 +179,7 @@ class GaitLibrary:
             raise GaitLibraryError("give the point positionally or by name, not both")
         query: Sequence[float] | dict[str, float] = named if point is None else point
         try:
-            return self.space().index(query)
+            return self._space.index(query)
         except (KeyError, ValueError) as exc:
             raise GaitLibraryError(f"no gait at {query!r}: {exc}") from None
 

@@ -34,7 +34,7 @@ class SimulationError(RuntimeError):
     """A simulated step did not reach heel strike (the walker fell or stalled)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SimulationResult:
     """Samples of a multi-step simulation and its verdict against the gait's orbit."""
 

@@ -28,7 +28,7 @@ PAPER_STEP_LENGTHS: tuple[float, ...] = tuple(float(v) for v in np.linspace(0.08
 PAPER_SPEED = 0.2
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class CotCurve:
     """COT per step length at one speed (``nan`` where no feasible gait exists)."""
 

@@ -72,7 +72,7 @@ def guard_angle(p: CompassGaitParams, step_length: float) -> float:
     return math.asin(ratio)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepGeometry:
     """What a step length fixes: the phase interval and the impact's velocity map."""
 
@@ -112,7 +112,7 @@ class StepGeometry:
         return np.concatenate([[first, second], free, [last]])
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class StepProfile:
     """One step on the zero dynamics, started on the periodic orbit's pre-impact speed guess.
 
