@@ -8,10 +8,10 @@ The paper's problem (Section "Gait Generation for Bipedal Robots", eqs. (3)-(5))
   (:meth:`StepGeometry.complete` fixes ``alpha_0, alpha_1, alpha_M``);
 * objective: mechanical COT (Reher et al. 2016, eqs. 17-18) with ``|.|`` smoothed;
 * equalities: periodic orbit of the zero dynamics, step duration ``T`` (or ``L / v``);
-* inequalities on ``n_c`` phase nodes: ``delta^2 <= max``, forward progress (``thetad`` bounded
-  below, ``I(theta) > 0``), normal force ``>= f_min m g``, ``|F_t| <= mu F_n``, swing-foot clearance
-  for ``tau >= clearance_start`` and a physical impact (positive normal impulse inside the
-  friction cone, the old stance foot lifting off).
+* inequalities on ``n_c`` phase nodes: ``0 < delta``, ``delta^2 <= max``, forward progress
+  (``thetad`` bounded below, ``I(theta) > 0``), normal force ``>= f_min m g``,
+  ``|F_t| <= mu F_n``, swing-foot clearance for ``tau >= clearance_start`` and a physical impact
+  (positive normal impulse inside the friction cone, the old stance foot lifting off).
 
 Each gait is checked again after the solver stops (:func:`_violations`); the verdict and every
 violated constraint go into :class:`Gait`'s ``feasible`` and ``message``.  The reported COT and
@@ -89,7 +89,7 @@ class _Problem:
         rate_sq = 2.0 * pr.zeta[i] / pr.inertia[i] ** 2 / self.mean_rate**2
         mu = s.friction_coefficient
         return {
-            "delta^2": np.array([s.max_delta_squared - pr.delta**2, pr.delta**2]),
+            "delta^2": np.array([s.max_delta_squared - pr.delta**2, pr.delta]),
             "forward progress": rate_sq - s.min_phase_speed**2,
             "momentum inertia": pr.inertia[i] / pr.inertia[0] - 0.2,
             "normal force": fn - s.min_normal_force,
@@ -130,7 +130,7 @@ def _describe(group: str, problem: _Problem, pr: StepProfile) -> str:
     s, i = problem.s, problem.nodes
     fn, ft = pr.force[i, 1], pr.force[i, 0]
     if group == "delta^2":
-        return f"delta^2 = {pr.delta**2:.4f}, needs 0 < delta^2 <= {s.max_delta_squared}"
+        return f"delta = {pr.delta:.4f}, needs 0 < delta and delta^2 <= {s.max_delta_squared}"
     if group == "forward progress":
         ratio = np.sqrt(np.maximum(2.0 * pr.zeta[i], 0.0)) / pr.inertia[i] / problem.mean_rate
         return (

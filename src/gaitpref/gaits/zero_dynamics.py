@@ -114,10 +114,10 @@ class StepGeometry:
 
 @dataclass(frozen=True, eq=False)
 class StepProfile:
-    """One step on the zero dynamics, started on the periodic orbit's pre-impact speed guess.
+    """One step on the zero dynamics for a given pre-impact phase velocity ``thetad_-``.
 
-    ``zeta`` follows from ``thetad_minus`` through the impact (``zeta_+ = delta^2 zeta_-``), so
-    the profile is a periodic orbit exactly when ``periodicity_residual`` is zero.
+    The step starts from the impact of that velocity (``zeta_+ = delta^2 zeta_-``), so the
+    profile is the periodic orbit exactly when ``periodicity_residual`` is zero.
     """
 
     theta: FloatArray
@@ -166,7 +166,11 @@ def step_profile(
     n_points: int = 201,
     smoothing: float = 1e-3,
 ) -> StepProfile:
-    """Evaluate one step of the zero dynamics on a uniform grid of ``n_points`` phases."""
+    """Evaluate one step of the zero dynamics on a uniform grid of ``n_points`` phases.
+
+    ``alpha`` must be impact invariant (made by :meth:`StepGeometry.complete`): the step starts
+    where the impact of the previous one lands, on the surface ``q2 = h(theta)``.
+    """
     if n_points < 5:
         raise ValueError(f"n_points must be >= 5, got {n_points}")
     coef = np.asarray(alpha, dtype=np.float64)
