@@ -76,7 +76,8 @@ def main() -> None:
         f"{all(s.returned_to_orbit for s in sims)}; min normal force "
         f"{min(s.min_normal_force for s in sims):.1f} N (weight "
         f"{sweep.params.total_mass * sweep.params.gravity:.1f} N); max friction ratio "
-        f"{max(s.max_friction_ratio for s in sims):.3f}",
+        f"{max(s.max_friction_ratio for s in sims):.3f}; lowest late swing-foot height "
+        f"{min(s.min_late_swing_height for s in sims):.1e} m",
         "",
         "| step length [m] | COT | step duration [s] | delta^2 |",
         "|---|---|---|---|",

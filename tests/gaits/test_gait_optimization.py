@@ -50,6 +50,7 @@ def test_full_model_simulation_returns_to_the_orbit(gait: Gait, params: CompassG
     # the swing foot is above ground late in each step (the exempt early part may scuff)
     late = (sim.state[:, 0] - gait.phase_start) / (gait.phase_end - gait.phase_start) > 0.6
     assert swing_foot_height(params, sim.state[late, :2]).min() > -1e-9
+    assert sim.min_late_swing_height > -1e-9
 
 
 def test_perturbed_start_contracts_towards_the_orbit(gait: Gait, params: CompassGaitParams) -> None:

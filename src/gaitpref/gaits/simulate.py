@@ -23,7 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from gaitpref.gaits.dynamics import coriolis, gravity_vector, ground_reaction, mass_matrix
+from gaitpref.gaits.dynamics import (
+    coriolis,
+    gravity_vector,
+    ground_reaction,
+    mass_matrix,
+    swing_foot_height,
+)
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.impact import impact
 from gaitpref.gaits.params import CompassGaitParams
@@ -46,6 +52,7 @@ class SimulationResult:
     post_impact: FloatArray  # (steps, 4) state after each heel strike
     orbit_error: FloatArray  # (steps,) max-abs distance of post_impact to the gait's orbit
     impulse_ratio: FloatArray  # (steps,) |F_t| / F_n of each impact impulse
+    min_late_swing_height: float  # m, after the guard is armed (0 at strike; < 0: penetration)
     tolerance: float
 
     @property
@@ -110,6 +117,8 @@ def simulate_gait(
         raise ValueError(f"steps must be >= 1, got {steps}")
     kp, kd = natural_frequency**2, 2.0 * natural_frequency
     x = np.array(gait.orbit_state if initial_state is None else initial_state, dtype=np.float64)
+    if x.shape != (4,) or not np.all(np.isfinite(x)):
+        raise ValueError(f"initial_state must be 4 finite numbers (phi1, q2, phi1d, q2d), got {x}")
     arm_angle = gait.phase_start + arm_at * (gait.phase_end - gait.phase_start)
     horizon = 10.0 * gait.step_duration
 
@@ -127,7 +136,7 @@ def simulate_gait(
     strike.terminal, strike.direction = True, 1.0  # type: ignore[attr-defined]
 
     t0 = 0.0
-    times, states, labels, posts, ratios = [], [], [], [], []
+    times, states, labels, posts, ratios, late = [], [], [], [], [], []
     for k in range(steps):
         start = t0
         for event in (armed, strike):
@@ -143,6 +152,8 @@ def simulate_gait(
             grid = np.linspace(t0, sol.t[-1], samples_per_step // 2)
             times.append(grid)
             states.append(sol.sol(grid).T)
+            if event is strike:
+                late.append(swing_foot_height(p, states[-1][:, :2]).min())
             labels.append(np.full(grid.size, k))
             t0, x = float(sol.t[-1]), sol.y[:, -1].copy()
         hit = impact(p, x[:2], x[2:])
@@ -167,6 +178,7 @@ def simulate_gait(
         post_impact=post,
         orbit_error=np.max(np.abs(post - gait.orbit_state[None, :]), axis=1),
         impulse_ratio=np.array(ratios),
+        min_late_swing_height=float(min(late)),
         tolerance=tolerance,
     )
 
