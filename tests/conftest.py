@@ -28,26 +28,12 @@ import pytest
 from gaitpref import Feature, Space, SquaredExponential
 from gaitpref.storage import MemoryStorage, Storage, open_storage
 
+pytest_plugins = ("pytester", "tests.ci_rule")  # the CI rule: see tests/ci_rule.py
+
 _HOW = (
     "install Debian's postgresql package (`make test` does it as root), or set "
     "GAITPREF_TEST_POSTGRES_URL=postgresql+psycopg://user@host:port/db"
 )
-_CI_MARKERS = ("postgres", "browser")
-
-
-@pytest.hookimpl(hookwrapper=True)
-def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]) -> Iterator[None]:
-    """Under ``CI=true`` a skipped ``postgres``/``browser`` test is a failure: CI runs them all."""
-    outcome = yield
-    report = outcome.get_result()  # type: ignore[attr-defined]
-    if (
-        report.skipped
-        and os.environ.get("CI", "").lower() == "true"
-        and any(item.get_closest_marker(m) for m in _CI_MARKERS)
-    ):
-        reason = report.longrepr[2] if isinstance(report.longrepr, tuple) else report.longrepr
-        report.outcome = "failed"
-        report.longrepr = f"CI=true runs every test, but this one skipped: {reason}"
 
 
 def _pg_bindir() -> Path | None:

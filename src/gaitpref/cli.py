@@ -16,6 +16,7 @@ from rich.table import Table
 from gaitpref import __version__
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.console.cli import console_app
+from gaitpref.session_cli import db_app, session_app
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser, objective_on_grid
 
@@ -26,6 +27,8 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(console_app, name="console")
+app.add_typer(session_app, name="session")
+app.add_typer(db_app, name="db")
 console = Console()
 err_console = Console(stderr=True)
 
@@ -193,6 +196,9 @@ def demo(
         f"the posterior's best action scores {_norm(objective, result.posterior_argmax):.3f}"
     )
     console.print(f"figure: [bold]{figure}[/]")
+    from gaitpref.session_demo import print_demo_session
+
+    print_demo_session(out, console)
 
 
 def _norm(objective: np.ndarray, index: int) -> float:

@@ -106,7 +106,12 @@ class Session:
         use_seed = cfg.seed if seed is None else seed
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
             raise ValueError(f"seed must be an integer in 0 .. 2**63 - 1, got {use_seed!r}")
+        meta = _library_meta(cfg)
+        if library is None and cfg.library is not None:
+            library = cfg.library
         gait_ids = _gait_ids(library, len(cfg.space))
+        if gait_ids is not None:
+            meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
         storage = open_storage(db)
         version = _version()
@@ -117,7 +122,7 @@ class Session:
             config_sha256=cfg.sha256,
             seed=use_seed,
             software_version=version,
-            meta={"gait_ids": gait_ids} if gait_ids is not None else {},
+            meta=meta,
         )
         created = NewEvent(
             log.CREATED,
@@ -485,13 +490,51 @@ def _config_of(record: SessionRecord) -> ExperimentConfig:
             f"session {record.id}: the stored config text does not match its hash "
             f"({digest[:12]} != {record.config_sha256[:12]}); the database was altered"
         )
+    meta = record.meta
     try:
-        return parse_config(record.config_text, default_name=record.config_name)
+        cfg = parse_config(
+            record.config_text, default_name=record.config_name, base_dir=meta.get("config_dir")
+        )
     except ConfigError as exc:
+        if meta.get("library_path"):
+            raise ReplayError(
+                f"session {record.id} needs its gait library {meta['library_path']} (sha256 "
+                f"{str(meta.get('library_sha256'))[:12]}), which cannot be loaded: {exc}"
+            ) from None
         raise ReplayError(
             f"session {record.id}: its config no longer parses with gaitpref {_version()} "
             f"(recorded with {record.software_version}): {exc}"
         ) from None
+    if meta.get("library_sha256") and cfg.library_sha256 != meta["library_sha256"]:
+        raise ReplayError(
+            f"session {record.id}: the gait library {cfg.library_path} is not the one the "
+            f"session was run with (sha256 {str(cfg.library_sha256)[:12]}, recorded "
+            f"{meta['library_sha256'][:12]})"
+        )
+    return cfg
+
+
+def _library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
+    """Where to find the config's gait library again on replay (its folder, path and hash)."""
+    if cfg.library_path is None:
+        return {}
+    import tomllib
+
+    given = Path(tomllib.loads(cfg.text)["gaits"]["library"])
+    where = Path(cfg.library_path)
+    base = where
+    for _ in given.parts:
+        base = base.parent
+    if not given.is_absolute() and (base / given).resolve() != where:
+        raise ValueError(
+            f"cannot tell which folder the config's gait library path {str(given)!r} is "
+            "relative to; load the config from its file"
+        )
+    return {
+        "config_dir": str(base),
+        "library_path": str(where),
+        "library_sha256": cfg.library_sha256,
+    }
 
 
 def _check_same_config(record: SessionRecord, config: str | Path | ExperimentConfig) -> None:

@@ -8,10 +8,12 @@ utility.  ``make demo`` runs it into SQLite and draws the session's figure.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from rich.console import Console
 
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.feedback import Comparison, Suggestion
@@ -116,3 +118,28 @@ def demo_session(
         return DemoSession(
             database, session.id, trials, best, session.describe(best), result, picture
         )
+
+
+def print_demo_session(out: Path, console: Console) -> DemoSession:
+    """Run :func:`demo_session` and tell the operator where everything went (``make demo``)."""
+    from gaitpref.session import Session
+    from gaitpref.session_export import export_session
+
+    start = time.perf_counter()
+    done = demo_session(out)
+    with Session.open(f"sqlite:///{done.database}", done.session_id) as session:
+        export = export_session(session, out / f"session-{done.session_id}-export", "csv").parent
+    v = done.validation
+    console.print(
+        f"[bold]scripted session[/]: a simulated subject answered {done.trials} trials of "
+        f"exo-2d-length-width through the Session API in {time.perf_counter() - start:.1f} s; "
+        f"best gait {done.best_description}; blind ranking {''.join(v.ranking)} "
+        f"{'agrees' if v.agrees else 'does not agree'} with the posterior "
+        f"(Kendall's tau {v.kendall_tau:+.2f})"
+    )
+    console.print(f"database: [bold]{done.database}[/] (session {done.session_id})")
+    if done.figure is not None:
+        console.print(f"session figure: [bold]{done.figure}[/]")
+    console.print(f"export: [bold]{export}[/]")
+    console.print(f"try: gaitpref session show {done.session_id} --db {done.database} --no-figure")
+    return done

@@ -4,7 +4,8 @@ An export folder is readable without gaitpref:
 
 - ``manifest.json``: format and version, software version, config name and hash, seed, the
   session's row, the features (name, unit), a posterior summary, and the SHA-256 of every file;
-- ``config.toml``: the config exactly as the session was given it;
+- ``config.toml``: the config exactly as the session was given it (and the gait library it
+  names, at the same relative path, when there is one);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
   ``payload``);
 - tables as CSV (``--format csv``) or JSON (``--format json``): ``trials``, ``comparisons`` (with
@@ -76,8 +77,30 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
             put(f"{name}.json", json.dumps(rows, indent=1, allow_nan=False) + "\n")
         else:
             put(f"{name}.csv", _csv(rows))
-    put("manifest.json", json.dumps(_manifest(session, written), indent=2) + "\n")
+    library = _copy_library(session, out)
+    if library is not None:
+        written[library[0]] = library[1]
+    manifest = _manifest(session, written)
+    if library is not None:
+        manifest["gait_library"] = {"file": library[0], "sha256": library[1]}
+    put("manifest.json", json.dumps(manifest, indent=2) + "\n")
     return out / "manifest.json"
+
+
+def _copy_library(session: Session, out: Path) -> tuple[str, str] | None:
+    """Copy the config's gait library into the export, at the path the config names."""
+    path = session.record.meta.get("library_path")
+    if not path:
+        return None
+    import tomllib
+
+    given = Path(tomllib.loads(session.record.config_text)["gaits"]["library"])
+    if given.is_absolute() or ".." in given.parts:
+        return None  # the config names it by an absolute path: it is not copied
+    data = Path(path).read_bytes()
+    (out / given).parent.mkdir(parents=True, exist_ok=True)
+    (out / given).write_bytes(data)
+    return given.as_posix(), hashlib.sha256(data).hexdigest()
 
 
 def _manifest(session: Session, files: dict[str, str]) -> dict[str, Any]:
@@ -244,6 +267,8 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
         raise ExportError("config.toml does not match the manifest's config_sha256")
     events = _read_events(_read_checked(folder, "events.jsonl", manifest))
     info = manifest["session"]
+    meta = dict(info.get("meta", {})) if isinstance(info.get("meta"), dict) else {}
+    _find_library(folder, manifest, meta)
     try:
         status = check_status(info["status"])
         spec = SessionSpec(
@@ -254,7 +279,7 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
             seed=int(manifest["seed"]),
             software_version=info["software_version"],
             meta={
-                **info.get("meta", {}),
+                **meta,
                 "imported_from": {
                     "session_id": info["id"],
                     "exported_at": manifest.get("exported_at"),
@@ -279,6 +304,27 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
         raise
     session._owns = owns  # closing the session closes the database it opened
     return session
+
+
+def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
+    """Point ``meta`` at the exported copy of the gait library unless the original is intact."""
+    original, sha = meta.get("library_path"), meta.get("library_sha256")
+    if not original:
+        return
+    path = Path(original)
+    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == sha:
+        return
+    copy = manifest.get("gait_library")
+    if not isinstance(copy, dict) or not (folder / str(copy.get("file"))).is_file():
+        raise ExportError(
+            f"the session's gait library {original} is missing or changed, and the export "
+            "holds no copy of it"
+        )
+    data = (folder / copy["file"]).read_bytes()
+    if hashlib.sha256(data).hexdigest() != sha:
+        raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
+    meta["config_dir"] = str(folder.resolve())
+    meta["library_path"] = str((folder / copy["file"]).resolve())
 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:

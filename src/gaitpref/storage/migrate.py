@@ -11,18 +11,22 @@ from __future__ import annotations
 
 from functools import cache
 from importlib import resources
+from typing import TYPE_CHECKING
 
-from alembic import command
-from alembic.config import Config
-from alembic.script import ScriptDirectory
 from sqlalchemy import Connection, inspect, text
 
 from gaitpref.storage.base import SchemaError
+
+if TYPE_CHECKING:  # alembic is imported when first needed: it costs a tenth of a second
+    from alembic.config import Config
+    from alembic.script import ScriptDirectory
 
 _TABLES = {"subjects", "sessions", "events"}
 
 
 def _config(connection: Connection | None = None) -> Config:
+    from alembic.config import Config
+
     cfg = Config()
     cfg.set_main_option("script_location", str(resources.files("gaitpref.storage") / "migrations"))
     if connection is not None:
@@ -32,6 +36,8 @@ def _config(connection: Connection | None = None) -> Config:
 
 @cache
 def _script() -> ScriptDirectory:
+    from alembic.script import ScriptDirectory
+
     return ScriptDirectory.from_config(_config())
 
 
@@ -63,6 +69,8 @@ def upgrade(connection: Connection, revision: str = "head") -> None:
     _check_known(current)
     if current is None:
         _check_empty(connection)
+    from alembic import command
+
     command.upgrade(_config(connection), revision)
 
 
@@ -79,6 +87,8 @@ def check_schema(connection: Connection, where: str, create: bool) -> bool:
                 f"{where} holds no gaitpref database; create one with "
                 "`gaitpref db upgrade` or `gaitpref session new`"
             )
+        from alembic import command
+
         command.upgrade(_config(connection), "head")
         return True
     _check_known(current)
