@@ -37,13 +37,16 @@ def create_app(
     *,
     csrf_secret: bytes | None = None,
     allowed_hosts: Iterable[str] | None = None,
+    library_dir: str | Path | None = None,
 ) -> FastAPI:
     """The console over database ``db`` (a URL, a storage, or None for the default).
 
     ``token``: when given, every request must carry it (see :mod:`gaitpref.console.security`).
-    ``allowed_hosts``: serve only these ``Host`` names (None: any).
+    ``allowed_hosts``: serve only these ``Host`` names (None: any).  ``library_dir``: where
+    uploaded gait libraries are kept and configs may name them (default: ``gait-libraries/``
+    beside a SQLite database, else in the working folder).
     """
-    service = SessionService(db)
+    service = SessionService(db, library_dir)
 
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:

@@ -8,6 +8,7 @@ is generated and printed with the URL to open.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -50,6 +51,13 @@ def serve(
         str | None,
         typer.Option(help=f"Access token (default: ${TOKEN_ENV}; generated off loopback)."),
     ] = None,
+    libraries: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder of gait libraries (uploads are kept there; default: gait-libraries/ "
+            "beside a SQLite database)."
+        ),
+    ] = None,
 ) -> None:
     """Serve the operator console (FastAPI + uvicorn) over the session database."""
     import uvicorn
@@ -59,7 +67,7 @@ def serve(
 
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
-    app = create_app(db, use_token, allowed_hosts=hosts)
+    app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
     _out.print(f"[bold]gaitpref console[/] on {resolve_url(db)}")
     _out.print(f"open [bold]{console_url(host, port, use_token)}[/]")
     if use_token is not None:

@@ -16,6 +16,7 @@ from starlette.datastructures import UploadFile
 
 from gaitpref.config import load_config, shipped_configs
 from gaitpref.console import figures, views
+from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
@@ -103,11 +104,16 @@ async def create_session(request: Request) -> Response:
     source = uploaded if uploaded is not None else fields.get("config", "")
     if not source:
         raise InputError("config", "choose a shipped config or upload a TOML config")
-    if files.get("library_file") is not None and files["library_file"].filename:
-        raise InputError("library_file", "gait libraries are not supported by this console yet")
+    library = None
+    lib_file = files.get("library_file")
+    if lib_file is not None and lib_file.filename:
+        data = await lib_file.read(MAX_LIBRARY_BYTES + 1)
+        if len(data) > MAX_LIBRARY_BYTES:
+            raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
+        library = (data, lib_file.filename)
     name = upload_name.rsplit(".", 1)[0] if upload_name else None
     session = await run_in_threadpool(
-        lambda: _service(request).create(source, subject, seed, config_name=name)
+        lambda: _service(request).create(source, subject, seed, config_name=name, library=library)
     )
     return _see(f"/sessions/{session.id}")
 

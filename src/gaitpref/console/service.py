@@ -16,7 +16,6 @@ anything is written; :mod:`gaitpref.console.errors` turns that into HTTP 409.
 from __future__ import annotations
 
 import io
-import re
 import tempfile
 import threading
 import zipfile
@@ -26,15 +25,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
+from gaitpref.console.configs import choose_config, default_library_dir
 from gaitpref.console.errors import InputError
 from gaitpref.session import Answered, Session, SessionQuery
 from gaitpref.session_log import SessionStateError
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
 from gaitpref.validation import ValidationPlan, ValidationResult
 
-#: grids larger than this are refused at creation (the console draws and sends every action)
-MAX_ACTIONS = 250_000
 ExportFormat = Literal["csv", "json"]
 
 
@@ -49,13 +46,16 @@ class Pending:
 class SessionService:
     """Sessions of one database, opened once and shared by all requests (thread-safe)."""
 
-    def __init__(self, db: str | Storage | None) -> None:
+    def __init__(self, db: str | Storage | None, library_dir: str | Path | None = None) -> None:
         if isinstance(db, Storage):
             self.storage = db
             self.url = db.url
         else:
             self.url = resolve_url(db)
             self.storage = open_storage(self.url)
+        self.library_dir = (
+            Path(library_dir) if library_dir is not None else default_library_dir(self.url)
+        )
         self._open: dict[int, Session] = {}
         self._locks: dict[int, threading.RLock] = {}
         self._guard = threading.Lock()
@@ -106,15 +106,16 @@ class SessionService:
         seed: int | None = None,
         *,
         config_name: str | None = None,
+        library: tuple[bytes, str | None] | None = None,
     ) -> Session:
-        """A new session from a shipped config's name or a config's TOML text."""
-        cfg = read_config(config, config_name)
-        if len(cfg.space) > MAX_ACTIONS:
-            raise InputError(
-                "config",
-                f"the grid has {len(cfg.space)} actions; the console serves at most {MAX_ACTIONS}",
-            )
-        session = Session.create(self.storage, cfg, subject, seed=seed)
+        """A new session from a shipped config's name or a config's TOML text, optionally with
+        an uploaded gait library (``(bytes, file name)``); see :mod:`gaitpref.console.configs`."""
+        chosen = choose_config(
+            config, library_dir=self.library_dir, name=config_name, library=library
+        )
+        session = Session.create(
+            self.storage, chosen.config, subject, seed=seed, library=chosen.library
+        )
         with self._guard:
             self._open[session.id] = session
         return session
@@ -233,21 +234,6 @@ class SessionService:
                 for path in sorted(folder.iterdir()):
                     zf.write(path, f"{folder.name}/{path.name}")
             return buf.getvalue()
-
-
-def read_config(source: str, name: str | None = None) -> ExperimentConfig:
-    """A shipped config by name, else config TOML text (never a path: the console reads no files
-    a client names)."""
-    if source in shipped_configs():
-        return load_config(source)
-    if "\n" not in source and "=" not in source:
-        raise InputError(
-            "config",
-            f"{source[:80]!r} is neither a shipped config ({', '.join(shipped_configs())}) "
-            "nor TOML config text",
-        )
-    stem = re.sub(r"[^A-Za-z0-9._-]", "_", name or "uploaded")[:100] or "uploaded"
-    return parse_config(source, default_name=stem)
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:
