@@ -202,6 +202,9 @@ def test_posterior_figure_and_export_links(client: TestClient) -> None:
     png = client.get(src.group(1))
     assert png.status_code == 200 and png.content[:8] == b"\x89PNG\r\n\x1a\n"
     assert client.get(src.group(1)).content == png.content  # cached, same picture
+    paper = client.get(f"/sessions/{sid}/figure.png")
+    assert paper.status_code == 200 and paper.content[:4] == b"\x89PNG"
+    assert paper.content != png.content
     for fmt in ("csv", "json"):
         r = client.get(f"/sessions/{sid}/export.zip", params={"format": fmt})
         assert r.status_code == 200 and r.content[:2] == b"PK"

@@ -68,8 +68,11 @@ def serve(
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
     app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
-    _out.print(f"[bold]gaitpref console[/] on {resolve_url(db)}")
-    _out.print(f"open [bold]{console_url(host, port, use_token)}[/]")
+    _out.print(f"[bold]gaitpref console[/] on {resolve_url(db)}", soft_wrap=True)
+    _out.print(f"open [bold]{console_url(host, port, use_token)}[/]", soft_wrap=True)
     if use_token is not None:
-        _out.print("every request needs this token (Authorization: Bearer <token> for the API)")
+        _out.print(
+            "every request needs this token (Authorization: Bearer <token> for the API)",
+            soft_wrap=True,
+        )
     uvicorn.run(app, host=host, port=port, log_level="warning")

@@ -17,6 +17,8 @@ import matplotlib.pyplot as plt
 
 from gaitpref.model import Posterior
 from gaitpref.plots.posterior import posterior_picture, render
+from gaitpref.plots.session import render_session, session_picture
+from gaitpref.session import Session
 
 _DRAW_LOCK = threading.Lock()
 
@@ -36,22 +38,35 @@ def posterior_png(
     return buf.getvalue()
 
 
+def session_png(session: Session, *, dpi: int = 90) -> bytes:
+    """The paper-style figure of the session (``gaitpref.plots.session``) as PNG bytes."""
+    pic = session_picture(session)
+    with _DRAW_LOCK:
+        fig = render_session(pic)
+        try:
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=dpi)
+        finally:
+            plt.close(fig)
+    return buf.getvalue()
+
+
 class FigureCache:
-    """The last ``size`` pictures, keyed by ``(session id, version)``."""
+    """The last ``size`` pictures, keyed by ``(session id, version, kind)``."""
 
     def __init__(self, size: int = 16) -> None:
         self._size = size
-        self._items: OrderedDict[tuple[int, int], bytes] = OrderedDict()
+        self._items: OrderedDict[tuple[int, int, str], bytes] = OrderedDict()
         self._lock = threading.Lock()
 
-    def get(self, key: tuple[int, int]) -> bytes | None:
+    def get(self, key: tuple[int, int, str]) -> bytes | None:
         with self._lock:
             png = self._items.get(key)
             if png is not None:
                 self._items.move_to_end(key)
             return png
 
-    def put(self, key: tuple[int, int], png: bytes) -> None:
+    def put(self, key: tuple[int, int, str], png: bytes) -> None:
         with self._lock:
             self._items[key] = png
             self._items.move_to_end(key)

@@ -233,19 +233,33 @@ async def post_exclude(
 
 @router.get("/sessions/{session_id}/posterior.png")
 async def posterior_png(request: Request, session_id: SessionId) -> Response:
+    """The posterior figure (1-D: mean +- 2 sd with the trials; 2-D: heat map with the trials)."""
+    return await _figure(request, session_id, "posterior")
+
+
+@router.get("/sessions/{session_id}/figure.png")
+async def session_png(request: Request, session_id: SessionId) -> Response:
+    """The paper-style session figure (posterior, chronology, blind ranking)."""
+    return await _figure(request, session_id, "session")
+
+
+async def _figure(request: Request, session_id: int, kind: str) -> Response:
     service = _service(request)
     session = await run_in_threadpool(service.get, session_id)
     cache: figures.FigureCache = request.app.state.figures
-    key = (session_id, session.last_seq)
+    key = (session_id, session.last_seq, kind)
     png = cache.get(key)
     if png is None:
-        trials = [t.action for t in session.trials()]
-        png = await run_in_threadpool(
-            figures.posterior_png,
-            session.posterior(),
-            trials,
-            title=f"session {session_id}: posterior after {len(trials)} trials",
-        )
+        if kind == "session":
+            png = await run_in_threadpool(figures.session_png, session)
+        else:
+            trials = [t.action for t in session.trials()]
+            png = await run_in_threadpool(
+                figures.posterior_png,
+                session.posterior(),
+                trials,
+                title=f"session {session_id}: posterior after {len(trials)} trials",
+            )
         cache.put(key, png)
     return Response(png, media_type="image/png", headers={"cache-control": "no-store"})
 
