@@ -1,7 +1,7 @@
 """Responsiveness of the operator console on the paper's 30 x 30 synthetic grid at 150 trials.
 
-A session of the synthetic-2d config (n = 1, b = 1, coactive) is filled with 140 answers from a
-simulated subject (the paper's objective 0) through the session API; then, for trials 141-160,
+A session of the synthetic-2d config (n = 1, b = 1, coactive) is filled with 130 answers from a
+simulated subject (the paper's objective 0) through the session API; then, for trials 131-170,
 each step is timed as the operator's browser does it, through the console's ASGI app (FastAPI's
 TestClient, SQLite in a temporary folder):
 
@@ -13,7 +13,7 @@ TestClient, SQLite in a temporary folder):
 
 Target (issue 6): answer + next page under 100 ms at 150 trials.
 
-    python benchmarks/bench_console.py [--warm 140] [--timed 20]
+    python benchmarks/bench_console.py [--warm 130] [--timed 40]
 
 Writes benchmarks/results/console.md and console.json.
 """
@@ -117,8 +117,8 @@ def run(warm: int, timed: int) -> dict[str, dict[str, float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--warm", type=int, default=140, help="answers before timing")
-    parser.add_argument("--timed", type=int, default=20, help="answers timed")
+    parser.add_argument("--warm", type=int, default=130, help="answers before timing")
+    parser.add_argument("--timed", type=int, default=40, help="answers timed")
     args = parser.parse_args()
     start = time.perf_counter()
     results = run(args.warm, args.timed)

@@ -3,6 +3,7 @@ generated from the schema never get a 500, and a refused request (4xx) writes no
 
 from __future__ import annotations
 
+import atexit
 import shutil
 import tempfile
 from collections import Counter
@@ -18,6 +19,7 @@ from gaitpref.console import create_app
 from gaitpref.console.service import SessionService
 
 _ROOT = Path(tempfile.mkdtemp(prefix="gaitpref-fuzz-"))
+atexit.register(shutil.rmtree, _ROOT, True)  # also when the module's tests are deselected
 APP = create_app(f"sqlite:///{_ROOT / 'fuzz.db'}")
 SERVICE: SessionService = APP.state.service
 schema = schemathesis.openapi.from_asgi("/openapi.json", APP)

@@ -41,6 +41,7 @@ from gaitpref.console.schemas import (
     ValidationOut,
 )
 from gaitpref.console.service import SessionService
+from gaitpref.session import Session
 
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID, description="the session's id")]
 _ERRORS: dict[int | str, dict[str, Any]] = {
@@ -89,7 +90,7 @@ def create_session(request: Request, body: CreateSessionIn) -> CreatedOut:
 
 @router.get("/sessions/{session_id}", response_model=SessionOut)
 def get_session(request: Request, session_id: SessionId) -> SessionOut:
-    return present.session_out(_service(request).get(session_id))
+    return _service(request).read(session_id, present.session_out)
 
 
 @router.get("/sessions/{session_id}/query", response_model=QueryOut)
@@ -99,9 +100,7 @@ def get_query(request: Request, session_id: SessionId) -> QueryOut:
     Issued (and logged) on the first read; every later read returns the same query until it is
     answered.  409 while the session is paused or finished, or a blind validation is open.
     """
-    service = _service(request)
-    query = service.query(session_id)
-    return present.query_out(service.get(session_id), query)
+    return _service(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
 
 
 @router.post("/sessions/{session_id}/query/{query_id}/ack", response_model=AckOut)
@@ -127,8 +126,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         [list(s) for s in body.suggestions],
         body.note,
     )
-    session = service.get(session_id)
-    pending = session.pending
+    pending = service.get(session_id).pending
     return AnsweredOut(
         query_id=answered.query,
         trials=list(answered.trials),
@@ -155,13 +153,13 @@ def undo(
 @router.get("/sessions/{session_id}/posterior", response_model=PosteriorOut)
 def posterior(request: Request, session_id: SessionId) -> PosteriorOut:
     """Posterior mean and standard deviation of every action, in grid order."""
-    return present.posterior_out(_service(request).get(session_id))
+    return _service(request).read(session_id, present.posterior_out)
 
 
 @router.get("/sessions/{session_id}/trials", response_model=list[TrialOut])
 def trials(request: Request, session_id: SessionId) -> list[TrialOut]:
     """The trials in force, in order (the chronology)."""
-    return present.trials_out(_service(request).get(session_id))
+    return _service(request).read(session_id, present.trials_out)
 
 
 @router.get("/sessions/{session_id}/events", response_model=list[EventOut])
@@ -188,7 +186,7 @@ def exclude(
     """Exclude an answered trial (device fault, stumble...): its answers leave the model."""
     service = _service(request)
     service.exclude(session_id, trial, body.reason, body.detail)
-    return present.trials_out(service.get(session_id))
+    return service.read(session_id, present.trials_out)
 
 
 @router.post("/sessions/{session_id}/status", response_model=SessionOut)
@@ -196,7 +194,7 @@ def set_status(request: Request, session_id: SessionId, body: StatusIn) -> Sessi
     """Pause, resume (``active``) or finish the session."""
     service = _service(request)
     service.set_status(session_id, body.status)
-    return present.session_out(service.get(session_id))
+    return service.read(session_id, present.session_out)
 
 
 @router.post("/sessions/{session_id}/validation", response_model=ValidationOut)
@@ -205,17 +203,20 @@ def start_validation(request: Request, session_id: SessionId) -> ValidationOut:
     order), or return the open one."""
     service = _service(request)
     plan = service.start_validation(session_id)
-    return present.plan_out(service.get(session_id), plan)
+    return service.read(session_id, lambda s: present.plan_out(s, plan))
 
 
 @router.get("/sessions/{session_id}/validation", response_model=list[ValidationOut])
 def validations(request: Request, session_id: SessionId) -> list[ValidationOut]:
     """The answered rounds (unblinded), then the open one, if any."""
-    session = _service(request).get(session_id)
-    out = [present.result_out(session, r) for r in session.validations()]
-    if session.validation_plan is not None:
-        out.append(present.plan_out(session, session.validation_plan))
-    return out
+
+    def rounds(session: Session) -> list[ValidationOut]:
+        out = [present.result_out(session, r) for r in session.validations()]
+        if session.validation_plan is not None:
+            out.append(present.plan_out(session, session.validation_plan))
+        return out
+
+    return _service(request).read(session_id, rounds)
 
 
 @router.post("/sessions/{session_id}/validation/{round_}/ranking", response_model=ValidationOut)
@@ -228,7 +229,7 @@ def rank(
     """The subject's blind ranking (labels, best first); returns the round unblinded."""
     service = _service(request)
     result = service.rank(session_id, round_, body.ranking)
-    return present.result_out(service.get(session_id), result)
+    return service.read(session_id, lambda s: present.result_out(s, result))
 
 
 @router.get(

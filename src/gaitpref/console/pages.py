@@ -20,9 +20,15 @@ from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
-from gaitpref.console.service import ExportFormat, SessionService, session_query_error
+from gaitpref.console.service import (
+    ExportFormat,
+    SessionService,
+    pending_of,
+    session_query_error,
+)
 from gaitpref.console.templating import render
 from gaitpref.console.trial_page import trial_context
+from gaitpref.session import Session
 from gaitpref.session_log import REASONS
 
 router = APIRouter(include_in_schema=False)
@@ -137,15 +143,14 @@ async def trial_page(
     answered: Annotated[str | None, Query(max_length=200)] = None,
     undone: Annotated[str | None, Query(max_length=200)] = None,
 ) -> Response:
-    service = _service(request)
-    pending = await run_in_threadpool(service.pending, session_id)
-    session = service.get(session_id)
+    context = await run_in_threadpool(
+        _service(request).read, session_id, lambda s: trial_context(s, pending_of(s))
+    )
     flash = ""
     if answered:
         flash = f"Saved: trial {answered}."
     elif undone:
         flash = f"Undone: the answer to trial {undone} was taken back; run it again."
-    context = await run_in_threadpool(trial_context, session, pending)
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 
 
@@ -267,7 +272,12 @@ async def _figure(request: Request, session_id: int, kind: str) -> Response:
 # -- validation --------------------------------------------------------------------------------
 @router.get("/sessions/{session_id}/validation", response_class=HTMLResponse)
 async def validation_page(request: Request, session_id: SessionId) -> Response:
-    session = await run_in_threadpool(_service(request).get, session_id)
+    return await run_in_threadpool(
+        _service(request).read, session_id, lambda s: _validation_page(request, s)
+    )
+
+
+def _validation_page(request: Request, session: Session) -> Response:
     space = session.config.space
     plan = session.validation_plan
     gaits = (

@@ -19,11 +19,11 @@ import io
 import tempfile
 import threading
 import zipfile
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir
 from gaitpref.console.errors import InputError
@@ -33,6 +33,9 @@ from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage
 from gaitpref.validation import ValidationPlan, ValidationResult
 
 ExportFormat = Literal["csv", "json"]
+T = TypeVar("T")
+#: opened sessions kept in memory (reopening one replays its log)
+KEEP = 32
 
 
 @dataclass(frozen=True)
@@ -74,12 +77,19 @@ class SessionService:
         with self._lock(session_id):
             yield self._current(session_id)
 
+    def _keep(self, session: Session) -> None:
+        """Remember an opened session (the ``KEEP`` most recently opened ones)."""
+        with self._guard:
+            self._open.pop(session.id, None)
+            self._open[session.id] = session
+            while len(self._open) > KEEP:
+                self._open.pop(next(iter(self._open)))
+
     def _current(self, session_id: int) -> Session:
         session = self._open.get(session_id)
         if session is None:
             session = Session.open(self.storage, session_id)
-            with self._guard:
-                self._open[session_id] = session
+            self._keep(session)
             return session
         stored = self.storage.get_session(session_id)
         if stored.last_seq != session.last_seq:
@@ -87,9 +97,14 @@ class SessionService:
         return session
 
     def get(self, session_id: int) -> Session:
-        """The session, up to date (read-only use)."""
+        """The session, up to date (for reading one thing; see :meth:`read` for several)."""
         with self.locked(session_id) as session:
             return session
+
+    def read(self, session_id: int, fn: Callable[[Session], T]) -> T:
+        """``fn(session)`` with the session's lock held: a consistent view of several things."""
+        with self.locked(session_id) as session:
+            return fn(session)
 
     # -- listing -------------------------------------------------------------------------------
     def list_sessions(self) -> list[SessionRecord]:
@@ -116,24 +131,13 @@ class SessionService:
         session = Session.create(
             self.storage, chosen.config, subject, seed=seed, library=chosen.library
         )
-        with self._guard:
-            self._open[session.id] = session
+        self._keep(session)
         return session
 
     # -- the loop ------------------------------------------------------------------------------
     def pending(self, session_id: int) -> Pending:
         """The query to run now (issued and logged if new), or why there is none."""
-        with self.locked(session_id) as session:
-            if session.status != "active":
-                return Pending(None, session.status)
-            if session.validation_plan is not None:
-                return Pending(None, "validation")
-            return Pending(session.next_query(), "")
-
-    def query(self, session_id: int) -> SessionQuery:
-        """The pending query (the same one until it is answered); 409 when there can be none."""
-        with self.locked(session_id) as session:
-            return session.next_query()
+        return self.read(session_id, pending_of)
 
     def answer(
         self,
@@ -234,6 +238,15 @@ class SessionService:
                 for path in sorted(folder.iterdir()):
                     zf.write(path, f"{folder.name}/{path.name}")
             return buf.getvalue()
+
+
+def pending_of(session: Session) -> Pending:
+    """The query to run now (issued and logged if new), or why there is none."""
+    if session.status != "active":
+        return Pending(None, session.status)
+    if session.validation_plan is not None:
+        return Pending(None, "validation")
+    return Pending(session.next_query(), "")
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:
