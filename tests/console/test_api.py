@@ -438,3 +438,20 @@ def test_the_openapi_schema_describes_the_api(client: TestClient) -> None:
     answer = schema["components"]["schemas"]["AnswerIn"]
     assert answer["additionalProperties"] is False and answer["required"] == ["query_id"]
     assert not any(p.startswith("/sessions") for p in paths)  # pages are not API
+
+
+def test_sessions_beyond_the_kept_ones_are_reopened_from_the_log(
+    db_url: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.console import service
+
+    monkeypatch.setattr(service, "KEEP", 1)
+    c = TestClient(create_app(db_url))
+    first, second = new_session(c), new_session(c)
+    answer_once(c, first)
+    answer_once(c, second)  # the first session is no longer kept open
+    state = c.app.state.service  # type: ignore[attr-defined]
+    assert list(state._open) == [second]
+    q = c.get(f"/api/sessions/{first}/query").json()
+    assert q["trials_done"] == 1 and q["buffer"][0]["trial"] == 1
+    assert list(state._open) == [first]

@@ -173,8 +173,12 @@
   document.addEventListener("keydown", (event) => {
     if (event.ctrlKey || event.metaKey || event.altKey) return;
     if (dialog && dialog.open) {
-      if (event.key === "Enter") { event.preventDefault(); if (pendingForm) confirmAndSend(pendingForm); }
-      return; // Esc closes the dialog natively
+      const onBack = document.activeElement && document.activeElement.hasAttribute("data-confirm-no");
+      if (event.key === "Enter" && !onBack) {
+        event.preventDefault();
+        if (pendingForm) confirmAndSend(pendingForm);
+      }
+      return; // Esc closes the dialog natively; Enter on "Back" goes back
     }
     if (typing(event.target)) {
       if (event.key === "Escape") event.target.blur();
@@ -204,4 +208,6 @@
     }
   });
   mark();
+  // a page restored from the back/forward cache may show a form already sent: load it afresh
+  window.addEventListener("pageshow", (event) => { if (event.persisted) window.location.reload(); });
 })();
