@@ -283,7 +283,7 @@ class Session:
 
         def run() -> SessionQuery:
             st = self._state
-            st.check_active("undo")
+            st.check_open("undo")
             self._append([st.undo_event()])
             assert self._state.pending is not None
             return self._state.pending
@@ -296,7 +296,7 @@ class Session:
 
         def run() -> Trial:
             st = self._state
-            st.check_active("exclusions")
+            st.check_open("exclusions")
             event = st.exclude_event(trial, reason, detail)
             st.apply_exclusion(event.payload)
             try:
@@ -322,7 +322,8 @@ class Session:
         return self._locked(run)
 
     def pause(self) -> None:
-        """Mark the session paused (the operator stepped away; resume later)."""
+        """Mark the session paused (the operator stepped away): no queries or answers until
+        :meth:`resume`; undo, exclusions, notes and validation stay possible."""
         self._locked(lambda: self._set_status(log.PAUSED, "active", "pause"))
 
     def resume(self) -> None:
@@ -350,7 +351,7 @@ class Session:
 
         def run() -> ValidationPlan:
             st = self._state
-            st.check_active("validation")
+            st.check_open("validation")
             if st.open_round is None:
                 self._append([st.validation_event()])
             current = self._state.open_round
@@ -370,7 +371,7 @@ class Session:
 
         def run() -> ValidationResult:
             st = self._state
-            st.check_active("validation")
+            st.check_open("validation")
             self._append([st.validation_answer_event(round_, ranking)])
             result = self._state.rounds[-1].result
             assert result is not None
@@ -385,7 +386,7 @@ class Session:
     # -- reading -------------------------------------------------------------------------------
     def posterior(self) -> Posterior:
         """The current posterior (answers in force, exclusions applied)."""
-        return self._locked(lambda: self._state.loop.posterior)  # type: ignore[no-any-return]
+        return self._locked(lambda: self._state.loop.posterior)
 
     def events(self) -> list[EventRecord]:
         """The whole log, from the database."""

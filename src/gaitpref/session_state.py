@@ -26,7 +26,7 @@ import numpy as np
 
 from gaitpref import session_log as log
 from gaitpref.config import ExperimentConfig
-from gaitpref.cospar import Answer, QueryError
+from gaitpref.cospar import Answer, CoSpar, QueryError
 from gaitpref.feedback import Preference
 from gaitpref.session_log import (
     ComparisonRecord,
@@ -75,7 +75,7 @@ class SessionState:
     config: ExperimentConfig
     seed: int
     gait_ids: list[str] | None = None
-    loop: Any = field(init=False)
+    loop: CoSpar = field(init=False)
     last_seq: int = 0
     status: Status = "active"
     pending: SessionQuery | None = None
@@ -425,9 +425,14 @@ class SessionState:
     def gait_id(self, action: int) -> str | None:
         return None if self.gait_ids is None else self.gait_ids[action]
 
-    def check_active(self, what: str) -> None:
+    def check_open(self, what: str) -> None:
+        """Refuse ``what`` in a finished session."""
         if self.status == "finished":
             raise SessionStateError(f"the session is finished: it takes no {what}")
+
+    def check_active(self, what: str) -> None:
+        """Refuse ``what`` (queries and answers) unless the session is running."""
+        self.check_open(what)
         if self.status == "paused":
             raise SessionStateError(f"the session is paused: resume it before {what}")
 
