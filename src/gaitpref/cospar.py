@@ -32,7 +32,7 @@ from gaitpref.feedback import (
 )
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.model.posterior import Posterior
 from gaitpref.space import Space
 
 
@@ -84,6 +84,7 @@ class CoSpar:
         buffer: int = 0,
         coactive_weight: float = 1.0,
         seed: int | np.random.Generator = 0,
+        sampler: str = "auto",
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -94,7 +95,7 @@ class CoSpar:
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
-        self.gp = PreferenceGP(space, kernel, noise)
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
         self.n = n
         self.buffer_size = buffer
         self.coactive_weight = float(coactive_weight)
@@ -131,8 +132,7 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        samples = self.posterior.sample(self.rng, self.n)
-        actions = tuple(random_argmax(s, self.rng) for s in samples)
+        actions = tuple(int(a) for a in self.posterior.argmax_samples(self.rng, self.n))
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
         return self.pending
