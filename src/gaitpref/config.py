@@ -13,6 +13,7 @@
     signal_variance = 0.005
     jitter = 1e-7
     noise = 0.02
+    sampler = "auto"               # optional: "auto", "dense" or "scalable" (posterior samples)
 
     [cospar]
     n = 1
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from gaitpref.cospar import CoSpar
+from gaitpref.model.engines import SAMPLERS, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Feature, Space
 
@@ -46,7 +48,7 @@ class ConfigError(ValueError):
 
 _TOP_KEYS = {"name", "description", "space", "model", "cospar"}
 _FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
-_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise"}
+_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise", "sampler"}
 _COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed"}
 
 
@@ -64,6 +66,7 @@ class ExperimentConfig:
     seed: int
     text: str = field(repr=False)
     description: str = ""
+    sampler: str = "auto"
 
     @property
     def sha256(self) -> str:
@@ -80,6 +83,7 @@ class ExperimentConfig:
             buffer=self.buffer,
             coactive_weight=self.coactive_weight,
             seed=self.seed if seed is None else seed,
+            sampler=self.sampler,
         )
 
 
@@ -140,6 +144,7 @@ def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfi
         or _fail("[cospar].coactive_weight must be > 0"),
         seed=_integer(cospar, "seed", "[cospar]", default=0, minimum=0),
         text=text,
+        sampler=_sampler(model, len(space)),
     )
 
 
@@ -190,6 +195,17 @@ def _integer(table: dict[str, Any], key: str, where: str, default: int, minimum:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise ConfigError(f"{where}.{key}: must be an integer >= {minimum}, got {value!r}")
     return value
+
+
+def _sampler(model: dict[str, Any], size: int) -> str:
+    value = model.get("sampler", "auto")
+    if value not in SAMPLERS:
+        raise ConfigError(f"[model].sampler: must be one of {', '.join(SAMPLERS)}; got {value!r}")
+    try:
+        resolve_sampler(value, size)
+    except ValueError as exc:
+        raise ConfigError(f"[model].sampler: {exc}") from None
+    return str(value)
 
 
 def _parse_space(raw: object) -> Space:

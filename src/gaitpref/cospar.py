@@ -73,7 +73,12 @@ def _light(posterior: Posterior) -> Posterior:
 
 
 class CoSpar:
-    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials."""
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials.
+
+    ``sampler`` ("auto", "dense" or "scalable") picks how posterior samples reach every action
+    (:mod:`gaitpref.model.engines`); for a given seed all choices propose the same actions up to
+    floating-point rounding.
+    """
 
     def __init__(
         self,

@@ -66,7 +66,7 @@ class DenseEngine:
         self.prior = KroneckerPriorSampler(space, kernel)
         root: FloatArray = np.ones((1, 1))
         for r in self.prior.roots:
-            root = np.kron(root, r)
+            root = np.kron(root, r).astype(np.float64, copy=False)
         self.root_t = np.ascontiguousarray(self.prior.scale * root.T)  # so z @ root_t
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:

@@ -156,7 +156,9 @@ def fit_laplace(
             trial = u + step
             new_value, new_logp, new_g, new_c = objective(trial)
         else:
-            trial, new_value, new_logp, new_g, new_c = _line_search(objective, u, value, step, slope)
+            trial, new_value, new_logp, new_g, new_c = _line_search(
+                objective, u, value, step, slope
+            )
             if trial is None:
                 raise ConvergenceError(
                     f"Laplace fit: line search failed at Newton iteration {iteration} "
