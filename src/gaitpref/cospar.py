@@ -16,8 +16,9 @@ preference" is stored and not modelled; the posterior is refitted, warm-started 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from gaitpref.feedback import (
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import SMALL_GRID, blas_threads
 from gaitpref.space import Space
 
 
@@ -110,7 +112,7 @@ class CoSpar:
         self.pending: Query | None = None
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
-        self._rng_before_pending: dict[str, object] | None = None
+        self._rng_before_pending: Mapping[str, Any] | None = None
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -137,7 +139,9 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        actions = tuple(int(a) for a in self.posterior.argmax_samples(self.rng, self.n))
+        with blas_threads(len(self.space)):
+            picks = self.posterior.argmax_samples(self.rng, self.n)
+        actions = tuple(int(a) for a in picks)
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
         return self.pending
@@ -178,7 +182,10 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
+        # The fit is m x m work whatever the grid's size (warm starts use the mean at the visited
+        # actions only): one BLAS thread, as on small grids.
+        with blas_threads(min(len(self.space), SMALL_GRID)):
+            new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
         self.pending = None

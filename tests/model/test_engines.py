@@ -55,7 +55,7 @@ def test_the_loop_proposes_the_same_actions_on_either_path() -> None:
         coactive = GradientCoactive(config.space, objective)
         results.append(run_simulation(loop, user, 40, coactive))
     assert results[0].actions.tolist() == results[1].actions.tolist()
-    scale = np.max(np.abs(results[0].posterior_mean))
+    scale = np.max(np.abs(results[0].posterior.mean))
     np.testing.assert_allclose(
-        results[1].posterior_mean, results[0].posterior_mean, rtol=1e-9, atol=1e-9 * scale
+        results[1].posterior.mean, results[0].posterior.mean, rtol=1e-9, atol=1e-9 * scale
     )
