@@ -10,9 +10,11 @@ same actions (up to floating-point rounding); they differ only in what they stor
 - ``"scalable"``: prior samples axis by axis through the per-feature roots and ``K_{:,V}`` through
   its Khatri-Rao tables (``kronecker.py``), in blocks of at most ``BLOCK_ELEMENTS`` floats:
   memory ``O(A s + (P + C) m)``, time ``O(A (sum n_f + m) s)`` per ask.
-- ``"auto"``: dense up to :data:`DENSE_MAX_ACTIONS` actions, scalable above (the crossover of
-  ask + tell measured on the project's 2-core machines: ``benchmarks/bench_large.py``,
-  ``benchmarks/results/large.md``).
+- ``"auto"``: dense up to :data:`DENSE_MAX_ACTIONS` actions, scalable above.  The threshold is
+  the measured crossover of an ask on the project's 2-core machines
+  (``benchmarks/bench_large.py``, ``benchmarks/results/large.md``): dense is faster by 10-30 us
+  below about 90 actions, the two tie at 90-100, and scalable is 2-10x faster from 250 actions on
+  (the dense path's ``A x A`` root makes its prior draw ``O(A^2)``).
 
 Notation: ``A`` actions, ``m`` visited, ``s`` samples, ``n_f`` values of feature ``f``.
 """
@@ -37,7 +39,7 @@ SamplerName = Literal["auto", "dense", "scalable"]
 SAMPLERS: tuple[SamplerName, ...] = get_args(SamplerName)
 
 #: ``sampler="auto"`` uses the dense path up to this many actions (measured crossover).
-DENSE_MAX_ACTIONS = 400
+DENSE_MAX_ACTIONS = 100
 #: The dense path refuses larger grids: its ``A x A`` prior root would pass 512 MiB.
 DENSE_LIMIT_ACTIONS = 8192
 
