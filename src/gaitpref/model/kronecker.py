@@ -122,6 +122,8 @@ class KhatriRaoCross:
 
     def add_product(self, out: FloatArray, coef: FloatArray) -> None:
         """``out += (K_{:,V} coef)^T`` in place; ``out`` is ``s x A``, ``coef`` is ``m x s``."""
+        if not out.flags.c_contiguous:
+            raise ValueError("add_product needs a C-contiguous output array")
         s = coef.shape[1]
         P, C = self.n_prefix, self.n_suffix
         view = out.reshape(s, P, C)
