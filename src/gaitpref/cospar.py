@@ -34,7 +34,7 @@ from gaitpref.feedback import (
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior
-from gaitpref.model.threads import SMALL_GRID, blas_threads
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 
 
@@ -139,7 +139,7 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        with blas_threads(len(self.space)):
+        with one_blas_thread():
             picks = self.posterior.argmax_samples(self.rng, self.n)
         actions = tuple(int(a) for a in picks)
         self.pending = Query(self._next_id, actions, self._buffer)
@@ -182,9 +182,7 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        # The fit is m x m work whatever the grid's size (warm starts use the mean at the visited
-        # actions only): one BLAS thread, as on small grids.
-        with blas_threads(min(len(self.space), SMALL_GRID)):
+        with one_blas_thread():
             new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
