@@ -17,7 +17,12 @@ RSS (everything, Python included) and the tracemalloc peak of one further iterat
 The crossover: the ask of a fresh posterior (150 random preferences) on the dense and the
 scalable path, for grids from 15 to 1,600 actions, with one BLAS thread as CoSpar uses there.
 
-    python benchmarks/bench_large.py [--iterations 15] [--cases 6d 4d]
+The 30 x 30 grid must not get slower: with ``--baseline SRC`` (the ``src`` directory of another
+gaitpref tree, e.g. ``git archive main | tar -x -C /tmp/main``) the n = 1, b = 1 coactive
+150-trial runs of ``bench_core.py`` are timed for that tree and this one, interleaved in rounds so
+that load from other work hits both alike.
+
+    python benchmarks/bench_large.py [--iterations 15] [--cases 6d 4d] [--baseline /tmp/main/src]
 
 Writes benchmarks/results/large.md and large.json.
 """
@@ -27,6 +32,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import os
 import resource
 import subprocess
 import sys
@@ -166,7 +172,54 @@ def crossover() -> list[dict[str, object]]:
     return rows
 
 
-def _markdown(info: dict[str, object], cases: list[dict], cross: list[dict]) -> str:
+_CORE_SNIPPET = """
+import json, sys
+sys.path.insert(0, "benchmarks")
+from bench_core import one_run
+one_run(1, 1, True, 99, trials=10)
+out = []
+for k in KS:
+    iters, total = one_run(1, 1, True, k)
+    out.append([total, [dt for done, dt in iters if done >= 100]])
+print(json.dumps(out))
+"""
+
+
+def core_comparison(
+    baseline: str, label: str, rounds: int = 5, per_round: int = 2
+) -> dict[str, dict[str, object]]:
+    """150-trial synthetic-2d runs (n = 1, b = 1, coactive) of ``baseline`` and this tree."""
+    here = str(Path(__file__).resolve().parent.parent / "src")
+    runs: dict[str, list] = {"baseline": [], "this branch": []}
+    for r in range(rounds):
+        ks = list(range(r * per_round, (r + 1) * per_round))
+        for name, src in (("baseline", baseline), ("this branch", here)):
+            env = {**os.environ, "PYTHONPATH": src}
+            code = _CORE_SNIPPET.replace("KS", repr(ks))
+            out = subprocess.run(
+                [sys.executable, "-c", code],
+                cwd=Path(__file__).resolve().parent.parent,
+                env=env,
+                check=True,
+                capture_output=True,
+                text=True,
+            )
+            runs[name] += json.loads(out.stdout.strip().splitlines()[-1])
+    summary: dict[str, dict[str, object]] = {}
+    for name, values in runs.items():
+        late = [dt for _, its in values for dt in its]
+        summary[name] = {
+            "label": label if name == "baseline" else "this tree",
+            "median_run_s": float(np.median([t for t, _ in values])),
+            "median_iteration_ms_trials_100_150": 1e3 * float(np.median(late)),
+            "runs": len(values),
+        }
+    return summary
+
+
+def _markdown(
+    info: dict[str, object], cases: list[dict], cross: list[dict], core: dict | None
+) -> str:
     lines = [
         "# CoSpar on large grids (issue 7)",
         "",
@@ -208,6 +261,22 @@ def _markdown(info: dict[str, object], cases: list[dict], cross: list[dict]) -> 
             f"| {r['shape']} | {r['actions']} | {r['visited']} | {r['dense_ask_us']:.0f} | "
             f"{r['scalable_ask_us']:.0f} | {faster} |"
         )
+    if core is not None:
+        lines += [
+            "",
+            "## The 30 x 30 grid (synthetic-2d, n = 1, b = 1, coactive, 150 trials)",
+            "",
+            f"Baseline: {core['baseline']['label']}; runs interleaved in rounds.",
+            "",
+            "| code | median run (s) | median iteration, trials 100-150 (ms) | runs |",
+            "|---|---|---|---|",
+        ]
+        for label in ("baseline", "this branch"):
+            c = core[label]
+            lines.append(
+                f"| {label} | {c['median_run_s']:.3f} | "
+                f"{c['median_iteration_ms_trials_100_150']:.2f} | {c['runs']} |"
+            )
     lines += ["", "Machine:", "", machine_markdown(info), ""]
     return "\n".join(lines)
 
@@ -216,6 +285,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--iterations", type=int, default=15)
     parser.add_argument("--cases", nargs="*", default=["6d", "4d"])
+    parser.add_argument("--baseline", help="src/ of another gaitpref tree to compare 30 x 30 with")
+    parser.add_argument("--baseline-label", help="how to name the baseline (e.g. main at abc123)")
     parser.add_argument("--case", help=argparse.SUPPRESS)  # internal: one case, JSON to stdout
     args = parser.parse_args()
     if args.case:
@@ -233,6 +304,10 @@ def main() -> None:
         cases.append(json.loads(out.stdout.strip().splitlines()[-1]))
     print("crossover ...", file=sys.stderr, flush=True)
     cross = crossover()
+    core = None
+    if args.baseline:
+        print("30 x 30 against the baseline ...", file=sys.stderr, flush=True)
+        core = core_comparison(args.baseline, args.baseline_label or f"`{args.baseline}`")
     info = machine_description()
     info["blas"] = ", ".join(
         f"{i['internal_api']} {i.get('version')} ({i['num_threads']} threads)"
@@ -240,9 +315,9 @@ def main() -> None:
         if i["user_api"] == "blas"
     )
     RESULTS.mkdir(exist_ok=True)
-    payload = {"machine": info, "cases": cases, "crossover": cross}
+    payload = {"machine": info, "cases": cases, "crossover": cross, "core_30x30": core}
     (RESULTS / "large.json").write_text(json.dumps(payload, indent=2))
-    text = _markdown(info, cases, cross)
+    text = _markdown(info, cases, cross, core)
     (RESULTS / "large.md").write_text(text)
     print(text)
 
