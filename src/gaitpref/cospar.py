@@ -217,7 +217,7 @@ class CoSpar:
         if answer.query.id in self._stale_before:
             # an exclusion in an earlier answer came after this one: refit what remains
             self._stale_before.discard(answer.query.id)
-            with blas_threads(len(self.space)):
+            with one_blas_thread():
                 self.posterior = self._fit(self.answers)
         else:
             self.posterior = answer.posterior_before
@@ -253,7 +253,7 @@ class CoSpar:
         old = self._dropped
         self._dropped = new
         try:
-            with blas_threads(len(self.space)):
+            with one_blas_thread():
                 posterior = self._fit(self.answers)
         except Exception:
             self._dropped = old
