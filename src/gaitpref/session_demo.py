@@ -142,5 +142,6 @@ def print_demo_session(out: Path, console: Console) -> DemoSession:
     if done.figure is not None:
         console.print(f"session figure: [bold]{done.figure}[/]", soft_wrap=True)
     console.print(f"export: [bold]{export}[/]", soft_wrap=True)
-    console.print(f"try: gaitpref session show {done.session_id} --db {done.database} --no-figure")
+    command = f"gaitpref session show {done.session_id} --db {done.database} --no-figure"
+    console.print(f"try: {command}", soft_wrap=True)
     return done
