@@ -27,10 +27,10 @@ __version__ = "0.1.0"
 __all__ = [
     "MOVES",
     "Answer",
+    "CoSpar",
     "Comparison",
     "ConfigError",
     "ConvergenceError",
-    "CoSpar",
     "ExperimentConfig",
     "Feature",
     "FeedbackError",

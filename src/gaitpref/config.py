@@ -209,8 +209,9 @@ def _parse_space(raw: object) -> Space:
                 if not isinstance(values, list) or not values:
                     raise ConfigError(f"{where}.values: must be a non-empty list of numbers")
             else:
-                lo, hi = _number(spec, "min", where, minimum=-np.inf), _number(
-                    spec, "max", where, minimum=-np.inf
+                lo, hi = (
+                    _number(spec, "min", where, minimum=-np.inf),
+                    _number(spec, "max", where, minimum=-np.inf),
                 )
                 num = _integer(spec, "num", where, default=0, minimum=1)
                 if num > 1 and hi <= lo:

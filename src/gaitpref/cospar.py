@@ -16,8 +16,9 @@ preference" is stored and not modelled; the posterior is refitted, warm-started 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from gaitpref.feedback import (
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.model.threads import blas_threads
 from gaitpref.space import Space
 
 
@@ -104,7 +106,7 @@ class CoSpar:
         self.pending: Query | None = None
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
-        self._rng_before_pending: dict[str, object] | None = None
+        self._rng_before_pending: Mapping[str, Any] | None = None
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -131,7 +133,8 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        samples = self.posterior.sample(self.rng, self.n)
+        with blas_threads(len(self.space)):
+            samples = self.posterior.sample(self.rng, self.n)
         actions = tuple(random_argmax(s, self.rng) for s in samples)
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
@@ -173,7 +176,8 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
+        with blas_threads(len(self.space)):
+            new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
         self.pending = None

@@ -47,7 +47,7 @@ class Comparison:
 
 @dataclass(frozen=True)
 class Suggestion:
-    """"Executed action ``action`` would be better with ``feature`` moved by ``move``"."""
+    """ "Executed action ``action`` would be better with ``feature`` moved by ``move``"."""
 
     action: int
     feature: str

@@ -175,7 +175,8 @@ class Space:
 
     def point(self, index: int) -> FloatArray:
         """Feature values of the action with flat index ``index``."""
-        return self.points[self.check_index(index)].copy()
+        out: FloatArray = self.points[self.check_index(index)].copy()
+        return out
 
     def values_of(self, index: int) -> dict[str, float]:
         """Feature name -> value of one action."""
@@ -206,12 +207,12 @@ class Space:
         f = self.feature_index(feature) if isinstance(feature, str) else int(feature)
         if not 0 <= f < self.ndim:
             raise IndexError(f"feature number {f} out of range (0..{self.ndim - 1})")
-        multi = list(np.unravel_index(i, self.shape))
-        new = self.features[f].move(int(multi[f]), move)
+        multi = [int(m) for m in np.unravel_index(i, self.shape)]
+        new = self.features[f].move(multi[f], move)
         if new is None:
             return None
         multi[f] = new
-        return int(np.ravel_multi_index(tuple(int(m) for m in multi), self.shape))
+        return int(np.ravel_multi_index(tuple(multi), self.shape))
 
     def describe(self, index: int) -> str:
         """Human-readable feature values, e.g. ``step_length=0.130 m, step_duration=0.95 s``."""

@@ -58,7 +58,10 @@ class LaplaceMode:
     @property
     def alpha(self) -> FloatArray:
         """``K_VV^-1 f_hat_V`` (so that the mean everywhere is ``K_{:,V} alpha``)."""
-        return solve_triangular(self.chol_prior, self.whitened_mode, lower=True, trans="T")
+        out: FloatArray = solve_triangular(
+            self.chol_prior, self.whitened_mode, lower=True, trans="T"
+        )
+        return out
 
     @property
     def log_evidence(self) -> float:
@@ -70,7 +73,8 @@ class LaplaceMode:
 
 def _factor_prior(k_vv: FloatArray) -> FloatArray:
     try:
-        return cholesky(k_vv, lower=True, check_finite=False)
+        factor: FloatArray = cholesky(k_vv, lower=True, check_finite=False)
+        return factor
     except LinAlgError:
         raise PriorNotPositiveDefiniteError(
             f"the prior covariance of the {k_vv.shape[0]} visited actions is not positive "
@@ -103,7 +107,7 @@ def fit_laplace(
     likelihood: PairLikelihood,
     init: FloatArray | None = None,
     *,
-    tol: float = 1e-9,
+    tol: float = 1e-11,
     max_iter: int = 100,
 ) -> LaplaceMode:
     """Newton's method for ``u_hat``; observations are ``d_k = f[first_k] - f[second_k]``.
@@ -156,7 +160,9 @@ def fit_laplace(
             trial = u + step
             new_value, new_logp, new_g, new_c = objective(trial)
         else:
-            trial, new_value, new_logp, new_g, new_c = _line_search(objective, u, value, step, slope)
+            trial, new_value, new_logp, new_g, new_c = _line_search(
+                objective, u, value, step, slope
+            )
             if trial is None:
                 raise ConvergenceError(
                     f"Laplace fit: line search failed at Newton iteration {iteration} "

@@ -40,12 +40,13 @@ class PairLikelihood(Protocol):
 def mills_ratio(z: FloatArray) -> FloatArray:
     """``phi(z) / Phi(z)`` for any real ``z``, without underflow (``-> -z`` as ``z -> -inf``)."""
     with np.errstate(over="ignore"):
-        return _SQRT_2_OVER_PI / erfcx(-z / _SQRT2)
+        out: FloatArray = _SQRT_2_OVER_PI / erfcx(-z / _SQRT2)
+    return out
 
 
 @dataclass(frozen=True)
 class Probit:
-    """``P(a > b) = Phi((f_a - f_b) / (sqrt(2) sigma_k))`` with one noise ``sigma_k`` per observation."""
+    """``P(a > b) = Phi((f_a - f_b) / (sqrt(2) sigma_k))``, one noise per observation."""
 
     sigma: FloatArray
 

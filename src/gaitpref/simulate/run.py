@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitpref.cospar import CoSpar
+from gaitpref.model.posterior import Posterior
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import FloatArray, IntArray
 
@@ -23,8 +24,13 @@ class SimulationResult:
 
     actions: IntArray
     normalized_objective: FloatArray
-    posterior_argmax: int
-    posterior_mean: FloatArray
+    posterior: Posterior
+    argmax_normalized_objective: float  # of the final posterior mean's argmax
+
+    @property
+    def posterior_argmax(self) -> int:
+        """Grid index of the final posterior mean's argmax."""
+        return self.posterior.argmax
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -32,6 +38,7 @@ class SimulationResult:
             "actions": self.actions.tolist(),
             "normalized_objective": self.normalized_objective.tolist(),
             "posterior_argmax": self.posterior_argmax,
+            "posterior_argmax_normalized_objective": self.argmax_normalized_objective,
         }
 
 
@@ -66,6 +73,6 @@ def run_simulation(
     return SimulationResult(
         actions=actions,
         normalized_objective=user.normalized(actions),
-        posterior_argmax=posterior.argmax,
-        posterior_mean=np.asarray(posterior.mean).copy(),
+        posterior=posterior,
+        argmax_normalized_objective=float(user.normalized([posterior.argmax])[0]),
     )

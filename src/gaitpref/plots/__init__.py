@@ -1,0 +1,1 @@
+"""Figures: compute the picture's data first, then render it with matplotlib."""

@@ -1,0 +1,150 @@
+"""Figures of a posterior over a 1-D or 2-D gait grid, as in the paper's Figs. 2, 3, 5 and 6.
+
+The data of a picture is computed first (:class:`PosteriorPicture`, plain arrays), then rendered
+with matplotlib (Agg backend, no screen needed):
+
+- 1-D: posterior mean +- 2 standard deviations, a few joint posterior samples, the trials;
+- 2-D: a heat map of the posterior mean with the trials in chronological order (numbered), and
+  optionally the true objective beside it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from gaitpref.model.posterior import Posterior
+from gaitpref.space import FloatArray, IntArray, Space
+
+
+@dataclass(frozen=True)
+class PosteriorPicture:
+    """What a posterior figure shows, as arrays."""
+
+    space: Space
+    mean: FloatArray
+    std: FloatArray
+    samples: FloatArray  # k x A
+    trials: IntArray  # executed actions in order
+    objective: FloatArray | None  # true objective (flat), if known
+    title: str
+
+
+def posterior_picture(
+    posterior: Posterior,
+    trials: Sequence[int] | IntArray = (),
+    objective: FloatArray | None = None,
+    *,
+    samples: int = 3,
+    rng: np.random.Generator | None = None,
+    title: str = "",
+) -> PosteriorPicture:
+    """Collect what to draw (``samples`` joint posterior samples, drawn with ``rng``)."""
+    if posterior.space.ndim > 2:
+        raise ValueError("posterior figures are drawn for 1-D and 2-D spaces only")
+    gen = rng if rng is not None else np.random.default_rng(0)
+    draws = posterior.sample(gen, samples) if samples else np.zeros((0, len(posterior.space)))
+    return PosteriorPicture(
+        space=posterior.space,
+        mean=np.asarray(posterior.mean).copy(),
+        std=np.asarray(posterior.std).copy(),
+        samples=draws,
+        trials=np.asarray(trials, dtype=np.intp),
+        objective=None if objective is None else np.asarray(objective, dtype=float).reshape(-1),
+        title=title,
+    )
+
+
+def _axis_label(space: Space, k: int) -> str:
+    f = space.features[k]
+    return f"{f.name} [{f.unit}]" if f.unit else f.name
+
+
+def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
+    x = pic.space.features[0].array
+    ax = fig.add_subplot(1, 1, 1)
+    ax.fill_between(x, pic.mean - 2 * pic.std, pic.mean + 2 * pic.std, alpha=0.25, label="±2 sd")
+    ax.plot(x, pic.mean, lw=2, label="posterior mean")
+    for k, s in enumerate(pic.samples):
+        ax.plot(x, s, lw=0.8, ls="--", label="posterior samples" if k == 0 else None)
+    if pic.trials.size:
+        ax.scatter(
+            x[pic.trials],
+            pic.mean[pic.trials],
+            c=np.arange(pic.trials.size),
+            cmap="viridis",
+            zorder=3,
+            s=20,
+            label="trials (colour: order)",
+        )
+    if pic.objective is not None:
+        ax2 = ax.twinx()
+        ax2.plot(x, pic.objective, color="k", lw=1, alpha=0.6)
+        ax2.set_ylabel("true objective")
+    ax.set_xlabel(_axis_label(pic.space, 0))
+    ax.set_ylabel("utility")
+    ax.legend(loc="best", fontsize=8)
+
+
+def _heat(ax: Axes, pic: PosteriorPicture, values: FloatArray, title: str) -> None:
+    fx, fy = pic.space.features
+    grid = values.reshape(pic.space.shape)
+    mesh = ax.pcolormesh(fy.array, fx.array, grid, shading="nearest", cmap="viridis")
+    plt.colorbar(mesh, ax=ax, fraction=0.046)
+    ax.set_xlabel(_axis_label(pic.space, 1))
+    ax.set_ylabel(_axis_label(pic.space, 0))
+    ax.set_title(title)
+
+
+def _draw_2d(pic: PosteriorPicture, fig: Figure) -> None:
+    panels = 2 if pic.objective is not None else 1
+    axes = fig.subplots(1, panels, squeeze=False)[0]
+    if pic.objective is not None:
+        _heat(axes[0], pic, pic.objective, "true objective")
+    ax = axes[-1]
+    _heat(ax, pic, pic.mean, "posterior mean")
+    if pic.trials.size:
+        pts = pic.space.points[pic.trials]
+        ax.plot(pts[:, 1], pts[:, 0], color="w", lw=0.6, alpha=0.6)
+        ax.scatter(
+            pts[:, 1], pts[:, 0], c=np.arange(pic.trials.size), cmap="autumn", s=14, zorder=3
+        )
+        best = pic.space.points[int(np.argmax(pic.mean))]
+        ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4)
+    if pic.objective is not None:
+        true_best = pic.space.points[int(np.argmax(pic.objective))]
+        for a in axes:
+            a.scatter([true_best[1]], [true_best[0]], marker="x", s=80, c="k", zorder=4)
+
+
+def render(pic: PosteriorPicture) -> Figure:
+    """A matplotlib figure of the picture."""
+    wide = pic.space.ndim == 2 and pic.objective is not None
+    fig = plt.figure(figsize=(11, 4.5) if wide else (6.5, 4.5))
+    if pic.space.ndim == 1:
+        _draw_1d(pic, fig)
+    else:
+        _draw_2d(pic, fig)
+    if pic.title:
+        fig.suptitle(pic.title)
+    fig.tight_layout()
+    return fig
+
+
+def save_posterior_figure(pic: PosteriorPicture, path: str | Path) -> Path:
+    """Render ``pic`` to ``path`` (PNG or anything matplotlib writes); returns the path."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig = render(pic)
+    fig.savefig(out, dpi=120)
+    plt.close(fig)
+    return out

@@ -1,0 +1,82 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitpref import Feature, GradientCoactive, Query, SimulatedUser, Space, load_config
+from gaitpref.simulate.run import run_simulation
+
+
+@pytest.fixture
+def line() -> Space:
+    return Space([Feature.linspace("x", 0.0, 1.0, 6)])
+
+
+def test_user_prefers_higher_or_lower(line: Space) -> None:
+    obj = np.array([0.0, 1.0, 2.0, 3.0, 2.0, 1.0])
+    hi = SimulatedUser(line, obj, np.random.default_rng(0))
+    lo = SimulatedUser(line, obj, np.random.default_rng(0), minimize=True)
+    assert hi.compare(3, 1) == "first" and hi.compare(1, 3) == "second"
+    assert lo.compare(3, 1) == "second"
+    assert np.allclose(hi.normalized([0, 3, 4]), [0.0, 1.0, 2 / 3])
+    assert np.allclose(lo.normalized([0, 3]), [1.0, 0.0])
+
+
+def test_exact_ties_are_broken_at_random(line: Space) -> None:
+    user = SimulatedUser(line, np.array([0, 1, 2, 3, 2, 1.0]), np.random.default_rng(1))
+    outcomes = [user.compare(2, 4) for _ in range(2000)]
+    assert abs(outcomes.count("first") - 1000) < 5 * np.sqrt(500)
+
+
+def test_noisy_user_follows_the_probit(line: Space) -> None:
+    user = SimulatedUser(
+        line, np.array([0, 0.1, 0, 0, 0, 0.0]), np.random.default_rng(2), noise=0.1
+    )
+    wins = sum(user.compare(1, 0) == "first" for _ in range(4000))
+    # Phi(0.1 / (sqrt(2) 0.1)) = Phi(0.7071) = 0.7602
+    assert abs(wins / 4000 - 0.7602) < 5 * np.sqrt(0.76 * 0.24 / 4000)
+
+
+def test_answer_compares_each_pair_once(line: Space) -> None:
+    user = SimulatedUser(line, np.arange(6.0), np.random.default_rng(0))
+    q = Query(1, (1, 2, 3), (4,))
+    pairs = [(c.first, c.second) for c in user.answer(q)]
+    assert pairs == [(1, 2), (1, 3), (1, 4), (2, 3), (2, 4), (3, 4)]
+    assert user.answer(Query(2, (2,), (2,))) == []
+
+
+def test_gradient_coactive_hand_computed_cases() -> None:
+    space = Space(
+        [
+            Feature.linspace("x", 0, 1, 5, coactive=(0.25, 0.5)),
+            Feature.linspace("y", 0, 1, 4, coactive=(0.3, 0.6)),
+        ]
+    )
+    # f = x-index^2 (grows along x), flat in y
+    obj = np.array([[i * i] * 4 for i in range(5)], dtype=float)
+    coactive = GradientCoactive(space, obj)
+    # np.gradient along x: [1, 2, 4, 6, 7] (edges one-sided); along y: 0
+    assert np.allclose(coactive.gradient[:, 0].reshape(5, 4)[:, 0], [1, 2, 4, 6, 7])
+    t50, t75 = np.percentile([1, 2, 4, 6, 7] * 4, [50, 75])
+    assert (t50, t75) == (4.0, 6.0)
+    assert coactive.suggest(space.index([0.0, 0.0])) is None  # 1 <= median: no feedback
+    assert coactive.suggest(space.index([0.5, 0.0])) is None  # 4 is not above the median
+    s = coactive.suggest(space.index([0.75, 0.0]))  # 6: above median, not above 75th -> small
+    assert s is not None and (s.feature, s.move) == ("x", "+small")
+    # at the top edge the move clips back to the point: no feedback
+    assert coactive.suggest(space.index([1.0, 0.0])) is None
+    down = GradientCoactive(space, obj, minimize=True).suggest(space.index([0.75, 0.0]))
+    assert down is not None and (down.feature, down.move) == ("x", "-small")
+
+
+def test_simulation_reports_trials_and_scores() -> None:
+    cfg = load_config("compass-gait")
+    x = cfg.space.points[:, 0]
+    cot = np.polyval([-660.1898, 556.5202, -186.4672, 34.1877, -3.4090, 0.1602], x)
+    loop = cfg.make_loop(seed=0)
+    user = SimulatedUser(cfg.space, cot, np.random.default_rng(0), minimize=True)
+    result = run_simulation(loop, user, trials=41)
+    assert result.actions.shape == (41,)
+    assert np.allclose(result.normalized_objective, user.normalized(result.actions))
+    assert abs(x[result.posterior_argmax] - 0.132) < 0.015
+    assert result.argmax_normalized_objective > 0.95
