@@ -15,6 +15,7 @@ from rich.table import Table
 
 from gaitpref import __version__
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
+from gaitpref.simulate.cli import bench_app
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser, objective_on_grid
 
@@ -24,6 +25,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
+app.add_typer(bench_app, name="bench")
 console = Console()
 err_console = Console(stderr=True)
 

@@ -99,4 +99,6 @@ def test_user_compares_each_pair_once_when_a_query_repeats_an_action() -> None:
     user = SimulatedUser(space, objective(), np.random.default_rng(0))
     comps = user.answer(Query(1, (3, 7, 3), ()))
     assert [(c.first, c.second) for c in comps] == [(3, 7)]
-    assert comps[0].outcome == ("first" if objective().ravel()[3] > objective().ravel()[7] else "second")
+    assert comps[0].outcome == (
+        "first" if objective().ravel()[3] > objective().ravel()[7] else "second"
+    )

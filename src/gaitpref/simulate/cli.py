@@ -17,7 +17,6 @@ import typer
 from rich.console import Console
 
 from gaitpref.simulate.compass import compass_gait_study, compass_objective, posterior_snapshots
-from gaitpref.simulate.figures import plot_compass_gait, plot_paper_2d
 from gaitpref.simulate.paper2d import paper_2d_study, published_curves
 from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
 from gaitpref.simulate.study import Study
@@ -97,6 +96,8 @@ def paper_2d(
     out.mkdir(parents=True, exist_ok=True)
     load_before = load_average()
     result = _run(study, backend, jobs, address)
+    from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
+
     published = published_curves()
     write_table(result.table, table_path)
     write_curves(result.curves, out / "curves.csv")
@@ -143,6 +144,8 @@ def compass_gait(
     table_path = _table_path(out, table)
     out.mkdir(parents=True, exist_ok=True)
     result = _run(study, backend, jobs, address)
+    from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
+
     write_table(result.table, table_path)
     write_curves(result.curves, out / "curves.csv")
     plot_compass_gait(

@@ -26,9 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitpref.config import load_config
-from gaitpref.simulate.objectives import paper_objectives, published_curves_text
+from gaitpref.data import paper_objectives
+from gaitpref.data import published_curves as _published
 from gaitpref.simulate.study import Setting, Study
-from gaitpref.simulate.tables import Curves, RunTable, parse_curves, summarize
+from gaitpref.simulate.tables import Curves, RunTable, summarize
 
 #: The six settings of Fig. 4 in the order of ``published_curves.csv``.
 PAPER_2D_SETTINGS: tuple[Setting, ...] = (
@@ -80,9 +81,14 @@ def paper_2d_study(
 
 def published_curves() -> Curves:
     """The authors' curves (mean and standard error over their 100 stored runs per setting)."""
-    return parse_curves(
-        published_curves_text(),
-        ("setting", "trial", "mean_normalized_objective", "standard_error"),
+    data = _published()
+    names = list(data)
+    means = [data[n][0] for n in names]
+    return Curves(
+        np.repeat(names, [m.size for m in means]),
+        np.concatenate([np.arange(1, m.size + 1) for m in means]),
+        np.concatenate(means),
+        np.concatenate([data[n][1] for n in names]),
     )
 
 

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import csv
 import gzip
-import io
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -223,15 +222,6 @@ def write_curves(curves: Curves, path: str | Path) -> Path:
 def read_curves(path: str | Path, columns: Sequence[str] = CURVE_COLUMNS) -> Curves:
     """Read curves from CSV; ``columns`` names the file's setting, trial, mean and se columns."""
     cols = _read_csv(Path(path), tuple(columns))
-    return curves_from_columns(cols)
-
-
-def parse_curves(text: str, columns: Sequence[str] = CURVE_COLUMNS) -> Curves:
-    """Curves from CSV text (see :func:`read_curves`)."""
-    return curves_from_columns(_parse_csv(io.StringIO(text), tuple(columns), "<text>"))
-
-
-def curves_from_columns(cols: list[list[str]]) -> Curves:
     return Curves(
         np.array(cols[0], dtype=str),
         np.array(cols[1], dtype=np.intp),
