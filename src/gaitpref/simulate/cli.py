@@ -47,6 +47,13 @@ def _split(values: list[str] | None) -> list[str] | None:
     return [v.strip() for item in values for v in item.split(",") if v.strip()]
 
 
+def _integers(text: str, option: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(f"{option} must be comma-separated integers, got {text!r}") from None
+
+
 def _fail(message: str) -> typer.Exit:
     _console.print(f"[red]error:[/red] {message}")
     return typer.Exit(2)
@@ -133,7 +140,7 @@ def compass_gait(
 ) -> None:
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     try:
-        its = [int(v) for v in iterations.split(",") if v.strip()]
+        its = _integers(iterations, "--iterations")
         obj = compass_objective(objective, library)  # type: ignore[arg-type]
         study = compass_gait_study(obj, runs, trials, baseline, seed)
         snapshots = posterior_snapshots(study, its)
