@@ -17,6 +17,8 @@ from gaitpref.simulate.hzd import library_objective, read_cot_curve
 from gaitpref.simulate.objectives import compass_gait_cot
 from gaitpref.simulate.study import run_one
 
+DATA = Path(__file__).parent / "data"
+
 
 def test_cot_polynomial_matches_the_documented_values() -> None:
     assert compass_gait_cot(0.08) == pytest.approx(0.0314, abs=5e-5)
@@ -73,12 +75,17 @@ def write_library(path: Path, x: np.ndarray, cot: np.ndarray, feasible: np.ndarr
         path.write_text("\n".join(rows) + "\n")
     elif path.suffix == ".npz":
         np.savez(path, step_length=x, cot=cot, feasible=feasible)
-    else:
+    else:  # the gait library's schema 1, with a step-width label axis (COT repeats)
         gaits = [
-            {"step_length": float(a), "cot": float(c), "feasible": bool(f)}
+            {
+                "parameters": {"step_length": float(a), "step_width": w},
+                "cot": float(c) if f else None,
+                "feasible": bool(f),
+            }
             for a, c, f in zip(x, cot, feasible, strict=True)
+            for w in (0.25, 0.3)
         ]
-        path.write_text(json.dumps({"schema": 1, "gaits": gaits}))
+        path.write_text(json.dumps({"schema_version": 1, "speed": 0.2, "gaits": gaits}))
     return path
 
 
@@ -93,12 +100,13 @@ def test_library_on_the_grid_keeps_the_grid(tmp_path: Path, suffix: str) -> None
     np.testing.assert_allclose(got, cot)
 
 
-def test_library_drops_infeasible_gaits_and_says_so(tmp_path: Path) -> None:
+@pytest.mark.parametrize("suffix", [".csv", ".json"])
+def test_library_drops_infeasible_gaits_and_says_so(tmp_path: Path, suffix: str) -> None:
     grid = compass_objective().space
     x = np.linspace(0.06, 0.20, 15)
     feasible = np.ones(15, bool)
     feasible[3] = False
-    path = write_library(tmp_path / "lib.csv", x, 1 + x, feasible)
+    path = write_library(tmp_path / f"lib{suffix}", x, 1 + x, feasible)
     space, cot, note = library_objective(path, grid)
     kept = x[feasible & (x >= 0.08 - 1e-9) & (x <= 0.18 + 1e-9)]
     np.testing.assert_allclose(space.features[0].array, kept)
@@ -129,3 +137,35 @@ def test_bad_library_files_are_refused(tmp_path: Path) -> None:
     write_library(tmp_path / "f.csv", np.array([0.01, 0.3]), np.ones(2), np.ones(2, bool))
     with pytest.raises(ValueError, match="fewer than 2 feasible gaits"):
         library_objective(tmp_path / "f.csv", compass_objective().space)
+
+
+def test_a_library_file_written_by_the_gait_library_branch() -> None:
+    """``data/gait-library-6.json``: ``build_library(linspace(0.08, 0.18, 6), speed=0.2)`` saved
+    by ``gaitpref.gaits`` (branch ``gaits``, commit 3375daf); its ``cot_over_step_length`` gave
+    these values."""
+    x, cot, feasible = read_cot_curve(DATA / "gait-library-6.json")
+    np.testing.assert_allclose(x, np.linspace(0.08, 0.18, 6))
+    np.testing.assert_allclose(
+        cot, [0.02546976, 0.00971932, 0.0078689, 0.01076695, 0.01455892, 0.01873395], rtol=1e-6
+    )
+    assert feasible.all()
+
+
+def test_libraries_without_a_fixed_speed_are_refused(tmp_path: Path) -> None:
+    path = tmp_path / "lib.json"
+    path.write_text(json.dumps({"speed": None, "gaits": []}))
+    with pytest.raises(ValueError, match="fixed speed"):
+        read_cot_curve(path)
+    path.write_text(
+        json.dumps(
+            {
+                "speed": 0.2,
+                "gaits": [
+                    {"parameters": {"step_length": 0.1, "step_width": 0.25}, "cot": 0.01},
+                    {"parameters": {"step_length": 0.1, "step_width": 0.3}, "cot": 0.02},
+                ],
+            }
+        )
+    )
+    with pytest.raises(ValueError, match="differ in cot"):
+        read_cot_curve(path)

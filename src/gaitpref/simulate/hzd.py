@@ -7,8 +7,12 @@ length, COT and feasibility.  Until its reader is integrated here, this adapter 
 - ``.csv`` with a header naming ``step_length`` (m) and ``cot``, optionally ``feasible``
   (``true``/``false``/``1``/``0``), one gait per row;
 - ``.npz`` with arrays ``step_length`` and ``cot`` (and optionally ``feasible``);
-- ``.json`` with an object holding lists ``step_length`` and ``cot`` (and optionally
-  ``feasible``), at the top level or under ``"gaits"`` as a list of objects with those keys.
+- ``.json``: a gait library file as ``gaitpref.gaits`` writes it (schema 1: ``"speed"`` and
+  ``"gaits"``, each gait with ``"parameters": {"step_length": ...}``, ``"cot"``, ``"feasible"``;
+  a step-width label axis repeats each step length with the same COT), or an object with lists
+  ``step_length`` and ``cot`` (optionally ``feasible``).  When ``gaitpref.gaits.study`` is
+  installed (the gait library's branch), its ``cot_over_step_length(GaitLibrary.load(path))``
+  reads JSON libraries instead, so the two cannot drift apart.
 
 Infeasible gaits are dropped (and said so).  If the library's step lengths are the grid's, the
 grid is kept; otherwise the study runs on the library's own step lengths within the grid's range,
@@ -18,6 +22,7 @@ which the returned note says.  Every problem raises ``ValueError`` naming the fi
 from __future__ import annotations
 
 import csv
+import importlib
 import json
 from pathlib import Path
 from typing import Any
@@ -41,7 +46,8 @@ def read_cot_curve(path: str | Path) -> tuple[FloatArray, FloatArray, np.ndarray
         with np.load(path, allow_pickle=False) as z:
             raw = {k: z[k].tolist() for k in z.files}
     elif path.suffix == ".json":
-        raw = _from_json(path)
+        curve = _from_gait_library(path)
+        raw = _from_json(path) if curve is None else curve
     else:
         raise ValueError(f"{path}: a gait library export must be .csv, .npz or .json")
     for key in ("step_length", "cot"):
@@ -119,17 +125,49 @@ def _from_csv(path: Path) -> dict[str, list[str]]:
     return {k.strip(): [r[k] for r in rows] for k in reader.fieldnames}
 
 
+def _from_gait_library(path: Path) -> dict[str, Any] | None:
+    """The gait library's own reader, when its package is installed; else None."""
+    try:
+        study = importlib.import_module("gaitpref.gaits.study")
+        library = importlib.import_module("gaitpref.gaits.library")
+    except ImportError:
+        return None
+    try:
+        lib = library.GaitLibrary.load(path, allow_infeasible=True)
+        curve = study.cot_over_step_length(lib)
+    except ValueError as exc:  # GaitLibraryError is a ValueError
+        raise ValueError(f"{path}: {exc}") from None
+    return {"step_length": curve.step_length, "cot": curve.cot, "feasible": curve.feasible}
+
+
 def _from_json(path: Path) -> dict[str, Any]:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except json.JSONDecodeError as exc:
         raise ValueError(f"{path}: not valid JSON: {exc}") from None
-    if isinstance(data, dict) and isinstance(data.get("gaits"), list):
-        gaits = data["gaits"]
-        if not all(isinstance(g, dict) for g in gaits):
-            raise ValueError(f"{path}: every entry of 'gaits' must be an object")
-        keys = {k for g in gaits for k in g}
-        return {k: [g.get(k) for g in gaits] for k in keys}
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a JSON object")
-    return dict(data)
+    if not isinstance(data.get("gaits"), list):
+        return dict(data)
+    if "speed" in data and data["speed"] is None:
+        raise ValueError(
+            f"{path}: COT over step length needs a library built at a fixed speed "
+            "(this one has a step_duration axis)"
+        )
+    by_length: dict[float, tuple[object, object]] = {}
+    for k, g in enumerate(data["gaits"]):
+        if not isinstance(g, dict):
+            raise ValueError(f"{path}: gaits[{k}] must be an object")
+        params = g.get("parameters", g)
+        if not isinstance(params, dict) or "step_length" not in params or "cot" not in g:
+            raise ValueError(f"{path}: gaits[{k}] needs step_length (or parameters) and cot")
+        x = float(params["step_length"])
+        entry = (g["cot"], g.get("feasible", True))
+        if x in by_length and by_length[x] != entry:
+            raise ValueError(f"{path}: gaits at step length {x} differ in cot or feasibility")
+        by_length[x] = entry
+    return {
+        "step_length": list(by_length),
+        "cot": [np.nan if c is None else c for c, _ in by_length.values()],
+        "feasible": [f for _, f in by_length.values()],
+    }
