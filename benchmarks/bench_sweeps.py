@@ -35,7 +35,8 @@ def main() -> int:
     result = run_study(study, backend=args.backend, jobs=args.jobs, progress=True)
     load_after = os.getloadavg()
     record = {
-        "study": f"paper-2d: {len(study.settings) - 1} settings + random x {args.runs} runs x 150 trials",
+        "study": f"paper-2d: {len(study.settings) - 1} settings + random x {args.runs} runs "
+        "x 150 trials",
         "runs": len(study),
         "backend": result.backend,
         "jobs": result.jobs,
