@@ -174,7 +174,11 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     if address is None:
         options["num_cpus"] = resolve_jobs(jobs)
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
-    ray.init(address=address, **options)
+    try:
+        ray.init(address=address, **options)
+    except (ConnectionError, TimeoutError, ValueError) as exc:
+        where = f"the Ray cluster at {address!r}" if address else "a local Ray runtime"
+        raise RuntimeError(f"could not start or reach {where}: {exc}") from None
     return True
 
 
