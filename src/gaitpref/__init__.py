@@ -12,6 +12,7 @@ The public API::
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.feedback import Comparison, FeedbackError, Preference, Suggestion, Tie
+from gaitpref.gaits import GaitLibrary, GaitLibraryError
 from gaitpref.model import (
     ConvergenceError,
     Posterior,
@@ -34,6 +35,8 @@ __all__ = [
     "ExperimentConfig",
     "Feature",
     "FeedbackError",
+    "GaitLibrary",
+    "GaitLibraryError",
     "GradientCoactive",
     "Move",
     "Posterior",

@@ -200,6 +200,15 @@ def _norm(objective: np.ndarray, index: int) -> float:
     return float((flat[index] - flat.min()) / (flat.max() - flat.min()))
 
 
+def _mount_subcommands() -> None:
+    from gaitpref.gaits.cli import app as gaits_app
+
+    app.add_typer(gaits_app, name="gaits")
+
+
+_mount_subcommands()
+
+
 def main() -> None:
     """Console-script entry point."""
     app()
