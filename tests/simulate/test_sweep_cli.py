@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
-from gaitpref.simulate.objectives import compass_gait_cot
+from gaitpref.simulate.objectives import cot_polynomial
 from gaitpref.simulate.tables import read_curves, read_table
 
 runner = CliRunner()
@@ -97,7 +97,7 @@ def test_compass_gait_poly_and_hzd(tmp_path: Path) -> None:
 
     x = np.linspace(0.07, 0.19, 13)
     lib = tmp_path / "library.npz"
-    np.savez(lib, step_length=x, cot=compass_gait_cot(x) * 0.4)
+    np.savez(lib, step_length=x, cot=cot_polynomial(x) * 0.4)
     code, out = invoke(
         "compass-gait",
         "--objective",
@@ -124,8 +124,8 @@ def test_compass_gait_poly_and_hzd(tmp_path: Path) -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (("--objective", "hzd"), "needs --library"),
-        (("--objective", "spline"), "objective must be 'poly' or 'hzd'"),
+        (("--objective", "hzd", "--library", "none.json"), "no such gait library"),
+        (("--objective", "spline"), "--objective must be 'poly' or 'hzd'"),
         (("--iterations", "a,b"), "--iterations must be comma-separated integers"),
     ],
 )

@@ -2,7 +2,7 @@
 
     gaitpref bench paper-2d [--runs 100] [--trials 150] [--settings n1_b1,n1_b1_coactive]
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
-    gaitpref bench compass-gait [--objective poly|hzd] [--library FILE] [--runs 100] ...
+    gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
 ``sweep``, files in ``tables``/``report``/``figures``).
@@ -20,7 +20,7 @@ from gaitpref.simulate.compass import compass_gait_study, compass_objective, pos
 from gaitpref.simulate.paper2d import paper_2d_study, published_curves
 from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
 from gaitpref.simulate.study import Study
-from gaitpref.simulate.sweep import BACKENDS, StudyResult, run_study
+from gaitpref.simulate.sweep import BACKENDS, StudyResult, resolve_jobs, run_study
 from gaitpref.simulate.tables import write_curves, write_table
 
 bench_app = typer.Typer(
@@ -123,7 +123,11 @@ def compass_gait(
         str, typer.Option(help="poly: the authors' COT polynomial; hzd: a gait library's COT")
     ] = "poly",
     library: Annotated[
-        Path | None, typer.Option(help="gait library export (.csv/.npz/.json) for --objective hzd")
+        Path | None,
+        typer.Option(
+            help="--objective hzd: a saved gait library (.json) or a .csv/.npz export "
+            "(default: build one on the grid at 0.2 m/s, saved as OUT/gait-library.json)"
+        ),
     ] = None,
     runs: Annotated[int, typer.Option(help="seeded runs per setting")] = 100,
     trials: Annotated[int, typer.Option(help="executed actions per run")] = 60,
@@ -141,7 +145,18 @@ def compass_gait(
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     try:
         its = _integers(iterations, "--iterations")
-        obj = compass_objective(objective, library)  # type: ignore[arg-type]
+        if objective not in ("poly", "hzd"):
+            raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
+        build = objective == "hzd" and library is None
+        if build:
+            out.mkdir(parents=True, exist_ok=True)
+            _console.print("building HZD gaits at 0.2 m/s on the 24 step lengths ...")
+        obj = compass_objective(
+            objective,  # type: ignore[arg-type]
+            library,
+            build_jobs=resolve_jobs(jobs),
+            save_library=out / "gait-library.json" if build else None,
+        )
         study = compass_gait_study(obj, runs, trials, baseline, seed)
         snapshots = posterior_snapshots(study, its)
     except ValueError as exc:

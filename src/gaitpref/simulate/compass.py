@@ -4,7 +4,8 @@ Section "Optimizing the Compass-Gait Biped's Cost of Transport": 24 step lengths
 [0.08, 0.18] m, preferences from comparing COT (lower preferred), ``n = 2``, ``b = 0``, no
 coactive feedback, the ``compass-gait`` config's kernel (lengthscale 0.025 m, signal variance
 1e-4, jitter 1e-8) and noise 0.01.  The objective is the authors' COT polynomial (``"poly"``) or
-the project's own HZD gait library (``"hzd"``, through :mod:`gaitpref.simulate.hzd`).
+the project's own HZD gaits at 0.2 m/s (``"hzd"``, :mod:`gaitpref.simulate.hzd`: a saved gait
+library, or one built on the grid's step lengths).
 
 :func:`posterior_snapshots` replays run ``seed`` of the study's CoSpar setting (the same seed
 sequence as :func:`~gaitpref.simulate.study.run_one`) and records the posterior after given
@@ -24,8 +25,8 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.cospar import CoSpar
-from gaitpref.simulate.hzd import library_objective
-from gaitpref.simulate.objectives import compass_gait_cot
+from gaitpref.simulate.hzd import build_cot_curve, library_objective, read_cot_curve
+from gaitpref.simulate.objectives import cot_polynomial
 from gaitpref.simulate.study import RunTask, Setting, Study, run_seed_sequence
 from gaitpref.simulate.users import SimulatedUser
 from gaitpref.space import FloatArray, IntArray, Space
@@ -56,22 +57,33 @@ class CompassObjective:
 
 
 def compass_objective(
-    kind: ObjectiveKind = "poly", library: str | Path | None = None
+    kind: ObjectiveKind = "poly",
+    library: str | Path | None = None,
+    *,
+    build_jobs: int = 1,
+    save_library: str | Path | None = None,
 ) -> CompassObjective:
-    """COT on the ``compass-gait`` grid (``poly``) or from a gait library file (``hzd``)."""
+    """COT on the ``compass-gait`` grid: the authors' polynomial (``poly``) or HZD gaits (``hzd``).
+
+    ``hzd`` reads ``library`` (a saved gait library, or a CSV/NPZ export), or without one builds
+    a 0.2 m/s library on the grid's step lengths with ``build_jobs`` processes (about 0.5 s a
+    gait) and saves it to ``save_library`` when given.
+    """
     config = load_config("compass-gait")
     if kind == "poly":
         if library is not None:
             raise ValueError("--library is for --objective hzd")
         x = config.space.features[0].array
-        return CompassObjective(config.space, compass_gait_cot(x), "COT (authors' polynomial)")
+        return CompassObjective(config.space, cot_polynomial(x), "COT (authors' polynomial)")
     if kind == "hzd":
         if library is None:
-            raise ValueError(
-                "--objective hzd needs --library FILE (COT per step length from a gait library)"
-            )
-        space, cot, note = library_objective(library, config.space)
-        return CompassObjective(space, cot, "COT (HZD gait library)", note)
+            x = config.space.features[0].array
+            curve = build_cot_curve(x, n_jobs=build_jobs, save=save_library)
+            source = "the built library"
+        else:
+            curve, source = read_cot_curve(library), str(library)
+        space, cot, note = library_objective(curve, config.space, source)
+        return CompassObjective(space, cot, "COT (HZD gaits, 0.2 m/s)", note)
     raise ValueError(f"objective must be 'poly' or 'hzd', got {kind!r}")
 
 

@@ -21,7 +21,7 @@ from gaitpref.space import FloatArray
 COT_COEFFICIENTS: tuple[float, ...] = (-660.1898, 556.5202, -186.4672, 34.1877, -3.4090, 0.1602)
 
 
-def compass_gait_cot(step_length: ArrayLike) -> FloatArray:
+def cot_polynomial(step_length: ArrayLike) -> FloatArray:
     """The authors' compass-gait COT at ``step_length`` (metres), fitted on [0.08, 0.18] m."""
     x = np.asarray(step_length, dtype=np.float64)
     return np.asarray(np.polyval(COT_COEFFICIENTS, x), dtype=np.float64)
