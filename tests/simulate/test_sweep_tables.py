@@ -83,3 +83,9 @@ def test_matrix_refuses_ragged_runs() -> None:
     )
     with pytest.raises(ValueError, match=r"trials 1\.\.3"):
         ragged.matrix("a")
+
+
+def test_compressed_tables_are_byte_for_byte_reproducible(tmp_path: Path) -> None:
+    a = write_table(table(), tmp_path / "a.csv.gz").read_bytes()
+    b = write_table(table(), tmp_path / "b.csv.gz").read_bytes()
+    assert a == b

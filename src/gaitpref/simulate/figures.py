@@ -63,7 +63,7 @@ def plot_paper_2d(
     axes[0].legend(loc="lower right", fontsize=8)
     fig.suptitle("CoSpar on the paper's 2-D objectives: mean +- SE (Fig. 4)")
     path = Path(path)
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=130, bbox_inches="tight", pad_inches=0.1)
     return path
 
 
@@ -118,5 +118,5 @@ def plot_compass_gait(
         ax.legend(fontsize=7, loc="lower right")
         ax.grid(alpha=0.3)
     path = Path(path)
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=130, bbox_inches="tight", pad_inches=0.1)
     return path

@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import csv
 import gzip
+import io
 from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -148,10 +150,19 @@ def summarize(table: RunTable) -> Curves:
 
 
 # -- files -----------------------------------------------------------------------------------------
-def _open_text(path: Path, mode: str) -> IO[str]:
-    if path.name.endswith(".gz"):
-        return gzip.open(path, mode + "t", encoding="utf-8", newline="")  # type: ignore[return-value]
-    return open(path, mode, encoding="utf-8", newline="")
+@contextmanager
+def _open_text(path: Path, mode: str) -> Iterator[IO[str]]:
+    if not path.name.endswith(".gz"):
+        with open(path, mode, encoding="utf-8", newline="") as fh:
+            yield fh
+        return
+    # mtime 0 and no file name in the gzip header: the same table gives the same bytes
+    with (
+        open(path, mode + "b") as raw,
+        gzip.GzipFile(filename="", mode=mode + "b", fileobj=raw, mtime=0) as gz,
+        io.TextIOWrapper(gz, encoding="utf-8", newline="") as fh,
+    ):
+        yield fh
 
 
 def _is_parquet(path: Path) -> bool:
