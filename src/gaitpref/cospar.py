@@ -33,8 +33,8 @@ from gaitpref.feedback import (
 )
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.posterior import Posterior, random_argmax
-from gaitpref.model.threads import blas_threads
+from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 
 
@@ -75,7 +75,12 @@ def _light(posterior: Posterior) -> Posterior:
 
 
 class CoSpar:
-    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials."""
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials.
+
+    ``sampler`` ("auto", "dense" or "scalable") picks how posterior samples reach every action
+    (:mod:`gaitpref.model.engines`); for a given seed all choices propose the same actions up to
+    floating-point rounding.
+    """
 
     def __init__(
         self,
@@ -86,6 +91,7 @@ class CoSpar:
         buffer: int = 0,
         coactive_weight: float = 1.0,
         seed: int | np.random.Generator = 0,
+        sampler: str = "auto",
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -96,7 +102,7 @@ class CoSpar:
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
-        self.gp = PreferenceGP(space, kernel, noise)
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
         self.n = n
         self.buffer_size = buffer
         self.coactive_weight = float(coactive_weight)
@@ -133,9 +139,9 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        with blas_threads(len(self.space)):
-            samples = self.posterior.sample(self.rng, self.n)
-        actions = tuple(random_argmax(s, self.rng) for s in samples)
+        with one_blas_thread():
+            picks = self.posterior.argmax_samples(self.rng, self.n)
+        actions = tuple(int(a) for a in picks)
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
         return self.pending
@@ -176,7 +182,7 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        with blas_threads(len(self.space)):
+        with one_blas_thread():
             new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
