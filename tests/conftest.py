@@ -66,8 +66,10 @@ def postgres_server() -> Iterator[str]:
     if bindir is None:
         pytest.skip(f"no PostgreSQL server binaries (initdb) on this machine: {_HOW}")
     prefix: list[str] = []
-    root = Path(tempfile.mkdtemp(prefix="gaitpref-pg-"))
-    if os.geteuid() == 0:
+    as_root = os.geteuid() == 0
+    # as root, the server runs as postgres: use a folder it can reach whatever $TMPDIR is
+    root = Path(tempfile.mkdtemp(prefix="gaitpref-pg-", dir="/tmp" if as_root else None))
+    if as_root:
         try:
             user = pwd.getpwnam("postgres")
         except KeyError:

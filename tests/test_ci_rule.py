@@ -21,7 +21,7 @@ def test_ci_turns_marked_skips_into_failures(
     pytester: pytest.Pytester, monkeypatch: pytest.MonkeyPatch, ci: str, failed: int, skipped: int
 ) -> None:
     monkeypatch.setenv("CI", ci)
-    pytester.makeconftest("pytest_plugins = (\"tests.ci_rule\",)\n")
+    pytester.makeconftest('pytest_plugins = ("tests.ci_rule",)\n')
     pytester.makeini("[pytest]\nmarkers =\n    postgres: x\n    browser: y\n")
     pytester.makepyfile(TESTS)
     result = pytester.runpytest_inprocess()

@@ -17,6 +17,7 @@ from gaitpref import __version__
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.console.cli import console_app
 from gaitpref.session_cli import db_app, session_app
+from gaitpref.simulate.cli import bench_app
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser, objective_on_grid
 
@@ -29,6 +30,7 @@ app = typer.Typer(
 app.add_typer(console_app, name="console")
 app.add_typer(session_app, name="session")
 app.add_typer(db_app, name="db")
+app.add_typer(bench_app, name="bench")
 console = Console()
 err_console = Console(stderr=True)
 

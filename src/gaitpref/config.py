@@ -13,6 +13,7 @@
     signal_variance = 0.005
     jitter = 1e-7
     noise = 0.02
+    sampler = "auto"               # optional: "auto", "dense" or "scalable" (posterior samples)
 
     [cospar]
     n = 1
@@ -42,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gaitpref.cospar import CoSpar
+from gaitpref.model.engines import SAMPLERS, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Feature, Space
 
@@ -56,7 +58,7 @@ class ConfigError(ValueError):
 _TOP_KEYS = {"name", "description", "space", "gaits", "model", "cospar"}
 _GAITS_KEYS = {"library"}
 _FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
-_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise"}
+_MODEL_KEYS = {"lengthscale", "signal_variance", "jitter", "noise", "sampler"}
 _COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed"}
 
 
@@ -74,6 +76,7 @@ class ExperimentConfig:
     seed: int
     text: str = field(repr=False)
     description: str = ""
+    sampler: str = "auto"
     library: GaitLibrary | None = field(default=None, repr=False, compare=False)
     library_path: str | None = None
 
@@ -103,6 +106,7 @@ class ExperimentConfig:
             buffer=self.buffer,
             coactive_weight=self.coactive_weight,
             seed=self.seed if seed is None else seed,
+            sampler=self.sampler,
         )
 
 
@@ -169,6 +173,7 @@ def parse_config(
         or _fail("[cospar].coactive_weight must be > 0"),
         seed=_integer(cospar, "seed", "[cospar]", default=0, minimum=0),
         text=text,
+        sampler=_sampler(model, len(space)),
         library=library,
         library_path=library_path,
     )
@@ -221,6 +226,17 @@ def _integer(table: dict[str, Any], key: str, where: str, default: int, minimum:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise ConfigError(f"{where}.{key}: must be an integer >= {minimum}, got {value!r}")
     return value
+
+
+def _sampler(model: dict[str, Any], size: int) -> str:
+    value = model.get("sampler", "auto")
+    if value not in SAMPLERS:
+        raise ConfigError(f"[model].sampler: must be one of {', '.join(SAMPLERS)}; got {value!r}")
+    try:
+        resolve_sampler(value, size)
+    except ValueError as exc:
+        raise ConfigError(f"[model].sampler: {exc}") from None
+    return str(value)
 
 
 def _parse_gaits(

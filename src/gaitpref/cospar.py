@@ -35,8 +35,8 @@ from gaitpref.feedback import (
 )
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.posterior import Posterior, random_argmax
-from gaitpref.model.threads import blas_threads
+from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 
 
@@ -77,7 +77,12 @@ def _light(posterior: Posterior) -> Posterior:
 
 
 class CoSpar:
-    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials."""
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials.
+
+    ``sampler`` ("auto", "dense" or "scalable") picks how posterior samples reach every action
+    (:mod:`gaitpref.model.engines`); for a given seed all choices propose the same actions up to
+    floating-point rounding.
+    """
 
     def __init__(
         self,
@@ -88,6 +93,7 @@ class CoSpar:
         buffer: int = 0,
         coactive_weight: float = 1.0,
         seed: int | np.random.Generator = 0,
+        sampler: str = "auto",
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -98,7 +104,7 @@ class CoSpar:
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
-        self.gp = PreferenceGP(space, kernel, noise)
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
         self.n = n
         self.buffer_size = buffer
         self.coactive_weight = float(coactive_weight)
@@ -144,9 +150,9 @@ class CoSpar:
         if self.pending is not None:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
-        with blas_threads(len(self.space)):
-            samples = self.posterior.sample(self.rng, self.n)
-        actions = tuple(random_argmax(s, self.rng) for s in samples)
+        with one_blas_thread():
+            picks = self.posterior.argmax_samples(self.rng, self.n)
+        actions = tuple(int(a) for a in picks)
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
         return self.pending
@@ -187,7 +193,7 @@ class CoSpar:
         answer = Answer(
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
-        with blas_threads(len(self.space)):
+        with one_blas_thread():
             new_posterior = self._fit([*self.answers, answer])  # may raise: nothing changed yet
         self.answers.append(answer)
         self.posterior = new_posterior
@@ -211,7 +217,7 @@ class CoSpar:
         if answer.query.id in self._stale_before:
             # an exclusion in an earlier answer came after this one: refit what remains
             self._stale_before.discard(answer.query.id)
-            with blas_threads(len(self.space)):
+            with one_blas_thread():
                 self.posterior = self._fit(self.answers)
         else:
             self.posterior = answer.posterior_before
@@ -247,7 +253,7 @@ class CoSpar:
         old = self._dropped
         self._dropped = new
         try:
-            with blas_threads(len(self.space)):
+            with one_blas_thread():
                 posterior = self._fit(self.answers)
         except Exception:
             self._dropped = old

@@ -21,17 +21,24 @@ and is brought up to date).  A ``Session`` object is safe to share between threa
 
 from __future__ import annotations
 
-import difflib
-import hashlib
 import threading
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import TypeVar
 
 from gaitpref import session_log as log
-from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
+from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.cospar import QueryError
 from gaitpref.model.posterior import Posterior
+from gaitpref.session_config import (
+    GaitLibrary,
+    LibraryLike,
+    _version,
+    check_same_config,
+    config_of,
+    gait_ids_of,
+    library_meta,
+)
 from gaitpref.session_log import (
     Answered,
     ComparisonRecord,
@@ -41,7 +48,8 @@ from gaitpref.session_log import (
     SuggestionRecord,
     Trial,
 )
-from gaitpref.session_state import SessionState, replay
+from gaitpref.session_replay import replay
+from gaitpref.session_state import SessionState
 from gaitpref.storage import (
     ConflictError,
     EventRecord,
@@ -58,21 +66,6 @@ from gaitpref.validation import ValidationPlan, ValidationResult
 T = TypeVar("T")
 
 
-class GaitLibrary(Protocol):
-    """Anything that names the gait of each grid action (e.g. a gait library)."""
-
-    def gait_id(self, action: int) -> str: ...
-
-
-LibraryLike = GaitLibrary | Sequence[str] | Mapping[int, str]
-
-
-def _version() -> str:
-    from gaitpref import __version__
-
-    return __version__
-
-
 class Session:
     """One subject's session.  Make one with :meth:`create` or :meth:`open`."""
 
@@ -81,7 +74,7 @@ class Session:
         self._record = record
         self._owns = owns_storage
         self._lock = threading.RLock()
-        self.config = _config_of(record)
+        self.config = config_of(record)
         self._state = self._fresh_state()
         self._broken = False
 
@@ -106,10 +99,10 @@ class Session:
         use_seed = cfg.seed if seed is None else seed
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
             raise ValueError(f"seed must be an integer in 0 .. 2**63 - 1, got {use_seed!r}")
-        meta = _library_meta(cfg)
+        meta = library_meta(cfg)
         if library is None and cfg.library is not None:
             library = cfg.library
-        gait_ids = _gait_ids(library, len(cfg.space))
+        gait_ids = gait_ids_of(library, len(cfg.space))
         if gait_ids is not None:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
@@ -157,7 +150,7 @@ class Session:
         try:
             record = storage.get_session(session_id)
             if config is not None:
-                _check_same_config(record, config)
+                check_same_config(record, config)
             session = cls(storage, record, owns_storage=owns)
             session._catch_up()
         except BaseException:
@@ -283,7 +276,7 @@ class Session:
 
         def run() -> SessionQuery:
             st = self._state
-            st.check_active("undo")
+            st.check_open("undo")
             self._append([st.undo_event()])
             assert self._state.pending is not None
             return self._state.pending
@@ -296,7 +289,7 @@ class Session:
 
         def run() -> Trial:
             st = self._state
-            st.check_active("exclusions")
+            st.check_open("exclusions")
             event = st.exclude_event(trial, reason, detail)
             st.apply_exclusion(event.payload)
             try:
@@ -322,7 +315,8 @@ class Session:
         return self._locked(run)
 
     def pause(self) -> None:
-        """Mark the session paused (the operator stepped away; resume later)."""
+        """Mark the session paused (the operator stepped away): no queries or answers until
+        :meth:`resume`; undo, exclusions, notes and validation stay possible."""
         self._locked(lambda: self._set_status(log.PAUSED, "active", "pause"))
 
     def resume(self) -> None:
@@ -350,7 +344,7 @@ class Session:
 
         def run() -> ValidationPlan:
             st = self._state
-            st.check_active("validation")
+            st.check_open("validation")
             if st.open_round is None:
                 self._append([st.validation_event()])
             current = self._state.open_round
@@ -370,7 +364,7 @@ class Session:
 
         def run() -> ValidationResult:
             st = self._state
-            st.check_active("validation")
+            st.check_open("validation")
             self._append([st.validation_answer_event(round_, ranking)])
             result = self._state.rounds[-1].result
             assert result is not None
@@ -385,7 +379,7 @@ class Session:
     # -- reading -------------------------------------------------------------------------------
     def posterior(self) -> Posterior:
         """The current posterior (answers in force, exclusions applied)."""
-        return self._locked(lambda: self._state.loop.posterior)  # type: ignore[no-any-return]
+        return self._locked(lambda: self._state.loop.posterior)
 
     def events(self) -> list[EventRecord]:
         """The whole log, from the database."""
@@ -480,98 +474,6 @@ class Session:
             raise
         self._state.commit(records)
         return records
-
-
-# -- helpers -----------------------------------------------------------------------------------
-def _config_of(record: SessionRecord) -> ExperimentConfig:
-    digest = hashlib.sha256(record.config_text.encode()).hexdigest()
-    if digest != record.config_sha256:
-        raise ReplayError(
-            f"session {record.id}: the stored config text does not match its hash "
-            f"({digest[:12]} != {record.config_sha256[:12]}); the database was altered"
-        )
-    meta = record.meta
-    try:
-        cfg = parse_config(
-            record.config_text, default_name=record.config_name, base_dir=meta.get("config_dir")
-        )
-    except ConfigError as exc:
-        if meta.get("library_path"):
-            raise ReplayError(
-                f"session {record.id} needs its gait library {meta['library_path']} (sha256 "
-                f"{str(meta.get('library_sha256'))[:12]}), which cannot be loaded: {exc}"
-            ) from None
-        raise ReplayError(
-            f"session {record.id}: its config no longer parses with gaitpref {_version()} "
-            f"(recorded with {record.software_version}): {exc}"
-        ) from None
-    if meta.get("library_sha256") and cfg.library_sha256 != meta["library_sha256"]:
-        raise ReplayError(
-            f"session {record.id}: the gait library {cfg.library_path} is not the one the "
-            f"session was run with (sha256 {str(cfg.library_sha256)[:12]}, recorded "
-            f"{meta['library_sha256'][:12]})"
-        )
-    return cfg
-
-
-def _library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
-    """Where to find the config's gait library again on replay (its folder, path and hash)."""
-    if cfg.library_path is None:
-        return {}
-    import tomllib
-
-    given = Path(tomllib.loads(cfg.text)["gaits"]["library"])
-    where = Path(cfg.library_path)
-    base = where
-    for _ in given.parts:
-        base = base.parent
-    if not given.is_absolute() and (base / given).resolve() != where:
-        raise ValueError(
-            f"cannot tell which folder the config's gait library path {str(given)!r} is "
-            "relative to; load the config from its file"
-        )
-    return {
-        "config_dir": str(base),
-        "library_path": str(where),
-        "library_sha256": cfg.library_sha256,
-    }
-
-
-def _check_same_config(record: SessionRecord, config: str | Path | ExperimentConfig) -> None:
-    given = config if isinstance(config, ExperimentConfig) else load_config(config)
-    if given.sha256 == record.config_sha256:
-        return
-    diff = "".join(
-        difflib.unified_diff(
-            record.config_text.splitlines(keepends=True),
-            given.text.splitlines(keepends=True),
-            fromfile=f"session {record.id} ({record.config_name})",
-            tofile=f"given ({given.name})",
-        )
-    )
-    raise ReplayError(f"session {record.id} was run with another config:\n{diff}")
-
-
-def _gait_ids(library: LibraryLike | None, size: int) -> list[str] | None:
-    if library is None:
-        return None
-    ids: list[Any]
-    if isinstance(library, Mapping):
-        missing = [a for a in range(size) if a not in library]
-        if missing:
-            raise ValueError(f"the gait library names no gait for action {missing[0]}")
-        ids = [library[a] for a in range(size)]
-    elif isinstance(library, Sequence) and not isinstance(library, str):
-        if len(library) != size:
-            raise ValueError(f"the gait library has {len(library)} gaits; the grid has {size}")
-        ids = list(library)
-    elif hasattr(library, "gait_id"):
-        ids = [library.gait_id(a) for a in range(size)]
-    else:
-        raise TypeError("library must map each action to a gait id (or have gait_id(action))")
-    if not all(isinstance(g, str) and g for g in ids):
-        raise ValueError("gait ids must be non-empty strings")
-    return [str(g) for g in ids]
 
 
 __all__ = [

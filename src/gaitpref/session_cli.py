@@ -79,27 +79,12 @@ def _opened(db: str | None, session_id: int) -> Iterator[Session]:
 @db_app.command("upgrade")
 def db_upgrade(db: DbOption = None) -> None:
     """Create the database, or migrate it to the schema this gaitpref writes."""
-    from sqlalchemy import create_engine
-
-    from gaitpref.storage.sql import SQLStorage, parse_url
+    from gaitpref.storage.sql import upgrade_database
 
     url = resolve_url(db)
-
-    def run() -> str:
-        if url == "memory://":
-            raise ValueError("an in-memory database needs no upgrade")
-        engine = create_engine(parse_url(url))
-        try:
-            with engine.begin() as conn:
-                _migrate.upgrade(conn)
-        finally:
-            engine.dispose()
-        store = SQLStorage(url)  # checks the result the way every command will
-        shown = store.url
-        store.close()
-        return shown
-
-    shown = _guard(run)
+    if url == "memory://":
+        _fail("an in-memory database needs no upgrade")
+    shown = _guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {_migrate.head_revision()} (the newest)")
 
 

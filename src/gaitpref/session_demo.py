@@ -135,11 +135,13 @@ def print_demo_session(out: Path, console: Console) -> DemoSession:
         f"exo-2d-length-width through the Session API in {time.perf_counter() - start:.1f} s; "
         f"best gait {done.best_description}; blind ranking {''.join(v.ranking)} "
         f"{'agrees' if v.agrees else 'does not agree'} with the posterior "
-        f"(Kendall's tau {v.kendall_tau:+.2f})"
+        f"(Kendall's tau {v.kendall_tau:+.2f})",
+        soft_wrap=True,
     )
-    console.print(f"database: [bold]{done.database}[/] (session {done.session_id})")
+    console.print(f"database: [bold]{done.database}[/] (session {done.session_id})", soft_wrap=True)
     if done.figure is not None:
-        console.print(f"session figure: [bold]{done.figure}[/]")
-    console.print(f"export: [bold]{export}[/]")
-    console.print(f"try: gaitpref session show {done.session_id} --db {done.database} --no-figure")
+        console.print(f"session figure: [bold]{done.figure}[/]", soft_wrap=True)
+    console.print(f"export: [bold]{export}[/]", soft_wrap=True)
+    command = f"gaitpref session show {done.session_id} --db {done.database} --no-figure"
+    console.print(f"try: {command}", soft_wrap=True)
     return done

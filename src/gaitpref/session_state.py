@@ -26,7 +26,7 @@ import numpy as np
 
 from gaitpref import session_log as log
 from gaitpref.config import ExperimentConfig
-from gaitpref.cospar import Answer, QueryError
+from gaitpref.cospar import Answer, CoSpar, QueryError
 from gaitpref.feedback import Preference
 from gaitpref.session_log import (
     ComparisonRecord,
@@ -75,7 +75,7 @@ class SessionState:
     config: ExperimentConfig
     seed: int
     gait_ids: list[str] | None = None
-    loop: Any = field(init=False)
+    loop: CoSpar = field(init=False)
     last_seq: int = 0
     status: Status = "active"
     pending: SessionQuery | None = None
@@ -425,9 +425,14 @@ class SessionState:
     def gait_id(self, action: int) -> str | None:
         return None if self.gait_ids is None else self.gait_ids[action]
 
-    def check_active(self, what: str) -> None:
+    def check_open(self, what: str) -> None:
+        """Refuse ``what`` in a finished session."""
         if self.status == "finished":
             raise SessionStateError(f"the session is finished: it takes no {what}")
+
+    def check_active(self, what: str) -> None:
+        """Refuse ``what`` (queries and answers) unless the session is running."""
+        self.check_open(what)
         if self.status == "paused":
             raise SessionStateError(f"the session is paused: resume it before {what}")
 
@@ -447,96 +452,3 @@ def _spoiled(p: Preference, members: set[int], executed: set[int]) -> bool:
     if p.source == "comparison":
         return p.winner in members or p.loser in members
     return p.loser in executed
-
-
-# -- replay ------------------------------------------------------------------------------------
-def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
-    """Apply logged ``records`` to ``state``, re-deriving and checking each one."""
-    i = 0
-    while i < len(records):
-        r = records[i]
-        if r.seq != state.last_seq + 1:
-            raise ReplayError(f"event {r.seq} follows event {state.last_seq}: the log has a gap")
-        if r.kind in log.ANSWER_KINDS:
-            j = i
-            while (
-                j < len(records)
-                and records[j].kind in log.ANSWER_KINDS
-                and records[j].payload.get("query") == r.payload.get("query")
-                and (j == i or records[j].kind != log.TRIAL or records[j - 1].kind == log.TRIAL)
-            ):
-                j += 1
-            _replay_answer(state, records[i:j])
-            i = j
-            continue
-        _replay_one(state, r)
-        i += 1
-
-
-def _check(r: EventRecord, derived: NewEvent) -> None:
-    fields = log.CHECKED_FIELDS.get(r.kind, ())
-    if derived.kind != r.kind or any(r.payload.get(f) != derived.payload.get(f) for f in fields):
-        raise ReplayError(log.describe_mismatch(r.seq, r.kind, r.payload, derived.payload))
-
-
-def _replay_one(state: SessionState, r: EventRecord) -> None:
-    p = r.payload
-    try:
-        if r.kind == log.QUERY:
-            if state.pending is not None:
-                raise ReplayError(
-                    f"event {r.seq}: a query was issued while {state.pending.id} was pending"
-                )
-            _check(r, NewEvent(log.QUERY, state.derive_query()))
-        elif r.kind == log.UNDO:
-            _check(r, state.undo_event())
-        elif r.kind == log.EXCLUDED:
-            _check(r, state.exclude_event(p["trial"], p["reason"], p.get("detail", "")))
-            state.apply_exclusion(p)
-        elif r.kind == log.VALIDATION_STARTED:
-            _check(r, state.validation_event())
-        elif r.kind == log.VALIDATION_ANSWERED:
-            _check(r, state.validation_answer_event(p["round"], p["ranking"]))
-    except (SessionStateError, QueryError, ValueError, KeyError) as exc:
-        raise ReplayError(f"event {r.seq} ({r.kind}) cannot be applied: {exc}") from None
-    state.commit([r])
-
-
-def _replay_answer(state: SessionState, group: Sequence[EventRecord]) -> None:
-    first = group[0]
-    query = state.pending
-    if first.kind != log.TRIAL or query is None or first.payload.get("query") != query.id:
-        pending = "no query is pending" if query is None else f"the pending query is {query.id}"
-        raise ReplayError(
-            f"event {first.seq} ({first.kind}) answers query {first.payload.get('query')}, "
-            f"but {pending}"
-        )
-    comparisons = [
-        (r.payload["first"], r.payload["second"], r.payload["outcome"])
-        for r in group
-        if r.kind == log.COMPARISON
-    ]
-    suggestions = [
-        (r.payload["action"], r.payload["feature"], r.payload["move"])
-        for r in group
-        if r.kind == log.SUGGESTION
-    ]
-    try:
-        answer = state.tell(query, comparisons, suggestions)
-    except (QueryError, ValueError, ArithmeticError, RuntimeError) as exc:
-        raise ReplayError(
-            f"event {first.seq}: the logged answer to query {query.id} is refused now: {exc}"
-        ) from None
-    derived = state.answer_events(query, answer)
-    try:
-        if len(derived) != len(group):
-            raise ReplayError(
-                f"event {first.seq}: the answer to query {query.id} has {len(group)} events "
-                f"in the log, {len(derived)} on replay"
-            )
-        for r, d in zip(group, derived, strict=True):
-            _check(r, d)
-    except ReplayError:
-        state.revert_tell()
-        raise
-    state.commit(group, answer)

@@ -174,7 +174,7 @@ class Terminal:
                 )
                 if key != "0":
                     out.append((a, f.name, _MOVES[int(key) - 1]))
-                    said.append(f"{f.name} {words[int(key) - 1]}")
+                    said.append(f"{f.name}{where} {words[int(key) - 1]}")
         return out, said
 
     # -- blind validation ----------------------------------------------------------------------

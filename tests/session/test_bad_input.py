@@ -55,7 +55,9 @@ def test_paused_session_refuses_answers_until_resumed(db: str | Storage) -> None
     s.pause()
     with pytest.raises(SessionStateError, match="paused"):
         s.answer(q.id, [], [])
-    s.note("break: subject resting")  # notes are fine while paused
+    with pytest.raises(SessionStateError, match="paused"):
+        s.next_query()
+    s.note("break: subject resting")  # notes, undo and exclusions are fine while paused
     s.resume()
     s.answer(q.id, [], [])
     assert [e.kind for e in s.events()][-3:] == ["note", "resumed", "trial_executed"]

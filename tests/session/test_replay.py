@@ -8,9 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import gaitpref.cospar
 import gaitpref.session
-from gaitpref import ReplayError, Session, load_config
+from gaitpref import Posterior, ReplayError, Session, load_config
 from gaitpref.storage import Storage
 from tests.session.sessionkit import CONFIG, Drive, state_of
 
@@ -95,7 +94,9 @@ def test_other_numerics_stop_replay_naming_both_versions(
     s = Session.create(sqlite_url, CONFIG, "S01", seed=5)
     drive(s, 4)
     monkeypatch.setattr(gaitpref.session, "_version", lambda: "9.9.9")
-    monkeypatch.setattr(gaitpref.cospar, "random_argmax", lambda v, rng: int(np.argmin(v)))
+    monkeypatch.setattr(  # numerics that propose other actions
+        Posterior, "argmax_samples", lambda self, rng, size: np.full(size, np.argmin(self.mean))
+    )
     with pytest.raises(ReplayError, match=r"(?s)query_issued.*actions.*gaitpref 0\.1\.0.*9\.9\.9"):
         Session.open(sqlite_url, s.id)
 

@@ -1,12 +1,16 @@
 """Pure numerics of the preference GP: kernels, likelihoods, the Laplace fit, the posterior."""
 
+from gaitpref.model.engines import DENSE_MAX_ACTIONS, SAMPLERS, SamplerName
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import ConvergenceError, LaplaceMode, PriorNotPositiveDefiniteError
 from gaitpref.model.likelihood import PairLikelihood, Probit
-from gaitpref.model.posterior import KroneckerPriorSampler, Posterior
+from gaitpref.model.posterior import Posterior
 
 __all__ = [
+    "DENSE_MAX_ACTIONS",
+    "SAMPLERS",
     "ConvergenceError",
     "KroneckerPriorSampler",
     "LaplaceMode",
@@ -15,5 +19,6 @@ __all__ = [
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
     "Probit",
+    "SamplerName",
     "SquaredExponential",
 ]

@@ -247,6 +247,29 @@ class SQLStorage(Storage):
             raise StorageError(f"{self.url}: {_reason(exc)}") from None
 
 
+def upgrade_database(url: str) -> str:
+    """Create the database's schema, or migrate it to the newest; returns the masked URL."""
+    parsed = parse_url(url)
+    if parsed.get_backend_name() == "sqlite" and not _sqlite_memory(parsed):
+        folder = Path(parsed.database or "").parent
+        if not folder.is_dir():
+            raise StorageConnectError(
+                f"cannot open {_masked(parsed)}: the folder {str(folder)!r} does not exist"
+            )
+    engine = _engine(parsed)
+    try:
+        with engine.connect() as conn:
+            conn.execution_options(gaitpref_write=True)
+            with conn.begin():
+                migrate.upgrade(conn)
+    except (DBAPIError, SQLAlchemyError, OSError, ImportError) as exc:
+        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}") from None
+    finally:
+        engine.dispose()
+    SQLStorage(url).close()  # opens it the way every command will
+    return _masked(parsed)
+
+
 # -- helpers -----------------------------------------------------------------------------------
 def _sqlite_memory(url: URL) -> bool:
     return url.database in (None, "", ":memory:")
