@@ -38,6 +38,7 @@ def test_create_from_the_sessions_page_then_answer_with_a_confirm_step(client: T
     html = client.get(f"/sessions/{sid}").text
     assert "Run now: trial 1" in html and "step duration" in html and ">s<" not in html
     assert "slightly slower" in html and "quicker" in html  # the features' own words
+    assert "No preference learned yet" in html
     form = forms_of(html)["answer-form"]
     gait = client.get(f"/api/sessions/{sid}/query").json()["actions"][0]["index"]
     assert form.radios[f"sug-{gait}-step_length"] == ["+big", "+small", "", "-small", "-big"]
@@ -59,6 +60,7 @@ def test_create_from_the_sessions_page_then_answer_with_a_confirm_step(client: T
     )
     assert "step length: slightly longer" in shown  # the chronology
     assert "trial 1: first steps" in shown  # the note
+    assert "Best so far" in shown and "No preference learned yet" not in shown
 
 
 def test_a_second_post_of_the_same_answer_is_a_409_page_and_writes_nothing(

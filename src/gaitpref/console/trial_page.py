@@ -99,6 +99,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "notes": list(reversed(session.notes()))[:20],
         "best": views.gait_view(space, best, gait_id=session.gait_id(best)),
         "best_mean": float(mean[best]),
+        "learned": bool(mean.max() > mean.min()),
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",
         "features": space.features,

@@ -163,10 +163,17 @@
     const last = selects.find((s) => s.value);
     if (last) last.value = "";
   }
+  function showPicks() {
+    const chosen = ["rank1", "rank2", "rank3"].map((n) => ranking.elements[n].value);
+    for (const b of ranking.querySelectorAll("[data-pick]")) {
+      b.setAttribute("aria-pressed", chosen.includes(b.dataset.pick) ? "true" : "false");
+    }
+  }
   if (ranking) {
-    for (const b of ranking.querySelectorAll("[data-pick]")) b.addEventListener("click", () => pick(b.dataset.pick));
+    for (const b of ranking.querySelectorAll("[data-pick]")) b.addEventListener("click", () => { pick(b.dataset.pick); showPicks(); });
     const clear = ranking.querySelector("[data-pick-clear]");
-    if (clear) clear.addEventListener("click", () => ["rank1", "rank2", "rank3"].forEach((n) => { ranking.elements[n].value = ""; }));
+    if (clear) clear.addEventListener("click", () => { ["rank1", "rank2", "rank3"].forEach((n) => { ranking.elements[n].value = ""; }); showPicks(); });
+    ranking.addEventListener("change", showPicks);
   }
 
   // -- keyboard ------------------------------------------------------------------------------
@@ -202,8 +209,8 @@
       if (undo) { event.preventDefault(); undo.requestSubmit(); return; }
     }
     if (ranking) {
-      if (["a", "b", "c"].includes(key)) { pick(key.toUpperCase()); event.preventDefault(); return; }
-      if (key === "Backspace") { unpick(); event.preventDefault(); return; }
+      if (["a", "b", "c"].includes(key)) { pick(key.toUpperCase()); showPicks(); event.preventDefault(); return; }
+      if (key === "Backspace") { unpick(); showPicks(); event.preventDefault(); return; }
       if (key === "Enter") { event.preventDefault(); ranking.requestSubmit(); return; }
     }
   });
