@@ -238,3 +238,11 @@ def test_an_uploaded_config_and_a_refused_one(client: TestClient) -> None:
     )
     assert r.status_code == 422 and "<code>config</code>" in r.text
     assert len(client.get("/api/sessions").json()) == 1
+
+
+def test_a_name_is_refused_as_a_subject_code(client: TestClient) -> None:
+    csrf = forms_of(client.get("/").text)["create-form"].fields["csrf_token"]
+    form = {"csrf_token": csrf, "subject": "Jane Doe", "config": "exo-1d-step-length"}
+    r = post(client, "/sessions", form)
+    assert r.status_code == 422 and "<code>subject</code>" in r.text and "never a name" in r.text
+    assert client.get("/api/sessions").json() == []

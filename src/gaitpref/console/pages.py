@@ -7,6 +7,7 @@ without), and a successful post redirects (303) so that reloading never posts tw
 
 from __future__ import annotations
 
+import re
 from typing import Annotated
 
 from fastapi import APIRouter, Path, Query, Request
@@ -18,7 +19,7 @@ from gaitpref.config import load_config, shipped_configs
 from gaitpref.console import figures, views
 from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
-from gaitpref.console.schemas import MAX_ID
+from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
     ExportFormat,
@@ -101,8 +102,12 @@ async def _upload_text(upload: UploadFile | None, field: str) -> str | None:
 async def create_session(request: Request) -> Response:
     fields, files = await _form(request)
     subject = fields.get("subject", "").strip()
-    if not subject:
-        raise InputError("subject", "a subject code is required (e.g. S01)")
+    if not re.fullmatch(SUBJECT_PATTERN, subject):
+        raise InputError(
+            "subject",
+            f"{subject!r} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
+            "(a pseudonymous code such as S01, never a name)",
+        )
     seed_text = fields.get("seed", "").strip()
     seed = views.read_int(fields, "seed", minimum=0) if seed_text else None
     uploaded = await _upload_text(files.get("config_file"), "config_file")
