@@ -3,6 +3,8 @@ from a path a client names outside the console's library folder."""
 
 from __future__ import annotations
 
+import io
+import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -83,6 +85,11 @@ def test_a_config_naming_an_uploaded_library(
     inside = NAMED.replace('"lib.json"', f'"{kept[0].parent.name}/lib.json"')
     r = console.post("/api/sessions", json={"config": inside, "subject": "S02"})
     assert r.status_code == 201, r.text
+    # exports carry the library at the path the config names, subfolders included
+    for sid, name in ((1, "lib.json"), (r.json()["id"], f"{kept[0].parent.name}/lib.json")):
+        z = console.get(f"/api/sessions/{sid}/export", params={"format": "json"})
+        with zipfile.ZipFile(io.BytesIO(z.content)) as zf:
+            assert zf.read(f"session-{sid}/{name}") == data
 
 
 def test_a_config_with_its_own_grid_and_a_library_naming_its_gaits(

@@ -36,6 +36,8 @@ ExportFormat = Literal["csv", "json"]
 T = TypeVar("T")
 #: opened sessions kept in memory (reopening one replays its log)
 KEEP = 32
+#: per-session locks, striped by session id
+LOCK_STRIPES = 64
 
 
 @dataclass(frozen=True)
@@ -60,21 +62,17 @@ class SessionService:
             Path(library_dir) if library_dir is not None else default_library_dir(self.url)
         )
         self._open: dict[int, Session] = {}
-        self._locks: dict[int, threading.RLock] = {}
+        self._locks = tuple(threading.RLock() for _ in range(LOCK_STRIPES))
         self._guard = threading.Lock()
 
     def close(self) -> None:
         self.storage.close()
 
     # -- opening -------------------------------------------------------------------------------
-    def _lock(self, session_id: int) -> threading.RLock:
-        with self._guard:
-            return self._locks.setdefault(session_id, threading.RLock())
-
     @contextmanager
     def locked(self, session_id: int) -> Iterator[Session]:
         """The session, up to date, with its console lock held."""
-        with self._lock(session_id):
+        with self._locks[session_id % LOCK_STRIPES]:  # bounded: any id a client sends
             yield self._current(session_id)
 
     def _keep(self, session: Session) -> None:
@@ -235,8 +233,8 @@ class SessionService:
             export_session(session, folder, fmt)
             buf = io.BytesIO()
             with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
-                for path in sorted(folder.iterdir()):
-                    zf.write(path, f"{folder.name}/{path.name}")
+                for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+                    zf.write(path, f"{folder.name}/{path.relative_to(folder).as_posix()}")
             return buf.getvalue()
 
 
