@@ -7,6 +7,7 @@ without), and a successful post redirects (303) so that reloading never posts tw
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Annotated
 
@@ -15,7 +16,7 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from starlette.datastructures import UploadFile
 
-from gaitpref.config import load_config, shipped_configs
+from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
 from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
@@ -74,7 +75,7 @@ async def sessions_page(request: Request) -> Response:
     records = await run_in_threadpool(service.list_sessions)
     subjects = await run_in_threadpool(service.list_subjects)
     counts = {s.code: sum(1 for r in records if r.subject == s.code) for s in subjects}
-    configs = [(name, load_config(name)) for name in shipped_configs()]
+    configs = _shipped()
     return render(
         request,
         "sessions.html",
@@ -84,6 +85,11 @@ async def sessions_page(request: Request) -> Response:
         configs=configs,
         db_url=service.url,
     )
+
+
+@functools.cache
+def _shipped() -> list[tuple[str, ExperimentConfig]]:
+    return [(name, load_config(name)) for name in shipped_configs()]
 
 
 async def _upload_text(upload: UploadFile | None, field: str) -> str | None:
@@ -167,15 +173,19 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     note = fields.get("note", "").strip()
     service = _service(request)
     if fields.get("confirmed") != "1":
-        session = service.get(session_id)
-        pending = session.pending
-        if pending is None or pending.id != query_id:
-            raise session_query_error(session, query_id)
-        lines = views.answer_summary(session.config.space, pending, comparisons, suggestions)
+
+        def summary(session: Session) -> list[str]:
+            pending = session.pending
+            if pending is None or pending.id != query_id:
+                raise session_query_error(session, query_id)
+            space = session.config.space
+            return views.answer_summary(space, pending, comparisons, suggestions, session.gait_id)
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
         return render(
             request,
             "confirm.html",
-            session=session,
+            session_id=session_id,
             what="answer",
             lines=lines,
             fields=fields,
@@ -195,19 +205,23 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
     query_id = views.read_int(fields, "query_id")
     service = _service(request)
     if fields.get("confirmed") != "1":
-        session = service.get(session_id)
-        trials = session.trials()
-        if not trials:
-            raise InputError("query_id", "nothing to undo: no trial has been answered")
-        last = trials[-1]
+
+        def summary(session: Session) -> list[str]:
+            trials = session.trials()
+            if not trials:
+                raise InputError("query_id", "nothing to undo: no trial has been answered")
+            last = trials[-1]
+            return [
+                f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
+            ]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
         return render(
             request,
             "confirm.html",
-            session=session,
+            session_id=session_id,
             what="undo",
-            lines=[
-                f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
-            ],
+            lines=lines,
             fields=fields,
             note="",
             action=f"/sessions/{session_id}/undo",

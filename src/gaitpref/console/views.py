@@ -18,7 +18,7 @@ feature row ``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less"
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gaitpref.console.errors import InputError
@@ -226,14 +226,16 @@ def answer_summary(
     query: SessionQuery,
     comparisons: Sequence[tuple[int, int, str]],
     suggestions: Sequence[tuple[int, str, str]],
+    gait_id: Callable[[int], str | None] | None = None,
 ) -> list[str]:
-    """The answer in words, for the confirm step."""
+    """The answer in words, for the confirm step (``gait_id``: a library's gait ids)."""
     trial_of = dict(zip(query.buffer, query.buffer_trials, strict=True))
     trial_of.update(zip(query.actions, query.trials, strict=True))
 
     def name(a: int) -> str:
+        gait = (gait_id(a) if gait_id is not None else None) or f"G{a}"
         t = trial_of.get(a)
-        return f"trial {t} (G{a})" if t is not None else f"G{a}"
+        return f"trial {t} ({gait})" if t is not None else gait
 
     lines = []
     for i, j, outcome in comparisons:
