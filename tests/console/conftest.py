@@ -5,19 +5,12 @@ from __future__ import annotations
 import re
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import pytest
+from fastapi.testclient import TestClient
 
 from gaitpref.console import create_app
-
-if TYPE_CHECKING:  # imported after pytest_configure below, which quiets its warning
-    from fastapi.testclient import TestClient
-
-
-def pytest_configure(config: pytest.Config) -> None:
-    # Starlette >= 1.0 suggests httpx2 for its test client; httpx is what the project installs.
-    config.addinivalue_line("filterwarnings", "ignore:Using `httpx` with `starlette.testclient`")
 
 
 @pytest.fixture
@@ -27,8 +20,6 @@ def db_url(tmp_path: Path) -> str:
 
 @pytest.fixture
 def client(db_url: str) -> Iterator[TestClient]:
-    from fastapi.testclient import TestClient
-
     with TestClient(create_app(db_url)) as c:
         yield c
 
