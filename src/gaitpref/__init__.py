@@ -10,23 +10,50 @@ The public API::
     session = gaitpref.Session.create("sqlite:///lab.db", config, subject="S01")  # durable
 """
 
+from typing import TYPE_CHECKING, Any
+
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.feedback import Comparison, FeedbackError, Preference, Suggestion, Tie
-from gaitpref.gaits import GaitLibrary, GaitLibraryError
 from gaitpref.model import (
     ConvergenceError,
     Posterior,
     PreferenceGP,
     SquaredExponential,
 )
-from gaitpref.session import Session, SessionQuery
-from gaitpref.session_log import REASONS, ReplayError, SessionStateError
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import MOVES, Feature, Move, Space
 
+if TYPE_CHECKING:
+    from gaitpref.gaits import GaitLibrary, GaitLibraryError
+    from gaitpref.session import Session, SessionQuery
+    from gaitpref.session_log import REASONS, ReplayError, SessionStateError
+
 __version__ = "0.1.0"
+
+# Heavier parts (gait optimization pulls scipy.optimize, sessions pull SQLAlchemy) load on first
+# use, so `import gaitpref` and the CLI start quickly.
+_LAZY = {
+    "GaitLibrary": "gaitpref.gaits",
+    "GaitLibraryError": "gaitpref.gaits",
+    "Session": "gaitpref.session",
+    "SessionQuery": "gaitpref.session",
+    "REASONS": "gaitpref.session_log",
+    "ReplayError": "gaitpref.session_log",
+    "SessionStateError": "gaitpref.session_log",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'gaitpref' has no attribute {name!r}")
+
 
 __all__ = [
     "MOVES",

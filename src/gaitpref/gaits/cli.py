@@ -18,7 +18,6 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from gaitpref.gaits.build import build_library
-from gaitpref.gaits.figures import default_ids, render_library_figure
 from gaitpref.gaits.gait import HZDSettings
 from gaitpref.gaits.library import GaitLibrary, GaitLibraryError
 from gaitpref.gaits.simulate import SimulationError
@@ -179,6 +178,8 @@ def plot(
     """COT over the grid and joint phase diagrams from full-model simulations (as the paper's
     Fig. 7)."""
     lib = _load(file)
+    from gaitpref.gaits.figures import default_ids, render_library_figure  # matplotlib: lazily
+
     chosen = list(ids) if ids else default_ids(lib)
     for gait_id in chosen:
         try:
