@@ -23,9 +23,11 @@ import json
 import secrets
 from collections.abc import Iterable
 from http.cookies import SimpleCookie
+from typing import TYPE_CHECKING
 from urllib.parse import parse_qsl, urlencode
 
-from starlette.types import ASGIApp, Receive, Scope, Send
+if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlette
+    from starlette.types import ASGIApp, Receive, Scope, Send
 
 TOKEN_COOKIE = "gaitpref_token"
 TOKEN_HEADER = "x-gaitpref-token"
