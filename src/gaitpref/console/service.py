@@ -133,10 +133,6 @@ class SessionService:
         return session
 
     # -- the loop ------------------------------------------------------------------------------
-    def pending(self, session_id: int) -> Pending:
-        """The query to run now (issued and logged if new), or why there is none."""
-        return self.read(session_id, pending_of)
-
     def answer(
         self,
         session_id: int,
