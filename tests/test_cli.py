@@ -21,21 +21,9 @@ def objective_file(tmp_path: Path) -> Path:
 
 
 def test_simulate_json(objective_file: Path) -> None:
-    result = runner.invoke(
-        app,
-        [
-            "simulate",
-            "synthetic-2d",
-            "--objective",
-            str(objective_file),
-            "--trials",
-            "30",
-            "--seed",
-            "3",
-            "--coactive",
-            "--json",
-        ],
-    )
+    args = ["simulate", "synthetic-2d", "--objective", str(objective_file), "--trials", "30"]
+    args += ["--seed", "3", "--coactive", "--json"]
+    result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
     payload = json.loads(result.stdout)
     assert len(payload["normalized_objective"]) == 30 and len(payload["actions"]) == 30
@@ -43,21 +31,7 @@ def test_simulate_json(objective_file: Path) -> None:
     norm = (obj[payload["actions"]] - obj.min()) / (obj.max() - obj.min())
     assert np.allclose(payload["normalized_objective"], norm)
     assert 0 <= payload["posterior_argmax"] < 900
-    again = runner.invoke(
-        app,
-        [
-            "simulate",
-            "synthetic-2d",
-            "--objective",
-            str(objective_file),
-            "--trials",
-            "30",
-            "--seed",
-            "3",
-            "--coactive",
-            "--json",
-        ],
-    )
+    again = runner.invoke(app, args)
     assert json.loads(again.stdout)["actions"] == payload["actions"]
 
 

@@ -8,9 +8,12 @@ The public API::
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0)   # ask() / tell()
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0,
                            strategy=gaitpref.make_strategy("gated-eubo"),
-                           learning=gaitpref.Learning(ties="model", fit="evidence"))
+                           learning=gaitpref.Learning(fit="evidence", refit_every=20))
     config = gaitpref.load_config("exo-1d-step-length")                    # or a TOML path
+    session = gaitpref.Session.create("sqlite:///lab.db", config, subject="S01")  # durable
 """
+
+from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.cospar import Answer, CoSpar, Query, QueryError
@@ -28,10 +31,39 @@ from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import MOVES, Feature, Move, Space
 from gaitpref.strategies import STRATEGIES, Strategy, make_strategy
 
+if TYPE_CHECKING:
+    from gaitpref.gaits import GaitLibrary, GaitLibraryError
+    from gaitpref.session import Session, SessionQuery
+    from gaitpref.session_log import REASONS, ReplayError, SessionStateError
+
 __version__ = "0.1.0"
+
+# Heavier parts (gait optimization pulls scipy.optimize, sessions pull SQLAlchemy) load on first
+# use, so `import gaitpref` and the CLI start quickly.
+_LAZY = {
+    "GaitLibrary": "gaitpref.gaits",
+    "GaitLibraryError": "gaitpref.gaits",
+    "Session": "gaitpref.session",
+    "SessionQuery": "gaitpref.session",
+    "REASONS": "gaitpref.session_log",
+    "ReplayError": "gaitpref.session_log",
+    "SessionStateError": "gaitpref.session_log",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'gaitpref' has no attribute {name!r}")
+
 
 __all__ = [
     "MOVES",
+    "REASONS",
     "STRATEGIES",
     "Answer",
     "CoSpar",
@@ -41,6 +73,8 @@ __all__ = [
     "ExperimentConfig",
     "Feature",
     "FeedbackError",
+    "GaitLibrary",
+    "GaitLibraryError",
     "GradientCoactive",
     "IndifferentUser",
     "Learning",
@@ -50,6 +84,10 @@ __all__ = [
     "PreferenceGP",
     "Query",
     "QueryError",
+    "ReplayError",
+    "Session",
+    "SessionQuery",
+    "SessionStateError",
     "SimulatedUser",
     "SimulationResult",
     "Space",

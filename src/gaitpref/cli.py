@@ -15,6 +15,9 @@ from rich.table import Table
 
 from gaitpref import __version__
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
+from gaitpref.console.cli import console_app
+from gaitpref.session_cli import db_app, session_app
+from gaitpref.simulate.cli import bench_app
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser, objective_on_grid
 
@@ -24,6 +27,10 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
 )
+app.add_typer(console_app, name="console")
+app.add_typer(session_app, name="session")
+app.add_typer(db_app, name="db")
+app.add_typer(bench_app, name="bench")
 console = Console()
 err_console = Console(stderr=True)
 
@@ -191,11 +198,23 @@ def demo(
         f"the posterior's best action scores {_norm(objective, result.posterior_argmax):.3f}"
     )
     console.print(f"figure: [bold]{figure}[/]")
+    from gaitpref.session_demo import print_demo_session
+
+    print_demo_session(out, console)
 
 
 def _norm(objective: np.ndarray, index: int) -> float:
     flat = objective.reshape(-1)
     return float((flat[index] - flat.min()) / (flat.max() - flat.min()))
+
+
+def _mount_subcommands() -> None:
+    from gaitpref.gaits.cli import app as gaits_app
+
+    app.add_typer(gaits_app, name="gaits")
+
+
+_mount_subcommands()
 
 
 def main() -> None:

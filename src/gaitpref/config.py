@@ -13,6 +13,7 @@
     signal_variance = 0.005
     jitter = 1e-7
     noise = 0.02
+    sampler = "auto"               # optional: "auto", "dense" or "scalable" (posterior samples)
     ties = "drop"                  # optional: "drop" (the paper) or "model" (ordered probit)
     # tie_band = "fit"             # with ties = "model": a number, or "fit"
     fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
@@ -29,6 +30,12 @@
     seed = 0
     strategy = "gated-eubo"        # optional: see gaitpref.strategies.STRATEGIES
 
+Instead of ``[space]``, a config can name a gait library built by ``gaitpref gaits build``; the
+features then come from the library's axes and every action has a gait id:
+
+    [gaits]
+    library = "gaits.json"         # relative to the config file's folder
+
 Every error names the key and what is allowed.  The optional learning keys default to
 :data:`DEFAULT_TIES`, :data:`DEFAULT_FIT` and :data:`DEFAULT_STRATEGY` (``docs/learning.md``
 says why); the shipped paper configs set them explicitly to the paper's choices.  Shipped configs
@@ -43,23 +50,28 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
 from gaitpref.cospar import CoSpar
 from gaitpref.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode
+from gaitpref.model.engines import SAMPLERS, resolve_sampler
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Feature, Space
 from gaitpref.strategies import STRATEGIES, make_strategy
+
+if TYPE_CHECKING:
+    from gaitpref.gaits.library import GaitLibrary
 
 
 class ConfigError(ValueError):
     """A config that cannot be used; the message names the key."""
 
 
-_TOP_KEYS = {"name", "description", "space", "model", "cospar"}
+_TOP_KEYS = {"name", "description", "space", "gaits", "model", "cospar"}
+_GAITS_KEYS = {"library"}
 _FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
 _MODEL_KEYS = {
     "lengthscale",
@@ -71,6 +83,7 @@ _MODEL_KEYS = {
     "fit",
     "refit_every",
     "prior",
+    "sampler",
 }
 _PRIOR_KEYS = {"lengthscale", "signal_variance", "tie_band"}
 _COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed", "strategy"}
@@ -98,11 +111,25 @@ class ExperimentConfig:
     description: str = ""
     strategy: str = "self-sparring"
     learning: Learning = field(default_factory=Learning)
+    sampler: str = "auto"
+    library: GaitLibrary | None = field(default=None, repr=False, compare=False)
+    library_path: str | None = None
 
     @property
     def sha256(self) -> str:
         """Hash of the config text as given (sessions store it to detect changes)."""
         return hashlib.sha256(self.text.encode()).hexdigest()
+
+    @property
+    def library_sha256(self) -> str | None:
+        """Hash of the gait library file, if the config names one."""
+        if self.library_path is None:
+            return None
+        return hashlib.sha256(Path(self.library_path).read_bytes()).hexdigest()
+
+    def gait_id(self, index: int) -> str | None:
+        """The gait id of grid action ``index`` when the config names a gait library."""
+        return None if self.library is None else self.library.gait_id(index)
 
     def make_loop(self, seed: int | np.random.Generator | None = None) -> CoSpar:
         """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's)."""
@@ -116,6 +143,7 @@ class ExperimentConfig:
             seed=self.seed if seed is None else seed,
             strategy=make_strategy(self.strategy),
             learning=self.learning,
+            sampler=self.sampler,
         )
 
 
@@ -125,32 +153,38 @@ def shipped_configs() -> list[str]:
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
-def _read(source: str | Path) -> tuple[str, str]:
+def _read(source: str | Path) -> tuple[str, str, Path | None]:
     path = Path(source)
     if path.is_file():
-        return path.read_text(encoding="utf-8"), path.stem
+        return path.read_text(encoding="utf-8"), path.stem, path.resolve().parent
     name = str(source)
     if path.suffix == "" and "/" not in name and name in shipped_configs():
         text = (resources.files("gaitpref") / "configs" / f"{name}.toml").read_text("utf-8")
-        return text, name
+        return text, name, None
     hint = f"; shipped configs are {', '.join(shipped_configs())}"
     raise ConfigError(f"config {name!r}: no such file{hint}")
 
 
 def load_config(source: str | Path) -> ExperimentConfig:
     """Load a config file, or a shipped config by name."""
-    text, stem = _read(source)
-    return parse_config(text, default_name=stem)
+    text, stem, folder = _read(source)
+    return parse_config(text, default_name=stem, base_dir=folder)
 
 
-def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfig:
-    """Parse config TOML text (see the module docstring for the format)."""
+def parse_config(
+    text: str, default_name: str = "experiment", base_dir: str | Path | None = None
+) -> ExperimentConfig:
+    """Parse config TOML text (see the module docstring for the format).
+
+    A relative ``[gaits].library`` path is taken from ``base_dir`` (default: the working folder).
+    """
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"config is not valid TOML: {exc}") from None
     _only(raw, _TOP_KEYS, "top level")
-    space = _parse_space(raw.get("space"))
+    library, library_path = _parse_gaits(raw, base_dir)
+    space = library.space() if library is not None else _parse_space(raw.get("space"))
     model = _table(raw, "model")
     _only(model, _MODEL_KEYS, "[model]")
     kernel = SquaredExponential(
@@ -180,6 +214,9 @@ def parse_config(text: str, default_name: str = "experiment") -> ExperimentConfi
         text=text,
         strategy=_choice(cospar, "strategy", "[cospar]", STRATEGIES, DEFAULT_STRATEGY),
         learning=learning,
+        sampler=_sampler(model, len(space)),
+        library=library,
+        library_path=library_path,
     )
 
 
@@ -230,6 +267,42 @@ def _integer(table: dict[str, Any], key: str, where: str, default: int, minimum:
     if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
         raise ConfigError(f"{where}.{key}: must be an integer >= {minimum}, got {value!r}")
     return value
+
+
+def _sampler(model: dict[str, Any], size: int) -> str:
+    value = model.get("sampler", "auto")
+    if value not in SAMPLERS:
+        raise ConfigError(f"[model].sampler: must be one of {', '.join(SAMPLERS)}; got {value!r}")
+    try:
+        resolve_sampler(value, size)
+    except ValueError as exc:
+        raise ConfigError(f"[model].sampler: {exc}") from None
+    return str(value)
+
+
+def _parse_gaits(
+    raw: dict[str, Any], base_dir: str | Path | None
+) -> tuple[GaitLibrary | None, str | None]:
+    if "gaits" not in raw:
+        return None, None
+    gaits = raw["gaits"]
+    if not isinstance(gaits, dict):
+        raise ConfigError('[gaits]: must be a table with library = "FILE"')
+    _only(gaits, _GAITS_KEYS, "[gaits]")
+    if "space" in raw:
+        raise ConfigError("give either [space] or [gaits].library (its axes are the space)")
+    name = gaits.get("library")
+    if not isinstance(name, str) or not name:
+        raise ConfigError("[gaits].library: must be the path of a gait library file")
+    path = Path(name)
+    if not path.is_absolute():
+        path = Path(base_dir if base_dir is not None else ".") / path
+    from gaitpref.gaits.library import GaitLibrary, GaitLibraryError
+
+    try:
+        return GaitLibrary.load(path), str(path.resolve())
+    except (GaitLibraryError, OSError) as exc:
+        raise ConfigError(f"[gaits].library: {exc}") from None
 
 
 def _parse_space(raw: object) -> Space:

@@ -10,13 +10,15 @@ preference" is stored and not modelled; the posterior is refitted, warm-started 
     query = loop.ask()              # query.actions: run these; query.buffer: compare with these
     loop.tell(query, [(query.actions[0], query.buffer[0], "first")], [(a, "step_length", "+small")])
 
-``tell`` checks everything first and changes nothing when it raises.
+``tell`` checks everything first and changes nothing when it raises.  ``exclude`` takes chosen
+preferences of earlier answers out of the model (their records stay in ``answers``), as a session
+does for a trial spoiled by a device fault or a stumble.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,7 +39,7 @@ from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior
-from gaitpref.model.threads import blas_threads
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
 
@@ -80,7 +82,12 @@ def _light(posterior: Posterior) -> Posterior:
 
 
 class CoSpar:
-    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials."""
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials.
+
+    ``sampler`` ("auto", "dense" or "scalable") picks how posterior samples reach every action
+    (:mod:`gaitpref.model.engines`); for a given seed all choices propose the same actions up to
+    floating-point rounding.
+    """
 
     def __init__(
         self,
@@ -93,6 +100,7 @@ class CoSpar:
         seed: int | np.random.Generator = 0,
         strategy: Strategy | None = None,
         learning: Learning | None = None,
+        sampler: str = "auto",
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -103,7 +111,7 @@ class CoSpar:
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
-        self.gp = PreferenceGP(space, kernel, noise)
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
         self.learning = Learning() if learning is None else learning
         band = self.learning.tie_band
         if self.learning.learns_band:
@@ -128,11 +136,20 @@ class CoSpar:
         self._next_id = 1
         self._buffer: tuple[int, ...] = ()
         self._rng_before_pending: Mapping[str, Any] | None = None
+        self._rng_before: dict[int, Mapping[str, Any]] = {}  # answered query id -> RNG before ask
+        self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
+        self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
     # -- state -------------------------------------------------------------------------------
     @property
     def preferences(self) -> list[Preference]:
-        return [p for a in self.answers for p in a.preferences]
+        """The preferences in the model (every answer's, less the excluded ones)."""
+        return [p for a in self.answers for p in self._kept(a)]
+
+    @property
+    def excluded(self) -> dict[int, frozenset[int]]:
+        """Query id -> indices into that answer's ``preferences`` taken out by :meth:`exclude`."""
+        return dict(self._dropped)
 
     @property
     def ties(self) -> list[Tie]:
@@ -160,7 +177,7 @@ class CoSpar:
             return self.pending
         self._rng_before_pending = self.rng.bit_generator.state
         context = AskContext(self.posterior, self.n, self._buffer, len(self.executed), self.rng)
-        with blas_threads(len(self.space)):
+        with one_blas_thread():
             actions = tuple(int(a) for a in self.strategy.propose(context))
         self.pending = Query(self._next_id, actions, self._buffer)
         self._next_id += 1
@@ -203,7 +220,7 @@ class CoSpar:
             q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
         )
         answers = [*self.answers, answer]
-        with blas_threads(len(self.space)):  # may raise: nothing changed yet
+        with one_blas_thread():  # may raise: nothing changed yet
             refit = self._refit(answers)
             hyper = self.hyper if refit is None else refit.after
             gp = self.gp if hyper == self.hyper else self._gp(hyper)
@@ -213,6 +230,8 @@ class CoSpar:
         self.answers.append(answer)
         self.posterior = new_posterior
         self.gp, self.hyper = gp, hyper
+        if self._rng_before_pending is not None:
+            self._rng_before[q.id] = self._rng_before_pending
         self.pending = None
         self._rng_before_pending = None
         recent = self._buffer + q.actions
@@ -227,16 +246,66 @@ class CoSpar:
             self.rng.bit_generator.state = self._rng_before_pending
             self._next_id = self.pending.id
         answer = self.answers.pop()
-        self.posterior = answer.posterior_before
         if answer.refit is not None and answer.refit.before != self.hyper:
-            self.hyper = answer.refit.before
+            self.hyper = answer.refit.before  # the hyperparameters from before its refit
             self.gp = self._gp(self.hyper)
+        self._dropped.pop(answer.query.id, None)
+        self.posterior = answer.posterior_before  # also the warm start of a refit below
+        if answer.query.id in self._stale_before:
+            # an exclusion in an earlier answer came after this one: refit what remains
+            self._stale_before.discard(answer.query.id)
+            with one_blas_thread():
+                self.posterior = self._fit(self.answers)
         self.pending = answer.query
-        self._rng_before_pending = None
+        # so that a further undo can put the generator back to before this query was drawn
+        self._rng_before_pending = self._rng_before.pop(answer.query.id, None)
         self._buffer = answer.query.buffer
         return answer
 
+    def exclude(self, drops: Mapping[int, Collection[int]]) -> Posterior:
+        """Take preferences out of the model and refit; the answers themselves stay recorded.
+
+        ``drops`` maps an answered query's id to indices into that answer's ``preferences``.
+        Exclusions add up (excluding twice is harmless) and are dropped with their answer by
+        :meth:`undo`.  Raises :class:`QueryError` / ``IndexError`` and changes nothing on bad
+        input.
+        """
+        position = {a.query.id: k for k, a in enumerate(self.answers)}
+        new = dict(self._dropped)
+        for qid, indices in drops.items():
+            if qid not in position:
+                raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
+            size = len(self.answers[position[qid]].preferences)
+            chosen = {int(i) for i in indices}
+            bad = sorted(i for i in chosen if not 0 <= i < size)
+            if bad:
+                raise IndexError(
+                    f"query {qid} has {size} preferences; cannot exclude index {bad[0]}"
+                )
+            new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
+        if new == self._dropped:
+            return self.posterior
+        old = self._dropped
+        self._dropped = new
+        try:
+            with one_blas_thread():
+                posterior = self._fit(self.answers)
+        except Exception:
+            self._dropped = old
+            raise
+        self.posterior = posterior
+        touched = [position[q] for q in drops if new.get(q) != old.get(q)]
+        if touched:
+            self._stale_before.update(a.query.id for a in self.answers[min(touched) + 1 :])
+        return posterior
+
     # -- internals ---------------------------------------------------------------------------
+    def _kept(self, answer: Answer) -> tuple[Preference, ...]:
+        dropped = self._dropped.get(answer.query.id)
+        if not dropped:
+            return answer.preferences
+        return tuple(p for k, p in enumerate(answer.preferences) if k not in dropped)
+
     def _check_query(self, query: Query | int) -> Query:
         qid = query.id if isinstance(query, Query) else query
         if isinstance(qid, bool) or not isinstance(qid, int | np.integer):
@@ -251,10 +320,10 @@ class CoSpar:
         return self.pending
 
     def _gp(self, hyper: Hyperparameters) -> PreferenceGP:
-        return PreferenceGP(self.space, hyper.kernel(), self.gp.noise)
+        return PreferenceGP(self.space, hyper.kernel(), self.gp.noise, sampler=self.gp.sampler)
 
     def _data(self, answers: list[Answer]) -> PairData:
-        prefs = [p for a in answers for p in a.preferences]
+        prefs = [p for a in answers for p in self._kept(a)]
         ties = [t for a in answers for t in a.ties]
         return pair_data(prefs, ties, self.gp.noise, self.learning.ties == "model")
 
@@ -267,9 +336,14 @@ class CoSpar:
             return None
         return fit_hyperparameters(self.space, self.hyper, data, self.prior)
 
-    def _fit(self, answers: list[Answer], gp: PreferenceGP, band: float) -> Posterior:
+    def _fit(
+        self, answers: list[Answer], gp: PreferenceGP | None = None, band: float | None = None
+    ) -> Posterior:
+        """The posterior given ``answers`` (default model: the current kernel and band)."""
+        gp = self.gp if gp is None else gp
+        band = self.hyper.band if band is None else band
         if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
-            prefs = [p for a in answers for p in a.preferences]
+            prefs = [p for a in answers for p in self._kept(a)]
             if not prefs:
                 return gp.prior()
             winners = np.array([p.winner for p in prefs], dtype=np.intp)

@@ -10,8 +10,8 @@ preference") and one optional coactive suggestion per executed action.  Here an 
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
-from typing import Literal, get_args
+from dataclasses import astuple, dataclass
+from typing import Any, Literal, get_args
 
 from gaitpref.space import MOVES, Move, Space
 
@@ -81,6 +81,19 @@ def _grid_index(space: Space, value: object, where: str) -> int:
         raise FeedbackError(f"{where}: {exc}") from None
 
 
+def _triple(
+    item: object, record: type[Comparison | Suggestion], where: str, expected: str
+) -> Sequence[Any]:
+    """A record or a 3-sequence as a 3-sequence; anything else is a :class:`FeedbackError`."""
+    if isinstance(item, Comparison | Suggestion):
+        if not isinstance(item, record):
+            raise FeedbackError(f"{where}: expected {expected}, got {item!r}")
+        return tuple(astuple(item))
+    if not isinstance(item, Sequence) or isinstance(item, str) or len(item) != 3:
+        raise FeedbackError(f"{where}: expected {expected}, got {item!r}")
+    return item
+
+
 def parse_comparisons(
     space: Space, raw: Iterable[object], members: Sequence[int], executed: Sequence[int]
 ) -> tuple[Comparison, ...]:
@@ -91,12 +104,9 @@ def parse_comparisons(
     """
     out: list[Comparison] = []
     seen: set[frozenset[int]] = set()
-    for k, item in enumerate(raw):
+    for k, raw_item in enumerate(raw):
         where = f"comparison {k}"
-        if isinstance(item, Comparison):
-            item = (item.first, item.second, item.outcome)
-        if not isinstance(item, Sequence) or isinstance(item, str) or len(item) != 3:
-            raise FeedbackError(f"{where}: expected (i, j, outcome), got {item!r}")
+        item = _triple(raw_item, Comparison, where, "(i, j, outcome)")
         i = _grid_index(space, item[0], where)
         j = _grid_index(space, item[1], where)
         outcome = item[2]
@@ -126,12 +136,9 @@ def parse_suggestions(
     """Check ``(action, feature, move)`` triples; ``action`` must be executed in this query."""
     out: list[Suggestion] = []
     seen: set[tuple[int, str]] = set()
-    for k, item in enumerate(raw):
+    for k, raw_item in enumerate(raw):
         where = f"suggestion {k}"
-        if isinstance(item, Suggestion):
-            item = (item.action, item.feature, item.move)
-        if not isinstance(item, Sequence) or isinstance(item, str) or len(item) != 3:
-            raise FeedbackError(f"{where}: expected (action, feature, move), got {item!r}")
+        item = _triple(raw_item, Suggestion, where, "(action, feature, move)")
         action = _grid_index(space, item[0], where)
         if action not in executed:
             raise FeedbackError(

@@ -1,5 +1,6 @@
 """Pure numerics of the preference GP: kernels, likelihoods, the Laplace fit, the posterior."""
 
+from gaitpref.model.engines import DENSE_MAX_ACTIONS, SAMPLERS, SamplerName
 from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import (
@@ -10,11 +11,14 @@ from gaitpref.model.hyperfit import (
     fit_hyperparameters,
 )
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import ConvergenceError, LaplaceMode, PriorNotPositiveDefiniteError
 from gaitpref.model.likelihood import OrderedProbit, PairLikelihood, Probit
-from gaitpref.model.posterior import KroneckerPriorSampler, Posterior
+from gaitpref.model.posterior import Posterior
 
 __all__ = [
+    "DENSE_MAX_ACTIONS",
+    "SAMPLERS",
     "ConvergenceError",
     "Evidence",
     "HyperFit",
@@ -30,6 +34,7 @@ __all__ = [
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
     "Probit",
+    "SamplerName",
     "SquaredExponential",
     "default_prior",
     "fit_hyperparameters",

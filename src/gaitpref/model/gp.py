@@ -15,10 +15,12 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import PairLikelihood, Probit
-from gaitpref.model.posterior import KroneckerPriorSampler, Posterior
+from gaitpref.model.posterior import Posterior
 from gaitpref.space import IntArray, Space
 
 
@@ -39,23 +41,35 @@ def _as_indices(space: Space, values: ArrayLike, name: str) -> IntArray:
 
 
 class PreferenceGP:
-    """A preference GP over the grid ``space`` with ``kernel`` and default probit ``noise``."""
+    """A preference GP over the grid ``space`` with ``kernel`` and default probit ``noise``.
 
-    def __init__(self, space: Space, kernel: SquaredExponential, noise: float) -> None:
+    ``sampler`` picks how posteriors reach all actions: ``"dense"``, ``"scalable"`` or
+    ``"auto"`` (by grid size; ``engines.py``).  Both give the same draws for the same seed up to
+    rounding.
+    """
+
+    def __init__(
+        self, space: Space, kernel: SquaredExponential, noise: float, sampler: str = "auto"
+    ) -> None:
         if not (np.isfinite(noise) and noise > 0):
             raise ValueError(f"preference noise must be positive, got {noise!r}")
         kernel.lengthscales(space.ndim)  # checks the count
         self.space = space
         self.kernel = kernel
         self.noise = float(noise)
+        self.sampler = resolve_sampler(sampler, len(space))
 
     @cached_property
+    def engine(self) -> GridEngine:
+        return make_engine(self.space, self.kernel, self.sampler)
+
+    @property
     def prior_sampler(self) -> KroneckerPriorSampler:
-        return KroneckerPriorSampler(self.space, self.kernel)
+        return self.engine.prior
 
     def prior(self) -> Posterior:
         """The prior as a :class:`Posterior` (no data)."""
-        return Posterior(self.space, self.kernel, None, self.prior_sampler)
+        return Posterior(self.space, self.kernel, None, self.engine)
 
     def posterior(
         self,
@@ -97,9 +111,9 @@ class PreferenceGP:
         visited = visited.astype(np.intp)
         a, b = inverse[: first.size].astype(np.intp), inverse[first.size :].astype(np.intp)
         k_vv = self.kernel.cross(self.space, visited, rows=visited)
-        start = None if init is None else np.asarray(init.mean)[visited]
+        start = None if init is None else init.mean_at(visited)
         fit = fit_laplace(k_vv, visited, a, b, likelihood, start)
-        return Posterior(self.space, self.kernel, fit, self.prior_sampler)
+        return Posterior(self.space, self.kernel, fit, self.engine)
 
 
 def preferences_to_arrays(pairs: Sequence[tuple[int, int]]) -> tuple[IntArray, IntArray]:

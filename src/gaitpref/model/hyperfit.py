@@ -34,7 +34,7 @@ from scipy.optimize import minimize
 
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.laplace import ConvergenceError, PriorNotPositiveDefiniteError
-from gaitpref.model.threads import blas_threads
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import FloatArray, Space
 
 
@@ -158,7 +158,7 @@ def fit_hyperparameters(
         raise ValueError("fitting the band needs a positive starting band")
     if data.size == 0 or not np.any(free):
         return HyperFit(start, start, False, True, "nothing to fit", 0, 0, np.nan, np.nan, 0)
-    with blas_threads(len(space)):
+    with one_blas_thread():
         return _fit(space, start, data, prior, free, max_evaluations)
 
 

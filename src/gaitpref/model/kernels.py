@@ -69,16 +69,28 @@ class SquaredExponential:
         return out
 
     def cross(self, space: Space, cols: IntArray, rows: IntArray | None = None) -> FloatArray:
-        """``K[rows, cols]`` (all rows when ``rows`` is None), jitter where row == col."""
+        """``K[rows, cols]`` (all rows when ``rows`` is None), jitter where row == col.
+
+        Each factor's columns are gathered first (``n_f x m``), then their rows: for all rows
+        the result is a column-wise Khatri-Rao product built by broadcasting, never an
+        ``A x m`` fancy-index gather per feature.
+        """
         cols = np.asarray(cols, dtype=np.intp)
-        mi = space.multi_index
-        row_mi = mi if rows is None else mi[np.asarray(rows, dtype=np.intp)]
-        col_mi = mi[cols]
-        out = np.full((row_mi.shape[0], cols.shape[0]), self.variance)
-        for k, kf in enumerate(self.factors(space)):
-            out *= kf[np.ix_(row_mi[:, k], col_mi[:, k])]
+        m = cols.shape[0]
+        col_mi = np.unravel_index(cols, space.shape)
+        gathered = [kf[:, c] for kf, c in zip(self.factors(space), col_mi, strict=True)]
+        if rows is None:
+            row_idx = np.arange(len(space))
+            out = np.full((1, m), self.variance)
+            for g in gathered:
+                out = (out[:, None, :] * g[None, :, :]).reshape(-1, m)
+        else:
+            row_idx = np.asarray(rows, dtype=np.intp)
+            row_mi = np.unravel_index(row_idx, space.shape)
+            out = np.full((row_idx.shape[0], m), self.variance)
+            for g, r in zip(gathered, row_mi, strict=True):
+                out *= g[r]
         if self.jitter:
-            row_idx = np.arange(len(space)) if rows is None else np.asarray(rows, dtype=np.intp)
             out += self.jitter * (row_idx[:, None] == cols[None, :])
         return out
 

@@ -3,16 +3,19 @@
 From a :class:`~gaitpref.model.laplace.LaplaceMode` on the visited set ``V`` (``K_VV = L L^T``,
 ``I + L^T Lambda L = R R^T``), with ``P = L^-1 K_{V,:}``:
 
-- mean        ``mu = K_{:,V} K_VV^-1 f_hat_V``;
+- mean        ``mu = K_{:,V} alpha``, ``alpha = K_VV^-1 f_hat_V``;
 - covariance  ``Sigma = K - P^T P + (R^-1 P)^T (R^-1 P)``  (GPML eq. 3.24 in the visited subspace:
   the prior's conditional given ``f_V`` plus ``Sigma_VV = L (R R^T)^-1 L^T`` carried through it);
-- samples (pathwise conditioning, Wilson et al. 2020): with a prior sample ``f0 ~ N(0, K)`` and
-  ``w = L^-1 f0_V``,  ``f = mu + f0 + K_{:,V} L^-T (R^-T w - w)``, an exact draw from
-  ``N(mu, Sigma)`` that costs ``O(A m)`` once ``f0`` is drawn.
+  the variance is its diagonal, ``k_aa - |P_a|^2 + |R^-1 P_a|^2``, computed block by block;
+- samples (pathwise conditioning, Matheron's rule; Wilson et al. 2020): with a prior sample
+  ``f0 ~ N(0, K)`` and ``w = L^-1 f0_V``,  ``f = f0 + K_{:,V} (alpha + L^-T (R^-T w - w))``, an
+  exact draw from ``N(mu, Sigma)`` that costs ``O(A m)`` once ``f0`` is drawn.
 
-Prior samples come from the kernel's Kronecker factors (``design/algorithm.md``, "Joint samples"):
-``f0 = s (S_1 (x) ... (x) S_d) z + sqrt(jitter) z'`` with ``S_f S_f^T = K_f`` from the eigen-
-decomposition of each ``n_f x n_f`` factor, applied axis by axis in ``O(A sum n_f)``.
+Everything over all ``A`` actions goes through a
+:class:`~gaitpref.model.cross.CrossCovariance` for ``K_{:,V}`` chosen by the model's engine
+(``engines.py``): one ``A x m`` matrix on small grids, Kronecker tables and blocks of bounded
+size on large ones.  Nothing ``A x A`` is built unless :meth:`Posterior.covariance` is called;
+nothing ``A x m`` is built on the scalable path.
 
 Notation: ``A`` actions, ``m`` visited, ``size`` samples; samples are ``size x A``.
 """
@@ -23,36 +26,20 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import solve_triangular
 
+from gaitpref.model.cross import CrossCovariance
+from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import LaplaceMode
 from gaitpref.space import FloatArray, IntArray, Space
 
+#: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB.
+COVARIANCE_LIMIT_ACTIONS = 11_585
 
-class KroneckerPriorSampler:
-    """Joint samples of ``N(0, K)`` over the whole grid through per-feature square roots."""
-
-    def __init__(self, space: Space, kernel: SquaredExponential) -> None:
-        self.shape = space.shape
-        self.size = len(space)
-        self.scale = float(np.sqrt(kernel.variance))
-        self.jitter_scale = float(np.sqrt(kernel.jitter))
-        self.roots: list[FloatArray] = []
-        for factor in kernel.factors(space):
-            eigval, eigvec = np.linalg.eigh(factor)
-            self.roots.append(eigvec * np.sqrt(np.clip(eigval, 0.0, None)))
-
-    def sample(self, rng: np.random.Generator, size: int) -> FloatArray:
-        """``size x A`` joint prior samples."""
-        z = rng.standard_normal((size, *self.shape))
-        x = z
-        for axis, root in enumerate(self.roots, start=1):
-            x = np.moveaxis(np.tensordot(root, x, axes=([1], [axis])), 0, axis)
-        out = self.scale * x.reshape(size, self.size)
-        if self.jitter_scale:
-            out += self.jitter_scale * rng.standard_normal((size, self.size))
-        return out
+__all__ = ["KroneckerPriorSampler", "Posterior", "random_argmax"]
 
 
 def _readonly(a: FloatArray) -> FloatArray:
@@ -64,47 +51,62 @@ def _readonly(a: FloatArray) -> FloatArray:
 class Posterior:
     """Immutable Laplace posterior ``N(mean, Sigma)`` over every action of ``space``.
 
-    ``fit`` is None for the prior (no data).  ``mean`` and ``variance`` are computed on first use
-    and cached; nothing ``A x A`` is built unless :meth:`covariance` is called.
+    ``fit`` is None for the prior (no data).  ``engine`` decides how ``A``-sized work is done
+    (:attr:`sampler` names it); ``mean`` and ``variance`` are computed on first use and cached.
     """
 
     space: Space
     kernel: SquaredExponential
     fit: LaplaceMode | None
-    prior_sampler: KroneckerPriorSampler
+    engine: GridEngine
 
     @property
     def visited(self) -> IntArray:
         return self.fit.visited if self.fit is not None else np.zeros(0, dtype=np.intp)
 
-    @cached_property
-    def cross(self) -> FloatArray:
-        """``K_{:,V}``, ``A x m``."""
-        return _readonly(self.kernel.cross(self.space, self.visited))
+    @property
+    def sampler(self) -> str:
+        """The path in use: ``"dense"`` or ``"scalable"``."""
+        return self.engine.name
 
     @cached_property
-    def _projected(self) -> tuple[FloatArray, FloatArray]:
-        """``P = L^-1 K_{V,:}`` and ``R^-1 P`` (both ``m x A``)."""
+    def cross(self) -> CrossCovariance:
+        """``K_{:,V}`` in the engine's representation."""
+        return self.engine.cross(self.visited)
+
+    @cached_property
+    def _alpha(self) -> FloatArray:
         assert self.fit is not None
-        P = solve_triangular(self.fit.chol_prior, self.cross.T, lower=True, check_finite=False)
-        Q = solve_triangular(self.fit.chol_hessian, P, lower=True, check_finite=False)
-        return P, Q
+        return self.fit.alpha
 
     @cached_property
     def mean(self) -> FloatArray:
         """Posterior mean utility of every action (length ``A``)."""
+        out = np.zeros((1, len(self.space)))
+        if self.fit is not None:
+            self.cross.add_product(out, self._alpha[:, None])
+        return _readonly(out[0])
+
+    def mean_at(self, actions: ArrayLike) -> FloatArray:
+        """Posterior mean of the given actions only, ``O(len(actions) m)``."""
+        idx = np.asarray(actions, dtype=np.intp)
         if self.fit is None:
-            return _readonly(np.zeros(len(self.space)))
-        return _readonly(self.cross @ self.fit.alpha)
+            return np.zeros(idx.shape[0])
+        out: FloatArray = self.cross.rows(idx) @ self._alpha
+        return out
 
     @cached_property
     def variance(self) -> FloatArray:
-        """Posterior marginal variance of every action (length ``A``)."""
-        prior = self.kernel.diagonal(self.space)
+        """Posterior marginal variance of every action (length ``A``), block by block."""
+        var = self.kernel.diagonal(self.space)
         if self.fit is None:
-            return _readonly(prior)
-        P, Q = self._projected
-        var = prior - np.einsum("ij,ij->j", P, P) + np.einsum("ij,ij->j", Q, Q)
+            return _readonly(var)
+        L, R = self.fit.chol_prior, self.fit.chol_hessian
+        for start, block in self.cross.blocks():
+            P = solve_triangular(L, block.T, lower=True, check_finite=False)
+            Q = solve_triangular(R, P, lower=True, check_finite=False)
+            stop = start + block.shape[0]
+            var[start:stop] += np.einsum("ij,ij->j", Q, Q) - np.einsum("ij,ij->j", P, P)
         return _readonly(np.maximum(var, 0.0))
 
     @property
@@ -112,29 +114,49 @@ class Posterior:
         return np.sqrt(self.variance)
 
     def covariance(self) -> FloatArray:
-        """The dense ``A x A`` posterior covariance (small grids: ``O(A^2 m)`` time)."""
+        """The dense ``A x A`` posterior covariance (small grids: ``O(A^2 m)`` time).
+
+        Raises ValueError above :data:`COVARIANCE_LIMIT_ACTIONS` actions (over 1 GiB).
+        """
+        size = len(self.space)
+        if size > COVARIANCE_LIMIT_ACTIONS:
+            raise ValueError(
+                f"covariance() would build a {size} x {size} matrix "
+                f"({size * size * 8 / 2**30:.1f} GiB); use variance, sample or argmax_samples"
+            )
         K = self.kernel.dense(self.space)
         if self.fit is None:
             return K
-        P, Q = self._projected
-        return K - P.T @ P + Q.T @ Q
-
-    def sample(self, rng: np.random.Generator, size: int = 1) -> FloatArray:
-        """``size x A`` joint samples of the utilities over every action."""
-        if size < 0:
-            raise ValueError(f"size must be >= 0, got {size}")
-        f0 = self.prior_sampler.sample(rng, size)
-        if self.fit is None:
-            return f0
-        L, R = self.fit.chol_prior, self.fit.chol_hessian
-        w = solve_triangular(L, f0[:, self.visited].T, lower=True, check_finite=False)
-        v = solve_triangular(R, w, lower=True, trans="T", check_finite=False) - w
-        beta = solve_triangular(L, v, lower=True, trans="T", check_finite=False)
-        out: FloatArray = f0 + self.mean + (self.cross @ beta).T
+        cross = np.concatenate([block for _, block in self.cross.blocks()])
+        P = solve_triangular(self.fit.chol_prior, cross.T, lower=True, check_finite=False)
+        Q = solve_triangular(self.fit.chol_hessian, P, lower=True, check_finite=False)
+        out: FloatArray = K - P.T @ P + Q.T @ Q
         return out
 
+    def sample(self, rng: np.random.Generator, size: int = 1) -> FloatArray:
+        """``size x A`` joint samples of the utilities over every action.
+
+        Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
+        place, plus the engine's bounded blocks.
+        """
+        if size < 0:
+            raise ValueError(f"size must be >= 0, got {size}")
+        f = self.engine.prior_samples(rng, size)
+        if self.fit is None or size == 0:
+            return f
+        L, R = self.fit.chol_prior, self.fit.chol_hessian
+        w = solve_triangular(L, f[:, self.visited].T, lower=True, check_finite=False)
+        v = solve_triangular(R, w, lower=True, trans="T", check_finite=False) - w
+        coef = solve_triangular(L, v, lower=True, trans="T", check_finite=False)
+        coef += self._alpha[:, None]
+        self.cross.add_product(f, coef)
+        return f
+
     def argmax_samples(self, rng: np.random.Generator, size: int) -> IntArray:
-        """The argmax of each of ``size`` joint samples, exact ties broken uniformly at random."""
+        """The argmax of each of ``size`` joint samples, exact ties broken uniformly at random.
+
+        One pass over the samples as :meth:`sample` leaves them: no second ``size x A`` array.
+        """
         samples = self.sample(rng, size)
         return np.array([random_argmax(s, rng) for s in samples], dtype=np.intp)
 

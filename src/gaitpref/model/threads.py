@@ -5,12 +5,19 @@ with ``m`` a few hundred: multi-threaded BLAS spends longer waking its threads t
 on a loaded 2-core machine it can be several times slower than one thread (measured: 0.12 s vs
 0.31-0.84 s per 150-trial run on the 30 x 30 grid).  :func:`blas_threads` limits BLAS to one
 thread around such work, for grids up to ``SMALL_GRID`` actions, and restores the setting after.
+
+On large grids the same holds: the Laplace fit is ``m x m`` work whatever the grid's size, and an
+ask on the scalable path is mostly memory-bound (normal draws, axis-wise prior transforms, the
+argmax) around ``2 A m`` flops of matrix products.  At 1,048,576 actions and 300 comparisons on a
+loaded 2-core machine an ask + tell took 0.15 s (p95 0.18 s) with one thread and 0.34 s (p95
+1.3 s) with two (``benchmarks/results/large.md``), so the loop uses :func:`one_blas_thread` at
+every size.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from contextlib import contextmanager, nullcontext
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from functools import cache
 
 from threadpoolctl import ThreadpoolController
@@ -31,3 +38,9 @@ def blas_threads(grid_size: int) -> Iterator[None]:
     )
     with limit:
         yield
+
+
+def one_blas_thread() -> AbstractContextManager[object]:
+    """One BLAS thread inside the block, whatever the grid's size; restored after."""
+    limit: AbstractContextManager[object] = _controller().limit(limits=1, user_api="blas")
+    return limit

@@ -60,7 +60,7 @@ def run_simulation(
         query = loop.ask()
         suggestions = []
         if coactive is not None:
-            for a in query.actions:
+            for a in dict.fromkeys(query.actions):  # an action drawn twice is suggested on once
                 s = coactive.suggest(a)
                 if s is not None:
                     suggestions.append(s)

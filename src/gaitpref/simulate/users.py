@@ -73,13 +73,17 @@ class SimulatedUser:
         return "first" if diff > 0 else "second"
 
     def answer(self, query: Query) -> list[Comparison]:
-        """Every executed action against every other member of the query, each pair once."""
+        """Every executed action against every other member of the query, each pair once.
+
+        A pair of grid actions is compared once even when an action appears twice in the query
+        (``n >= 3`` can draw the same argmax twice): the loop accepts each pair once.
+        """
         out: list[Comparison] = []
         seen: set[tuple[int, int]] = set()
-        for r, i in enumerate(query.actions):
-            for c, j in enumerate(query.members):
-                key = (min(r, c), max(r, c))
-                if r == c or key in seen or i == j:
+        for i in query.actions:
+            for j in query.members:
+                key = (min(i, j), max(i, j))
+                if key in seen or i == j:
                     continue
                 seen.add(key)
                 out.append(Comparison(i, j, self.compare(i, j)))

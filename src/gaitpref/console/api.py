@@ -1,0 +1,253 @@
+"""The JSON API under ``/api/``: the same actions as the pages, for scripts and device controllers.
+
+A controller polls ``GET /api/sessions/{id}/query`` (the same pending query until it is answered,
+so a reconnecting controller never skips or repeats a gait), loads the gaits (feature values in
+physical units), acknowledges with ``POST .../query/{query_id}/ack``, and the answer arrives with
+``POST .../answers``.  Errors: 404 unknown session, 409 stale or already-answered query (nothing
+written), 422 malformed body with ``loc`` naming the field (see :mod:`gaitpref.console.errors`).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Body, Path, Query, Request, Response, status
+from fastapi.concurrency import run_in_threadpool
+
+from gaitpref.config import load_config, shipped_configs
+from gaitpref.console import present
+from gaitpref.console.schemas import (
+    MAX_ID,
+    AckOut,
+    AnsweredOut,
+    AnswerIn,
+    ConfigOut,
+    CreatedOut,
+    CreateSessionIn,
+    ErrorOut,
+    EventOut,
+    ExcludeIn,
+    NoteIn,
+    NoteOut,
+    PosteriorOut,
+    QueryOut,
+    RankingIn,
+    SessionItemOut,
+    SessionOut,
+    StatusIn,
+    TrialOut,
+    UndoIn,
+    UndoneOut,
+    ValidationOut,
+)
+from gaitpref.console.service import SessionService
+from gaitpref.session import Session
+
+SessionId = Annotated[int, Path(ge=1, le=MAX_ID, description="the session's id")]
+_ERRORS: dict[int | str, dict[str, Any]] = {
+    404: {"model": ErrorOut, "description": "no such session"},
+    409: {"model": ErrorOut, "description": "refused now: stale query, paused/finished session"},
+}
+
+router = APIRouter(prefix="/api", tags=["api"], responses=_ERRORS)
+
+
+def _service(request: Request) -> SessionService:
+    service: SessionService = request.app.state.service
+    return service
+
+
+@router.get("/configs", response_model=list[ConfigOut])
+def configs() -> list[ConfigOut]:
+    """The shipped experiment configs (their names can be given as ``config``)."""
+    out = []
+    for name in shipped_configs():
+        cfg = load_config(name)
+        out.append(
+            ConfigOut(
+                name=name,
+                grid=list(cfg.space.shape),
+                n=cfg.n,
+                buffer=cfg.buffer,
+                description=cfg.description,
+            )
+        )
+    return out
+
+
+@router.get("/sessions", response_model=list[SessionItemOut])
+def list_sessions(request: Request) -> list[SessionItemOut]:
+    """Every session of the database, by id."""
+    return [present.item_out(r) for r in _service(request).list_sessions()]
+
+
+@router.post("/sessions", response_model=CreatedOut, status_code=status.HTTP_201_CREATED)
+def create_session(request: Request, body: CreateSessionIn) -> CreatedOut:
+    """A new session from a shipped config's name or a TOML config's text."""
+    session = _service(request).create(body.config, body.subject, body.seed)
+    return CreatedOut(id=session.id)
+
+
+@router.get("/sessions/{session_id}", response_model=SessionOut)
+def get_session(request: Request, session_id: SessionId) -> SessionOut:
+    return _service(request).read(session_id, present.session_out)
+
+
+@router.get("/sessions/{session_id}/query", response_model=QueryOut)
+def get_query(request: Request, session_id: SessionId) -> QueryOut:
+    """The pending query: the gait(s) to run now and the buffered trial(s) to compare with.
+
+    Issued (and logged) on the first read; every later read returns the same query until it is
+    answered.  409 while the session is paused or finished, or a blind validation is open.
+    """
+    return _service(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
+
+
+@router.post("/sessions/{session_id}/query/{query_id}/ack", response_model=AckOut)
+def acknowledge(
+    request: Request,
+    session_id: SessionId,
+    query_id: Annotated[int, Path(ge=1, le=MAX_ID)],
+) -> AckOut:
+    """A device controller loaded the query's gaits (logged once as a note); 409 if not pending."""
+    new = _service(request).acknowledge(session_id, query_id)
+    return AckOut(query_id=query_id, acknowledged=new)
+
+
+@router.post("/sessions/{session_id}/answers", response_model=AnsweredOut)
+def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredOut:
+    """Answer the pending query: ``comparisons`` ``[i, j, first|second|none]`` and
+    ``suggestions`` ``[action, feature, move]``, as for ``CoSpar.tell``."""
+    service = _service(request)
+    answered = service.answer(
+        session_id,
+        body.query_id,
+        [list(c) for c in body.comparisons],
+        [list(s) for s in body.suggestions],
+        body.note,
+    )
+    pending = service.get(session_id).pending
+    return AnsweredOut(
+        query_id=answered.query,
+        trials=list(answered.trials),
+        next_query_id=None if pending is None else pending.id,
+    )
+
+
+@router.post("/sessions/{session_id}/undo", response_model=UndoneOut)
+def undo(
+    request: Request, session_id: SessionId, body: Annotated[UndoIn | None, Body()] = None
+) -> UndoneOut:
+    """Take back the last answer; its query is pending again.  With ``query_id``, refused (409)
+    unless that query is the pending one (so two clients cannot undo twice)."""
+    service = _service(request)
+    before = service.get(session_id).pending
+    query = service.undo(session_id, None if body is None else body.query_id)
+    return UndoneOut(
+        pending_query_id=query.id,
+        trials=list(query.trials),
+        discarded_query_id=None if before is None else before.id,
+    )
+
+
+@router.get("/sessions/{session_id}/posterior", response_model=PosteriorOut)
+def posterior(request: Request, session_id: SessionId) -> PosteriorOut:
+    """Posterior mean and standard deviation of every action, in grid order."""
+    return _service(request).read(session_id, present.posterior_out)
+
+
+@router.get("/sessions/{session_id}/trials", response_model=list[TrialOut])
+def trials(request: Request, session_id: SessionId) -> list[TrialOut]:
+    """The trials in force, in order (the chronology)."""
+    return _service(request).read(session_id, present.trials_out)
+
+
+@router.get("/sessions/{session_id}/events", response_model=list[EventOut])
+def events(request: Request, session_id: SessionId) -> list[EventOut]:
+    """The session's whole append-only log."""
+    return [
+        EventOut(seq=e.seq, kind=e.kind, at=e.at.isoformat(), payload=e.payload)
+        for e in _service(request).get(session_id).events()
+    ]
+
+
+@router.post("/sessions/{session_id}/notes", response_model=NoteOut)
+def add_note(request: Request, session_id: SessionId, body: NoteIn) -> NoteOut:
+    return NoteOut(seq=_service(request).note(session_id, body.text))
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/exclude", response_model=list[TrialOut])
+def exclude(
+    request: Request,
+    session_id: SessionId,
+    trial: Annotated[int, Path(ge=1, le=MAX_ID)],
+    body: ExcludeIn,
+) -> list[TrialOut]:
+    """Exclude an answered trial (device fault, stumble...): its answers leave the model."""
+    service = _service(request)
+    service.exclude(session_id, trial, body.reason, body.detail)
+    return service.read(session_id, present.trials_out)
+
+
+@router.post("/sessions/{session_id}/status", response_model=SessionOut)
+def set_status(request: Request, session_id: SessionId, body: StatusIn) -> SessionOut:
+    """Pause, resume (``active``) or finish the session."""
+    service = _service(request)
+    service.set_status(session_id, body.status)
+    return service.read(session_id, present.session_out)
+
+
+@router.post("/sessions/{session_id}/validation", response_model=ValidationOut)
+def start_validation(request: Request, session_id: SessionId) -> ValidationOut:
+    """Open a blind validation round (max/mean/min of the posterior mean in a stored random
+    order), or return the open one."""
+    service = _service(request)
+    plan = service.start_validation(session_id)
+    return service.read(session_id, lambda s: present.plan_out(s, plan))
+
+
+@router.get("/sessions/{session_id}/validation", response_model=list[ValidationOut])
+def validations(request: Request, session_id: SessionId) -> list[ValidationOut]:
+    """The answered rounds (unblinded), then the open one, if any."""
+
+    def rounds(session: Session) -> list[ValidationOut]:
+        out = [present.result_out(session, r) for r in session.validations()]
+        if session.validation_plan is not None:
+            out.append(present.plan_out(session, session.validation_plan))
+        return out
+
+    return _service(request).read(session_id, rounds)
+
+
+@router.post("/sessions/{session_id}/validation/{round_}/ranking", response_model=ValidationOut)
+def rank(
+    request: Request,
+    session_id: SessionId,
+    round_: Annotated[int, Path(ge=1, le=MAX_ID)],
+    body: RankingIn,
+) -> ValidationOut:
+    """The subject's blind ranking (labels, best first); returns the round unblinded."""
+    service = _service(request)
+    result = service.rank(session_id, round_, body.ranking)
+    return service.read(session_id, lambda s: present.result_out(s, result))
+
+
+@router.get(
+    "/sessions/{session_id}/export",
+    response_class=Response,
+    responses={200: {"content": {"application/zip": {}}, "description": "the export folder"}},
+)
+async def export(
+    request: Request,
+    session_id: SessionId,
+    format: Annotated[Literal["csv", "json"], Query()] = "csv",
+) -> Response:
+    """The session exported (``gaitpref session export``) as a zip of its folder."""
+    data = await run_in_threadpool(_service(request).export_zip, session_id, format)
+    return Response(
+        data,
+        media_type="application/zip",
+        headers={
+            "content-disposition": f'attachment; filename="session-{session_id}-{format}.zip"'
+        },
+    )

@@ -1,0 +1,97 @@
+"""The console's FastAPI application: pages, the JSON API, static files, access control.
+
+    app = create_app("sqlite:///lab.db")                  # loopback use, no token
+    app = create_app("sqlite:///lab.db", token="s3cret")  # every request must carry the token
+
+``gaitpref console`` serves it with uvicorn (``gaitpref.console.cli``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator, Iterable
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import pydantic
+from fastapi import FastAPI, Request
+from fastapi.exception_handlers import request_validation_exception_handler
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse, Response
+from fastapi.staticfiles import StaticFiles
+
+from gaitpref import __version__
+from gaitpref.console import api, pages
+from gaitpref.console.errors import HANDLED, refusal
+from gaitpref.console.figures import FigureCache
+from gaitpref.console.security import AccessMiddleware, Csrf
+from gaitpref.console.service import SessionService
+from gaitpref.console.templating import page_error
+from gaitpref.storage import Storage
+
+HERE = Path(__file__).parent
+
+
+def create_app(
+    db: str | Storage | None = None,
+    token: str | None = None,
+    *,
+    csrf_secret: bytes | None = None,
+    allowed_hosts: Iterable[str] | None = None,
+    library_dir: str | Path | None = None,
+) -> FastAPI:
+    """The console over database ``db`` (a URL, a storage, or None for the default).
+
+    ``token``: when given, every request must carry it (see :mod:`gaitpref.console.security`).
+    ``allowed_hosts``: serve only these ``Host`` names (None: any).  ``library_dir``: where
+    uploaded gait libraries are kept and configs may name them (default: ``gait-libraries/``
+    beside a SQLite database, else in the working folder).
+    """
+    service = SessionService(db, library_dir)
+
+    @asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        yield
+        service.close()
+
+    app = FastAPI(
+        title="gaitpref operator console",
+        version=__version__,
+        description=(
+            "Run a CoSpar gait-preference session at the bench. The JSON API under /api/ does "
+            "what the pages do; 409 means the query is stale or already answered (nothing was "
+            "written), 422 names the malformed field."
+        ),
+        lifespan=lifespan,
+    )
+    app.state.service = service
+    app.state.csrf = Csrf(csrf_secret)
+    app.state.figures = FigureCache()
+    app.state.token_required = token is not None
+    app.include_router(api.router)
+    app.include_router(pages.router)
+    app.mount("/static", StaticFiles(directory=HERE / "static"), name="static")
+    app.add_middleware(AccessMiddleware, token=token, allowed_hosts=allowed_hosts)
+
+    async def handle(request: Request, exc: Exception) -> Response:
+        if isinstance(exc, pydantic.ValidationError):
+            raise exc  # a bug in the console's own models, not the client's input
+        ref = refusal(exc)
+        if request.url.path.startswith("/api/"):
+            return JSONResponse(ref.api_body(), status_code=ref.status)
+        return page_error(request, ref)
+
+    for kind in HANDLED:
+        app.add_exception_handler(kind, handle)
+
+    async def invalid(request: Request, exc: Exception) -> Response:
+        assert isinstance(exc, RequestValidationError)
+        if request.url.path.startswith("/api/"):
+            return await request_validation_exception_handler(request, exc)
+        errors = exc.errors()
+        field = ".".join(str(p) for p in errors[0]["loc"][1:]) if errors else ""
+        return page_error(
+            request, refusal(ValueError(f"{field}: {errors[0]['msg']}" if errors else "bad input"))
+        )
+
+    app.add_exception_handler(RequestValidationError, invalid)
+    return app

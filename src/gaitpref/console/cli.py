@@ -1,0 +1,78 @@
+"""``gaitpref console``: serve the operator console with uvicorn.
+
+On the loopback interface (the default, 127.0.0.1) no token is needed unless one is given.
+Listening anywhere else requires one: ``--token``, else ``$GAITPREF_TOKEN``, else a random token
+is generated and printed with the URL to open.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from gaitpref.console.security import TOKEN_ENV, new_token
+
+console_app = typer.Typer(
+    help="Serve the operator console (a web page) for running sessions at the bench.",
+    invoke_without_command=True,
+    add_completion=False,
+)
+LOOPBACK = ("127.0.0.1", "localhost", "::1")
+_out = Console(stderr=True)
+
+
+def choose_token(host: str, token: str | None) -> str | None:
+    """The token the console will require (None: none, only on the loopback interface)."""
+    given = token or os.environ.get(TOKEN_ENV) or None
+    if given is not None:
+        return given
+    return None if host in LOOPBACK else new_token()
+
+
+def console_url(host: str, port: int, token: str | None) -> str:
+    shown = f"[{host}]" if ":" in host else host
+    if host in ("0.0.0.0", "::"):
+        shown = "<this machine's address>"
+    return f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
+
+
+@console_app.callback()
+def serve(
+    db: Annotated[
+        str | None, typer.Option("--db", help="Database URL (default: $GAITPREF_DB or SQLite).")
+    ] = None,
+    host: Annotated[str, typer.Option(help="Interface to listen on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(min=1, max=65535, help="Port to listen on.")] = 8000,
+    token: Annotated[
+        str | None,
+        typer.Option(help=f"Access token (default: ${TOKEN_ENV}; generated off loopback)."),
+    ] = None,
+    libraries: Annotated[
+        Path | None,
+        typer.Option(
+            help="Folder of gait libraries (uploads are kept there; default: gait-libraries/ "
+            "beside a SQLite database)."
+        ),
+    ] = None,
+) -> None:
+    """Serve the operator console (FastAPI + uvicorn) over the session database."""
+    import uvicorn
+
+    from gaitpref.console.app import create_app
+    from gaitpref.storage import resolve_url
+
+    use_token = choose_token(host, token)
+    hosts = None if host not in LOOPBACK else list(LOOPBACK)
+    app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
+    _out.print(f"[bold]gaitpref console[/] on {resolve_url(db)}", soft_wrap=True)
+    _out.print(f"open [bold]{console_url(host, port, use_token)}[/]", soft_wrap=True)
+    if use_token is not None:
+        _out.print(
+            "every request needs this token (Authorization: Bearer <token> for the API)",
+            soft_wrap=True,
+        )
+    uvicorn.run(app, host=host, port=port, log_level="warning")

@@ -1,0 +1,159 @@
+"""Configs and gait libraries as a client gives them to the console, read without trusting paths.
+
+- a **shipped config** by name (``exo-1d-step-length``);
+- **TOML text** (API body or uploaded file).  A ``[gaits].library`` it names must be a relative
+  path inside the console's library folder (``--libraries``, default ``gait-libraries/`` beside a
+  SQLite database): the console never opens a file a client names anywhere else;
+- an **uploaded gait library** (JSON, ``gaitpref gaits build``) is checked by the gait library's
+  own loader, then kept in ``<libraries>/<sha256 prefix>/<file name>`` so that the session finds
+  it again when it is reopened.  A config that names a library must name the uploaded file; a
+  config with its own ``[space]`` must have exactly the library's grid (the library then only
+  names the gait of every action).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import tempfile
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
+from gaitpref.console.errors import InputError
+from gaitpref.gaits import GaitLibrary, GaitLibraryError
+
+#: grids larger than this are refused at creation (the console draws and sends every action)
+MAX_ACTIONS = 250_000
+MAX_LIBRARY_BYTES = 64_000_000
+
+
+def default_library_dir(url: str) -> Path:
+    """``gait-libraries/`` beside a SQLite database file, else in the working folder."""
+    if url.startswith("sqlite:///") and url != "sqlite:///:memory:":
+        return Path(url[len("sqlite:///") :]).resolve().parent / "gait-libraries"
+    return Path.cwd() / "gait-libraries"
+
+
+def _safe_name(name: str | None, fallback: str) -> str:
+    base = Path(name or "").name
+    clean = re.sub(r"[^A-Za-z0-9._-]", "_", base)[:100].lstrip(".")
+    return clean or fallback
+
+
+@dataclass(frozen=True)
+class Chosen:
+    """A config ready for ``Session.create``, with the library that names its gaits (if any)."""
+
+    config: ExperimentConfig
+    library: GaitLibrary | None
+
+
+def store_library(folder: Path, data: bytes, filename: str | None) -> tuple[Path, GaitLibrary]:
+    """Check an uploaded gait library and keep it under ``folder`` (content-addressed)."""
+    if len(data) > MAX_LIBRARY_BYTES:
+        raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
+    name = _safe_name(filename, "gaits.json")
+    with tempfile.TemporaryDirectory() as tmp:
+        probe = Path(tmp) / name
+        probe.write_bytes(data)
+        try:
+            GaitLibrary.load(probe)
+        except (GaitLibraryError, ValueError, OSError) as exc:
+            raise InputError("library_file", f"not a usable gait library: {exc}") from None
+    target = folder / hashlib.sha256(data).hexdigest()[:16] / name
+    if not target.exists():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        part = target.with_suffix(target.suffix + ".part")
+        part.write_bytes(data)
+        part.replace(target)
+    return target, GaitLibrary.load(target)
+
+
+def _named_library(text: str) -> str | None:
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        return None  # parse_config reports it
+    gaits = raw.get("gaits")
+    if isinstance(gaits, dict) and isinstance(gaits.get("library"), str):
+        return str(gaits["library"])
+    return None
+
+
+def _inside(base: Path, name: str) -> Path:
+    given = Path(name)
+    where = (base / given).resolve()
+    if given.is_absolute() or not where.is_relative_to(base.resolve()):
+        raise InputError(
+            "config",
+            f"[gaits].library {name!r}: a config given to the console names a library inside its "
+            f"library folder ({base}) by a relative path, or comes with the library uploaded",
+        )
+    return where
+
+
+def _same_grid(config: ExperimentConfig, library: GaitLibrary) -> None:
+    mine, theirs = config.space, library.space()
+    same = mine.names == theirs.names and mine.shape == theirs.shape
+    if same:
+        same = all(
+            np.allclose(a.array, b.array, rtol=1e-9, atol=1e-12)
+            for a, b in zip(mine.features, theirs.features, strict=True)
+        )
+    if not same:
+        raise InputError(
+            "library_file",
+            f"the library's grid ({' x '.join(map(str, theirs.shape))} over "
+            f"{', '.join(theirs.names)}) is not the config's ({' x '.join(map(str, mine.shape))} "
+            f"over {', '.join(mine.names)})",
+        )
+
+
+def choose_config(
+    source: str,
+    *,
+    library_dir: Path,
+    name: str | None = None,
+    library: tuple[bytes, str | None] | None = None,
+) -> Chosen:
+    """The config (and library) for a new session; :class:`InputError` names what is wrong."""
+    uploaded: tuple[Path, GaitLibrary] | None = None
+    if library is not None:
+        uploaded = store_library(library_dir, *library)
+    if source in shipped_configs():
+        cfg = load_config(source)
+    else:
+        if "\n" not in source and "=" not in source:
+            raise InputError(
+                "config",
+                f"{source[:80]!r} is neither a shipped config ({', '.join(shipped_configs())}) "
+                "nor TOML config text",
+            )
+        stem = _safe_name(name, "uploaded")
+        named = _named_library(source)
+        base: Path | None = None
+        if named is not None and uploaded is not None:
+            if Path(named).name != uploaded[0].name or len(Path(named).parts) != 1:
+                raise InputError(
+                    "config",
+                    f"[gaits].library names {named!r}, but the uploaded library is "
+                    f"{uploaded[0].name!r}: name the uploaded file",
+                )
+            base = uploaded[0].parent
+        elif named is not None:
+            _inside(library_dir, named)
+            base = library_dir
+        cfg = parse_config(source, default_name=stem, base_dir=base)
+    if len(cfg.space) > MAX_ACTIONS:
+        raise InputError(
+            "config",
+            f"the grid has {len(cfg.space)} actions; the console serves at most {MAX_ACTIONS}",
+        )
+    if uploaded is not None and cfg.library is None:
+        _same_grid(cfg, uploaded[1])
+        return Chosen(cfg, uploaded[1])
+    return Chosen(cfg, None)

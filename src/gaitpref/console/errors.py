@@ -1,0 +1,118 @@
+"""The one place where errors of the session API become HTTP statuses.
+
+==========================================  ======  =========================================
+error                                       status  meaning
+==========================================  ======  =========================================
+``CsrfError`` (console)                     403     a form without a valid CSRF token
+``SessionNotFoundError``                    404     no such session
+``QueryError``                              409     stale, unknown or already-answered query
+``SessionStateError``                       409     paused/finished session, nothing to undo...
+``ConflictError``                           409     another writer changed the session first
+``SessionFinishedError``                    409     the session takes no more events
+``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
+``InputError`` (console) / ``ValueError``   422     any other refused input
+``ConvergenceError``                        422     the model could not take this answer
+``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is
+``ReplayError``                             500     the stored log does not replay: see message
+==========================================  ======  =========================================
+
+In every case the session API wrote nothing (it checks before it writes), so a refused request
+leaves the database as it was.  API requests get JSON (``{"detail": ...}``; 422 in FastAPI's
+shape, with ``loc`` naming the field), pages get an HTML page that says what happened.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from gaitpref.config import ConfigError
+from gaitpref.cospar import QueryError
+from gaitpref.feedback import FeedbackError
+from gaitpref.model.laplace import ConvergenceError, PriorNotPositiveDefiniteError
+from gaitpref.session_log import ReplayError, SessionStateError
+from gaitpref.storage import (
+    ConflictError,
+    SchemaError,
+    SessionFinishedError,
+    SessionNotFoundError,
+    StorageConnectError,
+    StorageError,
+)
+
+
+class InputError(ValueError):
+    """A request field the console refuses before calling the session API."""
+
+    def __init__(self, field: str, message: str) -> None:
+        super().__init__(message)
+        self.field = field
+
+
+class CsrfError(PermissionError):
+    """A form without this console's CSRF token."""
+
+
+#: checked in order: the first matching type gives the status
+STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
+    (CsrfError, 403, "refused form"),
+    (SessionNotFoundError, 404, "not found"),
+    (QueryError, 409, "stale query"),
+    (SessionStateError, 409, "not now"),
+    (ConflictError, 409, "changed elsewhere"),
+    (SessionFinishedError, 409, "finished"),
+    (SchemaError, 503, "database schema"),
+    (StorageConnectError, 503, "database unreachable"),
+    (FeedbackError, 422, "refused answer"),
+    (ConfigError, 422, "refused config"),
+    (PriorNotPositiveDefiniteError, 422, "refused config"),
+    (InputError, 422, "refused input"),
+    (ConvergenceError, 422, "model did not converge"),
+    (StorageError, 422, "refused by storage"),
+    (ValueError, 422, "refused input"),
+    (ReplayError, 500, "log does not replay"),
+)
+
+HANDLED: tuple[type[Exception], ...] = tuple(t for t, _, _ in STATUS_OF)
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """An error as the console reports it."""
+
+    status: int
+    title: str
+    detail: str
+    field: str | None
+
+    def api_body(self) -> dict[str, object]:
+        if self.status == 422:
+            loc: list[str] = ["body"] + ([self.field] if self.field else [])
+            return {"detail": [{"loc": loc, "msg": self.detail, "type": "value_error"}]}
+        return {"detail": self.detail}
+
+
+def _field_of(exc: BaseException) -> str | None:
+    if isinstance(exc, InputError):
+        return exc.field
+    if isinstance(exc, FeedbackError):
+        text = str(exc)
+        if text.startswith("comparison"):
+            return "comparisons"
+        if text.startswith("suggestion"):
+            return "suggestions"
+    if isinstance(exc, ConfigError | PriorNotPositiveDefiniteError):
+        return "config"
+    if isinstance(exc, QueryError):
+        return "query_id"
+    return None
+
+
+def refusal(exc: BaseException) -> Refusal:
+    """How ``exc`` is reported: status, a short title and the full message."""
+    for kind, status, title in STATUS_OF:
+        if isinstance(exc, kind):
+            detail = str(exc) or title
+            if status == 409 and isinstance(exc, QueryError | ConflictError):
+                detail += "; nothing was written"
+            return Refusal(status, title, detail, _field_of(exc))
+    raise TypeError(f"no status is defined for {type(exc).__name__}")  # pragma: no cover

@@ -1,0 +1,367 @@
+"""The console's HTML pages: sessions, the trial page, blind validation.
+
+Every form posts with the page's CSRF token; answers and undos carry the query id they were
+decided on and go through a confirm step (in the page with JavaScript, as a server-rendered page
+without), and a successful post redirects (303) so that reloading never posts twice.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Query, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from starlette.datastructures import UploadFile
+
+from gaitpref.config import ExperimentConfig, load_config, shipped_configs
+from gaitpref.console import figures, views
+from gaitpref.console.configs import MAX_LIBRARY_BYTES
+from gaitpref.console.errors import CsrfError, InputError
+from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
+from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
+from gaitpref.console.service import (
+    ExportFormat,
+    SessionService,
+    pending_of,
+    session_query_error,
+)
+from gaitpref.console.templating import render
+from gaitpref.console.trial_page import trial_context
+from gaitpref.session import Session
+from gaitpref.session_log import REASONS
+
+router = APIRouter(include_in_schema=False)
+SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
+MAX_UPLOAD = 200_000  # bytes of an uploaded config
+
+
+def _service(request: Request) -> SessionService:
+    service: SessionService = request.app.state.service
+    return service
+
+
+def _see(url: str) -> RedirectResponse:
+    return RedirectResponse(url, status_code=303)
+
+
+async def _form(request: Request) -> tuple[dict[str, str], dict[str, UploadFile]]:
+    """The posted form (each field once), after checking its CSRF token."""
+    form = await request.form()
+    fields: dict[str, str] = {}
+    files: dict[str, UploadFile] = {}
+    for key, value in form.multi_items():
+        if key in fields or key in files:
+            raise InputError(key, f"the field {key!r} was given twice")
+        if isinstance(value, UploadFile):
+            files[key] = value
+        else:
+            fields[key] = value
+    csrf: Csrf = request.app.state.csrf
+    if not csrf.check(request.cookies.get(CSRF_COOKIE), fields.get(CSRF_FIELD)):
+        raise CsrfError(
+            "this form has no valid CSRF token (it was not made by this console, or the console "
+            "restarted since the page was loaded): reload the page and try again"
+        )
+    return fields, files
+
+
+# -- sessions ----------------------------------------------------------------------------------
+@router.get("/", response_class=HTMLResponse)
+async def sessions_page(request: Request) -> Response:
+    service = _service(request)
+    records = await run_in_threadpool(service.list_sessions)
+    subjects = await run_in_threadpool(service.list_subjects)
+    counts = {s.code: sum(1 for r in records if r.subject == s.code) for s in subjects}
+    configs = _shipped()
+    return render(
+        request,
+        "sessions.html",
+        sessions=list(reversed(records)),
+        subjects=subjects,
+        counts=counts,
+        configs=configs,
+        db_url=service.url,
+    )
+
+
+@functools.cache
+def _shipped() -> list[tuple[str, ExperimentConfig]]:
+    return [(name, load_config(name)) for name in shipped_configs()]
+
+
+async def _upload_text(upload: UploadFile | None, field: str) -> str | None:
+    if upload is None or not upload.filename:
+        return None
+    data = await upload.read(MAX_UPLOAD + 1)
+    if len(data) > MAX_UPLOAD:
+        raise InputError(field, f"the file is larger than {MAX_UPLOAD // 1000} kB")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InputError(field, "the file is not UTF-8 text") from None
+
+
+@router.post("/sessions")
+async def create_session(request: Request) -> Response:
+    fields, files = await _form(request)
+    subject = fields.get("subject", "").strip()
+    if not re.fullmatch(SUBJECT_PATTERN, subject):
+        raise InputError(
+            "subject",
+            f"{subject!r} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
+            "(a pseudonymous code such as S01, never a name)",
+        )
+    seed_text = fields.get("seed", "").strip()
+    seed = views.read_int(fields, "seed", minimum=0) if seed_text else None
+    uploaded = await _upload_text(files.get("config_file"), "config_file")
+    upload_name = files["config_file"].filename if uploaded is not None else None
+    source = uploaded if uploaded is not None else fields.get("config", "")
+    if not source:
+        raise InputError("config", "choose a shipped config or upload a TOML config")
+    library = None
+    lib_file = files.get("library_file")
+    if lib_file is not None and lib_file.filename:
+        data = await lib_file.read(MAX_LIBRARY_BYTES + 1)
+        if len(data) > MAX_LIBRARY_BYTES:
+            raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
+        library = (data, lib_file.filename)
+    name = upload_name.rsplit(".", 1)[0] if upload_name else None
+    session = await run_in_threadpool(
+        lambda: _service(request).create(source, subject, seed, config_name=name, library=library)
+    )
+    return _see(f"/sessions/{session.id}")
+
+
+@router.post("/sessions/{session_id}/status")
+async def set_status(request: Request, session_id: SessionId) -> Response:
+    fields, _ = await _form(request)
+    status = fields.get("status", "")
+    if status not in ("active", "paused", "finished"):
+        raise InputError("status", f"must be active, paused or finished; got {status!r}")
+    await run_in_threadpool(_service(request).set_status, session_id, status)
+    back = fields.get("back", "")
+    return _see(back if back in ("/", f"/sessions/{session_id}") else f"/sessions/{session_id}")
+
+
+# -- the trial page ----------------------------------------------------------------------------
+@router.get("/sessions/{session_id}", response_class=HTMLResponse)
+async def trial_page(
+    request: Request,
+    session_id: SessionId,
+    answered: Annotated[str | None, Query(max_length=200)] = None,
+    undone: Annotated[str | None, Query(max_length=200)] = None,
+) -> Response:
+    context = await run_in_threadpool(
+        _service(request).read, session_id, lambda s: trial_context(s, pending_of(s))
+    )
+    flash = ""
+    if answered:
+        flash = f"Saved: trial {answered}."
+    elif undone:
+        flash = f"Undone: the answer to trial {undone} was taken back; run it again."
+    return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
+
+
+@router.post("/sessions/{session_id}/answer")
+async def post_answer(request: Request, session_id: SessionId) -> Response:
+    fields, _ = await _form(request)
+    query_id = views.read_int(fields, "query_id")
+    comparisons, suggestions = views.read_answer_form(fields)
+    note = fields.get("note", "").strip()
+    service = _service(request)
+    if fields.get("confirmed") != "1":
+
+        def summary(session: Session) -> list[str]:
+            pending = session.pending
+            if pending is None or pending.id != query_id:
+                raise session_query_error(session, query_id)
+            space = session.config.space
+            return views.answer_summary(space, pending, comparisons, suggestions, session.gait_id)
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return render(
+            request,
+            "confirm.html",
+            session_id=session_id,
+            what="answer",
+            lines=lines,
+            fields=fields,
+            note=note,
+            action=f"/sessions/{session_id}/answer",
+        )
+    answered = await run_in_threadpool(
+        service.answer, session_id, query_id, comparisons, suggestions, note
+    )
+    trials = ",".join(map(str, answered.trials))
+    return _see(f"/sessions/{session_id}?answered={trials}")
+
+
+@router.post("/sessions/{session_id}/undo")
+async def post_undo(request: Request, session_id: SessionId) -> Response:
+    fields, _ = await _form(request)
+    query_id = views.read_int(fields, "query_id")
+    service = _service(request)
+    if fields.get("confirmed") != "1":
+
+        def summary(session: Session) -> list[str]:
+            trials = session.trials()
+            if not trials:
+                raise InputError("query_id", "nothing to undo: no trial has been answered")
+            last = trials[-1]
+            return [
+                f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
+            ]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return render(
+            request,
+            "confirm.html",
+            session_id=session_id,
+            what="undo",
+            lines=lines,
+            fields=fields,
+            note="",
+            action=f"/sessions/{session_id}/undo",
+        )
+    query = await run_in_threadpool(service.undo, session_id, query_id)
+    return _see(f"/sessions/{session_id}?undone={','.join(map(str, query.trials))}")
+
+
+@router.post("/sessions/{session_id}/note")
+async def post_note(request: Request, session_id: SessionId) -> Response:
+    fields, _ = await _form(request)
+    text = fields.get("text", "").strip()
+    if not text:
+        raise InputError("text", "the note is empty")
+    if len(text) > 2000:
+        raise InputError("text", "a note has at most 2000 characters")
+    await run_in_threadpool(_service(request).note, session_id, text)
+    return _see(f"/sessions/{session_id}")
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/exclude")
+async def post_exclude(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    fields, _ = await _form(request)
+    reason = fields.get("reason", "")
+    if reason not in REASONS:
+        raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {reason!r}")
+    detail = fields.get("detail", "").strip()[:500]
+    await run_in_threadpool(_service(request).exclude, session_id, trial, reason, detail)
+    return _see(f"/sessions/{session_id}")
+
+
+@router.get("/sessions/{session_id}/posterior.png")
+async def posterior_png(request: Request, session_id: SessionId) -> Response:
+    """The posterior figure (1-D: mean +- 2 sd with the trials; 2-D: heat map with the trials)."""
+    return await _figure(request, session_id, "posterior")
+
+
+@router.get("/sessions/{session_id}/figure.png")
+async def session_png(request: Request, session_id: SessionId) -> Response:
+    """The paper-style session figure (posterior, chronology, blind ranking)."""
+    return await _figure(request, session_id, "session")
+
+
+async def _figure(request: Request, session_id: int, kind: str) -> Response:
+    service = _service(request)
+    session = await run_in_threadpool(service.get, session_id)
+    cache: figures.FigureCache = request.app.state.figures
+    key = (session_id, session.last_seq, kind)
+    png = cache.get(key)
+    if png is None:
+        if kind == "session":
+            png = await run_in_threadpool(figures.session_png, session)
+        else:
+            trials = [t.action for t in session.trials()]
+            png = await run_in_threadpool(
+                figures.posterior_png,
+                session.posterior(),
+                trials,
+                title=f"session {session_id}: posterior after {len(trials)} trials",
+            )
+        cache.put(key, png)
+    return Response(png, media_type="image/png", headers={"cache-control": "no-store"})
+
+
+# -- validation --------------------------------------------------------------------------------
+@router.get("/sessions/{session_id}/validation", response_class=HTMLResponse)
+async def validation_page(request: Request, session_id: SessionId) -> Response:
+    return await run_in_threadpool(
+        _service(request).read, session_id, lambda s: _validation_page(request, s)
+    )
+
+
+def _validation_page(request: Request, session: Session) -> Response:
+    space = session.config.space
+    plan = session.validation_plan
+    gaits = (
+        []
+        if plan is None
+        else [
+            (g.label, views.gait_view(space, g.action, gait_id=session.gait_id(g.action)))
+            for g in plan.gaits
+        ]
+    )
+    results = [
+        (
+            r,
+            {
+                lbl: views.gait_view(space, a, gait_id=session.gait_id(a))
+                for lbl, a in r.actions.items()
+            },
+        )
+        for r in session.validations()
+    ]
+    return render(
+        request,
+        "validation.html",
+        session=session,
+        plan=plan,
+        gaits=gaits,
+        results=list(reversed(results)),
+        trials=len(session.trials()),
+    )
+
+
+@router.post("/sessions/{session_id}/validation")
+async def start_validation(request: Request, session_id: SessionId) -> Response:
+    await _form(request)
+    await run_in_threadpool(_service(request).start_validation, session_id)
+    return _see(f"/sessions/{session_id}/validation")
+
+
+@router.post("/sessions/{session_id}/validation/{round_}")
+async def post_ranking(
+    request: Request, session_id: SessionId, round_: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    fields, _ = await _form(request)
+    ranking = [fields.get(f"rank{k}", "") for k in (1, 2, 3)]
+    for k, label in enumerate(ranking, start=1):
+        if not label:
+            raise InputError(f"rank{k}", "choose a gait for every place")
+    await run_in_threadpool(_service(request).rank, session_id, round_, ranking)
+    return _see(f"/sessions/{session_id}/validation")
+
+
+# -- export ------------------------------------------------------------------------------------
+@router.get("/sessions/{session_id}/export.zip")
+async def export_zip(
+    request: Request,
+    session_id: SessionId,
+    format: Annotated[str, Query(pattern="^(csv|json)$")] = "csv",
+) -> Response:
+    fmt: ExportFormat = "json" if format == "json" else "csv"
+    data = await run_in_threadpool(_service(request).export_zip, session_id, fmt)
+    return Response(
+        data,
+        media_type="application/zip",
+        headers={"content-disposition": f'attachment; filename="session-{session_id}-{fmt}.zip"'},
+    )
+
+
+__all__ = ["router"]

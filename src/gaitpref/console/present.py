@@ -1,0 +1,147 @@
+"""Session objects as the JSON API shows them (:mod:`gaitpref.console.schemas`)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitpref.console import views
+from gaitpref.console.schemas import (
+    FeatureOut,
+    GaitOut,
+    PosteriorOut,
+    QueryOut,
+    SessionItemOut,
+    SessionOut,
+    TrialOut,
+    ValidationGaitOut,
+    ValidationOut,
+)
+from gaitpref.session import Session, SessionQuery
+from gaitpref.storage import SessionRecord
+from gaitpref.validation import ValidationPlan, ValidationResult
+
+
+def gait_out(session: Session, action: int, trial: int | None = None) -> GaitOut:
+    space = session.config.space
+    values = space.values_of(action)
+    return GaitOut(
+        index=int(action),
+        gait_id=session.gait_id(action) or f"G{int(action)}",
+        values={k: float(v) for k, v in values.items()},
+        units={f.name: f.unit for f in space.features},
+        trial=trial,
+    )
+
+
+def features_out(session: Session) -> list[FeatureOut]:
+    return [
+        FeatureOut(
+            name=f.name,
+            unit=f.unit,
+            values=list(f.values),
+            words=f.words,
+            moves=views.move_words(f),
+        )
+        for f in session.config.space.features
+    ]
+
+
+def query_out(session: Session, query: SessionQuery) -> QueryOut:
+    actions = [gait_out(session, a, t) for a, t in zip(query.actions, query.trials, strict=True)]
+    buffer = [
+        gait_out(session, a, t) for a, t in zip(query.buffer, query.buffer_trials, strict=True)
+    ]
+    groups = views.comparison_groups(
+        [views.gait_view(session.config.space, g.index, trial=g.trial) for g in actions],
+        [views.gait_view(session.config.space, g.index, trial=g.trial) for g in buffer],
+    )
+    return QueryOut(
+        session_id=session.id,
+        query_id=query.id,
+        actions=actions,
+        buffer=buffer,
+        trials_done=len(session.trials()),
+        comparisons=[(g.first.index, g.second.index) for g in groups],
+    )
+
+
+def item_out(record: SessionRecord) -> SessionItemOut:
+    return SessionItemOut(
+        id=record.id,
+        subject=record.subject,
+        config=record.config_name,
+        status=record.status,
+        events=record.last_seq,
+        created_at=record.created_at.isoformat(),
+        updated_at=record.updated_at.isoformat(),
+    )
+
+
+def session_out(session: Session) -> SessionOut:
+    record = session.record
+    pending = session.pending
+    return SessionOut(
+        id=session.id,
+        subject=session.subject,
+        config=record.config_name,
+        status=session.status,
+        events=session.last_seq,
+        created_at=record.created_at.isoformat(),
+        seed=session.seed,
+        trials=len(session.trials()),
+        pending_query_id=None if pending is None else pending.id,
+        validation_open=session.validation_plan is not None,
+        features=features_out(session),
+    )
+
+
+def posterior_out(session: Session) -> PosteriorOut:
+    post = session.posterior()
+    mean = np.asarray(post.mean, dtype=float)
+    sd = np.asarray(post.std, dtype=float)
+    space = session.config.space
+    return PosteriorOut(
+        session_id=session.id,
+        features=list(space.names),
+        shape=list(space.shape),
+        mean=mean.tolist(),
+        sd=sd.tolist(),
+        argmax=gait_out(session, int(np.argmax(mean))),
+        trials=[t.action for t in session.trials()],
+    )
+
+
+def trials_out(session: Session) -> list[TrialOut]:
+    return [
+        TrialOut(
+            trial=t.number,
+            query_id=t.query,
+            gait=gait_out(session, t.action, t.number),
+            excluded=t.excluded,
+        )
+        for t in session.trials()
+    ]
+
+
+def plan_out(session: Session, plan: ValidationPlan) -> ValidationOut:
+    return ValidationOut(
+        round=plan.round,
+        gaits=[
+            ValidationGaitOut(label=g.label, gait=gait_out(session, g.action)) for g in plan.gaits
+        ],
+    )
+
+
+def result_out(session: Session, result: ValidationResult) -> ValidationOut:
+    return ValidationOut(
+        round=result.round,
+        gaits=[
+            ValidationGaitOut(label=label, gait=gait_out(session, result.actions[label]))
+            for label in sorted(result.actions)
+        ],
+        ranking=list(result.ranking),
+        model_ranking=list(result.model_ranking),
+        roles=dict(result.roles),
+        agrees=result.agrees,
+        kendall_tau=result.kendall_tau,
+    )

@@ -1,0 +1,265 @@
+"""Request and response bodies of the console's JSON API (Pydantic models).
+
+Every request model forbids unknown fields and uses strict scalars (``1`` is an integer, ``"1"``
+and ``true`` are not), with bounds on every number and every list, so a malformed body is refused
+with 422 naming the field (FastAPI's ``loc``) before the session API is called.  Answers use the
+same triples as :meth:`gaitpref.CoSpar.tell`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr
+
+from gaitpref.feedback import Outcome
+from gaitpref.space import Move
+
+MAX_ID = 2**63 - 1
+#: a subject code: pseudonymous, never a name
+SUBJECT_PATTERN = r"^[A-Za-z0-9._-]{1,64}$"
+
+Id = Annotated[StrictInt, Field(ge=1, le=MAX_ID)]
+GridIndex = Annotated[StrictInt, Field(ge=0, le=2**31)]
+FeatureName = Annotated[StrictStr, Field(min_length=1, max_length=100)]
+ComparisonTriple = tuple[GridIndex, GridIndex, Outcome]
+SuggestionTriple = tuple[GridIndex, FeatureName, Move]
+Note = Annotated[StrictStr, Field(max_length=2000)]
+
+
+class _Request(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class CreateSessionIn(_Request):
+    """A new session: ``config`` is a shipped config's name or the text of a TOML config."""
+
+    config: StrictStr = Field(
+        min_length=1,
+        max_length=100_000,
+        description="a shipped config name (GET /api/configs) or TOML config text",
+        examples=["exo-1d-step-length"],
+    )
+    subject: StrictStr = Field(
+        pattern=SUBJECT_PATTERN, description="pseudonymous subject code", examples=["S01"]
+    )
+    seed: Annotated[StrictInt, Field(ge=0, le=MAX_ID)] | None = Field(
+        default=None, description="the session's seed (default: the config's)"
+    )
+
+
+class CreatedOut(BaseModel):
+    id: int
+
+
+class FeatureOut(BaseModel):
+    """A gait feature and how an operator words its coactive moves."""
+
+    name: str
+    unit: str
+    values: list[float]
+    words: tuple[str, str] = Field(description="(increase, decrease), e.g. (longer, shorter)")
+    moves: dict[str, str] = Field(description="move -> its words, e.g. +small -> slightly longer")
+
+
+class GaitOut(BaseModel):
+    """A gait of the grid: its index, feature values in physical units, and its trial number."""
+
+    index: int = Field(description="flat grid index (C order over the features)")
+    gait_id: str = Field(description="the gait library's id, or G<index> without a library")
+    values: dict[str, float]
+    units: dict[str, str]
+    trial: int | None = Field(default=None, description="the trial number it runs (or ran) as")
+
+
+class QueryOut(BaseModel):
+    """The pending query: run ``actions`` now, compare them with ``buffer``."""
+
+    session_id: int
+    query_id: int
+    actions: list[GaitOut]
+    buffer: list[GaitOut]
+    trials_done: int = Field(description="trials answered so far")
+    comparisons: list[tuple[int, int]] = Field(
+        description="the pairs (i, j) the operator is asked to compare, as grid indices"
+    )
+
+
+class AnswerIn(_Request):
+    """An answer to query ``query_id`` (the same triples as ``CoSpar.tell``)."""
+
+    query_id: Id
+    comparisons: list[ComparisonTriple] = Field(
+        default_factory=list, max_length=256, examples=[[[12, 7, "first"]]]
+    )
+    suggestions: list[SuggestionTriple] = Field(
+        default_factory=list, max_length=256, examples=[[[12, "step_length", "+small"]]]
+    )
+    note: Note | None = None
+
+
+class AnsweredOut(BaseModel):
+    query_id: int
+    trials: list[int]
+    next_query_id: int | None
+
+
+class UndoIn(_Request):
+    """Optionally name the pending query the undo was decided on: refused (409) if it changed."""
+
+    query_id: Id | None = None
+
+
+class UndoneOut(BaseModel):
+    pending_query_id: int = Field(
+        description="the query whose answer was taken back, pending again"
+    )
+    trials: list[int] = Field(description="its trial numbers (they will be given again)")
+    discarded_query_id: int | None = Field(
+        description="the query that was pending before the undo (withdrawn)"
+    )
+
+
+class NoteIn(_Request):
+    text: Annotated[StrictStr, Field(min_length=1, max_length=2000)]
+
+
+class ExcludeIn(_Request):
+    reason: Literal["device_fault", "stumble", "distracted", "other"]
+    detail: Annotated[StrictStr, Field(max_length=500)] = ""
+
+
+class PosteriorOut(BaseModel):
+    """Posterior mean and standard deviation of the utility of every action (grid order)."""
+
+    session_id: int
+    features: list[str]
+    shape: list[int]
+    mean: list[float]
+    sd: list[float]
+    argmax: GaitOut
+    trials: list[int] = Field(description="executed actions in trial order")
+
+
+class SessionItemOut(BaseModel):
+    """A session as listed: its row, without replaying its log."""
+
+    id: int
+    subject: str
+    config: str
+    status: str
+    events: int = Field(description="events in its log")
+    created_at: str
+    updated_at: str
+
+
+class SessionOut(BaseModel):
+    """A session with what its log says now."""
+
+    id: int
+    subject: str
+    config: str
+    status: str
+    events: int = Field(description="events in its log")
+    created_at: str
+    seed: int
+    trials: int = Field(description="trials in force (answered, not undone)")
+    pending_query_id: int | None
+    validation_open: bool
+    features: list[FeatureOut]
+
+
+class TrialOut(BaseModel):
+    """An executed trial (the chronology)."""
+
+    trial: int
+    query_id: int
+    gait: GaitOut
+    excluded: str | None = Field(description="the exclusion reason, if excluded")
+
+
+class ConfigOut(BaseModel):
+    name: str
+    grid: list[int]
+    n: int
+    buffer: int
+    description: str
+
+
+class AckOut(BaseModel):
+    query_id: int
+    acknowledged: bool = Field(description="false when it had been acknowledged before")
+
+
+class NoteOut(BaseModel):
+    seq: int
+
+
+class EventOut(BaseModel):
+    seq: int
+    kind: str
+    at: str
+    payload: dict[str, object]
+
+
+class StatusIn(_Request):
+    status: Literal["active", "paused", "finished"]
+
+
+class ValidationGaitOut(BaseModel):
+    label: str
+    gait: GaitOut
+
+
+class ValidationOut(BaseModel):
+    """A blind validation round: the gaits in their stored random order (roles hidden)."""
+
+    round: int
+    gaits: list[ValidationGaitOut]
+    ranking: list[str] | None = None
+    model_ranking: list[str] | None = None
+    roles: dict[str, str] | None = None
+    agrees: bool | None = None
+    kendall_tau: float | None = None
+
+
+class RankingIn(_Request):
+    ranking: list[Annotated[StrictStr, Field(min_length=1, max_length=4)]] = Field(
+        min_length=1, max_length=8, description="labels, best first", examples=[["B", "A", "C"]]
+    )
+
+
+class ErrorOut(BaseModel):
+    detail: str
+
+
+__all__ = [
+    "SUBJECT_PATTERN",
+    "AckOut",
+    "AnswerIn",
+    "AnsweredOut",
+    "ComparisonTriple",
+    "ConfigOut",
+    "CreateSessionIn",
+    "CreatedOut",
+    "ErrorOut",
+    "EventOut",
+    "ExcludeIn",
+    "FeatureOut",
+    "GaitOut",
+    "Move",
+    "NoteIn",
+    "NoteOut",
+    "PosteriorOut",
+    "QueryOut",
+    "RankingIn",
+    "SessionItemOut",
+    "SessionOut",
+    "StatusIn",
+    "SuggestionTriple",
+    "TrialOut",
+    "UndoIn",
+    "UndoneOut",
+    "ValidationGaitOut",
+    "ValidationOut",
+]

@@ -1,0 +1,259 @@
+"""The console's one door to the session API (:class:`gaitpref.Session`).
+
+Routes never open sessions themselves: they call :class:`SessionService`, which
+
+- holds one storage handle for the whole console (a connection pool, passed to ``Session``),
+- keeps opened sessions (rebuilding one replays its whole log, so it is done once), and before
+  each use checks that no other writer (the CLI, another console) moved the session on; if one
+  did, the session is brought up to date first,
+- runs compound operations (undo of an expected query, an answer with its note) under a
+  per-session lock, so two browser tabs cannot interleave them.
+
+Stale and already-answered queries are refused by the session API itself (``QueryError``), before
+anything is written; :mod:`gaitpref.console.errors` turns that into HTTP 409.
+"""
+
+from __future__ import annotations
+
+import io
+import tempfile
+import threading
+import zipfile
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal, TypeVar
+
+from gaitpref.console.configs import choose_config, default_library_dir
+from gaitpref.console.errors import InputError
+from gaitpref.session import Answered, Session, SessionQuery
+from gaitpref.session_log import SessionStateError
+from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
+from gaitpref.validation import ValidationPlan, ValidationResult
+
+ExportFormat = Literal["csv", "json"]
+T = TypeVar("T")
+#: opened sessions kept in memory (reopening one replays its log)
+KEEP = 32
+#: per-session locks, striped by session id
+LOCK_STRIPES = 64
+
+
+@dataclass(frozen=True)
+class Pending:
+    """What the trial page can show now: a query, or why there is none."""
+
+    query: SessionQuery | None
+    reason: str  # "" when there is a query; else "paused", "finished", "validation"
+
+
+class SessionService:
+    """Sessions of one database, opened once and shared by all requests (thread-safe)."""
+
+    def __init__(self, db: str | Storage | None, library_dir: str | Path | None = None) -> None:
+        if isinstance(db, Storage):
+            self.storage = db
+            self.url = db.url
+        else:
+            self.url = resolve_url(db)
+            self.storage = open_storage(self.url)
+        self.library_dir = (
+            Path(library_dir) if library_dir is not None else default_library_dir(self.url)
+        )
+        self._open: dict[int, Session] = {}
+        self._locks = tuple(threading.RLock() for _ in range(LOCK_STRIPES))
+        self._guard = threading.Lock()
+
+    def close(self) -> None:
+        self.storage.close()
+
+    # -- opening -------------------------------------------------------------------------------
+    @contextmanager
+    def locked(self, session_id: int) -> Iterator[Session]:
+        """The session, up to date, with its console lock held."""
+        with self._locks[session_id % LOCK_STRIPES]:  # bounded: any id a client sends
+            yield self._current(session_id)
+
+    def _keep(self, session: Session) -> None:
+        """Remember an opened session (the ``KEEP`` most recently opened ones)."""
+        with self._guard:
+            self._open.pop(session.id, None)
+            self._open[session.id] = session
+            while len(self._open) > KEEP:
+                self._open.pop(next(iter(self._open)))
+
+    def _current(self, session_id: int) -> Session:
+        session = self._open.get(session_id)
+        if session is None:
+            session = Session.open(self.storage, session_id)
+            self._keep(session)
+            return session
+        stored = self.storage.get_session(session_id)
+        if stored.last_seq != session.last_seq:
+            session.refresh()  # another writer moved it on
+        return session
+
+    def get(self, session_id: int) -> Session:
+        """The session, up to date (for reading one thing; see :meth:`read` for several)."""
+        with self.locked(session_id) as session:
+            return session
+
+    def read(self, session_id: int, fn: Callable[[Session], T]) -> T:
+        """``fn(session)`` with the session's lock held: a consistent view of several things."""
+        with self.locked(session_id) as session:
+            return fn(session)
+
+    # -- listing -------------------------------------------------------------------------------
+    def list_sessions(self) -> list[SessionRecord]:
+        return self.storage.list_sessions()
+
+    def list_subjects(self) -> list[SubjectRecord]:
+        return self.storage.list_subjects()
+
+    # -- creating ------------------------------------------------------------------------------
+    def create(
+        self,
+        config: str,
+        subject: str,
+        seed: int | None = None,
+        *,
+        config_name: str | None = None,
+        library: tuple[bytes, str | None] | None = None,
+    ) -> Session:
+        """A new session from a shipped config's name or a config's TOML text, optionally with
+        an uploaded gait library (``(bytes, file name)``); see :mod:`gaitpref.console.configs`."""
+        chosen = choose_config(
+            config, library_dir=self.library_dir, name=config_name, library=library
+        )
+        session = Session.create(
+            self.storage, chosen.config, subject, seed=seed, library=chosen.library
+        )
+        self._keep(session)
+        return session
+
+    # -- the loop ------------------------------------------------------------------------------
+    def answer(
+        self,
+        session_id: int,
+        query_id: int,
+        comparisons: Sequence[object],
+        suggestions: Sequence[object],
+        note: str | None = None,
+    ) -> Answered:
+        """Answer ``query_id``; a non-empty ``note`` is logged right after the answer."""
+        text = (note or "").strip()
+        if len(text) > 2000:
+            raise InputError("note", "a note has at most 2000 characters")
+        with self.locked(session_id) as session:
+            answered = session.answer(query_id, comparisons, suggestions)
+            if text:
+                session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
+            return answered
+
+    def undo(self, session_id: int, expected_query: int | None = None) -> SessionQuery:
+        """Take back the last answer; with ``expected_query``, only if that query is pending."""
+        with self.locked(session_id) as session:
+            if expected_query is not None:
+                pending = session.pending
+                if pending is None or pending.id != expected_query:
+                    now = "no query is pending" if pending is None else f"query {pending.id} is"
+                    raise SessionStateError(
+                        f"the undo was asked while query {expected_query} was pending, but now "
+                        f"{now} pending (another tab answered or undid first); nothing was undone"
+                    )
+            return session.undo()
+
+    def acknowledge(self, session_id: int, query_id: int) -> bool:
+        """A device controller loaded the gaits of ``query_id``: logged once as a note.
+
+        Returns False when it was acknowledged before.  Refused (409) unless pending.
+        """
+        with self.locked(session_id) as session:
+            pending = session.pending
+            if pending is None or pending.id != query_id:
+                raise session_query_error(session, query_id)
+            text = ack_text(session, pending)
+            if any(t == text for _, t in session.notes()):
+                return False
+            session.note(text)
+            return True
+
+    def note(self, session_id: int, text: str) -> int:
+        with self.locked(session_id) as session:
+            return session.note(text)
+
+    def exclude(self, session_id: int, trial: int, reason: str, detail: str = "") -> None:
+        with self.locked(session_id) as session:
+            session.exclude(trial, reason, detail)
+
+    def set_status(self, session_id: int, status: str) -> None:
+        with self.locked(session_id) as session:
+            if status == session.status:
+                return
+            if status == "paused":
+                session.pause()
+            elif status == "finished":
+                session.finish()
+            elif status == "active":
+                session.resume()
+            else:
+                raise InputError("status", "must be active, paused or finished")
+
+    # -- validation ----------------------------------------------------------------------------
+    def start_validation(self, session_id: int) -> ValidationPlan:
+        with self.locked(session_id) as session:
+            return session.start_validation()
+
+    def rank(self, session_id: int, round_: int, ranking: Sequence[str]) -> ValidationResult:
+        """Record the blind ranking (labels, best first) of the open round ``round_``."""
+        with self.locked(session_id) as session:
+            plan = session.validation_plan
+            if plan is not None and plan.round == round_:
+                labels = [str(r).upper() for r in ranking]
+                if sorted(labels) != sorted(plan.labels):
+                    raise InputError(
+                        "ranking",
+                        f"name each of {', '.join(plan.labels)} exactly once, best first; "
+                        f"got {', '.join(labels) or 'nothing'}",
+                    )
+            return session.answer_validation(round_, list(ranking))
+
+    # -- export --------------------------------------------------------------------------------
+    def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:
+        """The session's export folder (``session export``) as a zip archive."""
+        from gaitpref.session_export import export_session
+
+        with self.locked(session_id) as session, tempfile.TemporaryDirectory() as tmp:
+            folder = Path(tmp) / f"session-{session_id}"
+            export_session(session, folder, fmt)
+            buf = io.BytesIO()
+            with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+                for path in sorted(p for p in folder.rglob("*") if p.is_file()):
+                    zf.write(path, f"{folder.name}/{path.relative_to(folder).as_posix()}")
+            return buf.getvalue()
+
+
+def pending_of(session: Session) -> Pending:
+    """The query to run now (issued and logged if new), or why there is none."""
+    if session.status != "active":
+        return Pending(None, session.status)
+    if session.validation_plan is not None:
+        return Pending(None, "validation")
+    return Pending(session.next_query(), "")
+
+
+def ack_text(session: Session, query: SessionQuery) -> str:
+    gaits = ", ".join(session.gait_id(a) or f"G{a}" for a in query.actions)
+    return f"device acknowledged query {query.id} (gaits {gaits})"
+
+
+def session_query_error(session: Session, query_id: int) -> Exception:
+    """The session API's own refusal for a query that is not pending."""
+    from gaitpref.cospar import QueryError
+
+    pending = session.pending
+    now = "none is pending" if pending is None else f"the pending query is {pending.id}"
+    answered = any(t.query == query_id for t in session.trials())
+    what = "was already answered" if answered else "is not the pending query"
+    return QueryError(f"query {query_id} {what} ({now})")

@@ -1,0 +1,47 @@
+"""Rendering pages: one Jinja2 environment (autoescaped), the CSRF cookie, error pages."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from fastapi import Request
+from fastapi.responses import HTMLResponse
+from jinja2 import Environment, FileSystemLoader, select_autoescape
+
+from gaitpref import __version__
+from gaitpref.console.errors import Refusal
+from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
+
+_ENV = Environment(
+    loader=FileSystemLoader(Path(__file__).parent / "templates"),
+    autoescape=select_autoescape(default=True),
+    trim_blocks=True,
+    lstrip_blocks=True,
+)
+
+
+def render(request: Request, template: str, status_code: int = 200, **context: Any) -> HTMLResponse:
+    """``template`` with ``context``; the page carries a CSRF token for its forms."""
+    csrf: Csrf = request.app.state.csrf
+    token = request.cookies.get(CSRF_COOKIE)
+    fresh = not csrf.valid(token)
+    if fresh or token is None:
+        token = csrf.issue()
+    html = _ENV.get_template(template).render(
+        request=request,
+        csrf_field=CSRF_FIELD,
+        csrf_token=token,
+        version=__version__,
+        **context,
+    )
+    response = HTMLResponse(html, status_code=status_code)
+    response.headers["cache-control"] = "no-store"
+    if fresh:
+        response.set_cookie(CSRF_COOKIE, token, httponly=True, samesite="strict", path="/")
+    return response
+
+
+def page_error(request: Request, ref: Refusal) -> HTMLResponse:
+    """An error page that says what happened and that nothing was written."""
+    return render(request, "error.html", status_code=ref.status, ref=ref)

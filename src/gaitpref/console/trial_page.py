@@ -1,0 +1,106 @@
+"""What the trial page shows, gathered from a session (read-only)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gaitpref.console import views
+from gaitpref.console.service import Pending
+from gaitpref.session import Session
+
+
+@dataclass(frozen=True)
+class ChronoRow:
+    """One trial of the chronology: what ran, what was said about it."""
+
+    trial: int
+    query: int
+    gait: views.GaitView
+    compared: tuple[str, ...]
+    suggested: tuple[str, ...]
+    excluded: str | None
+
+
+def _outcome_text(first: int, second: int, outcome: str, trial: int) -> str:
+    """A comparison as seen from ``trial`` (one of ``first``/``second``)."""
+    other = second if trial == first else first
+    if outcome == "none":
+        return f"= trial {other} (no preference)"
+    won = (outcome == "first") == (trial == first)
+    return f"> trial {other}" if won else f"< trial {other}"
+
+
+def chronology(session: Session) -> list[ChronoRow]:
+    """The trials in force, newest first, with their comparisons and suggestions."""
+    space = session.config.space
+    compared: dict[int, list[str]] = {}
+    for c in session.comparisons():
+        if c.undone:
+            continue
+        for t in {c.first_trial, c.second_trial}:
+            text = _outcome_text(c.first_trial, c.second_trial, c.outcome, t)
+            compared.setdefault(t, []).append(text + (" [excluded]" if c.excluded else ""))
+    suggested: dict[int, list[str]] = {}
+    words = {f.name: views.move_words(f) for f in space.features}
+    for s in session.suggestions():
+        if s.undone:
+            continue
+        text = f"{views.pretty(s.feature)}: {words[s.feature][s.move]}"
+        suggested.setdefault(s.trial, []).append(
+            text + (" (at the grid's edge)" if s.target is None else "")
+        )
+    rows = [
+        ChronoRow(
+            t.number,
+            t.query,
+            views.gait_view(space, t.action, trial=t.number, gait_id=session.gait_id(t.action)),
+            tuple(compared.get(t.number, ())),
+            tuple(suggested.get(t.number, ())),
+            t.excluded,
+        )
+        for t in session.trials()
+    ]
+    return list(reversed(rows))
+
+
+def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
+    """Everything ``trial.html`` renders."""
+    space = session.config.space
+    query = pending.query
+    actions: list[views.GaitView] = []
+    buffer: list[views.GaitView] = []
+    if query is not None:
+        actions = [
+            views.gait_view(space, a, trial=t, gait_id=session.gait_id(a))
+            for a, t in zip(query.actions, query.trials, strict=True)
+        ]
+        buffer = [
+            views.gait_view(space, a, trial=t, gait_id=session.gait_id(a))
+            for a, t in zip(query.buffer, query.buffer_trials, strict=True)
+        ]
+    post = session.posterior()
+    mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
+    best = int(np.argmax(mean))
+    trials = session.trials()
+    return {
+        "session": session,
+        "status": session.status,
+        "reason": pending.reason,
+        "query": query,
+        "actions": actions,
+        "buffer": buffer,
+        "comparisons": views.comparison_groups(actions, buffer),
+        "suggestions": views.suggestion_groups(space, actions),
+        "multi": len(actions) > 1,
+        "chronology": chronology(session),
+        "notes": list(reversed(session.notes()))[:20],
+        "best": views.gait_view(space, best, gait_id=session.gait_id(best)),
+        "best_mean": float(mean[best]),
+        "learned": bool(mean.max() > mean.min()),
+        "trials_done": len(trials),
+        "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",
+        "features": space.features,
+    }

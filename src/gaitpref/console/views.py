@@ -1,0 +1,255 @@
+"""What the console's pages show, as plain values: gaits, answer choices, keyboard shortcuts.
+
+Nothing here touches a session: these functions turn grid indices into what an operator reads
+(feature values with units, a gait id, "slightly longer"), lay out the answer form of a query,
+and read that form back into the triples of :meth:`gaitpref.CoSpar.tell`.
+
+Form fields of an answer (stateless: a field names what it answers, the query id is checked
+by the session):
+
+- ``cmp-<i>-<j>``: ``first`` | ``second`` | ``none``, comparing grid actions ``i`` and ``j``;
+- ``sug-<a>-<feature>``: ``+big`` | ``+small`` | ``-small`` | ``-big`` | empty (no suggestion)
+  for executed action ``a``.
+
+Keyboard: comparisons ``1`` (first), ``2`` (second), ``0`` (no preference); suggestions per
+feature row ``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less").
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+from gaitpref.console.errors import InputError
+from gaitpref.session_log import SessionQuery
+from gaitpref.space import MOVES, Feature, Space
+
+COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
+SUGGESTION_ROWS = ("qwert", "asdfg", "zxcvb", "yuiop", "hjkl;")
+_BUTTON_MOVES: tuple[str, ...] = ("+big", "+small", "", "-small", "-big")
+_CMP = re.compile(r"^cmp-(\d{1,10})-(\d{1,10})$")
+_SUG = re.compile(r"^sug-(\d{1,10})-([A-Za-z_][A-Za-z0-9_]{0,99})$")
+FORM_FIELDS = ("query_id", "csrf_token", "confirmed", "note")
+
+
+def fmt_value(value: float) -> str:
+    """A feature value as an operator reads it (4 significant digits)."""
+    return f"{value:.4g}"
+
+
+def pretty(name: str) -> str:
+    """``step_length`` -> ``step length``."""
+    return name.replace("_", " ")
+
+
+@dataclass(frozen=True)
+class FeatureValue:
+    name: str
+    label: str
+    value: float
+    text: str
+    unit: str
+
+
+@dataclass(frozen=True)
+class GaitView:
+    """A grid action as shown: gait id, feature values with units, trial number if any."""
+
+    index: int
+    gait_id: str
+    trial: int | None
+    values: tuple[FeatureValue, ...]
+
+    @property
+    def text(self) -> str:
+        return ", ".join(f"{v.label} {v.text}{' ' + v.unit if v.unit else ''}" for v in self.values)
+
+    @property
+    def name(self) -> str:
+        """``trial 5 (G12)`` or ``G12``."""
+        return f"trial {self.trial} ({self.gait_id})" if self.trial else self.gait_id
+
+
+def gait_view(
+    space: Space, index: int, *, trial: int | None = None, gait_id: str | None = None
+) -> GaitView:
+    point = space.point(index)
+    values = tuple(
+        FeatureValue(f.name, pretty(f.name), float(x), fmt_value(float(x)), f.unit)
+        for f, x in zip(space.features, point, strict=True)
+    )
+    return GaitView(int(index), gait_id or f"G{int(index)}", trial, values)
+
+
+def move_words(feature: Feature) -> dict[str, str]:
+    """Each coactive move in the feature's own words (``+small`` -> ``slightly longer``)."""
+    more, less = feature.words
+    return {"+big": more, "+small": f"slightly {more}", "-small": f"slightly {less}", "-big": less}
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One big button of a group: its form value, label, shortcut and a sentence for review."""
+
+    value: str
+    label: str
+    key: str
+    say: str
+
+
+@dataclass(frozen=True)
+class ComparisonGroup:
+    field: str
+    first: GaitView
+    second: GaitView
+    choices: tuple[Choice, ...]
+
+    @property
+    def same_gait(self) -> bool:
+        return self.first.index == self.second.index
+
+
+@dataclass(frozen=True)
+class SuggestionGroup:
+    field: str
+    action: GaitView
+    position: int  # which executed action of the query (0-based)
+    feature: str
+    label: str
+    choices: tuple[Choice, ...]
+
+
+def comparison_groups(
+    actions: Sequence[GaitView], buffer: Sequence[GaitView]
+) -> list[ComparisonGroup]:
+    """The pairs a query asks about: new actions among themselves, then each with the buffer."""
+    single = len(actions) == 1 and len(buffer) == 1
+    pairs = [(a, b) for k, a in enumerate(actions) for b in actions[k + 1 :]]
+    pairs += [(a, b) for a in actions for b in buffer]
+    groups: list[ComparisonGroup] = []
+    seen: set[frozenset[int]] = set()
+    for a, b in pairs:
+        key = frozenset((a.index, b.index))
+        if key in seen and a.index != b.index:
+            continue
+        seen.add(key)
+        first_label = "this one" if single else a.name
+        second_label = "previous one" if single else b.name
+        choices = (
+            Choice(
+                "first", first_label, COMPARISON_KEYS["first"], f"{a.name} preferred to {b.name}"
+            ),
+            Choice(
+                "second", second_label, COMPARISON_KEYS["second"], f"{b.name} preferred to {a.name}"
+            ),
+            Choice(
+                "none",
+                "no preference",
+                COMPARISON_KEYS["none"],
+                f"no preference between {a.name} and {b.name}",
+            ),
+        )
+        groups.append(ComparisonGroup(f"cmp-{a.index}-{b.index}", a, b, choices))
+    return groups
+
+
+def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[SuggestionGroup]:
+    """One row of five buttons per executed action and feature."""
+    groups: list[SuggestionGroup] = []
+    for pos, gait in enumerate(actions):
+        for row, feature in enumerate(space.features):
+            words = move_words(feature)
+            keys = SUGGESTION_ROWS[row] if row < len(SUGGESTION_ROWS) else ""
+            choices = tuple(
+                Choice(
+                    move,
+                    words[move] if move else "no change",
+                    keys[k] if keys else "",
+                    f"{pretty(feature.name)}: {words[move]}" if move else "",
+                )
+                for k, move in enumerate(_BUTTON_MOVES)
+            )
+            groups.append(
+                SuggestionGroup(
+                    f"sug-{gait.index}-{feature.name}",
+                    gait,
+                    pos,
+                    feature.name,
+                    pretty(feature.name),
+                    choices,
+                )
+            )
+    return groups
+
+
+def read_answer_form(
+    form: Mapping[str, str],
+) -> tuple[list[tuple[int, int, str]], list[tuple[int, str, str]]]:
+    """Comparison and suggestion triples of an answer form (:class:`InputError` names a bad
+    field)."""
+    comparisons: list[tuple[int, int, str]] = []
+    suggestions: list[tuple[int, str, str]] = []
+    for name, value in form.items():
+        if name in FORM_FIELDS:
+            continue
+        if m := _CMP.match(name):
+            if value not in COMPARISON_KEYS:
+                raise InputError(name, f"must be one of first, second, none; got {value!r}")
+            comparisons.append((int(m.group(1)), int(m.group(2)), value))
+        elif m := _SUG.match(name):
+            if value == "":
+                continue
+            if value not in MOVES:
+                raise InputError(name, f"must be one of {', '.join(MOVES)} or empty; got {value!r}")
+            suggestions.append((int(m.group(1)), m.group(2), value))
+        else:
+            raise InputError(name, "unknown field in an answer form")
+    return comparisons, suggestions
+
+
+def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
+    """An integer form field; :class:`InputError` if it is missing or not an integer."""
+    raw = form.get(field)
+    if raw is None or raw == "":
+        raise InputError(field, "missing")
+    if not re.fullmatch(r"\d{1,18}", raw.strip()):
+        raise InputError(field, f"must be an integer, got {raw!r}")
+    value = int(raw)
+    if value < minimum:
+        raise InputError(field, f"must be >= {minimum}, got {value}")
+    return value
+
+
+def answer_summary(
+    space: Space,
+    query: SessionQuery,
+    comparisons: Sequence[tuple[int, int, str]],
+    suggestions: Sequence[tuple[int, str, str]],
+    gait_id: Callable[[int], str | None] | None = None,
+) -> list[str]:
+    """The answer in words, for the confirm step (``gait_id``: a library's gait ids)."""
+    trial_of = dict(zip(query.buffer, query.buffer_trials, strict=True))
+    trial_of.update(zip(query.actions, query.trials, strict=True))
+
+    def name(a: int) -> str:
+        gait = (gait_id(a) if gait_id is not None else None) or f"G{a}"
+        t = trial_of.get(a)
+        return f"trial {t} ({gait})" if t is not None else gait
+
+    lines = []
+    for i, j, outcome in comparisons:
+        if outcome == "none":
+            lines.append(f"No preference between {name(i)} and {name(j)}")
+        else:
+            win, lose = (i, j) if outcome == "first" else (j, i)
+            lines.append(f"{name(win)} preferred to {name(lose)}")
+    for a, feature, move in suggestions:
+        try:
+            words = move_words(space.features[space.feature_index(feature)])
+        except KeyError:
+            words = {}
+        lines.append(f"{name(a)}: {pretty(feature)} {words.get(move, move)}")
+    if not suggestions:
+        lines.append("No suggestions")
+    return lines

@@ -1,0 +1,37 @@
+"""Compass-gait model, HZD gait optimization and the gait library (issue 4).
+
+Layers, bottom up: :mod:`params` and :mod:`dynamics` / :mod:`impact` (the hybrid model),
+:mod:`bezier` and :mod:`zero_dynamics` (the virtual constraint and its periodic orbit),
+:mod:`optimize` (one gait), :mod:`simulate` (full-model check), :mod:`library`,
+:mod:`library_io` and :mod:`build` (a grid of gaits and its file), :mod:`study` (COT over step
+length), :mod:`figures` and :mod:`cli` (pictures and commands).  See ``docs/gaits.md``.
+"""
+
+from gaitpref.gaits.build import build_library
+from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
+from gaitpref.gaits.library import GaitLibrary, GaitLibraryError
+from gaitpref.gaits.library_io import SCHEMA_VERSION, load_library, save_library
+from gaitpref.gaits.optimize import optimize_gait
+from gaitpref.gaits.params import CompassGaitParams
+from gaitpref.gaits.simulate import SimulationError, SimulationResult, simulate_gait
+from gaitpref.gaits.study import CotCurve, compass_gait_cot, cot_over_step_length
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "CompassGaitParams",
+    "CotCurve",
+    "Gait",
+    "GaitLibrary",
+    "GaitLibraryError",
+    "GaitRequest",
+    "HZDSettings",
+    "SimulationError",
+    "SimulationResult",
+    "build_library",
+    "compass_gait_cot",
+    "cot_over_step_length",
+    "load_library",
+    "optimize_gait",
+    "save_library",
+    "simulate_gait",
+]

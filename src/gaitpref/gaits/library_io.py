@@ -1,0 +1,244 @@
+"""The gait library's file format: one JSON document, readable without gaitpref.
+
+Schema version 1 (``docs/gaits.md`` has the full description)::
+
+    {"format": "gaitpref-gait-library", "schema_version": 1, "created_by": "gaitpref 0.1.0",
+     "model": {"name": "compass_gait", "parameters": {hip_mass, leg_mass, leg_com, leg_length,
+               gravity}},
+     "formulation": {HZDSettings fields..., "phase_variable": "stance_leg_angle",
+                     "outputs": ["hip_angle"], "objective": "mechanical_cot"},
+     "speed": 0.2 | null,
+     "axes": [{"name": "step_length", "unit": "m", "values": [...]}, ...],
+     "grid_order": "C",
+     "gaits": [{"index", "id", "parameters": {axis: value}, "degree", "alpha": [[M + 1 numbers]],
+                "phase_start", "phase_end", "step_duration", "orbit_state": [phi1, q2, phi1d, q2d],
+                "cot", "delta_squared", "feasible", "solver_status", "solver_message",
+                "min_normal_force", "max_friction_ratio"}, ...]}
+
+Gaits are listed in flat grid order (C order over ``axes``); non-finite numbers are ``null``.
+Loading checks the format tag, schema version, every field's type and shape and, unless told
+otherwise, that every gait is feasible; each failure raises :class:`GaitLibraryError` naming the
+file and the field.
+
+Notation: ``M`` Bezier degree.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from gaitpref.gaits.gait import Gait, HZDSettings
+from gaitpref.gaits.library import AXES, GaitLibrary, GaitLibraryError
+from gaitpref.gaits.params import CompassGaitParams
+
+FORMAT = "gaitpref-gait-library"
+SCHEMA_VERSION = 1
+_NUMBERS = (
+    "phase_start",
+    "phase_end",
+    "step_duration",
+    "cot",
+    "delta_squared",
+    "min_normal_force",
+    "max_friction_ratio",
+)
+
+
+def _num(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def to_document(lib: GaitLibrary) -> dict[str, Any]:
+    """The library as a JSON-ready dictionary (schema version 1)."""
+    gaits = []
+    for i, g in enumerate(lib.gaits):
+        entry: dict[str, Any] = {
+            "index": i,
+            "id": lib.gait_id(i),
+            "parameters": lib.parameters(i),
+            "degree": g.degree,
+            "alpha": [[_num(v) for v in row] for row in g.alpha],
+        }
+        entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[:3]})
+        entry["orbit_state"] = [_num(v) for v in g.orbit_state]
+        entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[3:]})
+        entry.update(
+            {"feasible": g.feasible, "solver_status": g.status, "solver_message": g.message}
+        )
+        gaits.append(entry)
+    import gaitpref  # late: gaitpref/__init__ may still be importing this package
+
+    formulation: dict[str, Any] = dict(lib.settings.to_dict())
+    formulation.update(
+        {
+            "phase_variable": "stance_leg_angle",
+            "outputs": ["hip_angle"],
+            "objective": "mechanical_cot",
+        }
+    )
+    return {
+        "format": FORMAT,
+        "schema_version": SCHEMA_VERSION,
+        "created_by": f"gaitpref {gaitpref.__version__}",
+        "model": {"name": "compass_gait", "parameters": lib.params.to_dict()},
+        "formulation": formulation,
+        "speed": lib.speed,
+        "axes": [{"name": n, "unit": AXES[n].unit, "values": list(v)} for n, v in lib.axes],
+        "grid_order": "C",
+        "gaits": gaits,
+    }
+
+
+def save_library(lib: GaitLibrary, path: str | Path) -> None:
+    """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename)."""
+    target = Path(path)
+    tmp = target.with_name(target.name + ".tmp")
+    text = json.dumps(to_document(lib), indent=1, allow_nan=False)
+    tmp.write_text(text + "\n", encoding="utf-8")
+    os.replace(tmp, target)
+
+
+class _Reader:
+    """Typed access to a parsed document; every error names the source and the field."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, field: str, problem: str) -> GaitLibraryError:
+        return GaitLibraryError(f"{self.source}: {field}: {problem}")
+
+    def get(self, obj: dict[str, Any], key: str, where: str) -> Any:
+        if not isinstance(obj, dict) or key not in obj:
+            raise self.fail(f"{where}{key}", "missing")
+        return obj[key]
+
+    def number(self, obj: dict[str, Any], key: str, where: str, nullable: bool = False) -> float:
+        value = self.get(obj, key, where)
+        if value is None and nullable:
+            return math.nan
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise self.fail(f"{where}{key}", f"expected a number, got {value!r}")
+        return float(value)
+
+    def matrix(self, value: Any, shape: tuple[int, ...], field: str) -> np.ndarray[Any, Any]:
+        try:
+            arr = np.array(value, dtype=np.float64)  # null -> nan
+        except (TypeError, ValueError):
+            raise self.fail(field, f"expected numbers of shape {shape}") from None
+        if arr.shape != shape:
+            raise self.fail(field, f"expected shape {shape}, got {arr.shape}")
+        return arr
+
+
+def from_document(
+    data: Any, source: str = "<document>", allow_infeasible: bool = False
+) -> GaitLibrary:
+    """Validate a parsed document and build the :class:`GaitLibrary`."""
+    r = _Reader(source)
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise r.fail("format", f"not a gait library (expected format {FORMAT!r})")
+    version = data.get("schema_version")
+    if version != SCHEMA_VERSION:
+        raise r.fail(
+            "schema_version", f"{version!r} is not supported (this gaitpref reads {SCHEMA_VERSION})"
+        )
+    model = r.get(data, "model", "")
+    try:
+        params = CompassGaitParams.from_dict(r.get(model, "parameters", "model."))
+    except ValueError as exc:
+        raise r.fail("model.parameters", str(exc)) from None
+    formulation = r.get(data, "formulation", "")
+    fields = HZDSettings.__dataclass_fields__
+    try:
+        settings = HZDSettings(**{k: r.get(formulation, k, "formulation.") for k in fields})
+    except (TypeError, ValueError) as exc:
+        raise r.fail("formulation", str(exc)) from None
+    speed_raw = r.get(data, "speed", "")
+    speed = None if speed_raw is None else r.number(data, "speed", "")
+    axes_raw = r.get(data, "axes", "")
+    if not isinstance(axes_raw, list):
+        raise r.fail("axes", "expected a list")
+    axes = []
+    for k, axis in enumerate(axes_raw):
+        name = r.get(axis, "name", f"axes[{k}].")
+        values = r.get(axis, "values", f"axes[{k}].")
+        if not isinstance(values, list) or not values:
+            raise r.fail(f"axes[{k}].values", "expected a non-empty list of numbers")
+        axes.append((str(name), tuple(r.matrix(values, (len(values),), f"axes[{k}].values"))))
+    if r.get(data, "grid_order", "") != "C":
+        raise r.fail("grid_order", "only C order (last axis fastest) is defined")
+    gaits_raw = r.get(data, "gaits", "")
+    if not isinstance(gaits_raw, list):
+        raise r.fail("gaits", "expected a list")
+    expected = int(np.prod([len(v) for _, v in axes])) if axes else 0
+    if len(gaits_raw) != expected:
+        raise r.fail("gaits", f"{len(gaits_raw)} gaits for a grid of {expected} points")
+    gaits = [_gait(r, entry, k, settings.degree) for k, entry in enumerate(gaits_raw)]
+    try:
+        lib = GaitLibrary(params, settings, tuple(axes), tuple(gaits), speed)
+    except GaitLibraryError as exc:
+        raise GaitLibraryError(f"{source}: {exc}") from None
+    for k, entry in enumerate(gaits_raw):
+        if entry["parameters"] != lib.parameters(k) or entry.get("id") != lib.gait_id(k):
+            raise r.fail(f"gaits[{k}]", "parameters or id do not match the grid at this index")
+    bad = lib.infeasible()
+    if bad and not allow_infeasible:
+        listed = "; ".join(f"{lib.gait_id(i)}: {lib.gaits[i].message}" for i in bad[:3])
+        more = f" (and {len(bad) - 3} more)" if len(bad) > 3 else ""
+        raise GaitLibraryError(
+            f"{source}: {len(bad)} of {len(lib)} gaits are infeasible{more}: {listed}. "
+            "Load with allow_infeasible=True to inspect them."
+        )
+    return lib
+
+
+def _gait(r: _Reader, entry: Any, k: int, degree: int) -> Gait:
+    where = f"gaits[{k}]."
+    if not isinstance(entry, dict):
+        raise r.fail(f"gaits[{k}]", "expected an object")
+    if r.get(entry, "index", where) != k:
+        raise r.fail(f"{where}index", f"expected {k} (gaits are stored in grid order)")
+    if r.get(entry, "degree", where) != degree:
+        raise r.fail(f"{where}degree", f"expected {degree} (the formulation's degree)")
+    if not isinstance(r.get(entry, "parameters", where), dict):
+        raise r.fail(f"{where}parameters", "expected an object")
+    feasible = r.get(entry, "feasible", where)
+    status = r.get(entry, "solver_status", where)
+    message = r.get(entry, "solver_message", where)
+    if (
+        not isinstance(feasible, bool)
+        or not isinstance(status, int)
+        or not isinstance(message, str)
+    ):
+        raise r.fail(where.rstrip("."), "feasible must be a boolean, solver_status an integer, "
+                     "solver_message a string")  # fmt: skip
+    nums = {key: r.number(entry, key, where, nullable=True) for key in _NUMBERS}
+    return Gait(
+        step_length=r.number(
+            r.get(entry, "parameters", where), "step_length", f"{where}parameters."
+        ),
+        alpha=r.matrix(r.get(entry, "alpha", where), (1, degree + 1), f"{where}alpha"),
+        orbit_state=r.matrix(r.get(entry, "orbit_state", where), (4,), f"{where}orbit_state"),
+        feasible=feasible,
+        status=status,
+        message=message,
+        **nums,
+    )
+
+
+def load_library(path: str | Path, *, allow_infeasible: bool = False) -> GaitLibrary:
+    """Read and validate a library file; :class:`GaitLibraryError` names any problem."""
+    file = Path(path)
+    if not file.is_file():
+        raise GaitLibraryError(f"{file}: no such gait library file")
+    try:
+        data = json.loads(file.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise GaitLibraryError(f"{file}: not valid JSON ({exc})") from None
+    return from_document(data, str(file), allow_infeasible)

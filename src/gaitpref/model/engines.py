@@ -1,0 +1,114 @@
+"""How a posterior reaches all ``A`` actions: the dense path or the scalable one.
+
+Both paths draw the same exact samples from the Laplace posterior by pathwise conditioning
+(``posterior.py``) and consume a generator identically, so with the same seed they propose the
+same actions (up to floating-point rounding); they differ only in what they store:
+
+- ``"dense"``: the prior's square root ``s (S_1 (x) ... (x) S_d)`` as one ``A x A`` matrix (built
+  once per model) and ``K_{:,V}`` as one ``A x m`` matrix per posterior.  Fewest Python steps:
+  fastest on small grids.
+- ``"scalable"``: prior samples axis by axis through the per-feature roots and ``K_{:,V}`` through
+  its Khatri-Rao tables (``kronecker.py``), in blocks of at most ``BLOCK_ELEMENTS`` floats:
+  memory ``O(A s + (P + C) m)``, time ``O(A (sum n_f + m) s)`` per ask.
+- ``"auto"``: dense up to :data:`DENSE_MAX_ACTIONS` actions, scalable above.  The threshold is
+  the measured crossover of an ask on the project's 2-core machines
+  (``benchmarks/bench_large.py``, ``benchmarks/results/large.md``): dense is faster by 10-30 us
+  below about 90 actions, the two tie at 90-100, and scalable is 2-10x faster from 250 actions on
+  (the dense path's ``A x A`` root makes its prior draw ``O(A^2)``).
+
+Notation: ``A`` actions, ``m`` visited, ``s`` samples, ``n_f`` values of feature ``f``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, get_args
+
+import numpy as np
+
+from gaitpref.model.cross import CrossCovariance, DenseCross, RowBlockCross
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.kronecker import (
+    BLOCK_ELEMENTS,
+    KhatriRaoCross,
+    KroneckerPriorSampler,
+    khatri_rao_split,
+)
+from gaitpref.space import FloatArray, IntArray, Space
+
+SamplerName = Literal["auto", "dense", "scalable"]
+SAMPLERS: tuple[SamplerName, ...] = get_args(SamplerName)
+
+#: ``sampler="auto"`` uses the dense path up to this many actions (measured crossover).
+DENSE_MAX_ACTIONS = 100
+#: The dense path refuses larger grids: its ``A x A`` prior root would pass 512 MiB.
+DENSE_LIMIT_ACTIONS = 8192
+
+
+def resolve_sampler(sampler: str, size: int) -> Literal["dense", "scalable"]:
+    """The path ``sampler`` means for a grid of ``size`` actions; ValueError if it cannot be."""
+    if sampler not in SAMPLERS:
+        raise ValueError(f"sampler must be one of {', '.join(SAMPLERS)}; got {sampler!r}")
+    if sampler == "auto":
+        return "dense" if size <= DENSE_MAX_ACTIONS else "scalable"
+    if sampler == "dense" and size > DENSE_LIMIT_ACTIONS:
+        raise ValueError(
+            f'sampler="dense" needs an A x A matrix; this grid has {size} actions (the limit is '
+            f'{DENSE_LIMIT_ACTIONS}): use sampler="scalable" or "auto"'
+        )
+    return "dense" if sampler == "dense" else "scalable"
+
+
+class DenseEngine:
+    """The dense path: ``A x A`` prior root, ``A x m`` cross-covariance."""
+
+    name: Literal["dense", "scalable"] = "dense"
+
+    def __init__(self, space: Space, kernel: SquaredExponential) -> None:
+        self.space, self.kernel = space, kernel
+        self.prior = KroneckerPriorSampler(space, kernel)
+        root: FloatArray = np.ones((1, 1))
+        for r in self.prior.roots:
+            root = np.kron(root, r).astype(np.float64, copy=False)
+        self.root_t = np.ascontiguousarray(self.prior.scale * root.T)  # so z @ root_t
+
+    def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
+        z, z_jitter = self.prior.draw(rng, size)
+        out: FloatArray = z @ self.root_t
+        if z_jitter is not None:
+            out += self.prior.jitter_scale * z_jitter
+        return out
+
+    def cross(self, visited: IntArray) -> CrossCovariance:
+        return DenseCross(self.space, self.kernel, visited)
+
+
+class ScalableEngine:
+    """The scalable path: Kronecker prior samples, blocked Khatri-Rao cross-covariance."""
+
+    name: Literal["dense", "scalable"] = "scalable"
+
+    def __init__(
+        self, space: Space, kernel: SquaredExponential, block_elements: int = BLOCK_ELEMENTS
+    ) -> None:
+        self.space, self.kernel = space, kernel
+        self.prior = KroneckerPriorSampler(space, kernel)
+        self.block_elements = block_elements
+
+    def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
+        return self.prior.sample(rng, size)
+
+    def cross(self, visited: IntArray) -> CrossCovariance:
+        split = khatri_rao_split(self.space.shape, visited.shape[0], self.block_elements)
+        if split is None:
+            return RowBlockCross(self.space, self.kernel, visited, self.block_elements)
+        return KhatriRaoCross(self.space, self.kernel, visited, split, self.block_elements)
+
+
+GridEngine = DenseEngine | ScalableEngine
+
+
+def make_engine(space: Space, kernel: SquaredExponential, sampler: str = "auto") -> GridEngine:
+    """The engine for ``sampler`` ("auto", "dense" or "scalable") on ``space``."""
+    if resolve_sampler(sampler, len(space)) == "dense":
+        return DenseEngine(space, kernel)
+    return ScalableEngine(space, kernel)

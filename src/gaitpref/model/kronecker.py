@@ -1,0 +1,184 @@
+"""Kronecker structure of the product kernel on a grid: prior samples and ``K_{:,V}`` products.
+
+``design/algorithm.md``, "Joint samples": on a Cartesian grid the prior covariance is
+``K = s^2 (K_1 (x) ... (x) K_d) + jitter I``, so nothing ``A x A`` (or ``A x m``) is ever needed.
+
+- Prior samples: ``f0 = s (S_1 (x) ... (x) S_d) z + sqrt(jitter) z'`` with ``S_f S_f^T = K_f``,
+  applied axis by axis in ``O(A sum n_f)`` per sample.
+- Cross-covariance: column ``j`` of ``K_{:,V}`` is ``s^2 (k_1[:, v_j1] (x) ... (x) k_d[:, v_jd])``
+  plus ``jitter`` at row ``v_j``, so ``K_{:,V}`` is a column-wise Khatri-Rao product.  Splitting
+  the features into a prefix (``P`` combinations) and a suffix (``C`` combinations, ``A = P C``),
+  the rows of prefix ``p`` are ``T * c_p`` with the suffix table ``T`` (``C x m``) and the
+  prefix row ``c_p`` (length ``m``).  Hence ``K_{:,V} B`` for an ``m x s`` matrix ``B`` is one
+  matrix product ``(c_p B_t)_{(p,t)} @ T^T`` per block of prefixes, ``2 A m s`` flops through
+  BLAS and only ``(P + C) m`` numbers stored; explicit row blocks ``K[rows, V]`` for the variance
+  are built block by block within a fixed memory budget.
+
+Notation: ``A`` grid points, ``d`` features with ``n_f`` values, ``m`` visited actions ``V``,
+``s`` columns (samples); ``P`` prefix and ``C`` suffix combinations of the split.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+import numpy as np
+
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.space import FloatArray, IntArray, Space
+
+#: Elements (float64) that one block of temporary work may hold: 4 Mi elements = 32 MiB.
+BLOCK_ELEMENTS = 1 << 22
+
+
+class KroneckerPriorSampler:
+    """Joint samples of ``N(0, K)`` over the whole grid through per-feature square roots.
+
+    The square roots come from the eigendecomposition ``K_f = U diag(e) U^T``, ``S_f = U
+    diag(sqrt(max(e, 0)))``, not from a Cholesky factor: a squared-exponential ``K_f`` on a fine
+    grid is positive semi-definite only to rounding (its smallest eigenvalues are ``~1e-17``
+    and some come out negative), where a Cholesky factorisation fails or needs a jitter that
+    would change the distribution; clipping the rounding-level eigenvalues at zero changes
+    ``S_f S_f^T`` by rounding only.  The grid jitter enters exactly, as an independent
+    ``sqrt(jitter) z'`` term.
+    """
+
+    def __init__(self, space: Space, kernel: SquaredExponential) -> None:
+        self.shape = space.shape
+        self.size = len(space)
+        self.scale = float(np.sqrt(kernel.variance))
+        self.jitter_scale = float(np.sqrt(kernel.jitter))
+        self.roots: list[FloatArray] = []
+        for factor in kernel.factors(space):
+            eigval, eigvec = np.linalg.eigh(factor)
+            self.roots.append(eigvec * np.sqrt(np.clip(eigval, 0.0, None)))
+
+    def draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray | None]:
+        """The standard normals of ``size`` samples: ``z`` (``size x A``) and ``z'`` (or None)."""
+        z = rng.standard_normal((size, self.size))
+        z_jitter = rng.standard_normal((size, self.size)) if self.jitter_scale else None
+        return z, z_jitter
+
+    def transform(self, z: FloatArray, z_jitter: FloatArray | None) -> FloatArray:
+        """``s (S_1 (x) ... (x) S_d) z + sqrt(jitter) z'`` for ``z`` of shape ``size x A``."""
+        size = z.shape[0]
+        x = z
+        pre, post = size, self.size
+        for root in self.roots:
+            n = root.shape[0]
+            post //= n
+            if post == 1:
+                x = x.reshape(pre, n) @ root.T
+            else:
+                x = np.matmul(root, x.reshape(pre, n, post))
+            pre *= n
+        out: FloatArray = x.reshape(size, self.size)
+        out *= self.scale
+        if z_jitter is not None:
+            out += self.jitter_scale * z_jitter
+        return out
+
+    def sample(self, rng: np.random.Generator, size: int) -> FloatArray:
+        """``size x A`` joint prior samples."""
+        return self.transform(*self.draw(rng, size))
+
+
+def _khatri_rao(columns: Sequence[FloatArray], m: int) -> FloatArray:
+    """Column-wise Khatri-Rao product (C order over the factors' rows); ``1 x m`` ones if none."""
+    out = np.ones((1, m))
+    for col in columns:
+        out = (out[:, None, :] * col[None, :, :]).reshape(-1, m)
+    return out
+
+
+class KhatriRaoCross:
+    """``K_{:,V}`` on a grid, never stored: products, row gathers and row blocks.
+
+    ``split`` is the first suffix feature (:func:`khatri_rao_split`).  Temporaries stay below
+    ``block_elements`` floats (plus one row block of ``s`` samples when ``C s`` exceeds it).
+    """
+
+    def __init__(
+        self,
+        space: Space,
+        kernel: SquaredExponential,
+        visited: IntArray,
+        split: int,
+        block_elements: int = BLOCK_ELEMENTS,
+    ) -> None:
+        self.size = len(space)
+        self.shape = space.shape
+        self.visited = visited
+        self.variance = kernel.variance
+        self.jitter = kernel.jitter
+        m = visited.shape[0]
+        self.m = m
+        vis_mi = np.unravel_index(visited, space.shape)
+        self.columns = [kf[:, vi] for kf, vi in zip(kernel.factors(space), vis_mi, strict=True)]
+        self.block_elements = block_elements
+        self.prefix = kernel.variance * _khatri_rao(self.columns[:split], m)  # P x m
+        self.suffix_t = np.ascontiguousarray(_khatri_rao(self.columns[split:], m).T)  # m x C
+        self.n_prefix, self.n_suffix = self.prefix.shape[0], self.suffix_t.shape[1]
+
+    def add_product(self, out: FloatArray, coef: FloatArray) -> None:
+        """``out += (K_{:,V} coef)^T`` in place; ``out`` is ``s x A``, ``coef`` is ``m x s``."""
+        if not out.flags.c_contiguous:
+            raise ValueError("add_product needs a C-contiguous output array")
+        s = coef.shape[1]
+        P, C = self.n_prefix, self.n_suffix
+        view = out.reshape(s, P, C)
+        step = max(1, self.block_elements // max(C * s, self.m * s))
+        coef_t = coef.T  # s x m
+        for p0 in range(0, P, step):
+            p1 = min(P, p0 + step)
+            scaled = (self.prefix[p0:p1, None, :] * coef_t[None, :, :]).reshape(-1, self.m)
+            block = scaled @ self.suffix_t  # (nb s) x C
+            view[:, p0:p1, :] += block.reshape(p1 - p0, s, C).transpose(1, 0, 2)
+        if self.jitter:
+            out[:, self.visited] += self.jitter * coef_t
+
+    def rows(self, rows: IntArray) -> FloatArray:
+        """``K[rows, V]`` (``len(rows) x m``)."""
+        rows = np.asarray(rows, dtype=np.intp)
+        multi = np.unravel_index(rows, self.shape)
+        out = self.variance * self.columns[0][multi[0]]
+        for col, idx in zip(self.columns[1:], multi[1:], strict=True):
+            out *= col[idx]
+        if self.jitter:
+            out += self.jitter * (rows[:, None] == self.visited[None, :])
+        return out
+
+    def blocks(self) -> Iterator[tuple[int, FloatArray]]:
+        """``(start, K[start:start + len(block), V])`` over the whole grid, block by block."""
+        P, C, m = self.n_prefix, self.n_suffix, self.m
+        suffix = self.suffix_t.T  # C x m (a view)
+        step = max(1, self.block_elements // (C * m))
+        for p0 in range(0, P, step):
+            p1 = min(P, p0 + step)
+            block = (self.prefix[p0:p1, None, :] * suffix[None, :, :]).reshape(-1, m)
+            start = p0 * C
+            if self.jitter:
+                _add_jitter(block, start, self.visited, self.jitter)
+            yield start, block
+
+
+def _add_jitter(block: FloatArray, start: int, visited: IntArray, jitter: float) -> None:
+    """``block[v - start, j] += jitter`` for the visited ``v = visited[j]`` inside the block."""
+    stop = start + block.shape[0]
+    j = np.flatnonzero((visited >= start) & (visited < stop))
+    block[visited[j] - start, j] += jitter
+
+
+def khatri_rao_split(
+    shape: Sequence[int], m: int, block_elements: int = BLOCK_ELEMENTS
+) -> int | None:
+    """The first suffix feature of the most balanced split (``max(P, C)`` smallest) whose tables
+    ``P x m`` and ``C x m`` both fit in ``block_elements``; None when no split fits."""
+    best: tuple[int, int] | None = None
+    total = int(np.prod(shape))
+    for k in range(len(shape)):
+        C = int(np.prod(shape[k:]))
+        largest = max(C, total // C)
+        if largest * max(m, 1) <= block_elements and (best is None or largest < best[0]):
+            best = (largest, k)
+    return None if best is None else best[1]

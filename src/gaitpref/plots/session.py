@@ -1,0 +1,173 @@
+"""The figure of a session, as in the paper's Figs. 2 and 3 (one row per subject there).
+
+- 1-D: the posterior mean +- one standard deviation with a few joint samples and the trials;
+  beside it the trials in chronological order (trial number upwards) over a background that
+  shows, row by row, the posterior mean after each trial ("the background depicting the posterior
+  preference mean at each step length").
+- 2-D: a heat map of the posterior mean with the trials numbered in order and the best action
+  starred.
+- With a blind validation: the subject's ranking of gaits A/B/C against their posterior mean.
+
+Excluded trials are drawn as crosses.  :func:`session_picture` collects plain arrays from a
+session; :func:`render_session` draws them (matplotlib, Agg).
+
+Notation: ``A`` actions, ``T`` trials in force, ``history`` is ``T x A``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+from gaitpref.space import FloatArray, IntArray, Space
+
+if TYPE_CHECKING:
+    from gaitpref.session import Session
+
+
+@dataclass(frozen=True)
+class SessionPicture:
+    """What a session figure shows, as arrays."""
+
+    space: Space
+    mean: FloatArray
+    std: FloatArray
+    samples: FloatArray  # k x A
+    trials: IntArray  # actions of the trials in force, in order
+    excluded: np.ndarray  # bool per trial
+    history: FloatArray  # T x A: posterior mean after each trial
+    validation: tuple[tuple[str, int, int, float], ...]  # (label, action, subject rank, mean)
+    title: str
+
+
+def session_picture(session: Session, samples: int = 3, seed: int = 0) -> SessionPicture:
+    """Collect a session's picture (``samples`` posterior draws with generator ``seed``)."""
+    post = session.posterior()
+    space = session.config.space
+    if space.ndim > 2:
+        raise ValueError("session figures are drawn for 1-D and 2-D spaces only")
+    trials = session.trials()
+    rows = [p.mean for q, p in session.history() for _ in q.actions]
+    history = np.array(rows) if rows else np.zeros((0, len(space)))
+    draws = post.sample(np.random.default_rng(seed), samples) if samples else np.zeros((0, 1))
+    last = session.validations()[-1:] if session.validations() else []
+    validation = tuple(
+        (label, r.actions[label], r.ranking.index(label) + 1, r.posterior_mean[label])
+        for r in last
+        for label in sorted(r.actions)
+    )
+    return SessionPicture(
+        space=space,
+        mean=np.asarray(post.mean).copy(),
+        std=np.asarray(post.std).copy(),
+        samples=draws,
+        trials=np.array([t.action for t in trials], dtype=np.intp),
+        excluded=np.array([t.excluded is not None for t in trials], dtype=bool),
+        history=history,
+        validation=validation,
+        title=f"session {session.id}: subject {session.subject}, {session.config.name}, "
+        f"{len(trials)} trials",
+    )
+
+
+def _label(space: Space, k: int) -> str:
+    f = space.features[k]
+    return f"{f.name} [{f.unit}]" if f.unit else f.name
+
+
+def _posterior_1d(ax: Axes, pic: SessionPicture) -> None:
+    x = pic.space.features[0].array
+    ax.fill_between(x, pic.mean - pic.std, pic.mean + pic.std, alpha=0.25, label="mean ± sd")
+    ax.plot(x, pic.mean, lw=2, label="posterior mean")
+    for k, s in enumerate(pic.samples):
+        ax.plot(x, s, lw=0.7, ls="--", alpha=0.8, label="posterior samples" if k == 0 else None)
+    kept = ~pic.excluded
+    ax.scatter(x[pic.trials[kept]], pic.mean[pic.trials[kept]], c="k", s=14, zorder=3,
+               label="trials")  # fmt: skip
+    if pic.excluded.any():
+        ax.scatter(x[pic.trials[~kept]], pic.mean[pic.trials[~kept]], marker="x", c="r", s=30,
+                   zorder=3, label="excluded")  # fmt: skip
+    ax.set_xlabel(_label(pic.space, 0))
+    ax.set_ylabel("utility")
+    ax.legend(loc="best", fontsize=7)
+    ax.set_title("posterior")
+
+
+def _chronology_1d(ax: Axes, pic: SessionPicture) -> None:
+    x = pic.space.features[0].array
+    n = pic.trials.size
+    if n:
+        ax.pcolormesh(x, np.arange(1, n + 1), pic.history, shading="nearest", cmap="viridis")
+        numbers = np.arange(1, n + 1)
+        ax.plot(x[pic.trials], numbers, color="w", lw=0.8)
+        ax.scatter(x[pic.trials][~pic.excluded], numbers[~pic.excluded], c="w", s=14, zorder=3)
+        ax.scatter(x[pic.trials][pic.excluded], numbers[pic.excluded], marker="x", c="r", s=30,
+                   zorder=3)  # fmt: skip
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel(_label(pic.space, 0))
+    ax.set_ylabel("trial")
+    ax.set_title("trials in order over the posterior mean")
+
+
+def _heat_2d(ax: Axes, pic: SessionPicture) -> None:
+    fx, fy = pic.space.features
+    mesh = ax.pcolormesh(fy.array, fx.array, pic.mean.reshape(pic.space.shape), shading="nearest",
+                         cmap="viridis")  # fmt: skip
+    plt.colorbar(mesh, ax=ax, fraction=0.046, label="posterior mean")
+    pts = pic.space.points[pic.trials]
+    if pic.trials.size:
+        ax.plot(pts[:, 1], pts[:, 0], color="w", lw=0.6, alpha=0.7)
+        for k, (p, bad) in enumerate(zip(pts, pic.excluded, strict=True), start=1):
+            ax.annotate(str(k), (p[1], p[0]), color="r" if bad else "w", fontsize=7,
+                        ha="center", va="center")  # fmt: skip
+    best = pic.space.points[int(np.argmax(pic.mean))]
+    ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4)
+    ax.set_xlabel(_label(pic.space, 1))
+    ax.set_ylabel(_label(pic.space, 0))
+    ax.set_title("posterior mean and trials (numbered)")
+
+
+def _validation(ax: Axes, pic: SessionPicture) -> None:
+    labels = [v[0] for v in pic.validation]
+    ax.bar(labels, [v[3] for v in pic.validation], color="0.7")
+    for k, v in enumerate(pic.validation):
+        ax.annotate(f"rank {v[2]}", (k, v[3]), ha="center", va="bottom", fontsize=8)
+    ax.set_ylabel("posterior mean")
+    ax.set_title("blind ranking (1 = best)")
+
+
+def render_session(pic: SessionPicture) -> Figure:
+    """A matplotlib figure of the picture."""
+    panels = (2 if pic.space.ndim == 1 else 1) + (1 if pic.validation else 0)
+    fig = plt.figure(figsize=(4.6 * panels + 0.6, 4.3))
+    axes = fig.subplots(1, panels, squeeze=False)[0]
+    if pic.space.ndim == 1:
+        _posterior_1d(axes[0], pic)
+        _chronology_1d(axes[1], pic)
+    else:
+        _heat_2d(axes[0], pic)
+    if pic.validation:
+        _validation(axes[-1], pic)
+    fig.suptitle(pic.title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def save_session_figure(session: Session, path: str | Path) -> Path:
+    """Draw ``session`` to ``path`` (PNG or anything matplotlib writes); returns the path."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig = render_session(session_picture(session))
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out

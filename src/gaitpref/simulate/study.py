@@ -1,0 +1,235 @@
+"""A simulation study as data, and one run of it as a pure function.
+
+A study is *settings x objectives x seeds* (the paper's Fig. 4: six CoSpar settings, the authors'
+100 objectives, one run per objective).  Every run is independent: :func:`run_one` takes a
+:class:`RunTask` (everything the run needs, nothing else) and returns its executed actions and
+their normalised objective.  Its random generators come from
+``numpy.random.SeedSequence(study seed, spawn_key=(setting, objective, seed))``, never from a
+worker's identity or the order runs finish in, so a study gives the same numbers sequentially, on
+joblib processes or on a Ray cluster.
+
+Strategies: ``"cospar"`` (Algorithm 1 with ``n``, ``b`` and optionally the paper's simulated
+coactive feedback, :class:`~gaitpref.simulate.users.GradientCoactive`) and ``"random"`` (each
+trial a grid action drawn uniformly: the floor to read learning curves against).
+
+Notation: ``A`` grid actions, ``K`` objectives (rows of ``Study.objectives``, ``K x A``),
+``T`` trials per run (a trial is one executed action).
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from gaitpref.config import ExperimentConfig
+from gaitpref.cospar import CoSpar
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.simulate.run import run_simulation
+from gaitpref.simulate.users import GradientCoactive, SimulatedUser
+from gaitpref.space import FloatArray, IntArray, Space
+
+Strategy = Literal["cospar", "random"]
+
+
+@dataclass(frozen=True)
+class Setting:
+    """One arm of a study: CoSpar with ``(n, b)`` and coactive feedback or not, or random."""
+
+    name: str
+    n: int = 1
+    buffer: int = 0
+    coactive: bool = False
+    strategy: Strategy = "cospar"
+    coactive_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not self.name or any(c in self.name for c in ",\n\"'"):
+            raise ValueError(f"setting name must be non-empty without commas/quotes: {self.name!r}")
+        if self.strategy not in ("cospar", "random"):
+            raise ValueError(f"setting {self.name!r}: strategy must be 'cospar' or 'random'")
+        if self.strategy == "random" and self.coactive:
+            raise ValueError(f"setting {self.name!r}: random selection takes no coactive feedback")
+        if self.strategy == "cospar":
+            if self.n < 1 or self.buffer < 0 or (self.n == 1 and self.buffer == 0):
+                raise ValueError(
+                    f"setting {self.name!r}: needs n >= 1, b >= 0 and not n = 1 with b = 0, "
+                    f"got n = {self.n}, b = {self.buffer}"
+                )
+            if not self.coactive_weight > 0:
+                raise ValueError(f"setting {self.name!r}: coactive_weight must be > 0")
+
+    @classmethod
+    def random(cls, name: str = "random") -> Setting:
+        return cls(name, strategy="random")
+
+
+@dataclass(frozen=True, eq=False)
+class RunTask:
+    """Everything one run needs (small enough to ship to a worker process)."""
+
+    space: Space
+    kernel: SquaredExponential
+    noise: float
+    setting: Setting
+    objective: FloatArray  # (A,)
+    objective_id: int
+    seed: int
+    trials: int
+    minimize: bool
+    study_seed: int
+    user_noise: float = 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class RunResult:
+    """One run: the executed action and its normalised objective at every trial."""
+
+    setting: str
+    objective_id: int
+    seed: int
+    actions: IntArray  # (T,)
+    normalized: FloatArray  # (T,)
+
+
+def _name_key(name: str) -> tuple[int, ...]:
+    """A setting name as four 32-bit words (stable across processes and Python versions)."""
+    digest = hashlib.sha256(name.encode("utf-8")).digest()[:16]
+    return tuple(int.from_bytes(digest[i : i + 4], "little") for i in range(0, 16, 4))
+
+
+def run_seed_sequence(
+    study_seed: int, setting: str, objective_id: int, seed: int
+) -> np.random.SeedSequence:
+    """The seed sequence of one run, from its coordinates in the study only."""
+    return np.random.SeedSequence(study_seed, spawn_key=(*_name_key(setting), objective_id, seed))
+
+
+def run_one(task: RunTask) -> RunResult:
+    """Run one simulated experiment (pure: the result depends on ``task`` only)."""
+    s = task.setting
+    loop_ss, user_ss = run_seed_sequence(
+        task.study_seed, s.name, task.objective_id, task.seed
+    ).spawn(2)
+    user = SimulatedUser(
+        task.space, task.objective, np.random.default_rng(user_ss), task.minimize, task.user_noise
+    )
+    if s.strategy == "random":
+        actions = np.random.default_rng(loop_ss).integers(0, len(task.space), size=task.trials)
+        actions = actions.astype(np.intp)
+        normalized = user.normalized(actions)
+    else:
+        loop = CoSpar(
+            task.space,
+            task.kernel,
+            task.noise,
+            n=s.n,
+            buffer=s.buffer,
+            coactive_weight=s.coactive_weight,
+            seed=np.random.default_rng(loop_ss),
+        )
+        coactive = (
+            GradientCoactive(task.space, task.objective, task.minimize) if s.coactive else None
+        )
+        result = run_simulation(loop, user, task.trials, coactive)
+        actions, normalized = result.actions, result.normalized_objective
+    return RunResult(s.name, task.objective_id, task.seed, actions, normalized)
+
+
+@dataclass(frozen=True, eq=False)
+class Study:
+    """Settings x objectives x seeds on one grid, model and trial budget.
+
+    ``objectives`` is ``K x A`` (or shaped like the grid per row); ``objective_ids`` labels its
+    rows (default ``0..K-1``) and enters each run's seed.  ``minimize``: lower objective is
+    better (a cost such as COT).
+    """
+
+    name: str
+    space: Space
+    kernel: SquaredExponential
+    noise: float
+    settings: tuple[Setting, ...]
+    objectives: FloatArray
+    objective_ids: tuple[int, ...] = ()
+    seeds: tuple[int, ...] = (0,)
+    trials: int = 150
+    minimize: bool = False
+    seed: int = 0
+    user_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        settings = tuple(self.settings)
+        if not settings:
+            raise ValueError(f"study {self.name!r}: needs at least one setting")
+        names = [s.name for s in settings]
+        if len(set(names)) != len(names):
+            raise ValueError(f"study {self.name!r}: setting names repeat: {names}")
+        A = len(self.space)
+        obj = np.asarray(self.objectives, dtype=np.float64)
+        obj = obj.reshape(obj.shape[0], -1) if obj.ndim > 1 else obj.reshape(1, -1)
+        if obj.shape[1] != A or obj.shape[0] == 0:
+            raise ValueError(f"study {self.name!r}: objectives must be K x {A}, got {obj.shape}")
+        if not np.all(np.isfinite(obj)):
+            raise ValueError(f"study {self.name!r}: objectives must be finite")
+        obj = obj.copy()
+        obj.setflags(write=False)
+        ids = tuple(int(i) for i in self.objective_ids) or tuple(range(obj.shape[0]))
+        if len(ids) != obj.shape[0] or len(set(ids)) != len(ids) or min(ids) < 0:
+            raise ValueError(f"study {self.name!r}: need {obj.shape[0]} distinct ids >= 0")
+        seeds = tuple(int(s) for s in self.seeds)
+        if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
+            raise ValueError(f"study {self.name!r}: seeds must be distinct integers >= 0")
+        if self.trials < 1 or self.seed < 0:
+            raise ValueError(f"study {self.name!r}: trials must be >= 1 and seed >= 0")
+        object.__setattr__(self, "settings", settings)
+        object.__setattr__(self, "objectives", obj)
+        object.__setattr__(self, "objective_ids", ids)
+        object.__setattr__(self, "seeds", seeds)
+
+    @classmethod
+    def from_config(
+        cls,
+        config: ExperimentConfig,
+        settings: Sequence[Setting],
+        objectives: ArrayLike,
+        **kwargs: object,
+    ) -> Study:
+        """A study on a config's grid and model (its ``n``/``b`` are replaced by ``settings``)."""
+        return cls(
+            kwargs.pop("name", config.name),  # type: ignore[arg-type]
+            config.space,
+            config.kernel,
+            config.noise,
+            tuple(settings),
+            np.asarray(objectives, dtype=np.float64),
+            **kwargs,  # type: ignore[arg-type]
+        )
+
+    def __len__(self) -> int:
+        return len(self.settings) * len(self.objective_ids) * len(self.seeds)
+
+    def tasks(self) -> list[RunTask]:
+        """Every run, ordered by setting, then objective, then seed."""
+        return [
+            RunTask(
+                self.space,
+                self.kernel,
+                self.noise,
+                s,
+                self.objectives[k],
+                oid,
+                seed,
+                self.trials,
+                self.minimize,
+                self.seed,
+                self.user_noise,
+            )
+            for s in self.settings
+            for k, oid in enumerate(self.objective_ids)
+            for seed in self.seeds
+        ]

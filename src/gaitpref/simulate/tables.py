@@ -1,0 +1,266 @@
+"""Tidy tables of a study: one row per run and trial, and per-setting learning curves.
+
+The run table has the columns ``setting, objective, seed, trial, action, normalized_objective``
+(``trial`` counts executed actions from 1; ``action`` is a flat grid index).  A curve is the mean
+of ``normalized_objective`` over a setting's runs at each trial, with its standard error
+``sd / sqrt(runs)`` (``sd`` with ``ddof = 1``; NaN for a single run), as in the paper's Fig. 4.
+
+Files: ``.csv`` (optionally ``.csv.gz``) with the standard library, ``.parquet`` through pyarrow
+(``pip install gaitpref[parquet]``).  Floats are written with ``repr`` so a table reads back
+bit for bit.
+
+Notation: ``R`` rows; per setting ``runs x trials`` values.
+"""
+
+from __future__ import annotations
+
+import csv
+import gzip
+import io
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gaitpref.space import FloatArray, IntArray
+
+RUN_COLUMNS = ("setting", "objective", "seed", "trial", "action", "normalized_objective")
+CURVE_COLUMNS = ("setting", "trial", "mean", "se")
+_RUN_DTYPES = (str, np.intp, np.intp, np.intp, np.intp, np.float64)
+_CURVE_DTYPES = (str, np.intp, np.float64, np.float64)
+
+
+def _frozen(a: NDArray[Any]) -> NDArray[Any]:
+    a = np.ascontiguousarray(a)
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class RunTable:
+    """The tidy per-run, per-trial table (columns as arrays of equal length)."""
+
+    setting: NDArray[np.str_]
+    objective: IntArray
+    seed: IntArray
+    trial: IntArray
+    action: IntArray
+    normalized_objective: FloatArray
+
+    def __post_init__(self) -> None:
+        sizes = {len(getattr(self, c)) for c in RUN_COLUMNS}
+        if len(sizes) != 1:
+            raise ValueError(f"run table columns differ in length: {sorted(sizes)}")
+        for name, dtype in zip(RUN_COLUMNS, _RUN_DTYPES, strict=True):
+            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), dtype=dtype)))
+
+    def __len__(self) -> int:
+        return int(self.trial.size)
+
+    @property
+    def settings(self) -> tuple[str, ...]:
+        """Setting names in order of first appearance."""
+        return tuple(dict.fromkeys(self.setting.tolist()))
+
+    def matrix(self, setting: str) -> FloatArray:
+        """``runs x trials`` normalised objective of one setting, runs in table order."""
+        rows = self.setting == setting
+        if not np.any(rows):
+            raise KeyError(f"no setting {setting!r} in this table; it has {list(self.settings)}")
+        trials = self.trial[rows]
+        width = int(trials.max())
+        values = self.normalized_objective[rows]
+        if values.size % width or not np.array_equal(
+            trials, np.tile(np.arange(1, width + 1), values.size // width)
+        ):
+            raise ValueError(
+                f"setting {setting!r}: runs do not all have trials 1..{width} in order"
+            )
+        out: FloatArray = values.reshape(-1, width)
+        return out
+
+    def equals(self, other: RunTable) -> bool:
+        """Exact equality of every column."""
+        return all(np.array_equal(getattr(self, c), getattr(other, c)) for c in RUN_COLUMNS)
+
+    def rows(self) -> Iterator[tuple[str, int, int, int, int, float]]:
+        yield from zip(*(getattr(self, c).tolist() for c in RUN_COLUMNS), strict=True)
+
+    @classmethod
+    def concat(cls, tables: Sequence[RunTable]) -> RunTable:
+        if not tables:
+            raise ValueError("nothing to concatenate")
+        return cls(*(np.concatenate([getattr(t, c) for t in tables]) for c in RUN_COLUMNS))
+
+
+@dataclass(frozen=True, eq=False)
+class Curves:
+    """Mean and standard error of the normalised objective per setting and trial."""
+
+    setting: NDArray[np.str_]
+    trial: IntArray
+    mean: FloatArray
+    se: FloatArray
+
+    def __post_init__(self) -> None:
+        for name, dtype in zip(CURVE_COLUMNS, _CURVE_DTYPES, strict=True):
+            object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), dtype=dtype)))
+        if len({len(getattr(self, c)) for c in CURVE_COLUMNS}) != 1:
+            raise ValueError("curve columns differ in length")
+
+    @property
+    def settings(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(self.setting.tolist()))
+
+    def curve(self, setting: str) -> tuple[IntArray, FloatArray, FloatArray]:
+        """``(trials, mean, se)`` of one setting, by trial."""
+        rows = np.flatnonzero(self.setting == setting)
+        if rows.size == 0:
+            raise KeyError(f"no curve for setting {setting!r}; there are {list(self.settings)}")
+        order = rows[np.argsort(self.trial[rows], kind="stable")]
+        return self.trial[order], self.mean[order], self.se[order]
+
+    def at(self, setting: str, trial: int) -> tuple[float, float]:
+        """``(mean, se)`` of ``setting`` at ``trial``."""
+        trials, mean, se = self.curve(setting)
+        k = np.flatnonzero(trials == trial)
+        if k.size == 0:
+            raise KeyError(f"setting {setting!r} has no trial {trial} (it has 1..{trials.max()})")
+        return float(mean[k[0]]), float(se[k[0]])
+
+
+def summarize(table: RunTable) -> Curves:
+    """Per-setting learning curves of a run table."""
+    parts: list[tuple[list[str], IntArray, FloatArray, FloatArray]] = []
+    for name in table.settings:
+        m = table.matrix(name)
+        runs, width = m.shape
+        se = m.std(axis=0, ddof=1) / np.sqrt(runs) if runs > 1 else np.full(width, np.nan)
+        parts.append(([name] * width, np.arange(1, width + 1), m.mean(axis=0), se))
+    return Curves(
+        np.array([s for p in parts for s in p[0]], dtype=str),
+        np.concatenate([p[1] for p in parts]),
+        np.concatenate([p[2] for p in parts]),
+        np.concatenate([p[3] for p in parts]),
+    )
+
+
+# -- files -----------------------------------------------------------------------------------------
+@contextmanager
+def _open_text(path: Path, mode: str) -> Iterator[IO[str]]:
+    if not path.name.endswith(".gz"):
+        with open(path, mode, encoding="utf-8", newline="") as fh:
+            yield fh
+        return
+    # mtime 0 and no file name in the gzip header: the same table gives the same bytes
+    with (
+        open(path, mode + "b") as raw,
+        gzip.GzipFile(filename="", mode=mode + "b", fileobj=raw, mtime=0) as gz,
+        io.TextIOWrapper(gz, encoding="utf-8", newline="") as fh,
+    ):
+        yield fh
+
+
+def _is_parquet(path: Path) -> bool:
+    if path.suffix == ".parquet":
+        return True
+    if path.name.endswith((".csv", ".csv.gz")):
+        return False
+    raise ValueError(f"{path}: table files must end in .csv, .csv.gz or .parquet")
+
+
+def _pyarrow() -> Any:
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        raise RuntimeError(
+            "writing Parquet needs pyarrow: pip install 'gaitpref[parquet]' (or use a .csv file)"
+        ) from None
+    return pa, pq
+
+
+def write_table(table: RunTable, path: str | Path) -> Path:
+    """Write the run table as CSV (``.csv``/``.csv.gz``) or Parquet (``.parquet``)."""
+    path = Path(path)
+    if _is_parquet(path):
+        pa, pq = _pyarrow()
+        pq.write_table(pa.table({c: getattr(table, c) for c in RUN_COLUMNS}), path)
+        return path
+    with _open_text(path, "w") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(RUN_COLUMNS)
+        for s, o, sd, t, a, v in table.rows():
+            w.writerow((s, o, sd, t, a, repr(v)))
+    return path
+
+
+def read_table(path: str | Path) -> RunTable:
+    """Read a run table written by :func:`write_table`."""
+    path = Path(path)
+    if _is_parquet(path):
+        _, pq = _pyarrow()
+        t = pq.read_table(path)
+        return RunTable(*(t.column(c).to_numpy() for c in RUN_COLUMNS))
+    cols = _read_csv(path, RUN_COLUMNS)
+    objective, seed, trial, action = (np.array(c, dtype=np.intp) for c in cols[1:5])
+    return RunTable(
+        np.array(cols[0], dtype=str), objective, seed, trial, action, np.array(cols[5], dtype=float)
+    )
+
+
+def write_curves(curves: Curves, path: str | Path) -> Path:
+    """Write curves as CSV with columns ``setting, trial, mean, se``."""
+    path = Path(path)
+    with _open_text(path, "w") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(CURVE_COLUMNS)
+        for s, t, m, e in zip(
+            curves.setting.tolist(),
+            curves.trial.tolist(),
+            curves.mean.tolist(),
+            curves.se.tolist(),
+            strict=True,
+        ):
+            w.writerow((s, t, f"{m:.6f}", f"{e:.6f}"))
+    return path
+
+
+def read_curves(path: str | Path, columns: Sequence[str] = CURVE_COLUMNS) -> Curves:
+    """Read curves from CSV; ``columns`` names the file's setting, trial, mean and se columns."""
+    cols = _read_csv(Path(path), tuple(columns))
+    return Curves(
+        np.array(cols[0], dtype=str),
+        np.array(cols[1], dtype=np.intp),
+        np.array(cols[2], dtype=float),
+        np.array(cols[3], dtype=float),
+    )
+
+
+def _read_csv(path: Path, columns: tuple[str, ...]) -> list[list[str]]:
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such file")
+    with _open_text(path, "r") as fh:
+        return _parse_csv(fh, columns, str(path))
+
+
+def _parse_csv(fh: Any, columns: tuple[str, ...], where: str) -> list[list[str]]:
+    reader = csv.reader(fh)
+    header = next(reader, None)
+    if header is None:
+        raise ValueError(f"{where}: empty file")
+    missing = [c for c in columns if c not in header]
+    if missing:
+        raise ValueError(f"{where}: missing column(s) {', '.join(missing)}; header is {header}")
+    idx = [header.index(c) for c in columns]
+    out: list[list[str]] = [[] for _ in columns]
+    for line, row in enumerate(reader, start=2):
+        if len(row) != len(header):
+            raise ValueError(f"{where}:{line}: {len(row)} fields, header has {len(header)}")
+        for k, i in enumerate(idx):
+            out[k].append(row[i])
+    return out

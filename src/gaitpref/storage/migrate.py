@@ -1,0 +1,121 @@
+"""Schema versions: Alembic migrations shipped in the package, and the checks on open.
+
+A gaitpref database carries Alembic's ``alembic_version`` table.  On open, :func:`check_schema`
+accepts a database at the newest revision this gaitpref knows; an empty database is created
+(when allowed); anything else raises :class:`~gaitpref.storage.base.SchemaError` that says what
+to do (a revision this gaitpref does not know was written by a newer gaitpref; an older one needs
+``gaitpref db upgrade``).
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from importlib import resources
+from typing import TYPE_CHECKING
+
+from sqlalchemy import Connection, inspect, text
+
+from gaitpref.storage.base import SchemaError
+
+if TYPE_CHECKING:  # alembic is imported when first needed: it costs a tenth of a second
+    from alembic.config import Config
+    from alembic.script import ScriptDirectory
+
+_TABLES = {"subjects", "sessions", "events"}
+
+
+def _config(connection: Connection | None = None) -> Config:
+    from alembic.config import Config
+
+    cfg = Config()
+    cfg.set_main_option("script_location", str(resources.files("gaitpref.storage") / "migrations"))
+    if connection is not None:
+        cfg.attributes["connection"] = connection
+    return cfg
+
+
+@cache
+def _script() -> ScriptDirectory:
+    from alembic.script import ScriptDirectory
+
+    return ScriptDirectory.from_config(_config())
+
+
+def head_revision() -> str:
+    """The newest schema revision this gaitpref writes."""
+    head = _script().get_current_head()
+    assert head is not None
+    return head
+
+
+def known_revisions() -> list[str]:
+    """Every schema revision this gaitpref knows, oldest first."""
+    return [s.revision for s in reversed(list(_script().walk_revisions()))]
+
+
+def current_revision(connection: Connection) -> str | None:
+    """The database's revision; ``None`` for a database without gaitpref's schema."""
+    if "alembic_version" not in inspect(connection).get_table_names():
+        return None
+    rows = connection.execute(text("SELECT version_num FROM alembic_version")).scalars().all()
+    if len(rows) != 1:
+        raise SchemaError(f"alembic_version holds {len(rows)} rows; expected exactly one")
+    return str(rows[0])
+
+
+def upgrade(connection: Connection, revision: str = "head") -> None:
+    """Migrate the database on ``connection`` (inside its transaction) to ``revision``."""
+    current = current_revision(connection)
+    _check_known(current)
+    if current is None:
+        _check_empty(connection)
+    from alembic import command
+
+    command.upgrade(_config(connection), revision)
+
+
+def check_schema(connection: Connection, where: str, create: bool) -> bool:
+    """Check the schema on open; create it in an empty database if ``create``.
+
+    Returns True when it created the schema.
+    """
+    current = current_revision(connection)
+    if current is None:
+        _check_empty(connection)
+        if not create:
+            raise SchemaError(
+                f"{where} holds no gaitpref database; create one with "
+                "`gaitpref db upgrade` or `gaitpref session new`"
+            )
+        from alembic import command
+
+        command.upgrade(_config(connection), "head")
+        return True
+    _check_known(current)
+    head = head_revision()
+    if current != head:
+        raise SchemaError(
+            f"{where} is at schema revision {current}; this gaitpref writes {head}: back the "
+            "database up, then run `gaitpref db upgrade`"
+        )
+    return False
+
+
+def _check_known(current: str | None) -> None:
+    if current is not None and current not in known_revisions():
+        raise SchemaError(
+            f"the database is at schema revision {current!r}, which this gaitpref does not know "
+            f"(its newest is {head_revision()!r}): it was written by a newer gaitpref; use that "
+            "version (or newer) to open it"
+        )
+
+
+def _check_empty(connection: Connection) -> None:
+    tables = set(inspect(connection).get_table_names())
+    if tables:
+        ours = sorted(tables & _TABLES)
+        what = f"gaitpref-like tables {ours}" if ours else f"{len(tables)} other tables"
+        raise SchemaError(
+            f"the database has {what} but no gaitpref schema version (alembic_version): it is "
+            "not a gaitpref database; use an empty database or another file"
+        )

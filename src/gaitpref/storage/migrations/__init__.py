@@ -1,0 +1,1 @@
+"""Alembic migrations of the gaitpref schema (run them with ``gaitpref db upgrade``)."""

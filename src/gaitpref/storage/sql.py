@@ -1,0 +1,360 @@
+"""The SQLAlchemy 2 :class:`~gaitpref.storage.base.Storage`: SQLite (default) and PostgreSQL.
+
+- SQLite: WAL journal, ``synchronous=FULL`` (a commit survives a power cut), a busy timeout,
+  foreign keys on, and writes in ``BEGIN IMMEDIATE`` transactions so that concurrent writers
+  queue instead of failing half-way.
+- PostgreSQL (``postgresql+psycopg://user@host/db``): the session row is locked
+  (``SELECT ... FOR UPDATE``) while a batch is appended.
+- Both: the append is a compare-and-set on ``sessions.last_seq`` and ``(session_id, seq)`` is the
+  events' primary key, so two writers can never both append the same sequence number.
+
+Opening checks the connection and the schema (``migrate.check_schema``) and raises
+:class:`StorageConnectError` / :class:`SchemaError` with the URL (password masked).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from sqlalchemy import Connection, Engine, create_engine, event, insert, select, update
+from sqlalchemy.dialects.postgresql import insert as pg_insert
+from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+from sqlalchemy.engine import URL, make_url
+from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, SQLAlchemyError
+from sqlalchemy.pool import StaticPool
+
+from gaitpref.storage import migrate
+from gaitpref.storage.base import (
+    ConflictError,
+    EventRecord,
+    NewEvent,
+    SessionFinishedError,
+    SessionNotFoundError,
+    SessionRecord,
+    SessionSpec,
+    Status,
+    Storage,
+    StorageConnectError,
+    StorageError,
+    SubjectRecord,
+    as_utc,
+    check_event,
+    check_spec,
+    check_status,
+    now,
+)
+from gaitpref.storage.schema import events as events_t
+from gaitpref.storage.schema import sessions as sessions_t
+from gaitpref.storage.schema import subjects as subjects_t
+
+BUSY_TIMEOUT_S = 30.0
+
+
+def parse_url(url: str) -> URL:
+    """``url`` as a SQLAlchemy URL; ``postgresql://`` means the psycopg 3 driver."""
+    try:
+        parsed = make_url(url)
+    except ArgumentError:
+        raise StorageConnectError(
+            f"{url!r} is not a database URL (expected e.g. sqlite:///gaitpref.db or "
+            "postgresql+psycopg://user@host/dbname)"
+        ) from None
+    if parsed.drivername in ("postgresql", "postgres"):
+        parsed = parsed.set(drivername="postgresql+psycopg")
+    if parsed.get_backend_name() not in ("sqlite", "postgresql"):
+        raise StorageConnectError(
+            f"unsupported database {parsed.get_backend_name()!r} in {_masked(parsed)}: "
+            "gaitpref stores sessions in SQLite or PostgreSQL"
+        )
+    return parsed
+
+
+def _masked(url: URL) -> str:
+    return url.render_as_string(hide_password=True)
+
+
+class SQLStorage(Storage):
+    """Sessions in a SQL database through SQLAlchemy 2 (see the module docstring)."""
+
+    def __init__(self, url: str, *, create: bool = True) -> None:
+        parsed = parse_url(url)
+        self.url = _masked(parsed)
+        self._sqlite = parsed.get_backend_name() == "sqlite"
+        if self._sqlite and not _sqlite_memory(parsed):
+            path = Path(parsed.database or "")
+            if not create and not path.exists():
+                raise StorageConnectError(
+                    f"no gaitpref database at {self.url} (the file {str(path)!r} does not "
+                    "exist); create one with `gaitpref db upgrade` or `gaitpref session new`"
+                )
+            if not path.parent.is_dir():
+                raise StorageConnectError(
+                    f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
+                )
+        self.engine = _engine(parsed)
+        try:
+            with self._write() as conn:
+                migrate.check_schema(conn, self.url, create)
+        except StorageError:
+            self.engine.dispose()
+            raise
+        except (DBAPIError, SQLAlchemyError, OSError, ImportError) as exc:
+            self.engine.dispose()
+            raise StorageConnectError(f"cannot open {self.url}: {_reason(exc)}") from None
+
+    # -- Storage -----------------------------------------------------------------------------
+    def create_session(
+        self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
+    ) -> SessionRecord:
+        spec = check_spec(spec)
+        checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
+        status = check_status(status)
+        stamp = now()
+        with self._write() as conn:
+            ins = sqlite_insert if self._sqlite else pg_insert
+            conn.execute(
+                ins(subjects_t)
+                .values(code=spec.subject, created_at=stamp)
+                .on_conflict_do_nothing(index_elements=["code"])
+            )
+            sid = conn.execute(
+                insert(sessions_t)
+                .values(
+                    subject=spec.subject,
+                    config_name=spec.config_name,
+                    config_text=spec.config_text,
+                    config_sha256=spec.config_sha256,
+                    seed=spec.seed,
+                    software_version=spec.software_version,
+                    status=status,
+                    created_at=stamp,
+                    updated_at=stamp,
+                    last_seq=len(checked),
+                    meta=spec.meta,
+                )
+                .returning(sessions_t.c.id)
+            ).scalar_one()
+            if checked:
+                conn.execute(insert(events_t), _rows(sid, 0, checked, stamp))
+            row = conn.execute(select(sessions_t).where(sessions_t.c.id == sid)).one()
+        return _session(row._mapping)
+
+    def get_session(self, session_id: int) -> SessionRecord:
+        with self._read() as conn:
+            row = conn.execute(
+                select(sessions_t).where(sessions_t.c.id == _sid(session_id))
+            ).first()
+        if row is None:
+            raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
+        return _session(row._mapping)
+
+    def list_sessions(self, subject: str | None = None) -> list[SessionRecord]:
+        query = select(sessions_t).order_by(sessions_t.c.id)
+        if subject is not None:
+            query = query.where(sessions_t.c.subject == subject)
+        with self._read() as conn:
+            return [_session(r._mapping) for r in conn.execute(query)]
+
+    def list_subjects(self) -> list[SubjectRecord]:
+        with self._read() as conn:
+            rows = conn.execute(select(subjects_t).order_by(subjects_t.c.code)).all()
+        return [SubjectRecord(r.code, as_utc(r.created_at)) for r in rows]
+
+    def append(
+        self,
+        session_id: int,
+        after: int,
+        events: Sequence[NewEvent],
+        status: Status | None = None,
+    ) -> list[EventRecord]:
+        checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
+        new_status = None if status is None else check_status(status)
+        sid = _sid(session_id)
+        stamp = now()
+        try:
+            with self._write() as conn:
+                query = select(sessions_t.c.last_seq, sessions_t.c.status).where(
+                    sessions_t.c.id == sid
+                )
+                row = conn.execute(query if self._sqlite else query.with_for_update()).first()
+                if row is None:
+                    raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
+                if row.status == "finished":
+                    raise SessionFinishedError(f"session {session_id} is finished")
+                if row.last_seq != after:
+                    raise _conflict(session_id, row.last_seq, after)
+                rows = _rows(sid, after, checked, stamp)
+                if rows:
+                    conn.execute(insert(events_t), rows)
+                values: dict[str, Any] = {"last_seq": after + len(rows), "updated_at": stamp}
+                if new_status is not None:
+                    values["status"] = new_status
+                done = conn.execute(
+                    update(sessions_t)
+                    .where(sessions_t.c.id == sid, sessions_t.c.last_seq == after)
+                    .values(**values)
+                )
+                if done.rowcount != 1:
+                    raise _conflict(session_id, None, after)
+        except IntegrityError:
+            raise _conflict(session_id, None, after) from None
+        return [EventRecord(sid, r["seq"], r["kind"], r["payload"], as_utc(r["at"])) for r in rows]
+
+    def events(self, session_id: int, after: int = 0) -> list[EventRecord]:
+        sid = _sid(session_id)
+        with self._read() as conn:
+            found = conn.execute(select(sessions_t.c.id).where(sessions_t.c.id == sid)).first()
+            if found is None:
+                raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
+            rows = conn.execute(
+                select(events_t)
+                .where(events_t.c.session_id == sid, events_t.c.seq > after)
+                .order_by(events_t.c.seq)
+            ).all()
+        return [EventRecord(r.session_id, r.seq, r.kind, r.payload, as_utc(r.at)) for r in rows]
+
+    def close(self) -> None:
+        self.engine.dispose()
+
+    # -- transactions ------------------------------------------------------------------------
+    @contextmanager
+    def _write(self) -> Iterator[Connection]:
+        """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving."""
+        with self._errors(), self.engine.connect() as conn:
+            conn.execution_options(gaitpref_write=True)
+            with conn.begin():
+                yield conn
+
+    @contextmanager
+    def _read(self) -> Iterator[Connection]:
+        with self._errors(), self.engine.connect() as conn, conn.begin():
+            yield conn
+
+    @contextmanager
+    def _errors(self) -> Iterator[None]:
+        try:
+            yield
+        except IntegrityError:
+            raise
+        except DBAPIError as exc:
+            if exc.connection_invalidated or "connect" in str(exc.orig).lower():
+                raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
+            raise StorageError(f"{self.url}: {_reason(exc)}") from None
+
+
+def upgrade_database(url: str) -> str:
+    """Create the database's schema, or migrate it to the newest; returns the masked URL."""
+    parsed = parse_url(url)
+    if parsed.get_backend_name() == "sqlite" and not _sqlite_memory(parsed):
+        folder = Path(parsed.database or "").parent
+        if not folder.is_dir():
+            raise StorageConnectError(
+                f"cannot open {_masked(parsed)}: the folder {str(folder)!r} does not exist"
+            )
+    engine = _engine(parsed)
+    try:
+        with engine.connect() as conn:
+            conn.execution_options(gaitpref_write=True)
+            with conn.begin():
+                migrate.upgrade(conn)
+    except (DBAPIError, SQLAlchemyError, OSError, ImportError) as exc:
+        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}") from None
+    finally:
+        engine.dispose()
+    SQLStorage(url).close()  # opens it the way every command will
+    return _masked(parsed)
+
+
+# -- helpers -----------------------------------------------------------------------------------
+def _sqlite_memory(url: URL) -> bool:
+    return url.database in (None, "", ":memory:")
+
+
+def _engine(url: URL) -> Engine:
+    serializer = functools.partial(json.dumps, allow_nan=False)
+    if url.get_backend_name() == "postgresql":
+        return create_engine(
+            url,
+            json_serializer=serializer,
+            connect_args={"connect_timeout": 10},
+            pool_pre_ping=True,
+        )
+    memory = _sqlite_memory(url)
+    engine = create_engine(
+        url,
+        json_serializer=serializer,
+        connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
+        **({"poolclass": StaticPool} if memory else {}),
+    )
+
+    @event.listens_for(engine, "connect")
+    def _on_connect(dbapi_connection: Any, _record: object) -> None:
+        dbapi_connection.isolation_level = None  # transactions are begun below, explicitly
+        cursor = dbapi_connection.cursor()
+        cursor.execute("PRAGMA foreign_keys = ON")
+        cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
+        if not memory:
+            cursor.execute("PRAGMA journal_mode = WAL")
+            cursor.execute("PRAGMA synchronous = FULL")
+        cursor.close()
+
+    @event.listens_for(engine, "begin")
+    def _on_begin(conn: Connection) -> None:
+        write = conn.get_execution_options().get("gaitpref_write", False)
+        conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
+
+    return engine
+
+
+def _sid(session_id: object) -> int:
+    if isinstance(session_id, bool) or not isinstance(session_id, int):
+        raise SessionNotFoundError(f"session ids are integers, got {session_id!r}")
+    return session_id
+
+
+def _rows(sid: int, after: int, events: Sequence[NewEvent], stamp: Any) -> list[dict[str, Any]]:
+    return [
+        {
+            "session_id": sid,
+            "seq": after + k + 1,
+            "kind": e.kind,
+            "payload": e.payload,
+            "at": as_utc(e.at) if e.at is not None else stamp,
+        }
+        for k, e in enumerate(events)
+    ]
+
+
+def _session(row: Any) -> SessionRecord:
+    return SessionRecord(
+        id=row["id"],
+        subject=row["subject"],
+        config_name=row["config_name"],
+        config_text=row["config_text"],
+        config_sha256=row["config_sha256"],
+        seed=int(row["seed"]),
+        software_version=row["software_version"],
+        status=row["status"],
+        created_at=as_utc(row["created_at"]),
+        updated_at=as_utc(row["updated_at"]),
+        last_seq=row["last_seq"],
+        meta=row["meta"],
+    )
+
+
+def _conflict(session_id: int, last: int | None, after: int) -> ConflictError:
+    have = "more events" if last is None else f"events up to {last}"
+    return ConflictError(
+        f"session {session_id} has {have}, not {after}: another writer appended to it; reload it"
+    )
+
+
+def _reason(exc: BaseException) -> str:
+    orig = getattr(exc, "orig", None)
+    text = str(orig if orig is not None else exc).strip().splitlines()
+    return text[0] if text else type(exc).__name__

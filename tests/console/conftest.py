@@ -1,0 +1,52 @@
+"""Fixtures for console tests: an application over a temporary SQLite database."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+
+from gaitpref.console import create_app
+
+
+@pytest.fixture
+def db_url(tmp_path: Path) -> str:
+    return f"sqlite:///{tmp_path / 'console.db'}"
+
+
+@pytest.fixture
+def client(db_url: str) -> Iterator[TestClient]:
+    with TestClient(create_app(db_url)) as c:
+        yield c
+
+
+def new_session(client: TestClient, config: str = "exo-1d-step-length", **extra: Any) -> int:
+    r = client.post("/api/sessions", json={"config": config, "subject": "S01", **extra})
+    assert r.status_code == 201, r.text
+    return int(r.json()["id"])
+
+
+def answer_once(client: TestClient, sid: int, outcome: str = "first") -> dict[str, Any]:
+    """Answer the pending query: every asked comparison with ``outcome``, no suggestions."""
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    body = {
+        "query_id": q["query_id"],
+        "comparisons": [[i, j, outcome] for i, j in q["comparisons"]],
+    }
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 200, r.text
+    return dict(r.json())
+
+
+def event_count(client: TestClient, sid: int) -> int:
+    return len(client.get(f"/api/sessions/{sid}/events").json())
+
+
+def csrf_of(html: str) -> str:
+    m = re.search(r'name="csrf_token" value="([^"]+)"', html)
+    assert m, "the page carries no CSRF token"
+    return m.group(1)

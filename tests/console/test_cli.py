@@ -1,0 +1,69 @@
+"""``gaitpref console``: the URL it prints, and the token it requires off the loopback interface."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import pytest
+import uvicorn
+from fastapi.testclient import TestClient
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+
+
+@pytest.fixture
+def served(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
+    """What ``uvicorn.run`` was asked to serve (nothing is served)."""
+    seen: dict[str, Any] = {}
+
+    def fake_run(application: Any, **kwargs: Any) -> None:
+        seen["app"] = application
+        seen.update(kwargs)
+
+    monkeypatch.setattr(uvicorn, "run", fake_run)
+    monkeypatch.delenv("GAITPREF_TOKEN", raising=False)
+    return seen
+
+
+def run(*args: str, env: dict[str, str] | None = None) -> str:
+    result = CliRunner().invoke(app, ["console", *args], env=env)
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def test_loopback_needs_no_token(served: dict[str, Any], db_url: str) -> None:
+    out = run("--db", db_url, "--port", "8123")
+    assert "open http://127.0.0.1:8123/\n" in out and "?token" not in out
+    assert served["host"] == "127.0.0.1" and served["port"] == 8123
+    client = TestClient(served["app"], base_url="http://127.0.0.1:8123")
+    assert client.get("/api/configs").status_code == 200
+    # DNS rebinding: a loopback console answers only to loopback host names
+    assert client.get("/api/configs", headers={"host": "evil.example"}).status_code == 400
+
+
+def test_other_interfaces_get_a_generated_token(served: dict[str, Any], db_url: str) -> None:
+    out = run("--db", db_url, "--host", "0.0.0.0")
+    token = re.search(r"\?token=([A-Za-z0-9_-]+)", out)
+    assert token is not None and len(token.group(1)) >= 32
+    client = TestClient(served["app"])
+    assert client.get("/api/configs").status_code == 401
+    auth = {"authorization": f"Bearer {token.group(1)}"}
+    assert client.get("/api/configs", headers=auth).status_code == 200
+
+
+def test_a_given_token_from_the_option_or_the_environment(
+    served: dict[str, Any], db_url: str
+) -> None:
+    out = run("--db", db_url, "--host", "10.0.0.5", "--token", "opt-token")
+    assert "http://10.0.0.5:8000/?token=opt-token" in out
+    out = run("--db", db_url, "--host", "10.0.0.5", env={"GAITPREF_TOKEN": "env-token"})
+    assert "?token=env-token" in out
+    client = TestClient(served["app"])
+    assert client.get("/api/configs", headers={"x-gaitpref-token": "env-token"}).status_code == 200
+    # a token given on the loopback interface is required too
+    out = run("--db", db_url, "--token", "local")
+    assert "?token=local" in out
+    loopback = TestClient(served["app"], base_url="http://127.0.0.1:8000")
+    assert loopback.get("/api/configs").status_code == 401

@@ -1,0 +1,126 @@
+"""Gait libraries given to the console: uploaded with a config, kept for reopening, never read
+from a path a client names outside the console's library folder."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from gaitpref.console import create_app
+from gaitpref.gaits import GaitLibrary, build_library
+from tests.console.htmlforms import forms_of
+
+NAMED = """
+[gaits]
+library = "lib.json"
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.08 }
+signal_variance = 0.005
+noise = 0.02
+[cospar]
+n = 1
+buffer = 1
+"""
+OWN_SPACE = """
+[space.step_length]
+values = [0.10, 0.13, 0.16]
+unit = "m"
+[space.step_duration]
+values = %s
+unit = "s"
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.08 }
+signal_variance = 0.005
+noise = 0.02
+[cospar]
+n = 1
+buffer = 1
+"""
+
+
+@pytest.fixture(scope="module")
+def library_bytes(tmp_path_factory: pytest.TempPathFactory) -> tuple[bytes, GaitLibrary]:
+    lib = build_library([0.10, 0.13, 0.16], step_durations=[0.85, 1.15], n_jobs=1)
+    path = tmp_path_factory.mktemp("lib") / "lib.json"
+    lib.save(path)
+    return path.read_bytes(), lib
+
+
+@pytest.fixture
+def console(db_url: str, tmp_path: Path) -> Iterator[TestClient]:
+    with TestClient(create_app(db_url, library_dir=tmp_path / "libs"), follow_redirects=False) as c:
+        yield c
+
+
+def upload(c: TestClient, config: str, library: tuple[str, bytes] | None) -> httpx.Response:
+    csrf = forms_of(c.get("/").text)["create-form"].fields["csrf_token"]
+    files = {"config_file": ("study.toml", config.encode())}
+    if library is not None:
+        files["library_file"] = (library[0], library[1])
+    return c.post("/sessions", data={"csrf_token": csrf, "subject": "S01"}, files=files)
+
+
+def test_a_config_naming_an_uploaded_library(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary], db_url: str, tmp_path: Path
+) -> None:
+    data, lib = library_bytes
+    r = upload(console, NAMED, ("lib.json", data))
+    assert r.status_code == 303, r.text
+    q = console.get("/api/sessions/1/query").json()
+    gait = q["actions"][0]
+    assert gait["gait_id"] == lib.gait_id(gait["index"])
+    assert gait["gait_id"] in console.get("/sessions/1").text
+    kept = list((tmp_path / "libs").glob("*/lib.json"))
+    assert len(kept) == 1 and kept[0].read_bytes() == data
+    # another console over the same database reopens the session: it finds the library again
+    other = TestClient(create_app(db_url, library_dir=tmp_path / "libs"))
+    assert other.get("/api/sessions/1/query").json() == q
+    # a config sent as text may name the kept library by its path inside the library folder
+    inside = NAMED.replace('"lib.json"', f'"{kept[0].parent.name}/lib.json"')
+    r = console.post("/api/sessions", json={"config": inside, "subject": "S02"})
+    assert r.status_code == 201, r.text
+    # exports carry the library at the path the config names, subfolders included
+    for sid, name in ((1, "lib.json"), (r.json()["id"], f"{kept[0].parent.name}/lib.json")):
+        z = console.get(f"/api/sessions/{sid}/export", params={"format": "json"})
+        with zipfile.ZipFile(io.BytesIO(z.content)) as zf:
+            assert zf.read(f"session-{sid}/{name}") == data
+
+
+def test_a_config_with_its_own_grid_and_a_library_naming_its_gaits(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary]
+) -> None:
+    data, lib = library_bytes
+    r = upload(console, OWN_SPACE % "[0.85, 1.15]", ("any-name.json", data))
+    assert r.status_code == 303
+    gait = console.get("/api/sessions/1/query").json()["actions"][0]
+    assert gait["gait_id"] == lib.gait_id(gait["index"])
+    r = upload(console, OWN_SPACE % "[0.85, 1.0, 1.15]", ("lib.json", data))
+    assert r.status_code == 422 and "<code>library_file</code>" in r.text
+    assert "3 x 2" in r.text and "3 x 3" in r.text
+
+
+def test_refused_libraries_and_paths(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary], tmp_path: Path
+) -> None:
+    data, _ = library_bytes
+    r = upload(console, NAMED, ("lib.json", b'{"format": "something else"}'))
+    assert r.status_code == 422 and "not a usable gait library" in r.text
+    r = upload(console, NAMED, ("other.json", data))
+    assert r.status_code == 422 and "name the uploaded file" in r.text
+    secret = tmp_path / "secret.json"
+    secret.write_bytes(data)
+    for path in (str(secret), "../secret.json", "../../../../etc/passwd"):
+        body = {"config": NAMED.replace('"lib.json"', f'"{path}"'), "subject": "S01"}
+        r = console.post("/api/sessions", json=body)
+        assert r.status_code == 422, path
+        assert r.json()["detail"][0]["loc"] == ["body", "config"]
+        assert "library folder" in r.json()["detail"][0]["msg"]
+    r = console.post("/api/sessions", json={"config": NAMED, "subject": "S01"})
+    assert r.status_code == 422 and "no such gait library" in r.text
+    assert console.get("/api/sessions").json() == []

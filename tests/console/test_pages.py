@@ -1,0 +1,248 @@
+"""The pages without a browser: forms, the server-side confirm step, 409/422 pages."""
+
+from __future__ import annotations
+
+import re
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from tests.console.conftest import answer_once, event_count, new_session
+from tests.console.htmlforms import Form, forms_of
+
+
+def trial_form(client: TestClient, sid: int) -> Form:
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200
+    return forms_of(page.text)["answer-form"]
+
+
+def post(client: TestClient, url: str, data: dict[str, str]) -> httpx.Response:
+    return client.post(url, data=data, follow_redirects=False)
+
+
+def test_create_from_the_sessions_page_then_answer_with_a_confirm_step(client: TestClient) -> None:
+    page = client.get("/")
+    create = forms_of(page.text)["create-form"]
+    assert "exo-2d-length-duration" in create.selects["config"]
+    r = client.post(
+        "/sessions",
+        data={**create.fields, "subject": "S07", "config": "exo-2d-length-duration", "seed": "3"},
+        files={"config_file": ("", b"")},
+        follow_redirects=False,
+    )
+    assert r.status_code == 303
+    sid = int(r.headers["location"].rsplit("/", 1)[1])
+    assert client.get(f"/api/sessions/{sid}").json()["seed"] == 3
+    html = client.get(f"/sessions/{sid}").text
+    assert "Run now: trial 1" in html and "step duration" in html and ">s<" not in html
+    assert "slightly slower" in html and "quicker" in html  # the features' own words
+    assert "No preference learned yet" in html
+    form = forms_of(html)["answer-form"]
+    gait = client.get(f"/api/sessions/{sid}/query").json()["actions"][0]["index"]
+    assert form.radios[f"sug-{gait}-step_length"] == ["+big", "+small", "", "-small", "-big"]
+    data = {**form.fields, f"sug-{gait}-step_length": "+small", "note": "first steps"}
+    confirm = post(client, f"/sessions/{sid}/answer", data)
+    assert confirm.status_code == 200
+    assert "Save this answer?" in confirm.text and "step length slightly longer" in confirm.text
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 0  # not yet
+    again = forms_of(confirm.text)["form1"]
+    assert again.fields["confirmed"] == "1"
+    done = post(client, f"/sessions/{sid}/answer", again.fields)
+    assert done.status_code == 303
+    assert done.headers["location"] == f"/sessions/{sid}?answered=1"
+    shown = client.get(done.headers["location"]).text
+    assert (
+        "Saved: trial 1." in shown
+        and "Run now: trial 2" in shown
+        and "Compare with: trial 1" in shown
+    )
+    assert "step length: slightly longer" in shown  # the chronology
+    assert "trial 1: first steps" in shown  # the note
+    assert "Best so far" in shown and "No preference learned yet" not in shown
+
+
+def test_a_second_post_of_the_same_answer_is_a_409_page_and_writes_nothing(
+    client: TestClient,
+) -> None:
+    sid = new_session(client)
+    answer_once(client, sid)
+    form = trial_form(client, sid)
+    cmp = next(k for k in form.radios if k.startswith("cmp-"))
+    data = {**form.fields, cmp: "first", "confirmed": "1"}
+    assert post(client, f"/sessions/{sid}/answer", data).status_code == 303
+    events = event_count(client, sid)
+    r = post(client, f"/sessions/{sid}/answer", data)
+    assert r.status_code == 409
+    assert "already answered" in r.text and "Nothing was written" in r.text
+    assert f'href="/sessions/{sid}"' in r.text
+    assert event_count(client, sid) == events
+
+
+@pytest.mark.parametrize(
+    ("change", "field"),
+    [
+        ({"cmp-1-2": "maybe"}, "cmp-1-2"),
+        ({"colour": "red"}, "colour"),
+        ({"query_id": "abc"}, "query_id"),
+        ({"sug-3-step_length": "+huge"}, "sug-3-step_length"),
+    ],
+)
+def test_malformed_answer_forms_are_422_naming_the_field(
+    client: TestClient, change: dict[str, str], field: str
+) -> None:
+    sid = new_session(client)
+    form = trial_form(client, sid)
+    events = event_count(client, sid)
+    r = post(client, f"/sessions/{sid}/answer", {**form.fields, **change, "confirmed": "1"})
+    assert r.status_code == 422
+    assert f"<code>{field}</code>" in r.text
+    assert event_count(client, sid) == events
+
+
+def test_undo_from_the_page_goes_through_a_confirm_step(client: TestClient) -> None:
+    sid = new_session(client)
+    answer_once(client, sid)
+    html = client.get(f"/sessions/{sid}").text
+    undo = forms_of(html)["undo-form"]
+    confirm = post(client, f"/sessions/{sid}/undo", undo.fields)
+    assert confirm.status_code == 200 and "Undo the last answer?" in confirm.text
+    assert "trial 1" in confirm.text
+    r = post(client, f"/sessions/{sid}/undo", {**undo.fields, "confirmed": "1"})
+    assert r.status_code == 303 and r.headers["location"].endswith("?undone=1")
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 0
+    r = post(client, f"/sessions/{sid}/undo", {**undo.fields, "confirmed": "1"})
+    assert r.status_code == 409 and "nothing was undone" in r.text
+
+
+def test_notes_exclusion_pause_resume_finish_from_the_page(client: TestClient) -> None:
+    sid = new_session(client)
+    answer_once(client, sid)
+    answer_once(client, sid)
+    forms = forms_of(client.get(f"/sessions/{sid}").text)
+    csrf = forms["answer-form"].fields["csrf_token"]
+    assert (
+        post(
+            client, f"/sessions/{sid}/note", {"csrf_token": csrf, "text": "strap loose"}
+        ).status_code
+        == 303
+    )
+    assert (
+        post(client, f"/sessions/{sid}/note", {"csrf_token": csrf, "text": " "}).status_code == 422
+    )
+    r = post(
+        client,
+        f"/sessions/{sid}/trials/1/exclude",
+        {"csrf_token": csrf, "reason": "device_fault", "detail": "motor"},
+    )
+    assert r.status_code == 303
+    html = client.get(f"/sessions/{sid}").text
+    assert "strap loose" in html and "excluded: device fault" in html
+    assert (
+        post(
+            client, f"/sessions/{sid}/status", {"csrf_token": csrf, "status": "paused"}
+        ).status_code
+        == 303
+    )
+    html = client.get(f"/sessions/{sid}").text
+    assert "Paused" in html and "answer-form" not in html
+    assert (
+        post(
+            client, f"/sessions/{sid}/status", {"csrf_token": csrf, "status": "active"}
+        ).status_code
+        == 303
+    )
+    assert (
+        post(
+            client, f"/sessions/{sid}/status", {"csrf_token": csrf, "status": "finished"}
+        ).status_code
+        == 303
+    )
+    html = client.get(f"/sessions/{sid}").text
+    assert "Finished" in html and "answer-form" not in html and "Export CSV" in html
+
+
+def test_a_query_of_two_new_gaits_asks_to_compare_them(client: TestClient) -> None:
+    sid = new_session(client, "compass-gait")
+    html = client.get(f"/sessions/{sid}").text
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    a, b = (g["index"] for g in q["actions"])
+    form = forms_of(html)["answer-form"]
+    assert form.radios[f"cmp-{a}-{b}"] == ["first", "second", "none"]
+    assert "Run now: trial 1" in html and "Run now: trial 2" in html
+    assert len([k for k in form.radios if k.startswith("sug-")]) == 2  # one per executed gait
+
+
+def test_validation_pages(client: TestClient) -> None:
+    sid = new_session(client)
+    for outcome in ("first", "second", "first"):
+        answer_once(client, sid, outcome)
+    page = client.get(f"/sessions/{sid}/validation").text
+    start = forms_of(page)["form1"]
+    assert post(client, f"/sessions/{sid}/validation", start.fields).status_code == 303
+    page = client.get(f"/sessions/{sid}/validation").text
+    assert re.findall(r'data-label="([ABC])"', page) == ["A", "B", "C"]
+    assert "A blind validation round is open" in client.get(f"/sessions/{sid}").text
+    rank = forms_of(page)["ranking-form"]
+    assert rank.selects["rank1"] == ["", "A", "B", "C"]
+    r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": "", "rank3": "A"})
+    assert r.status_code == 422 and "<code>rank2</code>" in r.text
+    r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": "B", "rank3": "A"})
+    assert r.status_code == 303
+    page = client.get(f"/sessions/{sid}/validation").text
+    assert "Kendall" in page and 'id="round-1"' in page
+    assert "Start a blind validation round" in page
+
+
+def test_posterior_figure_and_export_links(client: TestClient) -> None:
+    sid = new_session(client, "exo-2d-length-width")
+    answer_once(client, sid)
+    html = client.get(f"/sessions/{sid}").text
+    src = re.search(r'<img src="([^"]+)"', html)
+    assert src is not None
+    png = client.get(src.group(1))
+    assert png.status_code == 200 and png.content[:8] == b"\x89PNG\r\n\x1a\n"
+    assert client.get(src.group(1)).content == png.content  # cached, same picture
+    paper = client.get(f"/sessions/{sid}/figure.png")
+    assert paper.status_code == 200 and paper.content[:4] == b"\x89PNG"
+    assert paper.content != png.content
+    for fmt in ("csv", "json"):
+        r = client.get(f"/sessions/{sid}/export.zip", params={"format": fmt})
+        assert r.status_code == 200 and r.content[:2] == b"PK"
+
+
+def test_unknown_sessions_get_an_html_404(client: TestClient) -> None:
+    r = client.get("/sessions/42")
+    assert r.status_code == 404 and "text/html" in r.headers["content-type"]
+    assert "no session 42" in r.text
+    assert client.get("/sessions/0").status_code == 422
+
+
+def test_an_uploaded_config_and_a_refused_one(client: TestClient) -> None:
+    from tests.console.test_api import SMALL_TOML
+
+    csrf = forms_of(client.get("/").text)["create-form"].fields["csrf_token"]
+    files = {"config_file": ("tiny-speed.toml", SMALL_TOML.replace('name = "tiny"\n', "").encode())}
+    r = client.post(
+        "/sessions",
+        data={"csrf_token": csrf, "subject": "S2", "config": "exo-1d-step-length"},
+        files=files,
+        follow_redirects=False,
+    )
+    assert r.status_code == 303
+    assert client.get("/api/sessions").json()[0]["config"] == "tiny-speed"
+    files = {"config_file": ("bad.toml", b"[model]\nnoise = -1\n")}
+    r = client.post(
+        "/sessions", data={"csrf_token": csrf, "subject": "S2"}, files=files, follow_redirects=False
+    )
+    assert r.status_code == 422 and "<code>config</code>" in r.text
+    assert len(client.get("/api/sessions").json()) == 1
+
+
+def test_a_name_is_refused_as_a_subject_code(client: TestClient) -> None:
+    csrf = forms_of(client.get("/").text)["create-form"].fields["csrf_token"]
+    form = {"csrf_token": csrf, "subject": "Jane Doe", "config": "exo-1d-step-length"}
+    r = post(client, "/sessions", form)
+    assert r.status_code == 422 and "<code>subject</code>" in r.text and "never a name" in r.text
+    assert client.get("/api/sessions").json() == []

@@ -1,0 +1,107 @@
+"""Access control: the token on every request, CSRF tokens on forms, the Host check."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+
+from gaitpref.console import create_app
+from gaitpref.console.security import CSRF_COOKIE, Csrf
+from tests.console.conftest import csrf_of
+
+TOKEN = "correct-horse-battery-staple"
+
+
+@pytest.fixture
+def guarded(db_url: str) -> TestClient:
+    return TestClient(create_app(db_url, token=TOKEN), follow_redirects=False)
+
+
+@pytest.mark.parametrize(
+    "path", ["/", "/api/sessions", "/api/configs", "/static/console.css", "/openapi.json", "/docs"]
+)
+def test_every_request_without_the_token_is_refused(guarded: TestClient, path: str) -> None:
+    r = guarded.get(path)
+    assert r.status_code == 401
+    assert "token" in r.json()["detail"]
+    assert guarded.get(path, headers={"authorization": "Bearer nope"}).status_code == 401
+
+
+def test_a_refused_request_writes_nothing(guarded: TestClient) -> None:
+    body = {"config": "exo-1d-step-length", "subject": "S01"}
+    assert guarded.post("/api/sessions", json=body).status_code == 401
+    assert (
+        guarded.post(
+            "/api/sessions", json=body, headers={"x-gaitpref-token": TOKEN + "x"}
+        ).status_code
+        == 401
+    )
+    auth = {"authorization": f"Bearer {TOKEN}"}
+    assert guarded.get("/api/sessions", headers=auth).json() == []
+    assert guarded.post("/api/sessions", json=body, headers=auth).status_code == 201
+    assert (
+        guarded.post("/api/sessions", json=body, headers={"x-gaitpref-token": TOKEN}).status_code
+        == 201
+    )
+
+
+def test_the_printed_url_sets_a_cookie_and_drops_the_token_from_the_address(
+    guarded: TestClient,
+) -> None:
+    r = guarded.get("/sessions/3", params={"token": TOKEN, "x": "1"})
+    assert r.status_code == 303
+    assert r.headers["location"] == "/sessions/3?x=1"
+    cookie = r.headers["set-cookie"]
+    assert "gaitpref_token=" in cookie and "HttpOnly" in cookie and "SameSite=Strict" in cookie
+    assert guarded.get("/").status_code == 200  # the client keeps the cookie
+    assert TestClient(guarded.app).get("/", params={"token": "wrong"}).status_code == 401
+
+
+def test_without_a_token_the_loopback_console_is_open(client: TestClient) -> None:
+    assert client.get("/api/configs").status_code == 200
+
+
+def test_foreign_host_headers_are_refused_when_hosts_are_listed(db_url: str) -> None:
+    app = create_app(db_url, allowed_hosts=["127.0.0.1", "localhost", "::1"])
+    c = TestClient(app, base_url="http://127.0.0.1:8000")
+    assert c.get("/api/configs").status_code == 200
+    assert c.get("/api/configs", headers={"host": "[::1]:8000"}).status_code == 200
+    assert c.get("/api/configs", headers={"host": "localhost"}).status_code == 200
+    r = c.get("/api/configs", headers={"host": "attacker.example:8000"})
+    assert r.status_code == 400 and "attacker.example" in r.json()["detail"]
+
+
+def test_csrf_tokens_are_signed_by_the_app() -> None:
+    mine, other = Csrf(b"k" * 32), Csrf(b"z" * 32)
+    token = mine.issue()
+    assert mine.valid(token) and not other.valid(token)
+    assert mine.check(token, token)
+    assert not mine.check(token, mine.issue())
+    assert not mine.check(None, token) and not mine.check(token, None)
+    nonce = token.split(".")[0]
+    assert not mine.valid(nonce) and not mine.valid(nonce + ".00") and not mine.valid("a.b.c")
+
+
+def test_forms_without_a_valid_csrf_token_are_refused_and_write_nothing(client: TestClient) -> None:
+    page = client.get("/")
+    token = csrf_of(page.text)
+    assert client.cookies.get(CSRF_COOKIE) == token
+    form = {"subject": "S01", "config": "exo-1d-step-length"}
+    r = client.post("/sessions", data=form, follow_redirects=False)
+    assert r.status_code == 403 and "CSRF" in r.text
+    forged = Csrf().issue()
+    r = client.post("/sessions", data={**form, "csrf_token": forged}, follow_redirects=False)
+    assert r.status_code == 403
+    assert client.get("/api/sessions").json() == []
+    r = client.post("/sessions", data={**form, "csrf_token": token}, follow_redirects=False)
+    assert r.status_code == 303 and r.headers["location"] == "/sessions/1"
+
+
+def test_pages_reuse_a_valid_csrf_cookie(client: TestClient) -> None:
+    first = csrf_of(client.get("/").text)
+    assert csrf_of(client.get("/").text) == first
+    client.cookies.clear()
+    client.cookies.set(CSRF_COOKIE, "forged.value", domain="testserver.local")
+    renewed = csrf_of(client.get("/").text)
+    assert renewed not in ("forged.value", first)
+    assert client.cookies.get(CSRF_COOKIE) == renewed

@@ -1,0 +1,54 @@
+"""An experiment config that names a gait library takes its space from the library's axes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from gaitpref import ConfigError, GaitLibrary, load_config
+
+CONFIG = """
+[gaits]
+library = "lib.json"
+
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.08 }
+signal_variance = 0.005
+jitter = 1e-7
+noise = 0.02
+
+[cospar]
+n = 1
+buffer = 1
+"""
+
+
+def test_config_space_and_gait_ids_come_from_the_library(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    duration_library.save(tmp_path / "lib.json")
+    (tmp_path / "study.toml").write_text(CONFIG)
+    cfg = load_config(tmp_path / "study.toml")
+    assert cfg.space.shape == duration_library.shape == (3, 2)
+    assert cfg.space.names == ("step_length", "step_duration")
+    assert cfg.library_path == str((tmp_path / "lib.json").resolve())
+    assert cfg.library_sha256 is not None and len(cfg.library_sha256) == 64
+    loop = cfg.make_loop(seed=0)
+    query = loop.ask()
+    a = query.actions[0]
+    assert cfg.gait_id(a) == duration_library.gait_id(a)
+    assert duration_library.parameters(a) == pytest.approx(cfg.space.values_of(a))
+
+
+def test_config_library_errors(tmp_path: Path) -> None:
+    (tmp_path / "study.toml").write_text(CONFIG)
+    with pytest.raises(ConfigError, match=r"\[gaits\].library: .*no such gait library file"):
+        load_config(tmp_path / "study.toml")
+    both = CONFIG + "\n[space.x]\nvalues = [0.0, 1.0]\n"
+    (tmp_path / "both.toml").write_text(both)
+    with pytest.raises(ConfigError, match=r"either \[space\] or \[gaits\].library"):
+        load_config(tmp_path / "both.toml")
+    (tmp_path / "typo.toml").write_text(CONFIG.replace("library =", "libary ="))
+    with pytest.raises(ConfigError, match=r"\[gaits\]: unknown key 'libary'"):
+        load_config(tmp_path / "typo.toml")

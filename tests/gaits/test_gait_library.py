@@ -1,0 +1,183 @@
+"""Gait library: grid order, ids, features, file round trip and validation errors."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gaitpref import Feature, Space
+from gaitpref.gaits import (
+    SCHEMA_VERSION,
+    GaitLibrary,
+    GaitLibraryError,
+    build_library,
+    load_library,
+)
+
+
+def _document(lib: GaitLibrary, tmp_path: Path) -> dict[str, Any]:
+    path = tmp_path / "lib.json"
+    lib.save(path)
+    data: dict[str, Any] = json.loads(path.read_text())
+    return data
+
+
+def _write(tmp_path: Path, data: dict[str, Any]) -> Path:
+    path = tmp_path / "edited.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_grid_order_matches_space(duration_library: GaitLibrary) -> None:
+    lib = duration_library
+    space = Space(lib.features())
+    assert lib.shape == space.shape == (3, 2)
+    for i in range(len(lib)):
+        assert lib.parameters(i) == space.values_of(i)
+        assert lib.gait(i).step_length == lib.parameters(i)["step_length"]
+        assert lib.index(**lib.parameters(i)) == i == space.index(lib.parameters(i))
+    # C order: the last axis (duration) varies fastest
+    assert lib.parameters(1) == {"step_length": 0.10, "step_duration": 1.15}
+    assert lib.lookup(step_length=0.13, step_duration=0.85) is lib.gait(2)
+
+
+def test_features_ids_and_cot_grid(
+    duration_library: GaitLibrary, speed_library: GaitLibrary
+) -> None:
+    length, duration = duration_library.features()
+    assert isinstance(length, Feature)
+    assert (length.name, length.unit, length.coactive) == ("step_length", "m", (0.1, 0.2))
+    assert (duration.name, duration.unit, duration.words) == (
+        "step_duration",
+        "s",
+        ("slower", "faster"),
+    )
+    width = speed_library.features()[1]
+    assert (width.name, width.unit, width.coactive) == ("step_width", "m", (0.2, 0.4))
+    assert duration_library.gait_id(2) == "L0.130-T0.850"
+    assert speed_library.gait_id(1) == "L0.080-V0.200-W0.300"
+    assert duration_library.index_of_id("L0.160-T1.150") == 5
+    grid = duration_library.cot_grid()
+    assert grid.shape == (3, 2)
+    assert grid[1, 0] == duration_library.lookup(step_length=0.13, step_duration=0.85).cot
+    # a width label does not change the gait
+    assert np.array_equal(speed_library.cot_grid()[:, 0], speed_library.cot_grid()[:, 1])
+
+
+def test_lookup_errors_name_the_problem(duration_library: GaitLibrary) -> None:
+    with pytest.raises(GaitLibraryError, match="off the grid"):
+        duration_library.gait(6)
+    with pytest.raises(GaitLibraryError, match="not a grid value"):
+        duration_library.lookup(step_length=0.11, step_duration=0.85)
+    with pytest.raises(GaitLibraryError, match="missing"):
+        duration_library.lookup(step_length=0.10)
+    with pytest.raises(GaitLibraryError, match="no gait with id"):
+        duration_library.index_of_id("L9.000-T1.000")
+
+
+def test_save_load_round_trip(duration_library: GaitLibrary, tmp_path: Path) -> None:
+    path = tmp_path / "lib.json"
+    duration_library.save(path)
+    loaded = GaitLibrary.load(path)
+    assert loaded.axes == duration_library.axes and loaded.speed is None
+    assert loaded.params == duration_library.params
+    assert loaded.settings == duration_library.settings
+    for a, b in zip(loaded.gaits, duration_library.gaits, strict=True):
+        np.testing.assert_array_equal(a.alpha, b.alpha)
+        np.testing.assert_array_equal(a.orbit_state, b.orbit_state)
+        assert (a.cot, a.step_duration, a.delta_squared, a.message) == (
+            b.cot, b.step_duration, b.delta_squared, b.message
+        )  # fmt: skip
+    data = json.loads(path.read_text())
+    assert data["schema_version"] == SCHEMA_VERSION and data["grid_order"] == "C"
+    assert data["gaits"][2]["id"] == "L0.130-T0.850"
+
+
+def test_wrong_schema_version_is_refused(duration_library: GaitLibrary, tmp_path: Path) -> None:
+    data = _document(duration_library, tmp_path)
+    data["schema_version"] = 99
+    with pytest.raises(GaitLibraryError, match="schema_version: 99 is not supported"):
+        load_library(_write(tmp_path, data))
+
+
+def test_bad_shapes_are_refused(duration_library: GaitLibrary, tmp_path: Path) -> None:
+    data = _document(duration_library, tmp_path)
+    data["gaits"][3]["alpha"] = [data["gaits"][3]["alpha"][0][:-1]]
+    with pytest.raises(GaitLibraryError, match=r"gaits\[3\]\.alpha: expected shape \(1, 7\)"):
+        load_library(_write(tmp_path, data))
+    data = _document(duration_library, tmp_path)
+    data["gaits"][0]["orbit_state"] = [0.0, 1.0]
+    with pytest.raises(GaitLibraryError, match=r"gaits\[0\]\.orbit_state"):
+        load_library(_write(tmp_path, data))
+    data = _document(duration_library, tmp_path)
+    data["gaits"].pop()
+    with pytest.raises(GaitLibraryError, match="5 gaits for a grid of 6 points"):
+        load_library(_write(tmp_path, data))
+
+
+def test_inconsistent_or_missing_fields_are_refused(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    data = _document(duration_library, tmp_path)
+    del data["gaits"][1]["cot"]
+    with pytest.raises(GaitLibraryError, match=r"gaits\[1\]\.cot: missing"):
+        load_library(_write(tmp_path, data))
+    data = _document(duration_library, tmp_path)
+    data["gaits"][1]["step_duration"] = 0.5
+    with pytest.raises(GaitLibraryError, match="step duration"):
+        load_library(_write(tmp_path, data))
+    data = _document(duration_library, tmp_path)
+    data["format"] = "something-else"
+    with pytest.raises(GaitLibraryError, match="not a gait library"):
+        load_library(_write(tmp_path, data))
+
+
+def test_infeasible_gaits_are_refused_unless_allowed(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    data = _document(duration_library, tmp_path)
+    data["gaits"][4]["feasible"] = False
+    data["gaits"][4]["solver_message"] = "infeasible: normal force violated"
+    path = _write(tmp_path, data)
+    with pytest.raises(GaitLibraryError, match=r"1 of 6 gaits are infeasible.*L0\.160-T0\.850"):
+        load_library(path)
+    lib = load_library(path, allow_infeasible=True)
+    assert lib.infeasible() == [4]
+    assert np.isnan(lib.cot_grid()[2, 0])
+
+
+def test_missing_and_corrupt_files(tmp_path: Path) -> None:
+    with pytest.raises(GaitLibraryError, match="no such gait library file"):
+        load_library(tmp_path / "absent.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(GaitLibraryError, match="not valid JSON"):
+        load_library(bad)
+
+
+def test_library_checks_its_grid(duration_library: GaitLibrary) -> None:
+    lib = duration_library
+    with pytest.raises(GaitLibraryError, match="6 points but the library has 5"):
+        GaitLibrary(lib.params, lib.settings, lib.axes, lib.gaits[:5])
+    with pytest.raises(GaitLibraryError, match="not both/neither"):
+        GaitLibrary(lib.params, lib.settings, lib.axes, lib.gaits, speed=0.2)
+    swapped = (lib.axes[1], lib.axes[0])
+    with pytest.raises(GaitLibraryError, match="start with step_length"):
+        GaitLibrary(lib.params, lib.settings, swapped, lib.gaits)
+
+
+def test_build_rejects_a_bad_grid_before_optimizing() -> None:
+    with pytest.raises(GaitLibraryError, match="strictly increasing"):
+        build_library([0.12, 0.10], speed=0.2)
+    with pytest.raises(ValueError, match="exactly one"):
+        build_library([0.12], speed=0.2, step_durations=[1.0])
+
+
+def test_gaits_are_read_only(duration_library: GaitLibrary) -> None:
+    gait = duration_library.gait(0)
+    with pytest.raises(ValueError, match="read-only"):
+        gait.alpha[0, 0] = 1.0

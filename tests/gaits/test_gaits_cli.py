@@ -1,0 +1,89 @@
+"""The ``gaitpref gaits`` Typer sub-application."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.gaits import GaitLibrary
+from gaitpref.gaits.cli import app, parse_range
+
+runner = CliRunner()
+
+
+def _text(output: str) -> str:
+    """Output without Rich's panel borders and line wrapping."""
+    return " ".join(output.replace("│", " ").split())
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("cli") / "lib.json"
+    result = runner.invoke(
+        app, ["build", "--step-length", "0.10:0.14:3", "--speed", "0.2", "--out", str(out)]
+    )
+    assert result.exit_code == 0, result.output
+    assert "3 feasible" in result.output
+    return out
+
+
+def test_build_writes_a_loadable_library(built: Path) -> None:
+    lib = GaitLibrary.load(built)
+    assert lib.shape == (3,) and lib.speed == 0.2
+    assert [lib.gait_id(i) for i in range(3)] == ["L0.100-V0.200", "L0.120-V0.200", "L0.140-V0.200"]
+
+
+def test_build_with_durations_and_width_label(tmp_path: Path) -> None:
+    out = tmp_path / "grid.json"
+    args = ["build", "--step-length", "0.12", "--step-duration", "0.9:1.0:2",
+            "--step-width", "0.25:0.30:2", "--jobs", "2", "--out", str(out)]  # fmt: skip
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    lib = GaitLibrary.load(out)
+    assert lib.names == ("step_length", "step_duration", "step_width") and lib.shape == (1, 2, 2)
+
+
+def test_show_table_and_json(built: Path) -> None:
+    table = runner.invoke(app, ["show", str(built)])
+    assert table.exit_code == 0, table.output
+    assert "L0.120-V0.200" in table.output and "feasible" in table.output
+    result = runner.invoke(app, ["show", str(built), "--json"])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.output)
+    assert doc["n_gaits"] == doc["n_feasible"] == 3
+    first = doc["gaits"][0]
+    assert first["parameters"] == {"step_length": 0.1}
+    assert first["feasible"] is True and first["cot"] > 0
+    assert first["step_duration"] == pytest.approx(0.5, rel=1e-4)
+
+
+def test_plot_writes_a_png(built: Path, tmp_path: Path) -> None:
+    png = tmp_path / "fig.png"
+    result = runner.invoke(
+        app, ["plot", str(built), "--id", "L0.120-V0.200", "--steps", "2", "--out", str(png)]
+    )
+    assert result.exit_code == 0, result.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    missing = runner.invoke(app, ["plot", str(built), "--id", "L9.000-V0.200"])
+    assert missing.exit_code != 0 and "no gait with id" in _text(missing.output)
+
+
+def test_usage_errors(tmp_path: Path) -> None:
+    neither = runner.invoke(app, ["build", "--out", str(tmp_path / "x.json")])
+    assert neither.exit_code == 2 and "exactly one of --step-duration and --speed" in _text(
+        neither.output
+    )
+    bad_range = runner.invoke(
+        app, ["build", "--step-length", "0.1:0.05:3", "--speed", "0.2", "--out", "x.json"]
+    )
+    assert bad_range.exit_code == 2 and "min:max:count" in _text(bad_range.output)
+    absent = runner.invoke(app, ["show", str(tmp_path / "absent.json")])
+    assert absent.exit_code == 2 and "no such gait library file" in _text(absent.output)
+
+
+def test_parse_range() -> None:
+    assert parse_range("0.08:0.18:3", "--x") == pytest.approx((0.08, 0.13, 0.18))
+    assert parse_range("0.2", "--x") == (0.2,)

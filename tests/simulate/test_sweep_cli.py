@@ -1,0 +1,136 @@
+"""``gaitpref bench ...`` end to end on tiny studies."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+from gaitpref.simulate.objectives import cot_polynomial
+from gaitpref.simulate.tables import read_curves, read_table
+
+runner = CliRunner()
+
+
+def invoke(*args: str) -> tuple[int, str]:
+    result = runner.invoke(app, ["bench", *args])
+    return result.exit_code, result.output
+
+
+def test_paper_2d_writes_every_output(tmp_path: Path) -> None:
+    code, out = invoke(
+        "paper-2d",
+        "--runs",
+        "2",
+        "--trials",
+        "12",
+        "--settings",
+        "n1_b1,n1_b1_coactive",
+        "--jobs",
+        "1",
+        "--out",
+        str(tmp_path),
+        "--table",
+        "parquet",
+    )
+    assert code == 0, out
+    curves = read_curves(tmp_path / "curves.csv")
+    assert curves.settings == ("n1_b1", "n1_b1_coactive", "random")
+    table = read_table(tmp_path / "runs.parquet")
+    assert len(table) == 3 * 2 * 12 and set(table.objective.tolist()) == {0, 1}
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| n1_b1_coactive | 10 |" in summary and "## Timing" in summary
+    assert (tmp_path / "curves.png").stat().st_size > 10_000
+
+
+def test_paper_2d_refuses_bad_options(tmp_path: Path) -> None:
+    code, out = invoke("paper-2d", "--settings", "n9_b9", "--out", str(tmp_path))
+    assert code == 2 and "unknown setting 'n9_b9'" in out
+    code, out = invoke("paper-2d", "--runs", "1", "--backend", "dask", "--out", str(tmp_path))
+    assert code == 2 and "--backend must be one of joblib, ray" in out
+    code, out = invoke("paper-2d", "--table", "xlsx", "--out", str(tmp_path))
+    assert code == 2 and "--table must be csv, csv.gz or parquet" in out
+    assert not (tmp_path / "summary.md").exists()
+
+
+def test_paper_2d_on_ray(tmp_path: Path, ray_runtime: None) -> None:
+    code, out = invoke(
+        "paper-2d",
+        "--runs",
+        "2",
+        "--trials",
+        "8",
+        "--settings",
+        "n2_b0",
+        "--backend",
+        "ray",
+        "--jobs",
+        "2",
+        "--out",
+        str(tmp_path),
+    )
+    assert code == 0, out
+    assert "(ray, 2 jobs)" in " ".join(out.split())
+    assert read_table(tmp_path / "runs.csv").settings == ("n2_b0", "random")
+
+
+def test_compass_gait_poly_and_hzd(tmp_path: Path) -> None:
+    code, out = invoke(
+        "compass-gait",
+        "--runs",
+        "2",
+        "--trials",
+        "10",
+        "--iterations",
+        "1,3",
+        "--jobs",
+        "1",
+        "--out",
+        str(tmp_path / "poly"),
+    )
+    assert code == 0, out
+    assert read_curves(tmp_path / "poly" / "curves.csv").settings == ("n2_b0", "random")
+    assert (tmp_path / "poly" / "posterior.png").is_file()
+
+    x = np.linspace(0.07, 0.19, 13)
+    lib = tmp_path / "library.npz"
+    np.savez(lib, step_length=x, cot=cot_polynomial(x) * 0.4)
+    code, out = invoke(
+        "compass-gait",
+        "--objective",
+        "hzd",
+        "--library",
+        str(lib),
+        "--runs",
+        "1",
+        "--trials",
+        "6",
+        "--iterations",
+        "2",
+        "--jobs",
+        "1",
+        "--out",
+        str(tmp_path / "hzd"),
+    )
+    assert code == 0, out
+    assert "the library's own step lengths" in " ".join(out.split())
+    table = read_table(tmp_path / "hzd" / "runs.csv")
+    assert table.action.max() < 11  # the library's 11 step lengths within [0.08, 0.18] m
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (("--objective", "hzd", "--library", "none.json"), "no such gait library"),
+        (("--objective", "spline"), "--objective must be 'poly' or 'hzd'"),
+        (("--iterations", "a,b"), "--iterations must be comma-separated integers"),
+    ],
+)
+def test_compass_gait_refuses_bad_options(
+    tmp_path: Path, args: tuple[str, ...], message: str
+) -> None:
+    code, out = invoke("compass-gait", *args, "--out", str(tmp_path))
+    assert code == 2 and message in " ".join(out.split())

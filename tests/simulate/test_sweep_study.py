@@ -1,0 +1,130 @@
+"""Studies as data: validation, seeding from run coordinates only, reproducibility."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from gaitpref.config import load_config
+from gaitpref.simulate.study import Setting, Study, run_one, run_seed_sequence
+from gaitpref.simulate.sweep import resolve_jobs, run_study
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"name": "a", "n": 1, "buffer": 0},
+        {"name": "a", "n": 0, "buffer": 1},
+        {"name": "a,b", "n": 2},
+        {"name": "", "n": 2},
+        {"name": "r", "strategy": "random", "coactive": True},
+        {"name": "x", "n": 2, "strategy": "thompson"},
+        {"name": "a", "n": 2, "coactive_weight": 0.0},
+    ],
+)
+def test_bad_settings_are_refused(kwargs: dict[str, object]) -> None:
+    with pytest.raises(ValueError, match="setting"):
+        Setting(**kwargs)  # type: ignore[arg-type]
+
+
+def test_bad_studies_are_refused(small_study: Study) -> None:
+    with pytest.raises(ValueError, match="repeat"):
+        dataclasses.replace(small_study, settings=small_study.settings[:1] * 2)
+    with pytest.raises(ValueError, match="K x 900"):
+        dataclasses.replace(small_study, objectives=np.zeros((3, 10)))
+    with pytest.raises(ValueError, match="distinct ids"):
+        dataclasses.replace(small_study, objective_ids=(0, 0, 1))
+    with pytest.raises(ValueError, match="seeds"):
+        dataclasses.replace(small_study, seeds=())
+    with pytest.raises(ValueError, match="finite"):
+        dataclasses.replace(small_study, objectives=np.full((3, 900), np.nan))
+
+
+def test_tasks_are_ordered_by_setting_objective_seed(small_study: Study) -> None:
+    tasks = small_study.tasks()
+    assert len(tasks) == len(small_study) == 3 * 3 * 2
+    coords = [(t.setting.name, t.objective_id, t.seed) for t in tasks]
+    assert coords[:4] == [("n3_b0", 0, 0), ("n3_b0", 0, 1), ("n3_b0", 5, 0), ("n3_b0", 5, 1)]
+    assert coords[-1] == ("random", 7, 1)
+    # each task carries its own objective row
+    np.testing.assert_array_equal(tasks[2].objective, small_study.objectives[1])
+
+
+def test_seed_sequence_depends_on_the_coordinates_only() -> None:
+    def state(*coords: object) -> list[int]:
+        return run_seed_sequence(*coords).generate_state(4).tolist()  # type: ignore[arg-type]
+
+    assert state(0, "n2_b0", 3, 0) == state(0, "n2_b0", 3, 0)
+    others = [(1, "n2_b0", 3, 0), (0, "n3_b0", 3, 0), (0, "n2_b0", 4, 0), (0, "n2_b0", 3, 1)]
+    assert all(state(*o) != state(0, "n2_b0", 3, 0) for o in others)
+
+
+def test_run_one_is_pure_and_seeds_differ(small_study: Study) -> None:
+    task = small_study.tasks()[0]
+    a, b = run_one(task), run_one(task)
+    np.testing.assert_array_equal(a.actions, b.actions)
+    np.testing.assert_array_equal(a.normalized, b.normalized)
+    other = run_one(small_study.tasks()[1])  # same setting and objective, seed 1
+    assert not np.array_equal(a.actions, other.actions)
+    assert a.actions.shape == a.normalized.shape == (20,)
+
+
+def test_a_run_does_not_depend_on_the_rest_of_the_study(small_study: Study) -> None:
+    full = run_study(small_study, jobs=1).table
+    part = Study.from_config(
+        load_config("synthetic-2d"),
+        [small_study.settings[1]],
+        small_study.objectives[2:],
+        objective_ids=(7,),
+        seeds=(1,),
+        trials=20,
+    )
+    sub = run_study(part, jobs=1).table
+    rows = (full.setting == "n1_b1_coactive") & (full.objective == 7) & (full.seed == 1)
+    np.testing.assert_array_equal(sub.action, full.action[rows])
+    np.testing.assert_array_equal(sub.normalized_objective, full.normalized_objective[rows])
+
+
+def test_study_is_reproducible_in_process_and_on_joblib_workers(small_study: Study) -> None:
+    first = run_study(small_study, jobs=1)
+    again = run_study(small_study, jobs=1)
+    workers = run_study(small_study, backend="joblib", jobs=2)
+    assert first.table.equals(again.table)
+    assert first.table.equals(workers.table)
+    assert len(first.table) == len(small_study) * 20
+    assert first.table.settings == ("n3_b0", "n1_b1_coactive", "random")
+
+
+def test_random_baseline_draws_uniform_actions_and_scores_them(small_study: Study) -> None:
+    only_random = dataclasses.replace(small_study, settings=(Setting.random(),), trials=400)
+    table = run_study(only_random, jobs=1).table
+    rows = table.setting == "random"
+    actions = table.action[rows]
+    assert actions.min() >= 0 and actions.max() < 900
+    assert len(np.unique(actions)) > 900 * 0.6  # 2400 uniform draws cover most of the grid
+    obj = small_study.objectives[0]
+    first = rows & (table.objective == 0) & (table.seed == 0)
+    expected = (obj[table.action[first]] - obj.min()) / (obj.max() - obj.min())
+    np.testing.assert_allclose(table.normalized_objective[first], expected)
+
+
+def test_cospar_beats_random_even_on_a_short_study(small_study: Study) -> None:
+    curves = run_study(dataclasses.replace(small_study, trials=40), jobs=1).curves
+    late = slice(20, 40)
+    assert curves.curve("n1_b1_coactive")[1][late].mean() > curves.curve("random")[1][late].mean()
+
+
+def test_resolve_jobs() -> None:
+    assert resolve_jobs(3) == 3
+    assert resolve_jobs(-1) >= 1 and resolve_jobs(None) == resolve_jobs(-1)
+    with pytest.raises(ValueError, match="jobs"):
+        resolve_jobs(0)
+
+
+def test_bad_backend_is_refused(small_study: Study) -> None:
+    with pytest.raises(ValueError, match="backend"):
+        run_study(small_study, backend="dask")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="Ray"):
+        run_study(small_study, backend="joblib", address="auto")

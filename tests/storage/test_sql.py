@@ -1,0 +1,163 @@
+"""SQL backend specifics: SQLite durability settings, schema versions, connection errors."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import pytest
+from alembic.autogenerate import compare_metadata
+from alembic.migration import MigrationContext
+from sqlalchemy import create_engine, text
+
+from gaitpref.storage import (
+    NewEvent,
+    SchemaError,
+    SessionSpec,
+    SQLStorage,
+    StorageConnectError,
+    StorageError,
+    open_storage,
+    resolve_url,
+)
+from gaitpref.storage.migrate import head_revision, known_revisions
+from gaitpref.storage.schema import metadata
+
+SPEC = SessionSpec("S01", "c", "text", "0" * 64, 0, "0.1.0")
+
+
+def _sqlite(tmp_path: Path) -> str:
+    return f"sqlite:///{tmp_path / 'g.db'}"
+
+
+def test_sqlite_runs_in_wal_with_full_sync(tmp_path: Path) -> None:
+    store = SQLStorage(_sqlite(tmp_path))
+    with store.engine.connect() as conn:
+        assert conn.exec_driver_sql("PRAGMA journal_mode").scalar() == "wal"
+        assert conn.exec_driver_sql("PRAGMA synchronous").scalar() == 2  # FULL
+        assert conn.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1
+        assert (conn.exec_driver_sql("PRAGMA busy_timeout").scalar() or 0) >= 1000
+    store.close()
+
+
+def test_committed_on_return_is_visible_to_an_independent_reader(tmp_path: Path) -> None:
+    store = SQLStorage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.append(sid, 0, [NewEvent("note", {"text": "hi"})])
+    with sqlite3.connect(tmp_path / "g.db") as raw:  # not through gaitpref or its pool
+        assert raw.execute("SELECT kind FROM events").fetchall() == [("note",)]
+    store.close()
+
+
+def _url_of(request: pytest.FixtureRequest, tmp_path: Path, kind: str) -> str:
+    return _sqlite(tmp_path) if kind == "sqlite" else str(request.getfixturevalue("postgres_url"))
+
+
+KINDS = ["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)]
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_migrations_build_exactly_the_schema(
+    request: pytest.FixtureRequest, tmp_path: Path, kind: str
+) -> None:
+    url = _url_of(request, tmp_path, kind)
+    SQLStorage(url).close()
+    engine = create_engine(url)
+    with engine.connect() as conn:
+        diff = compare_metadata(MigrationContext.configure(conn), metadata)
+        assert diff == []
+        assert conn.execute(text("SELECT version_num FROM alembic_version")).scalar() == (
+            head_revision()
+        )
+    engine.dispose()
+    assert known_revisions()[-1] == head_revision()
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_events_cannot_be_edited_or_deleted_even_by_hand(
+    request: pytest.FixtureRequest, tmp_path: Path, kind: str
+) -> None:
+    url = _url_of(request, tmp_path, kind)
+    store = SQLStorage(url)
+    sid = store.create_session(SPEC, [NewEvent("a", {"v": 1})]).id
+    for statement in ("UPDATE events SET kind = 'b'", "DELETE FROM events"):
+        with pytest.raises(Exception, match="append-only"), store.engine.begin() as conn:
+            conn.execute(text(statement))
+    assert [e.kind for e in store.events(sid)] == ["a"]
+    store.close()
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_newer_schema_is_refused_and_left_alone(
+    request: pytest.FixtureRequest, tmp_path: Path, kind: str
+) -> None:
+    url = _url_of(request, tmp_path, kind)
+    store = SQLStorage(url)
+    store.create_session(SPEC)
+    with store.engine.begin() as conn:
+        conn.execute(text("UPDATE alembic_version SET version_num = '9999_future'"))
+    store.close()
+    with pytest.raises(SchemaError, match="newer gaitpref"):
+        SQLStorage(url)
+    engine = create_engine(url)
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT version_num FROM alembic_version")).scalar() == (
+            "9999_future"
+        )
+        assert conn.execute(text("SELECT count(*) FROM sessions")).scalar() == 1
+    engine.dispose()
+
+
+def test_a_foreign_database_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "other.db"
+    with sqlite3.connect(path) as raw:
+        raw.execute("CREATE TABLE patients (name TEXT)")
+    with pytest.raises(SchemaError, match="not a gaitpref database"):
+        SQLStorage(f"sqlite:///{path}")
+    with sqlite3.connect(path) as raw:
+        tables = {r[0] for r in raw.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    assert tables == {"patients"}
+
+
+@pytest.mark.parametrize(
+    "url, message",
+    [
+        ("sqlite:////nonexistent-folder/g.db", "does not exist"),
+        ("postgresql+psycopg://nobody@127.0.0.1:1/none", "cannot connect"),
+        ("mysql://x@localhost/db", "SQLite or PostgreSQL"),
+        ("not a url ://", "not a database URL"),
+    ],
+)
+def test_urls_that_do_not_connect_give_clear_errors(url: str, message: str) -> None:
+    with pytest.raises(StorageConnectError, match=message):
+        open_storage(url)
+
+
+def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:
+    with pytest.raises(StorageConnectError, match="no gaitpref database"):
+        open_storage(_sqlite(tmp_path), create=False)
+    assert not (tmp_path / "g.db").exists()
+
+
+def test_url_resolution(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("GAITPREF_DB", raising=False)
+    assert resolve_url() == "sqlite:///gaitpref.db"
+    monkeypatch.setenv("GAITPREF_DB", "sqlite:////tmp/x.db")
+    assert resolve_url() == "sqlite:////tmp/x.db"
+    assert resolve_url("lab.db") == "sqlite:///lab.db"
+    assert resolve_url("postgresql+psycopg://u@h/d") == "postgresql+psycopg://u@h/d"
+
+
+def test_storage_errors_are_runtime_errors_with_the_url(tmp_path: Path) -> None:
+    store = SQLStorage(_sqlite(tmp_path))
+    assert "g.db" in store.url
+    with pytest.raises(StorageError):
+        store.append(1, 0, [NewEvent("a")])
+    store.close()
+
+
+@pytest.mark.postgres
+def test_postgres_password_is_masked(postgres_server: str) -> None:
+    with pytest.raises(StorageConnectError) as err:
+        open_storage(postgres_server.replace("gaitpref@", "gaitpref:secret@") + "/missing_db")
+    assert "secret" not in str(err.value) and "***" in str(err.value)
