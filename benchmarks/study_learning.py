@@ -86,12 +86,12 @@ strategy = "{strategy}"
 
 PAPER = 'ties = "drop"\nfit = "fixed"'
 TIES_BAND_ONLY = (
-    'ties = "model"\nfit = "evidence"\ntie_band = "fit"\n'
+    'ties = "model"\nfit = "evidence"\ntie_band = "fit"\nrefit_every = 20\n'
     "[model.prior]\nlengthscale = { x = [0.25, 0.0], y = [0.25, 0.0] }"
 )
-FIT = 'ties = "drop"\nfit = "evidence"'
-TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"'
-FIT20 = FIT + "\nrefit_every = 20"
+FIT = 'ties = "drop"\nfit = "evidence"\nrefit_every = 20'
+TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"\nrefit_every = 20'
+FIT10 = 'ties = "drop"\nfit = "evidence"\nrefit_every = 10'
 FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
 
 
@@ -120,7 +120,7 @@ ARMS = [
     Arm("eubo-then-sparring", "eubo-then-sparring", PAPER, note="EUBO for 20 trials, then TS"),
     Arm("gated", "gated-eubo", PAPER, note="Thompson-gated EUBO"),
     Arm("gated+ties", "gated-eubo", TIES_BAND_ONLY, note="ties modelled, band learned"),
-    Arm("gated+fit", "gated-eubo", FIT, note="lengthscales fitted"),
+    Arm("gated+fit", "gated-eubo", FIT, note="lengthscales fitted every 20 answers"),
     Arm("gated+ties+fit", "gated-eubo", TIES_FIT, note="ties modelled, lengthscales + band"),
     Arm("gated+fit+s2", "gated-eubo", FIT_S2, note="lengthscales and signal variance fitted"),
     Arm("paper+ties+fit", "self-sparring", TIES_FIT, note="self-sparring with both additions"),
@@ -130,16 +130,16 @@ ARMS = [
     Arm("gated+fit@2x", "gated-eubo", FIT, 0.30, "gated + fitted, starting 2x wrong"),
     Arm("gated@0.5x", "gated-eubo", PAPER, 0.075, "gated, lengthscale wrong by 0.5x"),
     Arm("gated+fit@0.5x", "gated-eubo", FIT, 0.075, "gated + fitted, starting 0.5x wrong"),
-    Arm("gated+fit20", "gated-eubo", FIT20, note="fitted every 20 answers"),
-    Arm("gated+fit20@2x", "gated-eubo", FIT20, 0.30, "fitted every 20, starting 2x wrong"),
-    Arm("gated+fit20@0.5x", "gated-eubo", FIT20, 0.075, "fitted every 20, starting 0.5x"),
+    Arm("gated+fit10", "gated-eubo", FIT10, note="fitted every 10 answers"),
+    Arm("gated+fit10@2x", "gated-eubo", FIT10, 0.30, "fitted every 10, starting 2x wrong"),
+    Arm("gated+fit10@0.5x", "gated-eubo", FIT10, 0.075, "fitted every 10, starting 0.5x"),
     Arm("gated+fitc", "gated-eubo", _fit_centred(0.15), 0.15, "fitted, prior at the guess"),
     Arm("gated+fitc@2x", "gated-eubo", _fit_centred(0.3), 0.3, "prior at a 2x wrong guess"),
     Arm("gated+fitc@0.5x", "gated-eubo", _fit_centred(0.075), 0.075, "prior at a 0.5x guess"),
     Arm("gated+ties+fit@2x", "gated-eubo", TIES_FIT, 0.30, "gated + both, starting 2x wrong"),
 ]
 SCENARIOS = ("noiseless", "noisy")
-DEFAULT_ARM = "gated+fit20"  # what a config that omits the learning keys runs (docs/learning.md)
+DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)
 ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("gated-eubo instead of self-sparring", "gated", "paper"),
     ("EUBO instead of self-sparring", "eubo", "paper"),
@@ -149,9 +149,9 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("signal variance fitted too", "gated+fit+s2", "gated+fit"),
     ("lengthscales fitted, kernel 2x wrong", "gated+fit@2x", "gated@2x"),
     ("lengthscales fitted, kernel 0.5x wrong", "gated+fit@0.5x", "gated@0.5x"),
-    ("fitted every 20 answers", "gated+fit20", "gated"),
-    ("fitted every 20 answers, kernel 2x wrong", "gated+fit20@2x", "gated@2x"),
-    ("fitted every 20 answers, kernel 0.5x wrong", "gated+fit20@0.5x", "gated@0.5x"),
+    ("fitted every 10 answers (not 20)", "gated+fit10", "gated"),
+    ("fitted every 10 answers, kernel 2x wrong", "gated+fit10@2x", "gated@2x"),
+    ("fitted every 10 answers, kernel 0.5x wrong", "gated+fit10@0.5x", "gated@0.5x"),
     ("fitted, prior at the guess", "gated+fitc", "gated"),
     ("fitted, prior at the guess, 2x wrong", "gated+fitc@2x", "gated@2x"),
     ("fitted, prior at the guess, 0.5x wrong", "gated+fitc@0.5x", "gated@0.5x"),
@@ -355,7 +355,7 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["paper", "eubo", "eubo-then-sparring", "gated", "gated+ties", "gated+fit20"]
+    shown = ["paper", "eubo", "eubo-then-sparring", "gated", "gated+ties", "gated+fit"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, scenario in zip(axes, SCENARIOS, strict=True):
         for name in shown:
