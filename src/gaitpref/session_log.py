@@ -2,7 +2,9 @@
 
 A session's log is a sequence of events (``storage/base.py``); this module fixes their kinds and
 payloads.  Each answer is one batch: the ``trial_executed`` events of the query's actions, then its
-``comparison_answered`` and ``suggestion_given`` events, all carrying the query's id.
+``comparison_answered`` and ``suggestion_given`` events and, when the answer triggered a
+hyperparameter fit (``[model] fit = "evidence"``), its ``hyperparameters_refit`` event, all
+carrying the query's id.
 
 ========================  ================================================================
 kind                      payload
@@ -12,6 +14,7 @@ kind                      payload
 ``trial_executed``        query, trial, action, values (feature -> value), gait_id
 ``comparison_answered``   query, first, second, outcome, first_trial, second_trial
 ``suggestion_given``      query, trial, action, feature, move, target (null: clipped)
+``hyperparameters_refit`` query, before, after, accepted, converged, message, evaluations, ...
 ``undo``                  query, trials
 ``trial_excluded``        trial, query, action, reason, detail
 ``validation_started``    round, gaits [{label, action, role, posterior_mean}]
@@ -35,6 +38,7 @@ QUERY = "query_issued"
 TRIAL = "trial_executed"
 COMPARISON = "comparison_answered"
 SUGGESTION = "suggestion_given"
+REFIT = "hyperparameters_refit"
 UNDO = "undo"
 EXCLUDED = "trial_excluded"
 VALIDATION_STARTED = "validation_started"
@@ -44,7 +48,7 @@ PAUSED = "paused"
 RESUMED = "resumed"
 FINISHED = "finished"
 
-ANSWER_KINDS = (TRIAL, COMPARISON, SUGGESTION)
+ANSWER_KINDS = (TRIAL, COMPARISON, SUGGESTION, REFIT)
 KINDS = (
     CREATED,
     QUERY,
@@ -65,6 +69,7 @@ CHECKED_FIELDS: dict[str, tuple[str, ...]] = {
     TRIAL: ("query", "trial", "action"),
     COMPARISON: ("query", "first", "second", "outcome"),
     SUGGESTION: ("query", "trial", "action", "feature", "move", "target"),
+    REFIT: ("query", "before", "after", "accepted"),
     UNDO: ("query", "trials"),
     EXCLUDED: ("trial", "query", "action", "reason"),
     VALIDATION_STARTED: ("round", "gaits"),

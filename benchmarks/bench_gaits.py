@@ -6,7 +6,7 @@
    cores, all gaits feasible).
 
 Results, with the machine's description, go to ``benchmarks/results/gaits.md``; ``--figures DIR``
-also renders the documentation figures.  Run: ``.venv/bin/python benchmarks/gaits_bench.py``.
+also renders the documentation figures.  Run: ``.venv/bin/python benchmarks/bench_gaits.py``.
 """
 
 from __future__ import annotations
