@@ -103,12 +103,6 @@ def impact(p: CompassGaitParams, q: ArrayLike, qd: ArrayLike) -> ImpactResult:
     )
 
 
-def impact_velocity_map(p: CompassGaitParams, q: ArrayLike) -> FloatArray:
-    """The ``2 x 2`` matrix ``P(q)`` with relabelled ``qd+ = P qd-`` (the map is linear)."""
-    cols = [impact(p, q, e).qd for e in np.eye(2)]
-    return np.column_stack(cols)
-
-
 def angular_momentum(
     p: CompassGaitParams, q: ArrayLike, qd_e: ArrayLike, about: ArrayLike
 ) -> float:

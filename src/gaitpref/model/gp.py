@@ -9,7 +9,6 @@ all actions (``posterior.py``).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from functools import cached_property
 
 import numpy as np
@@ -17,7 +16,6 @@ from numpy.typing import ArrayLike
 
 from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import PairLikelihood, Probit
 from gaitpref.model.posterior import Posterior
@@ -62,10 +60,6 @@ class PreferenceGP:
     @cached_property
     def engine(self) -> GridEngine:
         return make_engine(self.space, self.kernel, self.sampler)
-
-    @property
-    def prior_sampler(self) -> KroneckerPriorSampler:
-        return self.engine.prior
 
     def prior(self) -> Posterior:
         """The prior as a :class:`Posterior` (no data)."""
@@ -114,11 +108,3 @@ class PreferenceGP:
         start = None if init is None else init.mean_at(visited)
         fit = fit_laplace(k_vv, visited, a, b, likelihood, start)
         return Posterior(self.space, self.kernel, fit, self.engine)
-
-
-def preferences_to_arrays(pairs: Sequence[tuple[int, int]]) -> tuple[IntArray, IntArray]:
-    """``[(winner, loser), ...]`` as two index arrays."""
-    if not pairs:
-        return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
-    arr = np.asarray(pairs, dtype=np.intp)
-    return arr[:, 0].copy(), arr[:, 1].copy()

@@ -3,8 +3,7 @@
 An iteration on a paper-sized grid is dominated by ``m x m`` factorisations and ``A x m`` products
 with ``m`` a few hundred: multi-threaded BLAS spends longer waking its threads than computing, and
 on a loaded 2-core machine it can be several times slower than one thread (measured: 0.12 s vs
-0.31-0.84 s per 150-trial run on the 30 x 30 grid).  :func:`blas_threads` limits BLAS to one
-thread around such work, for grids up to ``SMALL_GRID`` actions, and restores the setting after.
+0.31-0.84 s per 150-trial run on the 30 x 30 grid).
 
 On large grids the same holds: the Laplace fit is ``m x m`` work whatever the grid's size, and an
 ask on the scalable path is mostly memory-bound (normal draws, axis-wise prior transforms, the
@@ -16,28 +15,15 @@ every size.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import AbstractContextManager, contextmanager, nullcontext
+from contextlib import AbstractContextManager
 from functools import cache
 
 from threadpoolctl import ThreadpoolController
-
-SMALL_GRID = 20_000
 
 
 @cache
 def _controller() -> ThreadpoolController:
     return ThreadpoolController()
-
-
-@contextmanager
-def blas_threads(grid_size: int) -> Iterator[None]:
-    """One BLAS thread inside the block when ``grid_size <= SMALL_GRID``; unchanged otherwise."""
-    limit = (
-        _controller().limit(limits=1, user_api="blas") if grid_size <= SMALL_GRID else nullcontext()
-    )
-    with limit:
-        yield
 
 
 def one_blas_thread() -> AbstractContextManager[object]:
