@@ -58,12 +58,14 @@ from gaitpref.storage import (
     SessionSpec,
     Status,
     Storage,
+    SubjectRecord,
     open_storage,
 )
 from gaitpref.storage.base import check_subject
 from gaitpref.validation import ValidationPlan, ValidationResult
 
 T = TypeVar("T")
+R = TypeVar("R")
 
 
 class Session:
@@ -158,6 +160,16 @@ class Session:
                 storage.close()
             raise
         return session
+
+    @staticmethod
+    def list_sessions(db: str | Storage | None, subject: str | None = None) -> list[SessionRecord]:
+        """The sessions in ``db`` (only ``subject``'s, if given), by id."""
+        return _reading(db, lambda storage: storage.list_sessions(subject))
+
+    @staticmethod
+    def list_subjects(db: str | Storage | None) -> list[SubjectRecord]:
+        """The subjects in ``db``, by code."""
+        return _reading(db, lambda storage: storage.list_subjects())
 
     def close(self) -> None:
         """Release the database if this session opened it."""
@@ -421,8 +433,22 @@ class Session:
         return f"{text} [gait {gait}]" if gait is not None else text
 
     def refresh(self) -> None:
-        """Bring this object up to date with events other writers appended."""
+        """Bring this object up to date with events other writers appended (full replay)."""
         self._locked(self._rebuild)
+
+    def sync(self) -> bool:
+        """Replay only the events other writers appended since this object last looked.
+
+        Cheap when nothing changed (one read of the session's record); True if it caught up.
+        """
+
+        def run() -> bool:
+            if self.storage.get_session(self.id).last_seq == self._state.last_seq:
+                return False
+            self._catch_up()
+            return True
+
+        return self._locked(run)
 
     # -- internals -----------------------------------------------------------------------------
     def _locked(self, fn: Callable[[], T]) -> T:
@@ -488,3 +514,13 @@ __all__ = [
     "SuggestionRecord",
     "Trial",
 ]
+
+
+def _reading(db: str | Storage | None, read: Callable[[Storage], list[R]]) -> list[R]:
+    """``read(storage)`` on ``db``, closing the storage afterwards if it was opened here."""
+    storage = open_storage(db, create=False)
+    try:
+        return list(read(storage))
+    finally:
+        if not isinstance(db, Storage):
+            storage.close()

@@ -23,7 +23,7 @@ from gaitpref.feedback import FeedbackError
 from gaitpref.session import Session
 from gaitpref.session_export import ExportError, export_session, import_session
 from gaitpref.session_log import REASONS, ReplayError, SessionStateError
-from gaitpref.storage import StorageError, open_storage, resolve_url
+from gaitpref.storage import StorageError, resolve_url
 from gaitpref.storage import migrate as _migrate
 
 session_app = typer.Typer(
@@ -93,11 +93,8 @@ def db_status(db: DbOption = None) -> None:
     """Show the database's URL, schema revision and number of sessions."""
 
     def run() -> tuple[str, int, int]:
-        store = open_storage(db, create=False)
-        try:
-            return store.url, len(store.list_sessions()), len(store.list_subjects())
-        finally:
-            store.close()
+        url = resolve_url(db)
+        return url, len(Session.list_sessions(url)), len(Session.list_subjects(url))
 
     url, sessions, subjects = _guard(run)
     console.print(
@@ -169,11 +166,7 @@ def list_sessions(
     """List the sessions in the database."""
 
     def run() -> list[object]:
-        store = open_storage(db, create=False)
-        try:
-            return list(store.list_sessions(subject))
-        finally:
-            store.close()
+        return list(Session.list_sessions(db, subject))
 
     rows = _guard(run)
     table = Table(title="sessions")

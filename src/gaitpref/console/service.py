@@ -89,9 +89,7 @@ class SessionService:
             session = Session.open(self.storage, session_id)
             self._keep(session)
             return session
-        stored = self.storage.get_session(session_id)
-        if stored.last_seq != session.last_seq:
-            session.refresh()  # another writer moved it on
+        session.sync()  # another writer may have moved it on
         return session
 
     def get(self, session_id: int) -> Session:
@@ -106,10 +104,10 @@ class SessionService:
 
     # -- listing -------------------------------------------------------------------------------
     def list_sessions(self) -> list[SessionRecord]:
-        return self.storage.list_sessions()
+        return Session.list_sessions(self.storage)
 
     def list_subjects(self) -> list[SubjectRecord]:
-        return self.storage.list_subjects()
+        return Session.list_subjects(self.storage)
 
     # -- creating ------------------------------------------------------------------------------
     def create(
