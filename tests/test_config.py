@@ -105,7 +105,6 @@ def test_load_from_path(tmp_path: Path) -> None:
             r"\[model\].lengthscale: unknown key 'length'",
         ),
         (lambda t: t.replace("max = 0.18", "max = 0.01"), "max must be greater than min"),
-        (lambda t: t.replace("buffer = 1", "buffer = 0"), "never compares"),
         (
             lambda t: t.replace("coactive = [0.1, 0.2]", "coactive = [0.5, 0.2]"),
             r"\[space.step_length\]: feature 'step_length': coactive",
@@ -127,3 +126,16 @@ def test_config_errors_name_the_key(edit, message: str) -> None:  # type: ignore
 def test_missing_config_file_names_it() -> None:
     with pytest.raises(ConfigError, match=r"'nope\.toml': no such file; shipped configs are"):
         load_config("nope.toml")
+
+
+def test_n1_b0_is_allowed_and_learns_from_suggestions_only() -> None:
+    cfg = parse_config(GOOD.replace("buffer = 1", "buffer = 0"))
+    loop = cfg.make_loop(seed=0)
+    q = loop.ask()
+    assert q.buffer == ()
+    a = q.actions[0]
+    move = "+big" if cfg.space.point(a)[0] < 0.13 else "-big"
+    loop.tell(q, [], [(a, "step_length", move)])
+    target = cfg.space.coactive_move(a, "step_length", move)
+    assert target is not None
+    assert loop.posterior.mean[target] > loop.posterior.mean[a]

@@ -233,7 +233,6 @@ def test_answer_undo_answer_differently_equals_answering_differently(
     ("kwargs", "message"),
     [
         ({"n": 0}, "n \\(actions per query\\)"),
-        ({"n": 1, "buffer": 0}, "never compares"),
         ({"buffer": -1}, "buffer"),
         ({"coactive_weight": 0.0}, "coactive_weight"),
     ],

@@ -198,8 +198,6 @@ def parse_config(
     _only(cospar, _COSPAR_KEYS, "[cospar]")
     n = _integer(cospar, "n", "[cospar]", default=1, minimum=1)
     buffer = _integer(cospar, "buffer", "[cospar]", default=0, minimum=0)
-    if n == 1 and buffer == 0:
-        raise ConfigError("[cospar]: n = 1 with buffer = 0 never compares anything")
     return ExperimentConfig(
         name=str(raw.get("name", default_name)),
         description=str(raw.get("description", "")),

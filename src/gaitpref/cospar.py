@@ -106,8 +106,6 @@ class CoSpar:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
         if not isinstance(buffer, int) or buffer < 0:
             raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
-        if n == 1 and buffer == 0:
-            raise ValueError("n = 1 with buffer = 0 never compares anything: use n >= 2 or b >= 1")
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
