@@ -24,9 +24,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, settings
 
 from gaitpref import Feature, Space, SquaredExponential
 from gaitpref.storage import MemoryStorage, Storage, open_storage
+
+# Property tests judge results, not speed: no per-example deadline (a loaded 2-core CI machine
+# makes timings noisy; speed targets live in benchmarks/).
+settings.register_profile(
+    "gaitpref", deadline=None, suppress_health_check=[HealthCheck.too_slow], print_blob=True
+)
+settings.load_profile("gaitpref")
 
 pytest_plugins = ("pytester", "tests.ci_rule")  # the CI rule: see tests/ci_rule.py
 
