@@ -9,22 +9,15 @@ from datetime import UTC, datetime
 import numpy as np
 import scipy
 
+from gaitpref.simulate.report import cpu_model, load_average
+
 
 def machine_description() -> dict[str, object]:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
     return {
         "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "cpu": cpu,
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
-        "load_average_1min": round(os.getloadavg()[0], 2),
+        "load_average_1min": round(load_average()[0], 2),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "scipy": scipy.__version__,

@@ -12,41 +12,20 @@ also renders the documentation figures.  Run: ``.venv/bin/python benchmarks/benc
 from __future__ import annotations
 
 import argparse
-import datetime as dt
-import os
-import platform
 import time
 from pathlib import Path
 
 import numpy as np
-import scipy
 
+try:
+    from _machine import machine_description, machine_markdown
+except ImportError:  # run as a module
+    from benchmarks._machine import machine_description, machine_markdown
 from gaitpref.gaits import build_library, cot_over_step_length, simulate_gait
 from gaitpref.gaits.figures import default_ids, render_library_figure
 
 LENGTHS = np.linspace(0.08, 0.18, 15)
 DURATIONS = np.linspace(0.85, 1.15, 10)
-
-
-def _cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
-def _machine() -> list[str]:
-    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
-    return [
-        f"- platform: `{platform.platform()}` ({platform.machine()}, {_cpu_model()})",
-        f"- CPUs: {os.cpu_count()} (load average at start {load[0]:.2f}, {load[1]:.2f}, "
-        f"{load[2]:.2f}: the machine is shared)",
-        f"- Python {platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}",
-        f"- date: {dt.datetime.now(dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}",
-    ]
 
 
 def main() -> None:
@@ -55,7 +34,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/gaits.md"))
     parser.add_argument("--figures", type=Path, default=None, help="also write figures here")
     args = parser.parse_args()
-    lines = ["# Gait generation benchmark", "", *_machine(), ""]
+    lines = ["# Gait generation benchmark", "", machine_markdown(machine_description()), ""]
 
     t0 = time.perf_counter()
     sweep = build_library(LENGTHS, speed=0.2, n_jobs=1)

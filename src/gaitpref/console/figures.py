@@ -11,9 +11,10 @@ from __future__ import annotations
 import io
 import threading
 from collections import OrderedDict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import matplotlib.pyplot as plt
+from matplotlib.figure import Figure
 
 from gaitpref.model import Posterior
 from gaitpref.plots.posterior import posterior_picture, render
@@ -23,32 +24,30 @@ from gaitpref.session import Session
 _DRAW_LOCK = threading.Lock()
 
 
+def _png(draw: Callable[[], Figure], dpi: int) -> bytes:
+    """Draw a figure (under the lock: pyplot is not thread-safe) and return it as PNG bytes."""
+    with _DRAW_LOCK:
+        fig = draw()
+        try:
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=dpi)
+        finally:
+            plt.close(fig)
+    return buf.getvalue()
+
+
 def posterior_png(
     posterior: Posterior, trials: Sequence[int], *, title: str = "", dpi: int = 90
 ) -> bytes:
     """The posterior figure (mean, +- 2 sd or heat map, trials) as PNG bytes."""
     pic = posterior_picture(posterior, list(trials), samples=0, title=title)
-    with _DRAW_LOCK:
-        fig = render(pic)
-        try:
-            buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=dpi)
-        finally:
-            plt.close(fig)
-    return buf.getvalue()
+    return _png(lambda: render(pic), dpi)
 
 
 def session_png(session: Session, *, dpi: int = 90) -> bytes:
     """The paper-style figure of the session (``gaitpref.plots.session``) as PNG bytes."""
     pic = session_picture(session)
-    with _DRAW_LOCK:
-        fig = render_session(pic)
-        try:
-            buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=dpi)
-        finally:
-            plt.close(fig)
-    return buf.getvalue()
+    return _png(lambda: render_session(pic), dpi)
 
 
 class FigureCache:

@@ -40,14 +40,15 @@ class MachineInfo:
     def now(cls, load_before: tuple[float, float, float]) -> MachineInfo:
         return cls(
             os.cpu_count() or 1,
-            f"{platform.system()} {platform.machine()}, {_cpu_model()}",
+            f"{platform.system()} {platform.machine()}, {cpu_model()}",
             platform.python_version(),
             load_before,
             load_average(),
         )
 
 
-def _cpu_model() -> str:
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``), else what ``platform`` knows."""
     try:
         with open("/proc/cpuinfo", encoding="utf-8") as fh:
             for line in fh:
