@@ -44,7 +44,7 @@ def one_run(n: int, b: int, coactive: bool, k: int, trials: int = 150) -> tuple[
         t0 = time.perf_counter()
         q = loop.ask()
         comps = user.answer(q)
-        suggs = [s for a in q.actions if helper and (s := helper.suggest(a)) is not None]
+        suggs = helper.suggest_all(q.actions) if helper else []
         loop.tell(q, comps, suggs)
         done += len(q.actions)
         per_iteration.append((done, time.perf_counter() - t0))

@@ -95,7 +95,7 @@ def run_case(name: str, iterations: int) -> dict[str, object]:
         t0 = time.perf_counter()
         query = loop.ask()
         t1 = time.perf_counter()
-        suggestions = [s for a in query.actions if (s := helper.suggest(a)) is not None]
+        suggestions = helper.suggest_all(query.actions)
         answers = user.answer(query)
         t2 = time.perf_counter()
         loop.tell(query, answers, suggestions)

@@ -51,12 +51,7 @@ class SimulatedSubject:
     def respond(self, query: SessionQuery) -> tuple[list[Comparison], list[Suggestion]]:
         """The comparisons and coactive suggestions for ``query``."""
         comparisons = self._user.answer(query)  # type: ignore[arg-type]
-        suggestions = []
-        if self._coach is not None:
-            for a in dict.fromkeys(query.actions):
-                s = self._coach.suggest(a)
-                if s is not None:
-                    suggestions.append(s)
+        suggestions = [] if self._coach is None else self._coach.suggest_all(query.actions)
         return comparisons, suggestions
 
     def rank(self, plan: ValidationPlan) -> str:

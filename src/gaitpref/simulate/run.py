@@ -58,12 +58,7 @@ def run_simulation(
     executed: list[int] = []
     while len(executed) < trials:
         query = loop.ask()
-        suggestions = []
-        if coactive is not None:
-            for a in dict.fromkeys(query.actions):  # an action drawn twice is suggested on once
-                s = coactive.suggest(a)
-                if s is not None:
-                    suggestions.append(s)
+        suggestions = [] if coactive is None else coactive.suggest_all(query.actions)
         loop.tell(query, user.answer(query), suggestions)
         executed.extend(query.actions)
         if progress is not None:

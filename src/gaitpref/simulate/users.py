@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -109,6 +110,15 @@ class GradientCoactive:
             raise ValueError("coactive gradients need at least 2 values per feature")
         self.gradient = np.stack([g.reshape(-1) for g in grads], axis=1)  # A x d
         self.thresholds = np.percentile(np.abs(self.gradient), [50, 75], axis=0)  # 2 x d
+
+    def suggest_all(self, actions: Sequence[int]) -> list[Suggestion]:
+        """Suggestions for a query's executed ``actions`` (an action drawn twice gets one)."""
+        out = []
+        for a in dict.fromkeys(actions):
+            s = self.suggest(a)
+            if s is not None:
+                out.append(s)
+        return out
 
     def suggest(self, action: int) -> Suggestion | None:
         """The suggestion for an executed ``action``, or None (none given, or it would clip)."""
