@@ -18,7 +18,6 @@ answer's trial numbers are given again to the next answer.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -188,9 +187,7 @@ class SessionState:
             for s in answer.suggestions
         ]
         if answer.refit is not None:
-            events.append(
-                NewEvent(log.REFIT, {"query": query.id, **_finite(answer.refit.to_json())})
-            )
+            events.append(NewEvent(log.REFIT, {"query": query.id, **answer.refit.to_json()}))
         return events
 
     def revert_tell(self) -> None:
@@ -457,10 +454,3 @@ def _spoiled(p: Preference, members: set[int], executed: set[int]) -> bool:
     if p.source == "comparison":
         return p.winner in members or p.loser in members
     return p.loser in executed
-
-
-def _finite(record: dict[str, object]) -> dict[str, object]:
-    """``record`` with non-finite floats as None (JSON in the database has no inf or nan)."""
-    return {
-        k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in record.items()
-    }

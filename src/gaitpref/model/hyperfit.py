@@ -25,6 +25,7 @@ Notation: ``d`` features; ``theta`` has ``d + 2`` entries, of which the free one
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,7 +103,11 @@ class HyperFit:
     observations: int
 
     def to_json(self) -> dict[str, object]:
-        """A plain record for logs (sessions store it with the answer that triggered it)."""
+        """A plain JSON record for logs (sessions store it with the answer that triggered it);
+        a non-finite objective (a failed evaluation) is ``None``: JSON has no inf or nan."""
+
+        def finite(x: float) -> float | None:
+            return x if math.isfinite(x) else None
 
         def values(h: Hyperparameters) -> dict[str, object]:
             return {
@@ -120,8 +125,8 @@ class HyperFit:
             "message": self.message,
             "evaluations": self.evaluations,
             "failed_evaluations": self.failed_evaluations,
-            "objective_before": self.objective_before,
-            "objective_after": self.objective_after,
+            "objective_before": finite(self.objective_before),
+            "objective_after": finite(self.objective_after),
             "observations": self.observations,
         }
 
