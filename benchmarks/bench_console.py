@@ -35,7 +35,7 @@ from fastapi.testclient import TestClient  # noqa: E402
 
 from gaitpref.console import create_app  # noqa: E402
 from gaitpref.data import paper_objectives  # noqa: E402
-from gaitpref.session_demo import SimulatedSubject  # noqa: E402
+from gaitpref.sessions.demo import SimulatedSubject  # noqa: E402
 
 try:
     from _machine import machine_description, machine_markdown

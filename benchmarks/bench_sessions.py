@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitpref import Session, load_config
-from gaitpref.session_demo import SimulatedSubject, bump_utility
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage, Storage
 
 try:

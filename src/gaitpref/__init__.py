@@ -16,15 +16,19 @@ The public API::
 from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
-from gaitpref.cospar import Answer, CoSpar, Query, QueryError
-from gaitpref.feedback import Comparison, FeedbackError, Preference, Suggestion, Tie
-from gaitpref.learning import Learning
-from gaitpref.model import (
+from gaitpref.errors import (
     ConvergenceError,
-    Posterior,
-    PreferenceGP,
-    SquaredExponential,
+    FeedbackError,
+    GaitLibraryError,
+    GaitprefError,
+    QueryError,
+    ReplayError,
+    SessionStateError,
+    StorageError,
 )
+from gaitpref.feedback import Comparison, Preference, Suggestion, Tie
+from gaitpref.loop import Answer, CoSpar, Learning, Query
+from gaitpref.model import Posterior, PreferenceGP, SquaredExponential
 from gaitpref.simulate.noisy import IndifferentUser
 from gaitpref.simulate.run import SimulationResult, run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
@@ -32,9 +36,8 @@ from gaitpref.space import MOVES, Feature, Move, Space
 from gaitpref.strategies import STRATEGIES, Strategy, make_strategy
 
 if TYPE_CHECKING:
-    from gaitpref.gaits import GaitLibrary, GaitLibraryError
-    from gaitpref.session import Session, SessionQuery
-    from gaitpref.session_log import REASONS, ReplayError, SessionStateError
+    from gaitpref.gaits import GaitLibrary
+    from gaitpref.sessions import REASONS, Session, SessionQuery
 
 __version__ = "0.1.0"
 
@@ -42,12 +45,9 @@ __version__ = "0.1.0"
 # use, so `import gaitpref` and the CLI start quickly.
 _LAZY = {
     "GaitLibrary": "gaitpref.gaits",
-    "GaitLibraryError": "gaitpref.gaits",
-    "Session": "gaitpref.session",
-    "SessionQuery": "gaitpref.session",
-    "REASONS": "gaitpref.session_log",
-    "ReplayError": "gaitpref.session_log",
-    "SessionStateError": "gaitpref.session_log",
+    "Session": "gaitpref.sessions",
+    "SessionQuery": "gaitpref.sessions",
+    "REASONS": "gaitpref.sessions",
 }
 
 
@@ -75,6 +75,7 @@ __all__ = [
     "FeedbackError",
     "GaitLibrary",
     "GaitLibraryError",
+    "GaitprefError",
     "GradientCoactive",
     "IndifferentUser",
     "Learning",
@@ -92,6 +93,7 @@ __all__ = [
     "SimulationResult",
     "Space",
     "SquaredExponential",
+    "StorageError",
     "Strategy",
     "Suggestion",
     "Tie",

@@ -16,8 +16,8 @@ import httpx
 
 from gaitpref.config import load_config
 from gaitpref.console import create_app
-from gaitpref.cospar import Query
-from gaitpref.session_demo import SimulatedSubject, bump_utility
+from gaitpref.loop.cospar import Query
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from tests.console.live import launch_chromium, serve
 
 CONFIG = "exo-2d-length-duration"

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from gaitpref.cli.gaits import app, parse_range
 from gaitpref.gaits import GaitLibrary
-from gaitpref.gaits.cli import app, parse_range
 
 runner = CliRunner()
 

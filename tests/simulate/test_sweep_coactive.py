@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from gaitpref.config import load_config
-from gaitpref.cospar import Query
+from gaitpref.loop.cospar import Query
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import Feature, Space
 

@@ -41,7 +41,7 @@ from gaitpref.console.schemas import (
     ValidationOut,
 )
 from gaitpref.console.service import SessionService
-from gaitpref.session import Session
+from gaitpref.sessions.session import Session
 
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID, description="the session's id")]
 _ERRORS: dict[int | str, dict[str, Any]] = {

@@ -3,7 +3,7 @@
     app = create_app("sqlite:///lab.db")                  # loopback use, no token
     app = create_app("sqlite:///lab.db", token="s3cret")  # every request must carry the token
 
-``gaitpref console`` serves it with uvicorn (``gaitpref.console.cli``).
+``gaitpref console`` serves it with uvicorn (``gaitpref.cli.console``).
 """
 
 from __future__ import annotations

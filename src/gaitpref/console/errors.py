@@ -26,10 +26,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from gaitpref.config import ConfigError
-from gaitpref.cospar import QueryError
-from gaitpref.feedback import FeedbackError
-from gaitpref.model.laplace import ConvergenceError, PriorNotPositiveDefiniteError
-from gaitpref.session_log import ReplayError, SessionStateError
+from gaitpref.errors import (
+    ConvergenceError,
+    FeedbackError,
+    PriorNotPositiveDefiniteError,
+    ReplayError,
+    SessionStateError,
+)
+from gaitpref.loop.cospar import QueryError
 from gaitpref.storage import (
     ConflictError,
     SchemaError,

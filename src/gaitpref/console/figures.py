@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from gaitpref.model import Posterior
 from gaitpref.plots.posterior import posterior_picture, render
 from gaitpref.plots.session import render_session, session_picture
-from gaitpref.session import Session
+from gaitpref.sessions.session import Session
 
 _DRAW_LOCK = threading.Lock()
 

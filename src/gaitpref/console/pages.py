@@ -30,8 +30,8 @@ from gaitpref.console.service import (
 )
 from gaitpref.console.templating import render
 from gaitpref.console.trial_page import trial_context
-from gaitpref.session import Session
-from gaitpref.session_log import REASONS
+from gaitpref.sessions.records import REASONS
+from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]

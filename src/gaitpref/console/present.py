@@ -16,9 +16,9 @@ from gaitpref.console.schemas import (
     ValidationGaitOut,
     ValidationOut,
 )
-from gaitpref.session import Session, SessionQuery
+from gaitpref.sessions.session import Session, SessionQuery
+from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord
-from gaitpref.validation import ValidationPlan, ValidationResult
 
 
 def gait_out(session: Session, action: int, trial: int | None = None) -> GaitOut:

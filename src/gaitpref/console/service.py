@@ -27,10 +27,10 @@ from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir
 from gaitpref.console.errors import InputError
-from gaitpref.session import Answered, Session, SessionQuery
-from gaitpref.session_log import SessionStateError
+from gaitpref.errors import SessionStateError
+from gaitpref.sessions.session import Answered, Session, SessionQuery
+from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
-from gaitpref.validation import ValidationPlan, ValidationResult
 
 ExportFormat = Literal["csv", "json"]
 T = TypeVar("T")
@@ -220,7 +220,7 @@ class SessionService:
     # -- export --------------------------------------------------------------------------------
     def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:
         """The session's export folder (``session export``) as a zip archive."""
-        from gaitpref.session_export import export_session
+        from gaitpref.sessions.export import export_session
 
         with self.locked(session_id) as session, tempfile.TemporaryDirectory() as tmp:
             folder = Path(tmp) / f"session-{session_id}"
@@ -248,7 +248,7 @@ def ack_text(session: Session, query: SessionQuery) -> str:
 
 def session_query_error(session: Session, query_id: int) -> Exception:
     """The session API's own refusal for a query that is not pending."""
-    from gaitpref.cospar import QueryError
+    from gaitpref.loop.cospar import QueryError
 
     pending = session.pending
     now = "none is pending" if pending is None else f"the pending query is {pending.id}"

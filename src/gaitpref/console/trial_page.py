@@ -9,7 +9,7 @@ import numpy as np
 
 from gaitpref.console import views
 from gaitpref.console.service import Pending
-from gaitpref.session import Session
+from gaitpref.sessions.session import Session
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gaitpref.console.errors import InputError
-from gaitpref.session_log import SessionQuery
+from gaitpref.sessions.records import SessionQuery
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}

@@ -7,13 +7,19 @@ Layers, bottom up: :mod:`params` and :mod:`dynamics` / :mod:`impact` (the hybrid
 length), :mod:`figures` and :mod:`cli` (pictures and commands).  See ``docs/gaits.md``.
 """
 
+from gaitpref.errors import GaitLibraryError, SimulationError
 from gaitpref.gaits.build import build_library
 from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
-from gaitpref.gaits.library import GaitLibrary, GaitLibraryError
+from gaitpref.gaits.library import (
+    GaitLibrary,
+)
 from gaitpref.gaits.library_io import SCHEMA_VERSION, load_library, save_library
 from gaitpref.gaits.optimize import optimize_gait
 from gaitpref.gaits.params import CompassGaitParams
-from gaitpref.gaits.simulate import SimulationError, SimulationResult, simulate_gait
+from gaitpref.gaits.simulate import (
+    SimulationResult,
+    simulate_gait,
+)
 from gaitpref.gaits.study import CotCurve, compass_gait_cot, cot_over_step_length
 
 __all__ = [

@@ -23,13 +23,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait, HZDSettings
 from gaitpref.gaits.params import CompassGaitParams
 from gaitpref.space import Feature, FloatArray, Space
-
-
-class GaitLibraryError(ValueError):
-    """A gait library (in memory or on disk) is malformed, inconsistent or has no such gait."""
 
 
 class AxisSpec(NamedTuple):

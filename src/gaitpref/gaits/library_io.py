@@ -33,8 +33,12 @@ from typing import Any
 
 import numpy as np
 
+from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait, HZDSettings
-from gaitpref.gaits.library import AXES, GaitLibrary, GaitLibraryError
+from gaitpref.gaits.library import (
+    AXES,
+    GaitLibrary,
+)
 from gaitpref.gaits.params import CompassGaitParams
 
 FORMAT = "gaitpref-gait-library"

@@ -76,7 +76,7 @@ class _Problem:
         pr = self.profile(x)
         return np.array([pr.periodicity_residual, (pr.duration - self.duration) / self.duration])
 
-    def _clearance_needed(self, pr: StepProfile) -> FloatArray:
+    def clearance_needed(self, pr: StepProfile) -> FloatArray:
         tau = pr.tau[self.late]
         ramp = (1.0 - tau) / (1.0 - self.s.clearance_start)
         return np.asarray(self.s.clearance * self.geo.step_length * ramp)
@@ -94,7 +94,7 @@ class _Problem:
             "momentum inertia": pr.inertia[i] / pr.inertia[0] - 0.2,
             "normal force": fn - s.min_normal_force,
             "friction": np.concatenate([mu * fn - ft, mu * fn + ft]),
-            "swing-foot clearance": (pr.swing_height[self.late] - self._clearance_needed(pr))
+            "swing-foot clearance": (pr.swing_height[self.late] - self.clearance_needed(pr))
             / (0.01 * self.geo.step_length),
             "impact impulse": np.array([imp[1] - 0.01, mu * imp[1] - imp[0], mu * imp[1] + imp[0]]),
             "lift-off": np.array([pr.lift_off_speed / self.p.leg_length]),
@@ -145,7 +145,7 @@ def _describe(group: str, problem: _Problem, pr: StepProfile) -> str:
         worst = np.nanmax(ratio) if np.isfinite(ratio).any() else math.inf
         return f"friction ratio reaches {worst:.2f} (limit {s.friction_coefficient})"
     if group == "swing-foot clearance":
-        gap = pr.swing_height[problem.late] - problem._clearance_needed(pr)
+        gap = pr.swing_height[problem.late] - problem.clearance_needed(pr)
         k = int(np.argmin(gap))
         return (
             f"swing-foot clearance short by {-1000 * gap[k]:.2f} mm at "

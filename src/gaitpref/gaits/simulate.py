@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from gaitpref.errors import SimulationError
 from gaitpref.gaits.dynamics import (
     coriolis,
     gravity_vector,
@@ -34,10 +35,6 @@ from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.impact import impact
 from gaitpref.gaits.params import CompassGaitParams
 from gaitpref.space import FloatArray, IntArray
-
-
-class SimulationError(RuntimeError):
-    """A simulated step did not reach heel strike (the walker fell or stalled)."""
 
 
 @dataclass(frozen=True, eq=False)

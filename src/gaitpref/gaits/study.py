@@ -18,9 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.build import build_library
 from gaitpref.gaits.gait import HZDSettings
-from gaitpref.gaits.library import GaitLibrary, GaitLibraryError
+from gaitpref.gaits.library import (
+    GaitLibrary,
+)
 from gaitpref.gaits.params import CompassGaitParams
 from gaitpref.space import FloatArray
 

@@ -1,5 +1,6 @@
 """Pure numerics of the preference GP: kernels, likelihoods, the Laplace fit, the posterior."""
 
+from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.engines import DENSE_MAX_ACTIONS, SAMPLERS, SamplerName
 from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.gp import PreferenceGP
@@ -12,7 +13,9 @@ from gaitpref.model.hyperfit import (
 )
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.kronecker import KroneckerPriorSampler
-from gaitpref.model.laplace import ConvergenceError, LaplaceMode, PriorNotPositiveDefiniteError
+from gaitpref.model.laplace import (
+    LaplaceMode,
+)
 from gaitpref.model.likelihood import OrderedProbit, PairLikelihood, Probit
 from gaitpref.model.posterior import Posterior
 

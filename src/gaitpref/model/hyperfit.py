@@ -33,8 +33,8 @@ from numpy.typing import NDArray
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
+from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
-from gaitpref.model.laplace import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import FloatArray, Space
 

@@ -26,16 +26,9 @@ from typing import Any
 import numpy as np
 from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
 
+from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.likelihood import PairLikelihood
 from gaitpref.space import FloatArray, IntArray
-
-
-class ConvergenceError(RuntimeError):
-    """The Newton iteration for the Laplace mode did not converge."""
-
-
-class PriorNotPositiveDefiniteError(ValueError):
-    """``K_VV`` could not be factorised: the kernel needs a (larger) jitter."""
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from matplotlib.ticker import MaxNLocator
 from gaitpref.space import FloatArray, IntArray, Space
 
 if TYPE_CHECKING:
-    from gaitpref.session import Session
+    from gaitpref.sessions.session import Session
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from typing import Literal
 import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config
-from gaitpref.cospar import CoSpar
+from gaitpref.loop.cospar import CoSpar
 from gaitpref.simulate.hzd import build_cot_curve, library_objective, read_cot_curve
 from gaitpref.simulate.objectives import cot_polynomial
 from gaitpref.simulate.study import RunTask, Setting, Study, run_seed_sequence

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitpref.cospar import CoSpar
+from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.posterior import Posterior
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import FloatArray, IntArray

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitpref.config import ExperimentConfig
-from gaitpref.cospar import CoSpar
+from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.simulate.run import run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser

@@ -23,8 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import ndtr
 
-from gaitpref.cospar import Query
 from gaitpref.feedback import Comparison, Outcome, Suggestion
+from gaitpref.loop.cospar import Query
 from gaitpref.space import FloatArray, Move, Space
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 
+from gaitpref.errors import StorageError
 from gaitpref.storage.base import (
     STATUSES,
     ConflictError,
@@ -27,7 +28,6 @@ from gaitpref.storage.base import (
     Status,
     Storage,
     StorageConnectError,
-    StorageError,
     SubjectRecord,
 )
 from gaitpref.storage.memory import MemoryStorage

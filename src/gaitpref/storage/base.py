@@ -2,7 +2,7 @@
 
 A database holds subjects, sessions and, per session, an append-only log of events.  Storage
 knows nothing of numerics: an event is a ``kind`` (a short string) and a JSON ``payload``;
-``gaitpref.session`` gives them meaning.
+``gaitpref.sessions.session`` gives them meaning.
 
 The contract every backend keeps (``tests/storage/test_contract.py`` checks it against the
 in-memory store, SQLite and PostgreSQL):
@@ -39,13 +39,11 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any, Literal, get_args
 
+from gaitpref.errors import StorageError
+
 Status = Literal["active", "paused", "finished"]
 STATUSES: tuple[Status, ...] = get_args(Status)
 JSONObject = dict[str, Any]
-
-
-class StorageError(RuntimeError):
-    """A storage operation that could not be done; nothing was written."""
 
 
 class SessionNotFoundError(StorageError, LookupError):

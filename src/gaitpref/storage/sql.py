@@ -28,6 +28,7 @@ from sqlalchemy.engine import URL, make_url
 from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, SQLAlchemyError
 from sqlalchemy.pool import StaticPool
 
+from gaitpref.errors import StorageError
 from gaitpref.storage import migrate
 from gaitpref.storage.base import (
     ConflictError,
@@ -40,7 +41,6 @@ from gaitpref.storage.base import (
     Status,
     Storage,
     StorageConnectError,
-    StorageError,
     SubjectRecord,
     as_utc,
     check_event,

@@ -1,0 +1,199 @@
+"""``gaitpref gaits ...``: build, inspect and plot gait libraries (a Typer sub-application).
+
+Thin commands over :mod:`gaitpref.gaits`; ranges are written ``min:max:count`` (inclusive, equally
+spaced, as :func:`numpy.linspace`) or as a single value.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from gaitpref.errors import GaitLibraryError, SimulationError
+from gaitpref.gaits.build import build_library
+from gaitpref.gaits.gait import HZDSettings
+from gaitpref.gaits.library import (
+    GaitLibrary,
+)
+
+app = typer.Typer(
+    help="Compass-gait HZD gaits and gait libraries.", no_args_is_help=True, add_completion=False
+)
+
+
+def parse_range(text: str, option: str) -> tuple[float, ...]:
+    """``"0.08:0.18:15"`` -> 15 equally spaced values; ``"0.2"`` -> one value."""
+    parts = text.split(":")
+    try:
+        if len(parts) == 1:
+            values = np.array([float(parts[0])])
+        elif len(parts) == 3:
+            lo, hi, num = float(parts[0]), float(parts[1]), int(parts[2])
+            if num < 1 or (num > 1 and not hi > lo):
+                raise ValueError
+            values = np.linspace(lo, hi, num)
+        else:
+            raise ValueError
+    except ValueError:
+        raise typer.BadParameter(
+            f"{text!r} is not min:max:count (max > min, count >= 1) or a single number",
+            param_hint=option,
+        ) from None
+    if not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise typer.BadParameter(f"{text!r}: values must be positive", param_hint=option)
+    return tuple(float(v) for v in values)
+
+
+def _finite(value: float) -> float | None:
+    return value if math.isfinite(value) else None
+
+
+def _load(path: Path) -> GaitLibrary:
+    try:
+        return GaitLibrary.load(path, allow_infeasible=True)
+    except GaitLibraryError as exc:
+        raise typer.BadParameter(str(exc), param_hint="FILE") from None
+
+
+@app.command()
+def build(
+    out: Annotated[Path, typer.Option("--out", help="Library file to write (JSON).")],
+    step_length: Annotated[
+        str, typer.Option(help="Step lengths [m], min:max:count.")
+    ] = "0.08:0.18:15",
+    step_duration: Annotated[
+        str | None, typer.Option(help="Step durations [s], min:max:count.")
+    ] = None,
+    speed: Annotated[float | None, typer.Option(help="Fixed forward speed [m/s] instead.")] = None,
+    step_width: Annotated[
+        str | None, typer.Option(help="Step widths [m]: a label only (the model is planar).")
+    ] = None,
+    degree: Annotated[int, typer.Option(help="Bezier degree of the virtual constraint.")] = 6,
+    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Parallel processes.")] = 1,
+) -> None:
+    """Optimize one gait per grid point and write the library; exit 1 if any is infeasible."""
+    if (step_duration is None) == (speed is None):
+        raise typer.BadParameter("give exactly one of --step-duration and --speed")
+    if speed is not None and not speed > 0:
+        raise typer.BadParameter("must be positive", param_hint="--speed")
+    if jobs < 1:
+        raise typer.BadParameter("must be >= 1", param_hint="--jobs")
+    lengths = parse_range(step_length, "--step-length")
+    durations = None if step_duration is None else parse_range(step_duration, "--step-duration")
+    widths = None if step_width is None else parse_range(step_width, "--step-width")
+    try:
+        settings = HZDSettings(degree=degree)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--degree") from None
+    total = len(lengths) * (len(durations) if durations else 1)
+    console = Console(stderr=True)
+    columns = (
+        TextColumn("optimizing gaits"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, console=console) as bar:
+        task = bar.add_task("gaits", total=total)
+        lib = build_library(
+            lengths,
+            step_durations=durations,
+            speed=speed,
+            step_widths=widths,
+            settings=settings,
+            n_jobs=jobs,
+            progress=lambda k: bar.advance(task, k),
+        )
+    lib.save(out)
+    bad = lib.infeasible()
+    console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
+    if bad:
+        for i in bad:
+            console.print(f"[red]infeasible[/red] {lib.gait_id(i)}: {lib.gaits[i].message}")
+        raise typer.Exit(code=1)
+
+
+@app.command()
+def show(
+    file: Annotated[Path, typer.Argument(help="Gait library file.")],
+    as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
+) -> None:
+    """List the gaits of a library: parameters, duration, COT, delta^2, feasibility."""
+    lib = _load(file)
+    if as_json:
+        rows = [
+            {
+                "index": i,
+                "id": lib.gait_id(i),
+                "parameters": lib.parameters(i),
+                "step_duration": _finite(gait.step_duration),
+                "cot": _finite(gait.cot) if gait.feasible else None,
+                "delta_squared": _finite(gait.delta_squared),
+                "feasible": gait.feasible,
+                "message": gait.message,
+            }
+            for i, gait in enumerate(lib.gaits)
+        ]
+        doc = {
+            "file": str(file),
+            "speed": lib.speed,
+            "axes": {name: list(values) for name, values in lib.axes},
+            "n_gaits": len(lib),
+            "n_feasible": len(lib) - len(lib.infeasible()),
+            "gaits": rows,
+        }
+        typer.echo(json.dumps(doc, indent=1))
+        return
+    speed = f", speed {lib.speed:g} m/s" if lib.speed is not None else ""
+    table = Table(title=f"{file.name}: {len(lib)} gaits over {' x '.join(lib.names)}{speed}")
+    for col in ("#", "id", *lib.names, "duration [s]", "COT", "delta^2", "feasible"):
+        table.add_column(col, justify="left" if col == "id" else "right", no_wrap=True)
+    for i, gait in enumerate(lib.gaits):
+        params = [f"{v:.4g}" for v in lib.parameters(i).values()]
+        cot = f"{gait.cot:.5f}" if gait.feasible else "-"
+        ok = "yes" if gait.feasible else "[red]no[/red]"
+        table.add_row(
+            str(i), lib.gait_id(i), *params, f"{gait.step_duration:.4f}", cot,
+            f"{gait.delta_squared:.4f}", ok,
+        )  # fmt: skip
+    Console().print(table)
+
+
+@app.command()
+def plot(
+    file: Annotated[Path, typer.Argument(help="Gait library file.")],
+    ids: Annotated[
+        list[str] | None,
+        typer.Option("--id", help="Gait id to show (repeatable); default: least/median/most COT."),
+    ] = None,
+    out: Annotated[Path | None, typer.Option(help="PNG to write (default: FILE.png).")] = None,
+    steps: Annotated[int, typer.Option(help="Simulated steps per phase diagram.")] = 6,
+) -> None:
+    """COT over the grid and joint phase diagrams from full-model simulations (as the paper's
+    Fig. 7)."""
+    lib = _load(file)
+    from gaitpref.gaits.figures import default_ids, render_library_figure  # matplotlib: lazily
+
+    chosen = list(ids) if ids else default_ids(lib)
+    for gait_id in chosen:
+        try:
+            index = lib.index_of_id(gait_id)
+        except GaitLibraryError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--id") from None
+        if not lib.gaits[index].feasible:
+            raise typer.BadParameter(f"gait {gait_id} is infeasible", param_hint="--id")
+    target = out if out is not None else file.with_suffix(".png")
+    try:
+        render_library_figure(lib, chosen, target, steps=steps)
+    except SimulationError as exc:
+        typer.echo(f"simulation failed: {exc}", err=True)
+        raise typer.Exit(code=1) from None
+    typer.echo(f"wrote {target}")

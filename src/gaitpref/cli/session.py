@@ -1,0 +1,323 @@
+"""``gaitpref session ...`` and ``gaitpref db ...``: thin commands over the Session API.
+
+Every command takes ``--db URL`` (default: ``$GAITPREF_DB``, else ``sqlite:///gaitpref.db`` in the
+working directory; a bare path means a SQLite file).  Errors name the problem and exit with
+status 2; nothing is written when a command fails.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, NoReturn, TypeVar
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from gaitpref.config import ConfigError
+from gaitpref.errors import ExportError, FeedbackError, ReplayError, SessionStateError
+from gaitpref.loop.cospar import QueryError
+from gaitpref.sessions.export import (
+    export_session,
+    import_session,
+)
+from gaitpref.sessions.records import (
+    REASONS,
+)
+from gaitpref.sessions.session import Session
+from gaitpref.storage import StorageError, migrate, resolve_url
+
+session_app = typer.Typer(
+    name="session", help="Experiment sessions with real subjects.", no_args_is_help=True
+)
+db_app = typer.Typer(name="db", help="The session database.", no_args_is_help=True)
+console = Console(highlight=False, soft_wrap=True)
+err_console = Console(stderr=True, highlight=False)
+T = TypeVar("T")
+
+DbOption = Annotated[
+    str | None,
+    typer.Option(
+        "--db", help="Database URL or SQLite path (default: $GAITPREF_DB, else ./gaitpref.db)."
+    ),
+]
+IdArgument = Annotated[int, typer.Argument(help="The session's id (see `gaitpref session list`).")]
+_ERRORS = (
+    StorageError,
+    SessionStateError,
+    QueryError,
+    FeedbackError,
+    ReplayError,
+    ConfigError,
+    ExportError,
+    ValueError,
+    TypeError,
+)
+
+
+def _fail(message: str) -> NoReturn:
+    err_console.print(f"[bold red]error:[/] {message}", highlight=False)
+    raise typer.Exit(2)
+
+
+def _guard(fn: Callable[[], T]) -> T:
+    try:
+        return fn()
+    except _ERRORS as exc:
+        _fail(str(exc))
+
+
+@contextmanager
+def _opened(db: str | None, session_id: int) -> Iterator[Session]:
+    session = _guard(lambda: Session.open(db, session_id))
+    try:
+        yield session
+    finally:
+        session.close()
+
+
+# -- db ----------------------------------------------------------------------------------------
+@db_app.command("upgrade")
+def db_upgrade(db: DbOption = None) -> None:
+    """Create the database, or migrate it to the schema this gaitpref writes."""
+    from gaitpref.storage.sql import upgrade_database
+
+    url = resolve_url(db)
+    if url == "memory://":
+        _fail("an in-memory database needs no upgrade")
+    shown = _guard(lambda: upgrade_database(url))
+    console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
+
+
+@db_app.command("status")
+def db_status(db: DbOption = None) -> None:
+    """Show the database's URL, schema revision and number of sessions."""
+
+    def run() -> tuple[str, int, int]:
+        url = resolve_url(db)
+        return url, len(Session.list_sessions(url)), len(Session.list_subjects(url))
+
+    url, sessions, subjects = _guard(run)
+    console.print(
+        f"{url}: schema revision {migrate.head_revision()}, {sessions} sessions, "
+        f"{subjects} subjects"
+    )
+
+
+# -- session -----------------------------------------------------------------------------------
+@session_app.command("new")
+def new(
+    config: Annotated[str, typer.Option(help="Config TOML file or shipped config name.")],
+    subject: Annotated[str, typer.Option(help="Pseudonymous subject code, e.g. S01.")],
+    seed: Annotated[int | None, typer.Option(help="Seed (default: the config's).")] = None,
+    gait_ids: Annotated[
+        Path | None,
+        typer.Option(help="Text file: one gait id per line, in grid order (a gait library)."),
+    ] = None,
+    db: DbOption = None,
+) -> None:
+    """Start a session of SUBJECT with CONFIG; prints its id."""
+
+    def run() -> Session:
+        library = None
+        if gait_ids is not None:
+            if not gait_ids.is_file():
+                raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
+            library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
+        return Session.create(db, config, subject, seed=seed, library=library)
+
+    session = _guard(run)
+    console.print(
+        f"session {session.id}: subject {session.subject}, config {session.config.name}, "
+        f"seed {session.seed}, in {session.storage.url}\n"
+        f"run it with: gaitpref session run {session.id}" + (f" --db {db}" if db else "")
+    )
+    session.close()
+
+
+@session_app.command("run")
+def run_session(session_id: IdArgument, db: DbOption = None) -> None:
+    """The interactive loop: show each trial, ask the answer, confirm, write (u undo, q quit)."""
+    from gaitpref.terminal import run_terminal
+
+    with _opened(db, session_id) as session:
+        _guard(lambda: run_terminal(session, console))
+
+
+@session_app.command("validate")
+def validate(
+    session_id: IdArgument,
+    ranking: Annotated[
+        str | None, typer.Option(help="The subject's ranking, best first (e.g. BCA).")
+    ] = None,
+    db: DbOption = None,
+) -> None:
+    """Blind validation: the max/mean/min gaits in a logged random order, then unblinding."""
+    from gaitpref.terminal import run_validation
+
+    with _opened(db, session_id) as session:
+        _guard(lambda: run_validation(session, ranking, console))
+
+
+@session_app.command("list")
+def list_sessions(
+    subject: Annotated[str | None, typer.Option(help="Only this subject's sessions.")] = None,
+    db: DbOption = None,
+) -> None:
+    """List the sessions in the database."""
+
+    def run() -> list[object]:
+        return list(Session.list_sessions(db, subject))
+
+    rows = _guard(run)
+    table = Table(title="sessions")
+    for col in ("id", "subject", "config", "seed", "status", "events", "created", "updated"):
+        table.add_column(col)
+    for r in rows:
+        table.add_row(
+            str(r.id),  # type: ignore[attr-defined]
+            r.subject,  # type: ignore[attr-defined]
+            r.config_name,  # type: ignore[attr-defined]
+            str(r.seed),  # type: ignore[attr-defined]
+            r.status,  # type: ignore[attr-defined]
+            str(r.last_seq),  # type: ignore[attr-defined]
+            r.created_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
+            r.updated_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
+        )
+    console.print(table)
+
+
+@session_app.command("show")
+def show(
+    session_id: IdArgument,
+    figure: Annotated[
+        Path | None, typer.Option(help="Where to draw the figure (default: session-ID.png).")
+    ] = None,
+    no_figure: Annotated[bool, typer.Option("--no-figure", help="Print only.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    db: DbOption = None,
+) -> None:
+    """Summarize a session and plot its posterior and trials (as in the paper's figures)."""
+    from gaitpref.sessions.export import posterior_summary
+
+    with _opened(db, session_id) as session:
+        summary = posterior_summary(session)
+        path = None
+        if not no_figure:
+            from gaitpref.plots.session import save_session_figure
+
+            target = figure or Path(f"session-{session.id}.png")
+            path = _guard(lambda: save_session_figure(session, target))
+        trials = session.trials()
+        info = {
+            "id": session.id,
+            "subject": session.subject,
+            "config": session.config.name,
+            "seed": session.seed,
+            "status": session.status,
+            "trials": len(trials),
+            "excluded": [t.number for t in trials if t.excluded],
+            "comparisons": sum(not c.undone for c in session.comparisons()),
+            "posterior": summary,
+            "validations": [
+                {
+                    "round": v.round,
+                    "ranking": "".join(v.ranking),
+                    "agrees": v.agrees,
+                    "kendall_tau": v.kendall_tau,
+                }
+                for v in session.validations()
+            ],
+            "figure": None if path is None else str(path),
+        }
+        if as_json:
+            typer.echo(json.dumps(info))
+            return
+        best = summary["argmax"]
+        console.print(
+            f"session {session.id}: subject {session.subject}, {session.config.name}, "
+            f"seed {session.seed}, {session.status}\n"
+            f"{len(trials)} trials ({len(info['excluded'])} excluded), "  # type: ignore[arg-type]
+            f"{info['comparisons']} comparisons\n"
+            f"best so far: action {best} ({session.describe(best)}), posterior mean "
+            f"{summary['mean_at_argmax']:.4g} ± {summary['sd_at_argmax']:.2g}"
+        )
+        for v in session.validations():
+            console.print(
+                f"validation {v.round}: ranking {''.join(v.ranking)}, "
+                f"{'agrees' if v.agrees else 'disagrees'}, Kendall's tau {v.kendall_tau:+.2f}"
+            )
+        if path is not None:
+            console.print(f"figure: {path}")
+
+
+@session_app.command("undo")
+def undo(session_id: IdArgument, db: DbOption = None) -> None:
+    """Take back the last answer (its trial is asked again)."""
+    with _opened(db, session_id) as session:
+        pending = _guard(session.undo)
+        console.print(f"undone: the answer to trial {', '.join(map(str, pending.trials))}")
+
+
+@session_app.command("exclude")
+def exclude(
+    session_id: IdArgument,
+    trial: Annotated[int, typer.Argument(help="The trial number.")],
+    reason: Annotated[str, typer.Option(help=f"One of {', '.join(REASONS)}.")],
+    detail: Annotated[str, typer.Option(help="What happened.")] = "",
+    db: DbOption = None,
+) -> None:
+    """Exclude a trial (device fault, stumble, ...): its comparisons leave the model."""
+    with _opened(db, session_id) as session:
+        _guard(lambda: session.exclude(trial, reason.replace("-", "_"), detail))
+        console.print(f"trial {trial} excluded ({reason}); the record stays")
+
+
+@session_app.command("note")
+def note(
+    session_id: IdArgument,
+    text: Annotated[str, typer.Argument(help="The note.")],
+    db: DbOption = None,
+) -> None:
+    """Log a note in the session."""
+    with _opened(db, session_id) as session:
+        seq = _guard(lambda: session.note(text))
+        console.print(f"note logged as event {seq}")
+
+
+@session_app.command("finish")
+def finish(session_id: IdArgument, db: DbOption = None) -> None:
+    """Finish the session: it takes no more events."""
+    with _opened(db, session_id) as session:
+        _guard(session.finish)
+        console.print(f"session {session_id} finished")
+
+
+@session_app.command("export")
+def export(
+    session_id: IdArgument,
+    out: Annotated[Path, typer.Option(help="A new (or empty) folder.")],
+    fmt: Annotated[str, typer.Option("--format", help="csv or json.")] = "csv",
+    db: DbOption = None,
+) -> None:
+    """Export events, trials, comparisons and the posterior, with a manifest."""
+    if fmt not in ("csv", "json"):
+        _fail(f"--format must be csv or json, got {fmt!r}")
+    with _opened(db, session_id) as session:
+        manifest = _guard(lambda: export_session(session, out, fmt))  # type: ignore[arg-type]
+        console.print(f"exported session {session_id} to {out} (manifest: {manifest.name})")
+
+
+@session_app.command("import")
+def import_(
+    folder: Annotated[Path, typer.Argument(help="An export folder.")],
+    db: DbOption = None,
+) -> None:
+    """Rebuild a session from an export (checked by replay before anything is written)."""
+    session = _guard(lambda: import_session(db, folder))
+    was = session.record.meta["imported_from"]["session_id"]
+    console.print(f"imported as session {session.id} (was {was}) in {session.storage.url}")
+    session.close()

@@ -1,0 +1,188 @@
+"""``gaitpref bench ...``: the paper's simulation studies from the command line.
+
+    gaitpref bench paper-2d [--runs 100] [--trials 150] [--settings n1_b1,n1_b1_coactive]
+                            [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
+    gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
+
+Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
+``sweep``, files in ``tables``/``report``/``figures``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from gaitpref.simulate.compass import compass_gait_study, compass_objective, posterior_snapshots
+from gaitpref.simulate.paper2d import paper_2d_study, published_curves
+from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
+from gaitpref.simulate.study import Study
+from gaitpref.simulate.sweep import BACKENDS, StudyResult, resolve_jobs, run_study
+from gaitpref.simulate.tables import write_curves, write_table
+
+bench_app = typer.Typer(
+    help="Reproduce the paper's simulation studies (sweeps over settings x objectives x seeds).",
+    no_args_is_help=True,
+)
+_console = Console(stderr=True)
+
+Backend = Annotated[
+    str,
+    typer.Option("--backend", help="joblib (local processes) or ray (pip install gaitpref[ray])"),
+]
+Address = Annotated[
+    str | None,
+    typer.Option("--address", help="Ray cluster address (default: start a local Ray runtime)"),
+]
+Jobs = Annotated[int, typer.Option("--jobs", "-j", help="parallel runs (-1: every core)")]
+TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
+
+
+def _split(values: list[str] | None) -> list[str] | None:
+    if not values:
+        return None
+    return [v.strip() for item in values for v in item.split(",") if v.strip()]
+
+
+def _integers(text: str, option: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(f"{option} must be comma-separated integers, got {text!r}") from None
+
+
+def _fail(message: str) -> typer.Exit:
+    _console.print(f"[red]error:[/red] {message}")
+    return typer.Exit(2)
+
+
+def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyResult:
+    if backend not in BACKENDS:
+        raise _fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    try:
+        return run_study(study, backend, jobs, address, progress=True, console=_console)
+    except (ValueError, RuntimeError) as exc:
+        raise _fail(str(exc)) from None
+
+
+def _table_path(out: Path, fmt: str) -> Path:
+    if fmt not in ("csv", "csv.gz", "parquet"):
+        raise _fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
+    return out / f"runs.{fmt}"
+
+
+@bench_app.command("paper-2d")
+def paper_2d(
+    runs: Annotated[int, typer.Option(help="runs per setting; run k uses objective k")] = 100,
+    trials: Annotated[int, typer.Option(help="executed actions per run")] = 150,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option(help="settings (repeat or comma-separate; default: all six)"),
+    ] = None,
+    baseline: Annotated[bool, typer.Option(help="add random selection as a floor")] = True,
+    backend: Backend = "joblib",
+    address: Address = None,
+    jobs: Jobs = -1,
+    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    out: Annotated[Path, typer.Option(help="output folder")] = Path("out/paper-2d"),
+    table: TableFormat = "csv",
+    notes: Annotated[
+        Path | None, typer.Option(help="markdown file appended to summary.md as Notes")
+    ] = None,
+) -> None:
+    """The paper's Fig. 4 study on the authors' 100 objectives, beside the published curves."""
+    try:
+        study = paper_2d_study(runs, trials, _split(settings), baseline, seed)
+        note_text = notes.read_text(encoding="utf-8") if notes is not None else ""
+    except (ValueError, OSError) as exc:
+        raise _fail(str(exc)) from None
+    table_path = _table_path(out, table)
+    out.mkdir(parents=True, exist_ok=True)
+    load_before = load_average()
+    result = _run(study, backend, jobs, address)
+    from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
+
+    published = published_curves()
+    write_table(result.table, table_path)
+    write_curves(result.curves, out / "curves.csv")
+    plot_paper_2d(result.curves, published, out / "curves.png")
+    summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
+    (out / "summary.md").write_text(summary, encoding="utf-8")
+    _console.print(
+        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, {result.jobs} jobs); "
+        f"wrote {out}/curves.csv, {table_path.name}, curves.png, summary.md"
+    )
+
+
+@bench_app.command("compass-gait")
+def compass_gait(
+    objective: Annotated[
+        str, typer.Option(help="poly: the authors' COT polynomial; hzd: a gait library's COT")
+    ] = "poly",
+    library: Annotated[
+        Path | None,
+        typer.Option(
+            help="--objective hzd: a saved gait library (.json) or a .csv/.npz export "
+            "(default: build one on the grid at 0.2 m/s, saved as OUT/gait-library.json)"
+        ),
+    ] = None,
+    runs: Annotated[int, typer.Option(help="seeded runs per setting")] = 100,
+    trials: Annotated[int, typer.Option(help="executed actions per run")] = 60,
+    iterations: Annotated[
+        str, typer.Option(help="iteration counts for the posterior panels")
+    ] = "1,5,10,20",
+    baseline: Annotated[bool, typer.Option(help="add random selection as a floor")] = True,
+    backend: Backend = "joblib",
+    address: Address = None,
+    jobs: Jobs = -1,
+    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    out: Annotated[Path, typer.Option(help="output folder")] = Path("out/compass-gait"),
+    table: TableFormat = "csv",
+) -> None:
+    """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
+    try:
+        its = _integers(iterations, "--iterations")
+        if objective not in ("poly", "hzd"):
+            raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
+        build = objective == "hzd" and library is None
+        if build:
+            out.mkdir(parents=True, exist_ok=True)
+            _console.print("building HZD gaits at 0.2 m/s on the 24 step lengths ...")
+        obj = compass_objective(
+            objective,  # type: ignore[arg-type]
+            library,
+            build_jobs=resolve_jobs(jobs),
+            save_library=out / "gait-library.json" if build else None,
+        )
+        study = compass_gait_study(obj, runs, trials, baseline, seed)
+        snapshots = posterior_snapshots(study, its)
+    except ValueError as exc:
+        raise _fail(str(exc)) from None
+    if obj.note:
+        _console.print(f"[yellow]note:[/yellow] {obj.note}")
+    table_path = _table_path(out, table)
+    out.mkdir(parents=True, exist_ok=True)
+    result = _run(study, backend, jobs, address)
+    from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
+
+    write_table(result.table, table_path)
+    write_curves(result.curves, out / "curves.csv")
+    plot_compass_gait(
+        obj.space.features[0].array,
+        obj.cot,
+        snapshots,
+        out / "posterior.png",
+        result.curves,
+        obj.label,
+    )
+    _console.print(
+        f"{len(study)} runs in {result.seconds:.1f} s; wrote {out}/curves.csv, {table_path.name}, "
+        "posterior.png"
+    )
+
+
+if __name__ == "__main__":  # python -m gaitpref.cli.simulate
+    bench_app()

@@ -1,0 +1,102 @@
+"""Every error gaitpref raises on purpose derives from :class:`GaitprefError`.
+
+The families below are where callers (the CLI, the terminal, the console) map errors to messages
+and status codes, in one place each.  Each class also derives from the built-in exception its
+callers caught before 0.2 (``ValueError``, ``RuntimeError``, ...), so ``except ValueError`` keeps
+working.  Storage errors live in :mod:`gaitpref.storage` and derive from :class:`StorageError`.
+
+=========================  ====================================================================
+family                     raised when
+=========================  ====================================================================
+:class:`ConfigError`       a config (TOML, dict or web form) is not valid; names table and key
+:class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
+                           not positive definite)
+:class:`FeedbackError`     an answer does not fit its query; nothing was changed
+:class:`QueryError`        an answer to a query that is unknown, stale or already answered
+:class:`SessionError`      a session's state refuses an operation, its log does not replay, an
+                           export cannot be read
+:class:`StorageError`      a database cannot be read or written; nothing was written
+:class:`GaitError`         a gait library or a gait simulation failed
+=========================  ====================================================================
+"""
+
+from __future__ import annotations
+
+
+class GaitprefError(Exception):
+    """Base of every error gaitpref raises on purpose: its message names the problem."""
+
+
+class ConfigError(GaitprefError, ValueError):
+    """A config that cannot be used; the message names the table and the key."""
+
+
+class ModelError(GaitprefError):
+    """The model's numerics cannot go on."""
+
+
+class ConvergenceError(ModelError, RuntimeError):
+    """The Newton iteration for the Laplace mode did not converge."""
+
+
+class PriorNotPositiveDefiniteError(ModelError, ValueError):
+    """``K_VV`` could not be factorised: the kernel needs a (larger) jitter."""
+
+
+class FeedbackError(GaitprefError, ValueError):
+    """An answer that cannot be taken; nothing was changed."""
+
+
+class QueryError(GaitprefError, ValueError):
+    """A ``tell`` for a query that is unknown, stale or already answered; nothing was changed."""
+
+
+class SessionError(GaitprefError, RuntimeError):
+    """A session operation that cannot be done."""
+
+
+class SessionStateError(SessionError):
+    """The session's state does not allow this (finished, paused, nothing to undo, ...)."""
+
+
+class ReplayError(SessionError):
+    """Rebuilding a session from its log did not give what the log says; nothing was changed."""
+
+
+class ExportError(SessionError):
+    """An export folder that cannot be written or read back."""
+
+
+class StorageError(GaitprefError, RuntimeError):
+    """A storage operation that could not be done; nothing was written."""
+
+
+class GaitError(GaitprefError):
+    """Gait generation or a gait library failed."""
+
+
+class GaitLibraryError(GaitError, ValueError):
+    """A gait library file that cannot be read, or a library that does not fit its config."""
+
+
+class SimulationError(GaitError, RuntimeError):
+    """A gait simulation that cannot go on (a fall, a non-finite state, no impact)."""
+
+
+__all__ = [
+    "ConfigError",
+    "ConvergenceError",
+    "ExportError",
+    "FeedbackError",
+    "GaitError",
+    "GaitLibraryError",
+    "GaitprefError",
+    "ModelError",
+    "PriorNotPositiveDefiniteError",
+    "QueryError",
+    "ReplayError",
+    "SessionError",
+    "SessionStateError",
+    "SimulationError",
+    "StorageError",
+]

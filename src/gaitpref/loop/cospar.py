@@ -1,0 +1,355 @@
+"""The CoSpar loop (the paper's Algorithm 1) behind an ask/tell interface.
+
+Each iteration: draw ``n`` joint posterior samples and propose their argmaxes (exact ties broken at
+random with the loop's generator); the user compares the new actions with each other and with the
+``b`` previously executed ones and may suggest an improvement per executed action; suggestions
+``a~ > a`` enter the data with noise ``sigma / beta`` (``beta``: the coactive weight); "no
+preference" is stored and not modelled; the posterior is refitted, warm-started from the last one.
+
+    loop = CoSpar(space, kernel, noise, n=1, buffer=1)
+    query = loop.ask()              # query.actions: run these; query.buffer: compare with these
+    loop.tell(query, [(query.actions[0], query.buffer[0], "first")], [(a, "step_length", "+small")])
+
+``tell`` checks everything first and changes nothing when it raises.  ``exclude`` takes chosen
+preferences of earlier answers out of the model (their records stay in ``answers``), as a session
+does for a trial spoiled by a device fault or a stumble.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Collection, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from gaitpref.errors import FeedbackError, QueryError
+from gaitpref.feedback import (
+    Comparison,
+    Preference,
+    Suggestion,
+    Tie,
+    parse_comparisons,
+    parse_suggestions,
+)
+from gaitpref.loop.learning import Learning, pair_data
+from gaitpref.model.evidence import Hyperparameters, PairData
+from gaitpref.model.gp import PreferenceGP
+from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import one_blas_thread
+from gaitpref.space import Space
+from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+
+
+@dataclass(frozen=True)
+class Query:
+    """One iteration's proposal: run ``actions`` now; compare with the buffered ``buffer``."""
+
+    id: int
+    actions: tuple[int, ...]
+    buffer: tuple[int, ...]
+
+    @property
+    def members(self) -> tuple[int, ...]:
+        """Every action a comparison of this query may name (executed, then buffered)."""
+        return self.actions + self.buffer
+
+
+@dataclass(frozen=True)
+class Answer:
+    """A told query: what the user said and what entered the model."""
+
+    query: Query
+    comparisons: tuple[Comparison, ...]
+    suggestions: tuple[Suggestion, ...]
+    preferences: tuple[Preference, ...]
+    ties: tuple[Tie, ...]
+    ignored_suggestions: tuple[Suggestion, ...]  # moves that clip back to the same point
+    posterior_before: Posterior = dataclasses.field(repr=False, compare=False)
+    refit: HyperFit | None = None  # the hyperparameter fit this answer triggered, if any
+
+
+def _light(posterior: Posterior) -> Posterior:
+    """The same posterior without its cached ``A``-sized arrays (cheap to keep for undo)."""
+    return dataclasses.replace(posterior)
+
+
+class CoSpar:
+    """The CoSpar loop over ``space``: ``n`` actions per query, a buffer of ``buffer`` trials.
+
+    ``sampler`` ("auto", "dense" or "scalable") picks how posterior samples reach every action
+    (:mod:`gaitpref.model.engines`); for a given seed all choices propose the same actions up to
+    floating-point rounding.
+    """
+
+    def __init__(
+        self,
+        space: Space,
+        kernel: SquaredExponential,
+        noise: float,
+        n: int = 1,
+        buffer: int = 0,
+        coactive_weight: float = 1.0,
+        seed: int | np.random.Generator = 0,
+        strategy: Strategy | None = None,
+        learning: Learning | None = None,
+        sampler: str = "auto",
+    ) -> None:
+        if not isinstance(n, int) or n < 1:
+            raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
+        if not isinstance(buffer, int) or buffer < 0:
+            raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
+        if not (np.isfinite(coactive_weight) and coactive_weight > 0):
+            raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        self.space = space
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
+        self.learning = Learning() if learning is None else learning
+        band = self.learning.tie_band
+        if self.learning.learns_band:
+            band = noise  # the starting band of the fit (the default prior's median)
+        self.hyper = Hyperparameters.from_kernel(kernel, space.ndim, band or 0.0)
+        self.prior: HyperPrior = self.learning.prior or default_prior(
+            space, kernel.variance, noise, fit_band=self.learning.learns_band
+        )
+        if len(self.prior.lengthscale) != space.ndim:
+            raise ValueError(
+                f"the hyperparameter prior has {len(self.prior.lengthscale)} lengthscales; "
+                f"the space has {space.ndim} features"
+            )
+        self.n = n
+        self.buffer_size = buffer
+        self.coactive_weight = float(coactive_weight)
+        self.strategy: Strategy = SelfSparring() if strategy is None else strategy
+        self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self.posterior: Posterior = self.gp.prior()
+        self.answers: list[Answer] = []
+        self.pending: Query | None = None
+        self._next_id = 1
+        self._buffer: tuple[int, ...] = ()
+        self._rng_before_pending: Mapping[str, Any] | None = None
+        self._rng_before: dict[int, Mapping[str, Any]] = {}  # answered query id -> RNG before ask
+        self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
+        self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
+
+    # -- state -------------------------------------------------------------------------------
+    @property
+    def preferences(self) -> list[Preference]:
+        """The preferences in the model (every answer's, less the excluded ones)."""
+        return [p for a in self.answers for p in self._kept(a)]
+
+    @property
+    def excluded(self) -> dict[int, frozenset[int]]:
+        """Query id -> indices into that answer's ``preferences`` taken out by :meth:`exclude`."""
+        return dict(self._dropped)
+
+    @property
+    def ties(self) -> list[Tie]:
+        return [t for a in self.answers for t in a.ties]
+
+    @property
+    def executed(self) -> list[int]:
+        """Every executed action, in order (one entry per trial)."""
+        return [x for a in self.answers for x in a.query.actions]
+
+    @property
+    def refits(self) -> list[HyperFit]:
+        """Every hyperparameter fit so far, in order (each also on its :class:`Answer`)."""
+        return [a.refit for a in self.answers if a.refit is not None]
+
+    @property
+    def buffer(self) -> tuple[int, ...]:
+        """The ``b`` most recently executed actions, oldest first."""
+        return self._buffer
+
+    # -- ask / tell --------------------------------------------------------------------------
+    def ask(self) -> Query:
+        """The next query; the same pending query again until it is told."""
+        if self.pending is not None:
+            return self.pending
+        self._rng_before_pending = self.rng.bit_generator.state
+        context = AskContext(self.posterior, self.n, self._buffer, len(self.executed), self.rng)
+        with one_blas_thread():
+            actions = tuple(int(a) for a in self.strategy.propose(context))
+        self.pending = Query(self._next_id, actions, self._buffer)
+        self._next_id += 1
+        return self.pending
+
+    def tell(
+        self,
+        query: Query | int,
+        comparisons: Iterable[object] = (),
+        suggestions: Iterable[object] = (),
+    ) -> Answer:
+        """Record the answer to ``query`` and refit the posterior.
+
+        ``comparisons``: ``(i, j, outcome)`` with ``i``, ``j`` grid indices of actions in the
+        query and ``outcome`` one of ``"first"``, ``"second"``, ``"none"``.  ``suggestions``:
+        ``(action, feature, move)`` for executed actions; a move that clips back to the same
+        point is ignored.  Raises :class:`QueryError` / :class:`FeedbackError` and changes
+        nothing on bad input.
+        """
+        q = self._check_query(query)
+        comps = parse_comparisons(self.space, comparisons, q.members, q.actions)
+        suggs = parse_suggestions(self.space, suggestions, q.actions)
+        prefs: list[Preference] = []
+        ties: list[Tie] = []
+        for c in comps:
+            pair = c.as_preference()
+            if pair is not None:
+                prefs.append(Preference(pair[0], pair[1], self.gp.noise, "comparison", q.id))
+            elif c.is_tie and c.first != c.second:
+                ties.append(Tie(c.first, c.second, q.id))
+        ignored: list[Suggestion] = []
+        coactive_noise = self.gp.noise / self.coactive_weight
+        for s in suggs:
+            target = self.space.coactive_move(s.action, s.feature, s.move)
+            if target is None:
+                ignored.append(s)
+            else:
+                prefs.append(Preference(target, s.action, coactive_noise, "coactive", q.id))
+        answer = Answer(
+            q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
+        )
+        answers = [*self.answers, answer]
+        with one_blas_thread():  # may raise: nothing changed yet
+            refit = self._refit(answers)
+            hyper = self.hyper if refit is None else refit.after
+            gp = self.gp if hyper == self.hyper else self._gp(hyper)
+            new_posterior = self._fit(answers, gp, hyper.band)
+        if refit is not None:
+            answer = dataclasses.replace(answer, refit=refit)
+        self.answers.append(answer)
+        self.posterior = new_posterior
+        self.gp, self.hyper = gp, hyper
+        if self._rng_before_pending is not None:
+            self._rng_before[q.id] = self._rng_before_pending
+        self.pending = None
+        self._rng_before_pending = None
+        recent = self._buffer + q.actions
+        self._buffer = recent[max(0, len(recent) - self.buffer_size) :]
+        return answer
+
+    def undo(self) -> Answer:
+        """Take back the last answer: its query is pending again, as it was before the answer."""
+        if not self.answers:
+            raise QueryError("nothing to undo: no query has been answered")
+        if self.pending is not None and self._rng_before_pending is not None:
+            self.rng.bit_generator.state = self._rng_before_pending
+            self._next_id = self.pending.id
+        answer = self.answers.pop()
+        if answer.refit is not None and answer.refit.before != self.hyper:
+            self.hyper = answer.refit.before  # the hyperparameters from before its refit
+            self.gp = self._gp(self.hyper)
+        self._dropped.pop(answer.query.id, None)
+        self.posterior = answer.posterior_before  # also the warm start of a refit below
+        if answer.query.id in self._stale_before:
+            # an exclusion in an earlier answer came after this one: refit what remains
+            self._stale_before.discard(answer.query.id)
+            with one_blas_thread():
+                self.posterior = self._fit(self.answers)
+        self.pending = answer.query
+        # so that a further undo can put the generator back to before this query was drawn
+        self._rng_before_pending = self._rng_before.pop(answer.query.id, None)
+        self._buffer = answer.query.buffer
+        return answer
+
+    def exclude(self, drops: Mapping[int, Collection[int]]) -> Posterior:
+        """Take preferences out of the model and refit; the answers themselves stay recorded.
+
+        ``drops`` maps an answered query's id to indices into that answer's ``preferences``.
+        Exclusions add up (excluding twice is harmless) and are dropped with their answer by
+        :meth:`undo`.  Raises :class:`QueryError` / ``IndexError`` and changes nothing on bad
+        input.
+        """
+        position = {a.query.id: k for k, a in enumerate(self.answers)}
+        new = dict(self._dropped)
+        for qid, indices in drops.items():
+            if qid not in position:
+                raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
+            size = len(self.answers[position[qid]].preferences)
+            chosen = {int(i) for i in indices}
+            bad = sorted(i for i in chosen if not 0 <= i < size)
+            if bad:
+                raise IndexError(
+                    f"query {qid} has {size} preferences; cannot exclude index {bad[0]}"
+                )
+            new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
+        if new == self._dropped:
+            return self.posterior
+        old = self._dropped
+        self._dropped = new
+        try:
+            with one_blas_thread():
+                posterior = self._fit(self.answers)
+        except Exception:
+            self._dropped = old
+            raise
+        self.posterior = posterior
+        touched = [position[q] for q in drops if new.get(q) != old.get(q)]
+        if touched:
+            self._stale_before.update(a.query.id for a in self.answers[min(touched) + 1 :])
+        return posterior
+
+    # -- internals ---------------------------------------------------------------------------
+    def _kept(self, answer: Answer) -> tuple[Preference, ...]:
+        dropped = self._dropped.get(answer.query.id)
+        if not dropped:
+            return answer.preferences
+        return tuple(p for k, p in enumerate(answer.preferences) if k not in dropped)
+
+    def _check_query(self, query: Query | int) -> Query:
+        qid = query.id if isinstance(query, Query) else query
+        if isinstance(qid, bool) or not isinstance(qid, int | np.integer):
+            raise QueryError(f"query must be a Query or its integer id, got {query!r}")
+        if any(a.query.id == qid for a in self.answers):
+            raise QueryError(f"query {qid} was already answered")
+        if self.pending is None or self.pending.id != qid:
+            pending = "none is pending" if self.pending is None else f"pending is {self.pending.id}"
+            raise QueryError(f"unknown query id {qid} ({pending})")
+        if isinstance(query, Query) and query != self.pending:
+            raise QueryError(f"query {qid} does not match the pending query {self.pending}")
+        return self.pending
+
+    def _gp(self, hyper: Hyperparameters) -> PreferenceGP:
+        return PreferenceGP(self.space, hyper.kernel(), self.gp.noise, sampler=self.gp.sampler)
+
+    def _data(self, answers: list[Answer]) -> PairData:
+        prefs = [p for a in answers for p in self._kept(a)]
+        ties = [t for a in answers for t in a.ties]
+        return pair_data(prefs, ties, self.gp.noise, self.learning.ties == "model")
+
+    def _refit(self, answers: list[Answer]) -> HyperFit | None:
+        """A hyperparameter fit when the schedule says so (every ``refit_every`` answers)."""
+        if self.learning.fit != "evidence" or len(answers) % self.learning.refit_every:
+            return None
+        data = self._data(answers)
+        if data.size == 0:
+            return None
+        return fit_hyperparameters(self.space, self.hyper, data, self.prior)
+
+    def _fit(
+        self, answers: list[Answer], gp: PreferenceGP | None = None, band: float | None = None
+    ) -> Posterior:
+        """The posterior given ``answers`` (default model: the current kernel and band)."""
+        gp = self.gp if gp is None else gp
+        band = self.hyper.band if band is None else band
+        if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
+            prefs = [p for a in answers for p in self._kept(a)]
+            if not prefs:
+                return gp.prior()
+            winners = np.array([p.winner for p in prefs], dtype=np.intp)
+            losers = np.array([p.loser for p in prefs], dtype=np.intp)
+            noise = np.array([p.noise for p in prefs])
+            return gp.posterior(winners, losers, noise, init=self.posterior)
+        data = self._data(answers)
+        if data.size == 0:
+            return gp.prior()
+        return gp.posterior_from(
+            data.first, data.second, data.likelihood(band), init=self.posterior
+        )
+
+
+__all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

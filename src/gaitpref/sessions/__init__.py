@@ -1,0 +1,49 @@
+"""Experiment sessions with real subjects: the one import surface of ``gaitpref.sessions``.
+
+A session is a config, a subject and a seed in a database, plus an append-only log of typed,
+versioned events (``events.py``).  Its state is never stored: it is rebuilt by replaying the log
+(``state.py``, ``replay.py``), and replay re-derives every proposal and checks it against the log.
+
+- :class:`Session` (``session.py``): create, open, next query, answer, undo, exclude, validate.
+- records (``records.py``): :class:`SessionQuery`, :class:`Trial`, :class:`ComparisonRecord`,
+  :class:`SuggestionRecord`, :class:`Answered`.
+- blind validation (``validation.py``), export and import (``export.py``), the stored config
+  (``stored_config.py``) and the simulated demo subject (``demo.py``).
+"""
+
+from gaitpref.errors import ExportError, ReplayError, SessionError, SessionStateError
+from gaitpref.sessions.export import export_session, import_session, posterior_summary
+from gaitpref.sessions.records import (
+    REASONS,
+    Answered,
+    ComparisonRecord,
+    Reason,
+    SessionQuery,
+    SuggestionRecord,
+    Trial,
+)
+from gaitpref.sessions.session import Session
+from gaitpref.sessions.stored_config import GaitLibraryLike, software_version
+from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+
+__all__ = [
+    "REASONS",
+    "Answered",
+    "ComparisonRecord",
+    "ExportError",
+    "GaitLibraryLike",
+    "Reason",
+    "ReplayError",
+    "Session",
+    "SessionError",
+    "SessionQuery",
+    "SessionStateError",
+    "SuggestionRecord",
+    "Trial",
+    "ValidationPlan",
+    "ValidationResult",
+    "export_session",
+    "import_session",
+    "posterior_summary",
+    "software_version",
+]

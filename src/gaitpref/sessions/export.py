@@ -1,0 +1,389 @@
+"""Export a session to plain files, and rebuild a session from such an export.
+
+An export folder is readable without gaitpref:
+
+- ``manifest.json``: format and version, software version, config name and hash, seed, the
+  session's row, the features (name, unit), a posterior summary, and the SHA-256 of every file;
+- ``config.toml``: the config exactly as the session was given it (and the gait library it
+  names, at the same relative path, when there is one);
+- ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
+  ``payload``);
+- tables as CSV (``--format csv``) or JSON (``--format json``): ``trials``, ``comparisons`` (with
+  ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
+  deviation of every action) and ``validation``.
+
+:func:`import_session` needs only the manifest, the config and the events: it replays them in
+memory first (checking every step and the exported posterior summary) and only then writes the
+session into the target database, under a new id, in one transaction.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+from collections.abc import Sequence
+from datetime import datetime
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from gaitpref.errors import ExportError, ReplayError
+from gaitpref.sessions.session import Session
+from gaitpref.storage import MemoryStorage, NewEvent, SessionSpec, Storage, open_storage
+from gaitpref.storage.base import check_status
+
+FORMAT = "gaitpref-session-export"
+FORMAT_VERSION = 1
+Format = Literal["csv", "json"]
+TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation")
+
+
+# -- export ------------------------------------------------------------------------------------
+def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
+    """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path."""
+    if fmt not in ("csv", "json"):
+        raise ExportError(f"format must be csv or json, got {fmt!r}")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
+    events = session.events()
+    tables = _tables(session, {e.seq: e.at.isoformat() for e in events})
+    out.mkdir(parents=True, exist_ok=True)
+    written: dict[str, str] = {}
+
+    def put(name: str, text: str) -> None:
+        (out / name).write_text(text, encoding="utf-8")
+        written[name] = hashlib.sha256(text.encode()).hexdigest()
+
+    put("config.toml", session.record.config_text)
+    put(
+        "events.jsonl",
+        "".join(
+            json.dumps(
+                {"seq": e.seq, "kind": e.kind, "at": e.at.isoformat(), "payload": e.payload},
+                allow_nan=False,
+            )
+            + "\n"
+            for e in events
+        ),
+    )
+    for name, rows in tables.items():
+        if fmt == "json":
+            put(f"{name}.json", json.dumps(rows, indent=1, allow_nan=False) + "\n")
+        else:
+            put(f"{name}.csv", _csv(rows))
+    library = _copy_library(session, out)
+    if library is not None:
+        written[library[0]] = library[1]
+    manifest = _manifest(session, written)
+    if library is not None:
+        manifest["gait_library"] = {"file": library[0], "sha256": library[1]}
+    put("manifest.json", json.dumps(manifest, indent=2) + "\n")
+    return out / "manifest.json"
+
+
+def _copy_library(session: Session, out: Path) -> tuple[str, str] | None:
+    """Copy the config's gait library into the export, at the path the config names."""
+    path = session.record.meta.get("library_path")
+    if not path:
+        return None
+    import tomllib
+
+    given = Path(tomllib.loads(session.record.config_text)["gaits"]["library"])
+    if given.is_absolute() or ".." in given.parts:
+        return None  # the config names it by an absolute path: it is not copied
+    data = Path(path).read_bytes()
+    (out / given).parent.mkdir(parents=True, exist_ok=True)
+    (out / given).write_bytes(data)
+    return given.as_posix(), hashlib.sha256(data).hexdigest()
+
+
+def _manifest(session: Session, files: dict[str, str]) -> dict[str, Any]:
+    from gaitpref import __version__
+
+    rec = session.record
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "software_version": __version__,
+        "exported_at": datetime.now().astimezone().isoformat(),
+        "config_name": rec.config_name,
+        "config_sha256": rec.config_sha256,
+        "seed": rec.seed,
+        "session": {
+            "id": rec.id,
+            "subject": rec.subject,
+            "status": session.status,
+            "software_version": rec.software_version,
+            "created_at": rec.created_at.isoformat(),
+            "last_seq": session.last_seq,
+            "meta": rec.meta,
+        },
+        "features": [{"name": f.name, "unit": f.unit} for f in session.config.space.features],
+        "posterior": posterior_summary(session),
+        "files": files,
+    }
+
+
+def posterior_summary(session: Session) -> dict[str, Any]:
+    """The posterior's best action, its value, and the pending query (JSON-ready)."""
+    post = session.posterior()
+    best = post.argmax
+    pending = session.pending
+    return {
+        "argmax": best,
+        "argmax_values": session.config.space.values_of(best),
+        "argmax_gait_id": session.gait_id(best),
+        "mean_at_argmax": float(post.mean[best]),
+        "sd_at_argmax": float(post.std[best]),
+        "trials_in_force": len(session.trials()),
+        "pending_query": None
+        if pending is None
+        else {"id": pending.id, "actions": list(pending.actions), "buffer": list(pending.buffer)},
+    }
+
+
+def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
+    space = session.config.space
+    trials = [
+        {
+            "trial": t.number,
+            "query": t.query,
+            "action": t.action,
+            **space.values_of(t.action),
+            "gait_id": session.gait_id(t.action),
+            "excluded": t.excluded is not None,
+            "exclusion_reason": t.excluded,
+            "exclusion_detail": t.exclusion_detail,
+            "undone": t.undone,
+            "seq": t.seq,
+            "at": at.get(t.seq),
+        }
+        for t in session.trials(include_undone=True)
+    ]
+    comparisons = [
+        {
+            "seq": c.seq,
+            "query": c.query,
+            "first_trial": c.first_trial,
+            "second_trial": c.second_trial,
+            "first_action": c.first,
+            "second_action": c.second,
+            "outcome": c.outcome,
+            "preferred_trial": None
+            if c.tie
+            else (c.first_trial if c.outcome == "first" else c.second_trial),
+            "tie": c.tie,
+            "undone": c.undone,
+            "excluded": c.excluded,
+            "at": at.get(c.seq),
+        }
+        for c in session.comparisons()
+    ]
+    suggestions = [
+        {
+            "seq": s.seq,
+            "query": s.query,
+            "trial": s.trial,
+            "action": s.action,
+            "feature": s.feature,
+            "move": s.move,
+            "target_action": s.target,
+            "undone": s.undone,
+            "excluded": s.excluded,
+            "at": at.get(s.seq),
+        }
+        for s in session.suggestions()
+    ]
+    post = session.posterior()
+    mean, sd = np.asarray(post.mean), np.asarray(post.std)
+    posterior = [
+        {
+            "action": a,
+            **space.values_of(a),
+            "gait_id": session.gait_id(a),
+            "mean": float(mean[a]),
+            "sd": float(sd[a]),
+        }
+        for a in range(len(space))
+    ]
+    validation = [
+        {
+            "round": r.round,
+            "label": label,
+            "action": r.actions[label],
+            "role": r.roles[label],
+            "posterior_mean": r.posterior_mean[label],
+            "subject_rank": r.ranking.index(label) + 1,
+            "model_rank": r.model_ranking.index(label) + 1,
+            "agrees": r.agrees,
+            "kendall_tau": r.kendall_tau,
+        }
+        for r in session.validations()
+        for label in sorted(r.actions)
+    ]
+    return {
+        "trials": trials,
+        "comparisons": comparisons,
+        "suggestions": suggestions,
+        "posterior": posterior,
+        "validation": validation,
+    }
+
+
+def _csv(rows: Sequence[dict[str, Any]]) -> str:
+    import io
+
+    buf = io.StringIO()
+    if rows:
+        writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: _cell(v) for k, v in row.items()})
+    return buf.getvalue()
+
+
+def _cell(value: object) -> object:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value)
+    return value
+
+
+# -- import ------------------------------------------------------------------------------------
+def import_session(db: str | Storage | None, folder: Path) -> Session:
+    """Rebuild the exported session in ``db`` (a new id); checked before anything is written."""
+    manifest = _read_manifest(folder)
+    config_text = _read_checked(folder, "config.toml", manifest)
+    if hashlib.sha256(config_text.encode()).hexdigest() != manifest.get("config_sha256"):
+        raise ExportError("config.toml does not match the manifest's config_sha256")
+    events = _read_events(_read_checked(folder, "events.jsonl", manifest))
+    info = manifest["session"]
+    meta = dict(info.get("meta", {})) if isinstance(info.get("meta"), dict) else {}
+    _find_library(folder, manifest, meta)
+    try:
+        status = check_status(info["status"])
+        spec = SessionSpec(
+            subject=info["subject"],
+            config_name=manifest["config_name"],
+            config_text=config_text,
+            config_sha256=manifest["config_sha256"],
+            seed=int(manifest["seed"]),
+            software_version=info["software_version"],
+            meta={
+                **meta,
+                "imported_from": {
+                    "session_id": info["id"],
+                    "exported_at": manifest.get("exported_at"),
+                    "exported_by": manifest.get("software_version"),
+                },
+            },
+        )
+    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+        raise ExportError(f"manifest.json: bad session entry ({exc})") from None
+    # rebuild in memory first: nothing reaches the database unless replay is exact
+    scratch = MemoryStorage()
+    trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
+    _check_summary(trial, manifest.get("posterior", {}))
+    storage = open_storage(db)
+    owns = not isinstance(db, Storage)
+    try:
+        record = storage.create_session(spec, events, status)
+        session = Session.open(storage, record.id)
+    except BaseException:
+        if owns:
+            storage.close()
+        raise
+    session._owns = owns  # closing the session closes the database it opened
+    return session
+
+
+def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
+    """Point ``meta`` at the exported copy of the gait library unless the original is intact."""
+    original, sha = meta.get("library_path"), meta.get("library_sha256")
+    if not original:
+        return
+    path = Path(original)
+    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == sha:
+        return
+    copy = manifest.get("gait_library")
+    if not isinstance(copy, dict) or not (folder / str(copy.get("file"))).is_file():
+        raise ExportError(
+            f"the session's gait library {original} is missing or changed, and the export "
+            "holds no copy of it"
+        )
+    data = (folder / copy["file"]).read_bytes()
+    if hashlib.sha256(data).hexdigest() != sha:
+        raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
+    meta["config_dir"] = str(folder.resolve())
+    meta["library_path"] = str((folder / copy["file"]).resolve())
+
+
+def _read_manifest(folder: Path) -> dict[str, Any]:
+    path = folder / "manifest.json"
+    if not path.is_file():
+        raise ExportError(f"{str(folder)!r} is not a gaitpref export (no manifest.json)")
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise ExportError(f"manifest.json is not JSON: {exc}") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        raise ExportError(f"manifest.json is not a {FORMAT} manifest")
+    version = manifest.get("format_version")
+    if not isinstance(version, int) or version > FORMAT_VERSION:
+        raise ExportError(
+            f"export format version {version!r} is newer than this gaitpref reads "
+            f"({FORMAT_VERSION}); use a newer gaitpref"
+        )
+    if not isinstance(manifest.get("files"), dict) or not isinstance(manifest.get("session"), dict):
+        raise ExportError("manifest.json lacks its files or session entries")
+    return manifest
+
+
+def _read_checked(folder: Path, name: str, manifest: dict[str, Any]) -> str:
+    path = folder / name
+    if not path.is_file():
+        raise ExportError(f"the export lacks {name}")
+    text = path.read_text(encoding="utf-8")
+    expected = manifest["files"].get(name)
+    if hashlib.sha256(text.encode()).hexdigest() != expected:
+        raise ExportError(f"{name} does not match its SHA-256 in manifest.json (was it edited?)")
+    return text
+
+
+def _read_events(text: str) -> list[NewEvent]:
+    out = []
+    for k, line in enumerate(text.splitlines(), start=1):
+        try:
+            row = json.loads(line)
+            if row["seq"] != k:
+                raise ValueError(f"seq {row['seq']} where {k} was expected")
+            out.append(NewEvent(row["kind"], row["payload"], datetime.fromisoformat(row["at"])))
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ExportError(f"events.jsonl line {k}: {exc}") from None
+    if not out:
+        raise ExportError("events.jsonl is empty")
+    return out
+
+
+def _check_summary(session: Session, summary: dict[str, Any]) -> None:
+    if not summary:
+        return
+    post = session.posterior()
+    best = post.argmax
+    exported = summary.get("mean_at_argmax")
+    if best != summary.get("argmax") or not np.isclose(
+        float(post.mean[best]),
+        float(exported if exported is not None else np.nan),
+        rtol=1e-9,
+        atol=1e-12,
+    ):
+        raise ReplayError(
+            f"the imported session's posterior differs from the exported summary: best action "
+            f"{best} (mean {float(post.mean[best])!r}) here, {summary.get('argmax')} "
+            f"(mean {exported!r}) in the export"
+        )

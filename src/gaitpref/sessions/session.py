@@ -1,0 +1,523 @@
+"""An experiment session with a real subject: durable, resumable, undoable, blind-validated.
+
+A session is a config, a subject and a seed in a database (``gaitpref.storage``), plus the
+append-only log of what happened.  The CoSpar state is never stored: it is rebuilt by replaying
+the log (``session_state.py``), and replay re-derives every proposal with the same seed and checks
+it against the logged one, so a resumed session is the one that was interrupted, bit for bit.
+
+    session = Session.create("sqlite:///lab.db", "exo-1d-step-length", subject="S01")
+    query = session.next_query()             # logged before it is returned
+    session.answer(query.id, [(query.actions[0], query.buffer[0], "first")],
+                   [(query.actions[0], "step_length", "+small")])
+    session.undo()                           # the answer is taken back; query is pending again
+    session = Session.open("sqlite:///lab.db", session.id)   # after a crash: same state
+
+Every write is committed before the call returns (one answer is one transaction), and nothing is
+written when a call raises.  One writer per session: writes are checked against the last event
+the session has seen, so two writers cannot both answer the same query (the loser gets
+:class:`~gaitpref.storage.ConflictError` or a stale-query :class:`~gaitpref.loop.cospar.QueryError`
+and is brought up to date).  A ``Session`` object is safe to share between threads.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Iterable, Sequence
+from pathlib import Path
+from typing import TypeVar
+
+from gaitpref.config import ExperimentConfig, load_config
+from gaitpref.errors import ReplayError, SessionStateError
+from gaitpref.loop.cospar import QueryError
+from gaitpref.model.posterior import Posterior
+from gaitpref.sessions import records as log
+from gaitpref.sessions.records import (
+    Answered,
+    ComparisonRecord,
+    SessionQuery,
+    SuggestionRecord,
+    Trial,
+)
+from gaitpref.sessions.replay import replay
+from gaitpref.sessions.state import SessionState
+from gaitpref.sessions.stored_config import (
+    GaitLibraryLike,
+    check_same_config,
+    config_of,
+    gait_ids_of,
+    library_meta,
+    software_version,
+)
+from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+from gaitpref.storage import (
+    ConflictError,
+    EventRecord,
+    NewEvent,
+    SessionRecord,
+    SessionSpec,
+    Status,
+    Storage,
+    SubjectRecord,
+    open_storage,
+)
+from gaitpref.storage.base import check_subject
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class Session:
+    """One subject's session.  Make one with :meth:`create` or :meth:`open`."""
+
+    def __init__(self, storage: Storage, record: SessionRecord, owns_storage: bool) -> None:
+        self.storage = storage
+        self._record = record
+        self._owns = owns_storage
+        self._lock = threading.RLock()
+        self.config = config_of(record)
+        self._state = self._fresh_state()
+        self._broken = False
+
+    # -- making and opening ------------------------------------------------------------------
+    @classmethod
+    def create(
+        cls,
+        db: str | Storage | None,
+        config: str | Path | ExperimentConfig,
+        subject: str,
+        seed: int | None = None,
+        library: GaitLibraryLike | None = None,
+    ) -> Session:
+        """A new session of ``subject`` with ``config`` (a path, a shipped name or a config).
+
+        ``db``: a URL, a storage, or None (``--db``/``$GAITPREF_DB``/``sqlite:///gaitpref.db``).
+        ``seed`` defaults to the config's; ``library`` names the gait of each action.
+        Everything is checked before the database is touched.
+        """
+        cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
+        check_subject(subject)
+        use_seed = cfg.seed if seed is None else seed
+        if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
+            raise ValueError(f"seed must be an integer in 0 .. 2**63 - 1, got {use_seed!r}")
+        meta = library_meta(cfg)
+        if library is None and cfg.library is not None:
+            library = cfg.library
+        gait_ids = gait_ids_of(library, len(cfg.space))
+        if gait_ids is not None:
+            meta["gait_ids"] = gait_ids
+        cfg.make_loop(seed=use_seed)  # the settings make a loop
+        storage = open_storage(db)
+        version = software_version()
+        spec = SessionSpec(
+            subject=subject,
+            config_name=cfg.name,
+            config_text=cfg.text,
+            config_sha256=cfg.sha256,
+            seed=use_seed,
+            software_version=version,
+            meta=meta,
+        )
+        created = NewEvent(
+            log.CREATED,
+            {
+                "subject": subject,
+                "config_name": cfg.name,
+                "config_sha256": cfg.sha256,
+                "seed": use_seed,
+                "software_version": version,
+                "gait_library": gait_ids is not None,
+            },
+        )
+        record = storage.create_session(spec, [created])
+        session = cls(storage, record, owns_storage=not isinstance(db, Storage))
+        session._catch_up()
+        return session
+
+    @classmethod
+    def open(
+        cls,
+        db: str | Storage | None,
+        session_id: int,
+        config: str | Path | ExperimentConfig | None = None,
+    ) -> Session:
+        """Reopen a session and rebuild its state from the log (checking every step).
+
+        With ``config``, it must be the session's config: a different one raises
+        :class:`ReplayError` showing the difference.
+        """
+        storage = open_storage(db, create=False)
+        owns = not isinstance(db, Storage)
+        try:
+            record = storage.get_session(session_id)
+            if config is not None:
+                check_same_config(record, config)
+            session = cls(storage, record, owns_storage=owns)
+            session._catch_up()
+        except BaseException:
+            if owns:
+                storage.close()
+            raise
+        return session
+
+    @staticmethod
+    def list_sessions(db: str | Storage | None, subject: str | None = None) -> list[SessionRecord]:
+        """The sessions in ``db`` (only ``subject``'s, if given), by id."""
+        return _reading(db, lambda storage: storage.list_sessions(subject))
+
+    @staticmethod
+    def list_subjects(db: str | Storage | None) -> list[SubjectRecord]:
+        """The subjects in ``db``, by code."""
+        return _reading(db, lambda storage: storage.list_subjects())
+
+    def close(self) -> None:
+        """Release the database if this session opened it."""
+        if self._owns:
+            self.storage.close()
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- what it is ----------------------------------------------------------------------------
+    @property
+    def id(self) -> int:
+        return self._record.id
+
+    @property
+    def subject(self) -> str:
+        return self._record.subject
+
+    @property
+    def seed(self) -> int:
+        return self._record.seed
+
+    @property
+    def record(self) -> SessionRecord:
+        """The stored session row as last read."""
+        return self._record
+
+    @property
+    def status(self) -> Status:
+        return self._state.status
+
+    @property
+    def last_seq(self) -> int:
+        return self._state.last_seq
+
+    @property
+    def gait_ids(self) -> list[str] | None:
+        return self._state.gait_ids
+
+    # -- the loop ------------------------------------------------------------------------------
+    def next_query(self) -> SessionQuery:
+        """The pending query, or a new one, logged (committed) before it is returned."""
+        return self._locked(self._next_query)
+
+    def _next_query(self) -> SessionQuery:
+        st = self._state
+        st.check_active("queries")
+        if st.open_round is not None:
+            raise SessionStateError(
+                f"blind validation round {st.open_round.plan.round} is open: "
+                "record its ranking first"
+            )
+        if st.pending is not None:
+            return st.pending
+        payload = st.derive_query()
+        try:
+            records = self._write([NewEvent(log.QUERY, payload)])
+        except ConflictError:
+            self._rebuild()
+            if self._state.pending is not None:
+                return self._state.pending
+            raise
+        st.commit(records)
+        assert st.pending is not None
+        return st.pending
+
+    @property
+    def pending(self) -> SessionQuery | None:
+        """The logged query awaiting its answer, if any."""
+        return self._state.pending
+
+    def answer(
+        self,
+        query_id: int,
+        comparisons: Iterable[object] = (),
+        suggestions: Iterable[object] = (),
+    ) -> Answered:
+        """Answer the pending query (``comparisons``/``suggestions`` as for ``CoSpar.tell``).
+
+        Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
+        not in the query, and a session that is finished or paused.
+        """
+        comps, suggs = list(comparisons), list(suggestions)
+        return self._locked(lambda: self._answer(query_id, comps, suggs, retry=True))
+
+    def _answer(
+        self, query_id: int, comps: list[object], suggs: list[object], retry: bool
+    ) -> Answered:
+        st = self._state
+        st.check_active("answers")
+        query = st.pending
+        if query is None or isinstance(query_id, bool) or query_id != query.id:
+            raise st.pending_query_error(query_id)
+        answer = st.tell(query, comps, suggs)
+        events = st.answer_events(query, answer)
+        try:
+            records = self._write(events)
+        except ConflictError:
+            st.revert_tell()
+            self._rebuild()
+            if retry and self._state.pending is not None and self._state.pending.id == query_id:
+                return self._answer(query_id, comps, suggs, retry=False)
+            raise self._state.pending_query_error(query_id) from None
+        except BaseException:
+            st.revert_tell()
+            raise
+        st.commit(records, answer)
+        kept = len(answer.preferences) - len(self._state.loop.excluded.get(query.loop_id, ()))
+        return Answered(query.id, query.trials, tuple(r.seq for r in records), kept)
+
+    def undo(self) -> SessionQuery:
+        """Take back the last answer: its query is pending again, the model as it was before."""
+
+        def run() -> SessionQuery:
+            st = self._state
+            st.check_open("undo")
+            self._append([st.undo_event()])
+            assert self._state.pending is not None
+            return self._state.pending
+
+        return self._locked(run)
+
+    def exclude(self, trial: int, reason: str, detail: str = "") -> Trial:
+        """Exclude an answered trial (``reason`` in ``REASONS``): its comparisons and
+        suggestions leave the model; the records stay, flagged."""
+
+        def run() -> Trial:
+            st = self._state
+            st.check_open("exclusions")
+            event = st.exclude_event(trial, reason, detail)
+            st.apply_exclusion(event.payload)
+            try:
+                records = self._write([event])
+            except BaseException:
+                self._broken = True  # the model already moved: rebuild from the log
+                raise
+            st.commit(records)
+            return next(t for t in self.trials() if t.number == trial)
+
+        return self._locked(run)
+
+    def note(self, text: str) -> int:
+        """Log a free-text note (anything the operator saw); returns its sequence number."""
+        if not isinstance(text, str) or not text.strip() or len(text) > 10_000:
+            raise ValueError("a note is a non-empty text of at most 10000 characters")
+
+        def run() -> int:
+            if self._state.status == "finished":
+                raise SessionStateError("the session is finished: it takes no notes")
+            return self._append([NewEvent(log.NOTE, {"text": text})])[-1].seq
+
+        return self._locked(run)
+
+    def pause(self) -> None:
+        """Mark the session paused (the operator stepped away): no queries or answers until
+        :meth:`resume`; undo, exclusions, notes and validation stay possible."""
+        self._locked(lambda: self._set_status(log.PAUSED, "active", "pause"))
+
+    def resume(self) -> None:
+        """Resume a paused session."""
+        self._locked(lambda: self._set_status(log.RESUMED, "paused", "resume"))
+
+    def finish(self) -> None:
+        """Close the session for good: it takes no more events."""
+
+        def run() -> None:
+            if self._state.status == "finished":
+                raise SessionStateError("the session is already finished")
+            self._append([NewEvent(log.FINISHED, {})], status="finished")
+
+        self._locked(run)
+
+    def _set_status(self, kind: str, need: str, verb: str) -> None:
+        if self._state.status != need:
+            raise SessionStateError(f"cannot {verb}: the session is {self._state.status}")
+        self._append([NewEvent(kind, {})], status="paused" if kind == log.PAUSED else "active")
+
+    # -- blind validation ----------------------------------------------------------------------
+    def start_validation(self) -> ValidationPlan:
+        """Fix and log a random order of the max/mean/min gaits (the open round, if any)."""
+
+        def run() -> ValidationPlan:
+            st = self._state
+            st.check_open("validation")
+            if st.open_round is None:
+                self._append([st.validation_event()])
+            current = self._state.open_round
+            assert current is not None
+            return current.plan
+
+        return self._locked(run)
+
+    @property
+    def validation_plan(self) -> ValidationPlan | None:
+        """The open validation round's blind plan, if any."""
+        current = self._state.open_round
+        return None if current is None else current.plan
+
+    def answer_validation(self, round_: int, ranking: Sequence[str] | str) -> ValidationResult:
+        """Record the subject's ranking (best first, e.g. ``"BAC"``), then unblind."""
+
+        def run() -> ValidationResult:
+            st = self._state
+            st.check_open("validation")
+            self._append([st.validation_answer_event(round_, ranking)])
+            result = self._state.rounds[-1].result
+            assert result is not None
+            return result
+
+        return self._locked(run)
+
+    def validations(self) -> list[ValidationResult]:
+        """The answered validation rounds, unblinded."""
+        return [r.result for r in self._state.rounds if r.result is not None]
+
+    # -- reading -------------------------------------------------------------------------------
+    def posterior(self) -> Posterior:
+        """The current posterior (answers in force, exclusions applied)."""
+        return self._locked(lambda: self._state.loop.posterior)
+
+    def events(self) -> list[EventRecord]:
+        """The whole log, from the database."""
+        return self.storage.events(self.id)
+
+    def trials(self, include_undone: bool = False) -> list[Trial]:
+        """Executed trials in order (with the undone ones, flagged, if asked)."""
+        return [t for t in self._state.trials_log if include_undone or not t.undone]
+
+    def comparisons(self) -> list[ComparisonRecord]:
+        """Every comparison ever answered, with ``undone``/``excluded`` flags."""
+        return list(self._state.comparisons_log)
+
+    def suggestions(self) -> list[SuggestionRecord]:
+        """Every coactive suggestion ever given, with ``undone``/``excluded`` flags."""
+        return list(self._state.suggestions_log)
+
+    def history(self) -> list[tuple[SessionQuery, Posterior]]:
+        """Each answer in force with the posterior right after it (as it was then)."""
+
+        def run() -> list[tuple[SessionQuery, Posterior]]:
+            told = self._state.told
+            after = [k.answer.posterior_before for k in told[1:]] + [self._state.loop.posterior]
+            return [(k.query, p) for k, p in zip(told, after, strict=True)]
+
+        return self._locked(run)
+
+    def notes(self) -> list[tuple[int, str]]:
+        """``(sequence number, text)`` of every note."""
+        return list(self._state.notes)
+
+    def gait_id(self, action: int) -> str | None:
+        return self._state.gait_id(action)
+
+    def describe(self, action: int) -> str:
+        """Feature values with units, and the gait id when there is a library."""
+        text = self.config.space.describe(action)
+        gait = self.gait_id(action)
+        return f"{text} [gait {gait}]" if gait is not None else text
+
+    def refresh(self) -> None:
+        """Bring this object up to date with events other writers appended (full replay)."""
+        self._locked(self._rebuild)
+
+    def sync(self) -> bool:
+        """Replay only the events other writers appended since this object last looked.
+
+        Cheap when nothing changed (one read of the session's record); True if it caught up.
+        """
+
+        def run() -> bool:
+            if self.storage.get_session(self.id).last_seq == self._state.last_seq:
+                return False
+            self._catch_up()
+            return True
+
+        return self._locked(run)
+
+    # -- internals -----------------------------------------------------------------------------
+    def _locked(self, fn: Callable[[], T]) -> T:
+        with self._lock:
+            if self._broken:
+                self._rebuild()
+            return fn()
+
+    def _fresh_state(self) -> SessionState:
+        meta = self._record.meta
+        return SessionState(self.config, self._record.seed, meta.get("gait_ids"))
+
+    def _catch_up(self) -> None:
+        """Replay the events this object has not seen."""
+        records = self.storage.events(self.id, after=self._state.last_seq)
+        try:
+            replay(self._state, records)
+        except ReplayError as exc:
+            raise ReplayError(
+                f"session {self.id} cannot be rebuilt exactly from its log; stopped instead of "
+                f"going on along a different path.\n{exc}\n{self._provenance()}"
+            ) from None
+
+    def _rebuild(self) -> None:
+        self._record = self.storage.get_session(self.id)
+        self._state = self._fresh_state()
+        self._broken = True
+        self._catch_up()
+        self._broken = False
+
+    def _provenance(self) -> str:
+        version = software_version()
+        rec = self._record
+        same = "the same" if rec.software_version == version else f"gaitpref {version}"
+        return (
+            f"The session was recorded with gaitpref {rec.software_version} and config "
+            f"{rec.config_name!r} (sha256 {rec.config_sha256[:12]}); this is {same}."
+        )
+
+    def _write(self, events: list[NewEvent], status: Status | None = None) -> list[EventRecord]:
+        return self.storage.append(self.id, self._state.last_seq, events, status)
+
+    def _append(self, events: list[NewEvent], status: Status | None = None) -> list[EventRecord]:
+        """Write and book events that change nothing before they are written."""
+        try:
+            records = self._write(events, status)
+        except ConflictError:
+            self._rebuild()
+            raise
+        self._state.commit(records)
+        return records
+
+
+__all__ = [
+    "Answered",
+    "ComparisonRecord",
+    "QueryError",
+    "ReplayError",
+    "Session",
+    "SessionQuery",
+    "SessionStateError",
+    "SuggestionRecord",
+    "Trial",
+]
+
+
+def _reading(db: str | Storage | None, read: Callable[[Storage], list[R]]) -> list[R]:
+    """``read(storage)`` on ``db``, closing the storage afterwards if it was opened here."""
+    storage = open_storage(db, create=False)
+    try:
+        return list(read(storage))
+    finally:
+        if not isinstance(db, Storage):
+            storage.close()

@@ -1,0 +1,460 @@
+"""A session's state rebuilt from its events: the one adapter from the log to CoSpar calls.
+
+Live operations and replay share this code, so a resumed session follows the same path as the one
+that wrote the log: every operation first *derives* its events from the current state (asking
+CoSpar for a proposal, telling it an answer, ...), the caller writes them, then :meth:`commit`
+books them.  Replay derives the same events and compares them with the logged ones field by field
+(``session_log.CHECKED_FIELDS``); a difference (another config, another software version) raises
+:class:`~gaitpref.sessions.records.ReplayError` that shows it.
+
+Exclusion (``trial_excluded``): a comparison leaves the model when it names the excluded trial's
+action in a query where that trial took part (executed or buffered); a suggestion leaves it when
+it was given for the excluded trial.  Comparisons answered later against an excluded buffered
+trial leave it too.  The records stay, flagged.
+
+Notation: trials are numbered 1, 2, ... in execution order among the answers in force; an undone
+answer's trial numbers are given again to the next answer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from gaitpref.config import ExperimentConfig
+from gaitpref.errors import ReplayError, SessionStateError
+from gaitpref.feedback import Preference
+from gaitpref.loop.cospar import Answer, CoSpar, QueryError
+from gaitpref.sessions import records as log
+from gaitpref.sessions.records import (
+    ComparisonRecord,
+    SessionQuery,
+    SuggestionRecord,
+    Trial,
+)
+from gaitpref.sessions.validation import (
+    BlindGait,
+    ValidationPlan,
+    ValidationResult,
+    blind_plan,
+    unblind,
+)
+from gaitpref.storage import EventRecord, NewEvent, Status
+
+_VALIDATION_STREAM = 0x7A11DA7E  # the validation order's generator: (seed, this, round)
+_STATUS_OF: dict[str, Status] = {
+    log.PAUSED: "paused",
+    log.RESUMED: "active",
+    log.FINISHED: "finished",
+}
+
+
+@dataclass
+class _Told:
+    """An answer in force: its query, CoSpar's record and the rows it wrote."""
+
+    query: SessionQuery
+    answer: Answer
+    trial_rows: list[int]
+    comparison_rows: list[int]
+    suggestion_rows: list[int]
+
+
+@dataclass
+class _Round:
+    plan: ValidationPlan
+    roles: dict[str, str]
+    values: dict[str, float]
+    seq: int
+    result: ValidationResult | None = None
+
+
+@dataclass
+class SessionState:
+    """Everything a session knows, rebuilt event by event."""
+
+    config: ExperimentConfig
+    seed: int
+    gait_ids: list[str] | None = None
+    loop: CoSpar = field(init=False)
+    last_seq: int = 0
+    status: Status = "active"
+    pending: SessionQuery | None = None
+    told: list[_Told] = field(default_factory=list)
+    trials_log: list[Trial] = field(default_factory=list)
+    comparisons_log: list[ComparisonRecord] = field(default_factory=list)
+    suggestions_log: list[SuggestionRecord] = field(default_factory=list)
+    excluded: dict[int, tuple[log.Reason, str]] = field(default_factory=dict)
+    rounds: list[_Round] = field(default_factory=list)
+    notes: list[tuple[int, str]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.loop = self.config.make_loop(seed=self.seed)
+
+    # -- views ---------------------------------------------------------------------------------
+    @property
+    def trial_actions(self) -> list[tuple[int, int]]:
+        """``(trial number, action)`` of the trials in force, in order."""
+        return [
+            (t, a) for k in self.told for t, a in zip(k.query.trials, k.query.actions, strict=True)
+        ]
+
+    @property
+    def open_round(self) -> _Round | None:
+        return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None
+
+    # -- derive: queries -----------------------------------------------------------------------
+    def derive_query(self) -> dict[str, Any]:
+        """Ask CoSpar for the next proposal (the same one until it is answered)."""
+        q = self.loop.ask()
+        done = self.trial_actions
+        numbers = [t for t, _ in done]
+        start = numbers[-1] + 1 if numbers else 1
+        buffered = numbers[len(numbers) - len(q.buffer) :] if q.buffer else []
+        return {
+            "query_loop_id": int(q.id),
+            "actions": [int(a) for a in q.actions],
+            "buffer": [int(b) for b in q.buffer],
+            "trials": list(range(start, start + len(q.actions))),
+            "buffer_trials": buffered,
+        }
+
+    def _query_of(self, seq: int, payload: dict[str, Any]) -> SessionQuery:
+        return SessionQuery(
+            id=seq,
+            loop_id=int(payload["query_loop_id"]),
+            actions=tuple(payload["actions"]),
+            buffer=tuple(payload["buffer"]),
+            trials=tuple(payload["trials"]),
+            buffer_trials=tuple(payload["buffer_trials"]),
+        )
+
+    # -- derive: answers -----------------------------------------------------------------------
+    def tell(
+        self, query: SessionQuery, comparisons: Iterable[object], suggestions: Iterable[object]
+    ) -> Answer:
+        """Tell CoSpar the answer (checked; nothing changes on error) and apply exclusions."""
+        answer: Answer = self.loop.tell(query.loop_id, comparisons, suggestions)
+        drops = self._drops(query, answer)
+        if drops:
+            try:
+                self.loop.exclude({query.loop_id: drops})
+            except Exception:
+                self.loop.undo()
+                raise
+        return answer
+
+    def answer_events(self, query: SessionQuery, answer: Answer) -> list[NewEvent]:
+        space = self.config.space
+        events = [
+            NewEvent(
+                log.TRIAL,
+                {
+                    "query": query.id,
+                    "trial": t,
+                    "action": a,
+                    "values": space.values_of(a),
+                    "gait_id": self.gait_id(a),
+                },
+            )
+            for t, a in zip(query.trials, query.actions, strict=True)
+        ]
+        events += [
+            NewEvent(
+                log.COMPARISON,
+                {
+                    "query": query.id,
+                    "first": c.first,
+                    "second": c.second,
+                    "outcome": c.outcome,
+                    "first_trial": query.trial_of(c.first),
+                    "second_trial": query.trial_of(c.second),
+                },
+            )
+            for c in answer.comparisons
+        ]
+        events += [
+            NewEvent(
+                log.SUGGESTION,
+                {
+                    "query": query.id,
+                    "trial": query.trial_of(s.action),
+                    "action": s.action,
+                    "feature": s.feature,
+                    "move": s.move,
+                    "target": space.coactive_move(s.action, s.feature, s.move),
+                },
+            )
+            for s in answer.suggestions
+        ]
+        if answer.refit is not None:
+            events.append(NewEvent(log.REFIT, {"query": query.id, **answer.refit.to_json()}))
+        return events
+
+    def revert_tell(self) -> None:
+        """Take back a :meth:`tell` whose events could not be written."""
+        self.loop.undo()
+
+    # -- derive: undo and exclusion ------------------------------------------------------------
+    def undo_event(self) -> NewEvent:
+        if not self.told:
+            raise SessionStateError("nothing to undo: no answer is in force")
+        last = self.told[-1]
+        spoiled = [t for t in last.query.trials if t in self.excluded]
+        if spoiled:
+            raise SessionStateError(
+                f"the last answer's trial {spoiled[0]} was excluded after it was given; "
+                "an excluded trial's answer cannot be undone"
+            )
+        return NewEvent(log.UNDO, {"query": last.query.id, "trials": list(last.query.trials)})
+
+    def exclude_event(self, trial: int, reason: str, detail: str) -> NewEvent:
+        if reason not in log.REASONS:
+            raise ValueError(f"reason must be one of {', '.join(log.REASONS)}; got {reason!r}")
+        if not isinstance(detail, str) or len(detail) > 2000:
+            raise ValueError("detail must be a string of at most 2000 characters")
+        found = [(k, t) for k in self.told for t in k.query.trials if t == trial]
+        if isinstance(trial, bool) or not isinstance(trial, int) or not found:
+            done = self.trial_actions
+            known = f"trials 1 to {done[-1][0]}" if done else "no trials yet"
+            raise SessionStateError(
+                f"no trial {trial!r} has been answered (this session has {known})"
+            )
+        if trial in self.excluded:
+            raise SessionStateError(
+                f"trial {trial} is already excluded ({self.excluded[trial][0]})"
+            )
+        told = found[0][0]
+        action = told.query.actions[told.query.trials.index(trial)]
+        return NewEvent(
+            log.EXCLUDED,
+            {
+                "trial": trial,
+                "query": told.query.id,
+                "action": action,
+                "reason": reason,
+                "detail": detail,
+            },
+        )
+
+    def apply_exclusion(self, payload: dict[str, Any]) -> None:
+        """Take the trial's comparisons and suggestions out of the model (before writing)."""
+        trial = payload["trial"]
+        self.excluded[trial] = (payload["reason"], payload["detail"])
+        drops: dict[int, list[int]] = {}
+        for told in self.told:
+            if trial in told.query.member_trials:
+                drops[told.query.loop_id] = self._drops(told.query, told.answer)
+        try:
+            self.loop.exclude(drops)
+        except Exception:
+            del self.excluded[trial]
+            raise
+        for told in self.told:
+            if trial in told.query.member_trials:
+                self._flag_exclusions(told)
+
+    # -- derive: validation --------------------------------------------------------------------
+    def validation_event(self) -> NewEvent:
+        round_ = len(self.rounds) + 1
+        rng = np.random.default_rng(
+            np.random.SeedSequence(self.seed, spawn_key=(_VALIDATION_STREAM, round_))
+        )
+        mean = np.asarray(self.loop.posterior.mean)
+        try:
+            plan, roles = blind_plan(round_, mean, rng)
+        except ValueError as exc:
+            raise SessionStateError(f"cannot start a blind validation: {exc}") from None
+        gaits = [
+            {
+                "label": g.label,
+                "action": g.action,
+                "role": roles[g.label],
+                "posterior_mean": float(mean[g.action]),
+            }
+            for g in plan.gaits
+        ]
+        return NewEvent(log.VALIDATION_STARTED, {"round": round_, "gaits": gaits})
+
+    def validation_answer_event(self, round_: int, ranking: Sequence[str] | str) -> NewEvent:
+        current = self.open_round
+        if current is None or current.plan.round != round_:
+            open_ = "none is open" if current is None else f"round {current.plan.round} is open"
+            raise SessionStateError(f"validation round {round_!r} is not open ({open_})")
+        try:
+            result = unblind(current.plan, current.roles, current.values, ranking)
+        except ValueError as exc:
+            raise SessionStateError(str(exc)) from None
+        return NewEvent(
+            log.VALIDATION_ANSWERED,
+            {
+                "round": round_,
+                "ranking": list(result.ranking),
+                "model_ranking": list(result.model_ranking),
+                "agrees": result.agrees,
+                "kendall_tau": result.kendall_tau,
+            },
+        )
+
+    # -- commit: book events that are written ---------------------------------------------------
+    def commit(self, records: Sequence[EventRecord], answer: Answer | None = None) -> None:
+        """Book written ``records`` (an answer batch comes with CoSpar's ``answer``)."""
+        if not records:
+            return
+        first = records[0]
+        if first.kind == log.TRIAL:
+            assert answer is not None and self.pending is not None
+            self._commit_answer(self.pending, answer, records)
+        else:
+            for r in records:
+                self._commit_one(r)
+        self.last_seq = records[-1].seq
+
+    def _commit_answer(
+        self, query: SessionQuery, answer: Answer, records: Sequence[EventRecord]
+    ) -> None:
+        told = _Told(query, answer, [], [], [])
+        for r in records:
+            p = r.payload
+            if r.kind == log.TRIAL:
+                told.trial_rows.append(len(self.trials_log))
+                self.trials_log.append(Trial(p["trial"], query.id, p["action"], r.seq))
+            elif r.kind == log.COMPARISON:
+                told.comparison_rows.append(len(self.comparisons_log))
+                self.comparisons_log.append(
+                    ComparisonRecord(
+                        r.seq,
+                        query.id,
+                        p["first"],
+                        p["second"],
+                        p["outcome"],
+                        p["first_trial"],
+                        p["second_trial"],
+                    )
+                )
+            elif r.kind == log.SUGGESTION:
+                told.suggestion_rows.append(len(self.suggestions_log))
+                self.suggestions_log.append(
+                    SuggestionRecord(
+                        r.seq,
+                        query.id,
+                        p["trial"],
+                        p["action"],
+                        p["feature"],
+                        p["move"],
+                        p["target"],
+                    )
+                )
+        self.told.append(told)
+        self.pending = None
+        self._flag_exclusions(told)
+
+    def _commit_one(self, r: EventRecord) -> None:
+        p = r.payload
+        if r.kind == log.QUERY:
+            self.pending = self._query_of(r.seq, p)
+        elif r.kind == log.UNDO:
+            self.loop.undo()
+            told = self.told.pop()
+            for rows, name in (
+                (told.trial_rows, "trials_log"),
+                (told.comparison_rows, "comparisons_log"),
+                (told.suggestion_rows, "suggestions_log"),
+            ):
+                records: list[Any] = getattr(self, name)
+                for k in rows:
+                    records[k] = replace(records[k], undone=True)
+            self.pending = told.query
+        elif r.kind == log.EXCLUDED:
+            pass  # applied to the model before it was written (apply_exclusion)
+        elif r.kind == log.VALIDATION_STARTED:
+            gaits = p["gaits"]
+            plan = ValidationPlan(
+                p["round"], tuple(BlindGait(g["label"], g["action"]) for g in gaits)
+            )
+            self.rounds.append(
+                _Round(
+                    plan,
+                    {g["label"]: g["role"] for g in gaits},
+                    {g["label"]: g["posterior_mean"] for g in gaits},
+                    r.seq,
+                )
+            )
+        elif r.kind == log.VALIDATION_ANSWERED:
+            current = self.open_round
+            assert current is not None
+            current.result = unblind(current.plan, current.roles, current.values, p["ranking"])
+        elif r.kind == log.NOTE:
+            self.notes.append((r.seq, p["text"]))
+        elif r.kind in _STATUS_OF:
+            self.status = _STATUS_OF[r.kind]
+        elif r.kind != log.CREATED:
+            raise ReplayError(
+                f"event {r.seq}: unknown kind {r.kind!r} (written by a newer gaitpref?)"
+            )
+
+    # -- exclusion rule --------------------------------------------------------------------------
+    def _excluded_actions(self, query: SessionQuery) -> tuple[set[int], set[int]]:
+        """Actions of excluded trials among the query's members, and among its executed ones."""
+        members = {
+            a for t, a in zip(query.member_trials, query.members, strict=True) if t in self.excluded
+        }
+        executed = {
+            a for t, a in zip(query.trials, query.actions, strict=True) if t in self.excluded
+        }
+        return members, executed
+
+    def _drops(self, query: SessionQuery, answer: Answer) -> list[int]:
+        members, executed = self._excluded_actions(query)
+        return [k for k, p in enumerate(answer.preferences) if _spoiled(p, members, executed)]
+
+    def _flag_exclusions(self, told: _Told) -> None:
+        members, executed = self._excluded_actions(told.query)
+        for k in told.comparison_rows:
+            c = self.comparisons_log[k]
+            if c.first in members or c.second in members:
+                self.comparisons_log[k] = replace(c, excluded=True)
+        for k in told.suggestion_rows:
+            s = self.suggestions_log[k]
+            if s.action in executed:
+                self.suggestions_log[k] = replace(s, excluded=True)
+        for k in told.trial_rows:
+            t = self.trials_log[k]
+            if t.number in self.excluded:
+                reason, detail = self.excluded[t.number]
+                self.trials_log[k] = replace(t, excluded=reason, exclusion_detail=detail)
+
+    # -- other ----------------------------------------------------------------------------------
+    def gait_id(self, action: int) -> str | None:
+        return None if self.gait_ids is None else self.gait_ids[action]
+
+    def check_open(self, what: str) -> None:
+        """Refuse ``what`` in a finished session."""
+        if self.status == "finished":
+            raise SessionStateError(f"the session is finished: it takes no {what}")
+
+    def check_active(self, what: str) -> None:
+        """Refuse ``what`` (queries and answers) unless the session is running."""
+        self.check_open(what)
+        if self.status == "paused":
+            raise SessionStateError(f"the session is paused: resume it before {what}")
+
+    def pending_query_error(self, query_id: object) -> QueryError:
+        pending = (
+            "none is pending" if self.pending is None else f"the pending query is {self.pending.id}"
+        )
+        answered = any(k.query.id == query_id for k in self.told)
+        if answered:
+            return QueryError(f"query {query_id} was already answered ({pending})")
+        return QueryError(
+            f"query {query_id!r} is not the pending query ({pending}): it is stale or unknown"
+        )
+
+
+def _spoiled(p: Preference, members: set[int], executed: set[int]) -> bool:
+    if p.source == "comparison":
+        return p.winner in members or p.loser in members
+    return p.loser in executed

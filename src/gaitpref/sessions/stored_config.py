@@ -1,0 +1,122 @@
+"""A session's config as stored: parsed again, checked against its hash and its gait library.
+
+The database keeps the config text exactly as given (and its SHA-256); a config that names a gait
+library also leaves, in the session's metadata, the folder its relative library path is taken
+from, the library's absolute path and its SHA-256, so that reopening the session finds the same
+library, or refuses with :class:`~gaitpref.sessions.records.ReplayError`.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeAlias
+
+from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
+from gaitpref.errors import ReplayError
+from gaitpref.storage import SessionRecord
+
+if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a library is used
+    from gaitpref.gaits.library import GaitLibrary
+
+#: what names the gait of each grid action: a gait library, a list of ids or an action -> id map
+GaitLibraryLike: TypeAlias = "GaitLibrary | Sequence[str] | Mapping[int, str]"
+
+
+def software_version() -> str:
+    from gaitpref import __version__
+
+    return __version__
+
+
+def config_of(record: SessionRecord) -> ExperimentConfig:
+    digest = hashlib.sha256(record.config_text.encode()).hexdigest()
+    if digest != record.config_sha256:
+        raise ReplayError(
+            f"session {record.id}: the stored config text does not match its hash "
+            f"({digest[:12]} != {record.config_sha256[:12]}); the database was altered"
+        )
+    meta = record.meta
+    try:
+        cfg = parse_config(
+            record.config_text, default_name=record.config_name, base_dir=meta.get("config_dir")
+        )
+    except ConfigError as exc:
+        if meta.get("library_path"):
+            raise ReplayError(
+                f"session {record.id} needs its gait library {meta['library_path']} (sha256 "
+                f"{str(meta.get('library_sha256'))[:12]}), which cannot be loaded: {exc}"
+            ) from None
+        raise ReplayError(
+            f"session {record.id}: its config no longer parses with gaitpref {software_version()} "
+            f"(recorded with {record.software_version}): {exc}"
+        ) from None
+    if meta.get("library_sha256") and cfg.library_sha256 != meta["library_sha256"]:
+        raise ReplayError(
+            f"session {record.id}: the gait library {cfg.library_path} is not the one the "
+            f"session was run with (sha256 {str(cfg.library_sha256)[:12]}, recorded "
+            f"{meta['library_sha256'][:12]})"
+        )
+    return cfg
+
+
+def library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
+    """Where to find the config's gait library again on replay (its folder, path and hash)."""
+    if cfg.library_path is None:
+        return {}
+    import tomllib
+
+    given = Path(tomllib.loads(cfg.text)["gaits"]["library"])
+    where = Path(cfg.library_path)
+    base = where
+    for _ in given.parts:
+        base = base.parent
+    if not given.is_absolute() and (base / given).resolve() != where:
+        raise ValueError(
+            f"cannot tell which folder the config's gait library path {str(given)!r} is "
+            "relative to; load the config from its file"
+        )
+    return {
+        "config_dir": str(base),
+        "library_path": str(where),
+        "library_sha256": cfg.library_sha256,
+    }
+
+
+def check_same_config(record: SessionRecord, config: str | Path | ExperimentConfig) -> None:
+    given = config if isinstance(config, ExperimentConfig) else load_config(config)
+    if given.sha256 == record.config_sha256:
+        return
+    diff = "".join(
+        difflib.unified_diff(
+            record.config_text.splitlines(keepends=True),
+            given.text.splitlines(keepends=True),
+            fromfile=f"session {record.id} ({record.config_name})",
+            tofile=f"given ({given.name})",
+        )
+    )
+    raise ReplayError(f"session {record.id} was run with another config:\n{diff}")
+
+
+def gait_ids_of(library: GaitLibraryLike | None, size: int) -> list[str] | None:
+    if library is None:
+        return None
+    ids: list[Any]
+    if isinstance(library, Mapping):
+        missing = [a for a in range(size) if a not in library]
+        if missing:
+            raise ValueError(f"the gait library names no gait for action {missing[0]}")
+        ids = [library[a] for a in range(size)]
+    elif isinstance(library, Sequence) and not isinstance(library, str):
+        if len(library) != size:
+            raise ValueError(f"the gait library has {len(library)} gaits; the grid has {size}")
+        ids = list(library)
+    elif hasattr(library, "gait_id"):
+        ids = [library.gait_id(a) for a in range(size)]
+    else:
+        raise TypeError("library must map each action to a gait id (or have gait_id(action))")
+    if not all(isinstance(g, str) and g for g in ids):
+        raise ValueError("gait ids must be non-empty strings")
+    return [str(g) for g in ids]

@@ -1,0 +1,241 @@
+"""The operator's terminal loop: show the trial, ask the answer with single keys, confirm, write.
+
+One iteration (n = 1, b = 1, the paper's protocol)::
+
+    Trial 5: run step_length=0.1371 m [gait g08]
+      compare with trial 4: step_length=0.1229 m
+    Trial 5 against trial 4: 1 this one, 2 the previous one, 0 no preference  (u undo, q quit)
+    Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
+    Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter
+    saved: trial 5
+
+Each answer is one key and Enter.  ``u`` undoes the last answer (its trial is asked again), ``q``
+pauses the session and quits (``gaitpref session run ID`` resumes it).  Nothing is written before
+the operator confirms, and the answer is committed before the next trial is shown.  The loop only
+calls the public :class:`~gaitpref.sessions.session.Session` API.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rich.console import Console
+
+from gaitpref.errors import FeedbackError, SessionStateError
+from gaitpref.loop.cospar import QueryError
+from gaitpref.sessions.records import (
+    SessionQuery,
+)
+from gaitpref.sessions.session import Session
+from gaitpref.space import Feature
+
+Reader = Callable[[str], str]
+_MOVES = ("+big", "+small", "-small", "-big")
+
+
+class _QuitError(Exception):
+    """The operator pressed q (or closed the input)."""
+
+
+class _UndoError(Exception):
+    """The operator pressed u."""
+
+
+def _move_words(feature: Feature) -> tuple[str, str, str, str]:
+    up, down = feature.words
+    return (up, f"slightly {up}", f"slightly {down}", down)
+
+
+class Terminal:
+    """Runs a session interactively through ``read`` (default: ``input``) and a Rich console."""
+
+    def __init__(self, session: Session, console: Console | None = None, read: Reader = input):
+        self.session = session
+        self.console = console or Console(highlight=False, soft_wrap=True)
+        self._read = read
+
+    # -- input ---------------------------------------------------------------------------------
+    def ask(self, prompt: str, allowed: dict[str, str], default: str | None = None) -> str:
+        """Ask until one of ``allowed`` keys (or u/q) is given; returns the key."""
+        while True:
+            self.console.print(prompt, markup=False)
+            try:
+                raw = self._read("> ").strip().lower()
+            except EOFError:
+                raise _QuitError from None
+            key = raw or (default or "")
+            if key == "q":
+                raise _QuitError
+            if key == "u":
+                raise _UndoError
+            if key in allowed:
+                return key
+            self.console.print(f"  '{raw}' is not one of: {', '.join(allowed)}, u, q", markup=False)
+
+    # -- the loop ------------------------------------------------------------------------------
+    def run(self) -> None:
+        s = self.session
+        if s.status == "finished":
+            raise SessionStateError(f"session {s.id} is finished")
+        if s.status == "paused":
+            s.resume()
+        self.console.print(
+            f"Session {s.id}, subject {s.subject}, {s.config.name}: "
+            f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and quit.",
+            markup=False,
+        )
+        try:
+            while True:
+                if s.validation_plan is not None:
+                    self.validate()
+                    return
+                try:
+                    self._one(s.next_query())
+                except _UndoError:
+                    self._undo()
+        except _QuitError:
+            s.pause()
+            self.console.print(f"Paused.  Resume with: gaitpref session run {s.id}", markup=False)
+
+    def _undo(self) -> None:
+        try:
+            pending = self.session.undo()
+        except SessionStateError as exc:
+            self.console.print(f"  cannot undo: {exc}", markup=False)
+            return
+        trials = ", ".join(map(str, pending.trials))
+        self.console.print(f"Undone: the answer to trial {trials} is asked again.", markup=False)
+
+    def _one(self, q: SessionQuery) -> None:
+        s = self.session
+        for t, a in zip(q.trials, q.actions, strict=True):
+            self.console.print(f"Trial {t}: run {s.describe(a)}", markup=False)
+        for t, a in zip(q.buffer_trials, q.buffer, strict=True):
+            self.console.print(f"  compare with trial {t}: {s.describe(a)}", markup=False)
+        while True:
+            comparisons, said = self._comparisons(q)
+            suggestions, words = self._suggestions(q)
+            summary = "; ".join(said + words) or "no comparison, no suggestion"
+            key = self.ask(f"Write: {summary}.  y yes, n re-enter", {"y": "", "n": ""}, "y")
+            if key == "n":
+                continue
+            try:
+                s.answer(q.id, comparisons, suggestions)
+            except (QueryError, FeedbackError) as exc:
+                self.console.print(f"  not written: {exc}", markup=False)
+                return
+            self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+            return
+
+    def _comparisons(self, q: SessionQuery) -> tuple[list[tuple[int, int, str]], list[str]]:
+        out: list[tuple[int, int, str]] = []
+        said: list[str] = []
+        seen: set[tuple[int, int]] = set()
+        members = list(zip(q.member_trials, q.members, strict=True))
+        for r, (ti, ai) in enumerate(zip(q.trials, q.actions, strict=True)):
+            for c, (tj, aj) in enumerate(members):
+                key = (min(r, c), max(r, c))
+                if r == c or key in seen:
+                    continue
+                seen.add(key)
+                if ai == aj:
+                    self.console.print(
+                        f"  trials {ti} and {tj} are the same gait: nothing to compare",
+                        markup=False,
+                    )
+                    continue
+                other = "the previous one" if c >= len(q.actions) else f"trial {tj}"
+                this = "this one" if len(q.actions) == 1 else f"trial {ti}"
+                answer = self.ask(
+                    f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
+                    {"1": "first", "2": "second", "0": "none"},
+                )
+                outcome = {"1": "first", "2": "second", "0": "none"}[answer]
+                out.append((ai, aj, outcome))
+                said.append(
+                    f"no preference between trials {ti} and {tj}"
+                    if outcome == "none"
+                    else f"trial {ti if outcome == 'first' else tj} preferred to trial "
+                    f"{tj if outcome == 'first' else ti}"
+                )
+        return out, said
+
+    def _suggestions(self, q: SessionQuery) -> tuple[list[tuple[int, str, str]], list[str]]:
+        out: list[tuple[int, str, str]] = []
+        said: list[str] = []
+        space = self.session.config.space
+        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+            for f in space.features:
+                words = _move_words(f)
+                options = ", ".join(f"{k + 1} {w}" for k, w in enumerate(words))
+                where = f" (trial {t})" if len(q.actions) > 1 else ""
+                key = self.ask(
+                    f"Suggestion for {f.name}{where}: {options}, 0 none",
+                    {"0": "", "1": "", "2": "", "3": "", "4": ""},
+                    default="0",
+                )
+                if key != "0":
+                    out.append((a, f.name, _MOVES[int(key) - 1]))
+                    said.append(f"{f.name}{where} {words[int(key) - 1]}")
+        return out, said
+
+    # -- blind validation ----------------------------------------------------------------------
+    def validate(self, ranking: str | None = None) -> None:
+        """Run (or resume) a blind validation round and report the unblinded result."""
+        s = self.session
+        plan = s.start_validation()
+        self.console.print(
+            f"Blind validation, round {plan.round}: run these gaits in this order and tell the "
+            "subject nothing about them.",
+            markup=False,
+        )
+        for g in plan.gaits:
+            self.console.print(f"  Gait {g.label}: {s.describe(g.action)}", markup=False)
+        while True:
+            if ranking is None:
+                self.console.print(
+                    f"The subject's ranking, best first (e.g. {''.join(plan.labels)}):",
+                    markup=False,
+                )
+                try:
+                    given = self._read("> ").strip()
+                except EOFError:
+                    raise _QuitError from None
+                if given.lower() == "q":
+                    raise _QuitError
+            else:
+                given = ranking
+            try:
+                result = s.answer_validation(plan.round, given)
+                break
+            except SessionStateError as exc:
+                if ranking is not None:
+                    raise
+                self.console.print(f"  {exc}", markup=False)
+        roles = ", ".join(f"{label} = {result.roles[label]}" for label in plan.labels)
+        verdict = "agrees" if result.agrees else "does not agree"
+        self.console.print(
+            f"Unblinded: {roles}.  The subject's ranking {''.join(result.ranking)} {verdict} "
+            f"with the posterior ({''.join(result.model_ranking)}); Kendall's tau "
+            f"{result.kendall_tau:+.2f}.",
+            markup=False,
+        )
+
+
+def run_terminal(session: Session, console: Console | None = None, read: Reader = input) -> None:
+    """The interactive loop of ``gaitpref session run``."""
+    Terminal(session, console, read).run()
+
+
+def run_validation(
+    session: Session,
+    ranking: str | None = None,
+    console: Console | None = None,
+    read: Reader = input,
+) -> bool:
+    """The blind validation of ``gaitpref session validate``; False if the operator quit."""
+    try:
+        Terminal(session, console, read).validate(ranking)
+    except (_QuitError, _UndoError):
+        return False
+    return True

@@ -1,0 +1,160 @@
+"""Bad input gets a clear error and writes nothing."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from gaitpref import ConfigError, FeedbackError, QueryError, Session, SessionStateError
+from gaitpref.storage import (
+    MemoryStorage,
+    SchemaError,
+    SessionNotFoundError,
+    Storage,
+    StorageConnectError,
+    StorageError,
+)
+from tests.sessions.sessionkit import CONFIG, Drive
+
+
+def test_unknown_session(db: str | Storage) -> None:
+    Session.create(db, CONFIG, "S01")
+    with pytest.raises(SessionNotFoundError, match="no session 99"):
+        Session.open(db, 99)
+
+
+def test_finished_session_takes_nothing(db: str | Storage, drive: Drive) -> None:
+    s = Session.create(db, CONFIG, "S01")
+    drive(s, 2)
+    q = s.next_query()
+    s.finish()
+    n = len(s.events())
+    for attempt, message in [
+        (lambda: s.answer(q.id, [], []), "finished"),
+        (s.next_query, "finished"),
+        (s.undo, "finished"),
+        (lambda: s.exclude(1, "stumble"), "finished"),
+        (lambda: s.note("late"), "finished"),
+        (s.start_validation, "finished"),
+        (s.finish, "already finished"),
+        (s.resume, "finished"),
+    ]:
+        with pytest.raises(SessionStateError, match=message):
+            attempt()
+    reopened = Session.open(db, s.id)
+    assert reopened.status == "finished" and len(reopened.events()) == n
+    with pytest.raises(SessionStateError, match="finished"):
+        reopened.answer(q.id, [], [])
+
+
+def test_paused_session_refuses_answers_until_resumed(db: str | Storage) -> None:
+    s = Session.create(db, CONFIG, "S01")
+    q = s.next_query()
+    s.pause()
+    with pytest.raises(SessionStateError, match="paused"):
+        s.answer(q.id, [], [])
+    with pytest.raises(SessionStateError, match="paused"):
+        s.next_query()
+    s.note("break: subject resting")  # notes, undo and exclusions are fine while paused
+    s.resume()
+    s.answer(q.id, [], [])
+    assert [e.kind for e in s.events()][-3:] == ["note", "resumed", "trial_executed"]
+
+
+def test_stale_and_unknown_queries(db: str | Storage, drive: Drive) -> None:
+    s = Session.create(db, CONFIG, "S01")
+    drive(s, 2)
+    answered = s.trials()[-1].query
+    q = s.next_query()
+    n = len(s.events())
+    with pytest.raises(QueryError, match="already answered"):
+        s.answer(answered, [], [])
+    with pytest.raises(QueryError, match="not the pending query"):
+        s.answer(q.id + 100, [], [])
+    with pytest.raises(QueryError, match="not the pending query"):
+        s.answer(True, [], [])  # type: ignore[arg-type]
+    s.undo()  # q is discarded; the last answer's query is pending again
+    with pytest.raises(QueryError, match="stale"):
+        s.answer(q.id, [], [])
+    assert len(s.events()) == n + 1
+
+
+@pytest.mark.parametrize(
+    "comparisons, suggestions, message",
+    [
+        ([(999, 0, "first")], [], "off the grid"),
+        ([(-1, 0, "first")], [], "off the grid"),
+        ([(3, 4, "first")], [], "not in this query"),
+        ([("a", 0, "first")], [], "integer"),
+        ([], [(999, "step_length", "+big")], "off the grid"),
+        ([], [(None, "step_width", "+big")], "integer"),
+        ("Q", [], "expected"),
+    ],
+)
+def test_actions_off_the_grid_and_malformed_answers(
+    db: str | Storage, comparisons: object, suggestions: object, message: str
+) -> None:
+    s = Session.create(db, CONFIG, "S01", seed=9)
+    q = s.next_query()
+    n = len(s.events())
+    with pytest.raises(FeedbackError, match=message):
+        s.answer(q.id, comparisons, suggestions)  # type: ignore[arg-type]
+    assert len(s.events()) == n and s.pending == q
+    s.answer(q.id, [], [])  # the session is unharmed
+
+
+def test_a_malformed_config_writes_nothing(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[space.step_length]\nmin = 0.08\nmax = 0.18\nnum = 15\n[model]\nnoise = 1\n")
+    url = f"sqlite:///{tmp_path / 'new.db'}"
+    with pytest.raises(ConfigError, match="lengthscale"):
+        Session.create(url, bad, "S01")
+    with pytest.raises(ConfigError, match="no such file"):
+        Session.create(url, tmp_path / "missing.toml", "S01")
+    assert not (tmp_path / "new.db").exists()
+
+
+def test_bad_subject_or_seed_writes_nothing(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'new.db'}"
+    with pytest.raises(StorageError, match="pseudonymous"):
+        Session.create(url, CONFIG, "Jane Doe")
+    with pytest.raises(ValueError, match="seed"):
+        Session.create(url, CONFIG, "S01", seed=-3)
+    with pytest.raises(ValueError, match="library has 3 gaits"):
+        Session.create(url, CONFIG, "S01", library=["a", "b", "c"])
+    assert not (tmp_path / "new.db").exists()
+
+
+def test_a_database_that_does_not_connect(tmp_path: Path) -> None:
+    with pytest.raises(StorageConnectError, match="does not exist"):
+        Session.create(f"sqlite:///{tmp_path}/no/such/folder/x.db", CONFIG, "S01")
+    with pytest.raises(StorageConnectError, match="cannot connect"):
+        Session.create("postgresql+psycopg://u@127.0.0.1:1/x", CONFIG, "S01")
+    with pytest.raises(StorageConnectError, match="no gaitpref database"):
+        Session.open(f"sqlite:///{tmp_path / 'absent.db'}", 1)
+    assert not (tmp_path / "absent.db").exists()
+
+
+def test_a_database_at_a_newer_schema(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'g.db'}"
+    Session.create(url, CONFIG, "S01").close()
+    with sqlite3.connect(tmp_path / "g.db") as raw:
+        raw.execute("UPDATE alembic_version SET version_num = 'ffff'")
+    for attempt in (lambda: Session.open(url, 1), lambda: Session.create(url, CONFIG, "S02")):
+        with pytest.raises(SchemaError, match="newer gaitpref"):
+            attempt()
+    with sqlite3.connect(tmp_path / "g.db") as raw:
+        assert raw.execute("SELECT count(*) FROM sessions").fetchone() == (1,)
+        assert raw.execute("SELECT max(seq) FROM events").fetchone() == (1,)
+
+
+def test_gait_library_ids_are_shown() -> None:
+    ids = [f"gait-{k:02d}" for k in range(15)]
+    s = Session.create(MemoryStorage(), CONFIG, "S01", library=ids)
+    q = s.next_query()
+    assert s.describe(q.actions[0]).endswith(f"[gait gait-{q.actions[0]:02d}]")
+    s.answer(q.id, [], [])
+    assert s.events()[-1].payload["gait_id"] == f"gait-{q.actions[0]:02d}"
+    assert Session.open(s.storage, s.id).gait_ids == ids

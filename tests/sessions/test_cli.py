@@ -1,0 +1,110 @@
+"""The session commands, driven through Typer's test runner."""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from gaitpref import Session
+from gaitpref.cli import app
+from tests.sessions.sessionkit import CONFIG, Drive
+
+runner = CliRunner()
+
+
+def _ok(*args: str) -> str:
+    result = runner.invoke(app, list(args))
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def _fails(*args: str) -> str:
+    result = runner.invoke(app, list(args))
+    assert result.exit_code == 2, result.output
+    return result.output
+
+
+def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
+    db = str(tmp_path / "lab.db")  # a bare path means SQLite
+    out = _ok("session", "new", "--config", CONFIG, "--subject", "S01", "--seed", "4", "--db", db)
+    assert "session 1" in out and "gaitpref session run 1" in out
+    session = Session.open(db, 1)
+    drive(session, 6)
+    assert "S01" in _ok("session", "list", "--db", db)
+    assert "1 sessions" in _ok("db", "status", "--db", db)
+    _ok("session", "note", "1", "knee strap loosened", "--db", db)
+    _ok("session", "exclude", "1", "3", "--reason", "device-fault", "--detail", "E12", "--db", db)
+    figure = tmp_path / "fig.png"
+    info = json.loads(_ok("session", "show", "1", "--json", "--figure", str(figure), "--db", db))
+    assert info["trials"] == 6 and info["excluded"] == [3] and figure.stat().st_size > 10_000
+    reopened = Session.open(db, 1)
+    assert info["posterior"]["argmax"] == reopened.posterior().argmax
+    assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
+    assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--db", db)
+    _ok("session", "finish", "1", "--db", db)
+    assert "finished" in _fails("session", "undo", "1", "--db", db)
+    text = _ok("session", "show", "1", "--no-figure", "--db", db)
+    assert "finished" in text and "5 trials (1 excluded)" in text and "validation 1" in text
+
+
+def test_export_import(tmp_path: Path, drive: Drive) -> None:
+    db, other = str(tmp_path / "a.db"), f"sqlite:///{tmp_path / 'b.db'}"
+    s = Session.create(db, CONFIG, "S02", seed=9)
+    drive(s, 5)
+    out = tmp_path / "export"
+    _ok("session", "export", str(s.id), "--format", "json", "--out", str(out), "--db", db)
+    assert (out / "comparisons.json").is_file() and (out / "manifest.json").is_file()
+    assert "imported as session 1" in _ok("session", "import", str(out), "--db", other)
+    np.testing.assert_array_equal(Session.open(other, 1).posterior().mean, s.posterior().mean)
+    assert "not an empty folder" in _fails("session", "export", "1", "--out", str(out), "--db", db)
+    assert "csv or json" in _fails("session", "export", "1", "--format", "xml", "--out",
+                                   str(tmp_path / "x"), "--db", db)  # fmt: skip
+
+
+def test_errors_are_clear_and_write_nothing(tmp_path: Path) -> None:
+    db = str(tmp_path / "lab.db")
+    assert "no gaitpref database" in _fails("session", "list", "--db", db)
+    assert "no gaitpref database" in _fails("session", "show", "1", "--db", db)
+    assert not Path(db).exists()
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[space.x]\nvalues = [1, 2]\n[model]\nnoise = 0.1\n")
+    assert "lengthscale" in _fails("session", "new", "--config", str(bad), "--subject", "S1",
+                                   "--db", db)  # fmt: skip
+    assert not Path(db).exists()
+    _ok("session", "new", "--config", CONFIG, "--subject", "S01", "--db", db)
+    assert "no session 7" in _fails("session", "show", "7", "--db", db)
+    assert "nothing to undo" in _fails("session", "undo", "1", "--db", db)
+    assert "reason must be one of" in _fails("session", "exclude", "1", "1", "--reason", "bored",
+                                             "--db", db)  # fmt: skip
+    assert "flat" in _fails("session", "validate", "1", "--ranking", "ABC", "--db", db)
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("SELECT count(*) FROM events").fetchone() == (1,)
+        raw.execute("UPDATE alembic_version SET version_num = 'zzzz'")
+    assert "newer gaitpref" in _fails("session", "list", "--db", db)
+    assert "newer gaitpref" in _fails("db", "upgrade", "--db", db)
+    assert "cannot connect" in _fails("session", "list", "--db",
+                                      "postgresql+psycopg://x@127.0.0.1:1/none")  # fmt: skip
+
+
+def test_db_upgrade_creates_and_is_idempotent(tmp_path: Path) -> None:
+    db = str(tmp_path / "new.db")
+    assert "schema revision 0001" in _ok("db", "upgrade", "--db", db)
+    assert "schema revision 0001" in _ok("db", "upgrade", "--db", db)
+    assert "0 sessions" in _ok("db", "status", "--db", db)
+
+
+def test_default_database_from_the_environment(tmp_path: Path, monkeypatch: object) -> None:
+    import pytest
+
+    assert isinstance(monkeypatch, pytest.MonkeyPatch)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("GAITPREF_DB", raising=False)
+    _ok("session", "new", "--config", CONFIG, "--subject", "S01")
+    assert (tmp_path / "gaitpref.db").is_file()
+    monkeypatch.setenv("GAITPREF_DB", f"sqlite:///{tmp_path / 'env.db'}")
+    _ok("session", "new", "--config", CONFIG, "--subject", "S01")
+    assert (tmp_path / "env.db").is_file()

@@ -1,0 +1,58 @@
+"""Hyperparameter refits are logged with the answer that triggered them and checked on replay."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from gaitpref import Session, load_config
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+
+FITTED = """
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+unit = "m"
+
+[model]
+lengthscale = { step_length = 0.03 }
+signal_variance = 0.005
+jitter = 1e-7
+noise = 0.02
+fit = "evidence"
+refit_every = 3
+
+[cospar]
+n = 1
+buffer = 1
+strategy = "self-sparring"
+"""
+
+
+def test_refits_are_logged_and_replayed_exactly(tmp_path: Path) -> None:
+    path = tmp_path / "fitted.toml"
+    path.write_text(FITTED)
+    url = f"sqlite:///{tmp_path / 'refit.db'}"
+    config = load_config(path)
+    session = Session.create(url, config, "S01", seed=4)
+    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
+    for _ in range(10):
+        q = session.next_query()
+        session.answer(q.id, *subject.respond(q))
+    refits = [e for e in session.events() if e.kind == "hyperparameters_refit"]
+    assert len(refits) == 3  # after answers 3, 6 and 9
+    told = session._state.loop.refits
+    assert [e.payload["after"] for e in refits] == [r.to_json()["after"] for r in told]
+    answered = [e.payload["query"] for e in session.events() if e.kind == "trial_executed"]
+    assert [e.payload["query"] for e in refits] == [answered[2], answered[5], answered[8]]
+    mean, hyper = np.asarray(session.posterior().mean).copy(), session._state.loop.hyper
+    session.close()
+
+    again = Session.open(url, session.id)  # replays and checks every refit
+    np.testing.assert_array_equal(again.posterior().mean, mean)
+    assert again._state.loop.hyper == hyper
+    again.undo()  # the 10th answer (no refit)
+    again.undo()  # the 9th, which refitted: back to the hyperparameters of the 6th's refit
+    assert again._state.loop.hyper == told[1].after

@@ -1,0 +1,92 @@
+"""The operator's terminal loop, driven through a pseudo-terminal (pexpect)."""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+import pexpect
+
+from gaitpref import Session
+from gaitpref.storage import MemoryStorage
+from tests.sessions.sessionkit import CONFIG
+
+_CLI = "from gaitpref.cli import main; main()"
+
+
+def _spawn(*args: str) -> pexpect.spawn:
+    env = {**os.environ, "NO_COLOR": "1", "TERM": "dumb", "COLUMNS": "200"}
+    child = pexpect.spawn(
+        sys.executable, ["-c", _CLI, *args], env=env, encoding="utf-8", timeout=60
+    )
+    return child
+
+
+def _answer(child: pexpect.spawn, comparison: str | None, suggestion: str) -> None:
+    if comparison is not None:
+        child.expect(r"1 this one, 2 the previous one, 0 no preference")
+        child.sendline(comparison)
+    child.expect(r"Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, "
+                 r"4 shorter, 0 none")  # fmt: skip
+    child.sendline(suggestion)
+    child.expect(r"Write: .*y yes, n re-enter")
+    child.sendline("y")
+
+
+def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    seed = 3
+    Session.create(url, CONFIG, "S01", seed=seed).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect("Session 1, subject S01, exo-1d-step-length: 0 trials so far")
+    child.expect(r"Trial 1: run step_length=")
+    _answer(child, None, "2")  # trial 1: slightly longer
+    child.expect("saved: trial 1")
+    child.expect(r"Trial 2: run step_length=\S+ m")
+    child.expect(r"compare with trial 1: step_length=")
+    child.expect(r"Trial 2 against trial 1: 1 this one")
+    child.sendline("7")  # not a key
+    child.expect("'7' is not one of: 1, 2, 0, u, q")
+    _answer(child, "1", "0")
+    child.expect("saved: trial 2")
+    child.expect("Trial 3: run")
+    child.sendline("u")  # the operator pressed the wrong key on trial 2
+    child.expect("Undone: the answer to trial 2 is asked again")
+    child.expect("Trial 2: run")
+    _answer(child, "2", "4")  # the previous one was better; shorter
+    child.expect("saved: trial 2")
+    child.expect("Trial 3: run")
+    child.sendline("q")
+    child.expect("Paused.  Resume with: gaitpref session run 1")
+    child.expect(pexpect.EOF)
+    child.close()
+    assert child.exitstatus == 0
+
+    s = Session.open(url, 1)
+    assert s.status == "paused" and len(s.trials()) == 2
+    assert [(c.outcome, c.undone) for c in s.comparisons()] == [("first", True), ("second", False)]
+    assert [(x.move, x.undone) for x in s.suggestions()] == [
+        ("+small", False),
+        ("-big", False),
+    ]
+    # the same answers given through the API give the same model
+    ref = Session.create(MemoryStorage(), CONFIG, "S01", seed=seed)
+    q = ref.next_query()
+    ref.answer(q.id, [], [(q.actions[0], "step_length", "+small")])
+    q = ref.next_query()
+    ref.answer(
+        q.id, [(q.actions[0], q.buffer[0], "second")], [(q.actions[0], "step_length", "-big")]
+    )
+    np.testing.assert_array_equal(s.posterior().mean, ref.posterior().mean)
+    s.close()
+
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect("2 trials so far")
+    child.expect("Trial 3: run")
+    child.sendeof()  # closing the terminal pauses too
+    child.expect("Paused")
+    child.expect(pexpect.EOF)
+    child.close()
+    assert child.exitstatus == 0

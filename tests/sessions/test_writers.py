@@ -1,0 +1,103 @@
+"""One writer per session: two writers cannot both answer the same query."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from gaitpref import QueryError, Session
+from gaitpref.storage import ConflictError
+from tests.sessions.sessionkit import CONFIG, Drive
+
+
+def test_a_second_writer_is_brought_up_to_date(sqlite_url: str, drive: Drive) -> None:
+    a = Session.create(sqlite_url, CONFIG, "S01", seed=6)
+    drive(a, 2)
+    b = Session.open(sqlite_url, a.id)
+    q = a.next_query()
+    assert b.next_query() == q  # b logged nothing new: it found a's pending query
+    a.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+    with pytest.raises(QueryError, match="already answered"):
+        b.answer(q.id, [], [])
+    assert b.pending is None and len(b.trials()) == 3  # b caught up
+    np.testing.assert_array_equal(b.posterior().mean, a.posterior().mean)
+    assert sum(e.kind == "trial_executed" for e in a.events()) == 3
+
+
+def test_notes_from_another_writer_do_not_block_an_answer(sqlite_url: str) -> None:
+    a = Session.create(sqlite_url, CONFIG, "S01")
+    q = a.next_query()
+    b = Session.open(sqlite_url, a.id)
+    b.note("the console wrote this")
+    a.answer(q.id, [], [])  # conflict on the sequence number, caught up, retried
+    assert [e.kind for e in a.events()][-2:] == ["note", "trial_executed"]
+
+
+def test_stale_writer_conflicts_on_plain_events(sqlite_url: str) -> None:
+    a = Session.create(sqlite_url, CONFIG, "S01")
+    b = Session.open(sqlite_url, a.id)
+    a.note("one")
+    with pytest.raises(ConflictError):
+        b.note("two")
+    b.note("two")  # b was brought up to date by the conflict
+    assert [n for _, n in Session.open(sqlite_url, a.id).notes()] == ["one", "two"]
+
+
+def test_racing_threads_answer_once(sqlite_url: str, drive: Drive) -> None:
+    first = Session.create(sqlite_url, CONFIG, "S01", seed=7)
+    drive(first, 2)
+    q = first.next_query()
+    writers = [Session.open(sqlite_url, first.id) for _ in range(3)]
+    barrier = threading.Barrier(len(writers))
+    outcomes: list[str] = []
+
+    def go(s: Session) -> None:
+        barrier.wait()
+        try:
+            s.answer(q.id, [(q.actions[0], q.buffer[0], "first")], [])
+            outcomes.append("ok")
+        except QueryError:
+            outcomes.append("stale")
+
+    threads = [threading.Thread(target=go, args=(w,)) for w in writers]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert sorted(outcomes) == ["ok", "stale", "stale"]
+    log = first.events()
+    assert sum(e.kind == "trial_executed" and e.payload["query"] == q.id for e in log) == 1
+
+
+def test_one_session_object_shared_by_threads(sqlite_url: str) -> None:
+    s = Session.create(sqlite_url, CONFIG, "S01")
+    q = s.next_query()
+    errors: list[Exception] = []
+
+    def go() -> None:
+        try:
+            s.answer(q.id, [], [])
+        except QueryError as exc:
+            errors.append(exc)
+
+    threads = [threading.Thread(target=go) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(errors) == 3 and len(s.trials()) == 1
+
+
+@pytest.mark.postgres
+def test_a_session_on_postgres(postgres_url: str, drive: Drive) -> None:
+    a = Session.create(postgres_url, CONFIG, "S01", seed=12)
+    drive(a, 5)
+    a.exclude(2, "stumble")
+    a.undo()
+    b = Session.open(postgres_url, a.id)
+    np.testing.assert_array_equal(b.posterior().mean, a.posterior().mean)
+    assert b.next_query() == a.next_query()
+    a.close()
+    b.close()
