@@ -8,8 +8,15 @@ preference" is stored and not modelled; the posterior is refitted, warm-started 
 
     loop = CoSpar(space, kernel, noise, n=1, buffer=1)
     query = loop.ask()              # query.actions: run these; query.buffer: compare with these
-    loop.tell(query, [(query.actions[0], query.buffer[0], "first")], [(a, "step_length", "+small")])
+    a = query.actions[0]
+    loop.tell(query, [Comparison(a, query.buffer[0], "first"),
+                      Suggestion(a, "step_length", "+small")])
+    loop.tell(query, [(a, query.buffer[0], "first")], [(a, "step_length", "+small")])  # the same
 
+``tell`` takes feedback records of any registered kind (``gaitpref.feedback``); each kind checks
+its records against the query and turns them into likelihood terms (on pairs of actions or on
+single actions), all fitted together.  The paper's form ``tell(query, comparisons, suggestions)``
+with ``(i, j, outcome)`` and ``(action, feature, move)`` tuples is a thin convenience over it.
 ``tell`` checks everything first and changes nothing when it raises.  ``exclude`` takes chosen
 preferences of earlier answers out of the model (their records stay in ``answers``), as a session
 does for a trial spoiled by a device fault or a stumble.
@@ -18,7 +25,7 @@ does for a trial spoiled by a device fault or a stumble.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Hashable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,18 +33,23 @@ import numpy as np
 
 from gaitpref.errors import FeedbackError, QueryError
 from gaitpref.feedback import (
+    ActionObservation,
     Comparison,
+    FeedbackKind,
+    ModelContext,
     Preference,
     Suggestion,
     Tie,
-    parse_comparisons,
-    parse_suggestions,
+    kind_named,
+    kind_of,
+    kinds,
 )
 from gaitpref.loop.learning import Learning, pair_data
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
@@ -60,16 +72,35 @@ class Query:
 
 @dataclass(frozen=True)
 class Answer:
-    """A told query: what the user said and what entered the model."""
+    """A told query: what the user said and what entered the model.
+
+    ``records``: every feedback record, grouped by kind in registration order (comparisons,
+    then suggestions, then other kinds), each kind's in the order given.  ``preferences`` and
+    ``ties`` are the pair terms, ``singles`` the single-action terms; ``ignored`` the records
+    that added no term (a suggestion whose move clips back to the same point).
+    """
 
     query: Query
-    comparisons: tuple[Comparison, ...]
-    suggestions: tuple[Suggestion, ...]
+    records: tuple[Hashable, ...]
     preferences: tuple[Preference, ...]
     ties: tuple[Tie, ...]
-    ignored_suggestions: tuple[Suggestion, ...]  # moves that clip back to the same point
+    singles: tuple[ActionObservation, ...]
+    ignored: tuple[Hashable, ...]
     posterior_before: Posterior = dataclasses.field(repr=False, compare=False)
     refit: HyperFit | None = None  # the hyperparameter fit this answer triggered, if any
+
+    @property
+    def comparisons(self) -> tuple[Comparison, ...]:
+        return tuple(r for r in self.records if isinstance(r, Comparison))
+
+    @property
+    def suggestions(self) -> tuple[Suggestion, ...]:
+        return tuple(r for r in self.records if isinstance(r, Suggestion))
+
+    @property
+    def ignored_suggestions(self) -> tuple[Suggestion, ...]:
+        """Suggestions whose move clips back to the same point (stored, not modelled)."""
+        return tuple(r for r in self.ignored if isinstance(r, Suggestion))
 
 
 def _light(posterior: Posterior) -> Posterior:
@@ -132,6 +163,7 @@ class CoSpar:
         self._rng_before_pending: Mapping[str, Any] | None = None
         self._rng_before: dict[int, Mapping[str, Any]] = {}  # answered query id -> RNG before ask
         self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
+        self._dropped_singles: dict[int, frozenset[int]] = {}  # ... and single-action terms
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
 
     # -- state -------------------------------------------------------------------------------
@@ -180,45 +212,53 @@ class CoSpar:
     def tell(
         self,
         query: Query | int,
-        comparisons: Iterable[object] = (),
+        answers: Iterable[object] = (),
         suggestions: Iterable[object] = (),
     ) -> Answer:
         """Record the answer to ``query`` and refit the posterior.
 
-        ``comparisons``: ``(i, j, outcome)`` with ``i``, ``j`` grid indices of actions in the
-        query and ``outcome`` one of ``"first"``, ``"second"``, ``"none"``.  ``suggestions``:
-        ``(action, feature, move)`` for executed actions; a move that clips back to the same
+        ``answers``: feedback records of any registered kind (:class:`Comparison`,
+        :class:`Suggestion`, ...).  The paper's convenience form also works: raw ``(i, j,
+        outcome)`` items of ``answers`` are comparisons (``i``, ``j`` grid indices of actions in
+        the query, ``outcome`` one of ``"first"``, ``"second"``, ``"none"``) and ``suggestions``
+        holds ``(action, feature, move)`` for executed actions; a move that clips back to the same
         point is ignored.  Raises :class:`QueryError` / :class:`FeedbackError` and changes
         nothing on bad input.
         """
         q = self._check_query(query)
-        comps = parse_comparisons(self.space, comparisons, q.members, q.actions)
-        suggs = parse_suggestions(self.space, suggestions, q.actions)
+        records = self._parse(q, answers, suggestions)
+        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
         prefs: list[Preference] = []
         ties: list[Tie] = []
-        for c in comps:
-            pair = c.as_preference()
-            if pair is not None:
-                prefs.append(Preference(pair[0], pair[1], self.gp.noise, "comparison", q.id))
-            elif c.is_tie and c.first != c.second:
-                ties.append(Tie(c.first, c.second, q.id))
-        ignored: list[Suggestion] = []
-        coactive_noise = self.gp.noise / self.coactive_weight
-        for s in suggs:
-            target = self.space.coactive_move(s.action, s.feature, s.move)
-            if target is None:
-                ignored.append(s)
-            else:
-                prefs.append(Preference(target, s.action, coactive_noise, "coactive", q.id))
+        singles: list[ActionObservation] = []
+        ignored: list[Hashable] = []
+        for kind, record in records:
+            terms = kind.observations(record, context, q.id)
+            prefs += terms.preferences
+            ties += terms.ties
+            singles += terms.singles
+            if terms.empty and not isinstance(record, Comparison):
+                ignored.append(record)
+        if singles and self.learning.fit == "evidence":
+            raise FeedbackError(
+                f"feedback kind {singles[0].kind!r} adds single-action terms, which the evidence "
+                "fit of the hyperparameters does not take yet; use [model] fit = 'fixed'"
+            )
         answer = Answer(
-            q, comps, suggs, tuple(prefs), tuple(ties), tuple(ignored), _light(self.posterior)
+            q,
+            tuple(r for _, r in records),
+            tuple(prefs),
+            tuple(ties),
+            tuple(singles),
+            tuple(ignored),
+            _light(self.posterior),
         )
-        answers = [*self.answers, answer]
+        answers_now = [*self.answers, answer]
         with one_blas_thread():  # may raise: nothing changed yet
-            refit = self._refit(answers)
+            refit = self._refit(answers_now)
             hyper = self.hyper if refit is None else refit.after
             gp = self.gp if hyper == self.hyper else self._gp(hyper)
-            new_posterior = self._fit(answers, gp, hyper.band)
+            new_posterior = self._fit(answers_now, gp, hyper.band)
         if refit is not None:
             answer = dataclasses.replace(answer, refit=refit)
         self.answers.append(answer)
@@ -232,6 +272,32 @@ class CoSpar:
         self._buffer = recent[max(0, len(recent) - self.buffer_size) :]
         return answer
 
+    def _parse(
+        self, query: Query, answers: Iterable[object], suggestions: Iterable[object]
+    ) -> list[tuple[FeedbackKind[Any], Hashable]]:
+        """Every record checked by its kind, grouped by kind in registration order."""
+        comparison, suggestion = kind_named("comparison"), kind_named("suggestion")
+        given: list[tuple[FeedbackKind[Any], object]] = []
+        for item in answers:
+            given.append((kind_of(item) or comparison, item))
+        for item in suggestions:
+            kind = kind_of(item) or suggestion
+            if kind is not suggestion:
+                raise FeedbackError(f"suggestions: expected (action, feature, move), got {item!r}")
+            given.append((kind, item))
+        out: list[tuple[FeedbackKind[Any], Hashable]] = []
+        for kind in kinds():
+            raw = [item for k, item in given if k is kind]
+            if not raw:
+                continue
+            parsed = [
+                kind.parse(self.space, item, query, f"{kind.name} {n}")
+                for n, item in enumerate(raw)
+            ]
+            kind.check_all(parsed, query)
+            out += [(kind, r) for r in parsed]
+        return out
+
     def undo(self) -> Answer:
         """Take back the last answer: its query is pending again, as it was before the answer."""
         if not self.answers:
@@ -244,6 +310,7 @@ class CoSpar:
             self.hyper = answer.refit.before  # the hyperparameters from before its refit
             self.gp = self._gp(self.hyper)
         self._dropped.pop(answer.query.id, None)
+        self._dropped_singles.pop(answer.query.id, None)
         self.posterior = answer.posterior_before  # also the warm start of a refit below
         if answer.query.id in self._stale_before:
             # an exclusion in an earlier answer came after this one: refit what remains
@@ -256,39 +323,40 @@ class CoSpar:
         self._buffer = answer.query.buffer
         return answer
 
-    def exclude(self, drops: Mapping[int, Collection[int]]) -> Posterior:
+    def exclude(
+        self,
+        drops: Mapping[int, Collection[int]],
+        singles: Mapping[int, Collection[int]] | None = None,
+    ) -> Posterior:
         """Take preferences out of the model and refit; the answers themselves stay recorded.
 
-        ``drops`` maps an answered query's id to indices into that answer's ``preferences``.
+        ``drops`` maps an answered query's id to indices into that answer's ``preferences``,
+        ``singles`` to indices into its ``singles`` (single-action terms).
         Exclusions add up (excluding twice is harmless) and are dropped with their answer by
         :meth:`undo`.  Raises :class:`QueryError` / ``IndexError`` and changes nothing on bad
         input.
         """
         position = {a.query.id: k for k, a in enumerate(self.answers)}
-        new = dict(self._dropped)
-        for qid, indices in drops.items():
-            if qid not in position:
-                raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
-            size = len(self.answers[position[qid]].preferences)
-            chosen = {int(i) for i in indices}
-            bad = sorted(i for i in chosen if not 0 <= i < size)
-            if bad:
-                raise IndexError(
-                    f"query {qid} has {size} preferences; cannot exclude index {bad[0]}"
-                )
-            new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
-        if new == self._dropped:
+        new = _merged(self._dropped, drops, position, self.answers, "preferences")
+        new_singles = _merged(
+            self._dropped_singles, singles or {}, position, self.answers, "singles"
+        )
+        if new == self._dropped and new_singles == self._dropped_singles:
             return self.posterior
-        old = self._dropped
-        self._dropped = new
+        old, old_singles = self._dropped, self._dropped_singles
+        self._dropped, self._dropped_singles = new, new_singles
         try:
             with one_blas_thread():
                 posterior = self._fit(self.answers)
         except Exception:
-            self._dropped = old
+            self._dropped, self._dropped_singles = old, old_singles
             raise
         self.posterior = posterior
-        touched = [position[q] for q in drops if new.get(q) != old.get(q)]
+        touched = [
+            position[q]
+            for q in {*drops, *(singles or {})}
+            if new.get(q) != old.get(q) or new_singles.get(q) != old_singles.get(q)
+        ]
         if touched:
             self._stale_before.update(a.query.id for a in self.answers[min(touched) + 1 :])
         return posterior
@@ -299,6 +367,27 @@ class CoSpar:
         if not dropped:
             return answer.preferences
         return tuple(p for k, p in enumerate(answer.preferences) if k not in dropped)
+
+    def _kept_singles(self, answer: Answer) -> tuple[ActionObservation, ...]:
+        dropped = self._dropped_singles.get(answer.query.id)
+        if not dropped:
+            return answer.singles
+        return tuple(o for k, o in enumerate(answer.singles) if k not in dropped)
+
+    def _singles(self, answers: list[Answer]) -> tuple[Any, ActionLikelihood | None]:
+        """The kept single-action terms: their actions and one likelihood over them (by kind)."""
+        kept = [o for a in answers for o in self._kept_singles(a)]
+        if not kept:
+            return None, None
+        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
+        actions: list[int] = []
+        parts: list[tuple[int, ActionLikelihood]] = []
+        for kind in kinds():
+            mine = [o for o in kept if o.kind == kind.name]
+            if mine:
+                actions += [o.action for o in mine]
+                parts.append((len(mine), kind.action_likelihood(mine, context)))
+        return np.asarray(actions, dtype=np.intp), StackedActionLikelihood(tuple(parts))
 
     def _check_query(self, query: Query | int) -> Query:
         qid = query.id if isinstance(query, Query) else query
@@ -336,20 +425,56 @@ class CoSpar:
         """The posterior given ``answers`` (default model: the current kernel and band)."""
         gp = self.gp if gp is None else gp
         band = self.hyper.band if band is None else band
+        single, single_likelihood = self._singles(answers)
         if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
             prefs = [p for a in answers for p in self._kept(a)]
-            if not prefs:
-                return gp.prior()
             winners = np.array([p.winner for p in prefs], dtype=np.intp)
             losers = np.array([p.loser for p in prefs], dtype=np.intp)
             noise = np.array([p.noise for p in prefs])
-            return gp.posterior(winners, losers, noise, init=self.posterior)
+            if single is None:
+                if not prefs:
+                    return gp.prior()
+                return gp.posterior(winners, losers, noise, init=self.posterior)
+            return gp.posterior_from(
+                winners,
+                losers,
+                Probit(noise),
+                init=self.posterior,
+                single=single,
+                single_likelihood=single_likelihood,
+            )
         data = self._data(answers)
-        if data.size == 0:
+        if data.size == 0 and single is None:
             return gp.prior()
         return gp.posterior_from(
-            data.first, data.second, data.likelihood(band), init=self.posterior
+            data.first,
+            data.second,
+            data.likelihood(band),
+            init=self.posterior,
+            single=single,
+            single_likelihood=single_likelihood,
         )
+
+
+def _merged(
+    current: dict[int, frozenset[int]],
+    drops: Mapping[int, Collection[int]],
+    position: dict[int, int],
+    answers: list[Answer],
+    field: str,
+) -> dict[int, frozenset[int]]:
+    """``current`` with ``drops`` (query id -> indices into that answer's ``field``) added."""
+    new = dict(current)
+    for qid, indices in drops.items():
+        if qid not in position:
+            raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
+        size = len(getattr(answers[position[qid]], field))
+        chosen = {int(i) for i in indices}
+        bad = sorted(i for i in chosen if not 0 <= i < size)
+        if bad:
+            raise IndexError(f"query {qid} has {size} {field}; cannot exclude index {bad[0]}")
+        new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
+    return new
 
 
 __all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

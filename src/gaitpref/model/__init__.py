@@ -16,12 +16,19 @@ from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import (
     LaplaceMode,
 )
-from gaitpref.model.likelihood import OrderedProbit, PairLikelihood, Probit
+from gaitpref.model.likelihood import (
+    ActionLikelihood,
+    OrderedProbit,
+    PairLikelihood,
+    Probit,
+    StackedActionLikelihood,
+)
 from gaitpref.model.posterior import Posterior
 
 __all__ = [
     "DENSE_MAX_ACTIONS",
     "SAMPLERS",
+    "ActionLikelihood",
     "ConvergenceError",
     "Evidence",
     "HyperFit",
@@ -39,6 +46,7 @@ __all__ = [
     "Probit",
     "SamplerName",
     "SquaredExponential",
+    "StackedActionLikelihood",
     "default_prior",
     "fit_hyperparameters",
     "laplace_evidence",

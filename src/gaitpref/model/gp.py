@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
-from gaitpref.model.likelihood import PairLikelihood, Probit
+from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import IntArray, Space
 
@@ -97,14 +97,31 @@ class PreferenceGP:
         likelihood: PairLikelihood,
         *,
         init: Posterior | None = None,
+        single: IntArray | None = None,
+        single_likelihood: ActionLikelihood | None = None,
     ) -> Posterior:
-        """Laplace posterior for any pairwise likelihood of ``f[first] - f[second]``."""
-        if first.size == 0:
+        """Laplace posterior for any pairwise likelihood of ``f[first] - f[second]``.
+
+        ``single`` (grid indices) with ``single_likelihood`` adds observations of single
+        utilities ``f[single_k]`` (the second shape of likelihood term, ``laplace.py``).
+        """
+        if single is not None:
+            single = _as_indices(self.space, single, "single")
+            if single.size == 0:
+                single = single_likelihood = None
+            elif single_likelihood is None:
+                raise ValueError("single-action observations need single_likelihood")
+        if first.size == 0 and single is None:
             return self.prior()
-        visited, inverse = np.unique(np.concatenate([first, second]), return_inverse=True)
+        n_first = first.size
+        parts = [first, second] if single is None else [first, second, single]
+        visited, inverse = np.unique(np.concatenate(parts), return_inverse=True)
         visited = visited.astype(np.intp)
-        a, b = inverse[: first.size].astype(np.intp), inverse[first.size :].astype(np.intp)
+        a, b = inverse[:n_first].astype(np.intp), inverse[n_first : 2 * n_first].astype(np.intp)
+        s = None if single is None else inverse[2 * n_first :].astype(np.intp)
         k_vv = self.kernel.cross(self.space, visited, rows=visited)
         start = None if init is None else init.mean_at(visited)
-        fit = fit_laplace(k_vv, visited, a, b, likelihood, start)
+        fit = fit_laplace(
+            k_vv, visited, a, b, likelihood, start, single=s, single_likelihood=single_likelihood
+        )
         return Posterior(self.space, self.kernel, fit, self.engine)

@@ -9,6 +9,11 @@ solve for ``f_V`` alone, in whitened coordinates ``f_V = L u`` (``K_VV = L L^T``
     grad = u - L^T G^T g,                       Hess = I + H^T H,  H = diag(sqrt(c)) G L
 
 (``G``: ``N x m`` signed incidence, ``g`` and ``c`` the likelihood's derivative and curvature).
+Observations come in two shapes: on a *pair* of actions (``d_k = f_a - f_b``: preferences, ties,
+coactive suggestions; row ``k`` of ``G`` is ``e_a - e_b``) and on a *single* action (``d_k = f_s``:
+what ordinal ratings need; row ``k`` is ``e_s``).  Both enter ``S``, its gradient and ``H`` the
+same way; with no single-action terms the arithmetic is the pair-only fit's, operation for
+operation.
 ``Hess >= I``, so each Newton step is a well-conditioned Cholesky solve (GPML Algorithm 3.1 in
 the comparison form, no ``W^-1``, no ``K^-1``).  A backtracking (Armijo) line search keeps every
 step a descent step, and the loop stops when the gradient is below tolerance; otherwise it raises
@@ -27,7 +32,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
 
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
-from gaitpref.model.likelihood import PairLikelihood
+from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
 from gaitpref.space import FloatArray, IntArray
 
 
@@ -100,6 +105,8 @@ def fit_laplace(
     likelihood: PairLikelihood,
     init: FloatArray | None = None,
     *,
+    single: IntArray | None = None,
+    single_likelihood: ActionLikelihood | None = None,
     tol: float = 1e-11,
     max_iter: int = 100,
 ) -> LaplaceMode:
@@ -107,8 +114,13 @@ def fit_laplace(
 
     ``k_vv`` is the prior covariance of the grid actions ``visited``; ``first``/``second`` index
     into the visited set (``0..m-1``); ``init`` is a starting ``f_V`` (the previous posterior's
-    mean there).
+    mean there).  ``single`` (indices into the visited set) with ``single_likelihood`` adds
+    observations of single utilities ``f[single_k]``.
     """
+    if (single is None) != (single_likelihood is None):
+        raise ValueError("single and single_likelihood go together")
+    if single is not None and single.size == 0:
+        single = single_likelihood = None
     m = k_vv.shape[0]
     L = _factor_prior(k_vv)
     u = (
@@ -119,18 +131,29 @@ def fit_laplace(
     if not np.all(np.isfinite(u)):
         u = np.zeros(m)
 
+    n_pairs = first.shape[0]
+    rows = L[first] - L[second]
+    if single is not None:
+        rows = np.vstack([rows, L[single]])
+
     def objective(u_: FloatArray) -> tuple[float, FloatArray, FloatArray, FloatArray]:
         f = L @ u_
         logp, g, c = likelihood.terms(f[first] - f[second])
+        if single is not None and single_likelihood is not None:
+            s_logp, s_g, s_c = single_likelihood.terms(f[single])
+            logp, g, c = (np.concatenate(p) for p in ((logp, s_logp), (g, s_g), (c, s_c)))
         return 0.5 * float(u_ @ u_) - float(np.sum(logp)), logp, g, c
 
     value, logp, g, c = objective(u)
     gnorm = last_full_step_gnorm = np.inf
     for iteration in range(1, max_iter + 1):
-        grad_f = np.bincount(first, g, m) - np.bincount(second, g, m)
+        g_pair = g[:n_pairs]
+        grad_f = np.bincount(first, g_pair, m) - np.bincount(second, g_pair, m)
+        if single is not None:
+            grad_f = grad_f + np.bincount(single, g[n_pairs:], m)
         grad = u - L.T @ grad_f
         gnorm = float(np.max(np.abs(grad))) if m else 0.0
-        H = np.sqrt(c)[:, None] * (L[first] - L[second])
+        H = np.sqrt(c)[:, None] * rows
         hess = H.T @ H
         hess[np.diag_indices_from(hess)] += 1.0
         R = cholesky(hess, lower=True, check_finite=False)

@@ -38,6 +38,36 @@ class PairLikelihood(Protocol):
         ...
 
 
+class ActionLikelihood(Protocol):
+    """A likelihood over single utilities ``f_s`` (one entry per observation of one action).
+
+    The second shape of observation the Laplace fit takes (``laplace.py``); ordinal ratings are
+    one.  Same contract as :class:`PairLikelihood`: log-concave in ``f_s``, so ``c >= 0``.
+    """
+
+    def terms(self, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``(log p, d log p / d f, -d^2 log p / d f^2)`` per observation."""
+        ...
+
+
+@dataclass(frozen=True)
+class StackedActionLikelihood:
+    """Several single-action likelihoods over consecutive blocks of observations, as one."""
+
+    parts: tuple[tuple[int, ActionLikelihood], ...]  # (number of observations, likelihood)
+
+    def terms(self, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        out: list[tuple[FloatArray, FloatArray, FloatArray]] = []
+        start = 0
+        for size, part in self.parts:
+            out.append(part.terms(values[start : start + size]))
+            start += size
+        if start != values.shape[0]:
+            raise ValueError(f"{values.shape[0]} values for {start} single-action observations")
+        logp, g, c = (np.concatenate([t[k] for t in out]) for k in range(3))
+        return logp, g, c
+
+
 def mills_ratio(z: FloatArray) -> FloatArray:
     """``phi(z) / Phi(z)`` for any real ``z``, without underflow (``-> -z`` as ``z -> -inf``)."""
     with np.errstate(over="ignore"):
