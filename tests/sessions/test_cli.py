@@ -92,8 +92,8 @@ def test_errors_are_clear_and_write_nothing(tmp_path: Path) -> None:
 
 def test_db_upgrade_creates_and_is_idempotent(tmp_path: Path) -> None:
     db = str(tmp_path / "new.db")
-    assert "schema revision 0001" in _ok("db", "upgrade", "--db", db)
-    assert "schema revision 0001" in _ok("db", "upgrade", "--db", db)
+    assert "schema revision 0002" in _ok("db", "upgrade", "--db", db)
+    assert "schema revision 0002" in _ok("db", "upgrade", "--db", db)
     assert "0 sessions" in _ok("db", "status", "--db", db)
 
 

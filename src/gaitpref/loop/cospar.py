@@ -178,6 +178,11 @@ class CoSpar:
         return dict(self._dropped)
 
     @property
+    def excluded_singles(self) -> dict[int, frozenset[int]]:
+        """Query id -> indices into that answer's ``singles`` taken out by :meth:`exclude`."""
+        return dict(self._dropped_singles)
+
+    @property
     def ties(self) -> list[Tie]:
         return [t for a in self.answers for t in a.ties]
 

@@ -1,80 +1,10 @@
-"""Session events and the records a session shows: what each event kind means.
-
-A session's log is a sequence of events (``storage/base.py``); this module fixes their kinds and
-payloads.  Each answer is one batch: the ``trial_executed`` events of the query's actions, then its
-``comparison_answered`` and ``suggestion_given`` events and, when the answer triggered a
-hyperparameter fit (``[model] fit = "evidence"``), its ``hyperparameters_refit`` event, all
-carrying the query's id.
-
-========================  ================================================================
-kind                      payload
-========================  ================================================================
-``created``               config_name, config_sha256, seed, software_version, subject
-``query_issued``          query_loop_id, actions, buffer, trials, buffer_trials
-``trial_executed``        query, trial, action, values (feature -> value), gait_id
-``comparison_answered``   query, first, second, outcome, first_trial, second_trial
-``suggestion_given``      query, trial, action, feature, move, target (null: clipped)
-``hyperparameters_refit`` query, before, after, accepted, converged, message, evaluations, ...
-``undo``                  query, trials
-``trial_excluded``        trial, query, action, reason, detail
-``validation_started``    round, gaits [{label, action, role, posterior_mean}]
-``validation_answered``   round, ranking, model_ranking, agrees, kendall_tau
-``note``                  text
-``paused`` ``resumed``    (nothing)
-``finished``              (nothing)
-========================  ================================================================
-
-A query's ``id`` is the sequence number of its ``query_issued`` event: unique in the session and
-never reused, so an answer to a query that is no longer pending is recognised as stale.
-"""
+"""The records a session shows: its queries, trials and answers as they were given, with what
+became of them (undone, excluded).  The events they are read from are in ``events.py``."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, get_args
-
-CREATED = "created"
-QUERY = "query_issued"
-TRIAL = "trial_executed"
-COMPARISON = "comparison_answered"
-SUGGESTION = "suggestion_given"
-REFIT = "hyperparameters_refit"
-UNDO = "undo"
-EXCLUDED = "trial_excluded"
-VALIDATION_STARTED = "validation_started"
-VALIDATION_ANSWERED = "validation_answered"
-NOTE = "note"
-PAUSED = "paused"
-RESUMED = "resumed"
-FINISHED = "finished"
-
-ANSWER_KINDS = (TRIAL, COMPARISON, SUGGESTION, REFIT)
-KINDS = (
-    CREATED,
-    QUERY,
-    *ANSWER_KINDS,
-    UNDO,
-    EXCLUDED,
-    VALIDATION_STARTED,
-    VALIDATION_ANSWERED,
-    NOTE,
-    PAUSED,
-    RESUMED,
-    FINISHED,
-)
-
-#: the fields replay re-derives and compares with the log, per kind
-CHECKED_FIELDS: dict[str, tuple[str, ...]] = {
-    QUERY: ("query_loop_id", "actions", "buffer", "trials", "buffer_trials"),
-    TRIAL: ("query", "trial", "action"),
-    COMPARISON: ("query", "first", "second", "outcome"),
-    SUGGESTION: ("query", "trial", "action", "feature", "move", "target"),
-    REFIT: ("query", "before", "after", "accepted"),
-    UNDO: ("query", "trials"),
-    EXCLUDED: ("trial", "query", "action", "reason"),
-    VALIDATION_STARTED: ("round", "gaits"),
-    VALIDATION_ANSWERED: ("round", "ranking", "model_ranking", "agrees", "kendall_tau"),
-}
+from typing import Any, Literal, get_args
 
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
 REASONS: tuple[Reason, ...] = get_args(Reason)
@@ -154,23 +84,24 @@ class SuggestionRecord:
 
 
 @dataclass(frozen=True)
+class FeedbackEntry:
+    """An answer of a kind other than comparison and suggestion (``gaitpref.feedback``), as
+    stored: its kind, its event payload, and what became of it."""
+
+    seq: int
+    query: int
+    kind: str
+    payload: dict[str, Any]
+    undone: bool = False
+    excluded: bool = False
+
+
+@dataclass(frozen=True)
 class Answered:
     """What :meth:`gaitpref.Session.answer` wrote."""
 
     query: int
     trials: tuple[int, ...]
     seqs: tuple[int, ...]
-    preferences: int  # how many preferences entered the model
-
-
-def describe_mismatch(
-    seq: int, kind: str, logged: dict[str, object], derived: dict[str, object]
-) -> str:
-    """One line per field that differs between the log and what replay re-derived."""
-    fields = CHECKED_FIELDS.get(kind, tuple(sorted(set(logged) | set(derived))))
-    lines = [
-        f"  {name}: log has {logged.get(name)!r}, replay gives {derived.get(name)!r}"
-        for name in fields
-        if logged.get(name) != derived.get(name)
-    ]
-    return f"event {seq} ({kind}):\n" + "\n".join(lines)
+    preferences: int  # how many pair terms (preferences) entered the model
+    singles: int = 0  # how many single-action terms entered it

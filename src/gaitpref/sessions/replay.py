@@ -1,19 +1,21 @@
 """Replay: rebuild a session's state from its log, re-deriving and checking every event.
 
-Each logged event is derived again from the state so far (``session_state.py``: the proposal
-CoSpar makes with the session's seed, the answer's preferences, the exclusion, the validation
-order) and compared with the log field by field (``session_log.CHECKED_FIELDS``).  The first
-difference raises :class:`~gaitpref.sessions.records.ReplayError` showing it; nothing is written.
-An answer's events (one transaction) are replayed together.
+Each logged event is read through its payload class (validated, its schema version checked;
+``events.py``), derived again from the state so far (``state.py``: the proposal CoSpar makes with
+the session's seed, the answer's terms, the exclusion, the validation order) and compared with the
+log on the payload class's checked fields.  The first difference raises
+:class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's events (one
+transaction: trials, one event per feedback record of any registered kind, the refit) are
+replayed together.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from gaitpref.errors import ReplayError, SessionStateError
-from gaitpref.loop.cospar import QueryError
-from gaitpref.sessions import records as log
+from gaitpref.errors import QueryError, ReplayError, SessionStateError
+from gaitpref.feedback import kind_for_event
+from gaitpref.sessions import events as log
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord, NewEvent
 
@@ -25,14 +27,17 @@ def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
         r = records[i]
         if r.seq != state.last_seq + 1:
             raise ReplayError(f"event {r.seq} follows event {state.last_seq}: the log has a gap")
-        if r.kind in log.ANSWER_KINDS:
+        log.read_payload(r)  # validates the payload and its version
+        if log.is_answer_part(r.kind):
             j = i
             while (
                 j < len(records)
-                and records[j].kind in log.ANSWER_KINDS
+                and log.is_answer_part(records[j].kind)
                 and records[j].payload.get("query") == r.payload.get("query")
                 and (j == i or records[j].kind != log.TRIAL or records[j - 1].kind == log.TRIAL)
             ):
+                if j > i:
+                    log.read_payload(records[j])
                 j += 1
             _replay_answer(state, records[i:j])
             i = j
@@ -42,8 +47,7 @@ def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
 
 
 def _check(r: EventRecord, derived: NewEvent) -> None:
-    fields = log.CHECKED_FIELDS.get(r.kind, ())
-    if derived.kind != r.kind or any(r.payload.get(f) != derived.payload.get(f) for f in fields):
+    if not log.same_event(r, derived):
         raise ReplayError(log.describe_mismatch(r.seq, r.kind, r.payload, derived.payload))
 
 
@@ -55,7 +59,7 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
                 raise ReplayError(
                     f"event {r.seq}: a query was issued while {state.pending.id} was pending"
                 )
-            _check(r, NewEvent(log.QUERY, state.derive_query()))
+            _check(r, state.derive_query())
         elif r.kind == log.UNDO:
             _check(r, state.undo_event())
         elif r.kind == log.EXCLUDED:
@@ -79,18 +83,13 @@ def _replay_answer(state: SessionState, group: Sequence[EventRecord]) -> None:
             f"event {first.seq} ({first.kind}) answers query {first.payload.get('query')}, "
             f"but {pending}"
         )
-    comparisons = [
-        (r.payload["first"], r.payload["second"], r.payload["outcome"])
-        for r in group
-        if r.kind == log.COMPARISON
-    ]
-    suggestions = [
-        (r.payload["action"], r.payload["feature"], r.payload["move"])
-        for r in group
-        if r.kind == log.SUGGESTION
-    ]
+    answers: list[object] = []
+    for r in group:
+        kind = kind_for_event(r.kind)
+        if kind is not None:
+            answers.append(kind.from_payload(log.read_payload(r)))
     try:
-        answer = state.tell(query, comparisons, suggestions)
+        answer = state.tell(query, answers)
     except (QueryError, ValueError, ArithmeticError, RuntimeError) as exc:
         raise ReplayError(
             f"event {first.seq}: the logged answer to query {query.id} is refused now: {exc}"

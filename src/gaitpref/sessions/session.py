@@ -30,7 +30,7 @@ from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import ReplayError, SessionStateError
 from gaitpref.loop.cospar import QueryError
 from gaitpref.model.posterior import Posterior
-from gaitpref.sessions import records as log
+from gaitpref.sessions import events as log
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
@@ -117,16 +117,15 @@ class Session:
             software_version=version,
             meta=meta,
         )
-        created = NewEvent(
-            log.CREATED,
-            {
-                "subject": subject,
-                "config_name": cfg.name,
-                "config_sha256": cfg.sha256,
-                "seed": use_seed,
-                "software_version": version,
-                "gait_library": gait_ids is not None,
-            },
+        created = log.new_event(
+            log.Created(
+                subject=subject,
+                config_name=cfg.name,
+                config_sha256=cfg.sha256,
+                seed=use_seed,
+                software_version=version,
+                gait_library=gait_ids is not None,
+            )
         )
         record = storage.create_session(spec, [created])
         session = cls(storage, record, owns_storage=not isinstance(db, Storage))
@@ -225,9 +224,9 @@ class Session:
             )
         if st.pending is not None:
             return st.pending
-        payload = st.derive_query()
+        event = st.derive_query()
         try:
-            records = self._write([NewEvent(log.QUERY, payload)])
+            records = self._write([event])
         except ConflictError:
             self._rebuild()
             if self._state.pending is not None:
@@ -245,15 +244,17 @@ class Session:
     def answer(
         self,
         query_id: int,
-        comparisons: Iterable[object] = (),
+        answers: Iterable[object] = (),
         suggestions: Iterable[object] = (),
     ) -> Answered:
-        """Answer the pending query (``comparisons``/``suggestions`` as for ``CoSpar.tell``).
+        """Answer the pending query with feedback records of any registered kind (as for
+        ``CoSpar.tell``; raw ``(i, j, outcome)`` items are comparisons, and ``suggestions``
+        takes ``(action, feature, move)``: the paper's convenience form).
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, and a session that is finished or paused.
         """
-        comps, suggs = list(comparisons), list(suggestions)
+        comps, suggs = list(answers), list(suggestions)
         return self._locked(lambda: self._answer(query_id, comps, suggs, retry=True))
 
     def _answer(
@@ -278,8 +279,10 @@ class Session:
             st.revert_tell()
             raise
         st.commit(records, answer)
-        kept = len(answer.preferences) - len(self._state.loop.excluded.get(query.loop_id, ()))
-        return Answered(query.id, query.trials, tuple(r.seq for r in records), kept)
+        loop = self._state.loop
+        kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
+        singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
+        return Answered(query.id, query.trials, tuple(r.seq for r in records), kept, singles)
 
     def undo(self) -> SessionQuery:
         """Take back the last answer: its query is pending again, the model as it was before."""
@@ -320,7 +323,7 @@ class Session:
         def run() -> int:
             if self._state.status == "finished":
                 raise SessionStateError("the session is finished: it takes no notes")
-            return self._append([NewEvent(log.NOTE, {"text": text})])[-1].seq
+            return self._append([log.new_event(log.Note(text=text))])[-1].seq
 
         return self._locked(run)
 
@@ -339,7 +342,7 @@ class Session:
         def run() -> None:
             if self._state.status == "finished":
                 raise SessionStateError("the session is already finished")
-            self._append([NewEvent(log.FINISHED, {})], status="finished")
+            self._append([log.new_event(log.Finished())], status="finished")
 
         self._locked(run)
 
@@ -487,6 +490,8 @@ class Session:
         )
 
     def _write(self, events: list[NewEvent], status: Status | None = None) -> list[EventRecord]:
+        for event in events:  # every payload validated on write, whoever built it
+            log.check_new(event, self.id)
         return self.storage.append(self.id, self._state.last_seq, events, status)
 
     def _append(self, events: list[NewEvent], status: Status | None = None) -> list[EventRecord]:

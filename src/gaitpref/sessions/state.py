@@ -4,7 +4,8 @@ Live operations and replay share this code, so a resumed session follows the sam
 that wrote the log: every operation first *derives* its events from the current state (asking
 CoSpar for a proposal, telling it an answer, ...), the caller writes them, then :meth:`commit`
 books them.  Replay derives the same events and compares them with the logged ones field by field
-(``session_log.CHECKED_FIELDS``); a difference (another config, another software version) raises
+(the payload classes' checked fields, ``events.py``); a difference (another config, another
+software version) raises
 :class:`~gaitpref.sessions.records.ReplayError` that shows it.
 
 Exclusion (``trial_excluded``): a comparison leaves the model when it names the excluded trial's
@@ -26,11 +27,14 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError, SessionStateError
-from gaitpref.feedback import Preference
+from gaitpref.feedback import Comparison, ModelContext, Preference, Suggestion, kind_of
 from gaitpref.loop.cospar import Answer, CoSpar, QueryError
-from gaitpref.sessions import records as log
+from gaitpref.sessions import events as log
 from gaitpref.sessions.records import (
+    REASONS,
     ComparisonRecord,
+    FeedbackEntry,
+    Reason,
     SessionQuery,
     SuggestionRecord,
     Trial,
@@ -61,6 +65,7 @@ class _Told:
     trial_rows: list[int]
     comparison_rows: list[int]
     suggestion_rows: list[int]
+    feedback_rows: list[int] = field(default_factory=list)  # other kinds' entries
 
 
 @dataclass
@@ -87,7 +92,8 @@ class SessionState:
     trials_log: list[Trial] = field(default_factory=list)
     comparisons_log: list[ComparisonRecord] = field(default_factory=list)
     suggestions_log: list[SuggestionRecord] = field(default_factory=list)
-    excluded: dict[int, tuple[log.Reason, str]] = field(default_factory=dict)
+    feedback_log: list[FeedbackEntry] = field(default_factory=list)
+    excluded: dict[int, tuple[Reason, str]] = field(default_factory=dict)
     rounds: list[_Round] = field(default_factory=list)
     notes: list[tuple[int, str]] = field(default_factory=list)
 
@@ -107,20 +113,22 @@ class SessionState:
         return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None
 
     # -- derive: queries -----------------------------------------------------------------------
-    def derive_query(self) -> dict[str, Any]:
+    def derive_query(self) -> NewEvent:
         """Ask CoSpar for the next proposal (the same one until it is answered)."""
         q = self.loop.ask()
         done = self.trial_actions
         numbers = [t for t, _ in done]
         start = numbers[-1] + 1 if numbers else 1
         buffered = numbers[len(numbers) - len(q.buffer) :] if q.buffer else []
-        return {
-            "query_loop_id": int(q.id),
-            "actions": [int(a) for a in q.actions],
-            "buffer": [int(b) for b in q.buffer],
-            "trials": list(range(start, start + len(q.actions))),
-            "buffer_trials": buffered,
-        }
+        return log.new_event(
+            log.QueryIssued(
+                query_loop_id=int(q.id),
+                actions=[int(a) for a in q.actions],
+                buffer=[int(b) for b in q.buffer],
+                trials=list(range(start, start + len(q.actions))),
+                buffer_trials=buffered,
+            )
+        )
 
     def _query_of(self, seq: int, payload: dict[str, Any]) -> SessionQuery:
         return SessionQuery(
@@ -134,64 +142,43 @@ class SessionState:
 
     # -- derive: answers -----------------------------------------------------------------------
     def tell(
-        self, query: SessionQuery, comparisons: Iterable[object], suggestions: Iterable[object]
+        self, query: SessionQuery, answers: Iterable[object], suggestions: Iterable[object] = ()
     ) -> Answer:
         """Tell CoSpar the answer (checked; nothing changes on error) and apply exclusions."""
-        answer: Answer = self.loop.tell(query.loop_id, comparisons, suggestions)
-        drops = self._drops(query, answer)
-        if drops:
+        answer: Answer = self.loop.tell(query.loop_id, answers, suggestions)
+        drops, single_drops = self._drops(query, answer)
+        if drops or single_drops:
             try:
-                self.loop.exclude({query.loop_id: drops})
+                self.loop.exclude({query.loop_id: drops}, {query.loop_id: single_drops})
             except Exception:
                 self.loop.undo()
                 raise
         return answer
 
     def answer_events(self, query: SessionQuery, answer: Answer) -> list[NewEvent]:
+        """The answer's batch: its trials, one event per feedback record, and its refit."""
         space = self.config.space
         events = [
-            NewEvent(
-                log.TRIAL,
-                {
-                    "query": query.id,
-                    "trial": t,
-                    "action": a,
-                    "values": space.values_of(a),
-                    "gait_id": self.gait_id(a),
-                },
+            log.new_event(
+                log.TrialExecuted(
+                    query=query.id,
+                    trial=t,
+                    action=a,
+                    values=space.values_of(a),
+                    gait_id=self.gait_id(a),
+                )
             )
             for t, a in zip(query.trials, query.actions, strict=True)
         ]
-        events += [
-            NewEvent(
-                log.COMPARISON,
-                {
-                    "query": query.id,
-                    "first": c.first,
-                    "second": c.second,
-                    "outcome": c.outcome,
-                    "first_trial": query.trial_of(c.first),
-                    "second_trial": query.trial_of(c.second),
-                },
-            )
-            for c in answer.comparisons
-        ]
-        events += [
-            NewEvent(
-                log.SUGGESTION,
-                {
-                    "query": query.id,
-                    "trial": query.trial_of(s.action),
-                    "action": s.action,
-                    "feature": s.feature,
-                    "move": s.move,
-                    "target": space.coactive_move(s.action, s.feature, s.move),
-                },
-            )
-            for s in answer.suggestions
-        ]
+        for record in answer.records:
+            kind = kind_of(record)
+            assert kind is not None  # the loop took it, so its kind is registered
+            events.append(log.new_event(kind.payload(record, query, space)))
         if answer.refit is not None:
-            events.append(NewEvent(log.REFIT, {"query": query.id, **answer.refit.to_json()}))
+            refit = log.HyperparametersRefit.parse(
+                {"query": query.id, **answer.refit.to_json()}, "hyperparameters_refit"
+            )
+            events.append(log.new_event(refit))
         return events
 
     def revert_tell(self) -> None:
@@ -209,11 +196,11 @@ class SessionState:
                 f"the last answer's trial {spoiled[0]} was excluded after it was given; "
                 "an excluded trial's answer cannot be undone"
             )
-        return NewEvent(log.UNDO, {"query": last.query.id, "trials": list(last.query.trials)})
+        return log.new_event(log.Undo(query=last.query.id, trials=list(last.query.trials)))
 
     def exclude_event(self, trial: int, reason: str, detail: str) -> NewEvent:
-        if reason not in log.REASONS:
-            raise ValueError(f"reason must be one of {', '.join(log.REASONS)}; got {reason!r}")
+        if reason not in REASONS:
+            raise ValueError(f"reason must be one of {', '.join(REASONS)}; got {reason!r}")
         if not isinstance(detail, str) or len(detail) > 2000:
             raise ValueError("detail must be a string of at most 2000 characters")
         found = [(k, t) for k in self.told for t in k.query.trials if t == trial]
@@ -229,27 +216,29 @@ class SessionState:
             )
         told = found[0][0]
         action = told.query.actions[told.query.trials.index(trial)]
-        return NewEvent(
-            log.EXCLUDED,
-            {
-                "trial": trial,
-                "query": told.query.id,
-                "action": action,
-                "reason": reason,
-                "detail": detail,
-            },
+        return log.new_event(
+            log.TrialExcluded(
+                trial=trial,
+                query=told.query.id,
+                action=action,
+                reason=reason,
+                detail=detail,
+            )
         )
 
     def apply_exclusion(self, payload: dict[str, Any]) -> None:
-        """Take the trial's comparisons and suggestions out of the model (before writing)."""
+        """Take the trial's answers out of the model (before writing)."""
         trial = payload["trial"]
-        self.excluded[trial] = (payload["reason"], payload["detail"])
+        self.excluded[trial] = (payload["reason"], payload.get("detail", ""))
         drops: dict[int, list[int]] = {}
+        single_drops: dict[int, list[int]] = {}
         for told in self.told:
             if trial in told.query.member_trials:
-                drops[told.query.loop_id] = self._drops(told.query, told.answer)
+                pairs, singles = self._drops(told.query, told.answer)
+                drops[told.query.loop_id] = pairs
+                single_drops[told.query.loop_id] = singles
         try:
-            self.loop.exclude(drops)
+            self.loop.exclude(drops, single_drops)
         except Exception:
             del self.excluded[trial]
             raise
@@ -269,15 +258,15 @@ class SessionState:
         except ValueError as exc:
             raise SessionStateError(f"cannot start a blind validation: {exc}") from None
         gaits = [
-            {
-                "label": g.label,
-                "action": g.action,
-                "role": roles[g.label],
-                "posterior_mean": float(mean[g.action]),
-            }
+            log.BlindGaitShown(
+                label=g.label,
+                action=g.action,
+                role=roles[g.label],
+                posterior_mean=float(mean[g.action]),
+            )
             for g in plan.gaits
         ]
-        return NewEvent(log.VALIDATION_STARTED, {"round": round_, "gaits": gaits})
+        return log.new_event(log.ValidationStarted(round=round_, gaits=gaits))
 
     def validation_answer_event(self, round_: int, ranking: Sequence[str] | str) -> NewEvent:
         current = self.open_round
@@ -288,15 +277,14 @@ class SessionState:
             result = unblind(current.plan, current.roles, current.values, ranking)
         except ValueError as exc:
             raise SessionStateError(str(exc)) from None
-        return NewEvent(
-            log.VALIDATION_ANSWERED,
-            {
-                "round": round_,
-                "ranking": list(result.ranking),
-                "model_ranking": list(result.model_ranking),
-                "agrees": result.agrees,
-                "kendall_tau": result.kendall_tau,
-            },
+        return log.new_event(
+            log.ValidationAnswered(
+                round=round_,
+                ranking=list(result.ranking),
+                model_ranking=list(result.model_ranking),
+                agrees=result.agrees,
+                kendall_tau=result.kendall_tau,
+            )
         )
 
     # -- commit: book events that are written ---------------------------------------------------
@@ -322,7 +310,7 @@ class SessionState:
             if r.kind == log.TRIAL:
                 told.trial_rows.append(len(self.trials_log))
                 self.trials_log.append(Trial(p["trial"], query.id, p["action"], r.seq))
-            elif r.kind == log.COMPARISON:
+            elif r.kind == "comparison_answered":
                 told.comparison_rows.append(len(self.comparisons_log))
                 self.comparisons_log.append(
                     ComparisonRecord(
@@ -335,7 +323,7 @@ class SessionState:
                         p["second_trial"],
                     )
                 )
-            elif r.kind == log.SUGGESTION:
+            elif r.kind == "suggestion_given":
                 told.suggestion_rows.append(len(self.suggestions_log))
                 self.suggestions_log.append(
                     SuggestionRecord(
@@ -348,6 +336,9 @@ class SessionState:
                         p["target"],
                     )
                 )
+            elif log.is_feedback(r.kind):
+                told.feedback_rows.append(len(self.feedback_log))
+                self.feedback_log.append(FeedbackEntry(r.seq, query.id, r.kind, dict(p)))
         self.told.append(told)
         self.pending = None
         self._flag_exclusions(told)
@@ -363,6 +354,7 @@ class SessionState:
                 (told.trial_rows, "trials_log"),
                 (told.comparison_rows, "comparisons_log"),
                 (told.suggestion_rows, "suggestions_log"),
+                (told.feedback_rows, "feedback_log"),
             ):
                 records: list[Any] = getattr(self, name)
                 for k in rows:
@@ -407,9 +399,12 @@ class SessionState:
         }
         return members, executed
 
-    def _drops(self, query: SessionQuery, answer: Answer) -> list[int]:
+    def _drops(self, query: SessionQuery, answer: Answer) -> tuple[list[int], list[int]]:
+        """Indices of the answer's pair terms and single-action terms an exclusion spoils."""
         members, executed = self._excluded_actions(query)
-        return [k for k, p in enumerate(answer.preferences) if _spoiled(p, members, executed)]
+        pairs = [k for k, p in enumerate(answer.preferences) if _spoiled(p, members, executed)]
+        singles = [k for k, o in enumerate(answer.singles) if o.action in executed]
+        return pairs, singles
 
     def _flag_exclusions(self, told: _Told) -> None:
         members, executed = self._excluded_actions(told.query)
@@ -421,6 +416,17 @@ class SessionState:
             s = self.suggestions_log[k]
             if s.action in executed:
                 self.suggestions_log[k] = replace(s, excluded=True)
+        if told.feedback_rows:
+            others = [r for r in told.answer.records if not isinstance(r, Comparison | Suggestion)]
+            context = ModelContext(self.config.space, self.loop.gp.noise, self.loop.coactive_weight)
+            for k, record in zip(told.feedback_rows, others, strict=True):
+                kind = kind_of(record)
+                assert kind is not None
+                terms = kind.observations(record, context, told.query.loop_id)
+                if any(_spoiled(p, members, executed) for p in terms.preferences) or any(
+                    o.action in executed for o in terms.singles
+                ):
+                    self.feedback_log[k] = replace(self.feedback_log[k], excluded=True)
         for k in told.trial_rows:
             t = self.trials_log[k]
             if t.number in self.excluded:

@@ -68,11 +68,13 @@ class StorageConnectError(StorageError):
 
 @dataclass(frozen=True)
 class NewEvent:
-    """An event to append: its ``kind``, JSON ``payload`` and, for imports only, its time."""
+    """An event to append: its ``kind``, JSON ``payload``, for imports only its time, and the
+    schema ``version`` of its payload (``gaitpref.payloads``)."""
 
     kind: str
     payload: JSONObject = field(default_factory=dict)
     at: datetime | None = None
+    version: int = 1
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,7 @@ class EventRecord:
     kind: str
     payload: JSONObject
     at: datetime
+    version: int = 1  # the payload's schema version
 
 
 @dataclass(frozen=True)
@@ -221,7 +224,10 @@ def check_event(event: NewEvent, where: str) -> NewEvent:
         raise StorageError(f"{where}: expected a NewEvent, got {type(event).__name__}")
     if not isinstance(event.kind, str) or not 0 < len(event.kind) <= 32:
         raise StorageError(f"{where}: kind must be a string of 1 to 32 characters")
-    return NewEvent(event.kind, check_json(event.payload, f"{where} payload"), event.at)
+    v = event.version
+    if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 10_000:
+        raise StorageError(f"{where}: version must be an integer from 1 to 10000, got {v!r}")
+    return NewEvent(event.kind, check_json(event.payload, f"{where} payload"), event.at, v)
 
 
 def check_spec(spec: SessionSpec) -> SessionSpec:

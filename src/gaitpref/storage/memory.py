@@ -67,7 +67,9 @@ class MemoryStorage(Storage):
             )
             self._sessions[sid] = record
             self._events[sid] = [
-                EventRecord(sid, k + 1, e.kind, e.payload, as_utc(e.at) if e.at else stamp)
+                EventRecord(
+                    sid, k + 1, e.kind, e.payload, as_utc(e.at) if e.at else stamp, e.version
+                )
                 for k, e in enumerate(checked)
             ]
             return _copy_session(record)
@@ -108,7 +110,9 @@ class MemoryStorage(Storage):
                 )
             stamp = now()
             out = [
-                EventRecord(session_id, after + k + 1, e.kind, e.payload, as_utc(e.at or stamp))
+                EventRecord(
+                    session_id, after + k + 1, e.kind, e.payload, as_utc(e.at or stamp), e.version
+                )
                 for k, e in enumerate(checked)
             ]
             self._events[session_id].extend(out)

@@ -203,7 +203,10 @@ class SQLStorage(Storage):
                     raise _conflict(session_id, None, after)
         except IntegrityError:
             raise _conflict(session_id, None, after) from None
-        return [EventRecord(sid, r["seq"], r["kind"], r["payload"], as_utc(r["at"])) for r in rows]
+        return [
+            EventRecord(sid, r["seq"], r["kind"], r["payload"], as_utc(r["at"]), r["version"])
+            for r in rows
+        ]
 
     def events(self, session_id: int, after: int = 0) -> list[EventRecord]:
         sid = _sid(session_id)
@@ -216,7 +219,10 @@ class SQLStorage(Storage):
                 .where(events_t.c.session_id == sid, events_t.c.seq > after)
                 .order_by(events_t.c.seq)
             ).all()
-        return [EventRecord(r.session_id, r.seq, r.kind, r.payload, as_utc(r.at)) for r in rows]
+        return [
+            EventRecord(r.session_id, r.seq, r.kind, r.payload, as_utc(r.at), r.version)
+            for r in rows
+        ]
 
     def close(self) -> None:
         self.engine.dispose()
@@ -325,6 +331,7 @@ def _rows(sid: int, after: int, events: Sequence[NewEvent], stamp: Any) -> list[
             "kind": e.kind,
             "payload": e.payload,
             "at": as_utc(e.at) if e.at is not None else stamp,
+            "version": e.version,
         }
         for k, e in enumerate(events)
     ]

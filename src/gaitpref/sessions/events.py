@@ -1,0 +1,290 @@
+"""A session's events: one typed, versioned payload class per kind (``gaitpref.payloads``).
+
+A session's log is a sequence of events (``storage/base.py``).  Each answer is one batch: the
+``trial_executed`` events of the query's actions, then one event per feedback record (the
+kind's own payload class, ``gaitpref.feedback``: ``comparison_answered``, ``suggestion_given``,
+...) and, when the answer triggered a hyperparameter fit, its ``hyperparameters_refit`` event,
+all carrying the query's id.  A query's ``id`` is the sequence number of its ``query_issued``
+event: unique in the session and never reused.
+
+Payloads are validated when written (:func:`new_event`) and when read (:func:`read_payload`,
+which also checks the stored schema version).  Replay compares each re-derived event with the
+logged one on the payload class's :meth:`~gaitpref.payloads.EventPayload.checked_fields`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, ClassVar
+
+from pydantic import BaseModel, ConfigDict
+
+from gaitpref.errors import ReplayError
+from gaitpref.feedback import kind_for_event
+from gaitpref.payloads import EventPayload, PayloadError, Recorded
+from gaitpref.sessions.records import Reason
+from gaitpref.storage import EventRecord, NewEvent
+
+
+class Created(EventPayload):
+    """``created``: what the session was made of (also in the session's row)."""
+
+    kind: ClassVar[str] = "created"
+    subject: str
+    config_name: str
+    config_sha256: str
+    seed: int
+    software_version: str
+    gait_library: bool = False
+
+
+class QueryIssued(EventPayload):
+    """``query_issued``: run ``actions`` as trials ``trials``; compare with ``buffer``."""
+
+    kind: ClassVar[str] = "query_issued"
+    query_loop_id: int
+    actions: list[int]
+    buffer: list[int]
+    trials: list[int]
+    buffer_trials: list[int]
+
+
+class TrialExecuted(EventPayload):
+    """``trial_executed``: one executed action of an answered query, with its feature values."""
+
+    kind: ClassVar[str] = "trial_executed"
+    query: int
+    trial: int
+    action: int
+    values: Annotated[dict[str, float], Recorded]
+    gait_id: Annotated[str | None, Recorded] = None
+
+
+class HyperValues(BaseModel):
+    """The hyperparameters before or after a refit."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    lengthscale: list[float]
+    signal_variance: float
+    jitter: float
+    tie_band: float | None
+
+
+class HyperparametersRefit(EventPayload):
+    """``hyperparameters_refit``: the evidence fit an answer triggered (``model/hyperfit.py``)."""
+
+    kind: ClassVar[str] = "hyperparameters_refit"
+    query: int
+    before: HyperValues
+    after: HyperValues
+    accepted: bool
+    converged: Annotated[bool, Recorded]
+    message: Annotated[str, Recorded]
+    evaluations: Annotated[int, Recorded]
+    failed_evaluations: Annotated[int, Recorded]
+    objective_before: Annotated[float | None, Recorded]
+    objective_after: Annotated[float | None, Recorded]
+    observations: Annotated[int, Recorded]
+
+
+class Undo(EventPayload):
+    """``undo``: the answer to ``query`` (its trials) is taken back."""
+
+    kind: ClassVar[str] = "undo"
+    query: int
+    trials: list[int]
+
+
+class TrialExcluded(EventPayload):
+    """``trial_excluded``: a trial's answers leave the model; the records stay, flagged."""
+
+    kind: ClassVar[str] = "trial_excluded"
+    trial: int
+    query: int
+    action: int
+    reason: Reason
+    detail: Annotated[str, Recorded] = ""
+
+
+class BlindGaitShown(BaseModel):
+    """One gait of a blind validation round: its label, action, role and posterior mean."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    label: str
+    action: int
+    role: str
+    posterior_mean: float
+
+
+class ValidationStarted(EventPayload):
+    """``validation_started``: the paper's blind validation (``validation.py``)."""
+
+    kind: ClassVar[str] = "validation_started"
+    round: int
+    gaits: list[BlindGaitShown]
+
+
+class ValidationAnswered(EventPayload):
+    """``validation_answered``: the subject's ranking and how it compares with the model's."""
+
+    kind: ClassVar[str] = "validation_answered"
+    round: int
+    ranking: list[str]
+    model_ranking: list[str]
+    agrees: bool
+    kendall_tau: float
+
+
+class Note(EventPayload):
+    """``note``: the operator's free text."""
+
+    kind: ClassVar[str] = "note"
+    text: str
+
+
+class Paused(EventPayload):
+    kind: ClassVar[str] = "paused"
+
+
+class Resumed(EventPayload):
+    kind: ClassVar[str] = "resumed"
+
+
+class Finished(EventPayload):
+    kind: ClassVar[str] = "finished"
+
+
+SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
+    Created,
+    QueryIssued,
+    TrialExecuted,
+    HyperparametersRefit,
+    Undo,
+    TrialExcluded,
+    ValidationStarted,
+    ValidationAnswered,
+    Note,
+    Paused,
+    Resumed,
+    Finished,
+)
+_BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
+
+CREATED = Created.kind
+QUERY = QueryIssued.kind
+TRIAL = TrialExecuted.kind
+REFIT = HyperparametersRefit.kind
+UNDO = Undo.kind
+EXCLUDED = TrialExcluded.kind
+VALIDATION_STARTED = ValidationStarted.kind
+VALIDATION_ANSWERED = ValidationAnswered.kind
+NOTE = Note.kind
+PAUSED = Paused.kind
+RESUMED = Resumed.kind
+FINISHED = Finished.kind
+
+
+def payload_class(kind: str) -> type[EventPayload] | None:
+    """The payload class of event ``kind``: a session event's or a feedback kind's."""
+    found = _BY_KIND.get(kind)
+    if found is not None:
+        return found
+    feedback = kind_for_event(kind)
+    return None if feedback is None else feedback.payload_type
+
+
+def is_feedback(kind: str) -> bool:
+    """Whether events of ``kind`` store a feedback record."""
+    return kind_for_event(kind) is not None
+
+
+def is_answer_part(kind: str) -> bool:
+    """Whether events of ``kind`` belong to an answer's batch."""
+    return kind in (TRIAL, REFIT) or is_feedback(kind)
+
+
+def new_event(payload: EventPayload) -> NewEvent:
+    """The event that stores ``payload`` (validated when it was made)."""
+    return NewEvent(payload.kind, payload.to_json(), version=payload.version)
+
+
+def check_new(event: NewEvent, session_id: int) -> None:
+    """Validate an event about to be written (a payload built as a dict is checked too)."""
+    cls = payload_class(event.kind)
+    where = f"session {session_id}: new {event.kind} event"
+    if cls is None:
+        raise ReplayError(f"{where}: unknown event kind {event.kind!r}")
+    if event.version != cls.version:
+        raise ReplayError(f"{where}: payload version {event.version}, expected {cls.version}")
+    try:
+        cls.parse(event.payload, where)
+    except PayloadError as exc:
+        raise ReplayError(str(exc)) from None
+
+
+def read_payload(record: EventRecord) -> EventPayload:
+    """The validated payload of a stored event; :class:`ReplayError` names session, event and
+    field (an unknown kind, another schema version, a payload that does not validate)."""
+    where = f"session {record.session_id}, event {record.seq} ({record.kind})"
+    cls = payload_class(record.kind)
+    if cls is None:
+        raise ReplayError(
+            f"{where}: unknown event kind {record.kind!r} (written by a newer gaitpref, or by a "
+            "feedback kind that is not registered here?)"
+        )
+    if record.version != cls.version:
+        raise ReplayError(
+            f"{where}: payload schema version {record.version}; this gaitpref reads version "
+            f"{cls.version} of {record.kind!r}"
+        )
+    try:
+        return cls.parse(record.payload, where)
+    except PayloadError as exc:
+        raise ReplayError(f"{exc} (the stored event is left as it is)") from None
+
+
+def describe_mismatch(seq: int, kind: str, logged: dict[str, Any], derived: dict[str, Any]) -> str:
+    """One line per checked field that differs between the log and what replay re-derived."""
+    cls = payload_class(kind)
+    fields = cls.checked_fields() if cls else tuple(sorted(set(logged) | set(derived)))
+    lines = [
+        f"  {name}: log has {logged.get(name)!r}, replay gives {derived.get(name)!r}"
+        for name in fields
+        if logged.get(name) != derived.get(name)
+    ]
+    return f"event {seq} ({kind}):\n" + "\n".join(lines)
+
+
+def same_event(record: EventRecord, derived: NewEvent) -> bool:
+    """Whether the logged event and the re-derived one agree on every checked field."""
+    if derived.kind != record.kind:
+        return False
+    cls = payload_class(record.kind)
+    fields = cls.checked_fields() if cls is not None else ()
+    return all(record.payload.get(f) == derived.payload.get(f) for f in fields)
+
+
+__all__ = [
+    "SESSION_PAYLOADS",
+    "BlindGaitShown",
+    "Created",
+    "Finished",
+    "HyperValues",
+    "HyperparametersRefit",
+    "Note",
+    "Paused",
+    "QueryIssued",
+    "Resumed",
+    "TrialExcluded",
+    "TrialExecuted",
+    "Undo",
+    "ValidationAnswered",
+    "ValidationStarted",
+    "check_new",
+    "describe_mismatch",
+    "is_answer_part",
+    "is_feedback",
+    "new_event",
+    "payload_class",
+    "read_payload",
+    "same_event",
+]
