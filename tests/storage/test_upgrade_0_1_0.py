@@ -45,3 +45,37 @@ def test_replays_to_what_0_1_0_recorded(old_db: str, index: int) -> None:
         assert got[key] == want[key], key
     for key in ("pending", "validations", "notes"):
         assert got[key] == want[key], key
+
+
+def _rows(path: str) -> list[tuple[object, ...]]:
+    import sqlite3
+
+    with sqlite3.connect(path) as conn:
+        return conn.execute(
+            "SELECT session_id, seq, kind, payload, at FROM events ORDER BY session_id, seq"
+        ).fetchall()
+
+
+def test_needs_db_upgrade_first_and_the_upgrade_rewrites_no_event(old_db: str) -> None:
+    from gaitpref.storage import SchemaError
+
+    path = old_db.removeprefix("sqlite:///")
+    before = _rows(path)
+    with pytest.raises(SchemaError, match="gaitpref db upgrade"):
+        Session.open(old_db, 1)
+    assert _rows(path) == before  # refusing to open wrote nothing
+    _upgrade(old_db)
+    assert _rows(path) == before  # every stored event byte for byte
+    with Session.open(old_db, 1) as session:
+        assert {e.version for e in session.events()} == {1}
+
+
+def test_db_upgrade_from_the_cli(old_db: str) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    result = CliRunner().invoke(app, ["db", "upgrade", "--db", old_db])
+    assert result.exit_code == 0, result.output
+    with Session.open(old_db, EXPECTED["sessions"][1]["id"]) as session:
+        assert summary(session)["trials"] == EXPECTED["sessions"][1]["trials"]

@@ -7,10 +7,12 @@ An export folder is readable without gaitpref:
 - ``config.toml``: the config exactly as the session was given it (and the gait library it
   names, at the same relative path, when there is one);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
-  ``payload``);
+  ``version`` (the payload's schema version), ``payload``);
 - tables as CSV (``--format csv``) or JSON (``--format json``): ``trials``, ``comparisons`` (with
   ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
-  deviation of every action) and ``validation``.
+  deviation of every action) and ``validation``; and one table per other feedback kind the
+  session holds (its kind's :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``,
+  ``query``, the kind's columns, ``undone``, ``excluded``, ``at``).
 
 :func:`import_session` needs only the manifest, the config and the events: it replays them in
 memory first (checking every step and the exported posterior summary) and only then writes the
@@ -30,6 +32,7 @@ from typing import Any, Literal
 import numpy as np
 
 from gaitpref.errors import ExportError, ReplayError
+from gaitpref.feedback import kind_for_event
 from gaitpref.sessions.session import Session
 from gaitpref.storage import MemoryStorage, NewEvent, SessionSpec, Storage, open_storage
 from gaitpref.storage.base import check_status
@@ -61,7 +64,13 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
         "events.jsonl",
         "".join(
             json.dumps(
-                {"seq": e.seq, "kind": e.kind, "at": e.at.isoformat(), "payload": e.payload},
+                {
+                    "seq": e.seq,
+                    "kind": e.kind,
+                    "at": e.at.isoformat(),
+                    "version": e.version,
+                    "payload": e.payload,
+                },
                 allow_nan=False,
             )
             + "\n"
@@ -229,7 +238,29 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
         "suggestions": suggestions,
         "posterior": posterior,
         "validation": validation,
+        **_other_feedback(session, at),
     }
+
+
+def _other_feedback(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
+    """One table per feedback kind besides comparisons and suggestions, from its kind."""
+    tables: dict[str, list[dict[str, Any]]] = {}
+    for entry in session.feedback():
+        kind = kind_for_event(entry.kind)
+        if kind is None:
+            raise ExportError(f"event {entry.seq}: feedback kind {entry.kind!r} is not registered")
+        columns = kind.export_row(kind.payload_type.parse(entry.payload, entry.kind))
+        tables.setdefault(kind.export.name, []).append(
+            {
+                "seq": entry.seq,
+                "query": entry.query,
+                **{k: v for k, v in columns.items() if k != "query"},
+                "undone": entry.undone,
+                "excluded": entry.excluded,
+                "at": at.get(entry.seq),
+            }
+        )
+    return tables
 
 
 def _csv(rows: Sequence[dict[str, Any]]) -> str:
@@ -362,7 +393,8 @@ def _read_events(text: str) -> list[NewEvent]:
             row = json.loads(line)
             if row["seq"] != k:
                 raise ValueError(f"seq {row['seq']} where {k} was expected")
-            out.append(NewEvent(row["kind"], row["payload"], datetime.fromisoformat(row["at"])))
+            at = datetime.fromisoformat(row["at"])
+            out.append(NewEvent(row["kind"], row["payload"], at, row.get("version", 1)))
         except (ValueError, KeyError, TypeError) as exc:
             raise ExportError(f"events.jsonl line {k}: {exc}") from None
     if not out:

@@ -34,6 +34,7 @@ from gaitpref.sessions import events as log
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
+    FeedbackEntry,
     SessionQuery,
     SuggestionRecord,
     Trial,
@@ -409,6 +410,10 @@ class Session:
     def suggestions(self) -> list[SuggestionRecord]:
         """Every coactive suggestion ever given, with ``undone``/``excluded`` flags."""
         return list(self._state.suggestions_log)
+
+    def feedback(self) -> list[FeedbackEntry]:
+        """Answers of every other registered feedback kind, in order (undone ones flagged)."""
+        return list(self._state.feedback_log)
 
     def history(self) -> list[tuple[SessionQuery, Posterior]]:
         """Each answer in force with the posterior right after it (as it was then)."""
