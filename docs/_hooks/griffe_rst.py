@@ -68,6 +68,8 @@ def to_markdown(text: str) -> str:
 class RestToMarkdown(griffe.Extension):
     """Rewrite every docstring with :func:`to_markdown` as Griffe loads it."""
 
-    def on_instance(self, *, node: ast.AST | griffe.ObjectNode, obj: griffe.Object, **kwargs: Any) -> None:
+    def on_instance(
+        self, *, node: ast.AST | griffe.ObjectNode, obj: griffe.Object, **kwargs: Any
+    ) -> None:
         if obj.docstring is not None:
             obj.docstring.value = to_markdown(obj.docstring.value)
