@@ -2,7 +2,8 @@
 
 - ``benchmarks/results/*.md`` (outside ``docs/``) become pages under ``benchmarks/results/``, and
   a link to one from a page in ``docs/`` (``../benchmarks/results/core.md``, right on GitHub) is
-  pointed at that page, so both work.
+  pointed at that page, so both work.  Each is listed under Results > Speed benchmarks, named by
+  its first heading, so a new benchmark's results need no edit here.
 - The API reference of ``gaitpref.storage`` adds ``gaitpref.storage.testing`` (the storage contract
   suite) when that module exists.
 """
@@ -23,12 +24,32 @@ PULLED_IN = "benchmarks/results"  # a folder of the repository, pulled in under 
 _LINK = re.compile(r"(\]\()([^)\s#]+)(#[^)\s]*)?(\))")
 
 
-def on_files(files: Files, config: MkDocsConfig, **kwargs: Any) -> Files:
-    folder = ROOT / PULLED_IN
-    pages = sorted(folder.glob("*.md"))
+def _pulled_in() -> list[Path]:
+    pages = sorted((ROOT / PULLED_IN).glob("*.md"))
     if not pages:
-        raise FileNotFoundError(f"no pages in {folder} to pull into the site")
-    for path in pages:
+        raise FileNotFoundError(f"no pages in {ROOT / PULLED_IN} to pull into the site")
+    return pages
+
+
+def _title(path: Path) -> str:
+    first = path.read_text(encoding="utf-8").split("\n", 1)[0]
+    if not first.startswith("# "):
+        raise ValueError(f"{path} must start with a '# title' line (it names the page in the nav)")
+    return first.removeprefix("# ").strip()
+
+
+def on_config(config: MkDocsConfig, **kwargs: Any) -> MkDocsConfig:
+    """Every pulled-in page under Results > Speed benchmarks, named by its first heading."""
+    results = [s for s in config.nav or [] if isinstance(s, dict) and "Results" in s]
+    if len(results) != 1:
+        raise ValueError("mkdocs.yml's nav needs one 'Results' section for the benchmark pages")
+    section = [{_title(p): f"{PULLED_IN}/{p.name}"} for p in _pulled_in()]
+    results[0]["Results"].append({"Speed benchmarks": section})
+    return config
+
+
+def on_files(files: Files, config: MkDocsConfig, **kwargs: Any) -> Files:
+    for path in _pulled_in():
         files.append(File.generated(config, f"{PULLED_IN}/{path.name}", abs_src_path=str(path)))
     return files
 
