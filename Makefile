@@ -27,7 +27,7 @@ demo: $(RUNTIME_STAMP)
 	$(BIN)/gaitpref demo --out $(DEMO_OUT)
 
 ## test: lint, type-check and the whole test suite (installs PostgreSQL and Chromium as root)
-test: $(DEV_STAMP) system-deps lint typecheck pytest
+test: $(DEV_STAMP) system-deps lint typecheck pytest docs
 
 system-deps:
 	bash .ci/system-deps
@@ -41,6 +41,11 @@ typecheck: $(DEV_STAMP)
 
 pytest: $(DEV_STAMP)
 	$(BIN)/python -m pytest
+
+## docs: the documentation site, built offline into site/ (strict: a broken link or reference fails)
+.PHONY: docs
+docs: $(DEV_STAMP)
+	$(BIN)/mkdocs build --strict --site-dir site
 
 ## bench: speed benchmarks; results go to benchmarks/results/
 bench: $(RUNTIME_STAMP)
