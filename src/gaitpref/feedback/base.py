@@ -20,12 +20,14 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, ClassVar, Generic, Literal, Protocol, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, Literal, Protocol, TypeVar
 
 from gaitpref.errors import FeedbackError
-from gaitpref.model.likelihood import ActionLikelihood
 from gaitpref.payloads import EventPayload
 from gaitpref.space import Space
+
+if TYPE_CHECKING:  # the model's numerics load only when a loop fits
+    from gaitpref.model.likelihood import ActionLikelihood
 
 Source = Literal["comparison", "coactive"]
 

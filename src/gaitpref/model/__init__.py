@@ -23,6 +23,7 @@ from gaitpref.model.likelihood import (
     Probit,
     StackedActionLikelihood,
 )
+from gaitpref.model.ordinal import Ordinal, OrdinalLikelihood, rating_likelihood, rating_probabilities
 from gaitpref.model.posterior import Posterior
 
 __all__ = [
@@ -40,6 +41,8 @@ __all__ = [
     "OrderedProbit",
     "PairData",
     "PairLikelihood",
+    "Ordinal",
+    "OrdinalLikelihood",
     "Posterior",
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
@@ -50,4 +53,6 @@ __all__ = [
     "default_prior",
     "fit_hyperparameters",
     "laplace_evidence",
+    "rating_likelihood",
+    "rating_probabilities",
 ]

@@ -9,6 +9,7 @@ all actions (``posterior.py``).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import cached_property
 
 import numpy as np
@@ -18,6 +19,7 @@ from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
+from gaitpref.model.ordinal import Ordinal, rating_likelihood
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import IntArray, Space
 
@@ -47,7 +49,12 @@ class PreferenceGP:
     """
 
     def __init__(
-        self, space: Space, kernel: SquaredExponential, noise: float, sampler: str = "auto"
+        self,
+        space: Space,
+        kernel: SquaredExponential,
+        noise: float,
+        sampler: str = "auto",
+        ordinal: Ordinal | None = None,
     ) -> None:
         if not (np.isfinite(noise) and noise > 0):
             raise ValueError(f"preference noise must be positive, got {noise!r}")
@@ -56,6 +63,7 @@ class PreferenceGP:
         self.kernel = kernel
         self.noise = float(noise)
         self.sampler = resolve_sampler(sampler, len(space))
+        self.ordinal = ordinal
 
     @cached_property
     def engine(self) -> GridEngine:
@@ -63,7 +71,7 @@ class PreferenceGP:
 
     def prior(self) -> Posterior:
         """The prior as a :class:`Posterior` (no data)."""
-        return Posterior(self.space, self.kernel, None, self.engine)
+        return Posterior(self.space, self.kernel, None, self.engine, self.noise, self.ordinal)
 
     def posterior(
         self,
@@ -71,9 +79,12 @@ class PreferenceGP:
         losers: ArrayLike,
         noise: ArrayLike | None = None,
         *,
+        ratings: Sequence[tuple[int, object]] | None = None,
         init: Posterior | None = None,
     ) -> Posterior:
-        """Laplace posterior given preferences ``winners[k] > losers[k]`` (grid indices).
+        """Laplace posterior given preferences ``winners[k] > losers[k]`` (grid indices) and
+        ordinal ``ratings`` ``(action, label)`` (labels ``1..K`` or category names; needs the
+        model's ``ordinal``), all in one fit.
 
         ``noise`` overrides the default probit noise per comparison; ``init`` is a previous
         posterior whose mean warm-starts Newton's method.
@@ -88,7 +99,16 @@ class PreferenceGP:
             sigma = np.broadcast_to(np.asarray(noise, dtype=np.float64), w.shape).copy()
             if not np.all(np.isfinite(sigma) & (sigma > 0)):
                 raise ValueError("every comparison's noise must be positive and finite")
-        return self.posterior_from(w, loser_idx, Probit(sigma), init=init)
+        if not ratings:
+            return self.posterior_from(w, loser_idx, Probit(sigma), init=init)
+        if self.ordinal is None:
+            raise ValueError("ratings need PreferenceGP(..., ordinal=Ordinal(...))")
+        actions = _as_indices(self.space, [a for a, _ in ratings], "rating actions")
+        labels = [self.ordinal.label_index(label) for _, label in ratings]
+        lik = rating_likelihood(self.ordinal, self.kernel.variance, labels)
+        return self.posterior_from(
+            w, loser_idx, Probit(sigma), init=init, single=actions, single_likelihood=lik
+        )
 
     def posterior_from(
         self,
@@ -124,4 +144,4 @@ class PreferenceGP:
         fit = fit_laplace(
             k_vv, visited, a, b, likelihood, start, single=s, single_likelihood=single_likelihood
         )
-        return Posterior(self.space, self.kernel, fit, self.engine)
+        return Posterior(self.space, self.kernel, fit, self.engine, self.noise, self.ordinal)

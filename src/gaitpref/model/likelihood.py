@@ -100,7 +100,7 @@ class Probit:
         return out
 
 
-def _tie_ratios(
+def interval_ratios(
     lo: FloatArray, hi: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """For ``lo < hi`` with ``lo + hi <= 0``: ``log Z``, ``phi(hi) / Z``, ``phi(lo) / Z`` and
@@ -178,7 +178,7 @@ class OrderedProbit:
             sign = np.where(x[self.tie] >= 0.0, -1.0, 1.0)
             xm, et = -np.abs(x[self.tie]), e[self.tie]
             lo, hi = xm - et, xm + et
-            log_z, rho_hi, rho_lo, u_hi = _tie_ratios(lo, hi)
+            log_z, rho_hi, rho_lo, u_hi = interval_ratios(lo, hi)
             t1 = rho_hi - rho_lo
             # -d2: one minus a truncated normal's variance, in [0, 1]
             t2 = np.clip(-rho_hi * u_hi + rho_lo * (lo + 2.0 * rho_hi - rho_lo), -1.0, 0.0)

@@ -28,12 +28,14 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import solve_triangular
+from scipy.special import ndtr
 
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.kronecker import KroneckerPriorSampler
 from gaitpref.model.laplace import LaplaceMode
+from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
 
 #: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB.
@@ -59,6 +61,8 @@ class Posterior:
     kernel: SquaredExponential
     fit: LaplaceMode | None
     engine: GridEngine
+    noise: float | None = None  # the pairwise probit noise (preference_probability)
+    ordinal: Ordinal | None = None  # the rating model (rating_probabilities)
 
     @property
     def visited(self) -> IntArray:
@@ -112,6 +116,35 @@ class Posterior:
     @property
     def std(self) -> FloatArray:
         return np.sqrt(self.variance)
+
+    def covariance_at(self, actions: ArrayLike) -> FloatArray:
+        """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""
+        idx = np.asarray(actions, dtype=np.intp)
+        out: FloatArray = np.asarray(self.kernel.cross(self.space, idx, rows=idx), dtype=float)
+        if self.fit is None:
+            return out
+        P = solve_triangular(self.fit.chol_prior, self.cross.rows(idx).T, lower=True)
+        Q = solve_triangular(self.fit.chol_hessian, P, lower=True)
+        result: FloatArray = out - P.T @ P + Q.T @ Q
+        return result
+
+    def preference_probability(self, a: int, b: int) -> float:
+        """``P(a preferred to b)``: the probit with the noise and the posterior integrated out,
+        ``Phi((mu_a - mu_b) / sqrt(2 sigma^2 + var_a + var_b - 2 cov_ab))``."""
+        if self.noise is None:
+            raise ValueError("this posterior was made without a preference noise")
+        cov = self.covariance_at([a, b])
+        spread = 2.0 * self.noise**2 + cov[0, 0] + cov[1, 1] - 2.0 * cov[0, 1]
+        mean = self.mean_at([a, b])
+        return float(ndtr((mean[0] - mean[1]) / np.sqrt(max(spread, 1e-300))))
+
+    def rating_probabilities(self, actions: ArrayLike) -> FloatArray:
+        """``P(rating = k)`` for each of ``actions`` (``n x K``, ``model/ordinal.py``)."""
+        if self.ordinal is None:
+            raise ValueError("this posterior was made without an ordinal rating model")
+        idx = np.asarray(actions, dtype=np.intp).reshape(-1)
+        var = np.diag(self.covariance_at(idx)) if idx.size <= 64 else self.variance[idx]
+        return rating_probabilities(self.ordinal, self.kernel.variance, self.mean_at(idx), var)
 
     def covariance(self) -> FloatArray:
         """The dense ``A x A`` posterior covariance (small grids: ``O(A^2 m)`` time).
