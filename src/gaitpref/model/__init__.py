@@ -23,7 +23,12 @@ from gaitpref.model.likelihood import (
     Probit,
     StackedActionLikelihood,
 )
-from gaitpref.model.ordinal import Ordinal, OrdinalLikelihood, rating_likelihood, rating_probabilities
+from gaitpref.model.ordinal import (
+    Ordinal,
+    OrdinalLikelihood,
+    rating_likelihood,
+    rating_probabilities,
+)
 from gaitpref.model.posterior import Posterior
 
 __all__ = [
@@ -39,10 +44,10 @@ __all__ = [
     "LaplaceMode",
     "LogNormal",
     "OrderedProbit",
-    "PairData",
-    "PairLikelihood",
     "Ordinal",
     "OrdinalLikelihood",
+    "PairData",
+    "PairLikelihood",
     "Posterior",
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
