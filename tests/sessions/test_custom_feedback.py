@@ -33,7 +33,6 @@ from gaitpref.feedback import (
 )
 from gaitpref.payloads import EventPayload
 from gaitpref.sessions import export_session, import_session
-from gaitpref.space import Space
 
 NOISE = 0.02
 
@@ -68,11 +67,11 @@ class EffortKind(FeedbackKind[Effort]):
     payload_type: ClassVar[type[EventPayload]] = EffortGiven
     export: ClassVar[ExportTable] = ExportTable("efforts", ("query", "trial", "action", "score"))
 
-    def parse(self, space: Space, raw: object, query: QueryView, where: str) -> Effort:
+    def parse(self, raw: object, query: QueryView, context: ModelContext, where: str) -> Effort:
         if isinstance(raw, Effort):
             raw = (raw.action, raw.score)
         action, score = expect_fields(raw, ("action", "score"), where)
-        a = grid_index(space, action, where)
+        a = grid_index(context.space, action, where)
         if a not in query.actions:
             raise FeedbackError(f"{where}: action {a} was not executed in this query")
         if isinstance(score, bool) or not isinstance(score, int) or not 0 <= score <= 10:
@@ -93,7 +92,7 @@ class EffortKind(FeedbackKind[Effort]):
     ) -> GaussianEffort:
         return GaussianEffort(np.array([(5 - int(o.value)) / 100 for o in observations]))
 
-    def payload(self, record: Effort, query: TrialQuery, space: Space) -> EventPayload:
+    def payload(self, record: Effort, query: TrialQuery, context: ModelContext) -> EventPayload:
         return EffortGiven(
             query=query.id,
             trial=query.trial_of(record.action),

@@ -1,10 +1,11 @@
-"""Kinds of answers behind one interface: comparisons with ties, coactive suggestions, and any
-kind registered from outside.
+"""Kinds of answers behind one interface: comparisons with ties, coactive suggestions, ordinal
+ratings, and any kind registered from outside.
 
 A kind (:class:`FeedbackKind`, ``base.py``) is a record type, a check against its query, the
 likelihood terms it adds to the model (on a pair of actions or on a single action), a typed
 event payload and an export table.  ``comparison.py`` and ``suggestion.py`` are the paper's two
-kinds (Algorithm 1's matrix ``R`` and its coactive feedback); :func:`register` adds more.
+kinds (Algorithm 1's matrix ``R`` and its coactive feedback), ``rating.py`` ROIAL's ordinal
+ratings; :func:`register` adds more.
 
     loop.tell(query, [Comparison(a, b, "first"), Suggestion(a, "step_length", "+small")])
 """
@@ -31,6 +32,7 @@ from gaitpref.feedback.comparison import (
     ComparisonKind,
     Outcome,
 )
+from gaitpref.feedback.rating import Rating, RatingGiven, RatingKind
 from gaitpref.feedback.registry import (
     kind_for_event,
     kind_named,
@@ -43,6 +45,7 @@ from gaitpref.feedback.suggestion import Suggestion, SuggestionGiven, Suggestion
 
 register(ComparisonKind())
 register(SuggestionKind())
+register(RatingKind())
 
 __all__ = [
     "OUTCOMES",
@@ -58,6 +61,9 @@ __all__ = [
     "Outcome",
     "Preference",
     "QueryView",
+    "Rating",
+    "RatingGiven",
+    "RatingKind",
     "Source",
     "Suggestion",
     "SuggestionGiven",

@@ -28,6 +28,7 @@ from gaitpref.space import Space
 
 if TYPE_CHECKING:  # the model's numerics load only when a loop fits
     from gaitpref.model.likelihood import ActionLikelihood
+    from gaitpref.model.ordinal import Ordinal
 
 Source = Literal["comparison", "coactive"]
 
@@ -81,11 +82,13 @@ class Observations:
 
 @dataclass(frozen=True)
 class ModelContext:
-    """What a kind needs of the loop to make its terms."""
+    """What a kind needs of the loop to check its records and make its terms."""
 
     space: Space
     noise: float  # the probit noise of a comparison (sigma)
     coactive_weight: float = 1.0  # suggestions have noise sigma / coactive_weight
+    ordinal: Ordinal | None = None  # the rating scale, when the loop takes ratings
+    signal_variance: float = 1.0  # the kernel's, for thresholds set from the prior
 
 
 class QueryView(Protocol):
@@ -135,8 +138,9 @@ class FeedbackKind(ABC, Generic[R]):
     export: ClassVar[ExportTable]  # its table in exports
 
     @abstractmethod
-    def parse(self, space: Space, raw: object, query: QueryView, where: str) -> R:
-        """One record from a record or raw input, checked against ``query``.
+    def parse(self, raw: object, query: QueryView, context: ModelContext, where: str) -> R:
+        """One record from a record or raw input, checked against ``query`` (and the loop's
+        ``context``: its space, rating scale, ...).
 
         Raises :class:`~gaitpref.errors.FeedbackError` naming ``where`` and the problem.
         """
@@ -155,8 +159,9 @@ class FeedbackKind(ABC, Generic[R]):
         raise NotImplementedError(f"feedback kind {self.name!r} makes no single-action terms")
 
     @abstractmethod
-    def payload(self, record: R, query: TrialQuery, space: Space) -> EventPayload:
-        """The event payload that stores ``record`` (answering ``query``)."""
+    def payload(self, record: R, query: TrialQuery, context: ModelContext) -> EventPayload:
+        """The event payload that stores ``record`` (answering ``query``, told to a loop whose
+        ``context`` this is)."""
 
     @abstractmethod
     def from_payload(self, payload: EventPayload) -> R:

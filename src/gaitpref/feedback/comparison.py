@@ -27,7 +27,6 @@ from gaitpref.feedback.base import (
     grid_index,
 )
 from gaitpref.payloads import EventPayload, Recorded
-from gaitpref.space import Space
 
 Outcome = Literal["first", "second", "none"]
 OUTCOMES: tuple[Outcome, ...] = get_args(Outcome)
@@ -79,7 +78,8 @@ class ComparisonKind(FeedbackKind[Comparison]):
         ("query", "first_trial", "second_trial", "first", "second", "outcome"),
     )
 
-    def parse(self, space: Space, raw: object, query: QueryView, where: str) -> Comparison:
+    def parse(self, raw: object, query: QueryView, context: ModelContext, where: str) -> Comparison:
+        space = context.space
         if isinstance(raw, Comparison):
             raw = (raw.first, raw.second, raw.outcome)
         item = expect_fields(raw, ("first", "second", "outcome"), where, "(i, j, outcome)")
@@ -123,7 +123,7 @@ class ComparisonKind(FeedbackKind[Comparison]):
             return Observations(ties=(Tie(record.first, record.second, query_id),))
         return Observations()
 
-    def payload(self, record: Comparison, query: TrialQuery, space: Space) -> EventPayload:
+    def payload(self, record: Comparison, query: TrialQuery, context: ModelContext) -> EventPayload:
         return ComparisonAnswered(
             query=query.id,
             first=record.first,

@@ -1,7 +1,7 @@
 """The registry of feedback kinds: by name, by record type and by event kind.
 
-``comparison`` and ``suggestion`` are registered when :mod:`gaitpref.feedback` is imported; a
-kind defined elsewhere (a lab's own, a test's) becomes usable everywhere (the loop, sessions,
+``comparison``, ``suggestion`` and ``rating`` are registered when :mod:`gaitpref.feedback` is
+imported; a kind defined elsewhere (a lab's own, a test's) becomes usable everywhere (the loop, sessions,
 replay, exports) by :func:`register`.  Kinds keep their registration order: a loop fits an
 answer's terms kind by kind in that order, so a replay gives the same numbers.
 """
@@ -41,7 +41,7 @@ def register(kind: FeedbackKind[Any], *, replace: bool = False) -> FeedbackKind[
 
 def unregister(name: str) -> None:
     """Forget the kind called ``name`` (for tests that register their own)."""
-    if name in ("comparison", "suggestion"):
+    if name in ("comparison", "suggestion", "rating"):
         raise ValueError(f"the built-in feedback kind {name!r} cannot be removed")
     _BY_NAME.pop(name, None)
 

@@ -25,7 +25,7 @@ from gaitpref.feedback.base import (
     grid_index,
 )
 from gaitpref.payloads import EventPayload
-from gaitpref.space import MOVES, Move, Space
+from gaitpref.space import MOVES, Move
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,8 @@ class SuggestionKind(FeedbackKind[Suggestion]):
         "suggestions", ("query", "trial", "action", "feature", "move", "target")
     )
 
-    def parse(self, space: Space, raw: object, query: QueryView, where: str) -> Suggestion:
+    def parse(self, raw: object, query: QueryView, context: ModelContext, where: str) -> Suggestion:
+        space = context.space
         if isinstance(raw, Suggestion):
             raw = (raw.action, raw.feature, raw.move)
         item = expect_fields(raw, ("action", "feature", "move"), where)
@@ -102,14 +103,14 @@ class SuggestionKind(FeedbackKind[Suggestion]):
             preferences=(Preference(target, record.action, noise, "coactive", query_id),)
         )
 
-    def payload(self, record: Suggestion, query: TrialQuery, space: Space) -> EventPayload:
+    def payload(self, record: Suggestion, query: TrialQuery, context: ModelContext) -> EventPayload:
         return SuggestionGiven(
             query=query.id,
             trial=query.trial_of(record.action),
             action=record.action,
             feature=record.feature,
             move=record.move,
-            target=space.coactive_move(record.action, record.feature, record.move),
+            target=context.space.coactive_move(record.action, record.feature, record.move),
         )
 
     def from_payload(self, payload: EventPayload) -> Suggestion:

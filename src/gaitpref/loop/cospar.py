@@ -50,6 +50,7 @@ from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
+from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
@@ -128,6 +129,7 @@ class CoSpar:
         strategy: Strategy | None = None,
         learning: Learning | None = None,
         sampler: str = "auto",
+        ordinal: Ordinal | None = None,
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -136,7 +138,7 @@ class CoSpar:
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
         self.space = space
-        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler)
+        self.gp = PreferenceGP(space, kernel, noise, sampler=sampler, ordinal=ordinal)
         self.learning = Learning() if learning is None else learning
         band = self.learning.tie_band
         if self.learning.learns_band:
@@ -232,7 +234,7 @@ class CoSpar:
         """
         q = self._check_query(query)
         records = self._parse(q, answers, suggestions)
-        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
+        context = self.context()
         prefs: list[Preference] = []
         ties: list[Tie] = []
         singles: list[ActionObservation] = []
@@ -282,6 +284,7 @@ class CoSpar:
     ) -> list[tuple[FeedbackKind[Any], Hashable]]:
         """Every record checked by its kind, grouped by kind in registration order."""
         comparison, suggestion = kind_named("comparison"), kind_named("suggestion")
+        context = self.context()
         given: list[tuple[FeedbackKind[Any], object]] = []
         for item in answers:
             given.append((kind_of(item) or comparison, item))
@@ -296,8 +299,7 @@ class CoSpar:
             if not raw:
                 continue
             parsed = [
-                kind.parse(self.space, item, query, f"{kind.name} {n}")
-                for n, item in enumerate(raw)
+                kind.parse(item, query, context, f"{kind.name} {n}") for n, item in enumerate(raw)
             ]
             kind.check_all(parsed, query)
             out += [(kind, r) for r in parsed]
@@ -384,7 +386,7 @@ class CoSpar:
         kept = [o for a in answers for o in self._kept_singles(a)]
         if not kept:
             return None, None
-        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
+        context = self.context()
         actions: list[int] = []
         parts: list[tuple[int, ActionLikelihood]] = []
         for kind in kinds():
@@ -393,6 +395,16 @@ class CoSpar:
                 actions += [o.action for o in mine]
                 parts.append((len(mine), kind.action_likelihood(mine, context)))
         return np.asarray(actions, dtype=np.intp), StackedActionLikelihood(tuple(parts))
+
+    def context(self) -> ModelContext:
+        """What feedback kinds see of this loop: its space, noises and rating scale."""
+        return ModelContext(
+            self.space,
+            self.gp.noise,
+            self.coactive_weight,
+            self.gp.ordinal,
+            self.gp.kernel.variance,
+        )
 
     def _check_query(self, query: Query | int) -> Query:
         qid = query.id if isinstance(query, Query) else query
@@ -408,7 +420,13 @@ class CoSpar:
         return self.pending
 
     def _gp(self, hyper: Hyperparameters) -> PreferenceGP:
-        return PreferenceGP(self.space, hyper.kernel(), self.gp.noise, sampler=self.gp.sampler)
+        return PreferenceGP(
+            self.space,
+            hyper.kernel(),
+            self.gp.noise,
+            sampler=self.gp.sampler,
+            ordinal=self.gp.ordinal,
+        )
 
     def _data(self, answers: list[Answer]) -> PairData:
         prefs = [p for a in answers for p in self._kept(a)]

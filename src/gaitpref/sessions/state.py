@@ -27,7 +27,7 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError, SessionStateError
-from gaitpref.feedback import Comparison, ModelContext, Preference, Suggestion, kind_of
+from gaitpref.feedback import Comparison, Preference, Suggestion, kind_of
 from gaitpref.loop.cospar import Answer, CoSpar, QueryError
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import (
@@ -170,10 +170,11 @@ class SessionState:
             )
             for t, a in zip(query.trials, query.actions, strict=True)
         ]
+        context = self.loop.context()
         for record in answer.records:
             kind = kind_of(record)
             assert kind is not None  # the loop took it, so its kind is registered
-            events.append(log.new_event(kind.payload(record, query, space)))
+            events.append(log.new_event(kind.payload(record, query, context)))
         if answer.refit is not None:
             refit = log.HyperparametersRefit.parse(
                 {"query": query.id, **answer.refit.to_json()}, "hyperparameters_refit"
@@ -418,7 +419,7 @@ class SessionState:
                 self.suggestions_log[k] = replace(s, excluded=True)
         if told.feedback_rows:
             others = [r for r in told.answer.records if not isinstance(r, Comparison | Suggestion)]
-            context = ModelContext(self.config.space, self.loop.gp.noise, self.loop.coactive_weight)
+            context = self.loop.context()
             for k, record in zip(told.feedback_rows, others, strict=True):
                 kind = kind_of(record)
                 assert kind is not None
