@@ -1,8 +1,8 @@
 """The registry of feedback kinds: by name, by record type and by event kind.
 
 ``comparison``, ``suggestion`` and ``rating`` are registered when :mod:`gaitpref.feedback` is
-imported; a kind defined elsewhere (a lab's own, a test's) becomes usable everywhere (the loop, sessions,
-replay, exports) by :func:`register`.  Kinds keep their registration order: a loop fits an
+imported; a kind defined elsewhere (a lab's own, a test's) becomes usable everywhere (the
+loop, sessions, replay, exports) by :func:`register`.  Kinds keep their registration order: a loop fits an
 answer's terms kind by kind in that order, so a replay gives the same numbers.
 """
 
