@@ -2,8 +2,8 @@
 
 ``comparison``, ``suggestion`` and ``rating`` are registered when :mod:`gaitpref.feedback` is
 imported; a kind defined elsewhere (a lab's own, a test's) becomes usable everywhere (the
-loop, sessions, replay, exports) by :func:`register`.  Kinds keep their registration order: a loop fits an
-answer's terms kind by kind in that order, so a replay gives the same numbers.
+loop, sessions, replay, exports) by :func:`register`.  Kinds keep their registration order: a
+loop fits an answer's terms kind by kind in that order, so a replay gives the same numbers.
 """
 
 from __future__ import annotations
