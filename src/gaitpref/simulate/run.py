@@ -1,4 +1,5 @@
-"""One simulated CoSpar experiment: a loop, a simulated user, optional coactive feedback.
+"""One simulated CoSpar experiment: a loop, a simulated user, optional coactive feedback and
+optional ordinal ratings (``raters.py``).
 
 A *trial* is one executed action (the paper's Fig. 4 x-axis): ``n = 2`` gives 75 iterations of 2
 trials for 150 trials.  The score of a trial is the normalised objective of its action,
@@ -12,8 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.posterior import Posterior
+from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import FloatArray, IntArray
 
@@ -26,6 +29,7 @@ class SimulationResult:
     normalized_objective: FloatArray
     posterior: Posterior
     argmax_normalized_objective: float  # of the final posterior mean's argmax
+    ratings: IntArray | None = None  # per trial, when a rater rated (1 = worst category)
 
     @property
     def posterior_argmax(self) -> int:
@@ -39,6 +43,7 @@ class SimulationResult:
             "normalized_objective": self.normalized_objective.tolist(),
             "posterior_argmax": self.posterior_argmax,
             "posterior_argmax_normalized_objective": self.argmax_normalized_objective,
+            **({} if self.ratings is None else {"ratings": self.ratings.tolist()}),
         }
 
 
@@ -48,18 +53,26 @@ def run_simulation(
     trials: int,
     coactive: GradientCoactive | None = None,
     progress: Callable[[int], None] | None = None,
+    rater: OrdinalRater | None = None,
 ) -> SimulationResult:
     """Run ``loop`` against ``user`` until ``trials`` actions have been executed.
 
-    ``progress`` is called with the number of trials done after every iteration.
+    ``rater`` also rates every executed action (the loop needs a rating scale with as many
+    categories).  ``progress`` is called with the number of trials done after every iteration.
     """
     if trials < 1:
         raise ValueError(f"trials must be >= 1, got {trials}")
     executed: list[int] = []
+    rated: list[int] = []
     while len(executed) < trials:
         query = loop.ask()
         suggestions = [] if coactive is None else coactive.suggest_all(query.actions)
-        loop.tell(query, user.answer(query), suggestions)
+        answers: list[object] = list(user.answer(query))
+        if rater is not None:
+            ratings = {r.action: int(r.label) for r in rater.rate_all(query.actions)}
+            answers += [Rating(a, k) for a, k in ratings.items()]
+            rated.extend(ratings[a] for a in query.actions)
+        loop.tell(query, answers, suggestions)
         executed.extend(query.actions)
         if progress is not None:
             progress(min(len(executed), trials))
@@ -70,4 +83,5 @@ def run_simulation(
         normalized_objective=user.normalized(actions),
         posterior=posterior,
         argmax_normalized_objective=float(user.normalized([posterior.argmax])[0]),
+        ratings=None if rater is None else np.asarray(rated[:trials], dtype=np.intp),
     )

@@ -1,0 +1,60 @@
+"""Simulated ordinal raters: categories at the objective's quantiles, noise near the boundaries,
+and simulations that rate every executed gait."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitpref import CoSpar, SimulatedUser, load_config, run_simulation
+from gaitpref.model.ordinal import Ordinal
+from gaitpref.simulate.raters import OrdinalRater
+
+
+def test_noiseless_ratings_split_the_grid_at_the_quantiles() -> None:
+    space = load_config("synthetic-2d").space
+    objective = np.random.default_rng(0).normal(size=len(space))
+    rater = OrdinalRater(space, objective, (0.25, 0.5, 0.75), np.random.default_rng(1))
+    ratings = np.array([rater.rate(a) for a in range(len(space))])
+    shares = np.bincount(ratings, minlength=5)[1:] / len(space)
+    assert np.allclose(shares, 0.25, atol=1.5 / len(space))
+    best, worst = int(np.argmax(objective)), int(np.argmin(objective))
+    assert rater.rate(best) == 4 and rater.rate(worst) == 1
+
+
+def test_noise_blurs_only_near_the_boundaries() -> None:
+    space = load_config("synthetic-2d").space
+    objective = np.linspace(0.0, 1.0, len(space))
+    rater = OrdinalRater(space, objective, (0.5,), np.random.default_rng(2), noise=0.05)
+    near = int(np.argmin(np.abs(rater.utility - rater.boundaries[0])))
+    assert {rater.rate(near) for _ in range(200)} == {1, 2}
+    assert {rater.rate(len(space) - 1) for _ in range(200)} == {2}
+
+
+def test_bad_quantiles_are_refused() -> None:
+    space = load_config("synthetic-2d").space
+    for q in [(), (0.5, 0.5), (0.0, 0.5), (0.7, 0.3), (1.0,)]:
+        with pytest.raises(ValueError, match="quantiles"):
+            OrdinalRater(space, np.zeros(len(space)), q, np.random.default_rng(0))
+
+
+def test_a_simulation_rates_every_trial_and_the_ratings_enter_the_model() -> None:
+    cfg = load_config("exo-1d-step-length")
+    objective = -((cfg.space.points[:, 0] - 0.12) ** 2)
+    ordinal = Ordinal(["very bad", "bad", "okay", "good"], noise=0.02)
+
+    def run(rated: bool) -> object:
+        loop = CoSpar(cfg.space, cfg.kernel, cfg.noise, n=1, buffer=1, seed=3, ordinal=ordinal)
+        user = SimulatedUser(cfg.space, objective, np.random.default_rng(4))
+        rater = (
+            OrdinalRater(cfg.space, objective, (0.25, 0.5, 0.75), np.random.default_rng(5))
+            if rated
+            else None
+        )
+        return run_simulation(loop, user, 12, rater=rater)
+
+    with_ratings, without = run(True), run(False)
+    assert len(with_ratings.ratings) == 12 and set(with_ratings.ratings) <= {1, 2, 3, 4}
+    assert with_ratings.to_json()["ratings"] == with_ratings.ratings.tolist()
+    assert without.ratings is None and "ratings" not in without.to_json()
+    assert not np.allclose(with_ratings.posterior.mean, without.posterior.mean)
