@@ -41,11 +41,11 @@ def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
     Session.create(url, CONFIG, "S01", seed=seed).close()
     child = _spawn("session", "run", "1", "--db", url)
     child.expect("Session 1, subject S01, exo-1d-step-length: 0 trials so far")
-    child.expect(r"Trial 1: run step_length=")
+    child.expect(r"Trial 1: run G\d+ \(step_length=")
     _answer(child, None, "2")  # trial 1: slightly longer
     child.expect("saved: trial 1")
-    child.expect(r"Trial 2: run step_length=\S+ m")
-    child.expect(r"compare with trial 1: step_length=")
+    child.expect(r"Trial 2: run G\d+ \(step_length=\S+ m\)")
+    child.expect(r"compare with trial 1: G\d+ \(step_length=")
     child.expect(r"Trial 2 against trial 1: 1 this one")
     child.sendline("7")  # not a key
     child.expect("'7' is not one of: 1, 2, 0, u, q")
@@ -53,6 +53,8 @@ def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
     child.expect("saved: trial 2")
     child.expect("Trial 3: run")
     child.sendline("u")  # the operator pressed the wrong key on trial 2
+    child.expect(r"Undo the last answer \(trial 2\)\?  y yes, n no")
+    child.sendline("y")
     child.expect("Undone: the answer to trial 2 is asked again")
     child.expect("Trial 2: run")
     _answer(child, "2", "4")  # the previous one was better; shorter
