@@ -30,6 +30,7 @@ from typing import NoReturn, TypeVar
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from gaitpref import errors
 
@@ -65,17 +66,21 @@ def exit_for(exc: BaseException) -> tuple[str, int]:
 
 def fail(message: str, code: int = 2) -> NoReturn:
     """Print ``error: message`` on stderr and exit with ``code`` (2: the input was refused)."""
-    err_console.print(f"[bold red]error:[/] {message}", highlight=False, markup=True)
+    _print_error("error", message)
     raise typer.Exit(code)
 
 
 def report(exc: BaseException) -> NoReturn:
     """Print ``exc`` as :func:`exit_for` says and exit with its status."""
     line, code = exit_for(exc)
-    label, _, rest = line.partition(": ")
-    err_console.print(f"[bold red]{label}:[/] ", end="", markup=True)
-    err_console.print(rest, markup=False, highlight=False)
+    label, _, message = line.partition(": ")
+    _print_error(label, message)
     raise typer.Exit(code)
+
+
+def _print_error(label: str, message: str) -> None:
+    # the message is printed as is: brackets in it (``[model]``, ``gaitpref[console]``) are text
+    err_console.print(f"[bold red]{label}:[/] {escape(message)}")
 
 
 def guard(fn: Callable[[], T]) -> T:
