@@ -58,6 +58,13 @@ def test_import_gaitpref_loads_only_the_errors(tmp_path: Path) -> None:
     assert {m for m in modules if m.startswith("gaitpref")} == {"gaitpref", "gaitpref.errors"}
 
 
+def test_the_storage_contract_suite_needs_pytest_only_when_imported(tmp_path: Path) -> None:
+    modules, _, _ = loaded(tmp_path, "import gaitpref.storage")
+    assert "pytest" not in modules and "gaitpref.storage.testing" not in modules
+    modules, _, _ = loaded(tmp_path, "import gaitpref.storage.testing")
+    assert "pytest" in modules
+
+
 def test_the_probe_sees_what_a_public_name_loads(tmp_path: Path) -> None:
     # the check above can fail: the first use of a name loads its module and what it needs
     modules, _, _ = loaded(tmp_path, "import gaitpref; gaitpref.CoSpar; gaitpref.Session")
