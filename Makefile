@@ -12,10 +12,12 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -qq --upgrade pip
 
+# the runtime and the operator console (the `console` extra): what `make demo` and its hints use
 $(RUNTIME_STAMP): pyproject.toml | $(VENV)/bin/python
-	$(BIN)/pip install -qq -e .
+	$(BIN)/pip install -qq -e '.[console]'
 	touch $@
 
+# the test tools; `dev` includes the `console` extra
 $(DEV_STAMP): pyproject.toml | $(VENV)/bin/python
 	$(BIN)/pip install -qq -e '.[dev]'
 	touch $@ $(RUNTIME_STAMP)

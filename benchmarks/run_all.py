@@ -1,4 +1,5 @@
-"""Run every speed benchmark (``benchmarks/bench_*.py``); each records its results in results/."""
+"""Run every speed benchmark (``benchmarks/bench_*.py``: console, core, gaits, large, sessions,
+startup, sweeps); each records its results in results/."""
 
 from __future__ import annotations
 

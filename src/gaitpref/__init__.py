@@ -11,12 +11,16 @@ The public API::
                            learning=gaitpref.Learning(fit="evidence", refit_every=20))
     config = gaitpref.load_config("exo-1d-step-length")                    # or a TOML path
     session = gaitpref.Session.create("sqlite:///lab.db", config, subject="S01")  # durable
+
+Every name is loaded on first use (a module ``__getattr__``, PEP 562): ``import gaitpref`` itself
+loads only the error classes, so the ``gaitpref`` command starts without SciPy's optimizers,
+SQLAlchemy, matplotlib or a web framework (``tests/cli/test_startup.py``).
 """
 
 from typing import TYPE_CHECKING, Any
 
-from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
 from gaitpref.errors import (
+    ConfigError,
     ConvergenceError,
     FeedbackError,
     GaitLibraryError,
@@ -26,39 +30,70 @@ from gaitpref.errors import (
     SessionStateError,
     StorageError,
 )
-from gaitpref.feedback import Comparison, Preference, Suggestion, Tie
-from gaitpref.loop import Answer, CoSpar, Learning, Query
-from gaitpref.model import Posterior, PreferenceGP, SquaredExponential
-from gaitpref.simulate.noisy import IndifferentUser
-from gaitpref.simulate.run import SimulationResult, run_simulation
-from gaitpref.simulate.users import GradientCoactive, SimulatedUser
-from gaitpref.space import MOVES, Feature, Move, Space
-from gaitpref.strategies import STRATEGIES, Strategy, make_strategy
 
 if TYPE_CHECKING:
+    from gaitpref.config import ExperimentConfig, load_config, shipped_configs
+    from gaitpref.feedback import Comparison, Preference, Suggestion, Tie
     from gaitpref.gaits import GaitLibrary
+    from gaitpref.loop import Answer, CoSpar, Learning, Query
+    from gaitpref.model import Posterior, PreferenceGP, SquaredExponential
     from gaitpref.sessions import REASONS, Session, SessionQuery
+    from gaitpref.simulate.noisy import IndifferentUser
+    from gaitpref.simulate.run import SimulationResult, run_simulation
+    from gaitpref.simulate.users import GradientCoactive, SimulatedUser
+    from gaitpref.space import MOVES, Feature, Move, Space
+    from gaitpref.strategies import STRATEGIES, Strategy, make_strategy
 
 __version__ = "0.1.0"
 
-# Heavier parts (gait optimization pulls scipy.optimize, sessions pull SQLAlchemy) load on first
-# use, so `import gaitpref` and the CLI start quickly.
+# name -> the module that defines it; imported on first access, then cached in globals().
 _LAZY = {
+    "ExperimentConfig": "gaitpref.config",
+    "load_config": "gaitpref.config",
+    "shipped_configs": "gaitpref.config",
+    "Comparison": "gaitpref.feedback",
+    "Preference": "gaitpref.feedback",
+    "Suggestion": "gaitpref.feedback",
+    "Tie": "gaitpref.feedback",
     "GaitLibrary": "gaitpref.gaits",
+    "Answer": "gaitpref.loop",
+    "CoSpar": "gaitpref.loop",
+    "Learning": "gaitpref.loop",
+    "Query": "gaitpref.loop",
+    "Posterior": "gaitpref.model",
+    "PreferenceGP": "gaitpref.model",
+    "SquaredExponential": "gaitpref.model",
+    "REASONS": "gaitpref.sessions",
     "Session": "gaitpref.sessions",
     "SessionQuery": "gaitpref.sessions",
-    "REASONS": "gaitpref.sessions",
+    "IndifferentUser": "gaitpref.simulate.noisy",
+    "SimulationResult": "gaitpref.simulate.run",
+    "run_simulation": "gaitpref.simulate.run",
+    "GradientCoactive": "gaitpref.simulate.users",
+    "SimulatedUser": "gaitpref.simulate.users",
+    "MOVES": "gaitpref.space",
+    "Feature": "gaitpref.space",
+    "Move": "gaitpref.space",
+    "Space": "gaitpref.space",
+    "STRATEGIES": "gaitpref.strategies",
+    "Strategy": "gaitpref.strategies",
+    "make_strategy": "gaitpref.strategies",
 }
 
 
 def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        import importlib
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'gaitpref' has no attribute {name!r}")
+    import importlib
 
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'gaitpref' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
 
 
 __all__ = [

@@ -2,22 +2,29 @@
 
 One iteration (n = 1, b = 1, the paper's protocol)::
 
-    Trial 5: run step_length=0.1371 m [gait g08]
-      compare with trial 4: step_length=0.1229 m
+    Trial 5: run g08 (step_length=0.1371 m)
+      compare with trial 4: g07 (step_length=0.1229 m)
     Trial 5 against trial 4: 1 this one, 2 the previous one, 0 no preference  (u undo, q quit)
     Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
     Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter
     saved: trial 5
 
-Each answer is one key and Enter.  ``u`` undoes the last answer (its trial is asked again), ``q``
-pauses the session and quits (``gaitpref session run ID`` resumes it).  Nothing is written before
-the operator confirms, and the answer is committed before the next trial is shown.  The loop only
-calls the public :class:`~gaitpref.sessions.session.Session` API.
+Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
+is asked again), ``q`` pauses the session and quits (``gaitpref session run ID [--db URL]``
+resumes it); so do Ctrl-C, a closed terminal (SIGHUP) and the end of input.  A signal that comes
+while an answer is being written lets the write finish first.  Nothing is written before the
+operator confirms (answers, undo and a validation ranking alike), and the answer is committed
+before the next trial is shown.  Gaits are named by their gait library id, or ``G<action>`` (as
+in the console) without a library.  The loop only calls the public
+:class:`~gaitpref.sessions.session.Session` API.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import contextlib
+import signal
+from collections.abc import Callable, Iterator
+from types import FrameType
 
 from rich.console import Console
 
@@ -41,6 +48,15 @@ class _UndoError(Exception):
     """The operator pressed u."""
 
 
+#: the signals that pause the session: Ctrl-C and a closed terminal
+PAUSE_SIGNALS = (signal.SIGINT, signal.SIGHUP)
+
+
+def gait_name(session: Session, action: int) -> str:
+    """The gait's library id, or ``G<action>`` without a library (as the console names it)."""
+    return session.gait_id(action) or f"G{action}"
+
+
 def _move_words(feature: Feature) -> tuple[str, str, str, str]:
     up, down = feature.words
     return (up, f"slightly {up}", f"slightly {down}", down)
@@ -49,20 +65,57 @@ def _move_words(feature: Feature) -> tuple[str, str, str, str]:
 class Terminal:
     """Runs a session interactively through ``read`` (default: ``input``) and a Rich console."""
 
-    def __init__(self, session: Session, console: Console | None = None, read: Reader = input):
+    def __init__(
+        self,
+        session: Session,
+        console: Console | None = None,
+        read: Reader = input,
+        resume: str | None = None,
+    ):
         self.session = session
         self.console = console or Console(highlight=False, soft_wrap=True)
         self._read = read
+        self.resume = resume or f"gaitpref session run {session.id}"
+        self._reading = False  # a pause signal now interrupts the read at once
+        self._signalled = False  # a pause signal came while writing: pause at the next read
 
     # -- input ---------------------------------------------------------------------------------
+    def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        if self._reading:
+            raise _QuitError
+        self._signalled = True
+
+    @contextlib.contextmanager
+    def pause_on_signals(self) -> Iterator[None]:
+        """Ctrl-C and SIGHUP pause the session (main thread only; elsewhere they are left be)."""
+        try:
+            previous = {sig: signal.signal(sig, self._on_signal) for sig in PAUSE_SIGNALS}
+        except ValueError:  # not the main thread: signal handlers cannot be set
+            yield
+            return
+        try:
+            yield
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+
+    def read(self) -> str:
+        """One line of input; a pause signal or the end of input quits (the session pauses)."""
+        if self._signalled:
+            raise _QuitError
+        self._reading = True
+        try:
+            return self._read("> ")
+        except (EOFError, KeyboardInterrupt):
+            raise _QuitError from None
+        finally:
+            self._reading = False
+
     def ask(self, prompt: str, allowed: dict[str, str], default: str | None = None) -> str:
         """Ask until one of ``allowed`` keys (or u/q) is given; returns the key."""
         while True:
             self.console.print(prompt, markup=False)
-            try:
-                raw = self._read("> ").strip().lower()
-            except EOFError:
-                raise _QuitError from None
+            raw = self.read().strip().lower()
             key = raw or (default or "")
             if key == "q":
                 raise _QuitError
@@ -84,20 +137,32 @@ class Terminal:
             f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and quit.",
             markup=False,
         )
-        try:
-            while True:
-                if s.validation_plan is not None:
-                    self.validate()
-                    return
-                try:
-                    self._one(s.next_query())
-                except _UndoError:
-                    self._undo()
-        except _QuitError:
-            s.pause()
-            self.console.print(f"Paused.  Resume with: gaitpref session run {s.id}", markup=False)
+        with self.pause_on_signals():
+            try:
+                while True:
+                    if s.validation_plan is not None:
+                        self.validate()
+                        return
+                    try:
+                        self._one(s.next_query())
+                    except _UndoError:
+                        self._undo()
+            except _QuitError:
+                self._pause()
+
+    def _pause(self) -> None:
+        """Pause the session, then say how to resume (the terminal may be gone: ignore that)."""
+        self.session.pause()
+        with contextlib.suppress(OSError):
+            self.console.print(f"Paused.  Resume with: {self.resume}", markup=False)
 
     def _undo(self) -> None:
+        answered = self.session.trials()
+        last = f" (trial {answered[-1].number})" if answered else ""
+        key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
+        if key == "n":
+            self.console.print("  not undone", markup=False)
+            return
         try:
             pending = self.session.undo()
         except SessionStateError as exc:
@@ -109,9 +174,9 @@ class Terminal:
     def _one(self, q: SessionQuery) -> None:
         s = self.session
         for t, a in zip(q.trials, q.actions, strict=True):
-            self.console.print(f"Trial {t}: run {s.describe(a)}", markup=False)
+            self.console.print(f"Trial {t}: run {self._gait(a)}", markup=False)
         for t, a in zip(q.buffer_trials, q.buffer, strict=True):
-            self.console.print(f"  compare with trial {t}: {s.describe(a)}", markup=False)
+            self.console.print(f"  compare with trial {t}: {self._gait(a)}", markup=False)
         while True:
             comparisons, said = self._comparisons(q)
             suggestions, words = self._suggestions(q)
@@ -126,6 +191,9 @@ class Terminal:
                 return
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
             return
+
+    def _gait(self, action: int) -> str:
+        return f"{gait_name(self.session, action)} ({self.session.config.space.describe(action)})"
 
     def _comparisons(self, q: SessionQuery) -> tuple[list[tuple[int, int, str]], list[str]]:
         out: list[tuple[int, int, str]] = []
@@ -190,19 +258,19 @@ class Terminal:
             markup=False,
         )
         for g in plan.gaits:
-            self.console.print(f"  Gait {g.label}: {s.describe(g.action)}", markup=False)
+            self.console.print(f"  Gait {g.label}: {self._gait(g.action)}", markup=False)
         while True:
             if ranking is None:
                 self.console.print(
                     f"The subject's ranking, best first (e.g. {''.join(plan.labels)}):",
                     markup=False,
                 )
-                try:
-                    given = self._read("> ").strip()
-                except EOFError:
-                    raise _QuitError from None
+                given = self.read().strip()
                 if given.lower() == "q":
                     raise _QuitError
+                key = self.ask(f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""})
+                if key == "n":
+                    continue
             else:
                 given = ranking
             try:
@@ -222,9 +290,14 @@ class Terminal:
         )
 
 
-def run_terminal(session: Session, console: Console | None = None, read: Reader = input) -> None:
-    """The interactive loop of ``gaitpref session run``."""
-    Terminal(session, console, read).run()
+def run_terminal(
+    session: Session,
+    console: Console | None = None,
+    read: Reader = input,
+    resume: str | None = None,
+) -> None:
+    """The interactive loop of ``gaitpref session run``; ``resume`` is the command it prints."""
+    Terminal(session, console, read, resume).run()
 
 
 def run_validation(
@@ -234,8 +307,10 @@ def run_validation(
     read: Reader = input,
 ) -> bool:
     """The blind validation of ``gaitpref session validate``; False if the operator quit."""
+    terminal = Terminal(session, console, read)
     try:
-        Terminal(session, console, read).validate(ranking)
+        with terminal.pause_on_signals():
+            terminal.validate(ranking)
     except (_QuitError, _UndoError):
         return False
     return True

@@ -43,10 +43,10 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
     assert info["trials"] == 6 and info["excluded"] == [3] and figure.stat().st_size > 10_000
     reopened = Session.open(db, 1)
     assert info["posterior"]["argmax"] == reopened.posterior().argmax
-    assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
-    assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--db", db)
-    _ok("session", "finish", "1", "--db", db)
-    assert "finished" in _fails("session", "undo", "1", "--db", db)
+    assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--yes", "--db", db)
+    assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--yes", "--db", db)
+    _ok("session", "finish", "1", "--yes", "--db", db)
+    assert "finished" in _fails("session", "undo", "1", "--yes", "--db", db)
     text = _ok("session", "show", "1", "--no-figure", "--db", db)
     assert "finished" in text and "5 trials (1 excluded)" in text and "validation 1" in text
 
@@ -77,10 +77,10 @@ def test_errors_are_clear_and_write_nothing(tmp_path: Path) -> None:
     assert not Path(db).exists()
     _ok("session", "new", "--config", CONFIG, "--subject", "S01", "--db", db)
     assert "no session 7" in _fails("session", "show", "7", "--db", db)
-    assert "nothing to undo" in _fails("session", "undo", "1", "--db", db)
+    assert "nothing to undo" in _fails("session", "undo", "1", "--yes", "--db", db)
     assert "reason must be one of" in _fails("session", "exclude", "1", "1", "--reason", "bored",
                                              "--db", db)  # fmt: skip
-    assert "flat" in _fails("session", "validate", "1", "--ranking", "ABC", "--db", db)
+    assert "flat" in _fails("session", "validate", "1", "--ranking", "ABC", "-y", "--db", db)
     with sqlite3.connect(db) as raw:
         assert raw.execute("SELECT count(*) FROM events").fetchone() == (1,)
         raw.execute("UPDATE alembic_version SET version_num = 'zzzz'")

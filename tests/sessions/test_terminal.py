@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -41,11 +42,11 @@ def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
     Session.create(url, CONFIG, "S01", seed=seed).close()
     child = _spawn("session", "run", "1", "--db", url)
     child.expect("Session 1, subject S01, exo-1d-step-length: 0 trials so far")
-    child.expect(r"Trial 1: run step_length=")
+    child.expect(r"Trial 1: run G\d+ \(step_length=")
     _answer(child, None, "2")  # trial 1: slightly longer
     child.expect("saved: trial 1")
-    child.expect(r"Trial 2: run step_length=\S+ m")
-    child.expect(r"compare with trial 1: step_length=")
+    child.expect(r"Trial 2: run G\d+ \(step_length=\S+ m\)")
+    child.expect(r"compare with trial 1: G\d+ \(step_length=")
     child.expect(r"Trial 2 against trial 1: 1 this one")
     child.sendline("7")  # not a key
     child.expect("'7' is not one of: 1, 2, 0, u, q")
@@ -53,13 +54,15 @@ def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
     child.expect("saved: trial 2")
     child.expect("Trial 3: run")
     child.sendline("u")  # the operator pressed the wrong key on trial 2
+    child.expect(r"Undo the last answer \(trial 2\)\?  y yes, n no")
+    child.sendline("y")
     child.expect("Undone: the answer to trial 2 is asked again")
     child.expect("Trial 2: run")
     _answer(child, "2", "4")  # the previous one was better; shorter
     child.expect("saved: trial 2")
     child.expect("Trial 3: run")
     child.sendline("q")
-    child.expect("Paused.  Resume with: gaitpref session run 1")
+    child.expect(f"Paused.  Resume with: gaitpref session run 1 --db {url}")
     child.expect(pexpect.EOF)
     child.close()
     assert child.exitstatus == 0
@@ -90,3 +93,49 @@ def test_a_few_trials_undo_and_quit_then_resume(tmp_path: Path) -> None:
     child.expect(pexpect.EOF)
     child.close()
     assert child.exitstatus == 0
+
+
+def test_ctrl_c_and_a_closed_terminal_pause_the_session(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, CONFIG, "S01", seed=5).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 1: run G\d+ \(step_length=")
+    _answer(child, None, "0")
+    child.expect("saved: trial 1")
+    child.expect(r"Trial 2 against trial 1")
+    child.sendintr()  # Ctrl-C
+    child.expect(f"Paused.  Resume with: gaitpref session run 1 --db {url}")
+    child.expect(pexpect.EOF)
+    child.close()
+    assert child.exitstatus == 0
+    with Session.open(url, 1) as s:
+        assert s.status == "paused" and len(s.trials()) == 1
+
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 2 against trial 1")
+    child.kill(signal.SIGHUP)  # the terminal window was closed
+    child.expect(pexpect.EOF)
+    child.close()
+    with Session.open(url, 1) as s:
+        assert s.status == "paused" and len(s.trials()) == 1
+        assert [e.kind for e in s.events()][-2:] == ["resumed", "paused"]
+
+
+def test_undo_in_the_terminal_asks_first(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, CONFIG, "S01", seed=5).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    _answer(child, None, "1")
+    child.expect("saved: trial 1")
+    child.expect(r"Trial 2 against trial 1")
+    child.sendline("u")
+    child.expect(r"Undo the last answer \(trial 1\)\?  y yes, n no")
+    child.sendline("n")
+    child.expect("not undone")
+    child.expect(r"Trial 2 against trial 1")  # asked again, nothing changed
+    child.sendline("q")
+    child.expect("Paused")
+    child.expect(pexpect.EOF)
+    child.close()
+    with Session.open(url, 1) as s:
+        assert [x.undone for x in s.suggestions()] == [False] and len(s.trials()) == 1

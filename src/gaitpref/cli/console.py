@@ -3,6 +3,9 @@
 On the loopback interface (the default, 127.0.0.1) no token is needed unless one is given.
 Listening anywhere else requires one: ``--token``, else ``$GAITPREF_TOKEN``, else a random token
 is generated and printed with the URL to open.
+
+The console's web dependencies (FastAPI, uvicorn, Jinja2, python-multipart) are the extra
+``gaitpref[console]``; without them this command says how to install them.
 """
 
 from __future__ import annotations
@@ -12,17 +15,15 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
-from gaitpref.console.security import TOKEN_ENV, new_token
+from gaitpref.cli.output import err_console as _out
+from gaitpref.cli.output import fail
+from gaitpref.console.security import TOKEN_ENV, new_token  # the standard library only
 
-console_app = typer.Typer(
-    help="Serve the operator console (a web page) for running sessions at the bench.",
-    invoke_without_command=True,
-    add_completion=False,
-)
 LOOPBACK = ("127.0.0.1", "localhost", "::1")
-_out = Console(stderr=True)
+#: the modules of the `console` extra; a missing one is reported with the install line
+WEB_MODULES = ("fastapi", "starlette", "uvicorn", "jinja2", "multipart", "python_multipart")
+INSTALL_HINT = "pip install 'gaitpref[console]'"
 
 
 def choose_token(host: str, token: str | None) -> str | None:
@@ -40,7 +41,6 @@ def console_url(host: str, port: int, token: str | None) -> str:
     return f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
 
 
-@console_app.callback()
 def serve(
     db: Annotated[
         str | None, typer.Option("--db", help="Database URL (default: $GAITPREF_DB or SQLite).")
@@ -60,9 +60,17 @@ def serve(
     ] = None,
 ) -> None:
     """Serve the operator console (FastAPI + uvicorn) over the session database."""
-    import uvicorn
+    try:
+        import uvicorn
 
-    from gaitpref.console.app import create_app
+        from gaitpref.console.app import create_app
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] not in WEB_MODULES:
+            raise
+        fail(
+            f"the console needs its web dependencies (module {exc.name!r} is not installed): "
+            f"{INSTALL_HINT}"
+        )
     from gaitpref.storage import resolve_url
 
     use_token = choose_token(host, token)

@@ -9,20 +9,15 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
+from gaitpref.cli.output import console, err_console
 from gaitpref.errors import GaitLibraryError, SimulationError
-from gaitpref.gaits.build import build_library
-from gaitpref.gaits.gait import HZDSettings
-from gaitpref.gaits.library import (
-    GaitLibrary,
-)
+
+if TYPE_CHECKING:
+    from gaitpref.gaits.library import GaitLibrary
 
 app = typer.Typer(
     help="Compass-gait HZD gaits and gait libraries.", no_args_is_help=True, add_completion=False
@@ -31,6 +26,8 @@ app = typer.Typer(
 
 def parse_range(text: str, option: str) -> tuple[float, ...]:
     """``"0.08:0.18:15"`` -> 15 equally spaced values; ``"0.2"`` -> one value."""
+    import numpy as np
+
     parts = text.split(":")
     try:
         if len(parts) == 1:
@@ -57,6 +54,8 @@ def _finite(value: float) -> float | None:
 
 
 def _load(path: Path) -> GaitLibrary:
+    from gaitpref.gaits.library import GaitLibrary
+
     try:
         return GaitLibrary.load(path, allow_infeasible=True)
     except GaitLibraryError as exc:
@@ -80,6 +79,17 @@ def build(
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Parallel processes.")] = 1,
 ) -> None:
     """Optimize one gait per grid point and write the library; exit 1 if any is infeasible."""
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
+    from gaitpref.gaits.build import build_library
+    from gaitpref.gaits.gait import HZDSettings
+
     if (step_duration is None) == (speed is None):
         raise typer.BadParameter("give exactly one of --step-duration and --speed")
     if speed is not None and not speed > 0:
@@ -94,14 +104,13 @@ def build(
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--degree") from None
     total = len(lengths) * (len(durations) if durations else 1)
-    console = Console(stderr=True)
     columns = (
         TextColumn("optimizing gaits"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns, console=console) as bar:
+    with Progress(*columns, console=err_console) as bar:
         task = bar.add_task("gaits", total=total)
         lib = build_library(
             lengths,
@@ -114,19 +123,21 @@ def build(
         )
     lib.save(out)
     bad = lib.infeasible()
-    console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
+    err_console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
     if bad:
         for i in bad:
-            console.print(f"[red]infeasible[/red] {lib.gait_id(i)}: {lib.gaits[i].message}")
+            err_console.print(f"[red]infeasible[/red] {lib.gait_id(i)}: {lib.gaits[i].message}")
         raise typer.Exit(code=1)
 
 
 @app.command()
 def show(
-    file: Annotated[Path, typer.Argument(help="Gait library file.")],
+    file: Annotated[Path, typer.Argument(metavar="FILE", help="Gait library file.")],
     as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
 ) -> None:
     """List the gaits of a library: parameters, duration, COT, delta^2, feasibility."""
+    from rich.table import Table
+
     lib = _load(file)
     if as_json:
         rows = [
@@ -164,12 +175,12 @@ def show(
             str(i), lib.gait_id(i), *params, f"{gait.step_duration:.4f}", cot,
             f"{gait.delta_squared:.4f}", ok,
         )  # fmt: skip
-    Console().print(table)
+    console.print(table)
 
 
 @app.command()
 def plot(
-    file: Annotated[Path, typer.Argument(help="Gait library file.")],
+    file: Annotated[Path, typer.Argument(metavar="FILE", help="Gait library file.")],
     ids: Annotated[
         list[str] | None,
         typer.Option("--id", help="Gait id to show (repeatable); default: least/median/most COT."),

@@ -1,48 +1,61 @@
-"""The ``gaitpref`` command line: thin commands over the public API."""
+"""The ``gaitpref`` command line: thin commands over the public API.
+
+The root app mounts its sub-apps (``session``/``db``, ``bench``, ``gaits``, ``console``) from
+modules that import only Typer at load time; every command imports what it needs when it runs, so
+``gaitpref --help`` loads no NumPy, SciPy, SQLAlchemy, matplotlib or web framework
+(``tests/cli/test_startup.py``, ``benchmarks/bench_startup.py``).
+"""
 
 from __future__ import annotations
 
 import json
 import time
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
 
 from gaitpref import __version__
-from gaitpref.cli.console import console_app
+from gaitpref.cli.console import serve as serve_console
+from gaitpref.cli.gaits import app as gaits_app
+from gaitpref.cli.output import console, err_console, fail, guard
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
-from gaitpref.config import ConfigError, ExperimentConfig, load_config, shipped_configs
-from gaitpref.simulate.run import SimulationResult, run_simulation
-from gaitpref.simulate.users import GradientCoactive, SimulatedUser, objective_on_grid
+
+if TYPE_CHECKING:
+    import numpy as np
+    from rich.progress import Progress
+
+    from gaitpref.config import ExperimentConfig
+    from gaitpref.simulate.run import SimulationResult
 
 app = typer.Typer(
     name="gaitpref",
     help="Personalize exoskeleton gaits from user preferences (CoSpar).",
     no_args_is_help=True,
     add_completion=False,
+    rich_markup_mode=None,
 )
-app.add_typer(console_app, name="console")
+# one command, not a group: `gaitpref console --help` lists its options, not `COMMAND [ARGS]`
+app.command(
+    "console", help="Serve the operator console (a web page) for running sessions at the bench."
+)(serve_console)
 app.add_typer(session_app, name="session")
 app.add_typer(db_app, name="db")
 app.add_typer(bench_app, name="bench")
-console = Console()
-err_console = Console(stderr=True)
-
-
-def fail(message: str, code: int = 2) -> NoReturn:
-    """Print an error that names the problem and exit with ``code``."""
-    err_console.print(f"[bold red]error:[/] {message}")
-    raise typer.Exit(code)
+app.add_typer(gaits_app, name="gaits")
 
 
 def progress_bar(transient: bool = False) -> Progress:
     """The Rich progress bar used by long commands."""
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
     return Progress(
         TextColumn("[bold]{task.description}"),
         BarColumn(),
@@ -54,13 +67,14 @@ def progress_bar(transient: bool = False) -> Progress:
 
 
 def _load_config_or_fail(source: str) -> ExperimentConfig:
-    try:
-        return load_config(source)
-    except ConfigError as exc:
-        fail(str(exc))
+    from gaitpref.config import load_config
+
+    return guard(lambda: load_config(source))
 
 
 def _load_objective(path: Path) -> np.ndarray:
+    import numpy as np
+
     if not path.is_file():
         fail(f"objective file {str(path)!r} does not exist")
     try:
@@ -81,6 +95,11 @@ def simulate_once(
     show_progress: bool = False,
 ) -> SimulationResult:
     """One simulated experiment with ``config`` against ``objective`` (seeded by ``seed``)."""
+    import numpy as np
+
+    from gaitpref.simulate.run import run_simulation
+    from gaitpref.simulate.users import GradientCoactive, SimulatedUser
+
     loop_seed, user_seed = np.random.SeedSequence(seed).spawn(2)
     loop = config.make_loop(seed=np.random.default_rng(loop_seed))
     user = SimulatedUser(
@@ -98,7 +117,9 @@ def simulate_once(
 
 @app.command()
 def simulate(
-    config: Annotated[str, typer.Argument(help="Config TOML file or shipped config name.")],
+    config: Annotated[
+        str, typer.Argument(metavar="CONFIG", help="Config TOML file or shipped config name.")
+    ],
     objective: Annotated[
         Path, typer.Option(help=".npy file: one utility per grid point, shaped like the grid.")
     ],
@@ -109,6 +130,10 @@ def simulate(
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Run one simulated CoSpar experiment against an objective over the config's grid."""
+    from rich.table import Table
+
+    from gaitpref.simulate.users import objective_on_grid
+
     cfg = _load_config_or_fail(config)
     obj = _load_objective(objective)
     try:
@@ -144,12 +169,16 @@ def simulate(
         f"posterior argmax: action {best} ({cfg.space.describe(best)}), normalized objective "
         f"{result.argmax_normalized_objective:.3f}"
     )
-    console.print(f"{elapsed:.2f} s")
+    console.print(f"simulated {trials} trials in {elapsed:.2f} s (wall clock)")
 
 
 @app.command("configs")
 def list_configs() -> None:
     """List the shipped experiment configs."""
+    from rich.table import Table
+
+    from gaitpref.config import load_config, shipped_configs
+
     table = Table(title="shipped configs")
     for col in ("name", "grid", "n", "b", "description"):
         table.add_column(col)
@@ -169,6 +198,7 @@ def demo(
     trials: Annotated[int, typer.Option(min=1)] = 150,
 ) -> None:
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
+    from gaitpref.config import load_config
     from gaitpref.data import paper_objectives
     from gaitpref.plots.posterior import posterior_picture, save_posterior_figure
 
@@ -206,15 +236,6 @@ def demo(
 def _norm(objective: np.ndarray, index: int) -> float:
     flat = objective.reshape(-1)
     return float((flat[index] - flat.min()) / (flat.max() - flat.min()))
-
-
-def _mount_subcommands() -> None:
-    from gaitpref.cli.gaits import app as gaits_app
-
-    app.add_typer(gaits_app, name="gaits")
-
-
-_mount_subcommands()
 
 
 def main() -> None:

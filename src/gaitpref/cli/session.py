@@ -8,35 +8,22 @@ status 2; nothing is written when a command fails.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, NoReturn, TypeVar
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
-from rich.table import Table
 
-from gaitpref.config import ConfigError
-from gaitpref.errors import ExportError, FeedbackError, ReplayError, SessionStateError
-from gaitpref.loop.cospar import QueryError
-from gaitpref.sessions.export import (
-    export_session,
-    import_session,
-)
-from gaitpref.sessions.records import (
-    REASONS,
-)
-from gaitpref.sessions.session import Session
-from gaitpref.storage import StorageError, migrate, resolve_url
+from gaitpref.cli.output import console, fail, guard
+
+if TYPE_CHECKING:
+    from gaitpref.sessions import Session
 
 session_app = typer.Typer(
     name="session", help="Experiment sessions with real subjects.", no_args_is_help=True
 )
 db_app = typer.Typer(name="db", help="The session database.", no_args_is_help=True)
-console = Console(highlight=False, soft_wrap=True)
-err_console = Console(stderr=True, highlight=False)
-T = TypeVar("T")
 
 DbOption = Annotated[
     str | None,
@@ -44,63 +31,66 @@ DbOption = Annotated[
         "--db", help="Database URL or SQLite path (default: $GAITPREF_DB, else ./gaitpref.db)."
     ),
 ]
-IdArgument = Annotated[int, typer.Argument(help="The session's id (see `gaitpref session list`).")]
-_ERRORS = (
-    StorageError,
-    SessionStateError,
-    QueryError,
-    FeedbackError,
-    ReplayError,
-    ConfigError,
-    ExportError,
-    ValueError,
-    TypeError,
-)
-
-
-def _fail(message: str) -> NoReturn:
-    err_console.print(f"[bold red]error:[/] {message}", highlight=False)
-    raise typer.Exit(2)
-
-
-def _guard(fn: Callable[[], T]) -> T:
-    try:
-        return fn()
-    except _ERRORS as exc:
-        _fail(str(exc))
+IdArgument = Annotated[
+    int, typer.Argument(metavar="ID", help="The session's id (see `gaitpref session list`).")
+]
+YesOption = Annotated[
+    bool, typer.Option("--yes", "-y", help="Do not ask for confirmation (for scripts).")
+]
 
 
 @contextmanager
 def _opened(db: str | None, session_id: int) -> Iterator[Session]:
-    session = _guard(lambda: Session.open(db, session_id))
+    from gaitpref.sessions import Session
+
+    session = guard(lambda: Session.open(db, session_id))
     try:
         yield session
     finally:
         session.close()
 
 
+def _confirm(question: str, yes: bool) -> None:
+    """Ask ``question`` (y/N) unless ``--yes`` was given; exit 1 with nothing done on no."""
+    if yes:
+        return
+    if not typer.confirm(question, default=False):
+        console.print("nothing done")
+        raise typer.Exit(1)
+
+
+def _resume_hint(session_id: int, db: str | None) -> str:
+    return f"gaitpref session run {session_id}" + (f" --db {db}" if db else "")
+
+
 # -- db ----------------------------------------------------------------------------------------
 @db_app.command("upgrade")
 def db_upgrade(db: DbOption = None) -> None:
     """Create the database, or migrate it to the schema this gaitpref writes."""
+    from gaitpref.storage import migrate, resolve_url
     from gaitpref.storage.sql import upgrade_database
 
     url = resolve_url(db)
     if url == "memory://":
-        _fail("an in-memory database needs no upgrade")
-    shown = _guard(lambda: upgrade_database(url))
+        fail("an in-memory database needs no upgrade")
+    shown = guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
 
 
 @db_app.command("status")
 def db_status(db: DbOption = None) -> None:
     """Show the database's URL, schema revision and number of sessions."""
+    from gaitpref.storage import migrate, open_storage, resolve_url
 
     def run() -> tuple[str, int, int]:
         url = resolve_url(db)
-        return url, len(Session.list_sessions(url)), len(Session.list_subjects(url))
+        storage = open_storage(url, create=False)
+        try:
+            return url, len(storage.list_sessions()), len(storage.list_subjects())
+        finally:
+            storage.close()
 
-    url, sessions, subjects = _guard(run)
+    url, sessions, subjects = guard(run)
     console.print(
         f"{url}: schema revision {migrate.head_revision()}, {sessions} sessions, "
         f"{subjects} subjects"
@@ -120,6 +110,7 @@ def new(
     db: DbOption = None,
 ) -> None:
     """Start a session of SUBJECT with CONFIG; prints its id."""
+    from gaitpref.sessions import Session
 
     def run() -> Session:
         library = None
@@ -129,11 +120,11 @@ def new(
             library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
         return Session.create(db, config, subject, seed=seed, library=library)
 
-    session = _guard(run)
+    session = guard(run)
     console.print(
         f"session {session.id}: subject {session.subject}, config {session.config.name}, "
         f"seed {session.seed}, in {session.storage.url}\n"
-        f"run it with: gaitpref session run {session.id}" + (f" --db {db}" if db else "")
+        f"run it with: {_resume_hint(session.id, db)}"
     )
     session.close()
 
@@ -144,7 +135,7 @@ def run_session(session_id: IdArgument, db: DbOption = None) -> None:
     from gaitpref.terminal import run_terminal
 
     with _opened(db, session_id) as session:
-        _guard(lambda: run_terminal(session, console))
+        guard(lambda: run_terminal(session, console, resume=_resume_hint(session_id, db)))
 
 
 @session_app.command("validate")
@@ -154,12 +145,15 @@ def validate(
         str | None, typer.Option(help="The subject's ranking, best first (e.g. BCA).")
     ] = None,
     db: DbOption = None,
+    yes: YesOption = False,
 ) -> None:
     """Blind validation: the max/mean/min gaits in a logged random order, then unblinding."""
     from gaitpref.terminal import run_validation
 
     with _opened(db, session_id) as session:
-        _guard(lambda: run_validation(session, ranking, console))
+        if ranking is not None:
+            _confirm(f"Record the ranking {ranking} for session {session_id}?", yes)
+        guard(lambda: run_validation(session, ranking, console))
 
 
 @session_app.command("list")
@@ -168,24 +162,33 @@ def list_sessions(
     db: DbOption = None,
 ) -> None:
     """List the sessions in the database."""
+    # The storage alone (not gaitpref.sessions, which loads the model): `session list` starts
+    # quickly, without SciPy's optimizers (tests/cli/test_startup.py).
+    from rich.table import Table
 
-    def run() -> list[object]:
-        return list(Session.list_sessions(db, subject))
+    from gaitpref.storage import SessionRecord, open_storage
 
-    rows = _guard(run)
+    def run() -> list[SessionRecord]:
+        storage = open_storage(db, create=False)
+        try:
+            return list(storage.list_sessions(subject))
+        finally:
+            storage.close()
+
+    rows = guard(run)
     table = Table(title="sessions")
     for col in ("id", "subject", "config", "seed", "status", "events", "created", "updated"):
         table.add_column(col)
     for r in rows:
         table.add_row(
-            str(r.id),  # type: ignore[attr-defined]
-            r.subject,  # type: ignore[attr-defined]
-            r.config_name,  # type: ignore[attr-defined]
-            str(r.seed),  # type: ignore[attr-defined]
-            r.status,  # type: ignore[attr-defined]
-            str(r.last_seq),  # type: ignore[attr-defined]
-            r.created_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
-            r.updated_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
+            str(r.id),
+            r.subject,
+            r.config_name,
+            str(r.seed),
+            r.status,
+            str(r.last_seq),
+            r.created_at.strftime("%Y-%m-%d %H:%M"),
+            r.updated_at.strftime("%Y-%m-%d %H:%M"),
         )
     console.print(table)
 
@@ -201,7 +204,7 @@ def show(
     db: DbOption = None,
 ) -> None:
     """Summarize a session and plot its posterior and trials (as in the paper's figures)."""
-    from gaitpref.sessions.export import posterior_summary
+    from gaitpref.sessions import posterior_summary
 
     with _opened(db, session_id) as session:
         summary = posterior_summary(session)
@@ -210,7 +213,7 @@ def show(
             from gaitpref.plots.session import save_session_figure
 
             target = figure or Path(f"session-{session.id}.png")
-            path = _guard(lambda: save_session_figure(session, target))
+            path = guard(lambda: save_session_figure(session, target))
         trials = session.trials()
         info = {
             "id": session.id,
@@ -255,44 +258,53 @@ def show(
 
 
 @session_app.command("undo")
-def undo(session_id: IdArgument, db: DbOption = None) -> None:
-    """Take back the last answer (its trial is asked again)."""
+def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) -> None:
+    """Take back the last answer (its trial is asked again); asks first unless --yes."""
     with _opened(db, session_id) as session:
-        pending = _guard(session.undo)
+        if session.status == "finished":
+            fail(f"session {session_id} is finished: nothing can be undone")
+        _confirm(f"Undo the last answer of session {session_id}?", yes)
+        pending = guard(session.undo)
         console.print(f"undone: the answer to trial {', '.join(map(str, pending.trials))}")
 
 
 @session_app.command("exclude")
 def exclude(
     session_id: IdArgument,
-    trial: Annotated[int, typer.Argument(help="The trial number.")],
-    reason: Annotated[str, typer.Option(help=f"One of {', '.join(REASONS)}.")],
+    trial: Annotated[int, typer.Argument(metavar="TRIAL", help="The trial number.")],
+    reason: Annotated[
+        str,
+        typer.Option(
+            help="Why (gaitpref.sessions.REASONS, e.g. device-fault; a wrong one lists them all)."
+        ),
+    ],
     detail: Annotated[str, typer.Option(help="What happened.")] = "",
     db: DbOption = None,
 ) -> None:
     """Exclude a trial (device fault, stumble, ...): its comparisons leave the model."""
     with _opened(db, session_id) as session:
-        _guard(lambda: session.exclude(trial, reason.replace("-", "_"), detail))
+        guard(lambda: session.exclude(trial, reason.replace("-", "_"), detail))
         console.print(f"trial {trial} excluded ({reason}); the record stays")
 
 
 @session_app.command("note")
 def note(
     session_id: IdArgument,
-    text: Annotated[str, typer.Argument(help="The note.")],
+    text: Annotated[str, typer.Argument(metavar="TEXT", help="The note.")],
     db: DbOption = None,
 ) -> None:
     """Log a note in the session."""
     with _opened(db, session_id) as session:
-        seq = _guard(lambda: session.note(text))
+        seq = guard(lambda: session.note(text))
         console.print(f"note logged as event {seq}")
 
 
 @session_app.command("finish")
-def finish(session_id: IdArgument, db: DbOption = None) -> None:
-    """Finish the session: it takes no more events."""
+def finish(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) -> None:
+    """Finish the session: it takes no more events; asks first unless --yes."""
     with _opened(db, session_id) as session:
-        _guard(session.finish)
+        _confirm(f"Finish session {session_id}? It will take no more answers.", yes)
+        guard(session.finish)
         console.print(f"session {session_id} finished")
 
 
@@ -304,20 +316,24 @@ def export(
     db: DbOption = None,
 ) -> None:
     """Export events, trials, comparisons and the posterior, with a manifest."""
+    from gaitpref.sessions import export_session
+
     if fmt not in ("csv", "json"):
-        _fail(f"--format must be csv or json, got {fmt!r}")
+        fail(f"--format must be csv or json, got {fmt!r}")
     with _opened(db, session_id) as session:
-        manifest = _guard(lambda: export_session(session, out, fmt))  # type: ignore[arg-type]
+        manifest = guard(lambda: export_session(session, out, fmt))  # type: ignore[arg-type]
         console.print(f"exported session {session_id} to {out} (manifest: {manifest.name})")
 
 
 @session_app.command("import")
 def import_(
-    folder: Annotated[Path, typer.Argument(help="An export folder.")],
+    folder: Annotated[Path, typer.Argument(metavar="FOLDER", help="An export folder.")],
     db: DbOption = None,
 ) -> None:
     """Rebuild a session from an export (checked by replay before anything is written)."""
-    session = _guard(lambda: import_session(db, folder))
+    from gaitpref.sessions import import_session
+
+    session = guard(lambda: import_session(db, folder))
     was = session.record.meta["imported_from"]["session_id"]
     console.print(f"imported as session {session.id} (was {was}) in {session.storage.url}")
     session.close()

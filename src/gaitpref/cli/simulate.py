@@ -11,23 +11,21 @@ Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``,
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.console import Console
 
-from gaitpref.simulate.compass import compass_gait_study, compass_objective, posterior_snapshots
-from gaitpref.simulate.paper2d import paper_2d_study, published_curves
-from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
-from gaitpref.simulate.study import Study
-from gaitpref.simulate.sweep import BACKENDS, StudyResult, resolve_jobs, run_study
-from gaitpref.simulate.tables import write_curves, write_table
+from gaitpref.cli.output import HANDLED, fail, guard, report
+from gaitpref.cli.output import err_console as _console
+
+if TYPE_CHECKING:
+    from gaitpref.simulate.study import Study
+    from gaitpref.simulate.sweep import StudyResult
 
 bench_app = typer.Typer(
     help="Reproduce the paper's simulation studies (sweeps over settings x objectives x seeds).",
     no_args_is_help=True,
 )
-_console = Console(stderr=True)
 
 Backend = Annotated[
     str,
@@ -54,23 +52,22 @@ def _integers(text: str, option: str) -> list[int]:
         raise ValueError(f"{option} must be comma-separated integers, got {text!r}") from None
 
 
-def _fail(message: str) -> typer.Exit:
-    _console.print(f"[red]error:[/red] {message}")
-    return typer.Exit(2)
-
-
 def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyResult:
+    from gaitpref.simulate.sweep import BACKENDS, run_study
+
     if backend not in BACKENDS:
-        raise _fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+        fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     try:
         return run_study(study, backend, jobs, address, progress=True, console=_console)
-    except (ValueError, RuntimeError) as exc:
-        raise _fail(str(exc)) from None
+    except HANDLED as exc:
+        report(exc)
+    except RuntimeError as exc:  # a Ray runtime that cannot start, a failed worker
+        fail(str(exc))
 
 
 def _table_path(out: Path, fmt: str) -> Path:
     if fmt not in ("csv", "csv.gz", "parquet"):
-        raise _fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
+        fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
     return out / f"runs.{fmt}"
 
 
@@ -94,11 +91,12 @@ def paper_2d(
     ] = None,
 ) -> None:
     """The paper's Fig. 4 study on the authors' 100 objectives, beside the published curves."""
-    try:
-        study = paper_2d_study(runs, trials, _split(settings), baseline, seed)
-        note_text = notes.read_text(encoding="utf-8") if notes is not None else ""
-    except (ValueError, OSError) as exc:
-        raise _fail(str(exc)) from None
+    from gaitpref.simulate.paper2d import paper_2d_study, published_curves
+    from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
+    from gaitpref.simulate.tables import write_curves, write_table
+
+    study = guard(lambda: paper_2d_study(runs, trials, _split(settings), baseline, seed))
+    note_text = guard(lambda: notes.read_text(encoding="utf-8") if notes is not None else "")
     table_path = _table_path(out, table)
     out.mkdir(parents=True, exist_ok=True)
     load_before = load_average()
@@ -143,6 +141,14 @@ def compass_gait(
     table: TableFormat = "csv",
 ) -> None:
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
+    from gaitpref.simulate.compass import (
+        compass_gait_study,
+        compass_objective,
+        posterior_snapshots,
+    )
+    from gaitpref.simulate.sweep import resolve_jobs
+    from gaitpref.simulate.tables import write_curves, write_table
+
     try:
         its = _integers(iterations, "--iterations")
         if objective not in ("poly", "hzd"):
@@ -160,7 +166,7 @@ def compass_gait(
         study = compass_gait_study(obj, runs, trials, baseline, seed)
         snapshots = posterior_snapshots(study, its)
     except ValueError as exc:
-        raise _fail(str(exc)) from None
+        report(exc)
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {obj.note}")
     table_path = _table_path(out, table)

@@ -1,0 +1,100 @@
+"""One Rich console and one error helper for the whole ``gaitpref`` command.
+
+Every command prints through :data:`console` (stdout) and :data:`err_console` (stderr), and turns
+errors into a message and an exit status in one place, :func:`exit_for`:
+
+==============================================  =====================  ======
+error family (:mod:`gaitpref.errors`)           printed as             status
+==============================================  =====================  ======
+:class:`~gaitpref.errors.ConfigError`           ``config error: ...``  2
+:class:`~gaitpref.errors.StorageError`          ``storage error: ...`` 2
+:class:`~gaitpref.errors.FeedbackError`,        ``answer refused: ...`` 2
+:class:`~gaitpref.errors.QueryError`
+:class:`~gaitpref.errors.SessionError`          ``session error: ...`` 2
+:class:`~gaitpref.errors.GaitError`             ``gait error: ...``    2
+:class:`~gaitpref.errors.ModelError`            ``model error: ...``   1
+any other :class:`~gaitpref.errors.GaitprefError`, ``error: ...``      2
+``ValueError``, ``TypeError``, ``OSError``
+==============================================  =====================  ======
+
+Status 2 means "the input was refused; nothing was written"; status 1 means a computation could
+not finish.  The message is always ``str(exc)``: the error classes name the table, key, session or
+event themselves, so the CLI never re-formats their arguments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import NoReturn, TypeVar
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+
+from gaitpref import errors
+
+T = TypeVar("T")
+
+console = Console(highlight=False, soft_wrap=True)
+err_console = Console(stderr=True, highlight=False, soft_wrap=True)
+
+#: (family, label, exit status), most specific first.
+FAMILIES: tuple[tuple[type[BaseException], str, int], ...] = (
+    (errors.ConfigError, "config error", 2),
+    (errors.StorageError, "storage error", 2),
+    (errors.FeedbackError, "answer refused", 2),
+    (errors.QueryError, "answer refused", 2),
+    (errors.SessionError, "session error", 2),
+    (errors.GaitError, "gait error", 2),
+    (errors.ModelError, "model error", 1),
+    (errors.GaitprefError, "error", 2),
+    (ValueError, "error", 2),
+    (TypeError, "error", 2),
+    (OSError, "error", 2),
+)
+HANDLED: tuple[type[BaseException], ...] = tuple(family for family, _, _ in FAMILIES)
+
+
+def exit_for(exc: BaseException) -> tuple[str, int]:
+    """The line to print and the exit status for ``exc`` (one of :data:`HANDLED`)."""
+    for family, label, code in FAMILIES:
+        if isinstance(exc, family):
+            return f"{label}: {exc}", code
+    raise TypeError(f"{type(exc).__name__} is not an error the CLI reports") from exc
+
+
+def fail(message: str, code: int = 2) -> NoReturn:
+    """Print ``error: message`` on stderr and exit with ``code`` (2: the input was refused)."""
+    _print_error("error", message)
+    raise typer.Exit(code)
+
+
+def report(exc: BaseException) -> NoReturn:
+    """Print ``exc`` as :func:`exit_for` says and exit with its status."""
+    line, code = exit_for(exc)
+    label, _, message = line.partition(": ")
+    _print_error(label, message)
+    raise typer.Exit(code)
+
+
+def _print_error(label: str, message: str) -> None:
+    # the message is printed as is: brackets in it (``[model]``, ``gaitpref[console]``) are text
+    err_console.print(f"[bold red]{label}:[/] {escape(message)}")
+
+
+def guard(fn: Callable[[], T]) -> T:
+    """``fn()``, reporting any handled error (:func:`report`) instead of a traceback."""
+    try:
+        return fn()
+    except HANDLED as exc:
+        report(exc)
+
+
+@contextmanager
+def reported() -> Iterator[None]:
+    """A block whose handled errors are reported (:func:`report`) instead of raised."""
+    try:
+        yield
+    except HANDLED as exc:
+        report(exc)

@@ -1,0 +1,74 @@
+"""Commands that take something back or close a session ask first (``--yes`` skips the question)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref import Session, load_config
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from tests.sessions.sessionkit import CONFIG
+
+runner = CliRunner()
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> str:
+    """A session with four answered trials (a simulated subject, seeded)."""
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    space = load_config(CONFIG).space
+    subject = SimulatedSubject(space, bump_utility(space), seed=1)
+    with Session.create(url, CONFIG, "S01", seed=2) as session:
+        for _ in range(4):
+            q = session.next_query()
+            session.answer(q.id, *subject.respond(q))
+    return url
+
+
+def _invoke(*args: str, answer: str | None = None) -> tuple[int, str]:
+    from gaitpref.cli import app
+
+    result = runner.invoke(app, list(args), input=answer)
+    return result.exit_code, result.output
+
+
+def _answers(db: str) -> int:
+    with Session.open(db, 1) as s:
+        return sum(not c.undone for c in s.comparisons())
+
+
+def test_undo_asks_and_no_keeps_the_answer(db: str) -> None:
+    before = _answers(db)
+    code, out = _invoke("session", "undo", "1", "--db", db, answer="n\n")
+    assert code == 1 and "Undo the last answer of session 1?" in out and "nothing done" in out
+    assert _answers(db) == before
+    code, out = _invoke("session", "undo", "1", "--db", db, answer="y\n")
+    assert code == 0 and "undone: the answer to trial 4" in out
+    assert _answers(db) == before - 1
+
+
+def test_undo_without_a_terminal_does_nothing_unless_yes(db: str) -> None:
+    before = _answers(db)
+    code, _ = _invoke("session", "undo", "1", "--db", db)  # no input: the question fails
+    assert code != 0 and _answers(db) == before
+    code, _ = _invoke("session", "undo", "1", "--db", db, "--yes")
+    assert code == 0 and _answers(db) == before - 1
+
+
+def test_finish_asks(db: str) -> None:
+    code, out = _invoke("session", "finish", "1", "--db", db, answer="n\n")
+    assert code == 1 and "It will take no more answers" in out
+    assert Session.open(db, 1).status != "finished"
+    code, _ = _invoke("session", "finish", "1", "--db", db, "-y")
+    assert code == 0 and Session.open(db, 1).status == "finished"
+
+
+def test_a_ranking_given_on_the_command_line_is_confirmed(db: str) -> None:
+    code, out = _invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, answer="n\n")
+    assert code == 1 and "Record the ranking ABC for session 1?" in out
+    assert Session.open(db, 1).validations() == []
+    code, out = _invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, answer="y\n")
+    assert code == 0 and "Unblinded" in out
+    assert len(Session.open(db, 1).validations()) == 1
