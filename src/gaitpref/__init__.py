@@ -33,10 +33,10 @@ from gaitpref.errors import (
 
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig, load_config, shipped_configs
-    from gaitpref.feedback import Comparison, Preference, Suggestion, Tie
+    from gaitpref.feedback import Comparison, Preference, Rating, Suggestion, Tie
     from gaitpref.gaits import GaitLibrary
     from gaitpref.loop import Answer, CoSpar, Learning, Query
-    from gaitpref.model import Posterior, PreferenceGP, SquaredExponential
+    from gaitpref.model import Ordinal, Posterior, PreferenceGP, SquaredExponential
     from gaitpref.sessions import REASONS, Session, SessionQuery
     from gaitpref.simulate.noisy import IndifferentUser
     from gaitpref.simulate.run import SimulationResult, run_simulation
@@ -53,6 +53,7 @@ _LAZY = {
     "shipped_configs": "gaitpref.config",
     "Comparison": "gaitpref.feedback",
     "Preference": "gaitpref.feedback",
+    "Rating": "gaitpref.feedback",
     "Suggestion": "gaitpref.feedback",
     "Tie": "gaitpref.feedback",
     "GaitLibrary": "gaitpref.gaits",
@@ -60,6 +61,7 @@ _LAZY = {
     "CoSpar": "gaitpref.loop",
     "Learning": "gaitpref.loop",
     "Query": "gaitpref.loop",
+    "Ordinal": "gaitpref.model",
     "Posterior": "gaitpref.model",
     "PreferenceGP": "gaitpref.model",
     "SquaredExponential": "gaitpref.model",
@@ -115,11 +117,13 @@ __all__ = [
     "IndifferentUser",
     "Learning",
     "Move",
+    "Ordinal",
     "Posterior",
     "Preference",
     "PreferenceGP",
     "Query",
     "QueryError",
+    "Rating",
     "ReplayError",
     "Session",
     "SessionQuery",
