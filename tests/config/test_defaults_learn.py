@@ -46,7 +46,7 @@ def test_a_config_with_only_space_and_model_asks_comparisons() -> None:
 def test_the_0_1_defaults_give_the_old_loop() -> None:
     assert parse_config(BARE, defaults="0.1").buffer == 0
     assert parse_config(BARE + "[cospar]\nbuffer = 1\n", defaults="0.1").buffer == 1
-    with pytest.raises(ConfigError, match="unknown config defaults version '9.9'"):
+    with pytest.raises(ConfigError, match=r"unknown config defaults version '9\.9'"):
         parse_config(BARE, defaults="9.9")
 
 

@@ -137,7 +137,7 @@ def test_a_hessian_that_cannot_be_factorised_is_a_convergence_error() -> None:
     first, second = np.array([0]), np.array([1])
     with (
         np.errstate(over="ignore"),
-        pytest.raises(ConvergenceError, match="Hessian .* cannot be factorised") as info,
+        pytest.raises(ConvergenceError, match=r"Hessian .* cannot be factorised") as info,
     ):
         fit_laplace(k_vv, np.array([0, 1]), first, second, Probit(np.array([1e-12])))
     assert not isinstance(info.value, LinAlgError)

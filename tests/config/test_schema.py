@@ -1,4 +1,4 @@
-"""The schema: one kind of error each, named by table and key (issue 15 item 9), and the defaults."""
+"""The schema: each kind of error names its table and key (issue 15 item 9); the defaults."""
 
 from __future__ import annotations
 
@@ -37,19 +37,19 @@ def _error(text: str) -> ConfigError:
             "cospar",
             "buffer",
             "[cospar].buffer: must be an integer >= 0, got -1",
-        ),  # fmt: skip
+        ),
         (
             SPACE + MODEL + "[cospar]\nn = 65\n",
             "cospar",
             "n",
             "[cospar].n: must be an integer <= 64, got 65",
-        ),  # fmt: skip
+        ),
         (
             SPACE + MODEL + "[cospar]\nseed = 1.5\n",
             "cospar",
             "seed",
             "[cospar].seed: must be an integer from 0 to",
-        ),  # fmt: skip
+        ),
         (
             SPACE + MODEL.replace("noise = 0.02", "noise = nan"),
             "model",
@@ -74,27 +74,27 @@ def _error(text: str) -> ConfigError:
             "space.x",
             "num",
             "[space.x].num: must be an integer from 1 to 1000000, got '11'",
-        ),  # fmt: skip
+        ),
         (SPACE + "unit = 3\n" + MODEL, "space.x", "unit", "[space.x].unit: must be text"),
         (
             SPACE + 'words = ["up"]\n' + MODEL,
             "space.x",
             "words",
             "[space.x].words: must be two words",
-        ),  # fmt: skip
+        ),
         (SPACE.replace("min = 0.0\n", "") + MODEL, "space.x", "min", "[space.x].min: missing"),
         (
             "[space.x]\nvalues = [0.1, 0.1]\n" + MODEL,
             "space.x",
             "values",
             "[space.x].values: the values must be strictly increasing",
-        ),  # fmt: skip
+        ),
         (
             "[space.x]\nvalues = []\n" + MODEL,
             "space.x",
             "values",
             "[space.x].values: must be a list of 1..1000000 numbers",
-        ),  # fmt: skip
+        ),
         ("[space]\n" + MODEL, "space", None, "[space]: needs one table per feature"),
         ("space = 3\n" + MODEL, "", "space", "space: must be a table"),
         (

@@ -59,33 +59,33 @@ def test_a_plain_strategy_name_still_works() -> None:
             None,
             "[cospar.strategy_settings]: unknown key 'gate' for "
             "strategy 'gated-eubo' (allowed: gates)",
-        ),  # fmt: skip
+        ),
         (
             "self-sparring",
             "beta = 1",
             None,
             "[cospar.strategy_settings]: unknown key 'beta' for strategy 'self-sparring' "
             "(allowed: none)",
-        ),  # fmt: skip
+        ),
         (
             "gated-eubo",
             "gates = 0",
             "gates",
             "[cospar.strategy_settings].gates: must be an integer >= 1, got 0",
-        ),  # fmt: skip
+        ),
         (
             "confident-eubo",
             "beta = -1.0",
             "beta",
             "[cospar.strategy_settings].beta: must be a finite number >= 0",
-        ),  # fmt: skip
+        ),
         ("confident-eubo", "beta = inf", "beta", "[cospar.strategy_settings].beta: must be"),
         (
             "eubo-then-sparring",
             "trials = 2.5",
             "trials",
             "[cospar.strategy_settings].trials: must be an integer",
-        ),  # fmt: skip
+        ),
     ],
 )
 def test_bad_settings_name_the_setting(
@@ -99,7 +99,7 @@ def test_bad_settings_name_the_setting(
 
 def test_make_strategy_names_the_setting() -> None:
     assert make_strategy("gated-eubo", gates=3) == GatedEubo(gates=3)
-    with pytest.raises(ValueError, match="strategy 'eubo' has no setting 'gates' .*candidates"):
+    with pytest.raises(ValueError, match=r"strategy 'eubo' has no setting 'gates' .*candidates"):
         make_strategy("eubo", gates=3)
     with pytest.raises(ValueError, match="unknown strategy 'ucb'"):
         make_strategy("ucb")
