@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from gaitpref import ConfigError, GaitprefError
 from gaitpref.config import parse_config
-from gaitpref.config.schema import place
+from gaitpref.config.specs import place
 
 PEAK_BYTES = 50_000_000
 

@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from gaitpref.config.schema import FEATURE, GAITS, MAX_FEATURES, check_table, fail
+from gaitpref.config.schema import FEATURE, GAITS, MAX_FEATURES, check_table
+from gaitpref.config.specs import fail
 from gaitpref.space import Feature, Space
 
 if TYPE_CHECKING:

@@ -13,16 +13,8 @@ from __future__ import annotations
 
 from typing import Any, cast
 
-from gaitpref.config.schema import (
-    MAX_SIGNAL_TO_NOISE,
-    MODEL,
-    PRIOR,
-    SCALE,
-    Key,
-    LogNormalPair,
-    check_table,
-    fail,
-)
+from gaitpref.config.schema import MAX_SIGNAL_TO_NOISE, MODEL, PRIOR, Key, check_table
+from gaitpref.config.specs import SCALE, LogNormalPair, fail
 from gaitpref.loop.learning import FitMode, Learning, TiesMode
 from gaitpref.model.engines import resolve_sampler
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior

@@ -83,8 +83,8 @@ from gaitpref.config.schema import (
     TOP,
     check_table,
     defaults_for,
-    fail,
 )
+from gaitpref.config.specs import fail
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
 from gaitpref.space import Space
