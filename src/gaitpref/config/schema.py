@@ -4,8 +4,8 @@ A config is TOML with the tables below (``parse.py`` documents the format).  Eac
 mapping ``key -> Key(spec, default)``; a spec (``specs.py``) checks one value and says in words
 what it allows, so every error reads ``[table].key: must be <allowed>, got <value>``.
 :data:`DEFAULTS` is the one table of defaults (the docs show it), :data:`LIMITS` the sizes a
-config may ask for: they are checked from the config's numbers before anything is built, so no config can make the process
-allocate or loop without bound (issue 15, items 1 and 2).
+config may ask for: they are checked from the config's numbers before anything is built, so
+no config can make the process allocate or loop without bound (issue 15, items 1 and 2).
 
 The strategies' settings (``[cospar.strategy_settings]``) take their defaults from the strategy
 classes themselves (``gaitpref.strategies``); only their bounds are declared here.
