@@ -28,7 +28,17 @@ class GaitprefError(Exception):
 
 
 class ConfigError(GaitprefError, ValueError):
-    """A config that cannot be used; the message names the table and the key."""
+    """A config that cannot be used; the message names the table and the key.
+
+    ``table`` (``"model"``, ``"space.step_length"``, ``"cospar.strategy_settings"``) and ``key``
+    say where, when the problem has a place (``None`` for a file that is not TOML at all); the
+    message reads ``[table].key: what is wrong and what is allowed``.
+    """
+
+    def __init__(self, message: str, *, table: str | None = None, key: str | None = None) -> None:
+        super().__init__(message)
+        self.table = table
+        self.key = key
 
 
 class ModelError(GaitprefError):

@@ -80,11 +80,19 @@ def test_every_key_is_read() -> None:
         ('ties = "drop"\ntie_band = 0.1', "", r'tie_band: only used with ties = "model"'),
         ('ties = "model"\nfit = "fixed"', "", "needs a number"),
         ('ties = "model"\nfit = "fixed"\ntie_band = "fit"', "", 'needs fit = "evidence"'),
-        ('ties = "model"\ntie_band = -1', "", r"\[model\].tie_band: must be >= 0"),
+        (
+            'ties = "model"\ntie_band = -1',
+            "",
+            r'\[model\].tie_band: must be "fit" or a finite number >= 1e-12',
+        ),
         ("refit_every = 0", "", r"\[model\].refit_every: must be an integer >= 1"),
         ("[model.prior]\nnoise = [1, 1]", "", r"\[model.prior\]: unknown key 'noise'"),
         ("[model.prior]\nsignal_variance = 1", "", r"must be \[median, sd\]"),
-        ("[model.prior]\nsignal_variance = [0, 1]", "", "median must be positive"),
+        (
+            "[model.prior]\nsignal_variance = [0, 1]",
+            "",
+            r"\[model.prior\].signal_variance: must be \[median, sd\] with 1e-12 <= median",
+        ),
         ("[model.prior]\nlengthscale = { speed = [1, 1] }", "", "unknown key 'speed'"),
         (
             'ties = "drop"\n[model.prior]\ntie_band = [0.1, 1]',

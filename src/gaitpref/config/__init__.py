@@ -2,26 +2,33 @@
 
 :func:`load_config` reads a shipped config by name (``shipped/``) or a TOML path;
 :func:`parse_config` parses text.  Every error is a :class:`ConfigError` that names the table
-and the key.
+and the key.  ``schema.py`` declares every key once; :data:`DEFAULTS` is the table of defaults
+and :data:`LIMITS` the sizes a config may ask for.
 """
 
+from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.parse import (
+    DEFAULT_BUFFER,
     DEFAULT_FIT,
     DEFAULT_REFIT_EVERY,
     DEFAULT_STRATEGY,
     DEFAULT_TIES,
-    ExperimentConfig,
     load_config,
     parse_config,
     shipped_configs,
 )
+from gaitpref.config.schema import DEFAULTS, DEFAULTS_VERSION, LIMITS
 from gaitpref.errors import ConfigError
 
 __all__ = [
+    "DEFAULTS",
+    "DEFAULTS_VERSION",
+    "DEFAULT_BUFFER",
     "DEFAULT_FIT",
     "DEFAULT_REFIT_EVERY",
     "DEFAULT_STRATEGY",
     "DEFAULT_TIES",
+    "LIMITS",
     "ConfigError",
     "ExperimentConfig",
     "load_config",

@@ -23,12 +23,18 @@
     lengthscale = { step_length = [0.025, 0.7] }
     signal_variance = [0.005, 0.0] # sd 0 holds the parameter fixed
 
-    [cospar]
-    n = 1
-    buffer = 1
+    [cospar]                       # optional, and so is every key in it
+    n = 1                          # actions per query (1..64, at most the grid's size)
+    buffer = 1                     # previous trials compared with (0..64; default 1, the paper)
     coactive_weight = 1.0
     seed = 0
     strategy = "gated-eubo"        # optional: see gaitpref.strategies.STRATEGIES
+
+    [cospar.strategy_settings]     # optional: the chosen strategy's settings
+    gates = 1                      # gated-eubo: posterior samples drawn for the gate (1..1000)
+    # trials = 20                  # eubo-then-sparring: trials of EUBO before self-sparring
+    # beta = 1.0                   # confident-eubo: width of the confidence bounds (0..100)
+    # candidates = 64              # eubo, confident-eubo: top actions for the first pair
 
 Instead of ``[space]``, a config can name a gait library built by ``gaitpref gaits build``; the
 features then come from the library's axes and every action has a gait id:
@@ -36,114 +42,59 @@ features then come from the library's axes and every action has a gait id:
     [gaits]
     library = "gaits.json"         # relative to the config file's folder
 
-Every error names the key and what is allowed.  The optional learning keys default to
-:data:`DEFAULT_TIES`, :data:`DEFAULT_FIT` and :data:`DEFAULT_STRATEGY` (``docs/learning.md``
-says why); the shipped paper configs set them explicitly to the paper's choices.  Shipped configs
-(the paper's settings) live in ``gaitpref/configs/`` and load by name:
-``load_config("exo-1d-step-length")``.
+Every key, its type, default and allowed values are declared once in ``schema.py``
+(:data:`~gaitpref.config.schema.DEFAULTS` is the table of defaults); every error is a
+:class:`ConfigError` that reads ``[table].key: what is wrong (allowed: ...)`` and carries
+``table`` and ``key``.  Sizes are checked from the config's numbers before anything is built
+(``grid.py``), ``n`` and ``buffer`` against the grid, and the scales against each other
+(``model.py``).  The optional learning keys default to :data:`DEFAULT_TIES`,
+:data:`DEFAULT_FIT` and :data:`DEFAULT_STRATEGY` (``docs/learning.md`` says why); the shipped
+paper configs set them explicitly to the paper's choices.  Shipped configs (the paper's settings)
+live in ``gaitpref/config/shipped/`` and load by name: ``load_config("exo-1d-step-length")``.
+
+A bare config (no ``[cospar]``) gets ``buffer = 1``, so that every trial after the first is
+compared with the one before and the loop learns without coactive feedback; 0.1 gave
+``buffer = 0``.  Sessions recorded with a config that relied on that default replay with it
+(``parse_config(..., defaults="0.1")``).
 """
 
 from __future__ import annotations
 
-import hashlib
 import tomllib
-from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any
 
-import numpy as np
-
+from gaitpref.config.experiment import ExperimentConfig
+from gaitpref.config.grid import parse_gaits, parse_space
+from gaitpref.config.model import (
+    check_model,
+    check_sampler,
+    check_scales,
+    make_kernel,
+    make_learning,
+)
+from gaitpref.config.schema import (
+    COSPAR,
+    DEFAULTS,
+    DEFAULTS_VERSION,
+    MAX_ACTIONS,
+    STRATEGY_TABLES,
+    TOP,
+    check_table,
+    defaults_for,
+)
+from gaitpref.config.specs import fail
 from gaitpref.errors import ConfigError
-from gaitpref.loop.cospar import CoSpar
-from gaitpref.loop.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode
-from gaitpref.model.engines import SAMPLERS, resolve_sampler
-from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
-from gaitpref.model.kernels import SquaredExponential
-from gaitpref.space import Feature, Space
-from gaitpref.strategies import STRATEGIES, make_strategy
-
-if TYPE_CHECKING:
-    from gaitpref.gaits.library import (
-        GaitLibrary,
-    )
-
-
-_TOP_KEYS = {"name", "description", "space", "gaits", "model", "cospar"}
-_GAITS_KEYS = {"library"}
-_FEATURE_KEYS = {"min", "max", "num", "values", "unit", "coactive", "words"}
-_MODEL_KEYS = {
-    "lengthscale",
-    "signal_variance",
-    "jitter",
-    "noise",
-    "ties",
-    "tie_band",
-    "fit",
-    "refit_every",
-    "prior",
-    "sampler",
-}
-_PRIOR_KEYS = {"lengthscale", "signal_variance", "tie_band"}
-_COSPAR_KEYS = {"n", "buffer", "coactive_weight", "seed", "strategy"}
+from gaitpref.loop.learning import FitMode, TiesMode
+from gaitpref.space import Space
 
 #: What a config that omits the learning keys gets (the study in docs/results/learning).
-DEFAULT_TIES: TiesMode = "drop"
-DEFAULT_FIT: FitMode = "evidence"
-DEFAULT_REFIT_EVERY = 20
-DEFAULT_STRATEGY = "gated-eubo"
-
-
-@dataclass(frozen=True)
-class ExperimentConfig:
-    """A parsed experiment config and the exact text it came from."""
-
-    name: str
-    space: Space
-    kernel: SquaredExponential
-    noise: float
-    n: int
-    buffer: int
-    coactive_weight: float
-    seed: int
-    text: str = field(repr=False)
-    description: str = ""
-    strategy: str = "self-sparring"
-    learning: Learning = field(default_factory=Learning)
-    sampler: str = "auto"
-    library: GaitLibrary | None = field(default=None, repr=False, compare=False)
-    library_path: str | None = None
-
-    @property
-    def sha256(self) -> str:
-        """Hash of the config text as given (sessions store it to detect changes)."""
-        return hashlib.sha256(self.text.encode()).hexdigest()
-
-    @property
-    def library_sha256(self) -> str | None:
-        """Hash of the gait library file, if the config names one."""
-        if self.library_path is None:
-            return None
-        return hashlib.sha256(Path(self.library_path).read_bytes()).hexdigest()
-
-    def gait_id(self, index: int) -> str | None:
-        """The gait id of grid action ``index`` when the config names a gait library."""
-        return None if self.library is None else self.library.gait_id(index)
-
-    def make_loop(self, seed: int | np.random.Generator | None = None) -> CoSpar:
-        """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's)."""
-        return CoSpar(
-            self.space,
-            self.kernel,
-            self.noise,
-            n=self.n,
-            buffer=self.buffer,
-            coactive_weight=self.coactive_weight,
-            seed=self.seed if seed is None else seed,
-            strategy=make_strategy(self.strategy),
-            learning=self.learning,
-            sampler=self.sampler,
-        )
+DEFAULT_TIES: TiesMode = DEFAULTS["model"]["ties"]
+DEFAULT_FIT: FitMode = DEFAULTS["model"]["fit"]
+DEFAULT_REFIT_EVERY: int = DEFAULTS["model"]["refit_every"]
+DEFAULT_STRATEGY: str = DEFAULTS["cospar"]["strategy"]
+DEFAULT_BUFFER: int = DEFAULTS["cospar"]["buffer"]
 
 
 def shipped_configs() -> list[str]:
@@ -164,263 +115,81 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
     raise ConfigError(f"config {name!r}: no such file{hint}")
 
 
-def load_config(source: str | Path) -> ExperimentConfig:
+def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> ExperimentConfig:
     """Load a config file, or a shipped config by name."""
     text, stem, folder = _read(source)
-    return parse_config(text, default_name=stem, base_dir=folder)
+    return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
 def parse_config(
-    text: str, default_name: str = "experiment", base_dir: str | Path | None = None
+    text: str,
+    default_name: str = "experiment",
+    base_dir: str | Path | None = None,
+    *,
+    defaults: str = DEFAULTS_VERSION,
+    max_actions: int = MAX_ACTIONS,
 ) -> ExperimentConfig:
     """Parse config TOML text (see the module docstring for the format).
 
     A relative ``[gaits].library`` path is taken from ``base_dir`` (default: the working folder).
+    ``defaults`` picks the version of the defaults (``"0.1"`` for sessions recorded with 0.1's);
+    ``max_actions`` lowers the limit on the grid's size (a server's own limit).
     """
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"config is not valid TOML: {exc}") from None
-    _only(raw, _TOP_KEYS, "top level")
-    library, library_path = _parse_gaits(raw, base_dir)
-    space = library.space() if library is not None else _parse_space(raw.get("space"))
-    model = _table(raw, "model")
-    _only(model, _MODEL_KEYS, "[model]")
-    kernel = SquaredExponential(
-        _lengthscales(model, space),
-        _positive(model, "signal_variance", "[model]"),
-        _number(model, "jitter", "[model]", default=0.0, minimum=0.0),
-    )
-    noise = _positive(model, "noise", "[model]")
-    learning = _learning(model, space, kernel.variance, noise)
-    cospar = _table(raw, "cospar")
-    _only(cospar, _COSPAR_KEYS, "[cospar]")
-    n = _integer(cospar, "n", "[cospar]", default=1, minimum=1)
-    buffer = _integer(cospar, "buffer", "[cospar]", default=0, minimum=0)
+    top, _ = check_table(raw, "", TOP)
+    library, library_path = None, None
+    if top["gaits"] is not None:
+        if top["space"] is not None:
+            fail("gaits", None, "give either [space] or [gaits].library (its axes are the space)")
+        library, library_path = parse_gaits(top["gaits"], base_dir)
+        space = library.space()
+        if len(space) > max_actions:
+            fail("gaits", "library", f"has {len(space)} gaits; at most {max_actions} are allowed")
+    else:
+        space = parse_space(top["space"], max_actions)
+    model = check_model(top["model"])
+    cospar, defaulted = _cospar(top["cospar"], space, defaults)
+    check_scales(model, cospar["coactive_weight"])
+    settings = _strategy_settings(cospar)
     return ExperimentConfig(
-        name=str(raw.get("name", default_name)),
-        description=str(raw.get("description", "")),
+        name=top["name"] if top["name"] is not None else default_name,
+        description=top["description"],
         space=space,
-        kernel=kernel,
-        noise=noise,
-        n=n,
-        buffer=buffer,
-        coactive_weight=_number(cospar, "coactive_weight", "[cospar]", default=1.0, minimum=0.0)
-        or _fail("[cospar].coactive_weight must be > 0"),
-        seed=_integer(cospar, "seed", "[cospar]", default=0, minimum=0),
+        kernel=make_kernel(model, space),
+        noise=model["noise"],
+        n=cospar["n"],
+        buffer=cospar["buffer"],
+        coactive_weight=cospar["coactive_weight"],
+        seed=cospar["seed"],
         text=text,
-        strategy=_choice(cospar, "strategy", "[cospar]", STRATEGIES, DEFAULT_STRATEGY),
-        learning=learning,
-        sampler=_sampler(model, len(space)),
+        strategy=cospar["strategy"],
+        learning=make_learning(model, space),
+        sampler=check_sampler(model, len(space)),
         library=library,
         library_path=library_path,
+        strategy_settings=settings,
+        defaulted=frozenset(f"cospar.{k}" for k in defaulted),
+        defaults_version=defaults,
     )
 
 
-# -- helpers -----------------------------------------------------------------------------------
-def _fail(message: str) -> Any:
-    raise ConfigError(message)
+def _cospar(raw: object, space: Space, defaults: str) -> tuple[dict[str, Any], frozenset[str]]:
+    cospar, defaulted = check_table(raw, "cospar", COSPAR, defaults_for(defaults, "cospar"))
+    size = len(space)
+    for key in ("n", "buffer"):
+        if cospar[key] > size:
+            fail("cospar", key, f"must be at most the grid's {size} actions, got {cospar[key]}")
+    return cospar, defaulted
 
 
-def _only(table: dict[str, Any], allowed: set[str], where: str) -> None:
-    unknown = sorted(set(table) - allowed)
-    if unknown:
-        raise ConfigError(
-            f"{where}: unknown key {unknown[0]!r}; allowed keys are {', '.join(sorted(allowed))}"
-        )
-
-
-def _table(raw: dict[str, Any], key: str) -> dict[str, Any]:
-    value = raw.get(key)
-    if not isinstance(value, dict):
-        raise ConfigError(f"[{key}]: missing table (it is required)")
-    return value
-
-
-def _number(
-    table: dict[str, Any], key: str, where: str, default: float | None = None, minimum: float = 0.0
-) -> float:
-    if key not in table:
-        if default is None:
-            raise ConfigError(f"{where}.{key}: missing (a number is required)")
-        return default
-    value = table[key]
-    if isinstance(value, bool) or not isinstance(value, int | float) or not np.isfinite(value):
-        raise ConfigError(f"{where}.{key}: must be a finite number, got {value!r}")
-    if value < minimum:
-        raise ConfigError(f"{where}.{key}: must be >= {minimum}, got {value!r}")
-    return float(value)
-
-
-def _positive(table: dict[str, Any], key: str, where: str) -> float:
-    value = _number(table, key, where)
-    if value <= 0:
-        raise ConfigError(f"{where}.{key}: must be > 0, got {value!r}")
-    return value
-
-
-def _integer(table: dict[str, Any], key: str, where: str, default: int, minimum: int) -> int:
-    value = table.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ConfigError(f"{where}.{key}: must be an integer >= {minimum}, got {value!r}")
-    return value
-
-
-def _sampler(model: dict[str, Any], size: int) -> str:
-    value = model.get("sampler", "auto")
-    if value not in SAMPLERS:
-        raise ConfigError(f"[model].sampler: must be one of {', '.join(SAMPLERS)}; got {value!r}")
-    try:
-        resolve_sampler(value, size)
-    except ValueError as exc:
-        raise ConfigError(f"[model].sampler: {exc}") from None
-    return str(value)
-
-
-def _parse_gaits(
-    raw: dict[str, Any], base_dir: str | Path | None
-) -> tuple[GaitLibrary | None, str | None]:
-    if "gaits" not in raw:
-        return None, None
-    gaits = raw["gaits"]
-    if not isinstance(gaits, dict):
-        raise ConfigError('[gaits]: must be a table with library = "FILE"')
-    _only(gaits, _GAITS_KEYS, "[gaits]")
-    if "space" in raw:
-        raise ConfigError("give either [space] or [gaits].library (its axes are the space)")
-    name = gaits.get("library")
-    if not isinstance(name, str) or not name:
-        raise ConfigError("[gaits].library: must be the path of a gait library file")
-    path = Path(name)
-    if not path.is_absolute():
-        path = Path(base_dir if base_dir is not None else ".") / path
-    from gaitpref.errors import GaitLibraryError
-    from gaitpref.gaits.library import GaitLibrary
-
-    try:
-        return GaitLibrary.load(path), str(path.resolve())
-    except (GaitLibraryError, OSError) as exc:
-        raise ConfigError(f"[gaits].library: {exc}") from None
-
-
-def _parse_space(raw: object) -> Space:
-    if not isinstance(raw, dict) or not raw:
-        raise ConfigError("[space]: needs one table per feature, e.g. [space.step_length]")
-    features = []
-    for name, spec in raw.items():
-        where = f"[space.{name}]"
-        if not isinstance(spec, dict):
-            raise ConfigError(f"{where}: must be a table with min/max/num or values")
-        _only(spec, _FEATURE_KEYS, where)
-        try:
-            if "values" in spec:
-                if {"min", "max", "num"} & set(spec):
-                    raise ConfigError(f"{where}: give either values or min/max/num, not both")
-                values = spec["values"]
-                if not isinstance(values, list) or not values:
-                    raise ConfigError(f"{where}.values: must be a non-empty list of numbers")
-            else:
-                lo, hi = (
-                    _number(spec, "min", where, minimum=-np.inf),
-                    _number(spec, "max", where, minimum=-np.inf),
-                )
-                num = _integer(spec, "num", where, default=0, minimum=1)
-                if num > 1 and hi <= lo:
-                    raise ConfigError(f"{where}: max must be greater than min")
-                values = np.linspace(lo, hi, num).tolist()
-            features.append(
-                Feature(
-                    name,
-                    values,
-                    unit=spec.get("unit", ""),
-                    coactive=spec.get("coactive", (0.1, 0.2)),
-                    words=spec.get("words", ("more", "less")),
-                )
-            )
-        except (ValueError, TypeError) as exc:
-            if isinstance(exc, ConfigError):
-                raise
-            raise ConfigError(f"{where}: {exc}") from None
-    return Space(features)
-
-
-def _lengthscales(model: dict[str, Any], space: Space) -> tuple[float, ...]:
-    value = model.get("lengthscale")
-    if value is None:
-        raise ConfigError("[model].lengthscale: missing (a number or {feature = number})")
-    if isinstance(value, dict):
-        _only(value, set(space.names), "[model].lengthscale")
-        missing = [n for n in space.names if n not in value]
-        if missing:
-            raise ConfigError(f"[model].lengthscale: missing a value for {', '.join(missing)}")
-        return tuple(_positive(value, n, "[model].lengthscale") for n in space.names)
-    return (_positive(model, "lengthscale", "[model]"),) * space.ndim
-
-
-def _choice(
-    table: dict[str, Any], key: str, where: str, allowed: tuple[str, ...], default: str
-) -> str:
-    value = table.get(key, default)
-    if value not in allowed:
-        raise ConfigError(f"{where}.{key}: must be one of {', '.join(allowed)}; got {value!r}")
-    return str(value)
-
-
-def _log_normal(value: object, where: str) -> LogNormal:
-    if (
-        not isinstance(value, list)
-        or len(value) != 2
-        or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
-    ):
-        raise ConfigError(f"{where}: must be [median, sd] (two numbers), got {value!r}")
-    try:
-        return LogNormal(float(value[0]), float(value[1]))
-    except ValueError as exc:
-        raise ConfigError(f"{where}: {exc}") from None
-
-
-def _learning(model: dict[str, Any], space: Space, variance: float, noise: float) -> Learning:
-    ties = cast(TiesMode, _choice(model, "ties", "[model]", TIES_MODES, DEFAULT_TIES))
-    fit = cast(FitMode, _choice(model, "fit", "[model]", FIT_MODES, DEFAULT_FIT))
-    refit_every = _integer(model, "refit_every", "[model]", DEFAULT_REFIT_EVERY, minimum=1)
-    raw_band = model.get("tie_band", "fit" if fit == "evidence" else None)
-    band: float | None = None
-    if ties == "drop":
-        if "tie_band" in model:
-            raise ConfigError('[model].tie_band: only used with ties = "model"')
-    elif raw_band == "fit":
-        if fit != "evidence":
-            raise ConfigError('[model].tie_band = "fit" needs fit = "evidence"')
-    elif raw_band is None:
-        raise ConfigError('[model].tie_band: ties = "model" with fit = "fixed" needs a number')
-    else:
-        band = _positive(model, "tie_band", "[model]")
-    prior = default_prior(space, variance, noise, fit_band=ties == "model" and band is None)
-    raw_prior = model.get("prior", {})
-    if not isinstance(raw_prior, dict):
-        raise ConfigError("[model.prior]: must be a table")
-    _only(raw_prior, _PRIOR_KEYS, "[model.prior]")
-    scales = list(prior.lengthscale)
-    if "lengthscale" in raw_prior:
-        table = raw_prior["lengthscale"]
-        if not isinstance(table, dict):
-            raise ConfigError("[model.prior].lengthscale: must be { feature = [median, sd] }")
-        _only(table, set(space.names), "[model.prior].lengthscale")
-        for name, value in table.items():
-            scales[space.feature_index(name)] = _log_normal(
-                value, f"[model.prior].lengthscale.{name}"
-            )
-    var_prior = prior.variance
-    if "signal_variance" in raw_prior:
-        var_prior = _log_normal(raw_prior["signal_variance"], "[model.prior].signal_variance")
-    band_prior = prior.band
-    if "tie_band" in raw_prior:
-        if band_prior is None:
-            raise ConfigError('[model.prior].tie_band: only used with tie_band = "fit"')
-        band_prior = _log_normal(raw_prior["tie_band"], "[model.prior].tie_band")
-    try:
-        return Learning(
-            ties, band, fit, refit_every, HyperPrior(tuple(scales), var_prior, band_prior)
-        )
-    except ValueError as exc:
-        raise ConfigError(f"[model]: {exc}") from None
+def _strategy_settings(cospar: dict[str, Any]) -> dict[str, Any]:
+    """The settings given for the strategy (the strategy keeps its defaults for the rest)."""
+    name = cospar["strategy"]
+    given = cospar["strategy_settings"]
+    table, _ = check_table(
+        given, "cospar.strategy_settings", STRATEGY_TABLES[name], for_what=f" for strategy {name!r}"
+    )
+    return {k: table[k] for k in given}

@@ -147,7 +147,7 @@ def choose_config(
         elif named is not None:
             _inside(library_dir, named)
             base = library_dir
-        cfg = parse_config(source, default_name=stem, base_dir=base)
+        cfg = parse_config(source, default_name=stem, base_dir=base, max_actions=MAX_ACTIONS)
     if len(cfg.space) > MAX_ACTIONS:
         raise InputError(
             "config",

@@ -17,7 +17,9 @@ operation.
 ``Hess >= I``, so each Newton step is a well-conditioned Cholesky solve (GPML Algorithm 3.1 in
 the comparison form, no ``W^-1``, no ``K^-1``).  A backtracking (Armijo) line search keeps every
 step a descent step, and the loop stops when the gradient is below tolerance; otherwise it raises
-:class:`ConvergenceError`.  It never returns the prior silently.
+:class:`ConvergenceError`.  It never returns the prior silently, and a Hessian that cannot be
+factorised (curvature that overflows) is a :class:`ConvergenceError` too, never a raw
+``LinAlgError``.
 
 Notation: ``N`` observations, ``m`` visited actions, ``u`` and ``f_V`` length ``m``.
 """
@@ -77,6 +79,25 @@ def _factor_prior(k_vv: FloatArray) -> FloatArray:
         raise PriorNotPositiveDefiniteError(
             f"the prior covariance of the {k_vv.shape[0]} visited actions is not positive "
             "definite; increase the kernel's jitter"
+        ) from None
+
+
+def _factor_hessian(hess: FloatArray, iteration: int, observations: int) -> FloatArray:
+    """``R`` with ``I + H^T H = R R^T``; a named :class:`ConvergenceError` if it cannot be had.
+
+    The Hessian is ``>= I`` in exact arithmetic; it fails only when the likelihood's curvature
+    overflows or is not finite (a near-deterministic likelihood: tiny noise, huge signal).
+    """
+    try:
+        if not np.all(np.isfinite(hess)):
+            raise LinAlgError("the Hessian is not finite")
+        factor: FloatArray = cholesky(hess, lower=True, check_finite=False)
+        return factor
+    except LinAlgError as exc:
+        raise ConvergenceError(
+            f"Laplace fit: the Hessian at Newton iteration {iteration} cannot be factorised "
+            f"({exc}; {observations} observations over {hess.shape[0]} actions): the likelihood "
+            "is nearly deterministic; use a larger noise or a smaller signal variance"
         ) from None
 
 
@@ -156,7 +177,7 @@ def fit_laplace(
         H = np.sqrt(c)[:, None] * rows
         hess = H.T @ H
         hess[np.diag_indices_from(hess)] += 1.0
-        R = cholesky(hess, lower=True, check_finite=False)
+        R = _factor_hessian(hess, iteration, first.shape[0])
         scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
         if gnorm <= tol * scale:
             return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))

@@ -41,7 +41,10 @@ def config_of(record: SessionRecord) -> ExperimentConfig:
     meta = record.meta
     try:
         cfg = parse_config(
-            record.config_text, default_name=record.config_name, base_dir=meta.get("config_dir")
+            record.config_text,
+            default_name=record.config_name,
+            base_dir=meta.get("config_dir"),
+            defaults=meta.get("config_defaults", "0.1"),  # 0.1 sessions relied on 0.1's
         )
     except ConfigError as exc:
         if meta.get("library_path"):
@@ -63,9 +66,11 @@ def config_of(record: SessionRecord) -> ExperimentConfig:
 
 
 def library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
-    """Where to find the config's gait library again on replay (its folder, path and hash)."""
+    """What replay needs besides the text: the version of the defaults the config relies on (if
+    it leaves a changed default to them), and where its gait library is (folder, path, hash)."""
+    defaults = {"config_defaults": cfg.defaults_version} if cfg.relies_on_changed_defaults else {}
     if cfg.library_path is None:
-        return {}
+        return defaults
     import tomllib
 
     given = Path(tomllib.loads(cfg.text)["gaits"]["library"])
@@ -79,6 +84,7 @@ def library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
             "relative to; load the config from its file"
         )
     return {
+        **defaults,
         "config_dir": str(base),
         "library_path": str(where),
         "library_sha256": cfg.library_sha256,

@@ -74,12 +74,20 @@ def _start(context: AskContext, candidates: int) -> list[int]:
     return [x, y]
 
 
+def _check_candidates(candidates: object) -> None:
+    if isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 2:
+        raise ValueError(f"candidates must be an integer >= 2, got {candidates!r}")
+
+
 @dataclass(frozen=True)
 class Eubo:
     """Greedy EUBO against the best buffered or chosen action (see the module docstring)."""
 
     candidates: int = 64
     name: str = "eubo"
+
+    def __post_init__(self) -> None:
+        _check_candidates(self.candidates)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         return eubo_fill(context, _start(context, self.candidates)[: context.n], None)
@@ -92,6 +100,12 @@ class ConfidentEubo:
     beta: float = 1.0
     candidates: int = 64
     name: str = "confident-eubo"
+
+    def __post_init__(self) -> None:
+        beta = self.beta
+        if isinstance(beta, bool) or not isinstance(beta, int | float) or not 0 <= beta < np.inf:
+            raise ValueError(f"beta must be a finite number >= 0, got {beta!r}")
+        _check_candidates(self.candidates)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post = context.posterior

@@ -29,6 +29,15 @@ class AskContext:
     trial: int  # actions executed before this query
     rng: np.random.Generator
 
+    def __post_init__(self) -> None:
+        # Every proposal loop runs at most ``n`` rounds: bound it by the grid, so that no query
+        # (a config's ``n``, or a loop built by hand) can keep a strategy busy without end.
+        size = len(self.posterior.space)
+        if isinstance(self.n, bool) or not isinstance(self.n, int) or not 1 <= self.n <= size:
+            raise ValueError(
+                f"a query needs 1 to {size} new actions (the grid's size), got n = {self.n!r}"
+            )
+
 
 class Strategy(Protocol):
     """Proposes the ``n`` actions of the next query."""

@@ -36,7 +36,7 @@ class GatedEubo:
     name: str = "gated-eubo"
 
     def __post_init__(self) -> None:
-        if self.gates < 1:
+        if isinstance(self.gates, bool) or not isinstance(self.gates, int) or self.gates < 1:
             raise ValueError(f"gates must be >= 1, got {self.gates!r}")
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
@@ -58,6 +58,10 @@ class Switch:
     early: Strategy = field(default_factory=Eubo)
     late: Strategy = field(default_factory=SelfSparring)
     name: str = "eubo-then-sparring"
+
+    def __post_init__(self) -> None:
+        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 0:
+            raise ValueError(f"trials must be an integer >= 0, got {self.trials!r}")
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         chosen = self.early if context.trial < self.trials else self.late

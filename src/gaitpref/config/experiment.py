@@ -1,0 +1,93 @@
+"""The parsed experiment config (:class:`ExperimentConfig`) and the loop it makes."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from gaitpref.config.schema import DEFAULTS_VERSION, EARLIER_DEFAULTS
+from gaitpref.loop.cospar import CoSpar
+from gaitpref.loop.learning import Learning
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.space import Space
+from gaitpref.strategies import make_strategy
+
+if TYPE_CHECKING:
+    from gaitpref.gaits.library import GaitLibrary
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """A parsed experiment config and the exact text it came from.
+
+    ``defaulted`` names the keys (``"cospar.buffer"``) the text left to the defaults of
+    ``defaults_version`` (``gaitpref.config.schema``).
+    """
+
+    name: str
+    space: Space
+    kernel: SquaredExponential
+    noise: float
+    n: int
+    buffer: int
+    coactive_weight: float
+    seed: int
+    text: str = field(repr=False)
+    description: str = ""
+    strategy: str = "self-sparring"
+    learning: Learning = field(default_factory=Learning)
+    sampler: str = "auto"
+    library: GaitLibrary | None = field(default=None, repr=False, compare=False)
+    library_path: str | None = None
+    strategy_settings: dict[str, Any] = field(default_factory=dict)
+    defaulted: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
+    defaults_version: str = DEFAULTS_VERSION
+
+    @property
+    def sha256(self) -> str:
+        """Hash of the config text as given (sessions store it to detect changes)."""
+        return hashlib.sha256(self.text.encode()).hexdigest()
+
+    @property
+    def library_sha256(self) -> str | None:
+        """Hash of the gait library file, if the config names one."""
+        if self.library_path is None:
+            return None
+        return hashlib.sha256(Path(self.library_path).read_bytes()).hexdigest()
+
+    @property
+    def relies_on_changed_defaults(self) -> bool:
+        """Whether the text leaves to the defaults a key whose default changed between versions.
+
+        A session stores :attr:`defaults_version` then, so that it replays with the same values.
+        """
+        changed = {
+            f"{table}.{key}"
+            for old in EARLIER_DEFAULTS.values()
+            for table in old
+            for key in old[table]
+        }
+        return bool(self.defaulted & changed)
+
+    def gait_id(self, index: int) -> str | None:
+        """The gait id of grid action ``index`` when the config names a gait library."""
+        return None if self.library is None else self.library.gait_id(index)
+
+    def make_loop(self, seed: int | np.random.Generator | None = None) -> CoSpar:
+        """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's)."""
+        return CoSpar(
+            self.space,
+            self.kernel,
+            self.noise,
+            n=self.n,
+            buffer=self.buffer,
+            coactive_weight=self.coactive_weight,
+            seed=self.seed if seed is None else seed,
+            strategy=make_strategy(self.strategy, **self.strategy_settings),
+            learning=self.learning,
+            sampler=self.sampler,
+        )

@@ -1,0 +1,203 @@
+"""Every key of an experiment config, declared once: its type, its default and what is allowed.
+
+A config is TOML with the tables below (``parse.py`` documents the format).  Each table is a
+mapping ``key -> Key(spec, default)``; a spec (``specs.py``) checks one value and says in words
+what it allows, so every error reads ``[table].key: must be <allowed>, got <value>``.
+:data:`DEFAULTS` is the one table of defaults (the docs show it), :data:`LIMITS` the sizes a
+config may ask for: they are checked from the config's numbers before anything is built, so
+no config can make the process allocate or loop without bound (issue 15, items 1 and 2).
+
+The strategies' settings (``[cospar.strategy_settings]``) take their defaults from the strategy
+classes themselves (``gaitpref.strategies``); only their bounds are declared here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any, Final
+
+from gaitpref.config.specs import (
+    MAX_MAGNITUDE,
+    MAX_NAME,
+    MIN_SCALE,
+    SCALE,
+    Choice,
+    Coactive,
+    Integer,
+    LogNormalPair,
+    Number,
+    Numbers,
+    ScaleOrFit,
+    ScaleOrTable,
+    Spec,
+    Table,
+    Text,
+    Words,
+    fail,
+    shown,
+)
+from gaitpref.errors import ConfigError
+from gaitpref.loop.learning import FIT_MODES, TIES_MODES
+from gaitpref.model.engines import SAMPLERS
+from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
+
+#: A grid (the product of every feature's ``num`` or ``values``) has at most this many actions.
+MAX_ACTIONS: Final = 1_000_000
+#: At most this many features (``[space.<feature>]`` tables).
+MAX_FEATURES: Final = 32
+#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many.
+MAX_QUERY: Final = 64
+#: ``signal_variance * max(1, coactive_weight)**2 / noise**2`` at most this: beyond it the
+#: likelihood is so nearly deterministic that the Laplace fit's Hessian cannot be factorised.
+MAX_SIGNAL_TO_NOISE: Final = 1e6
+#: Length of a description.
+MAX_TEXT: Final = 10_000
+
+LIMITS: Final[dict[str, float]] = {
+    "actions": MAX_ACTIONS,
+    "features": MAX_FEATURES,
+    "n, buffer": MAX_QUERY,
+    "magnitude": MAX_MAGNITUDE,
+    "smallest scale": MIN_SCALE,
+    "signal to noise": MAX_SIGNAL_TO_NOISE,
+}
+
+
+class _Required:
+    def __repr__(self) -> str:
+        return "required"
+
+
+REQUIRED: Final[Any] = _Required()
+
+
+@dataclass(frozen=True)
+class Key:
+    """One key of a table: how it is checked and its default (:data:`REQUIRED` if none)."""
+
+    spec: Spec
+    default: Any = REQUIRED
+
+
+TOP: Final[dict[str, Key]] = {
+    "name": Key(Text(MAX_NAME), None),  # None: the file's name
+    "description": Key(Text(MAX_TEXT), ""),
+    "space": Key(Table("one table per feature"), None),
+    "gaits": Key(Table('library = "FILE"'), None),
+    "model": Key(Table("the GP model")),
+    "cospar": Key(Table("the loop's settings"), {}),
+}
+FEATURE: Final[dict[str, Key]] = {
+    "min": Key(Number(), None),
+    "max": Key(Number(), None),
+    "num": Key(Integer(1, MAX_ACTIONS), None),
+    "values": Key(Numbers(Number(), 1, MAX_ACTIONS), None),
+    "unit": Key(Text(MAX_NAME), ""),
+    "coactive": Key(Coactive(), (0.1, 0.2)),
+    "words": Key(Words(), ("more", "less")),
+}
+GAITS: Final[dict[str, Key]] = {"library": Key(Text(4096))}
+MODEL: Final[dict[str, Key]] = {
+    "lengthscale": Key(ScaleOrTable()),
+    "signal_variance": Key(SCALE),
+    "noise": Key(SCALE),
+    "jitter": Key(Number(0.0, MAX_MAGNITUDE), 0.0),
+    "sampler": Key(Choice(SAMPLERS), "auto"),
+    "ties": Key(Choice(TIES_MODES), "drop"),
+    "tie_band": Key(ScaleOrFit(), None),  # None: "fit" with fit = "evidence", else required
+    "fit": Key(Choice(FIT_MODES), "evidence"),
+    "refit_every": Key(Integer(1, 1_000_000), 20),
+    "prior": Key(Table("log-normal priors [median, sd]"), {}),
+}
+PRIOR: Final[dict[str, Key]] = {
+    "lengthscale": Key(Table("{feature = [median, sd]}"), None),
+    "signal_variance": Key(LogNormalPair(), None),
+    "tie_band": Key(LogNormalPair(), None),
+}
+COSPAR: Final[dict[str, Key]] = {
+    "n": Key(Integer(1, MAX_QUERY), 1),
+    "buffer": Key(Integer(0, MAX_QUERY), 1),
+    "coactive_weight": Key(Number(MIN_SCALE, 1e6), 1.0),
+    "seed": Key(Integer(0, 2**63 - 1), 0),
+    "strategy": Key(Choice(STRATEGIES), "gated-eubo"),
+    "strategy_settings": Key(Table("the strategy's settings"), {}),
+}
+
+#: Bounds of every strategy setting; the defaults are the strategy classes' own.
+_SETTING_SPECS: Final[dict[str, Spec]] = {
+    "gates": Integer(1, 1000),
+    "trials": Integer(0, 1_000_000),
+    "beta": Number(0.0, 100.0),
+    "candidates": Integer(2, 4096),
+}
+
+
+def _strategy_table(name: str) -> dict[str, Key]:
+    by_field = {f.name: f.default for f in fields(STRATEGY_CLASSES[name])}
+    return {s: Key(_SETTING_SPECS[s], by_field[s]) for s in STRATEGY_SETTINGS[name]}
+
+
+STRATEGY_TABLES: Final[dict[str, dict[str, Key]]] = {s: _strategy_table(s) for s in STRATEGIES}
+
+TABLES: Final[dict[str, dict[str, Key]]] = {
+    "": TOP,
+    "space.<feature>": FEATURE,
+    "gaits": GAITS,
+    "model": MODEL,
+    "model.prior": PRIOR,
+    "cospar": COSPAR,
+    **{f"cospar.strategy_settings ({s})": t for s, t in STRATEGY_TABLES.items()},
+}
+
+#: The version of the defaults below.  A session records it when its config relies on a default
+#: that changed since an earlier version, and replays with the defaults it was recorded with.
+DEFAULTS_VERSION: Final = "0.2"
+#: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``).
+EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {"0.1": {"cospar": {"buffer": 0}}}
+
+#: The one table of defaults: table -> key -> default (``None``: see the key's documentation).
+DEFAULTS: Final[dict[str, dict[str, Any]]] = {
+    table: {k: key.default for k, key in keys.items() if key.default is not REQUIRED}
+    for table, keys in TABLES.items()
+}
+
+
+def check_table(
+    raw: object,
+    table: str,
+    keys: dict[str, Key],
+    overrides: dict[str, Any] | None = None,
+    for_what: str = "",
+) -> tuple[dict[str, Any], frozenset[str]]:
+    """Every declared key of ``raw`` checked (defaults filled in) and the keys that defaulted.
+
+    Unknown keys, a missing required key and a bad value raise :class:`ConfigError`.
+    """
+    if not isinstance(raw, dict):
+        fail(table, None, f"must be a table, got {shown(raw)}")
+    unknown = sorted(set(raw) - set(keys))
+    if unknown:
+        allowed = ", ".join(keys) or "none"
+        fail(table, None, f"unknown key {unknown[0]!r}{for_what} (allowed: {allowed})")
+    out: dict[str, Any] = {}
+    defaulted = set()
+    for name, key in keys.items():
+        if name in raw:
+            out[name] = key.spec.check(raw[name], table, name)
+        elif key.default is REQUIRED:
+            fail(table, name, f"missing (required: {key.spec.allowed})")
+        else:
+            defaults = overrides or {}
+            out[name] = defaults.get(name, key.default)
+            defaulted.add(name)
+    return out, frozenset(defaulted)
+
+
+def defaults_for(version: str, table: str) -> dict[str, Any]:
+    """The defaults of ``table`` that differ in defaults ``version`` (empty for the current)."""
+    if version == DEFAULTS_VERSION:
+        return {}
+    if version not in EARLIER_DEFAULTS:
+        known = ", ".join([*EARLIER_DEFAULTS, DEFAULTS_VERSION])
+        raise ConfigError(f"unknown config defaults version {version!r} (known: {known})")
+    return EARLIER_DEFAULTS[version].get(table, {})

@@ -1,0 +1,143 @@
+"""Configs that cannot hurt the process (issue 15 items 1-3, config side)."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+from scipy.linalg import LinAlgError
+
+from gaitpref import ConfigError, ConvergenceError, Feature, Space, SquaredExponential
+from gaitpref.config import parse_config
+from gaitpref.config.schema import MAX_ACTIONS, MAX_SIGNAL_TO_NOISE
+from gaitpref.loop.cospar import CoSpar
+from gaitpref.model.laplace import fit_laplace
+from gaitpref.model.likelihood import Probit
+from gaitpref.strategies import STRATEGIES, make_strategy
+
+MODEL = "[model]\nlengthscale = 0.2\nsignal_variance = 0.005\nnoise = 0.02\n"
+
+
+def _feature(name: str, num: int | str) -> str:
+    return f"[space.{name}]\nmin = 0.0\nmax = 1.0\nnum = {num}\n"
+
+
+def _peak_of(text: str) -> tuple[ConfigError, int]:
+    tracemalloc.start()
+    try:
+        with pytest.raises(ConfigError) as info:
+            parse_config(text)
+        return info.value, tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+@pytest.mark.parametrize(
+    ("text", "table", "key"),
+    [
+        (_feature("x", 1_000_000_000) + MODEL, "space.x", "num"),  # item 1: 23 GB before 0.2
+        (_feature("x", 10_000_000) + MODEL, "space.x", "num"),
+        (_feature("x", 1000) + _feature("y", 1001) + _feature("z", 1000) + MODEL, "space.y", "num"),
+        (_feature("x", 2**200) + MODEL, "space.x", "num"),
+    ],
+)
+def test_a_huge_grid_fails_before_anything_is_built(text: str, table: str, key: str) -> None:
+    error, peak = _peak_of(text)
+    assert (error.table, error.key) == (table, key)
+    assert f"at most {MAX_ACTIONS}" in str(error) or "<= 1000000" in str(error)
+    assert peak < 1_000_000  # bytes: nothing grid-sized was allocated
+
+
+def test_the_size_limit_is_checked_before_building_a_values_list() -> None:
+    values = ", ".join(["0.1", "0.2", "0.3"])
+    text = f"[space.x]\nvalues = [{values}]\n" + _feature("y", 999_999) + MODEL
+    error, peak = _peak_of(text)
+    assert (error.table, error.key) == ("space.y", "num")
+    assert peak < 1_000_000
+
+
+def test_a_server_can_lower_the_limit() -> None:
+    with pytest.raises(ConfigError, match=r"\[space.x\].num: .*at most 100 are allowed"):
+        parse_config(_feature("x", 101) + MODEL, max_actions=100)
+
+
+@pytest.mark.parametrize("key", ["n", "buffer"])
+def test_n_and_buffer_cannot_exceed_the_grid(key: str) -> None:  # item 2
+    with pytest.raises(ConfigError, match=rf"\[cospar\].{key}: must be at most the grid's 5 "):
+        parse_config(_feature("x", 5) + MODEL + f"[cospar]\n{key} = 6\n")
+    parse_config(_feature("x", 5) + MODEL + f"[cospar]\n{key} = 5\n")
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_every_strategy_proposes_even_when_the_query_fills_the_grid(strategy: str) -> None:
+    cfg = parse_config(
+        _feature("x", 3) + MODEL + f'[cospar]\nn = 3\nbuffer = 3\nstrategy = "{strategy}"\n'
+    )
+    loop = cfg.make_loop()
+    for _ in range(4):
+        q = loop.ask()
+        assert len(q.actions) == 3 and all(0 <= a < 3 for a in q.actions)
+        loop.tell(
+            q, [(q.actions[0], q.actions[1], "first")] if q.actions[0] != q.actions[1] else []
+        )
+
+
+@pytest.mark.parametrize("strategy", STRATEGIES)
+def test_a_loop_built_by_hand_with_n_past_the_grid_is_refused_by_name(strategy: str) -> None:
+    space = Space([Feature.linspace("x", 0, 1, 4)])
+    loop = CoSpar(space, SquaredExponential((0.2,), 0.005), 0.02, n=10**9,
+                  strategy=make_strategy(strategy))  # fmt: skip
+    with pytest.raises(ValueError, match=r"a query needs 1 to 4 new actions .*n = 1000000000"):
+        loop.ask()
+
+
+@pytest.mark.parametrize(
+    ("model", "key", "why"),
+    [
+        ("noise = 1e-12", "noise", "cannot be fitted"),  # item 3
+        ("noise = 1e-5", "noise", "signal_variance / noise\\*\\*2 is 5e\\+07"),
+        ("signal_variance = 1e300", "signal_variance", "<= 1e\\+12"),
+        ("jitter = 1", "jitter", "must be at most signal_variance"),
+    ],
+)
+def test_degenerate_scales_are_refused_with_the_reason(model: str, key: str, why: str) -> None:
+    lines = dict(line.split(" = ") for line in MODEL.splitlines()[1:])
+    name, value = model.split(" = ")
+    lines[name] = value
+    text = _feature("x", 5) + "[model]\n" + "".join(f"{k} = {v}\n" for k, v in lines.items())
+    with pytest.raises(ConfigError, match=why) as info:
+        parse_config(text)
+    assert (info.value.table, info.value.key) == ("model", key)
+
+
+def test_the_coactive_weight_counts_in_the_signal_to_noise_bound() -> None:
+    noise = (0.005 / MAX_SIGNAL_TO_NOISE) ** 0.5 * 1.01
+    text = _feature("x", 5) + MODEL.replace("noise = 0.02", f"noise = {noise}")
+    parse_config(text)
+    with pytest.raises(ConfigError, match=r"\[model\].noise: .*coactive_weight\*\*2 \(2\*\*2\)"):
+        parse_config(text + "[cospar]\ncoactive_weight = 2.0\n")
+
+
+def test_a_loop_at_the_signal_to_noise_bound_takes_contradicting_answers() -> None:
+    noise = (0.005 / MAX_SIGNAL_TO_NOISE) ** 0.5
+    cfg = parse_config(
+        _feature("x", 15) + _feature("y", 10) + MODEL.replace("noise = 0.02", f"noise = {noise}")
+    )
+    loop, rng = cfg.make_loop(seed=1), np.random.default_rng(0)
+    for _ in range(30):
+        q = loop.ask()
+        comps = [(q.actions[0], q.buffer[0], rng.choice(["first", "second"]))] if q.buffer else []
+        loop.tell(q, comps)
+    assert len(loop.preferences) >= 20
+
+
+def test_a_hessian_that_cannot_be_factorised_is_a_convergence_error() -> None:
+    k_vv = np.array([[1e300, 0.0], [0.0, 1e300]])
+    first, second = np.array([0]), np.array([1])
+    with (
+        np.errstate(over="ignore"),
+        pytest.raises(ConvergenceError, match=r"Hessian .* cannot be factorised") as info,
+    ):
+        fit_laplace(k_vv, np.array([0, 1]), first, second, Probit(np.array([1e-12])))
+    assert not isinstance(info.value, LinAlgError)
