@@ -10,7 +10,7 @@ family                     raised when
 =========================  ====================================================================
 :class:`ConfigError`       a config (TOML, dict or web form) is not valid; names table and key
 :class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
-                           not positive definite)
+                           not positive definite, :class:`NoSafeGaitError`: no gait is safe)
 :class:`FeedbackError`     an answer does not fit its query; nothing was changed
 :class:`QueryError`        an answer to a query that is unknown, stale or already answered
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
@@ -51,6 +51,11 @@ class ConvergenceError(ModelError, RuntimeError):
 
 class PriorNotPositiveDefiniteError(ModelError, ValueError):
     """``K_VV`` could not be factorised: the kernel needs a (larger) jitter."""
+
+
+class NoSafeGaitError(ModelError, RuntimeError):
+    """Every gait is in the region of avoidance or near a gait flagged unsafe: the loop proposes
+    nothing rather than a gait it should avoid."""
 
 
 class FeedbackError(GaitprefError, ValueError):
@@ -102,6 +107,7 @@ __all__ = [
     "GaitLibraryError",
     "GaitprefError",
     "ModelError",
+    "NoSafeGaitError",
     "PriorNotPositiveDefiniteError",
     "QueryError",
     "ReplayError",

@@ -6,6 +6,7 @@
 
 from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.loop.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode, pair_data
+from gaitpref.loop.safety import Safety
 
 __all__ = [
     "FIT_MODES",
@@ -16,6 +17,7 @@ __all__ = [
     "Learning",
     "Query",
     "QueryError",
+    "Safety",
     "TiesMode",
     "pair_data",
 ]

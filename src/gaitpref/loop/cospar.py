@@ -30,8 +30,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-from gaitpref.errors import FeedbackError, QueryError
+from gaitpref.errors import FeedbackError, NoSafeGaitError, QueryError
 from gaitpref.feedback import (
     ActionObservation,
     Comparison,
@@ -45,6 +46,7 @@ from gaitpref.feedback import (
     kinds,
 )
 from gaitpref.loop.learning import Learning, pair_data
+from gaitpref.loop.safety import Safety
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
@@ -130,6 +132,7 @@ class CoSpar:
         learning: Learning | None = None,
         sampler: str = "auto",
         ordinal: Ordinal | None = None,
+        safety: Safety | None = None,
     ) -> None:
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
@@ -157,6 +160,12 @@ class CoSpar:
         self.coactive_weight = float(coactive_weight)
         self.strategy: Strategy = SelfSparring() if strategy is None else strategy
         self.rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        self.safety = Safety() if safety is None else safety
+        if self.safety.avoid:
+            if ordinal is None:
+                raise ValueError("a region of avoidance needs a rating scale (ordinal=...)")
+            self.safety.threshold(ordinal, kernel.variance)  # checks avoid < categories
+        self.unsafe: set[int] = set()  # actions flagged unsafe (flag_unsafe)
         self.posterior: Posterior = self.gp.prior()
         self.answers: list[Answer] = []
         self.pending: Query | None = None
@@ -203,13 +212,34 @@ class CoSpar:
         """The ``b`` most recently executed actions, oldest first."""
         return self._buffer
 
+    def allowed(self) -> NDArray[np.bool_] | None:
+        """The actions the next query may propose (None: all; ``loop/safety.py``)."""
+        return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
+
+    def flag_unsafe(self, action: int) -> None:
+        """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``."""
+        self.unsafe.add(self.space.check_index(action))
+
+    def unflag_unsafe(self, action: int) -> None:
+        """Take an unsafe flag back (the flag's undo)."""
+        self.unsafe.discard(int(action))
+
     # -- ask / tell --------------------------------------------------------------------------
     def ask(self) -> Query:
         """The next query; the same pending query again until it is told."""
         if self.pending is not None:
             return self.pending
+        with one_blas_thread():
+            allowed = self.allowed()
+        if allowed is not None and not allowed.any():
+            raise NoSafeGaitError(
+                "no gait may be proposed: every gait is in the region of avoidance or near a gait "
+                f"flagged unsafe ({len(self.unsafe)} flagged); nothing was proposed"
+            )
         self._rng_before_pending = self.rng.bit_generator.state
-        context = AskContext(self.posterior, self.n, self._buffer, len(self.executed), self.rng)
+        context = AskContext(
+            self.posterior, self.n, self._buffer, len(self.executed), self.rng, allowed
+        )
         with one_blas_thread():
             actions = tuple(int(a) for a in self.strategy.propose(context))
         self.pending = Query(self._next_id, actions, self._buffer)

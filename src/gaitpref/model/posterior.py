@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import solve_triangular
 from scipy.special import ndtr
 
@@ -185,12 +185,17 @@ class Posterior:
         self.cross.add_product(f, coef)
         return f
 
-    def argmax_samples(self, rng: np.random.Generator, size: int) -> IntArray:
-        """The argmax of each of ``size`` joint samples, exact ties broken uniformly at random.
+    def argmax_samples(
+        self, rng: np.random.Generator, size: int, allowed: NDArray[np.bool_] | None = None
+    ) -> IntArray:
+        """The argmax of each of ``size`` joint samples, exact ties broken uniformly at random;
+        with ``allowed``, the argmax over the allowed actions only.
 
         One pass over the samples as :meth:`sample` leaves them: no second ``size x A`` array.
         """
         samples = self.sample(rng, size)
+        if allowed is not None:
+            samples[:, ~allowed] = -np.inf
         return np.array([random_argmax(s, rng) for s in samples], dtype=np.intp)
 
     @property

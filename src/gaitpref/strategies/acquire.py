@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import IntArray
@@ -27,11 +28,15 @@ from gaitpref.strategies.base import AskContext
 from gaitpref.strategies.eubo import best_pair, eubo_against
 
 
-def _top_candidates(posterior: Posterior, k: int, rng: np.random.Generator) -> IntArray:
-    """The ``k`` actions with the highest ``mu + 2 sd`` (exact ties in random order)."""
+def _top_candidates(
+    posterior: Posterior, k: int, rng: np.random.Generator, allowed: NDArray[np.bool_] | None
+) -> IntArray:
+    """The ``k`` (allowed) actions with the highest ``mu + 2 sd`` (exact ties in random order)."""
     score = np.asarray(posterior.mean) + 2.0 * np.asarray(posterior.std)
     order = np.lexsort((rng.permutation(score.shape[0]), -score))
-    return order[: min(k, score.shape[0])].astype(np.intp)
+    if allowed is not None:
+        order = order[allowed[order]]
+    return order[: min(k, order.shape[0])].astype(np.intp)
 
 
 def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Generator) -> int:
@@ -40,9 +45,14 @@ def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Genera
 
 
 def eubo_fill(context: AskContext, chosen: list[int], allowed: IntArray | None) -> tuple[int, ...]:
-    """Add actions one at a time, each the EUBO maximiser against the best reference."""
+    """Add actions one at a time, each the EUBO maximiser against the best reference.
+
+    ``allowed`` (indices) narrows the choice (confident-eubo's plausible set) while it has new
+    actions; ``context.allowed`` (a mask: the region of interest) is never left.
+    """
     post, rng = context.posterior, context.rng
     size = len(post.space)
+    safe = np.ones(size, dtype=bool) if context.allowed is None else context.allowed
     while len(chosen) < context.n:
         refs = [*context.buffer, *chosen]
         ref = _best_reference(post, refs, rng)
@@ -52,11 +62,16 @@ def eubo_fill(context: AskContext, chosen: list[int], allowed: IntArray | None) 
             mask[:] = True
         else:
             mask[allowed] = True
+        mask &= safe
         mask[np.asarray(refs, dtype=np.intp)] = False
-        if not mask.any():  # nothing new left in the allowed set: use every other action
-            mask[:] = True
+        if not mask.any():  # nothing new left in the allowed set: any other safe action
+            mask[:] = safe
             mask[np.asarray(refs, dtype=np.intp)] = False
-        if not mask.any():  # a grid smaller than the query: repeat the reference
+        if not mask.any():  # a grid (or region) smaller than the query: repeat a safe action
+            mask[:] = safe
+            if not mask[ref]:
+                chosen.append(random_argmax(np.where(mask, values, -np.inf), rng))
+                continue
             chosen.append(ref)
             continue
         chosen.append(random_argmax(np.where(mask, values, -np.inf), rng))
@@ -67,9 +82,11 @@ def _start(context: AskContext, candidates: int) -> list[int]:
     """With no buffer: the best EUBO pair of the top candidates (n >= 2) or one sample's argmax."""
     if context.buffer:
         return []
-    if context.n == 1 or len(context.posterior.space) < 2:
-        return [int(context.posterior.argmax_samples(context.rng, 1)[0])]
-    top = _top_candidates(context.posterior, candidates, context.rng)
+    allowed = context.allowed
+    few = len(context.posterior.space) < 2 or (allowed is not None and allowed.sum() < 2)
+    if context.n == 1 or few:
+        return [int(context.posterior.argmax_samples(context.rng, 1, allowed)[0])]
+    top = _top_candidates(context.posterior, candidates, context.rng, allowed)
     x, y, _ = best_pair(context.posterior, top)
     return [x, y]
 
@@ -112,11 +129,13 @@ class ConfidentEubo:
         chosen = _start(context, self.candidates)[: context.n]
         mu, sd = np.asarray(post.mean), np.asarray(post.std)
         ucb = mu + self.beta * sd
-        plausible = np.flatnonzero(ucb >= np.max(mu - self.beta * sd))
+        safe = np.ones(mu.shape[0], dtype=bool) if context.allowed is None else context.allowed
+        plausible = np.flatnonzero((ucb >= np.max(mu - self.beta * sd)) & safe)
         refs = np.asarray([*context.buffer, *chosen], dtype=np.intp)
         rest = np.setdiff1d(plausible, refs)
         if rest.size == 0:  # only the references are plausible: the most plausible challenger
-            masked = ucb.copy()
+            masked = np.where(safe, ucb, -np.inf)
             masked[refs] = -np.inf
-            rest = np.array([int(np.argmax(masked))], dtype=np.intp)
+            if context.allowed is None or np.isfinite(masked).any():
+                rest = np.array([int(np.argmax(masked))], dtype=np.intp)
         return eubo_fill(context, chosen, rest.astype(np.intp))

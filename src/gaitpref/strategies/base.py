@@ -4,7 +4,8 @@ The paper's Algorithm 1 (Tucker, Novoseller et al., ICRA 2020) proposes the argm
 posterior samples (self-sparring).  A :class:`Strategy` replaces only that step: the query's
 buffer, the comparisons, coactive feedback and the refit are the loop's (``cospar.py``), the same
 for every strategy.  A strategy is deterministic given the context's generator, so a loop
-replays exactly from its seed.
+replays exactly from its seed.  It proposes only actions in ``context.allowed`` when it is set
+(the region of interest and the unsafe flags, ``loop/safety.py``).
 
 Notation: ``A`` actions; ``n`` new actions per query; ``b`` buffered (previously executed) ones.
 """
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
+from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior
 
@@ -28,6 +30,7 @@ class AskContext:
     buffer: tuple[int, ...]
     trial: int  # actions executed before this query
     rng: np.random.Generator
+    allowed: NDArray[np.bool_] | None = None  # None: every action may be proposed
 
     def __post_init__(self) -> None:
         # Every proposal loop runs at most ``n`` rounds: bound it by the grid, so that no query
@@ -58,5 +61,5 @@ class SelfSparring:
     name: str = "self-sparring"
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
-        picks = context.posterior.argmax_samples(context.rng, context.n)
+        picks = context.posterior.argmax_samples(context.rng, context.n, context.allowed)
         return tuple(int(a) for a in picks)

@@ -40,7 +40,10 @@ class GatedEubo:
             raise ValueError(f"gates must be >= 1, got {self.gates!r}")
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
-        picks = [int(a) for a in context.posterior.argmax_samples(context.rng, self.gates)]
+        picks = [
+            int(a)
+            for a in context.posterior.argmax_samples(context.rng, self.gates, context.allowed)
+        ]
         if not context.buffer:
             return eubo_fill(context, picks[:1], None)
         if context.n == 1:

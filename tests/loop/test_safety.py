@@ -1,0 +1,117 @@
+"""The region of avoidance and unsafe flags (``loop/safety.py``): no strategy ever proposes an
+avoided gait or one near a flagged gait, and an empty region of interest proposes nothing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gaitpref import CoSpar, Feature, Space, SquaredExponential
+from gaitpref.errors import NoSafeGaitError
+from gaitpref.feedback import Comparison, Rating
+from gaitpref.loop import Safety
+from gaitpref.loop.safety import near
+from gaitpref.model.ordinal import Ordinal
+from gaitpref.strategies import STRATEGIES, make_strategy
+
+SPACE = Space(
+    [
+        Feature.linspace("length", 0.08, 0.18, 9, unit="m"),
+        Feature.linspace("duration", 0.85, 1.15, 7, unit="s"),
+    ]
+)
+KERNEL = SquaredExponential(lengthscale=(0.03, 0.08), variance=0.005, jitter=1e-7)
+SCALE = Ordinal(["very bad", "bad", "okay", "good"], noise=0.02)
+
+
+def _loop(strategy: str, n: int, buffer: int, safety: Safety, seed: int) -> CoSpar:
+    return CoSpar(
+        SPACE,
+        KERNEL,
+        0.02,
+        n=n,
+        buffer=buffer,
+        seed=seed,
+        strategy=make_strategy(strategy),
+        ordinal=SCALE,
+        safety=safety,
+    )
+
+
+@settings(max_examples=25)
+@given(
+    strategy=st.sampled_from(STRATEGIES),
+    n=st.integers(1, 3),
+    buffer=st.integers(0, 2),
+    lam=st.floats(0.0, 2.0),
+    radius=st.sampled_from([0.0, 0.1, 0.3]),
+    seed=st.integers(0, 10_000),
+    flags=st.lists(st.integers(0, len(SPACE) - 1), max_size=3),
+)
+def test_no_strategy_proposes_an_avoided_or_flagged_gait(
+    strategy: str, n: int, buffer: int, lam: float, radius: float, seed: int, flags: list[int]
+) -> None:
+    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius)
+    loop = _loop(strategy, n, buffer, safety, seed)
+    for a in flags:
+        loop.flag_unsafe(a)
+    rng = np.random.default_rng(seed)
+    truth = rng.normal(0, 0.07, len(SPACE))
+    for _ in range(6):
+        allowed = loop.allowed()
+        if allowed is not None and not allowed.any():
+            with pytest.raises(NoSafeGaitError):
+                loop.ask()
+            return
+        q = loop.ask()
+        banned = near(SPACE, loop.unsafe, radius) if loop.unsafe else np.zeros(len(SPACE), bool)
+        upper = np.asarray(loop.posterior.mean) + lam * np.asarray(loop.posterior.std)
+        avoided = upper < safety.threshold(SCALE, KERNEL.variance)
+        for a in q.actions:
+            assert not banned[a], f"{strategy} proposed {a}, near an unsafe flag"
+            assert not avoided[a], f"{strategy} proposed {a}, in the region of avoidance"
+        answers: list[object] = [Rating(a, 1 if truth[a] < -0.05 else 3) for a in set(q.actions)]
+        seen: set[frozenset[int]] = set()
+        for a in q.actions:
+            for b in q.buffer:
+                if a != b and frozenset((a, b)) not in seen:
+                    seen.add(frozenset((a, b)))
+                    answers.append(Comparison(a, b, "first" if truth[a] > truth[b] else "second"))
+        loop.tell(q, answers)
+
+
+def test_rating_everything_worst_empties_the_region_and_nothing_is_proposed() -> None:
+    loop = _loop("self-sparring", 1, 1, Safety(avoid=1, lam=0.0), 0)
+    for _ in range(40):
+        q = loop.ask()
+        loop.tell(q, [Rating(q.actions[0], "very bad")])
+        allowed = loop.allowed()
+        if allowed is not None and not allowed.any():
+            break
+    else:
+        pytest.fail("the region of interest never emptied")
+    before = loop.rng.bit_generator.state
+    with pytest.raises(NoSafeGaitError, match="nothing was proposed"):
+        loop.ask()
+    assert loop.pending is None and loop.rng.bit_generator.state == before
+
+
+def test_unsafe_radius_and_unflag() -> None:
+    loop = _loop("eubo", 1, 1, Safety(unsafe_radius=0.25), 1)
+    loop.flag_unsafe(31)
+    banned = near(SPACE, {31}, 0.25)
+    assert banned[31] and banned.sum() > 1 and not banned.all()
+    assert np.array_equal(loop.allowed(), ~banned)
+    loop.unflag_unsafe(31)
+    assert loop.allowed() is None
+
+
+def test_bad_safety_settings_are_refused() -> None:
+    with pytest.raises(ValueError, match="rating scale"):
+        CoSpar(SPACE, KERNEL, 0.02, safety=Safety(avoid=1))
+    with pytest.raises(ValueError, match="leaves nothing"):
+        CoSpar(SPACE, KERNEL, 0.02, ordinal=SCALE, safety=Safety(avoid=4))
+    with pytest.raises(ValueError, match="unsafe_radius"):
+        Safety(unsafe_radius=2.0)
