@@ -12,7 +12,9 @@ import numpy as np
 from gaitpref.config.schema import DEFAULTS_VERSION, EARLIER_DEFAULTS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.learning import Learning
+from gaitpref.loop.safety import Safety
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.ordinal import Ordinal
 from gaitpref.space import Space
 from gaitpref.strategies import make_strategy
 
@@ -46,6 +48,8 @@ class ExperimentConfig:
     strategy_settings: dict[str, Any] = field(default_factory=dict)
     defaulted: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
     defaults_version: str = DEFAULTS_VERSION
+    ordinal: Ordinal | None = None  # [feedback.rating]
+    safety: Safety = field(default_factory=Safety)  # [safety]
 
     @property
     def sha256(self) -> str:
@@ -90,4 +94,6 @@ class ExperimentConfig:
             strategy=make_strategy(self.strategy, **self.strategy_settings),
             learning=self.learning,
             sampler=self.sampler,
+            ordinal=self.ordinal,
+            safety=self.safety,
         )

@@ -36,6 +36,9 @@
     # beta = 1.0                   # confident-eubo: width of the confidence bounds (0..100)
     # candidates = 64              # eubo, confident-eubo: top actions for the first pair
 
+Ordinal ratings (``[feedback.rating]``) and the region of avoidance (``[safety]``) are in
+``feedback.py``.
+
 Instead of ``[space]``, a config can name a gait library built by ``gaitpref gaits build``; the
 features then come from the library's axes and every action has a gait id:
 
@@ -66,6 +69,7 @@ from pathlib import Path
 from typing import Any
 
 from gaitpref.config.experiment import ExperimentConfig
+from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.config.grid import parse_gaits, parse_space
 from gaitpref.config.model import (
     check_model,
@@ -154,6 +158,8 @@ def parse_config(
     cospar, defaulted = _cospar(top["cospar"], space, defaults)
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
+    ordinal = parse_rating(top["feedback"], model["noise"])
+    safety = parse_safety(top["safety"], ordinal)
     return ExperimentConfig(
         name=top["name"] if top["name"] is not None else default_name,
         description=top["description"],
@@ -171,6 +177,8 @@ def parse_config(
         library=library,
         library_path=library_path,
         strategy_settings=settings,
+        ordinal=ordinal,
+        safety=safety,
         defaulted=frozenset(f"cospar.{k}" for k in defaulted),
         defaults_version=defaults,
     )

@@ -24,6 +24,7 @@ from gaitpref.config.specs import (
     Choice,
     Coactive,
     Integer,
+    Labels,
     LogNormalPair,
     Number,
     Numbers,
@@ -86,6 +87,21 @@ TOP: Final[dict[str, Key]] = {
     "gaits": Key(Table('library = "FILE"'), None),
     "model": Key(Table("the GP model")),
     "cospar": Key(Table("the loop's settings"), {}),
+    "feedback": Key(Table("[feedback.rating]: ordinal ratings"), {}),
+    "safety": Key(Table("the region of avoidance and unsafe flags"), {}),
+}
+FEEDBACK: Final[dict[str, Key]] = {
+    "rating": Key(Table("labels, thresholds, noise"), None),
+}
+RATING: Final[dict[str, Key]] = {
+    "labels": Key(Labels()),
+    "thresholds": Key(Numbers(Number(), 1, 9), None),  # None: the prior predictive's quantiles
+    "noise": Key(SCALE, None),  # None: [model].noise
+}
+SAFETY: Final[dict[str, Key]] = {
+    "avoid": Key(Labels(1, 9), ()),  # the worst categories, e.g. ["very bad"]
+    "lambda": Key(Number(0.0, 100.0), 1.0),  # confidence of the region of interest
+    "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
 }
 FEATURE: Final[dict[str, Key]] = {
     "min": Key(Number(), None),
@@ -146,6 +162,9 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
     "model": MODEL,
     "model.prior": PRIOR,
     "cospar": COSPAR,
+    "feedback": FEEDBACK,
+    "feedback.rating": RATING,
+    "safety": SAFETY,
     **{f"cospar.strategy_settings ({s})": t for s, t in STRATEGY_TABLES.items()},
 }
 

@@ -260,3 +260,28 @@ class ScaleOrTable:
             return SCALE.check(value, table, key)
         except ConfigError:
             _bad(self, value, table, key)
+
+
+@dataclass(frozen=True)
+class Labels:
+    """``min_len..max_len`` distinct category names, worst first."""
+
+    min_len: int = 2
+    max_len: int = 10
+
+    @property
+    def allowed(self) -> str:
+        return (
+            f"a list of {self.min_len} to {self.max_len} distinct names, worst first, e.g. "
+            '["very bad", "bad", "okay", "good"]'
+        )
+
+    def check(self, value: object, table: str, key: str) -> tuple[str, ...]:
+        if (
+            not isinstance(value, list)
+            or not self.min_len <= len(value) <= self.max_len
+            or not all(isinstance(w, str) and 0 < len(w) <= MAX_NAME for w in value)
+            or len(set(value)) != len(value)
+        ):
+            _bad(self, value, table, key)
+        return tuple(value)

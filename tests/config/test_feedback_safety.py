@@ -1,0 +1,67 @@
+"""``[feedback.rating]`` and ``[safety]``: a loop with a rating scale and a region of avoidance,
+and errors that name the table and key."""
+
+from __future__ import annotations
+
+import pytest
+
+from gaitpref import ConfigError
+from gaitpref.config import parse_config
+
+BASE = """
+name = "rated"
+[space.x]
+min = 0.0
+max = 1.0
+num = 11
+[model]
+lengthscale = 0.2
+signal_variance = 0.01
+noise = 0.02
+fit = "fixed"
+"""
+RATING = '\n[feedback.rating]\nlabels = ["very bad", "bad", "okay", "good"]\n'
+
+
+def test_rating_scale_and_region_of_avoidance() -> None:
+    cfg = parse_config(BASE + RATING + '[safety]\navoid = ["very bad"]\nlambda = 0.5\n')
+    assert cfg.ordinal is not None and cfg.ordinal.categories[-1] == "good"
+    assert cfg.ordinal.noise == 0.02 and cfg.ordinal.thresholds is None
+    assert cfg.safety.avoid == 1 and cfg.safety.lam == 0.5
+    loop = cfg.make_loop()
+    assert loop.gp.ordinal == cfg.ordinal and loop.safety == cfg.safety
+    thresholds = parse_config(BASE + RATING + "thresholds = [-0.1, 0.0, 0.1]\nnoise = 0.05\n")
+    assert thresholds.ordinal is not None and thresholds.ordinal.thresholds == (-0.1, 0.0, 0.1)
+
+
+def test_without_the_tables_nothing_changes() -> None:
+    cfg = parse_config(BASE)
+    assert cfg.ordinal is None and cfg.safety.avoid == 0
+    assert cfg.make_loop().allowed() is None
+
+
+@pytest.mark.parametrize(
+    ("extra", "where"),
+    [
+        ('\n[feedback.rating]\nlabels = ["only"]\n', r"\[feedback.rating\].labels"),
+        ('\n[feedback.rating]\nlabels = ["a", "a"]\n', r"\[feedback.rating\].labels"),
+        (
+            RATING + "thresholds = [0.1, 0.0, 0.2]\n",
+            r"\[feedback.rating\].thresholds: must increase",
+        ),
+        (RATING + "thresholds = [0.1]\n", r"\[feedback.rating\].thresholds: must hold 3"),
+        (RATING + "noize = 0.1\n", r"\[feedback.rating\]: unknown key 'noize'"),
+        ('\n[feedback.ratings]\nlabels = ["a", "b"]\n', r"\[feedback\]: unknown key 'ratings'"),
+        ('\n[safety]\navoid = ["very bad"]\n', r"\[safety\].avoid: needs a \[feedback.rating\]"),
+        (RATING + '[safety]\navoid = ["bad"]\n', r"\[safety\].avoid: must be the worst labels"),
+        (
+            RATING + '[safety]\navoid = ["very bad", "bad", "okay", "good"]\n',
+            r"\[safety\].avoid: must leave",
+        ),
+        (RATING + "[safety]\nlambda = -1\n", r"\[safety\].lambda"),
+        (RATING + "[safety]\nunsafe_radius = 2\n", r"\[safety\].unsafe_radius"),
+    ],
+)
+def test_errors_name_the_table_and_key(extra: str, where: str) -> None:
+    with pytest.raises(ConfigError, match=where):
+        parse_config(BASE + extra)
