@@ -215,7 +215,9 @@ def test_third_and_threshold_derivatives_match_finite_differences(
     h = 1e-6 * noise
     c_up, c_down = lik.terms(x + h)[2], lik.terms(x - h)[2]
     scale = noise**-3
-    assert lik.third(x)[0] == pytest.approx((c_up - c_down)[0] / (2 * h), rel=1e-4, abs=1e-4 * scale)
+    assert lik.third(x)[0] == pytest.approx(
+        (c_up - c_down)[0] / (2 * h), rel=1e-4, abs=1e-4 * scale
+    )
     dl, dg, dc = lik.threshold_terms(x)
     for j in range(t.size):
         up, down = t.copy(), t.copy()

@@ -28,10 +28,11 @@ explicit ``sum dlog p / dt_j - 1/2 sum dc / dt_j (E Sigma E^T)_ss``, implicit
 fixed like ``sigma`` (the same scale argument).
 
 The parameters are ``theta = (log l_1, ..., log l_d, log s^2, log band)``: lengthscales, the
-signal variance and the indifference band (then the thresholds' entries, when fitted).  The jitter scales with ``s^2`` (its ratio to the
-signal variance is the config's), and the probit noise ``sigma`` is held fixed: scaling ``f``,
-``s``, ``sigma`` and the band by one factor leaves every probability unchanged, so only ``s /
-sigma`` and ``band / sigma`` are identifiable, and fixing ``sigma`` removes the redundancy.
+signal variance and the indifference band (then the thresholds' entries, when fitted).  The
+jitter scales with ``s^2`` (its ratio to the signal variance is the config's), and the probit
+noise ``sigma`` is held fixed: scaling ``f``, ``s``, ``sigma`` and the band by one factor leaves
+every probability unchanged, so only ``s / sigma`` and ``band / sigma`` are identifiable, and
+fixing ``sigma`` removes the redundancy.
 
 Notation: ``N`` observations, ``m`` visited actions, ``d`` features; ``K`` is ``K_VV``.
 """

@@ -190,7 +190,11 @@ class OrdinalLikelihood:
         s = self.noise
         dz_hi, dd_hi, dc_hi, dz_lo, dd_lo, dc_lo = self._end_derivatives(values)
         n, k = values.shape[0], self.thresholds.shape[0]
-        out = tuple(np.zeros((n, k)) for _ in range(3))
+        out: tuple[FloatArray, FloatArray, FloatArray] = (
+            np.zeros((n, k)),
+            np.zeros((n, k)),
+            np.zeros((n, k)),
+        )
         rows = np.arange(n)
         upper = self.labels <= k  # t_label is this category's upper threshold
         lower = self.labels >= 2  # t_(label - 1) its lower one

@@ -117,10 +117,12 @@ class SingleData:
         found = self._learnable_part()
         if thresholds is None or found is None:
             return self
-        parts = [
-            (n, p.with_thresholds(thresholds) if _learnable(p) else p)  # type: ignore[union-attr]
-            for n, p in _parts(self.likelihood, self.size)
-        ]
+        parts: list[tuple[int, ActionLikelihood]] = []
+        for n, p in _parts(self.likelihood, self.size):
+            if _learnable(p):
+                assert isinstance(p, ThresholdLikelihood)
+                p = p.with_thresholds(thresholds)
+            parts.append((n, p))
         if isinstance(self.likelihood, StackedActionLikelihood):
             return SingleData(self.actions, StackedActionLikelihood(tuple(parts)))
         return SingleData(self.actions, parts[0][1])
