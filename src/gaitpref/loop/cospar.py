@@ -54,6 +54,7 @@ from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
@@ -277,10 +278,7 @@ class CoSpar:
             if terms.empty and not isinstance(record, Comparison):
                 ignored.append(record)
         if singles and self.learning.fit == "evidence":
-            raise FeedbackError(
-                f"feedback kind {singles[0].kind!r} adds single-action terms, which the evidence "
-                "fit of the hyperparameters does not take yet; use [model] fit = 'fixed'"
-            )
+            self._check_evidence(singles)
         answer = Answer(
             q,
             tuple(r for _, r in records),
@@ -295,7 +293,7 @@ class CoSpar:
             refit = self._refit(answers_now)
             hyper = self.hyper if refit is None else refit.after
             gp = self.gp if hyper == self.hyper else self._gp(hyper)
-            new_posterior = self._fit(answers_now, gp, hyper.band)
+            new_posterior = self._fit(answers_now, gp, hyper)
         if refit is not None:
             answer = dataclasses.replace(answer, refit=refit)
         self.answers.append(answer)
@@ -411,8 +409,27 @@ class CoSpar:
             return answer.singles
         return tuple(o for k, o in enumerate(answer.singles) if k not in dropped)
 
-    def _singles(self, answers: list[Answer]) -> tuple[Any, ActionLikelihood | None]:
-        """The kept single-action terms: their actions and one likelihood over them (by kind)."""
+    def _check_evidence(self, singles: list[ActionObservation]) -> None:
+        """Refuse, naming the kind, single-action terms the evidence fit cannot differentiate."""
+        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
+        for kind in kinds():
+            mine = [o for o in singles if o.kind == kind.name]
+            if mine:
+                try:
+                    SingleData(
+                        np.array([o.action for o in mine], dtype=np.intp),
+                        kind.action_likelihood(mine, context),
+                    )
+                except UnsupportedLikelihoodError as exc:
+                    raise FeedbackError(
+                        f"feedback kind {kind.name!r}: {exc}; use [model] fit = 'fixed'"
+                    ) from None
+
+    def _singles(
+        self, answers: list[Answer], thresholds: tuple[float, ...] | None = None
+    ) -> tuple[Any, ActionLikelihood | None]:
+        """The kept single-action terms: their actions and one likelihood over them (by kind),
+        with fitted ordinal ``thresholds`` in place of the kind's own when given."""
         kept = [o for a in answers for o in self._kept_singles(a)]
         if not kept:
             return None, None
@@ -424,7 +441,11 @@ class CoSpar:
             if mine:
                 actions += [o.action for o in mine]
                 parts.append((len(mine), kind.action_likelihood(mine, context)))
-        return np.asarray(actions, dtype=np.intp), StackedActionLikelihood(tuple(parts))
+        single = np.asarray(actions, dtype=np.intp)
+        stacked = StackedActionLikelihood(tuple(parts))
+        if thresholds is None:
+            return single, stacked
+        return single, SingleData(single, stacked).at(thresholds).likelihood
 
     def context(self) -> ModelContext:
         """What feedback kinds see of this loop: its space, noises and rating scale."""
@@ -468,17 +489,26 @@ class CoSpar:
         if self.learning.fit != "evidence" or len(answers) % self.learning.refit_every:
             return None
         data = self._data(answers)
-        if data.size == 0:
+        single, single_likelihood = self._singles(answers)
+        if data.size == 0 and single is None:
             return None
-        return fit_hyperparameters(self.space, self.hyper, data, self.prior)
+        singles = None
+        if single is not None and single_likelihood is not None:
+            singles = SingleData(single, single_likelihood)
+        return fit_hyperparameters(self.space, self.hyper, data, self.prior, singles=singles)
 
     def _fit(
-        self, answers: list[Answer], gp: PreferenceGP | None = None, band: float | None = None
+        self,
+        answers: list[Answer],
+        gp: PreferenceGP | None = None,
+        hyper: Hyperparameters | None = None,
     ) -> Posterior:
-        """The posterior given ``answers`` (default model: the current kernel and band)."""
+        """The posterior given ``answers`` (default model: the current kernel, band and
+        thresholds)."""
         gp = self.gp if gp is None else gp
-        band = self.hyper.band if band is None else band
-        single, single_likelihood = self._singles(answers)
+        hyper = self.hyper if hyper is None else hyper
+        band = hyper.band
+        single, single_likelihood = self._singles(answers, hyper.thresholds)
         if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
             prefs = [p for a in answers for p in self._kept(a)]
             winners = np.array([p.winner for p in prefs], dtype=np.intp)

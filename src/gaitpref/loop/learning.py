@@ -10,7 +10,9 @@
   hyperparameters (needs ``fit="evidence"``).
 - ``fit``: ``"fixed"`` keeps the config's kernel (the paper); ``"evidence"`` refits lengthscales,
   signal variance (and a learned band) every ``refit_every`` answers by maximising the Laplace
-  evidence plus priors (``model/hyperfit.py``), warm-started from the current values.
+  evidence plus priors (``model/hyperfit.py``), warm-started from the current values.  Single-
+  action terms (ratings) take part; ordinal thresholds the config leaves unset are fitted with
+  the rest (``Hyperparameters.thresholds``), and the posterior uses the fitted ones.
 
 :func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
 """

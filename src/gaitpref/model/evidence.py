@@ -18,11 +18,21 @@ own parameter, ``log band`` of the ordered probit, the explicit part is
 ``sum_k dlog p_k - 1/2 sum_k dc_k (G Sigma G^T)_kk`` and the implicit one
 ``s2^T (I - Sigma W) K G^T dg``.  ``Sigma = S^T S`` with ``S = R^-1 L^T`` from the Laplace fit.
 
+Single-action terms (``singles.py``; ordinal ratings) are observations of ``f_s``: they stack
+under the pairs as rows ``e_s`` of ``G`` (``E``), so ``W`` gains ``E^T diag(c_s) E``, the first
+term their ``log p``, and ``s2`` their third derivatives; every formula above holds with the
+stacked ``G``.  Fitted ordinal thresholds ``t_j`` are likelihood parameters like the band:
+explicit ``sum dlog p / dt_j - 1/2 sum dc / dt_j (E Sigma E^T)_ss``, implicit
+``s2^T (I - Sigma W) K E^T dg / dt_j``; they enter ``theta`` as ``t_1`` and the log gaps
+``log(t_(j+1) - t_j)`` (so they stay increasing), by the chain rule.  The rating noise is held
+fixed like ``sigma`` (the same scale argument).
+
 The parameters are ``theta = (log l_1, ..., log l_d, log s^2, log band)``: lengthscales, the
-signal variance and the indifference band.  The jitter scales with ``s^2`` (its ratio to the
-signal variance is the config's), and the probit noise ``sigma`` is held fixed: scaling ``f``,
-``s``, ``sigma`` and the band by one factor leaves every probability unchanged, so only ``s /
-sigma`` and ``band / sigma`` are identifiable, and fixing ``sigma`` removes the redundancy.
+signal variance and the indifference band (then the thresholds' entries, when fitted).  The
+jitter scales with ``s^2`` (its ratio to the signal variance is the config's), and the probit
+noise ``sigma`` is held fixed: scaling ``f``, ``s``, ``sigma`` and the band by one factor leaves
+every probability unchanged, so only ``s / sigma`` and ``band / sigma`` are identifiable, and
+fixing ``sigma`` removes the redundancy.
 
 Notation: ``N`` observations, ``m`` visited actions, ``d`` features; ``K`` is ``K_VV``.
 """
@@ -38,6 +48,7 @@ from scipy.linalg import solve_triangular
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import LaplaceMode, fit_laplace
 from gaitpref.model.likelihood import OrderedProbit
+from gaitpref.model.singles import SingleData
 from gaitpref.space import FloatArray, IntArray, Space
 
 
@@ -75,12 +86,14 @@ class PairData:
 
 @dataclass(frozen=True)
 class Hyperparameters:
-    """Kernel lengthscales (feature units), signal variance, jitter, and indifference band."""
+    """Kernel lengthscales (feature units), signal variance, jitter, indifference band, and
+    the ordinal thresholds when the evidence fits them (None: not fitted)."""
 
     lengthscale: tuple[float, ...]
     variance: float
     jitter: float
     band: float = 0.0
+    thresholds: tuple[float, ...] | None = None
 
     @classmethod
     def from_kernel(
@@ -92,21 +105,35 @@ class Hyperparameters:
         return SquaredExponential(self.lengthscale, self.variance, self.jitter)
 
     def log_vector(self) -> FloatArray:
-        """``(log l_1, ..., log l_d, log s^2, log band)`` (``log band = -inf`` for no band)."""
+        """``(log l_1, ..., log l_d, log s^2, log band)`` (``log band = -inf`` for no band), then
+        with thresholds ``(t_1, log(t_2 - t_1), ..., log(t_T - t_(T-1)))``: every value of
+        this vector gives increasing thresholds."""
         with np.errstate(divide="ignore"):
             out: FloatArray = np.log(np.array([*self.lengthscale, self.variance, self.band]))
+            if self.thresholds is not None:
+                t = np.asarray(self.thresholds, dtype=np.float64)
+                out = np.concatenate([out, t[:1], np.log(np.diff(t))])
         return out
 
     def with_log_vector(self, theta: FloatArray) -> Hyperparameters:
         """New values from a log vector; the jitter keeps its ratio to the signal variance."""
-        values = np.exp(np.asarray(theta, dtype=np.float64))
+        theta = np.asarray(theta, dtype=np.float64)
         d = len(self.lengthscale)
+        values = np.exp(theta[: d + 2])
         variance = float(values[d])
+        thresholds = None
+        if self.thresholds is not None:
+            rest = theta[d + 2 :]
+            if rest.shape != (len(self.thresholds),):
+                raise ValueError(f"expected {d + 2 + len(self.thresholds)} entries")
+            t = rest[0] + np.concatenate([[0.0], np.cumsum(np.exp(rest[1:]))])
+            thresholds = tuple(float(x) for x in t)
         return Hyperparameters(
             tuple(float(v) for v in values[:d]),
             variance,
             self.jitter * variance / self.variance,
             float(values[d + 1]),
+            thresholds,
         )
 
 
@@ -115,7 +142,7 @@ class Evidence:
     """Laplace log evidence, its gradient in :meth:`Hyperparameters.log_vector`, the fit."""
 
     value: float
-    gradient: FloatArray  # (d + 2,)
+    gradient: FloatArray  # (d + 2,), or (d + 2 + T,) with T fitted thresholds
     fit: LaplaceMode
 
 
@@ -126,21 +153,47 @@ def visited_pairs(data: PairData) -> tuple[IntArray, IntArray, IntArray]:
     return visited.astype(np.intp), inverse[:n].astype(np.intp), inverse[n:].astype(np.intp)
 
 
+def _visited(
+    data: PairData, singles: SingleData | None
+) -> tuple[IntArray, IntArray, IntArray, IntArray | None]:
+    if singles is None:
+        return (*visited_pairs(data), None)
+    n = data.size
+    visited, inverse = np.unique(
+        np.concatenate([data.first, data.second, singles.actions]), return_inverse=True
+    )
+    inv = inverse.astype(np.intp)
+    return visited.astype(np.intp), inv[:n], inv[n : 2 * n], inv[2 * n :]
+
+
 def laplace_evidence(
-    space: Space, hyper: Hyperparameters, data: PairData, init: FloatArray | None = None
+    space: Space,
+    hyper: Hyperparameters,
+    data: PairData,
+    init: FloatArray | None = None,
+    *,
+    singles: SingleData | None = None,
 ) -> Evidence:
     """Log evidence and gradient at ``hyper``; ``init`` warm-starts the mode on the visited set.
 
-    Raises what :func:`~gaitpref.model.laplace.fit_laplace` raises (``ConvergenceError``,
-    ``PriorNotPositiveDefiniteError``).
+    ``singles``: single-action terms besides the pairs; with ``hyper.thresholds`` set, those
+    thresholds replace the fitted part's (:class:`~gaitpref.model.singles.SingleData`) and
+    the gradient has their entries.  Raises what :func:`~gaitpref.model.laplace.fit_laplace`
+    raises (``ConvergenceError``, ``PriorNotPositiveDefiniteError``).
     """
-    if data.size == 0:
+    if singles is not None and singles.size == 0:
+        singles = None
+    if data.size == 0 and singles is None:
         raise ValueError("the evidence needs at least one observation")
-    visited, a, b = visited_pairs(data)
+    fitted = singles is not None and hyper.thresholds is not None and singles.thresholds is not None
+    if singles is not None:
+        singles = singles.at(hyper.thresholds)
+    visited, a, b, s = _visited(data, singles)
     kernel = hyper.kernel()
     K = kernel.cross(space, visited, rows=visited)
     lik = data.likelihood(hyper.band)
-    fit = fit_laplace(K, visited, a, b, lik, init)
+    single_lik = None if singles is None else singles.likelihood
+    fit = fit_laplace(K, visited, a, b, lik, init, single=s, single_likelihood=single_lik)
     m = visited.shape[0]
     f = fit.mode
     diff = f[a] - f[b]
@@ -148,24 +201,55 @@ def laplace_evidence(
     G = np.zeros((data.size, m))
     G[np.arange(data.size), a] += 1.0
     G[np.arange(data.size), b] -= 1.0
+    third = lik.third(diff)
+    if singles is not None and s is not None:  # rows e_s below the pairs' (module docstring)
+        E = np.zeros((singles.size, m))
+        E[np.arange(singles.size), s] = 1.0
+        _, g_s, c_s = singles.likelihood.terms(f[s])
+        G, g, c = np.vstack([G, E]), np.concatenate([g, g_s]), np.concatenate([c, c_s])
+        third = np.concatenate([third, singles.third(f[s])])
     alpha = G.T @ g
     W = G.T @ (c[:, None] * G)
     S = solve_triangular(fit.chol_hessian, fit.chol_prior.T, lower=True, check_finite=False)
     Sigma = S.T @ S
     GS = G @ Sigma
     v = np.einsum("kj,kj->k", GS, G)  # diag(G Sigma G^T)
-    s2 = -0.5 * (G.T @ (lik.third(diff) * v))
+    s2 = -0.5 * (G.T @ (third * v))
     q = s2 - W @ (Sigma @ s2)  # (I - W Sigma) s2
     B = 0.5 * np.outer(alpha, alpha) - 0.5 * (W - W @ Sigma @ W) + np.outer(q, alpha)
-    grad = np.zeros(space.ndim + 2)
+    n_thresholds = 0 if hyper.thresholds is None else len(hyper.thresholds)
+    grad = np.zeros(space.ndim + 2 + n_thresholds)
     points = space.points[visited]
     se = K - kernel.jitter * np.eye(m)  # the squared-exponential part
     for j, ell in enumerate(hyper.lengthscale):
         dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2
         grad[j] = float(np.sum(dK * B))
     grad[space.ndim] = float(np.sum(K * B))  # dK / dlog s^2 = K (the jitter scales along)
+    n = data.size
     if hyper.band > 0 and np.any(data.banded):
         dlogp, dg, dc = lik.band_terms(diff)
-        explicit = float(np.sum(dlogp)) - 0.5 * float(np.sum(dc * v))
-        grad[space.ndim + 1] = explicit + float(q @ (K @ (G.T @ dg)))
+        explicit = float(np.sum(dlogp)) - 0.5 * float(np.sum(dc * v[:n]))
+        grad[space.ndim + 1] = explicit + float(q @ (K @ (G[:n].T @ dg)))
+    if fitted and singles is not None and s is not None and hyper.thresholds is not None:
+        grad[space.ndim + 2 :] = _threshold_gradient(
+            singles, f[s], v[n:], q, K @ G[n:].T, hyper.thresholds
+        )
     return Evidence(fit.log_evidence, grad, fit)
+
+
+def _threshold_gradient(
+    singles: SingleData,
+    values: FloatArray,
+    v: FloatArray,
+    q: FloatArray,
+    KE: FloatArray,
+    thresholds: tuple[float, ...],
+) -> FloatArray:
+    """The gradient in ``(t_1, log gaps)`` (:meth:`Hyperparameters.log_vector`): per threshold
+    ``sum dlog p - 1/2 sum dc v + q^T K E^T dg``, then the chain rule ``t_j = t_1 + sum gaps``."""
+    dlogp, dg, dc = singles.threshold_terms(values)
+    per_t = dlogp.sum(axis=0) - 0.5 * (v @ dc) + q @ (KE @ dg)
+    gaps = np.diff(np.asarray(thresholds, dtype=np.float64))
+    tail = np.cumsum(per_t[::-1])[::-1]  # tail[j] = sum_{i >= j} per_t[i]
+    out: FloatArray = np.concatenate([tail[:1], gaps * tail[1:]])
+    return out

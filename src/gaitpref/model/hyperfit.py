@@ -16,17 +16,25 @@ with consistent answers the evidence keeps raising ``s / sigma``, the posterior 
 overconfident and the loop explores too little; the study in ``docs/results/learning`` measured
 it (``variance_sd = 1`` lost late in the session).
 
+Ordinal ratings whose thresholds the config leaves unset have them fitted too, as ``t_1`` and
+the log gaps ``log(t_(j+1) - t_j)`` (any value keeps them increasing): ``t_1`` normal, the gaps
+log-normal (:class:`ThresholdPrior`), centred at the prior predictive's quantiles (the rating
+likelihood's own thresholds, ``Ordinal.thresholds_for``); ``sd = 0.7`` on the log gaps and the
+prior's utility sd on ``t_1`` by default, bounds at 3 sd.  The rating noise stays fixed (as
+``sigma``: ``evidence.py``).
+
 :func:`fit_hyperparameters` never fails silently: a fit that raises, produces non-finite values
 or does not improve the objective keeps the previous hyperparameters, and the returned
 :class:`HyperFit` says what happened (``accepted``, ``converged``, ``message``).
 
-Notation: ``d`` features; ``theta`` has ``d + 2`` entries, of which the free ones are optimised.
+Notation: ``d`` features, ``T`` fitted thresholds; ``theta`` has ``d + 2`` (``+ T``) entries, of
+which the free ones are optimised.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -35,6 +43,7 @@ from scipy.optimize import minimize
 
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
+from gaitpref.model.singles import SingleData
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import FloatArray, Space
 
@@ -54,18 +63,44 @@ class LogNormal:
 
 
 @dataclass(frozen=True)
-class HyperPrior:
-    """Priors of the lengthscales (one per feature), the signal variance and the band.
+class ThresholdPrior:
+    """Ordinal thresholds: ``t_1 ~ N(c_1, first_sd^2)``, ``log(t_(j+1) - t_j) ~ N(log(c_(j+1) -
+    c_j), gap_sd^2)``, centred at the rating likelihood's own thresholds ``c`` (the prior
+    predictive's quantiles, ``Ordinal.thresholds_for``).  ``first_sd`` None: the prior's
+    utility sd ``sqrt(s^2)`` (the variance prior's median).  ``sd = 0`` holds them."""
 
-    ``band`` None: the band is not fitted (ties dropped, or a band fixed by the config).
+    first_sd: float | None = None
+    gap_sd: float = 0.7
+
+    def __post_init__(self) -> None:
+        for name, sd in (("first_sd", self.first_sd), ("gap_sd", self.gap_sd)):
+            if sd is not None and not (np.isfinite(sd) and sd >= 0):
+                raise ValueError(f"the thresholds' prior {name} must be >= 0, got {sd!r}")
+
+
+@dataclass(frozen=True)
+class HyperPrior:
+    """Priors of the lengthscales (one per feature), the signal variance, the band and the
+    ordinal thresholds.
+
+    ``band`` None: the band is not fitted (ties dropped, or a band fixed by the config).  The
+    thresholds are fitted only when there are ratings whose thresholds the config leaves unset.
     """
 
     lengthscale: tuple[LogNormal, ...]
     variance: LogNormal
     band: LogNormal | None = None
+    thresholds: ThresholdPrior = ThresholdPrior()
 
     def all(self) -> tuple[LogNormal | None, ...]:
         return (*self.lengthscale, self.variance, self.band)
+
+    def threshold_priors(self, centre: tuple[float, ...]) -> list[tuple[float, float]]:
+        """``(centre, sd)`` of each threshold entry of ``theta`` (``t_1``, then log gaps)."""
+        first = self.thresholds.first_sd
+        first = float(np.sqrt(self.variance.median)) if first is None else first
+        gaps = np.log(np.diff(np.asarray(centre, dtype=np.float64)))
+        return [(centre[0], first), *((float(g), self.thresholds.gap_sd) for g in gaps)]
 
 
 def default_prior(
@@ -110,12 +145,15 @@ class HyperFit:
             return x if math.isfinite(x) else None
 
         def values(h: Hyperparameters) -> dict[str, object]:
-            return {
+            out: dict[str, object] = {
                 "lengthscale": list(h.lengthscale),
                 "signal_variance": h.variance,
                 "jitter": h.jitter,
                 "tie_band": h.band,
             }
+            if h.thresholds is not None:  # only when fitted: older records stay as they were
+                out["thresholds"] = list(h.thresholds)
+            return out
 
         return {
             "before": values(self.before),
@@ -134,19 +172,61 @@ class HyperFit:
 _FAILURES = (ConvergenceError, PriorNotPositiveDefiniteError, LinAlgError, FloatingPointError)
 
 
-def _bounds(space: Space, prior: HyperPrior) -> list[tuple[float, float]]:
-    out = []
-    for k, p in enumerate(prior.all()):
+@dataclass(frozen=True)
+class _Entries:
+    """Per entry of ``theta``: prior centre and sd (in ``theta``'s coordinates), free or held,
+    and bounds."""
+
+    centre: FloatArray
+    sd: FloatArray
+    free: NDArray[np.bool_]
+    bounds: list[tuple[float, float]]
+
+
+def _entries(
+    space: Space, prior: HyperPrior, start: Hyperparameters, singles: SingleData | None
+) -> _Entries:
+    priors: list[tuple[float, float] | None] = [
+        None if p is None else (float(np.log(p.median)), p.sd) for p in prior.all()
+    ]
+    if start.thresholds is not None:
+        centre = None if singles is None else singles.thresholds
+        if centre is None:  # fitted before; no ratings to fit them now: held
+            priors += [None] * len(start.thresholds)
+        else:
+            priors += prior.threshold_priors(centre)
+    free = np.array([p is not None and p[1] > 0 for p in priors])
+    bounds = []
+    for k, p in enumerate(priors):
         if p is None:
-            out.append((-np.inf, np.inf))
+            bounds.append((-np.inf, np.inf))
             continue
-        lo, hi = np.log(p.median) - 3 * p.sd, np.log(p.median) + 3 * p.sd
+        lo, hi = p[0] - 3 * p[1], p[0] + 3 * p[1]
         if k < space.ndim and len(space.features[k]) > 1:
             step = float(np.min(np.diff(space.features[k].array)))
             lo = max(lo, float(np.log(0.5 * step)))
             hi = max(hi, lo)
-        out.append((float(lo), float(hi)))
-    return out
+        bounds.append((float(lo), float(hi)))
+    return _Entries(
+        np.array([p[0] if p else 0.0 for p in priors]),
+        np.array([p[1] if p else 1.0 for p in priors]),
+        free,
+        bounds,
+    )
+
+
+def _with_thresholds(start: Hyperparameters, singles: SingleData | None) -> Hyperparameters:
+    """``start`` with the thresholds to fit (the likelihood's own when not fitted before)."""
+    own = None if singles is None else singles.thresholds
+    if own is None:
+        return start
+    if start.thresholds is None:
+        return replace(start, thresholds=own)
+    if len(start.thresholds) != len(own):
+        raise ValueError(
+            f"the ratings have {len(own)} thresholds; the hyperparameters {len(start.thresholds)}"
+        )
+    return start
 
 
 def fit_hyperparameters(
@@ -155,16 +235,24 @@ def fit_hyperparameters(
     data: PairData,
     prior: HyperPrior,
     *,
+    singles: SingleData | None = None,
     max_evaluations: int = 60,
 ) -> HyperFit:
-    """MAP hyperparameters for ``data`` by L-BFGS-B from ``start`` (see the module docstring)."""
-    free = np.array([p is not None and p.sd > 0 for p in prior.all()])
+    """MAP hyperparameters for ``data`` (and single-action terms ``singles``) by L-BFGS-B from
+    ``start`` (see the module docstring).  Ratings whose thresholds are not fixed have them
+    fitted too; ``after.thresholds`` then holds them (``start``'s, or the likelihood's own the
+    first time, are the starting values)."""
+    if singles is not None and singles.size == 0:
+        singles = None
     if prior.band is not None and start.band <= 0:
         raise ValueError("fitting the band needs a positive starting band")
-    if data.size == 0 or not np.any(free):
+    used = _with_thresholds(start, singles)
+    entries = _entries(space, prior, used, singles)
+    size = data.size + (0 if singles is None else singles.size)
+    if size == 0 or not np.any(entries.free):
         return HyperFit(start, start, False, True, "nothing to fit", 0, 0, np.nan, np.nan, 0)
     with one_blas_thread():
-        return _fit(space, start, data, prior, free, max_evaluations)
+        return _fit(space, start, used, data, singles, entries, max_evaluations)
 
 
 class _Objective:
@@ -175,14 +263,13 @@ class _Objective:
         space: Space,
         start: Hyperparameters,
         data: PairData,
-        prior: HyperPrior,
-        free: NDArray[np.bool_],
+        singles: SingleData | None,
+        entries: _Entries,
     ) -> None:
-        self.space, self.start, self.data, self.free = space, start, data, free
+        self.space, self.start, self.data, self.singles = space, start, data, singles
+        self.free = free = entries.free
         self.theta0 = start.log_vector()
-        priors = prior.all()
-        self.centre = np.array([np.log(p.median) if p else 0.0 for p in priors])[free]
-        self.sd = np.array([p.sd if p else 1.0 for p in priors])[free]
+        self.centre, self.sd = entries.centre[free], entries.sd[free]
         self.mode: FloatArray | None = None
         self.evaluations = 0
         self.failures = 0
@@ -196,7 +283,9 @@ class _Objective:
     def __call__(self, x: FloatArray) -> tuple[float, FloatArray]:
         self.evaluations += 1
         try:
-            ev = laplace_evidence(self.space, self.hyper(x), self.data, self.mode)
+            ev = laplace_evidence(
+                self.space, self.hyper(x), self.data, self.mode, singles=self.singles
+            )
             if not (np.isfinite(ev.value) and np.all(np.isfinite(ev.gradient))):
                 raise FloatingPointError("non-finite evidence")
         except _FAILURES:
@@ -216,18 +305,21 @@ _FAILED = 1e10  # what a failed evaluation reports to L-BFGS-B: far worse than a
 def _fit(
     space: Space,
     start: Hyperparameters,
+    used: Hyperparameters,
     data: PairData,
-    prior: HyperPrior,
-    free: NDArray[np.bool_],
+    singles: SingleData | None,
+    entries: _Entries,
     max_evaluations: int,
 ) -> HyperFit:
-    bounds = [b for b, keep in zip(_bounds(space, prior), free, strict=True) if keep]
-    objective = _Objective(space, start, data, prior, free)
+    free = entries.free
+    size = data.size + (0 if singles is None else singles.size)
+    bounds = [b for b, keep in zip(entries.bounds, free, strict=True) if keep]
+    objective = _Objective(space, used, data, singles, entries)
     x0 = np.clip(objective.theta0[free], [b[0] for b in bounds], [b[1] for b in bounds])
     first, _ = objective(x0)
     if objective.failures:
         message = "kept the previous hyperparameters: the evidence cannot be evaluated at the start"
-        return HyperFit(start, start, False, False, message, 1, 1, np.nan, np.nan, data.size)
+        return HyperFit(start, start, False, False, message, 1, 1, np.nan, np.nan, size)
     res = minimize(
         objective,
         x0,
@@ -242,11 +334,9 @@ def _fit(
     evals, failed = objective.evaluations, objective.failures
     if not after >= before:
         message = f"kept the previous hyperparameters: the fit did not improve ({res.message})"
-        return HyperFit(
-            start, start, False, False, message, evals, failed, before, before, data.size
-        )
+        return HyperFit(start, start, False, False, message, evals, failed, before, before, size)
     message = str(res.message) + (f"; {failed} evaluations failed" if failed else "")
     return HyperFit(
         start, objective.hyper(best_x), True, bool(res.success) and not failed, message, evals,
-        failed, before, after, data.size,
+        failed, before, after, size,
     )  # fmt: skip

@@ -14,6 +14,17 @@ thresholds ``t_1 < ... < t_{K-1}`` (``t_0 = -inf``, ``t_K = +inf``) and a rating
   variance of a standard normal truncated to ``[lo, hi]``, over ``s^2``: in ``[0, 1 / s^2]``, so
   the likelihood is log-concave and the Laplace fit stays a convex Newton problem.
 
+The Laplace evidence (``evidence.py``) also needs ``c``'s derivative in ``f`` and the
+derivatives of ``(log p, g, c)`` in each threshold.  With ``D = rho_lo - rho_hi``,
+``u = hi rho_hi - lo rho_lo`` and ``C = D^2 + u`` (so ``g = D / s``, ``c = C / s^2``):
+
+    dD/dhi = rho_hi (hi - D),                   dD/dlo = rho_lo (D - lo),
+    dC/dhi = rho_hi (2 D (hi - D) + 1 - hi^2 - u),  dC/dlo = rho_lo (2 D (D - lo) + u - 1 + lo^2),
+
+``d log Z / dhi = rho_hi``, ``d log Z / dlo = -rho_lo``; ``hi`` and ``lo`` move by ``-1 / s``
+with ``f`` and by ``1 / s`` with their own threshold, so ``dc/df = -(dC/dhi + dC/dlo) / s^3``.
+An open end contributes nothing.
+
 Tails go through the same Mills-ratio forms as the pairwise probit (``likelihood.py``): an
 interval is flipped to ``lo + hi <= 0`` (``Z`` is symmetric), and an open end uses the probit's
 own ratio, so nothing underflows.  :class:`Ordinal` holds the settings;
@@ -106,6 +117,7 @@ class OrdinalLikelihood:
     labels: NDArray[np.intp]
     thresholds: FloatArray  # (K - 1,) increasing
     noise: float
+    thresholds_fixed: bool = False  # set by the config: the evidence does not fit them
 
     def bounds(self, values: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(lo, hi)`` in units of ``s`` per observation (``-inf`` / ``+inf`` at the ends)."""
@@ -114,10 +126,12 @@ class OrdinalLikelihood:
         hi = (t[self.labels] - values) / self.noise
         return lo, hi
 
-    def terms(self, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    def _ratios(self, values: FloatArray) -> tuple[FloatArray, ...]:
+        """``(lo, hi, log Z, rho_lo, rho_hi, u)`` per observation, ``u = hi rho_hi - lo rho_lo``
+        (``rho`` and ``u`` are 0 at an open end)."""
         lo, hi = self.bounds(values)
         n = values.shape[0]
-        log_z, r_lo, r_hi, u = (np.zeros(n) for _ in range(4))  # u = hi rho_hi - lo rho_lo
+        log_z, r_lo, r_hi, u = (np.zeros(n) for _ in range(4))
         bottom = np.isneginf(lo)  # k = 1: Z = Phi(hi)
         top = np.isposinf(hi) & ~bottom  # k = K: Z = Phi(-lo)
         both = ~(bottom | top)
@@ -140,10 +154,65 @@ class OrdinalLikelihood:
             r_lo[both] = np.where(flip, rho_hi, rho_lo)
             r_hi[both] = np.where(flip, rho_lo, rho_hi)
             u[both] = b * r_hi[both] - a * r_lo[both]
+        return lo, hi, log_z, r_lo, r_hi, u
+
+    def terms(self, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        _, _, log_z, r_lo, r_hi, u = self._ratios(values)
         d = r_lo - r_hi
         grad = d / self.noise
         curv = np.clip(d**2 + u, 0.0, 1.0) / self.noise**2
         return log_z, grad, curv
+
+    def _end_derivatives(self, values: FloatArray) -> tuple[FloatArray, ...]:
+        """Derivatives of ``log Z``, ``D = rho_lo - rho_hi`` and ``C = D^2 + u`` in ``hi`` and in
+        ``lo``: ``(rho_hi, dD/dhi, dC/dhi, -rho_lo, dD/dlo, dC/dlo)`` (module docstring); each
+        is 0 at an open end (no threshold there)."""
+        lo, hi, _, r_lo, r_hi, u = self._ratios(values)
+        d = r_lo - r_hi
+        fin_hi, fin_lo = np.isfinite(hi), np.isfinite(lo)
+        h, ell = np.where(fin_hi, hi, 0.0), np.where(fin_lo, lo, 0.0)
+        dd_hi = np.where(fin_hi, r_hi * (h - d), 0.0)
+        dd_lo = np.where(fin_lo, r_lo * (d - ell), 0.0)
+        dc_hi = np.where(fin_hi, r_hi * (2.0 * d * (h - d) + 1.0 - h * h - u), 0.0)
+        dc_lo = np.where(fin_lo, r_lo * (2.0 * d * (d - ell) + u - 1.0 + ell * ell), 0.0)
+        return r_hi, dd_hi, dc_hi, -r_lo, dd_lo, dc_lo
+
+    def third(self, values: FloatArray) -> FloatArray:
+        """``d c / d f = -d^3 log p / d f^3`` per observation (the evidence's gradient)."""
+        _, _, dc_hi, _, _, dc_lo = self._end_derivatives(values)
+        out: FloatArray = -(dc_hi + dc_lo) / self.noise**3
+        return out
+
+    def threshold_terms(self, values: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Derivatives of ``(log p, g, c)`` (as :meth:`terms`) with respect to each threshold:
+        three ``n x (K - 1)`` arrays (an observation depends only on the thresholds around its
+        category)."""
+        s = self.noise
+        dz_hi, dd_hi, dc_hi, dz_lo, dd_lo, dc_lo = self._end_derivatives(values)
+        n, k = values.shape[0], self.thresholds.shape[0]
+        out: tuple[FloatArray, FloatArray, FloatArray] = (
+            np.zeros((n, k)),
+            np.zeros((n, k)),
+            np.zeros((n, k)),
+        )
+        rows = np.arange(n)
+        upper = self.labels <= k  # t_label is this category's upper threshold
+        lower = self.labels >= 2  # t_(label - 1) its lower one
+        for arr, up, low, power in zip(
+            out, (dz_hi, dd_hi, dc_hi), (dz_lo, dd_lo, dc_lo), (1, 2, 3), strict=True
+        ):
+            arr[rows[upper], self.labels[upper] - 1] += up[upper] / s**power
+            arr[rows[lower], self.labels[lower] - 2] += low[lower] / s**power
+        return out
+
+    def with_thresholds(self, thresholds: Sequence[float] | FloatArray) -> OrdinalLikelihood:
+        """The same ratings under other thresholds (increasing, ``K - 1`` of them)."""
+        t = np.asarray(thresholds, dtype=np.float64)
+        if t.shape != self.thresholds.shape or np.any(np.diff(t) <= 0):
+            raise ValueError(
+                f"thresholds must be {self.thresholds.size} increasing values, got {t.tolist()}"
+            )
+        return OrdinalLikelihood(self.labels, t, self.noise, self.thresholds_fixed)
 
 
 def rating_likelihood(
@@ -154,7 +223,7 @@ def rating_likelihood(
     if idx.size and (idx.min() < 1 or idx.max() > ordinal.size):
         raise ValueError(f"rating labels must be in 1..{ordinal.size}")
     t = np.asarray(ordinal.thresholds_for(signal_variance), dtype=np.float64)
-    return OrdinalLikelihood(idx, t, ordinal.noise)
+    return OrdinalLikelihood(idx, t, ordinal.noise, ordinal.thresholds is not None)
 
 
 def rating_probabilities(
