@@ -411,7 +411,7 @@ class CoSpar:
 
     def _check_evidence(self, singles: list[ActionObservation]) -> None:
         """Refuse, naming the kind, single-action terms the evidence fit cannot differentiate."""
-        context = ModelContext(self.space, self.gp.noise, self.coactive_weight)
+        context = self.context()
         for kind in kinds():
             mine = [o for o in singles if o.kind == kind.name]
             if mine:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, SerializerFunctionWrapHandler, model_serializer
 
 from gaitpref.errors import ReplayError
 from gaitpref.feedback import kind_for_event
@@ -60,13 +60,22 @@ class TrialExecuted(EventPayload):
 
 
 class HyperValues(BaseModel):
-    """The hyperparameters before or after a refit."""
+    """The hyperparameters before or after a refit; ``thresholds`` (the ordinal ratings') only
+    when they are fitted, and absent otherwise (as 0.1.0 wrote every refit)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
     lengthscale: list[float]
     signal_variance: float
     jitter: float
     tie_band: float | None
+    thresholds: list[float] | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_unfitted_thresholds(self, handler: SerializerFunctionWrapHandler) -> Any:
+        out = handler(self)
+        if isinstance(out, dict) and out.get("thresholds") is None:
+            out.pop("thresholds", None)
+        return out
 
 
 class HyperparametersRefit(EventPayload):

@@ -1,0 +1,84 @@
+"""Ratings in a session: answered with comparisons, logged, replayed (with evidence refits that
+fit the thresholds), undone, excluded and exported."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitpref import FeedbackError, Rating, Session
+from gaitpref.config import parse_config
+from gaitpref.sessions import export_session, import_session
+
+CONFIG = """
+name = "rated-1d"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+unit = "m"
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+fit = "evidence"
+refit_every = 2
+[cospar]
+seed = 2
+strategy = "self-sparring"
+[feedback.rating]
+labels = ["very bad", "bad", "okay", "good"]
+[safety]
+avoid = ["very bad"]
+lambda = 2.0
+"""
+LABELS = ["very bad", "bad", "okay", "good"]
+
+
+def _session(url: str, answers: int = 6) -> Session:
+    s = Session.create(url, parse_config(CONFIG), "S01")
+    for k in range(answers):
+        q = s.next_query()
+        a = q.actions[0]
+        given: list[object] = [Rating(a, LABELS[(k + 2) % 4])]
+        if q.buffer and q.buffer[0] != a:
+            given.append((a, q.buffer[0], "first" if k % 2 else "second"))
+        s.answer(q.id, given)
+    return s
+
+
+def test_replay_with_refits_that_fit_the_thresholds(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'r.db'}"
+    with _session(url) as s:
+        mean = np.asarray(s.posterior().mean).copy()
+        refits = [e.payload for e in s.events() if e.kind == "hyperparameters_refit"]
+        ratings = [e.payload for e in s.events() if e.kind == "rating_given"]
+        sid = s.id
+    assert len(refits) == 3 and all("thresholds" in r["after"] for r in refits)
+    assert [r["category"] for r in ratings] == [LABELS[(k + 2) % 4] for k in range(6)]
+    with Session.open(url, sid) as again:
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+
+
+def test_undo_exclude_export_import(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'r.db'}"
+    with _session(url, 4) as s:
+        s.undo()
+        assert s.feedback()[-1].undone and s.feedback()[-1].kind == "rating_given"
+        q = s.next_query()
+        s.answer(q.id, [Rating(q.actions[0], "good")])
+        s.exclude(1, "device_fault")
+        assert [e.excluded for e in s.feedback() if not e.undone][0]
+        with pytest.raises(FeedbackError, match="not a category"):
+            s.answer(s.next_query().id, [Rating(s.next_query().actions[0], "great")])
+        export_session(s, tmp_path / "out")
+        mean = np.asarray(s.posterior().mean).copy()
+    with (tmp_path / "out" / "ratings.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [r["category"] for r in rows] == ["okay", "good", "very bad", "bad", "good"]
+    assert [r["undone"] for r in rows] == ["false", "false", "false", "true", "false"]
+    with import_session(f"sqlite:///{tmp_path / 'b.db'}", tmp_path / "out") as copy:
+        assert np.array_equal(np.asarray(copy.posterior().mean), mean)
