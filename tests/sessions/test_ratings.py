@@ -71,7 +71,7 @@ def test_undo_exclude_export_import(tmp_path: Path) -> None:
         q = s.next_query()
         s.answer(q.id, [Rating(q.actions[0], "good")])
         s.exclude(1, "device_fault")
-        assert [e.excluded for e in s.feedback() if not e.undone][0]
+        assert next(e.excluded for e in s.feedback() if not e.undone)
         with pytest.raises(FeedbackError, match="not a category"):
             s.answer(s.next_query().id, [Rating(s.next_query().actions[0], "great")])
         export_session(s, tmp_path / "out")
