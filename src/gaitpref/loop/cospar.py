@@ -46,7 +46,7 @@ from gaitpref.feedback import (
     kinds,
 )
 from gaitpref.loop.learning import Learning, pair_data
-from gaitpref.loop.safety import Safety
+from gaitpref.loop.safety import Safety, near
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
@@ -217,9 +217,25 @@ class CoSpar:
         """The actions the next query may propose (None: all; ``loop/safety.py``)."""
         return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
 
-    def flag_unsafe(self, action: int) -> None:
-        """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``."""
+    def flag_unsafe(self, action: int) -> bool:
+        """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``.
+
+        A pending query that proposes such an action is withdrawn (the generator goes back to
+        before it was drawn, so the next :meth:`ask` proposes again under the flag); returns
+        whether it was.
+        """
         self.unsafe.add(self.space.check_index(action))
+        pending = self.pending
+        if pending is None:
+            return False
+        banned = near(self.space, self.unsafe, self.safety.unsafe_radius)
+        if not any(banned[a] for a in pending.actions):
+            return False
+        if self._rng_before_pending is not None:
+            self.rng.bit_generator.state = self._rng_before_pending
+        self.pending = None
+        self._rng_before_pending = None
+        return True
 
     def unflag_unsafe(self, action: int) -> None:
         """Take an unsafe flag back (the flag's undo)."""

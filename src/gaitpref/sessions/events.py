@@ -114,6 +114,25 @@ class TrialExcluded(EventPayload):
     detail: Annotated[str, Recorded] = ""
 
 
+class TrialFlaggedUnsafe(EventPayload):
+    """``trial_flagged_unsafe``: the operator's hard stop; the trial's gait, and the gaits within
+    ``[safety].unsafe_radius`` of it, are never proposed again (``loop/safety.py``)."""
+
+    kind: ClassVar[str] = "trial_flagged_unsafe"
+    trial: int
+    query: int
+    action: int
+    reason: Annotated[str, Recorded]
+
+
+class UnsafeFlagWithdrawn(EventPayload):
+    """``unsafe_flag_withdrawn``: an unsafe flag taken back (its undo)."""
+
+    kind: ClassVar[str] = "unsafe_flag_withdrawn"
+    trial: int
+    action: int
+
+
 class BlindGaitShown(BaseModel):
     """One gait of a blind validation round: its label, action, role and posterior mean."""
 
@@ -169,6 +188,8 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     HyperparametersRefit,
     Undo,
     TrialExcluded,
+    TrialFlaggedUnsafe,
+    UnsafeFlagWithdrawn,
     ValidationStarted,
     ValidationAnswered,
     Note,
@@ -184,6 +205,8 @@ TRIAL = TrialExecuted.kind
 REFIT = HyperparametersRefit.kind
 UNDO = Undo.kind
 EXCLUDED = TrialExcluded.kind
+UNSAFE = TrialFlaggedUnsafe.kind
+UNSAFE_WITHDRAWN = UnsafeFlagWithdrawn.kind
 VALIDATION_STARTED = ValidationStarted.kind
 VALIDATION_ANSWERED = ValidationAnswered.kind
 NOTE = Note.kind
@@ -285,7 +308,9 @@ __all__ = [
     "Resumed",
     "TrialExcluded",
     "TrialExecuted",
+    "TrialFlaggedUnsafe",
     "Undo",
+    "UnsafeFlagWithdrawn",
     "ValidationAnswered",
     "ValidationStarted",
     "check_new",

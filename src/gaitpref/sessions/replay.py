@@ -65,6 +65,10 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
         elif r.kind == log.EXCLUDED:
             _check(r, state.exclude_event(p["trial"], p["reason"], p.get("detail", "")))
             state.apply_exclusion(p)
+        elif r.kind == log.UNSAFE:
+            _check(r, state.unsafe_event(p["trial"], p["reason"]))
+        elif r.kind == log.UNSAFE_WITHDRAWN:
+            _check(r, state.withdraw_unsafe_event(p["trial"]))
         elif r.kind == log.VALIDATION_STARTED:
             _check(r, state.validation_event())
         elif r.kind == log.VALIDATION_ANSWERED:

@@ -316,6 +316,32 @@ class Session:
 
         return self._locked(run)
 
+    def flag_unsafe(self, trial: int, reason: str) -> None:
+        """The operator's hard stop: the trial's gait, and the gaits within
+        ``[safety].unsafe_radius`` of it, are never proposed again.  A pending query that
+        proposes one of them is withdrawn (the next query is proposed under the flag)."""
+
+        def run() -> None:
+            st = self._state
+            st.check_open("unsafe flags")
+            self._append([st.unsafe_event(trial, reason)])
+
+        self._locked(run)
+
+    def withdraw_unsafe(self, trial: int) -> None:
+        """Take back the unsafe flag of ``trial`` (its undo)."""
+
+        def run() -> None:
+            st = self._state
+            st.check_open("unsafe flags")
+            self._append([st.withdraw_unsafe_event(trial)])
+
+        self._locked(run)
+
+    def unsafe_flags(self) -> dict[int, tuple[int, str]]:
+        """Trials flagged unsafe: trial -> (action, reason)."""
+        return dict(self._state.unsafe)
+
     def note(self, text: str) -> int:
         """Log a free-text note (anything the operator saw); returns its sequence number."""
         if not isinstance(text, str) or not text.strip() or len(text) > 10_000:

@@ -94,6 +94,7 @@ class SessionState:
     suggestions_log: list[SuggestionRecord] = field(default_factory=list)
     feedback_log: list[FeedbackEntry] = field(default_factory=list)
     excluded: dict[int, tuple[Reason, str]] = field(default_factory=dict)
+    unsafe: dict[int, tuple[int, str]] = field(default_factory=dict)  # trial -> (action, reason)
     rounds: list[_Round] = field(default_factory=list)
     notes: list[tuple[int, str]] = field(default_factory=list)
 
@@ -197,7 +198,42 @@ class SessionState:
                 f"the last answer's trial {spoiled[0]} was excluded after it was given; "
                 "an excluded trial's answer cannot be undone"
             )
+        flagged = [t for t in last.query.trials if t in self.unsafe]
+        if flagged:
+            raise SessionStateError(
+                f"the last answer's trial {flagged[0]} is flagged unsafe; withdraw the flag "
+                "before undoing its answer"
+            )
         return log.new_event(log.Undo(query=last.query.id, trials=list(last.query.trials)))
+
+    def unsafe_event(self, trial: int, reason: str) -> NewEvent:
+        """Flag an answered trial unsafe (``reason``: what happened, 1..2000 characters)."""
+        if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
+            raise ValueError("an unsafe flag needs a reason: a text of 1 to 2000 characters")
+        told, action = self._trial(trial)
+        if trial in self.unsafe:
+            raise SessionStateError(f"trial {trial} is already flagged unsafe")
+        return log.new_event(
+            log.TrialFlaggedUnsafe(trial=trial, query=told.query.id, action=action, reason=reason)
+        )
+
+    def withdraw_unsafe_event(self, trial: int) -> NewEvent:
+        if trial not in self.unsafe:
+            flagged = ", ".join(map(str, sorted(self.unsafe))) or "none"
+            raise SessionStateError(f"trial {trial!r} is not flagged unsafe (flagged: {flagged})")
+        return log.new_event(log.UnsafeFlagWithdrawn(trial=trial, action=self.unsafe[trial][0]))
+
+    def _trial(self, trial: int) -> tuple[_Told, int]:
+        """The answer in force that executed ``trial``, and the trial's action."""
+        found = [k for k in self.told for t in k.query.trials if t == trial]
+        if isinstance(trial, bool) or not isinstance(trial, int) or not found:
+            done = self.trial_actions
+            known = f"trials 1 to {done[-1][0]}" if done else "no trials yet"
+            raise SessionStateError(
+                f"no trial {trial!r} has been answered (this session has {known})"
+            )
+        told = found[0]
+        return told, told.query.actions[told.query.trials.index(trial)]
 
     def exclude_event(self, trial: int, reason: str, detail: str) -> NewEvent:
         if reason not in REASONS:
@@ -363,6 +399,14 @@ class SessionState:
             self.pending = told.query
         elif r.kind == log.EXCLUDED:
             pass  # applied to the model before it was written (apply_exclusion)
+        elif r.kind == log.UNSAFE:
+            self.unsafe[p["trial"]] = (p["action"], p["reason"])
+            if self.loop.flag_unsafe(p["action"]):
+                self.pending = None  # the pending query proposed a gait it now avoids
+        elif r.kind == log.UNSAFE_WITHDRAWN:
+            action = self.unsafe.pop(p["trial"])[0]
+            if all(a != action for a, _ in self.unsafe.values()):
+                self.loop.unflag_unsafe(action)
         elif r.kind == log.VALIDATION_STARTED:
             gaits = p["gaits"]
             plan = ValidationPlan(
