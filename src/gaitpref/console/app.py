@@ -23,6 +23,7 @@ from gaitpref import __version__
 from gaitpref.console import api, pages
 from gaitpref.console.errors import HANDLED, refusal
 from gaitpref.console.figures import FigureCache
+from gaitpref.console.limits import MAX_LIST, BodyLimitMiddleware
 from gaitpref.console.security import AccessMiddleware, Csrf
 from gaitpref.console.service import SessionService
 from gaitpref.console.templating import page_error
@@ -59,7 +60,8 @@ def create_app(
         description=(
             "Run a CoSpar gait-preference session at the bench. The JSON API under /api/ does "
             "what the pages do; 409 means the query is stale or already answered (nothing was "
-            "written), 422 names the malformed field."
+            "written), 422 names the malformed field, 413 refuses a body over 1 MB or a list "
+            "over 256 items."
         ),
         lifespan=lifespan,
     )
@@ -70,6 +72,7 @@ def create_app(
     app.include_router(api.router)
     app.include_router(pages.router)
     app.mount("/static", StaticFiles(directory=HERE / "static"), name="static")
+    app.add_middleware(BodyLimitMiddleware)  # inside the token check: strangers get 401 first
     app.add_middleware(AccessMiddleware, token=token, allowed_hosts=allowed_hosts)
 
     async def handle(request: Request, exc: Exception) -> Response:
@@ -85,9 +88,17 @@ def create_app(
 
     async def invalid(request: Request, exc: Exception) -> Response:
         assert isinstance(exc, RequestValidationError)
-        if request.url.path.startswith("/api/"):
-            return await request_validation_exception_handler(request, exc)
         errors = exc.errors()
+        if request.url.path.startswith("/api/"):
+            long = [e for e in errors if e.get("type") == "too_long"]
+            if long:  # a list past its documented maximum: 413, as for a body past its size
+                where = ".".join(str(p) for p in long[0]["loc"][1:])
+                most = long[0].get("ctx", {}).get("max_length", MAX_LIST)
+                return JSONResponse(
+                    {"detail": f"{where}: at most {most} items (see docs/console.md)"},
+                    status_code=413,
+                )
+            return await request_validation_exception_handler(request, exc)
         field = ".".join(str(p) for p in errors[0]["loc"][1:]) if errors else ""
         return page_error(
             request, refusal(ValueError(f"{field}: {errors[0]['msg']}" if errors else "bad input"))

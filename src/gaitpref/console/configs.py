@@ -24,11 +24,11 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
 from gaitpref.console.errors import InputError
+from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
 
 #: grids larger than this are refused at creation (the console draws and sends every action)
 MAX_ACTIONS = 250_000
-MAX_LIBRARY_BYTES = 64_000_000
 
 
 def default_library_dir(url: str) -> Path:

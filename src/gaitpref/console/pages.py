@@ -18,8 +18,8 @@ from starlette.datastructures import UploadFile
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
-from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
+from gaitpref.console.limits import MAX_LIBRARY_BYTES, MAX_UPLOAD
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
@@ -35,7 +35,6 @@ from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
-MAX_UPLOAD = 200_000  # bytes of an uploaded config
 
 
 def _service(request: Request) -> SessionService:
