@@ -78,10 +78,13 @@ def create_app(
     async def handle(request: Request, exc: Exception) -> Response:
         if isinstance(exc, pydantic.ValidationError):
             raise exc  # a bug in the console's own models, not the client's input
-        ref = refusal(exc)
+        ref = refusal(exc, request.method)
+        retry = {"retry-after": "1"} if ref.status == 503 else None
         if request.url.path.startswith("/api/"):
-            return JSONResponse(ref.api_body(), status_code=ref.status)
-        return page_error(request, ref)
+            return JSONResponse(ref.api_body(), status_code=ref.status, headers=retry)
+        response = page_error(request, ref)
+        response.headers.update(retry or {})
+        return response
 
     for kind in HANDLED:
         app.add_exception_handler(kind, handle)

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import re
 import tempfile
@@ -59,10 +60,8 @@ def discard(written: Path | None) -> None:
     if written is None:
         return
     written.unlink(missing_ok=True)
-    try:
+    with contextlib.suppress(OSError):  # not empty: another session's file of that prefix
         written.parent.rmdir()
-    except OSError:  # not empty: another session's file of the same content prefix
-        pass
 
 
 def store_library(

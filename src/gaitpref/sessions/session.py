@@ -53,6 +53,7 @@ from gaitpref.storage import (
     ConflictError,
     EventRecord,
     NewEvent,
+    SessionBusyError,
     SessionRecord,
     SessionSpec,
     Status,
@@ -77,6 +78,7 @@ class Session:
         self.config = config_of(record)
         self._state = self._fresh_state()
         self._broken = False
+        self._in_turn = False
 
     # -- making and opening ------------------------------------------------------------------
     @classmethod
@@ -228,11 +230,19 @@ class Session:
         payload = st.derive_query()
         try:
             records = self._write([NewEvent(log.QUERY, payload)])
-        except ConflictError:
+        except ConflictError:  # a writer that does not take turns: catch up and ask once more
             self._rebuild()
             if self._state.pending is not None:
                 return self._state.pending
-            raise
+            st = self._state
+            try:
+                records = self._write([NewEvent(log.QUERY, st.derive_query())])
+            except ConflictError:
+                self._rebuild()
+                raise SessionBusyError(
+                    f"session {self.id} is busy: another writer kept appending while a query "
+                    "was being issued; nothing was written, try again"
+                ) from None
         st.commit(records)
         assert st.pending is not None
         return st.pending
@@ -446,14 +456,33 @@ class Session:
             self._catch_up()
             return True
 
-        return self._locked(run)
+        return self._locked(run, catch_up=False)
 
     # -- internals -----------------------------------------------------------------------------
-    def _locked(self, fn: Callable[[], T]) -> T:
+    def _locked(self, fn: Callable[[], T], catch_up: bool = True) -> T:
+        """``fn()`` with this object's lock and the session's writer turn held, up to date.
+
+        The turn (``Storage.writer_turn``: fair, bounded, shared with other processes) is taken
+        around the whole operation, and the events other writers appended are replayed first,
+        so the append at its end does not lose a compare-and-set to another writer, and two
+        writers alternate.  Past the bounded wait: :class:`~gaitpref.storage.SessionBusyError`.
+        """
         with self._lock:
-            if self._broken:
-                self._rebuild()
-            return fn()
+            if self._in_turn:  # an operation inside an operation: the turn is held already
+                return fn()
+            with self.storage.writer_turn(self.id):
+                self._in_turn = True
+                try:
+                    if self._broken:
+                        self._rebuild()
+                    elif catch_up and self._moved_on():
+                        self._catch_up()  # another writer moved the session on
+                    return fn()
+                finally:
+                    self._in_turn = False
+
+    def _moved_on(self) -> bool:
+        return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
         meta = self._record.meta

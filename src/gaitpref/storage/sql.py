@@ -5,6 +5,9 @@
   queue instead of failing half-way.
 - PostgreSQL (``postgresql+psycopg://user@host/db``): the session row is locked
   (``SELECT ... FOR UPDATE``) while a batch is appended.
+- SQLite files: the writers of a session take turns (:mod:`gaitpref.storage.turns`, lock files in
+  ``<db>.turns/``), so that two processes answering one session alternate instead of one
+  starving the other.
 - Both: the append is a compare-and-set on ``sessions.last_seq`` and ``(session_id, seq)`` is the
   events' primary key, so two writers can never both append the same sequence number.
 
@@ -29,7 +32,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, SQLAlchemy
 from sqlalchemy.pool import StaticPool
 
 from gaitpref.errors import StorageError
-from gaitpref.storage import migrate
+from gaitpref.storage import base, migrate
 from gaitpref.storage.base import (
     ConflictError,
     EventRecord,
@@ -51,6 +54,7 @@ from gaitpref.storage.base import (
 from gaitpref.storage.schema import events as events_t
 from gaitpref.storage.schema import sessions as sessions_t
 from gaitpref.storage.schema import subjects as subjects_t
+from gaitpref.storage.turns import FileTurns
 
 BUSY_TIMEOUT_S = 30.0
 
@@ -96,6 +100,10 @@ class SQLStorage(Storage):
                 raise StorageConnectError(
                     f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
                 )
+        self._turns: FileTurns | None = None
+        if self._sqlite and not _sqlite_memory(parsed):
+            path = Path(parsed.database or "").resolve()
+            self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
         self.engine = _engine(parsed)
         try:
             with self._write() as conn:
@@ -217,6 +225,18 @@ class SQLStorage(Storage):
                 .order_by(events_t.c.seq)
             ).all()
         return [EventRecord(r.session_id, r.seq, r.kind, r.payload, as_utc(r.at)) for r in rows]
+
+    @contextmanager
+    def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
+        """SQLite files: a fair turn shared by every process (lock files in ``<db>.turns/``).
+
+        PostgreSQL: none yet (the row lock and the compare-and-set keep the data right).
+        """
+        if self._turns is None:
+            yield
+            return
+        with self._turns.turn(_sid(session_id), base.WRITER_WAIT_S if wait_s is None else wait_s):
+            yield
 
     def close(self) -> None:
         self.engine.dispose()
