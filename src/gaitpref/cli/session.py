@@ -96,15 +96,10 @@ def db_upgrade(db: DbOption = None) -> None:
 def db_status(db: DbOption = None) -> None:
     """Show the database's URL, schema revision and number of sessions."""
 
-    def run() -> tuple[str, int, int]:
-        url = resolve_url(db)
-        return url, len(Session.list_sessions(url)), len(Session.list_subjects(url))
+    from gaitpref.storage.sql import database_status
 
-    url, sessions, subjects = _guard(run)
-    console.print(
-        f"{url}: schema revision {migrate.head_revision()}, {sessions} sessions, "
-        f"{subjects} subjects"
-    )
+    # missing, interrupted upgrade, needs upgrade, newer, or its revision and counts
+    console.print(_guard(lambda: database_status(resolve_url(db))))
 
 
 # -- session -----------------------------------------------------------------------------------
