@@ -23,6 +23,7 @@ from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.export import (
     export_session,
     import_session,
+    origin_of,
 )
 from gaitpref.sessions.records import (
     REASONS,
@@ -177,7 +178,7 @@ def list_sessions(
             r.subject,  # type: ignore[attr-defined]
             r.config_name,  # type: ignore[attr-defined]
             str(r.seed),  # type: ignore[attr-defined]
-            r.status,  # type: ignore[attr-defined]
+            r.status + (f" ({origin_of(r)})" if origin_of(r) else ""),  # type: ignore[arg-type,attr-defined]
             str(r.last_seq),  # type: ignore[attr-defined]
             r.created_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
             r.updated_at.strftime("%Y-%m-%d %H:%M"),  # type: ignore[attr-defined]
@@ -310,9 +311,12 @@ def export(
 def import_(
     folder: Annotated[Path, typer.Argument(help="An export folder.")],
     db: DbOption = None,
+    as_new: Annotated[
+        bool, typer.Option("--as-new", help="Import a session the database already holds again.")
+    ] = False,
 ) -> None:
     """Rebuild a session from an export (checked by replay before anything is written)."""
-    session = _guard(lambda: import_session(db, folder))
+    session = _guard(lambda: import_session(db, folder, as_new=as_new))
     was = session.record.meta["imported_from"]["session_id"]
     console.print(f"imported as session {session.id} (was {was}) in {session.storage.url}")
     session.close()
