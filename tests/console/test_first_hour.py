@@ -1,4 +1,5 @@
-"""The operator's first hour (issue 15, item 12): nothing chosen for them, nothing broken at 1024 px."""
+"""The operator's first hour (issue 15, item 12): no config chosen for them, and nothing broken
+at 1024 px (a landscape tablet)."""
 
 from __future__ import annotations
 
@@ -42,7 +43,10 @@ LAYOUT_PROBLEMS = """() => {
     const rects = [...range.getClientRects()].filter(r => r.width > 0);
     rects.sort((a, b) => a.top - b.top);
     let count = 0, bottom = -Infinity;  // rects that overlap vertically are one line
-    for (const r of rects) { if (r.top >= bottom - 2) count += 1; bottom = Math.max(bottom, r.bottom); }
+    for (const r of rects) {
+      if (r.top >= bottom - 2) count += 1;
+      bottom = Math.max(bottom, r.bottom);
+    }
     return count;
   };
   for (const span of document.querySelectorAll('.choice.move span')) {
