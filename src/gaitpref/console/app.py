@@ -22,7 +22,7 @@ from fastapi.staticfiles import StaticFiles
 from gaitpref import __version__
 from gaitpref.console import api, pages
 from gaitpref.console.errors import HANDLED, refusal
-from gaitpref.console.figures import FigureCache
+from gaitpref.console.figures import FigureRenderer
 from gaitpref.console.limits import MAX_LIST, BodyLimitMiddleware
 from gaitpref.console.security import AccessMiddleware, Csrf
 from gaitpref.console.service import SessionService
@@ -52,6 +52,7 @@ def create_app(
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         yield
+        app.state.figures.close()
         service.close()
 
     app = FastAPI(
@@ -67,7 +68,7 @@ def create_app(
     )
     app.state.service = service
     app.state.csrf = Csrf(csrf_secret)
-    app.state.figures = FigureCache()
+    app.state.figures = FigureRenderer()
     app.state.token_required = token is not None
     app.include_router(api.router)
     app.include_router(pages.router)

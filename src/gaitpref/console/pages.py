@@ -268,22 +268,13 @@ async def session_png(request: Request, session_id: SessionId) -> Response:
 
 async def _figure(request: Request, session_id: int, kind: str) -> Response:
     service = _service(request)
-    session = await run_in_threadpool(service.get, session_id)
-    cache: figures.FigureCache = request.app.state.figures
-    key = (session_id, session.last_seq, kind)
-    png = cache.get(key)
-    if png is None:
-        if kind == "session":
-            png = await run_in_threadpool(figures.session_png, session)
-        else:
-            trials = [t.action for t in session.trials()]
-            png = await run_in_threadpool(
-                figures.posterior_png,
-                session.posterior(),
-                trials,
-                title=f"session {session_id}: posterior after {len(trials)} trials",
-            )
-        cache.put(key, png)
+    version = await run_in_threadpool(lambda: service.get(session_id).last_seq)
+    renderer: figures.FigureRenderer = request.app.state.figures
+
+    def fetch() -> tuple[int, figures.Picture]:  # in the drawing queue, not a request's thread
+        return service.read(session_id, lambda s: (s.last_seq, figures.picture_of(s, kind)))
+
+    png = await renderer.png(session_id, kind, version, fetch)
     return Response(png, media_type="image/png", headers={"cache-control": "no-store"})
 
 
