@@ -16,7 +16,10 @@ Every write is committed before the call returns (one answer is one transaction)
 written when a call raises.  One writer per session: writes are checked against the last event
 the session has seen, so two writers cannot both answer the same query (the loser gets
 :class:`~gaitpref.storage.ConflictError` or a stale-query :class:`~gaitpref.loop.cospar.QueryError`
-and is brought up to date).  A ``Session`` object is safe to share between threads.
+and is brought up to date).  Writers take turns (``Storage.writer_turn``: fair, bounded,
+shared between processes on SQLite) and catch up with each other before they write, so a second
+writer is not starved; past the bounded wait :class:`~gaitpref.storage.SessionBusyError` names
+the session.  A ``Session`` object is safe to share between threads.
 """
 
 from __future__ import annotations
