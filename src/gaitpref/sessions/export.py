@@ -34,7 +34,14 @@ import numpy as np
 from gaitpref.errors import ExportError, ReplayError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions.session import Session
-from gaitpref.storage import MemoryStorage, NewEvent, SessionSpec, Storage, open_storage
+from gaitpref.storage import (
+    MemoryStorage,
+    NewEvent,
+    SessionRecord,
+    SessionSpec,
+    Storage,
+    open_storage,
+)
 from gaitpref.storage.base import check_status
 
 FORMAT = "gaitpref-session-export"
@@ -286,9 +293,15 @@ def _cell(value: object) -> object:
 
 
 # -- import ------------------------------------------------------------------------------------
-def import_session(db: str | Storage | None, folder: Path) -> Session:
-    """Rebuild the exported session in ``db`` (a new id); checked before anything is written."""
+def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = False) -> Session:
+    """Rebuild the exported session in ``db`` (a new id); checked before anything is written.
+
+    Every file the manifest lists must match its SHA-256.  A session already in ``db`` (imported
+    from this export before, or the exported session itself) is refused unless ``as_new``; the
+    new session's metadata says where it came from (``imported_from``, see :func:`origin_of`).
+    """
     manifest = _read_manifest(folder)
+    _check_files(folder, manifest)
     config_text = _read_checked(folder, "config.toml", manifest)
     if hashlib.sha256(config_text.encode()).hexdigest() != manifest.get("config_sha256"):
         raise ExportError("config.toml does not match the manifest's config_sha256")
@@ -311,6 +324,8 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
                     "session_id": info["id"],
                     "exported_at": manifest.get("exported_at"),
                     "exported_by": manifest.get("software_version"),
+                    "events_sha256": manifest["files"]["events.jsonl"],
+                    "created_at": info.get("created_at"),
                 },
             },
         )
@@ -323,6 +338,8 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
     try:
+        if not as_new:
+            _check_not_imported(storage, spec, info)
         record = storage.create_session(spec, events, status)
         session = Session.open(storage, record.id)
     except BaseException:
@@ -331,6 +348,54 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
         raise
     session._owns = owns  # closing the session closes the database it opened
     return session
+
+
+def origin_of(record: SessionRecord) -> str | None:
+    """``"imported from session N"`` for a session made by :func:`import_session`, else None."""
+    return record.origin
+
+
+def _check_not_imported(storage: Storage, spec: SessionSpec, info: dict[str, Any]) -> None:
+    """Refuse an export whose session ``storage`` already holds (imported, or the original)."""
+    mine = spec.meta["imported_from"]
+    for rec in storage.list_sessions(spec.subject):
+        origin = rec.meta.get("imported_from")
+        again = isinstance(origin, dict) and origin.get("events_sha256") == mine["events_sha256"]
+        original = (
+            rec.config_sha256 == spec.config_sha256
+            and rec.seed == spec.seed
+            and rec.created_at.isoformat() == info.get("created_at")
+        )
+        if again or original:
+            how = "imported before as" if again else "the exported session itself, as"
+            raise ExportError(
+                f"this export (session {info.get('id')} of subject {spec.subject}) is already in "
+                f"{storage.url}: {how} session {rec.id}; nothing was written.  To keep a second "
+                "copy under a new id, import it with --as-new"
+            )
+
+
+def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
+    """Every file the manifest lists is inside the folder and matches its SHA-256."""
+    files = dict(manifest["files"])
+    library = manifest.get("gait_library")
+    if isinstance(library, dict) and isinstance(library.get("file"), str):
+        files.setdefault(library["file"], library.get("sha256"))
+    for name in ("config.toml", "events.jsonl"):
+        if name not in files:
+            raise ExportError(f"manifest.json lists no {name}")
+    root = folder.resolve()
+    for name, expected in sorted(files.items()):
+        path = (folder / str(name)).resolve()
+        if Path(str(name)).is_absolute() or not path.is_relative_to(root):
+            raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
+        if not path.is_file():
+            raise ExportError(f"the export lacks {name}, which manifest.json lists")
+        if hashlib.sha256(path.read_bytes()).hexdigest() != expected:
+            raise ExportError(
+                f"{name} does not match its SHA-256 in manifest.json (was it edited?); "
+                "nothing was written"
+            )
 
 
 def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
