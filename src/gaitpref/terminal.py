@@ -57,7 +57,7 @@ PAUSE_SIGNALS = (signal.SIGINT, signal.SIGHUP)
 
 def gait_name(session: Session, action: int) -> str:
     """The gait's library id, or ``G<action>`` without a library (as the console names it)."""
-    return session.gait_id(action) or f"G{action}"
+    return session.gait_name(action)
 
 
 def _move_words(feature: Feature) -> tuple[str, str, str, str]:

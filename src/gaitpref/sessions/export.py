@@ -8,7 +8,9 @@ An export folder is readable without gaitpref:
   names, at the same relative path, when there is one);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
   ``version`` (the payload's schema version), ``payload``);
-- tables as CSV (``--format csv``) or JSON (``--format json``): ``trials``, ``comparisons`` (with
+- tables as CSV (``--format csv``) or JSON (``--format json``), every gait named as the terminal
+  and the console name it (``gait``: the library's id, or ``G<action>``): ``trials`` (with
+  ``unsafe`` flags and their reasons), ``comparisons`` (with
   ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
   deviation of every action) and ``validation``; and one table per other feedback kind the
   session holds (its kind's :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``,
@@ -162,6 +164,7 @@ def posterior_summary(session: Session) -> dict[str, Any]:
 
 def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
     space = session.config.space
+    unsafe = session.unsafe_flags()
     trials = [
         {
             "trial": t.number,
@@ -169,6 +172,9 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "action": t.action,
             **space.values_of(t.action),
             "gait_id": session.gait_id(t.action),
+            "gait": session.gait_name(t.action),
+            "unsafe": t.number in unsafe,
+            "unsafe_reason": unsafe.get(t.number, (0, ""))[1],
             "excluded": t.excluded is not None,
             "exclusion_reason": t.excluded,
             "exclusion_detail": t.exclusion_detail,
@@ -186,6 +192,8 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "second_trial": c.second_trial,
             "first_action": c.first,
             "second_action": c.second,
+            "first_gait": session.gait_name(c.first),
+            "second_gait": session.gait_name(c.second),
             "outcome": c.outcome,
             "preferred_trial": None
             if c.tie
@@ -203,6 +211,7 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "query": s.query,
             "trial": s.trial,
             "action": s.action,
+            "gait": session.gait_name(s.action),
             "feature": s.feature,
             "move": s.move,
             "target_action": s.target,
@@ -219,6 +228,7 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "action": a,
             **space.values_of(a),
             "gait_id": session.gait_id(a),
+            "gait": session.gait_name(a),
             "mean": float(mean[a]),
             "sd": float(sd[a]),
         }

@@ -469,7 +469,13 @@ class Session:
         return list(self._state.notes)
 
     def gait_id(self, action: int) -> str | None:
+        """The gait library's id of ``action`` (None without a library)."""
         return self._state.gait_id(action)
+
+    def gait_name(self, action: int) -> str:
+        """How the terminal, the console and exports name a gait: its library id, or
+        ``G<action>`` without a library."""
+        return self._state.gait_id(action) or f"G{int(action)}"
 
     def describe(self, action: int) -> str:
         """Feature values with units, and the gait id when there is a library."""
