@@ -260,15 +260,18 @@ class Session:
         query_id: int,
         answers: Iterable[object] = (),
         suggestions: Iterable[object] = (),
+        *,
+        comparisons: Iterable[object] = (),
     ) -> Answered:
         """Answer the pending query with feedback records of any registered kind (as for
         ``CoSpar.tell``; raw ``(i, j, outcome)`` items are comparisons, and ``suggestions``
-        takes ``(action, feature, move)``: the paper's convenience form).
+        takes ``(action, feature, move)``: the paper's convenience form; ``comparisons=`` as a
+        keyword is the same as giving them in ``answers``).
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, and a session that is finished or paused.
         """
-        comps, suggs = list(answers), list(suggestions)
+        comps, suggs = [*answers, *comparisons], list(suggestions)
         return self._locked(lambda: self._answer(query_id, comps, suggs, retry=True))
 
     def _answer(
