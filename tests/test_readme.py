@@ -14,6 +14,6 @@ def test_readme_python_blocks_run() -> None:
     assert len(blocks) >= 2
     scope: dict[str, object] = {}
     for block in blocks:
-        exec(compile(block, "README.md", "exec"), scope)  # noqa: S102
+        exec(compile(block, "README.md", "exec"), scope)
     posterior = scope["posterior"]
     assert posterior.mean.shape == (15,)  # type: ignore[attr-defined]
