@@ -1,7 +1,7 @@
 """Mutual information between the next answer and the utility (BALD), in bits.
 
 Houlsby, Huszar, Ghahramani & Lengyel (2011), "Bayesian active learning for classification and
-preference learning" (arXiv:1112.5745), eq. (3): the information an answer ``y`` brings about the
+preference learning" (arXiv:1112.5745): the information an answer ``y`` brings about the
 utility ``f`` is ``I(y; f) = H[y] - E_f[H[y | f]]``, the entropy of the predictive answer minus
 the answer's expected entropy once ``f`` is known.
 
@@ -11,14 +11,18 @@ Under the posterior ``d ~ N(m, v)``, ``m = mu_x - mu_r``, ``v = var_x + var_r - 
 
     H[y] = h(Phi(m / sqrt(sigma^2 + v)))                       (h: the binary entropy, bits)
 
-and, with Houlsby et al.'s approximation ``h(Phi(z)) ~ exp(-z^2 / (pi ln 2))`` (their eq. 4-5;
-a Taylor match at ``z = 0``), ``h(Phi(d / sigma)) ~ exp(-d^2 / (2 C^2))`` with
+and, with Houlsby et al.'s approximation ``h(Phi(z)) ~ exp(-z^2 / (pi ln 2))`` (their GP
+classifier's derivation; it matches the value and curvature at ``z = 0``),
+``h(Phi(d / sigma)) ~ exp(-d^2 / (2 C^2))`` with
 
     C^2 = pi ln 2 sigma^2 / 2 = pi ln 2 s^2,
 
 a Gaussian in ``d``; its expectation under ``N(m, v)`` is the Gaussian convolution
 
-    E_d[H[y | f]] ~ C / sqrt(v + C^2) exp(-m^2 / (2 (v + C^2)))             (their eq. 6).
+    E_d[H[y | f]] ~ C / sqrt(v + C^2) exp(-m^2 / (2 (v + C^2)))
+
+(their closed form, with ``C`` for this probit's scale ``sigma = sqrt(2) s``: within ~0.01 bits
+of the exact expectation, ``tests/strategies/test_infogain.py``).
 
 **Rating** of ``x`` (the ordered probit, ``model/ordinal.py``, thresholds ``t_k``, noise
 ``s_r``): ``H[y]`` is the entropy of the predictive ``rating_probabilities`` (the noise widened to
