@@ -109,8 +109,11 @@ def _markdown(info: dict[str, object], rows: list[dict[str, object]]) -> str:
         "",
         "`python benchmarks/bench_infogain.py` - CoSpar n = 1, b = 1 with `information-gain`",
         "(default settings), a simulated user and, with ratings, an ordinal rater at the",
-        "objective's quartiles. Ask is the strategy's proposal (the loop's `ask`); tell is the",
-        "refit. Targets: an iteration under 50 ms on 30 x 30 and under 0.5 s on 57,750 actions.",
+        "objective's quartiles. Ask is the strategy's proposal (the loop's `ask`; CPU: this",
+        "process's CPU time, steadier than wall time on a shared machine); tell is the loop's",
+        "refit, the same for every strategy. Targets: an iteration under 50 ms on 30 x 30 and",
+        "under 0.5 s on 57,750 actions. Mind the load average below: wall times include waiting",
+        "for a core.",
         "",
         "| grid | actions | ratings | path | comparisons | visited | median ask (ms) |"
         " p95 ask (ms) | ask CPU (ms) | median tell (ms) | median iteration (ms) |"
