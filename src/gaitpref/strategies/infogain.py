@@ -54,10 +54,11 @@ def _top(score: FloatArray, k: int, rng: np.random.Generator) -> IntArray:
 def _coverage(posterior: Posterior) -> FloatArray:
     """``sum_v k(a, v)`` over the visited actions ``v``, for every action ``a`` (``K_{:,V} 1``,
     one product through the engine, as cheap as the mean)."""
-    out = np.zeros((1, len(posterior.space)))
+    out: FloatArray = np.zeros((1, len(posterior.space)))
     if posterior.visited.size:
         posterior.cross.add_product(out, np.ones((posterior.visited.size, 1)))
-    return out[0]
+    row: FloatArray = out[0]
+    return row
 
 
 def candidate_pool(
