@@ -175,7 +175,7 @@ def information_against(
     if posterior.noise is None:
         raise ValueError("information-gain needs the posterior's preference noise (noise=None)")
     ref = np.array([reference], dtype=np.intp)
-    mu_r, var_r = posterior.mean_at(ref)[0], variance_at(posterior, ref)[0]
+    mu_r, var_r = float(np.asarray(posterior.mean)[reference]), variance_at(posterior, ref)[0]
     cov = covariance_with_reference(posterior, actions, reference)
     value = preference_information(mean - mu_r, variance + var_r - 2.0 * cov, posterior.noise)
     if posterior.ordinal is not None:
