@@ -18,6 +18,7 @@ from starlette.datastructures import UploadFile
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
+from gaitpref.console.answers import read_rating_fields
 from gaitpref.console.errors import CsrfError, InputError
 from gaitpref.console.limits import MAX_LIBRARY_BYTES, MAX_UPLOAD
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
@@ -152,6 +153,8 @@ async def trial_page(
     session_id: SessionId,
     answered: Annotated[str | None, Query(max_length=200)] = None,
     undone: Annotated[str | None, Query(max_length=200)] = None,
+    flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
+    withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
     context = await run_in_threadpool(
         _service(request).read, session_id, lambda s: trial_context(s, pending_of(s))
@@ -161,6 +164,12 @@ async def trial_page(
         flash = f"Saved: trial {answered}."
     elif undone:
         flash = f"Undone: the answer to trial {undone} was taken back; run it again."
+    elif flagged:
+        flash = (
+            f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
+        )
+    elif withdrawn:
+        flash = f"The unsafe flag of trial {withdrawn} was withdrawn."
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 
 
@@ -171,6 +180,9 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     comparisons, suggestions = views.read_answer_form(fields)
     note = fields.get("note", "").strip()
     service = _service(request)
+    ordinal = await run_in_threadpool(lambda: service.get(session_id).config.ordinal)
+    categories = ordinal.categories if ordinal is not None else ()
+    ratings = read_rating_fields(fields, len(categories))
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
@@ -178,7 +190,10 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             if pending is None or pending.id != query_id:
                 raise session_query_error(session, query_id)
             space = session.config.space
-            return views.answer_summary(space, pending, comparisons, suggestions, session.gait_id)
+            said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
+            return views.answer_summary(
+                space, pending, comparisons, suggestions, session.gait_id, said
+            )
 
         lines = await run_in_threadpool(service.read, session_id, summary)
         return render(
@@ -192,7 +207,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             action=f"/sessions/{session_id}/answer",
         )
     answered = await run_in_threadpool(
-        service.answer, session_id, query_id, comparisons, suggestions, note
+        service.answer, session_id, query_id, comparisons, suggestions, note, ratings
     )
     trials = ",".join(map(str, answered.trials))
     return _see(f"/sessions/{session_id}?answered={trials}")
@@ -252,6 +267,71 @@ async def post_exclude(
     detail = fields.get("detail", "").strip()[:500]
     await run_in_threadpool(_service(request).exclude, session_id, trial, reason, detail)
     return _see(f"/sessions/{session_id}")
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe")
+async def post_unsafe(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    """Flag an answered trial unsafe (a reason is required; confirmed first)."""
+    fields, _ = await _form(request)
+    reason = fields.get("reason", "").strip()
+    if not reason:
+        raise InputError("reason", "say why the trial was unsafe (the reason is required)")
+    service = _service(request)
+    if fields.get("confirmed") != "1":
+
+        def summary(session: Session) -> list[str]:
+            gait = next((t.action for t in session.trials() if t.number == trial), None)
+            if gait is None:
+                raise InputError("trial", f"trial {trial} has not been answered")
+            radius = session.config.safety.unsafe_radius
+            near = f" and the gaits within {radius:g} of its range" if radius else ""
+            return [
+                f"Flag trial {trial} ({session.describe(gait)}) unsafe: {reason}",
+                f"Its gait{near} will not be proposed again (the flag can be withdrawn).",
+            ]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return _confirm(request, session_id, "unsafe", lines, fields, f"trials/{trial}/unsafe")
+    await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
+    return _see(f"/sessions/{session_id}?flagged={trial}")
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw")
+async def post_withdraw_unsafe(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    """Withdraw the unsafe flag of a trial (confirmed first)."""
+    fields, _ = await _form(request)
+    if fields.get("confirmed") != "1":
+        lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
+        return _confirm(
+            request, session_id, "withdraw", lines, fields, f"trials/{trial}/unsafe/withdraw"
+        )
+    await run_in_threadpool(_service(request).withdraw_unsafe, session_id, trial)
+    return _see(f"/sessions/{session_id}?withdrawn={trial}")
+
+
+def _confirm(
+    request: Request,
+    session_id: int,
+    what: str,
+    lines: list[str],
+    fields: dict[str, str],
+    path: str,
+) -> Response:
+    """The confirm step as a page (without JavaScript)."""
+    return render(
+        request,
+        "confirm.html",
+        session_id=session_id,
+        what=what,
+        lines=lines,
+        fields=fields,
+        note="",
+        action=f"/sessions/{session_id}/{path}",
+    )
 
 
 @router.get("/sessions/{session_id}/posterior.png")
