@@ -163,9 +163,7 @@ def test_flag_and_withdraw_through_the_api(client: TestClient) -> None:
 def test_no_safe_gait_is_409_with_its_reason_and_a_plain_page(client: TestClient) -> None:
     sid = new_session(client, rated_config(1.0))  # a radius of the whole range
     answer(client, sid, [])
-    assert client.post(
-        f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "fell"}
-    ).is_success
+    assert client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "fell"}).is_success
     before = event_count(client, sid)
     r = client.get(f"/api/sessions/{sid}/query")
     assert r.status_code == 409
