@@ -5,6 +5,9 @@ so a reconnecting controller never skips or repeats a gait), loads the gaits (fe
 physical units), acknowledges with ``POST .../query/{query_id}/ack``, and the answer arrives with
 ``POST .../answers``.  Errors: 404 unknown session, 409 stale or already-answered query (nothing
 written), 422 malformed body with ``loc`` naming the field (see :mod:`gaitpref.console.errors`).
+Answers take ratings (and any other registered feedback kind) as ``feedback`` items; a trial
+flagged unsafe (``POST .../trials/{trial}/unsafe``) keeps its gait out of every later query, and
+when no gait is left to propose the query is refused with 409 and its reason.
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from fastapi.concurrency import run_in_threadpool
 
 from gaitpref.config import load_config, shipped_configs
 from gaitpref.console import present
+from gaitpref.console.answers import feedback_records
 from gaitpref.console.schemas import (
     MAX_ID,
     AckOut,
@@ -38,6 +42,7 @@ from gaitpref.console.schemas import (
     TrialOut,
     UndoIn,
     UndoneOut,
+    UnsafeIn,
     ValidationOut,
 )
 from gaitpref.console.service import SessionService
@@ -98,7 +103,9 @@ def get_query(request: Request, session_id: SessionId) -> QueryOut:
     """The pending query: the gait(s) to run now and the buffered trial(s) to compare with.
 
     Issued (and logged) on the first read; every later read returns the same query until it is
-    answered.  409 while the session is paused or finished, or a blind validation is open.
+    answered.  409 while the session is paused or finished, a blind validation is open, or no
+    gait may be proposed (every gait is in the region of avoidance or near an unsafe flag: the
+    reason says so; nothing is written).
     """
     return _service(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
 
@@ -117,14 +124,17 @@ def acknowledge(
 @router.post("/sessions/{session_id}/answers", response_model=AnsweredOut)
 def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredOut:
     """Answer the pending query: ``comparisons`` ``[i, j, first|second|none]`` and
-    ``suggestions`` ``[action, feature, move]``, as for ``CoSpar.tell``."""
+    ``suggestions`` ``[action, feature, move]``, as for ``CoSpar.tell``, and ``feedback`` items
+    of any registered kind, e.g. ``{"kind": "rating", "action": 7, "label": "okay"}``."""
     service = _service(request)
+    records = feedback_records([(f.kind, f.fields()) for f in body.feedback])
     answered = service.answer(
         session_id,
         body.query_id,
         [list(c) for c in body.comparisons],
         [list(s) for s in body.suggestions],
         body.note,
+        records,
     )
     pending = service.get(session_id).pending
     return AnsweredOut(
@@ -186,6 +196,31 @@ def exclude(
     """Exclude an answered trial (device fault, stumble...): its answers leave the model."""
     service = _service(request)
     service.exclude(session_id, trial, body.reason, body.detail)
+    return service.read(session_id, present.trials_out)
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe", response_model=list[TrialOut])
+def flag_unsafe(
+    request: Request,
+    session_id: SessionId,
+    trial: Annotated[int, Path(ge=1, le=MAX_ID)],
+    body: UnsafeIn,
+) -> list[TrialOut]:
+    """Flag an answered trial unsafe (``reason`` required): its gait, and those within the
+    config's ``[safety] unsafe_radius``, are never proposed again.  A pending query that proposes
+    one of them is withdrawn: read ``GET .../query`` again for the next one."""
+    service = _service(request)
+    service.flag_unsafe(session_id, trial, body.reason)
+    return service.read(session_id, present.trials_out)
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw", response_model=list[TrialOut])
+def withdraw_unsafe(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> list[TrialOut]:
+    """Withdraw the unsafe flag of a trial (the flag's undo); 409 if it is not flagged."""
+    service = _service(request)
+    service.withdraw_unsafe(session_id, trial)
     return service.read(session_id, present.trials_out)
 
 

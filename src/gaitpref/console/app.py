@@ -20,7 +20,7 @@ from fastapi.responses import JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
 
 from gaitpref import __version__
-from gaitpref.console import api, pages
+from gaitpref.console import api, flag_pages, pages
 from gaitpref.console.errors import HANDLED, refusal
 from gaitpref.console.figures import FigureRenderer
 from gaitpref.console.limits import MAX_LIST, BodyLimitMiddleware
@@ -72,6 +72,7 @@ def create_app(
     app.state.token_required = token is not None
     app.include_router(api.router)
     app.include_router(pages.router)
+    app.include_router(flag_pages.router)
     app.mount("/static", StaticFiles(directory=HERE / "static"), name="static")
     app.add_middleware(BodyLimitMiddleware)  # inside the token check: strangers get 401 first
     app.add_middleware(AccessMiddleware, token=token, allowed_hosts=allowed_hosts)

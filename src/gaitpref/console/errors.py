@@ -11,6 +11,8 @@ error                                       status  meaning
 ``SessionBusyError``                        409     another writer held the session too long
                                                     (a POST; a GET gets 503 with Retry-After)
 ``SessionFinishedError``                    409     the session takes no more events
+``NoSafeGaitError``                         409     no gait may be proposed (all avoided or
+                                                    near an unsafe flag): nothing proposed
 ``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
@@ -31,6 +33,7 @@ from gaitpref.config import ConfigError
 from gaitpref.errors import (
     ConvergenceError,
     FeedbackError,
+    NoSafeGaitError,
     PriorNotPositiveDefiniteError,
     ReplayError,
     SessionStateError,
@@ -68,6 +71,7 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (ConflictError, 409, "changed elsewhere"),
     (SessionBusyError, 409, "session busy"),
     (SessionFinishedError, 409, "finished"),
+    (NoSafeGaitError, 409, "no safe gait"),
     (SchemaError, 503, "database schema"),
     (StorageConnectError, 503, "database unreachable"),
     (FeedbackError, 422, "refused answer"),
@@ -108,6 +112,7 @@ def _field_of(exc: BaseException) -> str | None:
             return "comparisons"
         if text.startswith("suggestion"):
             return "suggestions"
+        return "feedback"  # a rating or another registered kind
     if isinstance(exc, ConfigError | PriorNotPositiveDefiniteError):
         return "config"
     if isinstance(exc, QueryError):

@@ -1,10 +1,12 @@
 """The posterior figure of a session as PNG bytes, drawn by :mod:`gaitpref.plots.posterior`.
 
 1-D spaces: posterior mean +- 2 sd with the trials; 2-D: a heat map of the mean with the trials
-in order.  matplotlib's figure registry is not thread-safe, so drawing is serialized, in one
-drawing thread that requests await (:class:`FigureRenderer`: a figure never holds a worker
-thread that an answer needs); finished pictures are kept in a small cache keyed by (session,
-version), where the version changes with every event the session writes.
+in order; both shade the region of avoidance and mark the gaits flagged unsafe, with their
+radius, when the session has them.  matplotlib's figure registry is not thread-safe, so
+drawing is serialized, in one drawing thread that requests await (:class:`FigureRenderer`: a
+figure never holds a worker thread that an answer needs); finished pictures are kept in a small
+cache keyed by (session, version), where the version changes with every event the session
+writes.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from matplotlib.figure import Figure
 
 from gaitpref.model import Posterior
 from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
+from gaitpref.plots.safety import safety_shading
 from gaitpref.plots.session import SessionPicture, render_session, session_picture
 from gaitpref.sessions.session import Session
 
@@ -67,7 +70,13 @@ def picture_of(session: Session, kind: str) -> Picture:
         return session_picture(session)
     trials = [t.action for t in session.trials()]
     title = f"session {session.id}: posterior after {len(trials)} trials"
-    return posterior_picture(session.posterior(), trials, samples=0, title=title)
+    post = session.posterior()
+    config = session.config
+    unsafe = [action for action, _ in session.unsafe_flags().values()]
+    shade = None
+    if config.safety.avoid or unsafe:  # the region of avoidance and the unsafe flags, shaded
+        shade = safety_shading(post, config.safety, config.ordinal, unsafe)
+    return posterior_picture(post, trials, samples=0, title=title, safety=shade)
 
 
 def png_of(pic: Picture, dpi: int = 90) -> bytes:

@@ -18,6 +18,7 @@ from starlette.datastructures import UploadFile
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
+from gaitpref.console.answers import read_rating_fields
 from gaitpref.console.errors import CsrfError, InputError
 from gaitpref.console.limits import MAX_LIBRARY_BYTES, MAX_UPLOAD
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
@@ -152,6 +153,8 @@ async def trial_page(
     session_id: SessionId,
     answered: Annotated[str | None, Query(max_length=200)] = None,
     undone: Annotated[str | None, Query(max_length=200)] = None,
+    flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
+    withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
     context = await run_in_threadpool(
         _service(request).read, session_id, lambda s: trial_context(s, pending_of(s))
@@ -161,6 +164,12 @@ async def trial_page(
         flash = f"Saved: trial {answered}."
     elif undone:
         flash = f"Undone: the answer to trial {undone} was taken back; run it again."
+    elif flagged:
+        flash = (
+            f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
+        )
+    elif withdrawn:
+        flash = f"The unsafe flag of trial {withdrawn} was withdrawn."
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 
 
@@ -171,6 +180,9 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     comparisons, suggestions = views.read_answer_form(fields)
     note = fields.get("note", "").strip()
     service = _service(request)
+    ordinal = await run_in_threadpool(lambda: service.get(session_id).config.ordinal)
+    categories = ordinal.categories if ordinal is not None else ()
+    ratings = read_rating_fields(fields, len(categories))
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
@@ -178,7 +190,10 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             if pending is None or pending.id != query_id:
                 raise session_query_error(session, query_id)
             space = session.config.space
-            return views.answer_summary(space, pending, comparisons, suggestions, session.gait_id)
+            said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
+            return views.answer_summary(
+                space, pending, comparisons, suggestions, session.gait_id, said
+            )
 
         lines = await run_in_threadpool(service.read, session_id, summary)
         return render(
@@ -192,7 +207,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             action=f"/sessions/{session_id}/answer",
         )
     answered = await run_in_threadpool(
-        service.answer, session_id, query_id, comparisons, suggestions, note
+        service.answer, session_id, query_id, comparisons, suggestions, note, ratings
     )
     trials = ",".join(map(str, answered.trials))
     return _see(f"/sessions/{session_id}?answered={trials}")

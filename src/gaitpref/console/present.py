@@ -10,6 +10,7 @@ from gaitpref.console.schemas import (
     GaitOut,
     PosteriorOut,
     QueryOut,
+    RatingScaleOut,
     SessionItemOut,
     SessionOut,
     TrialOut,
@@ -92,7 +93,16 @@ def session_out(session: Session) -> SessionOut:
         pending_query_id=None if pending is None else pending.id,
         validation_open=session.validation_plan is not None,
         features=features_out(session),
+        rating=rating_scale_out(session),
+        unsafe={t: reason for t, (_, reason) in session.unsafe_flags().items()},
     )
+
+
+def rating_scale_out(session: Session) -> RatingScaleOut | None:
+    ordinal = session.config.ordinal
+    if ordinal is None:
+        return None
+    return RatingScaleOut(categories=list(ordinal.categories), avoid=session.config.safety.avoid)
 
 
 def posterior_out(session: Session) -> PosteriorOut:
@@ -111,13 +121,26 @@ def posterior_out(session: Session) -> PosteriorOut:
     )
 
 
+def ratings_by_trial(session: Session) -> dict[int, str]:
+    """The category each trial was rated in (ratings undone are left out)."""
+    return {
+        int(e.payload["trial"]): str(e.payload["category"])
+        for e in session.feedback()
+        if e.kind == "rating_given" and not e.undone
+    }
+
+
 def trials_out(session: Session) -> list[TrialOut]:
+    unsafe = session.unsafe_flags()
+    rated = ratings_by_trial(session)
     return [
         TrialOut(
             trial=t.number,
             query_id=t.query,
             gait=gait_out(session, t.action, t.number),
             excluded=t.excluded,
+            unsafe=unsafe[t.number][1] if t.number in unsafe else None,
+            rating=rated.get(t.number),
         )
         for t in session.trials()
     ]

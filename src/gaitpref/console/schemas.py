@@ -86,8 +86,24 @@ class QueryOut(BaseModel):
     )
 
 
+class FeedbackIn(BaseModel):
+    """One answer of any registered feedback kind: ``kind`` names it (``GET
+    /api/sessions/{id}`` lists the session's), the other keys are its record's fields, e.g.
+    ``{"kind": "rating", "action": 7, "label": "okay"}`` (a label is a category name or its
+    number ``1..K``, worst first)."""
+
+    model_config = ConfigDict(extra="allow", json_schema_extra={"additionalProperties": True})
+
+    kind: StrictStr = Field(min_length=1, max_length=100, examples=["rating"])
+
+    def fields(self) -> dict[str, object]:
+        """The record's fields (every key but ``kind``)."""
+        return dict(self.model_extra or {})
+
+
 class AnswerIn(_Request):
-    """An answer to query ``query_id`` (the same triples as ``CoSpar.tell``)."""
+    """An answer to query ``query_id`` (the same triples as ``CoSpar.tell``, and ``feedback``
+    records of any other registered kind, such as ratings)."""
 
     query_id: Id
     comparisons: list[ComparisonTriple] = Field(
@@ -95,6 +111,11 @@ class AnswerIn(_Request):
     )
     suggestions: list[SuggestionTriple] = Field(
         default_factory=list, max_length=MAX_LIST, examples=[[[12, "step_length", "+small"]]]
+    )
+    feedback: list[FeedbackIn] = Field(
+        default_factory=list,
+        max_length=MAX_LIST,
+        examples=[[{"kind": "rating", "action": 12, "label": "okay"}]],
     )
     note: Note | None = None
 
@@ -154,6 +175,13 @@ class SessionItemOut(BaseModel):
     updated_at: str
 
 
+class RatingScaleOut(BaseModel):
+    """The config's rating scale (``[feedback.rating]``), worst first."""
+
+    categories: list[str]
+    avoid: int = Field(description="the worst categories avoided by [safety] (0: none)")
+
+
 class SessionOut(BaseModel):
     """A session with what its log says now."""
 
@@ -168,6 +196,12 @@ class SessionOut(BaseModel):
     pending_query_id: int | None
     validation_open: bool
     features: list[FeatureOut]
+    rating: RatingScaleOut | None = Field(
+        default=None, description="the rating scale, when the config asks for ratings"
+    )
+    unsafe: dict[int, str] = Field(
+        default_factory=dict, description="trials flagged unsafe -> the reason"
+    )
 
 
 class TrialOut(BaseModel):
@@ -177,6 +211,17 @@ class TrialOut(BaseModel):
     query_id: int
     gait: GaitOut
     excluded: str | None = Field(description="the exclusion reason, if excluded")
+    unsafe: str | None = Field(default=None, description="the unsafe flag's reason, if flagged")
+    rating: str | None = Field(default=None, description="the category it was rated, if rated")
+
+
+class UnsafeIn(_Request):
+    """Flag an answered trial unsafe: its gait and those within the config's
+    ``[safety] unsafe_radius`` are never proposed again."""
+
+    reason: Annotated[StrictStr, Field(min_length=1, max_length=2000)] = Field(
+        description="what happened (required)", examples=["knee hyperextension"]
+    )
 
 
 class ConfigOut(BaseModel):
@@ -247,6 +292,7 @@ __all__ = [
     "EventOut",
     "ExcludeIn",
     "FeatureOut",
+    "FeedbackIn",
     "GaitOut",
     "Move",
     "NoteIn",
@@ -254,6 +300,7 @@ __all__ = [
     "PosteriorOut",
     "QueryOut",
     "RankingIn",
+    "RatingScaleOut",
     "SessionItemOut",
     "SessionOut",
     "StatusIn",
@@ -261,6 +308,7 @@ __all__ = [
     "TrialOut",
     "UndoIn",
     "UndoneOut",
+    "UnsafeIn",
     "ValidationGaitOut",
     "ValidationOut",
 ]

@@ -27,7 +27,7 @@ from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir, discard
 from gaitpref.console.errors import InputError
-from gaitpref.errors import SessionStateError
+from gaitpref.errors import NoSafeGaitError, SessionStateError
 from gaitpref.sessions.session import Answered, Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
@@ -45,7 +45,8 @@ class Pending:
     """What the trial page can show now: a query, or why there is none."""
 
     query: SessionQuery | None
-    reason: str  # "" when there is a query; else "paused", "finished", "validation"
+    reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe"
+    detail: str = ""  # why, in words (the NoSafeGaitError's message)
 
 
 class SessionService:
@@ -142,13 +143,15 @@ class SessionService:
         comparisons: Sequence[object],
         suggestions: Sequence[object],
         note: str | None = None,
+        feedback: Sequence[object] = (),
     ) -> Answered:
-        """Answer ``query_id``; a non-empty ``note`` is logged right after the answer."""
+        """Answer ``query_id`` (``feedback``: records of other kinds, such as ratings); a
+        non-empty ``note`` is logged right after the answer."""
         text = (note or "").strip()
         if len(text) > 2000:
             raise InputError("note", "a note has at most 2000 characters")
         with self.locked(session_id) as session:
-            answered = session.answer(query_id, comparisons, suggestions)
+            answered = session.answer(query_id, [*comparisons, *feedback], suggestions)
             if text:
                 session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
             return answered
@@ -180,6 +183,20 @@ class SessionService:
                 return False
             session.note(text)
             return True
+
+    def flag_unsafe(self, session_id: int, trial: int, reason: str) -> None:
+        """The operator's hard stop on an answered trial (``reason`` required)."""
+        text = reason.strip()
+        if not text:
+            raise InputError("reason", "say why the trial was unsafe (the reason is required)")
+        if len(text) > 2000:
+            raise InputError("reason", "a reason has at most 2000 characters")
+        with self.locked(session_id) as session:
+            session.flag_unsafe(trial, text)
+
+    def withdraw_unsafe(self, session_id: int, trial: int) -> None:
+        with self.locked(session_id) as session:
+            session.withdraw_unsafe(trial)
 
     def note(self, session_id: int, text: str) -> int:
         with self.locked(session_id) as session:
@@ -242,7 +259,10 @@ def pending_of(session: Session) -> Pending:
         return Pending(None, session.status)
     if session.validation_plan is not None:
         return Pending(None, "validation")
-    return Pending(session.next_query(), "")
+    try:
+        return Pending(session.next_query(), "")
+    except NoSafeGaitError as exc:  # nothing was written: say why and propose nothing
+        return Pending(None, "no-safe", str(exc))
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:

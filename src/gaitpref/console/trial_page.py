@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from gaitpref.console import views
+from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
 from gaitpref.sessions.session import Session
 
@@ -22,6 +23,8 @@ class ChronoRow:
     compared: tuple[str, ...]
     suggested: tuple[str, ...]
     excluded: str | None
+    rating: str | None = None  # the category it was rated
+    unsafe: str | None = None  # the unsafe flag's reason
 
 
 def _outcome_text(first: int, second: int, outcome: str, trial: int) -> str:
@@ -52,6 +55,8 @@ def chronology(session: Session) -> list[ChronoRow]:
         suggested.setdefault(s.trial, []).append(
             text + (" (at the grid's edge)" if s.target is None else "")
         )
+    rated = ratings_by_trial(session)
+    unsafe = session.unsafe_flags()
     rows = [
         ChronoRow(
             t.number,
@@ -60,6 +65,8 @@ def chronology(session: Session) -> list[ChronoRow]:
             tuple(compared.get(t.number, ())),
             tuple(suggested.get(t.number, ())),
             t.excluded,
+            rated.get(t.number),
+            unsafe[t.number][1] if t.number in unsafe else None,
         )
         for t in session.trials()
     ]
@@ -85,15 +92,21 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
     best = int(np.argmax(mean))
     trials = session.trials()
+    ordinal = session.config.ordinal
+    categories = ordinal.categories if ordinal is not None else ()
     return {
         "session": session,
         "status": session.status,
         "reason": pending.reason,
+        "reason_detail": pending.detail,
         "query": query,
         "actions": actions,
         "buffer": buffer,
         "comparisons": views.comparison_groups(actions, buffer),
         "suggestions": views.suggestion_groups(space, actions),
+        "ratings": views.rating_groups(categories, actions),
+        "categories": categories,
+        "unsafe": session.unsafe_flags(),
         "multi": len(actions) > 1,
         "chronology": chronology(session),
         "notes": list(reversed(session.notes()))[:20],

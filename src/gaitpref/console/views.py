@@ -9,10 +9,13 @@ by the session):
 
 - ``cmp-<i>-<j>``: ``first`` | ``second`` | ``none``, comparing grid actions ``i`` and ``j``;
 - ``sug-<a>-<feature>``: ``+big`` | ``+small`` | ``-small`` | ``-big`` | empty (no suggestion)
-  for executed action ``a``.
+  for executed action ``a``;
+- ``rate-<a>``: the rating of executed action ``a``, ``1..K`` (the config's categories, worst
+  first) or empty (not rated; read by :mod:`gaitpref.console.answers`).
 
-Keyboard: comparisons ``1`` (first), ``2`` (second), ``0`` (no preference); suggestions per
-feature row ``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less").
+Keyboard: comparisons ``1`` (first), ``2`` (second), ``0`` (no preference); once every
+comparison is answered the digits ``1..K`` rate the gait; suggestions per feature row
+``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less").
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
+from gaitpref.console.answers import is_rating_field
 from gaitpref.console.errors import InputError
 from gaitpref.sessions.records import SessionQuery
 from gaitpref.space import MOVES, Feature, Space
@@ -120,6 +124,32 @@ class SuggestionGroup:
     choices: tuple[Choice, ...]
 
 
+@dataclass(frozen=True)
+class RatingGroup:
+    """The rating buttons of one executed gait: the config's categories, worst first."""
+
+    field: str
+    action: GaitView
+    position: int
+    choices: tuple[Choice, ...]
+
+
+def rating_groups(categories: Sequence[str], actions: Sequence[GaitView]) -> list[RatingGroup]:
+    """One row of buttons per executed gait (none without a rating scale): the categories with
+    the digits ``1..K`` as shortcuts, and "no rating" (the default: a trial may go unrated)."""
+    if not categories:
+        return []
+    groups = []
+    for pos, gait in enumerate(actions):
+        choices = tuple(
+            Choice(str(k), word, str(k) if k <= 9 else "", f"{gait.name} rated {word!r}")
+            for k, word in enumerate(categories, start=1)
+        )
+        skip = Choice("", "no rating", "", "")
+        groups.append(RatingGroup(f"rate-{gait.index}", gait, pos, (*choices, skip)))
+    return groups
+
+
 def comparison_groups(
     actions: Sequence[GaitView], buffer: Sequence[GaitView]
 ) -> list[ComparisonGroup]:
@@ -191,7 +221,7 @@ def read_answer_form(
     comparisons: list[tuple[int, int, str]] = []
     suggestions: list[tuple[int, str, str]] = []
     for name, value in form.items():
-        if name in FORM_FIELDS:
+        if name in FORM_FIELDS or is_rating_field(name):
             continue
         if m := _CMP.match(name):
             if value not in COMPARISON_KEYS:
@@ -227,8 +257,10 @@ def answer_summary(
     comparisons: Sequence[tuple[int, int, str]],
     suggestions: Sequence[tuple[int, str, str]],
     gait_id: Callable[[int], str | None] | None = None,
+    ratings: Sequence[tuple[int, str]] = (),
 ) -> list[str]:
-    """The answer in words, for the confirm step (``gait_id``: a library's gait ids)."""
+    """The answer in words, for the confirm step (``gait_id``: a library's gait ids;
+    ``ratings``: ``(action, category)``)."""
     trial_of = dict(zip(query.buffer, query.buffer_trials, strict=True))
     trial_of.update(zip(query.actions, query.trials, strict=True))
 
@@ -252,4 +284,6 @@ def answer_summary(
         lines.append(f"{name(a)}: {pretty(feature)} {words.get(move, move)}")
     if not suggestions:
         lines.append("No suggestions")
+    for a, category in ratings:
+        lines.append(f"{name(a)} rated {category!r}")
     return lines

@@ -8,6 +8,10 @@ with matplotlib (Agg backend, no screen needed):
 - 2-D: a heat map of the posterior mean (colour bar) with the trials in chronological order
   (shaded by order, their own colour bar), the best posterior mean starred and, when the true
   objective is known, its best marked with an X; a legend names the marks.
+
+With ``safety`` (ROIAL's region of avoidance and the operator's unsafe flags,
+:mod:`gaitpref.plots.safety`), both kinds shade the avoided gaits (``mu + lambda sd`` below the
+threshold) and mark each gait flagged unsafe with the radius around it.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from matplotlib.figure import Figure
 
 from gaitpref.model.posterior import Posterior
 from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d
 from gaitpref.space import FloatArray, IntArray, Space
 
 
@@ -40,6 +45,7 @@ class PosteriorPicture:
     trials: IntArray  # executed actions in order
     objective: FloatArray | None  # true objective (flat), if known
     title: str
+    safety: SafetyShading | None = None  # region of avoidance and unsafe flags, if any
 
 
 def posterior_picture(
@@ -50,8 +56,10 @@ def posterior_picture(
     samples: int = 3,
     rng: np.random.Generator | None = None,
     title: str = "",
+    safety: SafetyShading | None = None,
 ) -> PosteriorPicture:
-    """Collect what to draw (``samples`` joint posterior samples, drawn with ``rng``)."""
+    """Collect what to draw (``samples`` joint posterior samples, drawn with ``rng``;
+    ``safety``: what :func:`gaitpref.plots.safety.safety_shading` computed, to shade)."""
     if posterior.space.ndim > 2:
         raise ValueError("posterior figures are drawn for 1-D and 2-D spaces only")
     gen = rng if rng is not None else np.random.default_rng(0)
@@ -64,6 +72,7 @@ def posterior_picture(
         trials=np.asarray(trials, dtype=np.intp),
         objective=None if objective is None else np.asarray(objective, dtype=float).reshape(-1),
         title=title,
+        safety=safety,
     )
 
 
@@ -95,6 +104,8 @@ def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
         ax2 = ax.twinx()
         ax2.plot(x, pic.objective, color="k", lw=1, alpha=0.6)
         ax2.set_ylabel("true objective")
+    if pic.safety is not None:
+        draw_1d(ax, x, pic.mean, pic.safety)
     ax.set_xlabel(_axis_label(pic.space, 0))
     ax.set_ylabel("utility")
     ax.legend(loc="best", fontsize=8)
@@ -142,7 +153,9 @@ def _draw_2d(pic: PosteriorPicture, fig: Figure) -> None:
         for a in axes:
             a.scatter([true_best[1]], [true_best[0]], marker="x", s=80, c="k", zorder=4,
                       label="true best")  # fmt: skip
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
+    proxies = draw_2d(ax, pic.space, pic.safety) if pic.safety is not None else []
+    handles, _ = ax.get_legend_handles_labels()
+    ax.legend(handles=[*handles, *proxies], loc="upper left", fontsize=7, framealpha=0.85)
 
 
 def render(pic: PosteriorPicture) -> Figure:

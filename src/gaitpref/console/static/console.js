@@ -35,12 +35,15 @@
     } else {
       const button = form.querySelector("button[data-say]");
       if (button) lines.push(button.dataset.say);
+      const reason = form.elements.namedItem("reason");
+      if (kind === "unsafe" && reason) lines.push("Reason: " + reason.value.trim());
     }
     return lines;
   }
 
   const TITLES = { answer: "Save this answer?", undo: "Undo the last answer?",
-    ranking: "Record this ranking?", finish: "Finish the session?" };
+    ranking: "Record this ranking?", finish: "Finish the session?",
+    unsafe: "Flag this trial unsafe?", withdraw: "Withdraw the unsafe flag?" };
 
   function ask(form) {
     if (!dialog) { confirmAndSend(form); return; }
@@ -93,14 +96,20 @@
   const answer = document.getElementById("answer-form");
   const cmpGroups = answer ? [...answer.querySelectorAll("fieldset[data-kind=comparison]")] : [];
   const sugGroups = answer ? [...answer.querySelectorAll("fieldset[data-kind=suggestion]")] : [];
+  const ratGroups = answer ? [...answer.querySelectorAll("fieldset[data-kind=rating]")] : [];
   const positions = [...new Set(sugGroups.map((g) => Number(g.dataset.position)))];
   let activeCmp = 0;
+  let activeRat = 0;
   let activePos = positions.length ? positions[0] : 0;
   const answered = (g) => !!g.querySelector("input:checked");
+  const rated = (g) => !!g.querySelector("input:checked:not([value=''])");
+  // ratings take the digits once every comparison is answered (the comparison comes first)
+  const digitsRate = () => ratGroups.length > 0 && cmpGroups.every(answered);
 
   function mark() {
     cmpGroups.forEach((g, i) => g.classList.toggle("active", i === activeCmp));
     sugGroups.forEach((g) => g.classList.toggle("active", Number(g.dataset.position) === activePos));
+    ratGroups.forEach((g, i) => g.classList.toggle("active", i === activeRat));
   }
 
   function ready(form) {
@@ -128,6 +137,12 @@
         activeCmp = cmpGroups.indexOf(group);
         const next = cmpGroups.findIndex((g) => !answered(g));
         if (next >= 0) activeCmp = next;
+      } else if (group.dataset.kind === "rating") {
+        activeRat = ratGroups.indexOf(group);
+        if (rated(group)) {
+          const next = ratGroups.findIndex((g, i) => i > activeRat && !rated(g));
+          if (next >= 0) activeRat = next;
+        }
       } else {
         activePos = Number(group.dataset.position);
       }
@@ -137,7 +152,8 @@
 
   function choose(key) {
     const scopes = [];
-    if (cmpGroups[activeCmp]) scopes.push(cmpGroups[activeCmp]);
+    if (digitsRate()) { if (ratGroups[activeRat]) scopes.push(ratGroups[activeRat]); }
+    else if (cmpGroups[activeCmp]) scopes.push(cmpGroups[activeCmp]);
     for (const g of sugGroups) if (Number(g.dataset.position) === activePos) scopes.push(g);
     for (const scope of scopes) {
       const input = scope.querySelector('input[data-key="' + CSS.escape(key) + '"]');

@@ -1,0 +1,92 @@
+"""The trial page's unsafe flags: flag an answered trial (a reason, then a confirm step) and
+withdraw a flag.
+
+A flag is the operator's hard stop (:meth:`gaitpref.Session.flag_unsafe`): the trial's gait and
+the gaits within the config's ``[safety] unsafe_radius`` are never proposed again, and a pending
+query that proposed one of them is withdrawn, so the page the post redirects to shows the query
+proposed after the flag.  Without JavaScript the confirm step is a server-rendered page.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Path, Request
+from fastapi.concurrency import run_in_threadpool
+from fastapi.responses import Response
+
+from gaitpref.console.errors import InputError
+from gaitpref.console.pages import SessionId, _form, _see, _service
+from gaitpref.console.schemas import MAX_ID
+from gaitpref.console.templating import render
+from gaitpref.sessions.session import Session
+
+router = APIRouter(include_in_schema=False)
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe")
+async def post_unsafe(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    """Flag an answered trial unsafe (a reason is required; confirmed first)."""
+    fields, _ = await _form(request)
+    reason = fields.get("reason", "").strip()
+    if not reason:
+        raise InputError("reason", "say why the trial was unsafe (the reason is required)")
+    service = _service(request)
+    if fields.get("confirmed") != "1":
+
+        def summary(session: Session) -> list[str]:
+            gait = next((t.action for t in session.trials() if t.number == trial), None)
+            if gait is None:
+                raise InputError("trial", f"trial {trial} has not been answered")
+            radius = session.config.safety.unsafe_radius
+            near = f" and the gaits within {radius:g} of its range" if radius else ""
+            return [
+                f"Flag trial {trial} ({session.describe(gait)}) unsafe: {reason}",
+                f"Its gait{near} will not be proposed again (the flag can be withdrawn).",
+            ]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return _confirm(request, session_id, "unsafe", lines, fields, f"trials/{trial}/unsafe")
+    await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
+    return _see(f"/sessions/{session_id}?flagged={trial}")
+
+
+@router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw")
+async def post_withdraw_unsafe(
+    request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    """Withdraw the unsafe flag of a trial (confirmed first)."""
+    fields, _ = await _form(request)
+    if fields.get("confirmed") != "1":
+        lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
+        return _confirm(
+            request, session_id, "withdraw", lines, fields, f"trials/{trial}/unsafe/withdraw"
+        )
+    await run_in_threadpool(_service(request).withdraw_unsafe, session_id, trial)
+    return _see(f"/sessions/{session_id}?withdrawn={trial}")
+
+
+def _confirm(
+    request: Request,
+    session_id: int,
+    what: str,
+    lines: list[str],
+    fields: dict[str, str],
+    path: str,
+) -> Response:
+    """The confirm step as a page (without JavaScript)."""
+    return render(
+        request,
+        "confirm.html",
+        session_id=session_id,
+        what=what,
+        lines=lines,
+        fields=fields,
+        note="",
+        action=f"/sessions/{session_id}/{path}",
+    )
+
+
+__all__ = ["router"]
