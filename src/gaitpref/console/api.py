@@ -57,7 +57,7 @@ _ERRORS: dict[int | str, dict[str, Any]] = {
 router = APIRouter(prefix="/api", tags=["api"], responses=_ERRORS)
 
 
-def _service(request: Request) -> SessionService:
+def service_of(request: Request) -> SessionService:
     service: SessionService = request.app.state.service
     return service
 
@@ -83,19 +83,19 @@ def configs() -> list[ConfigOut]:
 @router.get("/sessions", response_model=list[SessionItemOut])
 def list_sessions(request: Request) -> list[SessionItemOut]:
     """Every session of the database, by id."""
-    return [present.item_out(r) for r in _service(request).list_sessions()]
+    return [present.item_out(r) for r in service_of(request).list_sessions()]
 
 
 @router.post("/sessions", response_model=CreatedOut, status_code=status.HTTP_201_CREATED)
 def create_session(request: Request, body: CreateSessionIn) -> CreatedOut:
     """A new session from a shipped config's name or a TOML config's text."""
-    session = _service(request).create(body.config, body.subject, body.seed)
+    session = service_of(request).create(body.config, body.subject, body.seed)
     return CreatedOut(id=session.id)
 
 
 @router.get("/sessions/{session_id}", response_model=SessionOut)
 def get_session(request: Request, session_id: SessionId) -> SessionOut:
-    return _service(request).read(session_id, present.session_out)
+    return service_of(request).read(session_id, present.session_out)
 
 
 @router.get("/sessions/{session_id}/query", response_model=QueryOut)
@@ -107,7 +107,7 @@ def get_query(request: Request, session_id: SessionId) -> QueryOut:
     gait may be proposed (every gait is in the region of avoidance or near an unsafe flag: the
     reason says so; nothing is written).
     """
-    return _service(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
+    return service_of(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
 
 
 @router.post("/sessions/{session_id}/query/{query_id}/ack", response_model=AckOut)
@@ -117,7 +117,7 @@ def acknowledge(
     query_id: Annotated[int, Path(ge=1, le=MAX_ID)],
 ) -> AckOut:
     """A device controller loaded the query's gaits (logged once as a note); 409 if not pending."""
-    new = _service(request).acknowledge(session_id, query_id)
+    new = service_of(request).acknowledge(session_id, query_id)
     return AckOut(query_id=query_id, acknowledged=new)
 
 
@@ -126,7 +126,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
     """Answer the pending query: ``comparisons`` ``[i, j, first|second|none]`` and
     ``suggestions`` ``[action, feature, move]``, as for ``CoSpar.tell``, and ``feedback`` items
     of any registered kind, e.g. ``{"kind": "rating", "action": 7, "label": "okay"}``."""
-    service = _service(request)
+    service = service_of(request)
     records = feedback_records([(f.kind, f.fields()) for f in body.feedback])
     answered = service.answer(
         session_id,
@@ -150,7 +150,7 @@ def undo(
 ) -> UndoneOut:
     """Take back the last answer; its query is pending again.  With ``query_id``, refused (409)
     unless that query is the pending one (so two clients cannot undo twice)."""
-    service = _service(request)
+    service = service_of(request)
     before = service.get(session_id).pending
     query = service.undo(session_id, None if body is None else body.query_id)
     return UndoneOut(
@@ -163,13 +163,13 @@ def undo(
 @router.get("/sessions/{session_id}/posterior", response_model=PosteriorOut)
 def posterior(request: Request, session_id: SessionId) -> PosteriorOut:
     """Posterior mean and standard deviation of every action, in grid order."""
-    return _service(request).read(session_id, present.posterior_out)
+    return service_of(request).read(session_id, present.posterior_out)
 
 
 @router.get("/sessions/{session_id}/trials", response_model=list[TrialOut])
 def trials(request: Request, session_id: SessionId) -> list[TrialOut]:
     """The trials in force, in order (the chronology)."""
-    return _service(request).read(session_id, present.trials_out)
+    return service_of(request).read(session_id, present.trials_out)
 
 
 @router.get("/sessions/{session_id}/events", response_model=list[EventOut])
@@ -177,13 +177,13 @@ def events(request: Request, session_id: SessionId) -> list[EventOut]:
     """The session's whole append-only log."""
     return [
         EventOut(seq=e.seq, kind=e.kind, at=e.at.isoformat(), payload=e.payload)
-        for e in _service(request).get(session_id).events()
+        for e in service_of(request).get(session_id).events()
     ]
 
 
 @router.post("/sessions/{session_id}/notes", response_model=NoteOut)
 def add_note(request: Request, session_id: SessionId, body: NoteIn) -> NoteOut:
-    return NoteOut(seq=_service(request).note(session_id, body.text))
+    return NoteOut(seq=service_of(request).note(session_id, body.text))
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/exclude", response_model=list[TrialOut])
@@ -194,7 +194,7 @@ def exclude(
     body: ExcludeIn,
 ) -> list[TrialOut]:
     """Exclude an answered trial (device fault, stumble...): its answers leave the model."""
-    service = _service(request)
+    service = service_of(request)
     service.exclude(session_id, trial, body.reason, body.detail)
     return service.read(session_id, present.trials_out)
 
@@ -209,7 +209,7 @@ def flag_unsafe(
     """Flag an answered trial unsafe (``reason`` required): its gait, and those within the
     config's ``[safety] unsafe_radius``, are never proposed again.  A pending query that proposes
     one of them is withdrawn: read ``GET .../query`` again for the next one."""
-    service = _service(request)
+    service = service_of(request)
     service.flag_unsafe(session_id, trial, body.reason)
     return service.read(session_id, present.trials_out)
 
@@ -219,7 +219,7 @@ def withdraw_unsafe(
     request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
 ) -> list[TrialOut]:
     """Withdraw the unsafe flag of a trial (the flag's undo); 409 if it is not flagged."""
-    service = _service(request)
+    service = service_of(request)
     service.withdraw_unsafe(session_id, trial)
     return service.read(session_id, present.trials_out)
 
@@ -227,7 +227,7 @@ def withdraw_unsafe(
 @router.post("/sessions/{session_id}/status", response_model=SessionOut)
 def set_status(request: Request, session_id: SessionId, body: StatusIn) -> SessionOut:
     """Pause, resume (``active``) or finish the session."""
-    service = _service(request)
+    service = service_of(request)
     service.set_status(session_id, body.status)
     return service.read(session_id, present.session_out)
 
@@ -236,7 +236,7 @@ def set_status(request: Request, session_id: SessionId, body: StatusIn) -> Sessi
 def start_validation(request: Request, session_id: SessionId) -> ValidationOut:
     """Open a blind validation round (max/mean/min of the posterior mean in a stored random
     order), or return the open one."""
-    service = _service(request)
+    service = service_of(request)
     plan = service.start_validation(session_id)
     return service.read(session_id, lambda s: present.plan_out(s, plan))
 
@@ -251,7 +251,7 @@ def validations(request: Request, session_id: SessionId) -> list[ValidationOut]:
             out.append(present.plan_out(session, session.validation_plan))
         return out
 
-    return _service(request).read(session_id, rounds)
+    return service_of(request).read(session_id, rounds)
 
 
 @router.post("/sessions/{session_id}/validation/{round_}/ranking", response_model=ValidationOut)
@@ -262,7 +262,7 @@ def rank(
     body: RankingIn,
 ) -> ValidationOut:
     """The subject's blind ranking (labels, best first); returns the round unblinded."""
-    service = _service(request)
+    service = service_of(request)
     result = service.rank(session_id, round_, body.ranking)
     return service.read(session_id, lambda s: present.result_out(s, result))
 
@@ -278,7 +278,7 @@ async def export(
     format: Annotated[Literal["csv", "json"], Query()] = "csv",
 ) -> Response:
     """The session exported (``gaitpref session export``) as a zip of its folder."""
-    data = await run_in_threadpool(_service(request).export_zip, session_id, format)
+    data = await run_in_threadpool(service_of(request).export_zip, session_id, format)
     return Response(
         data,
         media_type="application/zip",

@@ -16,7 +16,7 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
 from gaitpref.console.errors import InputError
-from gaitpref.console.pages import SessionId, _form, _see, _service
+from gaitpref.console.pages import SessionId, read_form, see_other, service_of
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.templating import render
 from gaitpref.sessions.session import Session
@@ -29,11 +29,11 @@ async def post_unsafe(
     request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
 ) -> Response:
     """Flag an answered trial unsafe (a reason is required; confirmed first)."""
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     reason = fields.get("reason", "").strip()
     if not reason:
         raise InputError("reason", "say why the trial was unsafe (the reason is required)")
-    service = _service(request)
+    service = service_of(request)
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
@@ -50,7 +50,7 @@ async def post_unsafe(
         lines = await run_in_threadpool(service.read, session_id, summary)
         return _confirm(request, session_id, "unsafe", lines, fields, f"trials/{trial}/unsafe")
     await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
-    return _see(f"/sessions/{session_id}?flagged={trial}")
+    return see_other(f"/sessions/{session_id}?flagged={trial}")
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw")
@@ -58,14 +58,14 @@ async def post_withdraw_unsafe(
     request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
 ) -> Response:
     """Withdraw the unsafe flag of a trial (confirmed first)."""
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     if fields.get("confirmed") != "1":
         lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
         return _confirm(
             request, session_id, "withdraw", lines, fields, f"trials/{trial}/unsafe/withdraw"
         )
-    await run_in_threadpool(_service(request).withdraw_unsafe, session_id, trial)
-    return _see(f"/sessions/{session_id}?withdrawn={trial}")
+    await run_in_threadpool(service_of(request).withdraw_unsafe, session_id, trial)
+    return see_other(f"/sessions/{session_id}?withdrawn={trial}")
 
 
 def _confirm(

@@ -38,16 +38,16 @@ router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
 
 
-def _service(request: Request) -> SessionService:
+def service_of(request: Request) -> SessionService:
     service: SessionService = request.app.state.service
     return service
 
 
-def _see(url: str) -> RedirectResponse:
+def see_other(url: str) -> RedirectResponse:
     return RedirectResponse(url, status_code=303)
 
 
-async def _form(request: Request) -> tuple[dict[str, str], dict[str, UploadFile]]:
+async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadFile]]:
     """The posted form (each field once), after checking its CSRF token."""
     form = await request.form()
     fields: dict[str, str] = {}
@@ -71,7 +71,7 @@ async def _form(request: Request) -> tuple[dict[str, str], dict[str, UploadFile]
 # -- sessions ----------------------------------------------------------------------------------
 @router.get("/", response_class=HTMLResponse)
 async def sessions_page(request: Request) -> Response:
-    service = _service(request)
+    service = service_of(request)
     records = await run_in_threadpool(service.list_sessions)
     subjects = await run_in_threadpool(service.list_subjects)
     counts = {s.code: sum(1 for r in records if r.subject == s.code) for s in subjects}
@@ -106,7 +106,7 @@ async def _upload_text(upload: UploadFile | None, field: str) -> str | None:
 
 @router.post("/sessions")
 async def create_session(request: Request) -> Response:
-    fields, files = await _form(request)
+    fields, files = await read_form(request)
     subject = fields.get("subject", "").strip()
     if not re.fullmatch(SUBJECT_PATTERN, subject):
         raise InputError(
@@ -130,20 +130,22 @@ async def create_session(request: Request) -> Response:
         library = (data, lib_file.filename)
     name = upload_name.rsplit(".", 1)[0] if upload_name else None
     session = await run_in_threadpool(
-        lambda: _service(request).create(source, subject, seed, config_name=name, library=library)
+        lambda: service_of(request).create(source, subject, seed, config_name=name, library=library)
     )
-    return _see(f"/sessions/{session.id}")
+    return see_other(f"/sessions/{session.id}")
 
 
 @router.post("/sessions/{session_id}/status")
 async def set_status(request: Request, session_id: SessionId) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     status = fields.get("status", "")
     if status not in ("active", "paused", "finished"):
         raise InputError("status", f"must be active, paused or finished; got {status!r}")
-    await run_in_threadpool(_service(request).set_status, session_id, status)
+    await run_in_threadpool(service_of(request).set_status, session_id, status)
     back = fields.get("back", "")
-    return _see(back if back in ("/", f"/sessions/{session_id}") else f"/sessions/{session_id}")
+    return see_other(
+        back if back in ("/", f"/sessions/{session_id}") else f"/sessions/{session_id}"
+    )
 
 
 # -- the trial page ----------------------------------------------------------------------------
@@ -157,7 +159,7 @@ async def trial_page(
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
     context = await run_in_threadpool(
-        _service(request).read, session_id, lambda s: trial_context(s, pending_of(s))
+        service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
     flash = ""
     if answered:
@@ -175,11 +177,11 @@ async def trial_page(
 
 @router.post("/sessions/{session_id}/answer")
 async def post_answer(request: Request, session_id: SessionId) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     query_id = views.read_int(fields, "query_id")
     comparisons, suggestions = views.read_answer_form(fields)
     note = fields.get("note", "").strip()
-    service = _service(request)
+    service = service_of(request)
     ordinal = await run_in_threadpool(lambda: service.get(session_id).config.ordinal)
     categories = ordinal.categories if ordinal is not None else ()
     ratings = read_rating_fields(fields, len(categories))
@@ -210,14 +212,14 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
         service.answer, session_id, query_id, comparisons, suggestions, note, ratings
     )
     trials = ",".join(map(str, answered.trials))
-    return _see(f"/sessions/{session_id}?answered={trials}")
+    return see_other(f"/sessions/{session_id}?answered={trials}")
 
 
 @router.post("/sessions/{session_id}/undo")
 async def post_undo(request: Request, session_id: SessionId) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     query_id = views.read_int(fields, "query_id")
-    service = _service(request)
+    service = service_of(request)
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
@@ -241,32 +243,32 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
             action=f"/sessions/{session_id}/undo",
         )
     query = await run_in_threadpool(service.undo, session_id, query_id)
-    return _see(f"/sessions/{session_id}?undone={','.join(map(str, query.trials))}")
+    return see_other(f"/sessions/{session_id}?undone={','.join(map(str, query.trials))}")
 
 
 @router.post("/sessions/{session_id}/note")
 async def post_note(request: Request, session_id: SessionId) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     text = fields.get("text", "").strip()
     if not text:
         raise InputError("text", "the note is empty")
     if len(text) > 2000:
         raise InputError("text", "a note has at most 2000 characters")
-    await run_in_threadpool(_service(request).note, session_id, text)
-    return _see(f"/sessions/{session_id}")
+    await run_in_threadpool(service_of(request).note, session_id, text)
+    return see_other(f"/sessions/{session_id}")
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/exclude")
 async def post_exclude(
     request: Request, session_id: SessionId, trial: Annotated[int, Path(ge=1, le=MAX_ID)]
 ) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     reason = fields.get("reason", "")
     if reason not in REASONS:
         raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {reason!r}")
     detail = fields.get("detail", "").strip()[:500]
-    await run_in_threadpool(_service(request).exclude, session_id, trial, reason, detail)
-    return _see(f"/sessions/{session_id}")
+    await run_in_threadpool(service_of(request).exclude, session_id, trial, reason, detail)
+    return see_other(f"/sessions/{session_id}")
 
 
 @router.get("/sessions/{session_id}/posterior.png")
@@ -282,7 +284,7 @@ async def session_png(request: Request, session_id: SessionId) -> Response:
 
 
 async def _figure(request: Request, session_id: int, kind: str) -> Response:
-    service = _service(request)
+    service = service_of(request)
     version = await run_in_threadpool(lambda: service.get(session_id).last_seq)
     renderer: figures.FigureRenderer = request.app.state.figures
 
@@ -297,7 +299,7 @@ async def _figure(request: Request, session_id: int, kind: str) -> Response:
 @router.get("/sessions/{session_id}/validation", response_class=HTMLResponse)
 async def validation_page(request: Request, session_id: SessionId) -> Response:
     return await run_in_threadpool(
-        _service(request).read, session_id, lambda s: _validation_page(request, s)
+        service_of(request).read, session_id, lambda s: _validation_page(request, s)
     )
 
 
@@ -335,22 +337,22 @@ def _validation_page(request: Request, session: Session) -> Response:
 
 @router.post("/sessions/{session_id}/validation")
 async def start_validation(request: Request, session_id: SessionId) -> Response:
-    await _form(request)
-    await run_in_threadpool(_service(request).start_validation, session_id)
-    return _see(f"/sessions/{session_id}/validation")
+    await read_form(request)
+    await run_in_threadpool(service_of(request).start_validation, session_id)
+    return see_other(f"/sessions/{session_id}/validation")
 
 
 @router.post("/sessions/{session_id}/validation/{round_}")
 async def post_ranking(
     request: Request, session_id: SessionId, round_: Annotated[int, Path(ge=1, le=MAX_ID)]
 ) -> Response:
-    fields, _ = await _form(request)
+    fields, _ = await read_form(request)
     ranking = [fields.get(f"rank{k}", "") for k in (1, 2, 3)]
     for k, label in enumerate(ranking, start=1):
         if not label:
             raise InputError(f"rank{k}", "choose a gait for every place")
-    await run_in_threadpool(_service(request).rank, session_id, round_, ranking)
-    return _see(f"/sessions/{session_id}/validation")
+    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking)
+    return see_other(f"/sessions/{session_id}/validation")
 
 
 # -- export ------------------------------------------------------------------------------------
@@ -361,7 +363,7 @@ async def export_zip(
     format: Annotated[str, Query(pattern="^(csv|json)$")] = "csv",
 ) -> Response:
     fmt: ExportFormat = "json" if format == "json" else "csv"
-    data = await run_in_threadpool(_service(request).export_zip, session_id, fmt)
+    data = await run_in_threadpool(service_of(request).export_zip, session_id, fmt)
     return Response(
         data,
         media_type="application/zip",
