@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -104,7 +105,7 @@ def test_a_session_on_postgres(postgres_url: str, drive: Drive) -> None:
     b.close()
 
 
-def test_two_writer_processes_take_turns(sqlite_url: str) -> None:
+def test_two_writer_processes_take_turns(sqlite_url: str, tmp_path: Path) -> None:
     """Two processes answering one session as fast as they can both get answers accepted
     (0.1.0: one made 549 answers, the other none), and nothing is lost or doubled."""
     from concurrent.futures import ProcessPoolExecutor
@@ -113,16 +114,42 @@ def test_two_writer_processes_take_turns(sqlite_url: str) -> None:
     from tests.sessions.writerkit import answer_loop
 
     first = Session.create(sqlite_url, CONFIG, "S01", seed=3)
-    attempts = 12
+    attempts = 20
     with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as pool:
-        runs = list(pool.map(answer_loop, [sqlite_url] * 2, [first.id] * 2, [attempts] * 2))
+        barrier = [str(tmp_path)] * 2
+        runs = list(
+            pool.map(answer_loop, [sqlite_url] * 2, [first.id] * 2, [attempts] * 2, barrier)
+        )
     for run in runs:
         assert run["busy"] == 0
-        assert run["accepted"] >= 3, runs  # each makes progress, not one of them only
+        assert int(run["accepted"]) + int(run["stale"]) == attempts, runs
+    # Both may read the same pending query; the second to answer it is told it is stale (right
+    # for two operators answering one trial), so how many each wins depends on the scheduler.
+    # Every round is won by one of them: nobody waits forever and nothing is lost.
+    assert sum(int(r["accepted"]) for r in runs) >= attempts, runs  # type: ignore[call-overload]
     first.refresh()
     executed = [e for e in first.events() if e.kind == "trial_executed"]
     assert len(executed) == sum(int(r["accepted"]) for r in runs)  # type: ignore[call-overload]
     assert len({e.payload["query"] for e in executed}) == len(executed)  # none answered twice
+
+
+def test_two_writer_processes_both_get_their_writes_in(sqlite_url: str, tmp_path: Path) -> None:
+    """Writers that do not race for one query (notes) take turns: each writes all of its events
+    (0.1.0: a second writer was starved by the first)."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    from tests.sessions.writerkit import note_loop
+
+    first = Session.create(sqlite_url, CONFIG, "S01", seed=3)
+    notes = 15
+    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as pool:
+        runs = list(
+            pool.map(note_loop, [sqlite_url] * 2, [first.id] * 2, [notes] * 2, [str(tmp_path)] * 2)
+        )
+    assert runs == [{"written": notes, "busy": 0}] * 2
+    first.refresh()
+    assert len(first.notes()) == 2 * notes
 
 
 def test_a_busy_session_is_refused_after_the_bounded_wait(sqlite_url: str) -> None:
