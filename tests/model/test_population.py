@@ -187,3 +187,40 @@ def test_refuses_rho_outside_the_unit_interval(
 ) -> None:
     with pytest.raises(ValueError, match="rho must lie in"):
         PopulationModel(small_space, small_kernel, 1.2, SIGMA)
+
+
+def _subjects_alike(rng: np.random.Generator, space: Space, alike: bool, subjects: int = 4):
+    """Preferences of ``subjects`` subjects with one utility (``alike``) or independent ones."""
+    x = space.points
+    w, l_, who = [], [], []
+    centres = rng.uniform(space.points.min(0), space.points.max(0), (subjects, space.ndim))
+    if alike:
+        centres[:] = centres[0]
+    span = np.ptp(x, axis=0)
+    for s in range(subjects):
+        utility = -np.sum(((x - centres[s]) / span) ** 2, axis=1)
+        for _ in range(25):
+            i, j = rng.choice(len(space), 2, replace=False)
+            first = utility[i] + rng.normal(0, 0.02) > utility[j]
+            w.append(i if first else j)
+            l_.append(j if first else i)
+            who.append(s)
+    return np.array(w), np.array(l_), np.array(who)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_evidence_learns_how_much_the_subjects_share(small_space: Space, seed: int) -> None:
+    from gaitpref.model.hyperfit import default_prior
+    from gaitpref.model.population_fit import fit_population
+
+    prior = default_prior(small_space, 0.005, SIGMA)
+    start = Hyperparameters((0.03, 0.08), 0.005, 1e-7)
+    fitted = {}
+    for alike in (True, False):
+        w, l_, who = _subjects_alike(np.random.default_rng(seed), small_space, alike)
+        fit = fit_population(small_space, start, 0.5, _pair_data(small_space, w, l_, who), prior)
+        assert fit.accepted, fit.message
+        assert fit.objective_after >= fit.objective_before
+        fitted[alike] = fit.rho_after
+    assert fitted[True] > 0.7
+    assert fitted[False] < 0.5
