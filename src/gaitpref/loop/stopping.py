@@ -127,13 +127,12 @@ class StopRule:
         """Why to stop after ``trials`` executed trials with confidence ``sure`` (None: go on)."""
         if self.max_trials is not None and trials >= self.max_trials:
             return f"{trials} trials reached max_trials = {self.max_trials}"
-        if self.confidence is not None and sure is not None:
-            if sure.probability >= self.confidence:
-                return (
-                    f"{sure.probability:.0%} that gait {sure.recommended} is within "
-                    f"{sure.tolerance:.0%} of the best (confidence = {self.confidence:.0%})"
-                )
-        return None
+        if self.confidence is None or sure is None or sure.probability < self.confidence:
+            return None
+        return (
+            f"{sure.probability:.0%} that gait {sure.recommended} is within "
+            f"{sure.tolerance:.0%} of the best (confidence = {self.confidence:.0%})"
+        )
 
 
 __all__ = ["Confidence", "StopRule", "check_tolerance", "confidence"]
