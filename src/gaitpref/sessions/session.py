@@ -21,6 +21,7 @@ and is brought up to date).  A ``Session`` object is safe to share between threa
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -29,8 +30,10 @@ from typing import TypeVar
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import ReplayError, SessionStateError
 from gaitpref.loop.cospar import QueryError
+from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
+from gaitpref.sessions.confidence import session_confidence, stop_reason
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
@@ -280,6 +283,7 @@ class Session:
             st.revert_tell()
             raise
         st.commit(records, answer)
+        self._stop_if_sure()
         loop = self._state.loop
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
@@ -377,6 +381,26 @@ class Session:
         if self._state.status != need:
             raise SessionStateError(f"cannot {verb}: the session is {self._state.status}")
         self._append([NewEvent(kind, {})], status="paused" if kind == log.PAUSED else "active")
+
+    # -- how sure are we -----------------------------------------------------------------------
+    def confidence(self) -> Confidence:
+        """How sure the model is of its recommendation (``sessions/confidence.py``), with the
+        config's ``[stop]`` tolerance and sample count: ``.sentence(name)`` reads
+        "88% that G95 is within 5% of the best"."""
+        return self._locked(lambda: session_confidence(self._state, self.config.stop))
+
+    def stop_reason(self) -> str | None:
+        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
+        return self._locked(lambda: stop_reason(self._state, self.config.stop))
+
+    def _stop_if_sure(self) -> None:
+        """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
+        (one round; the operator may go on afterwards, the rule does not reopen it)."""
+        st = self._state
+        if st.rounds or st.pending is not None or stop_reason(st, self.config.stop) is None:
+            return
+        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
+            self._append([st.validation_event()])
 
     # -- blind validation ----------------------------------------------------------------------
     def start_validation(self) -> ValidationPlan:
