@@ -47,7 +47,7 @@ def test_confidence_rule_opens_validation_when_the_model_is_sure_enough(drive: D
 def test_confidence_is_reproducible_and_leaves_the_loop_alone(drive: Drive) -> None:
     s = Session.create(MemoryStorage(), CONFIG, "S01")
     drive(s, 5)
-    mean, var, query, rng = state_of(s)
+    mean, _var, query, rng = state_of(s)
     first, second = s.confidence(), s.confidence()
     assert first == second
     assert state_of(s)[2:] == (query, rng)
