@@ -37,6 +37,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
 from gaitpref.model.cross import CrossCovariance
@@ -137,6 +138,9 @@ class PopulationPosterior(Posterior):
         weight = np.where(subjects == self.target, 1.0, self.rho)
         base = self.engine.cross(unique.astype(np.intp))
         return SubjectCross(base, self.visited, inverse.astype(np.intp), weight)
+
+    def visited_cross(self, actions: ArrayLike) -> FloatArray:
+        return self.cross.rows(np.asarray(actions, dtype=np.intp))
 
     def _prior_draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray]:
         """The subject's own part first (so ``rho = 0`` draws as one subject), then the shared

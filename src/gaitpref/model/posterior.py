@@ -99,6 +99,13 @@ class Posterior:
         out: FloatArray = self.cross.rows(idx) @ self._alpha
         return out
 
+    def visited_cross(self, actions: ArrayLike) -> FloatArray:
+        """``K[actions, V]``, the prior covariance of ``actions`` with the visited set, from the
+        kernel (the strategies' covariances; ``population.py`` overrides it)."""
+        idx = np.asarray(actions, dtype=np.intp)
+        out: FloatArray = self.kernel.cross(self.space, self.visited, rows=idx)
+        return out
+
     @cached_property
     def variance(self) -> FloatArray:
         """Posterior marginal variance of every action (length ``A``), block by block."""

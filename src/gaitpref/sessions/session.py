@@ -53,6 +53,7 @@ from gaitpref.sessions.stored_config import (
     software_version,
 )
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+from gaitpref.sessions.warm import describe_prior, make_warm_start, prepare_state, resolve_prior
 from gaitpref.storage import (
     ConflictError,
     EventRecord,
@@ -91,11 +92,14 @@ class Session:
         subject: str,
         seed: int | None = None,
         library: GaitLibraryLike | None = None,
+        prior_from: Sequence[int | str] = (),
     ) -> Session:
         """A new session of ``subject`` with ``config`` (a path, a shipped name or a config).
 
         ``db``: a URL, a storage, or None (``--db``/``$GAITPREF_DB``/``sqlite:///gaitpref.db``).
         ``seed`` defaults to the config's; ``library`` names the gait of each action.
+        ``prior_from`` (session ids or subject codes) warm-starts the model with those
+        sessions' answers, read and never changed (``sessions/warm.py``).
         Everything is checked before the database is touched.
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
@@ -111,6 +115,12 @@ class Session:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
         storage = open_storage(db)
+        prior, rho = [], None
+        if prior_from:
+            prior = describe_prior(storage, resolve_prior(storage, cfg, prior_from))
+            rho = make_warm_start(storage, cfg, prior, use_seed).rho
+            meta["prior_from"] = [p.model_dump() for p in prior]
+            meta["prior_rho"] = rho
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -129,6 +139,8 @@ class Session:
                 seed=use_seed,
                 software_version=version,
                 gait_library=gait_ids is not None,
+                prior_from=prior,
+                prior_rho=rho,
             )
         )
         record = storage.create_session(spec, [created])
@@ -514,8 +526,7 @@ class Session:
             return fn()
 
     def _fresh_state(self) -> SessionState:
-        meta = self._record.meta
-        return SessionState(self.config, self._record.seed, meta.get("gait_ids"))
+        return prepare_state(self.storage, self._record, self.config)
 
     def _catch_up(self) -> None:
         """Replay the events this object has not seen."""
