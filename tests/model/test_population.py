@@ -68,9 +68,10 @@ def test_rho_zero_is_the_single_subject_posterior(
     assert np.allclose(pop.variance, single.variance, rtol=1e-9, atol=1e-15)
     assert np.allclose(pop.covariance(), single.covariance(), rtol=1e-8, atol=1e-15)
     assert pop.log_evidence != pytest.approx(single.log_evidence)  # the others' data are in it
-    a = pop.sample(np.random.default_rng(7), 5)
-    b = single.sample(np.random.default_rng(7), 5)
+    ra, rb = np.random.default_rng(7), np.random.default_rng(7)
+    a, b = pop.sample(ra, 5), single.sample(rb, 5)
     assert np.allclose(a, b, rtol=0, atol=1e-8 * np.max(np.abs(b)))
+    assert ra.bit_generator.state == rb.bit_generator.state  # a loop proposes as it would alone
 
 
 def test_rho_one_pools_the_data_as_one_subject(

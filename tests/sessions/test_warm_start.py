@@ -101,3 +101,20 @@ def test_prior_from_names_what_it_cannot_use() -> None:
         Session.create(db, CONFIG, "S03", prior_from=["S09"])
     with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
+
+
+def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    ids = _earlier(url)
+    args = ["session", "new", "--config", CONFIG, "--subject", "S03", "--db", url]
+    result = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", str(ids[2])])
+    assert result.exit_code == 0, result.output
+    new_id = int(result.output.split()[1].rstrip(":"))
+    with Session.open(url, new_id) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
+    bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
+    assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output

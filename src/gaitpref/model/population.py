@@ -144,7 +144,11 @@ class PopulationPosterior(Posterior):
 
     def _prior_draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray]:
         """The subject's own part first (so ``rho = 0`` draws as one subject), then the shared
-        part, then the other subjects' own parts on their visited gaits, in subject order."""
+        part, then the other subjects' own parts on their visited gaits, in subject order.
+
+        With ``rho = 0`` the factors are block-diagonal by subject and the other subjects' draws
+        cannot reach this subject's samples: they are left at 0 and the generator moves exactly
+        as a single-subject posterior's does."""
         gaits, subjects = self._nodes
         rho = self.rho
         own = self.engine.prior_samples(rng, size) if rho < 1.0 else None
@@ -159,6 +163,9 @@ class PopulationPosterior(Posterior):
         f_visited = np.empty((size, gaits.shape[0]))
         mine = subjects == self.target
         f_visited[:, mine] = f[:, gaits[mine]]
+        if rho == 0.0:  # the others' nodes are independent of this subject: no draw needed
+            f_visited[:, ~mine] = 0.0
+            return f, f_visited
         for s in np.unique(subjects[~mine]):
             nodes = np.flatnonzero(subjects == s)
             at = gaits[nodes]
