@@ -10,7 +10,8 @@ gait ``r`` (the posterior mean's argmax, the gait blind validation calls "max"):
   and as a fraction of the range.
 
 Both are Monte Carlo averages over ``samples`` draws (their standard error is at most
-``0.5 / sqrt(samples)``), computed in blocks so no more than ``block x A`` values are held.
+``0.5 / sqrt(samples)``), computed in blocks so that no more than :data:`BLOCK_ELEMENTS` values
+are held (the posterior's own sampling adds its bounded blocks).
 A :class:`StopRule` (the config's ``[stop]`` table) says when a session has learnt enough:
 once the probability reaches ``confidence``, or after ``max_trials`` executed trials.
 """
@@ -23,6 +24,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior
+
+#: At most this many sampled values (``block x A``) are held at once: 32 MiB.
+BLOCK_ELEMENTS = 1 << 22
 
 
 @dataclass(frozen=True)
@@ -65,14 +69,17 @@ def confidence(
     tolerance: float = 0.05,
     samples: int = 2000,
     allowed: NDArray[np.bool_] | None = None,
-    block: int = 256,
+    block: int | None = None,
 ) -> Confidence:
     """The :class:`Confidence` of ``posterior`` from ``samples`` joint draws with ``rng``.
 
     ``allowed`` restricts both the recommendation and "the best" to the gaits that may be
-    proposed (a region of avoidance, unsafe flags); None: all.
+    proposed (a region of avoidance, unsafe flags); None: all.  ``block`` samples are held at
+    a time (default: as many as fit in :data:`BLOCK_ELEMENTS` values, at most 256).
     """
     tolerance = check_tolerance(tolerance)
+    if block is None:
+        block = max(1, min(256, BLOCK_ELEMENTS // len(posterior.space)))
     if samples < 1 or block < 1:
         raise ValueError(f"samples and block must be >= 1, got {samples} and {block}")
     mean = np.array(posterior.mean)
