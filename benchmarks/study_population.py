@@ -118,8 +118,9 @@ def summary(results: dict, args: argparse.Namespace, seconds: float) -> str:
         lines.append("| " + " | ".join(cells) + " |")
     lines += [
         "",
-        "The stated probability is conservative: the observed frequency is above it in every bin "
-        "with at least 10 answers, so a `[stop] confidence` rule stops later than it needs to, never too early.  "
+        "The stated probability is conservative: the observed frequency is above it in every "
+        "bin with at least 10 answers, so a `[stop] confidence` rule stops later than it needs "
+        "to, never too early.  "
         "The Laplace posterior of a probit model is wider than the exact one and its mean "
         "shrunk towards the prior (Kuss & Rasmussen 2005), and both lower the probability; "
         "under the prior, with no data, it is exact (`tests/loop/test_stopping.py`).  The "
