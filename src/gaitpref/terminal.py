@@ -204,6 +204,10 @@ class Terminal:
                 self.console.print(f"  not written: {exc}", markup=False)
                 return
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+            if s.config.stop.active:  # [stop]: how sure the model is, after every answer
+                sure = s.confidence()
+                line = sure.sentence(gait_name(s, sure.recommended))
+                self.console.print(f"  {line}", markup=False)
             if reason:
                 for t in dict.fromkeys(q.trials):
                     s.flag_unsafe(t, reason)

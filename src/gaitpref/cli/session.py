@@ -97,6 +97,13 @@ def new(
         Path | None,
         typer.Option(help="Text file: one gait id per line, in grid order (a gait library)."),
     ] = None,
+    prior_from: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--prior-from",
+            help="Warm start from an earlier session id or subject code (repeat for more).",
+        ),
+    ] = None,
     db: DbOption = None,
 ) -> None:
     """Start a session of SUBJECT with CONFIG; prints its id."""
@@ -108,7 +115,8 @@ def new(
             if not gait_ids.is_file():
                 raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
             library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
-        return Session.create(db, config, subject, seed=seed, library=library)
+        prior = [int(p) if p.isdigit() else p for p in prior_from or []]
+        return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
     session = guard(run)
     console.print(

@@ -3,6 +3,7 @@
     gaitpref bench paper-2d [--runs 100] [--trials 150] [--settings n1_b1,n1_b1_coactive]
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
+    gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
 ``sweep``, files in ``tables``/``report``/``figures``).
@@ -188,6 +189,47 @@ def compass_gait(
         f"{len(study)} runs in {result.seconds:.1f} s; wrote {out}/curves.csv, {table_path.name}, "
         "posterior.png"
     )
+
+
+@bench_app.command("population")
+def population(
+    objectives: Annotated[
+        Path,
+        typer.Option(help=".npy file: one utility grid per subject (S x grid), higher is better"),
+    ],
+    trials: Annotated[int, typer.Option(min=1, help="executed trials per subject")] = 20,
+    config: Annotated[str, typer.Option(help="config file or shipped name")] = "synthetic-2d",
+    jobs: Jobs = 1,
+    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    tolerance: Annotated[float, typer.Option(help="'within' as a fraction of the range")] = 0.05,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Each subject held out in turn: cold, then warm-started from the others (same seeds)."""
+    import json
+
+    import numpy as np
+
+    from gaitpref.config import load_config
+    from gaitpref.simulate.population import population_bench
+
+    def run() -> dict[str, object]:
+        if not objectives.is_file():
+            raise ValueError(f"objectives file {str(objectives)!r} does not exist")
+        arr = np.load(objectives, allow_pickle=False)
+        cfg = load_config(config)
+        return population_bench(cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance)
+
+    result = guard(run)
+    if as_json:
+        typer.echo(json.dumps(result))
+        return
+    subjects = result["subjects"]
+    assert isinstance(subjects, list)
+    parts = [("1-10", (0, 10))] if trials > 10 else []
+    for part, (lo, hi) in [*parts, (f"1-{trials}", (0, trials))]:
+        cold = np.mean([np.mean(s["cold"][lo:hi]) for s in subjects])
+        warm = np.mean([np.mean(s["warm"][lo:hi]) for s in subjects])
+        _console.print(f"trials {part}: cold {cold:.3f}, warm {warm:.3f} ({warm - cold:+.3f})")
 
 
 if __name__ == "__main__":  # python -m gaitpref.cli.simulate

@@ -13,6 +13,7 @@ from gaitpref.config.schema import DEFAULTS_VERSION, EARLIER_DEFAULTS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.learning import Learning
 from gaitpref.loop.safety import Safety
+from gaitpref.loop.stopping import StopRule
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.space import Space
@@ -50,6 +51,7 @@ class ExperimentConfig:
     defaults_version: str = DEFAULTS_VERSION
     ordinal: Ordinal | None = None  # [feedback.rating]
     safety: Safety = field(default_factory=Safety)  # [safety]
+    stop: StopRule = field(default_factory=StopRule)  # [stop]
 
     @property
     def sha256(self) -> str:

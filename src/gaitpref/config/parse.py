@@ -37,7 +37,7 @@
     # candidates = 64              # eubo, confident-eubo: top actions for the first pair
 
 Ordinal ratings (``[feedback.rating]``) and the region of avoidance (``[safety]``) are in
-``feedback.py``.
+``feedback.py``; the stopping rule (``[stop]``) in ``stop.py``.
 
 Instead of ``[space]``, a config can name a gait library built by ``gaitpref gaits build``; the
 features then come from the library's axes and every action has a gait id:
@@ -89,6 +89,7 @@ from gaitpref.config.schema import (
     defaults_for,
 )
 from gaitpref.config.specs import fail
+from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
 from gaitpref.space import Space
@@ -160,6 +161,7 @@ def parse_config(
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
     safety = parse_safety(top["safety"], ordinal)
+    stop = parse_stop(top["stop"])
     return ExperimentConfig(
         name=top["name"] if top["name"] is not None else default_name,
         description=top["description"],
@@ -179,6 +181,7 @@ def parse_config(
         strategy_settings=settings,
         ordinal=ordinal,
         safety=safety,
+        stop=stop,
         defaulted=frozenset(f"cospar.{k}" for k in defaulted),
         defaults_version=defaults,
     )

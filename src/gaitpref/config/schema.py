@@ -89,6 +89,7 @@ TOP: Final[dict[str, Key]] = {
     "cospar": Key(Table("the loop's settings"), {}),
     "feedback": Key(Table("[feedback.rating]: ordinal ratings"), {}),
     "safety": Key(Table("the region of avoidance and unsafe flags"), {}),
+    "stop": Key(Table("the stopping rule: confidence, max_trials, tolerance"), {}),
 }
 FEEDBACK: Final[dict[str, Key]] = {
     "rating": Key(Table("labels, thresholds, noise"), None),
@@ -102,6 +103,12 @@ SAFETY: Final[dict[str, Key]] = {
     "avoid": Key(Labels(1, 9), ()),  # the worst categories, e.g. ["very bad"]
     "lambda": Key(Number(0.0, 100.0), 1.0),  # confidence of the region of interest
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
+}
+STOP: Final[dict[str, Key]] = {
+    "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule
+    "max_trials": Key(Integer(1, 1_000_000), None),  # None: no limit
+    "tolerance": Key(Number(0.0, 0.5), 0.05),  # "within 5% of the best" (of the utility's range)
+    "samples": Key(Integer(100, 100_000), 2000),  # posterior samples behind the probability
 }
 FEATURE: Final[dict[str, Key]] = {
     "min": Key(Number(), None),
@@ -165,6 +172,7 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
     "feedback": FEEDBACK,
     "feedback.rating": RATING,
     "safety": SAFETY,
+    "stop": STOP,
     **{f"cospar.strategy_settings ({s})": t for s, t in STRATEGY_TABLES.items()},
 }
 

@@ -47,6 +47,7 @@ from gaitpref.feedback import (
 )
 from gaitpref.loop.learning import Learning, pair_data
 from gaitpref.loop.safety import Safety, near
+from gaitpref.loop.warm import WarmStart, warm_posterior
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
@@ -177,6 +178,7 @@ class CoSpar:
         self._dropped: dict[int, frozenset[int]] = {}  # query id -> excluded preference indices
         self._dropped_singles: dict[int, frozenset[int]] = {}  # ... and single-action terms
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
+        self.warm: WarmStart | None = None  # earlier subjects' answers (warm_start)
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -240,6 +242,15 @@ class CoSpar:
     def unflag_unsafe(self, action: int) -> None:
         """Take an unsafe flag back (the flag's undo)."""
         self.unsafe.discard(int(action))
+
+    def warm_start(self, warm: WarmStart) -> None:
+        """Include earlier subjects' answers in every fit from now on (``loop/warm.py``);
+        only before the first answer."""
+        if self.answers or self.pending is not None:
+            raise QueryError("a warm start must come before the first query")
+        self.warm = warm
+        with one_blas_thread():
+            self.posterior = self._fit([])
 
     # -- ask / tell --------------------------------------------------------------------------
     def ask(self) -> Query:
@@ -528,7 +539,9 @@ class CoSpar:
         hyper = self.hyper if hyper is None else hyper
         band = hyper.band
         single, single_likelihood = self._singles(answers, hyper.thresholds)
-        if self.learning.ties == "drop":  # the paper's likelihood, bit for bit
+        if (
+            self.learning.ties == "drop" and self.warm is None
+        ):  # the paper's likelihood, bit for bit
             prefs = [p for a in answers for p in self._kept(a)]
             winners = np.array([p.winner for p in prefs], dtype=np.intp)
             losers = np.array([p.loser for p in prefs], dtype=np.intp)
@@ -544,6 +557,10 @@ class CoSpar:
                 init=self.posterior,
                 single=single,
                 single_likelihood=single_likelihood,
+            )
+        if self.warm is not None:
+            return warm_posterior(
+                self.warm, gp, self._data(answers), band, single, single_likelihood
             )
         data = self._data(answers)
         if data.size == 0 and single is None:

@@ -29,6 +29,8 @@ from gaitpref.model.ordinal import (
     rating_likelihood,
     rating_probabilities,
 )
+from gaitpref.model.population import PopulationModel, PopulationPosterior, population_evidence
+from gaitpref.model.population_fit import LogitNormal, PopulationFit, fit_population
 from gaitpref.model.posterior import Posterior
 
 __all__ = [
@@ -43,11 +45,15 @@ __all__ = [
     "KroneckerPriorSampler",
     "LaplaceMode",
     "LogNormal",
+    "LogitNormal",
     "OrderedProbit",
     "Ordinal",
     "OrdinalLikelihood",
     "PairData",
     "PairLikelihood",
+    "PopulationFit",
+    "PopulationModel",
+    "PopulationPosterior",
     "Posterior",
     "PreferenceGP",
     "PriorNotPositiveDefiniteError",
@@ -57,7 +63,9 @@ __all__ = [
     "StackedActionLikelihood",
     "default_prior",
     "fit_hyperparameters",
+    "fit_population",
     "laplace_evidence",
+    "population_evidence",
     "rating_likelihood",
     "rating_probabilities",
 ]

@@ -39,6 +39,7 @@ Notation: ``N`` observations, ``m`` visited actions, ``d`` features; ``K`` is ``
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -191,6 +192,46 @@ def laplace_evidence(
     visited, a, b, s = _visited(data, singles)
     kernel = hyper.kernel()
     K = kernel.cross(space, visited, rows=visited)
+    m = visited.shape[0]
+
+    def kernel_gradient(B: FloatArray) -> FloatArray:
+        out = np.zeros(space.ndim + 1)
+        points = space.points[visited]
+        se = K - kernel.jitter * np.eye(m)  # the squared-exponential part
+        for j, ell in enumerate(hyper.lengthscale):
+            dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2
+            out[j] = float(np.sum(dK * B))
+        out[space.ndim] = float(np.sum(K * B))  # dK / dlog s^2 = K (the jitter scales along)
+        return out
+
+    return evidence_from_prior(
+        K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init, fitted=fitted
+    )
+
+
+#: ``B -> d log q / d (kernel entries of theta)``, given ``B`` with ``d log q = sum(dK * B)``.
+KernelGradient = Callable[[FloatArray], FloatArray]
+
+
+def evidence_from_prior(
+    K: FloatArray,
+    visited: IntArray,
+    indices: tuple[IntArray, IntArray, IntArray | None],
+    data: PairData,
+    singles: SingleData | None,
+    hyper: Hyperparameters,
+    kernel_gradient: KernelGradient,
+    init: FloatArray | None = None,
+    *,
+    fitted: bool = False,
+) -> Evidence:
+    """The Laplace evidence for any prior covariance ``K`` of the visited set (its entries
+    ``visited`` are labels only), with the observations' ``indices`` into it (``first``,
+    ``second``, single actions).  The gradient holds ``kernel_gradient(B)`` (the kernel's
+    entries of ``theta``: eq. (5.22-24) give ``d log q = sum(dK * B)`` for each), then
+    ``log band``, then the thresholds when ``fitted``.
+    """
+    a, b, s = indices
     lik = data.likelihood(hyper.band)
     single_lik = None if singles is None else singles.likelihood
     fit = fit_laplace(K, visited, a, b, lik, init, single=s, single_likelihood=single_lik)
@@ -218,22 +259,17 @@ def laplace_evidence(
     q = s2 - W @ (Sigma @ s2)  # (I - W Sigma) s2
     B = 0.5 * np.outer(alpha, alpha) - 0.5 * (W - W @ Sigma @ W) + np.outer(q, alpha)
     n_thresholds = 0 if hyper.thresholds is None else len(hyper.thresholds)
-    grad = np.zeros(space.ndim + 2 + n_thresholds)
-    points = space.points[visited]
-    se = K - kernel.jitter * np.eye(m)  # the squared-exponential part
-    for j, ell in enumerate(hyper.lengthscale):
-        dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2
-        grad[j] = float(np.sum(dK * B))
-    grad[space.ndim] = float(np.sum(K * B))  # dK / dlog s^2 = K (the jitter scales along)
+    kernel_part = kernel_gradient(B)
+    nk = kernel_part.shape[0]
+    grad = np.zeros(nk + 1 + n_thresholds)
+    grad[:nk] = kernel_part
     n = data.size
     if hyper.band > 0 and np.any(data.banded):
         dlogp, dg, dc = lik.band_terms(diff)
         explicit = float(np.sum(dlogp)) - 0.5 * float(np.sum(dc * v[:n]))
-        grad[space.ndim + 1] = explicit + float(q @ (K @ (G[:n].T @ dg)))
+        grad[nk] = explicit + float(q @ (K @ (G[:n].T @ dg)))
     if fitted and singles is not None and s is not None and hyper.thresholds is not None:
-        grad[space.ndim + 2 :] = _threshold_gradient(
-            singles, f[s], v[n:], q, K @ G[n:].T, hyper.thresholds
-        )
+        grad[nk + 1 :] = _threshold_gradient(singles, f[s], v[n:], q, K @ G[n:].T, hyper.thresholds)
     return Evidence(fit.log_evidence, grad, fit)
 
 

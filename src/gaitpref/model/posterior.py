@@ -99,6 +99,13 @@ class Posterior:
         out: FloatArray = self.cross.rows(idx) @ self._alpha
         return out
 
+    def visited_cross(self, actions: ArrayLike) -> FloatArray:
+        """``K[actions, V]``, the prior covariance of ``actions`` with the visited set, from the
+        kernel (the strategies' covariances; ``population.py`` overrides it)."""
+        idx = np.asarray(actions, dtype=np.intp)
+        out: FloatArray = self.kernel.cross(self.space, self.visited, rows=idx)
+        return out
+
     @cached_property
     def variance(self) -> FloatArray:
         """Posterior marginal variance of every action (length ``A``), block by block."""
@@ -174,16 +181,22 @@ class Posterior:
         """
         if size < 0:
             raise ValueError(f"size must be >= 0, got {size}")
-        f = self.engine.prior_samples(rng, size)
         if self.fit is None or size == 0:
-            return f
+            return self.engine.prior_samples(rng, size)
+        f, f_visited = self._prior_draw(rng, size)
         L, R = self.fit.chol_prior, self.fit.chol_hessian
-        w = solve_triangular(L, f[:, self.visited].T, lower=True, check_finite=False)
+        w = solve_triangular(L, f_visited.T, lower=True, check_finite=False)
         v = solve_triangular(R, w, lower=True, trans="T", check_finite=False) - w
         coef = solve_triangular(L, v, lower=True, trans="T", check_finite=False)
         coef += self._alpha[:, None]
         self.cross.add_product(f, coef)
         return f
+
+    def _prior_draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray]:
+        """A joint prior draw over every action (``size x A``) and the visited set (``size x
+        m``); here the visited set is part of the grid (``model/population.py`` overrides it)."""
+        f = self.engine.prior_samples(rng, size)
+        return f, f[:, self.visited]
 
     def argmax_samples(
         self, rng: np.random.Generator, size: int, allowed: NDArray[np.bool_] | None = None

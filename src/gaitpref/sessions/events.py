@@ -16,13 +16,29 @@ from __future__ import annotations
 
 from typing import Annotated, Any, ClassVar
 
-from pydantic import BaseModel, ConfigDict, SerializerFunctionWrapHandler, model_serializer
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    SerializerFunctionWrapHandler,
+    model_serializer,
+)
 
 from gaitpref.errors import ReplayError
 from gaitpref.feedback import kind_for_event
 from gaitpref.payloads import EventPayload, PayloadError, Recorded
 from gaitpref.sessions.records import Reason
 from gaitpref.storage import EventRecord, NewEvent
+
+
+class PriorSession(BaseModel):
+    """An earlier session a warm start read: its log up to ``last_seq`` hashed (``sha256``)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    session: int
+    subject: str
+    last_seq: int
+    sha256: str
 
 
 class Created(EventPayload):
@@ -35,6 +51,18 @@ class Created(EventPayload):
     seed: int
     software_version: str
     gait_library: bool = False
+    # warm starts (0.2; absent in 0.1.0 logs): the earlier sessions read, and the shared fraction
+    prior_from: list[PriorSession] = Field(default_factory=list)
+    prior_rho: float | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_a_cold_start(self, handler: SerializerFunctionWrapHandler) -> Any:
+        """A session without a warm start stores what 0.1 stored."""
+        out = handler(self)
+        if isinstance(out, dict) and not out.get("prior_from"):
+            out.pop("prior_from", None)
+            out.pop("prior_rho", None)
+        return out
 
 
 class QueryIssued(EventPayload):
@@ -304,6 +332,7 @@ __all__ = [
     "HyperparametersRefit",
     "Note",
     "Paused",
+    "PriorSession",
     "QueryIssued",
     "Resumed",
     "TrialExcluded",

@@ -24,6 +24,7 @@ the session.  A ``Session`` object is safe to share between threads.
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
@@ -32,8 +33,10 @@ from typing import TypeVar
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import ReplayError, SessionStateError
 from gaitpref.loop.cospar import QueryError
+from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
+from gaitpref.sessions.confidence import session_confidence, stop_reason
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
@@ -53,6 +56,7 @@ from gaitpref.sessions.stored_config import (
     software_version,
 )
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+from gaitpref.sessions.warm import describe_prior, make_warm_start, prepare_state, resolve_prior
 from gaitpref.storage import (
     ConflictError,
     EventRecord,
@@ -93,11 +97,14 @@ class Session:
         subject: str,
         seed: int | None = None,
         library: GaitLibraryLike | None = None,
+        prior_from: Sequence[int | str] = (),
     ) -> Session:
         """A new session of ``subject`` with ``config`` (a path, a shipped name or a config).
 
         ``db``: a URL, a storage, or None (``--db``/``$GAITPREF_DB``/``sqlite:///gaitpref.db``).
         ``seed`` defaults to the config's; ``library`` names the gait of each action.
+        ``prior_from`` (session ids or subject codes) warm-starts the model with those
+        sessions' answers, read and never changed (``sessions/warm.py``).
         Everything is checked before the database is touched.
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
@@ -113,6 +120,12 @@ class Session:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
         storage = open_storage(db)
+        prior, rho = [], None
+        if prior_from:
+            prior = describe_prior(storage, resolve_prior(storage, cfg, prior_from))
+            rho = make_warm_start(storage, cfg, prior, use_seed).rho
+            meta["prior_from"] = [p.model_dump() for p in prior]
+            meta["prior_rho"] = rho
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -131,6 +144,8 @@ class Session:
                 seed=use_seed,
                 software_version=version,
                 gait_library=gait_ids is not None,
+                prior_from=prior,
+                prior_rho=rho,
             )
         )
         record = storage.create_session(spec, [created])
@@ -296,6 +311,7 @@ class Session:
             st.revert_tell()
             raise
         st.commit(records, answer)
+        self._stop_if_sure()
         loop = self._state.loop
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
@@ -393,6 +409,26 @@ class Session:
         if self._state.status != need:
             raise SessionStateError(f"cannot {verb}: the session is {self._state.status}")
         self._append([NewEvent(kind, {})], status="paused" if kind == log.PAUSED else "active")
+
+    # -- how sure are we -----------------------------------------------------------------------
+    def confidence(self) -> Confidence:
+        """How sure the model is of its recommendation (``sessions/confidence.py``), with the
+        config's ``[stop]`` tolerance and sample count: ``.sentence(name)`` reads
+        "88% that G95 is within 5% of the best"."""
+        return self._locked(lambda: session_confidence(self._state, self.config.stop))
+
+    def stop_reason(self) -> str | None:
+        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
+        return self._locked(lambda: stop_reason(self._state, self.config.stop))
+
+    def _stop_if_sure(self) -> None:
+        """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
+        (one round; the operator may go on afterwards, the rule does not reopen it)."""
+        st = self._state
+        if st.rounds or st.pending is not None or stop_reason(st, self.config.stop) is None:
+            return
+        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
+            self._append([st.validation_event()])
 
     # -- blind validation ----------------------------------------------------------------------
     def start_validation(self) -> ValidationPlan:
@@ -531,8 +567,7 @@ class Session:
         return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
-        meta = self._record.meta
-        return SessionState(self.config, self._record.seed, meta.get("gait_ids"))
+        return prepare_state(self.storage, self._record, self.config)
 
     def _catch_up(self) -> None:
         """Replay the events this object has not seen."""

@@ -63,11 +63,10 @@ def covariance_with(posterior: Posterior, action: int) -> FloatArray:
     out = kernel.cross(space, col)[:, 0].copy()
     if posterior.fit is None:
         return out
-    visited = posterior.visited
-    w = _visited_solve(posterior, kernel.cross(space, col, rows=visited))[:, 0]
+    w = _visited_solve(posterior, posterior.visited_cross(col).T)[:, 0]
     for start in range(0, len(space), _ROW_BLOCK):
         rows = np.arange(start, min(start + _ROW_BLOCK, len(space)), dtype=np.intp)
-        out[rows] -= kernel.cross(space, visited, rows=rows) @ w
+        out[rows] -= posterior.visited_cross(rows) @ w
     return out
 
 
@@ -77,7 +76,7 @@ def covariance_among(posterior: Posterior, actions: IntArray) -> FloatArray:
     out: FloatArray = kernel.cross(space, actions, rows=actions)
     if posterior.fit is None:
         return out
-    k_vc = kernel.cross(space, actions, rows=posterior.visited)
+    k_vc = posterior.visited_cross(actions).T
     out = out - k_vc.T @ _visited_solve(posterior, k_vc)
     return 0.5 * (out + out.T)
 

@@ -1,0 +1,145 @@
+"""How sure are we: the chance that the recommended gait is good enough, and when to stop.
+
+From joint posterior samples ``f^(1..S)`` (pathwise, ``model/posterior.py``) and the recommended
+gait ``r`` (the posterior mean's argmax, the gait blind validation calls "max"):
+
+- the probability that ``r`` is within a tolerance of the subject's best,
+  ``P(max f - f_r <= tol (max f - min f))``, with the tolerance a fraction of the utility's
+  range (the same normalisation as the paper's normalised objective, Fig. 4);
+- the expected shortfall (simple regret) of stopping now, ``E[max f - f_r]``, in utility units
+  and as a fraction of the range.
+
+Both are Monte Carlo averages over ``samples`` draws (their standard error is at most
+``0.5 / sqrt(samples)``), computed in blocks so that no more than :data:`BLOCK_ELEMENTS` values
+are held (the posterior's own sampling adds its bounded blocks).
+A :class:`StopRule` (the config's ``[stop]`` table) says when a session has learnt enough:
+once the probability reaches ``confidence``, or after ``max_trials`` executed trials.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gaitpref.model.posterior import Posterior
+
+#: At most this many sampled values (``block x A``) are held at once: 32 MiB.
+BLOCK_ELEMENTS = 1 << 22
+
+
+@dataclass(frozen=True)
+class Confidence:
+    """How sure the posterior is of its recommendation ``recommended`` (a grid index)."""
+
+    recommended: int
+    probability: float  # P(f_best - f_rec <= tolerance * range)
+    regret: float  # E[f_best - f_rec], utility units
+    relative_regret: float  # E[(f_best - f_rec) / range]
+    tolerance: float
+    samples: int
+
+    def sentence(self, name: str) -> str:
+        """``"88% that G95 is within 5% of the best"`` with ``name`` for the gait."""
+        return f"{self.probability:.0%} that {name} is within {self.tolerance:.0%} of the best"
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "recommended": self.recommended,
+            "probability": self.probability,
+            "regret": self.regret,
+            "relative_regret": self.relative_regret,
+            "tolerance": self.tolerance,
+            "samples": self.samples,
+        }
+
+
+def check_tolerance(tolerance: float) -> float:
+    value = float(tolerance)
+    if not (np.isfinite(value) and 0.0 <= value < 1.0):
+        raise ValueError(f"tolerance must be a fraction in [0, 1), got {tolerance!r}")
+    return value
+
+
+def confidence(
+    posterior: Posterior,
+    rng: np.random.Generator,
+    *,
+    tolerance: float = 0.05,
+    samples: int = 2000,
+    allowed: NDArray[np.bool_] | None = None,
+    block: int | None = None,
+) -> Confidence:
+    """The :class:`Confidence` of ``posterior`` from ``samples`` joint draws with ``rng``.
+
+    ``allowed`` restricts both the recommendation and "the best" to the gaits that may be
+    proposed (a region of avoidance, unsafe flags); None: all.  ``block`` samples are held at
+    a time (default: as many as fit in :data:`BLOCK_ELEMENTS` values, at most 256).
+    """
+    tolerance = check_tolerance(tolerance)
+    if block is None:
+        block = max(1, min(256, BLOCK_ELEMENTS // len(posterior.space)))
+    if samples < 1 or block < 1:
+        raise ValueError(f"samples and block must be >= 1, got {samples} and {block}")
+    mean = np.array(posterior.mean)
+    if allowed is not None:
+        if not allowed.any():
+            raise ValueError("no gait is allowed: there is nothing to recommend")
+        mean[~allowed] = -np.inf
+    rec = int(np.argmax(mean))
+    hits = 0
+    shortfall = relative = 0.0
+    done = 0
+    while done < samples:
+        size = min(block, samples - done)
+        f = posterior.sample(rng, size)
+        if allowed is not None:
+            f = f[:, allowed]
+            at = int(np.count_nonzero(allowed[:rec]))
+        else:
+            at = rec
+        best, worst = f.max(axis=1), f.min(axis=1)
+        gap = best - f[:, at]
+        span = best - worst
+        hits += int(np.count_nonzero(gap <= tolerance * span))
+        shortfall += float(gap.sum())
+        relative += float(np.sum(np.divide(gap, span, out=np.zeros_like(gap), where=span > 0)))
+        done += size
+    return Confidence(rec, hits / samples, shortfall / samples, relative / samples, tolerance, done)
+
+
+@dataclass(frozen=True)
+class StopRule:
+    """The config's ``[stop]``: stop once ``P(within tolerance) >= confidence`` or after
+    ``max_trials`` executed trials (either None: not used; both None: no rule)."""
+
+    confidence: float | None = None
+    max_trials: int | None = None
+    tolerance: float = 0.05
+    samples: int = 2000
+
+    def __post_init__(self) -> None:
+        if self.confidence is not None and not 0.0 < self.confidence <= 1.0:
+            raise ValueError(f"confidence must lie in (0, 1], got {self.confidence!r}")
+        if self.max_trials is not None and self.max_trials < 1:
+            raise ValueError(f"max_trials must be >= 1, got {self.max_trials!r}")
+        check_tolerance(self.tolerance)
+
+    @property
+    def active(self) -> bool:
+        return self.confidence is not None or self.max_trials is not None
+
+    def reason(self, trials: int, sure: Confidence | None) -> str | None:
+        """Why to stop after ``trials`` executed trials with confidence ``sure`` (None: go on)."""
+        if self.max_trials is not None and trials >= self.max_trials:
+            return f"{trials} trials reached max_trials = {self.max_trials}"
+        if self.confidence is None or sure is None or sure.probability < self.confidence:
+            return None
+        return (
+            f"{sure.probability:.0%} that gait {sure.recommended} is within "
+            f"{sure.tolerance:.0%} of the best (confidence = {self.confidence:.0%})"
+        )
+
+
+__all__ = ["Confidence", "StopRule", "check_tolerance", "confidence"]

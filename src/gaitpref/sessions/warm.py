@@ -1,0 +1,135 @@
+"""Warm starts: a new session's model includes earlier sessions' answers (``loop/warm.py``).
+
+``Session.create(..., prior_from=[session ids or subject codes])`` resolves the earlier sessions
+(:func:`resolve_prior`: a code means every session of that subject), refuses any whose grid is
+not the new config's, and records each one's log up to its last event, hashed
+(:class:`~gaitpref.sessions.events.PriorSession`), with the shared fraction ``rho`` learned from
+them, in the ``created`` event and the session's meta.  Every time the session is built
+(:func:`prepare_state`) the earlier sessions are replayed from their logs up to the recorded
+event (each with its own warm start, if it had one), their hashes compared, and their
+preferences in force (after exclusions) enter the new subject's model, one subject per code.
+Earlier sessions are only read: nothing is written to them, and they may go on afterwards (the
+hash covers the log up to the recorded event only).  A changed log is a
+:class:`~gaitpref.errors.ReplayError` naming the session.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Sequence
+
+from gaitpref.config import ExperimentConfig
+from gaitpref.errors import ReplayError
+from gaitpref.feedback import Preference
+from gaitpref.loop.warm import WarmStart, warm_data, warm_start
+from gaitpref.sessions.events import PriorSession
+from gaitpref.sessions.replay import replay
+from gaitpref.sessions.state import SessionState
+from gaitpref.sessions.stored_config import config_of
+from gaitpref.storage import EventRecord, SessionRecord, Storage
+
+
+def log_sha256(events: Sequence[EventRecord]) -> str:
+    """Hash of a log: each event's sequence number, kind, payload version and payload."""
+    rows = [[e.seq, e.kind, e.version, e.payload] for e in events]
+    text = json.dumps(rows, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def resolve_prior(
+    storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str]
+) -> list[SessionRecord]:
+    """The earlier sessions named by ids or subject codes, by id, each once; ValueError names
+    an unknown one or one whose grid differs from ``config``'s."""
+    found: dict[int, SessionRecord] = {}
+    for item in prior_from:
+        if isinstance(item, bool) or not isinstance(item, int | str):
+            raise ValueError(f"prior_from: expected session ids or subject codes, got {item!r}")
+        if isinstance(item, int):
+            records = [storage.get_session(item)]
+        else:
+            records = storage.list_sessions(item)
+            if not records:
+                raise ValueError(f"prior_from: subject {item!r} has no sessions")
+        for record in records:
+            if config_of(record).space != config.space:
+                raise ValueError(
+                    f"prior_from: session {record.id} (subject {record.subject}) was run on "
+                    f"another grid (config {record.config_name!r}); a warm start needs the same"
+                )
+            found[record.id] = record
+    return [found[k] for k in sorted(found)]
+
+
+def describe_prior(storage: Storage, records: Sequence[SessionRecord]) -> list[PriorSession]:
+    """What the ``created`` event records of each earlier session: its log hashed as it is now."""
+    out = []
+    for record in records:
+        events = storage.events(record.id)
+        last = events[-1].seq if events else 0
+        out.append(
+            PriorSession(
+                session=record.id, subject=record.subject, last_seq=last, sha256=log_sha256(events)
+            )
+        )
+    return out
+
+
+def _earlier_preferences(storage: Storage, prior: PriorSession) -> list[Preference]:
+    """The preferences in force in an earlier session after its recorded event, replayed."""
+    record = storage.get_session(prior.session)
+    events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
+    if log_sha256(events) != prior.sha256:
+        raise ReplayError(
+            f"session {prior.session} (subject {prior.subject}), which this session's warm start "
+            f"read, has changed since (its log up to event {prior.last_seq} no longer matches the "
+            "hash recorded at creation); the warm start cannot be rebuilt"
+        )
+    state = prepare_state(storage, record)
+    replay(state, events)
+    return list(state.loop.preferences)
+
+
+def earlier_subjects(storage: Storage, prior: Sequence[PriorSession]) -> list[list[Preference]]:
+    """The earlier sessions' preferences, one list per subject code (in order of first id)."""
+    by_subject: dict[str, list[Preference]] = {}
+    for p in prior:
+        by_subject.setdefault(p.subject, []).extend(_earlier_preferences(storage, p))
+    return list(by_subject.values())
+
+
+def make_warm_start(
+    storage: Storage, config: ExperimentConfig, prior: Sequence[PriorSession], seed: int
+) -> WarmStart:
+    """The warm start of a new session, ``rho`` learned from the earlier subjects."""
+    loop = config.make_loop(seed=seed)
+    return warm_start(config.space, loop.hyper, loop.prior, earlier_subjects(storage, prior))
+
+
+def prepare_state(
+    storage: Storage, record: SessionRecord, config: ExperimentConfig | None = None
+) -> SessionState:
+    """A fresh state for ``record`` (its parsed ``config``, if at hand), with its warm start
+    when it has one (not yet replayed)."""
+    config = config_of(record) if config is None else config
+    state = SessionState(config, record.seed, record.meta.get("gait_ids"))
+    raw = record.meta.get("prior_from")
+    if raw:
+        prior = [PriorSession.model_validate(p) for p in raw]
+        groups = earlier_subjects(storage, prior)
+        rho = record.meta.get("prior_rho")
+        if not isinstance(rho, float):
+            raise ReplayError(f"session {record.id}: its warm start's rho is missing")
+        state.loop.warm_start(WarmStart(warm_data(config.space, groups), rho, len(groups)))
+    return state
+
+
+__all__ = [
+    "describe_prior",
+    "earlier_subjects",
+    "log_sha256",
+    "make_warm_start",
+    "prepare_state",
+    "resolve_prior",
+]

@@ -1,0 +1,164 @@
+"""Warm against cold on a simulated clinic: ``gaitpref bench population``.
+
+The objectives hold one utility grid per subject (``S x A``).  Every subject first walks ``T``
+trials alone (the cold run, simulated as ``gaitpref simulate`` does: the config's loop, a
+noiseless simulated user, comparisons only); then, for each held-out subject, the same run
+again (same seeds) warm-started from the other subjects' cold runs (``loop/warm.py``: their
+preferences through the population kernel, ``rho`` learned from them).  A trial's score is the
+normalised objective of its executed gait (1 at the subject's best, 0 at the worst).
+
+After every answer, in both runs, the loop states its confidence (``loop/stopping.py``): the
+probability that its recommended gait is within ``tolerance`` of the best, and the truth is
+checked against the subject's objective.  :func:`calibration` bins those pairs: when it said
+``p``, how often it was right.
+
+:func:`synthetic_population` builds the populations of the study in
+``docs/results/population``: each subject's utility is ``sqrt(rho) z_0 + sqrt(1 - rho) z_s``
+over standardised objectives ``z`` (the paper's, ``gaitpref.data``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitpref.config import ExperimentConfig
+from gaitpref.feedback import Preference
+from gaitpref.loop.cospar import CoSpar
+from gaitpref.loop.stopping import confidence
+from gaitpref.loop.warm import warm_start
+from gaitpref.simulate.sweep import resolve_jobs
+from gaitpref.simulate.users import SimulatedUser, objective_on_grid
+from gaitpref.space import FloatArray
+
+
+@dataclass(frozen=True)
+class Walked:
+    """One subject's run: per-trial scores, the preferences it left, and the confidence pairs
+    ``(stated probability, recommendation truly within tolerance)`` after each answer."""
+
+    scores: list[float]
+    preferences: list[Preference]
+    stated: list[float]
+    right: list[bool]
+    rho: float | None = None
+
+
+def _walk(
+    config: ExperimentConfig,
+    objective: FloatArray,
+    trials: int,
+    seeds: Sequence[int],
+    others: Sequence[Sequence[Preference]] | None,
+    tolerance: float,
+    samples: int,
+) -> Walked:
+    loop_ss, user_ss, sure_ss = np.random.SeedSequence(list(seeds)).spawn(3)
+    loop: CoSpar = config.make_loop(seed=np.random.default_rng(loop_ss))
+    rho = None
+    if others is not None:
+        warm = warm_start(config.space, loop.hyper, loop.prior, others)
+        loop.warm_start(warm)
+        rho = warm.rho
+    user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss))
+    sure_rng = np.random.default_rng(sure_ss)
+    utility = user.utility
+    span = float(utility.max() - utility.min())
+    executed: list[int] = []
+    stated: list[float] = []
+    right: list[bool] = []
+    while len(executed) < trials:
+        query = loop.ask()
+        loop.tell(query, user.answer(query))
+        executed.extend(query.actions)
+        sure = confidence(loop.posterior, sure_rng, tolerance=tolerance, samples=samples)
+        stated.append(sure.probability)
+        right.append(bool(utility.max() - utility[sure.recommended] <= tolerance * span))
+    scores = user.normalized(np.asarray(executed[:trials], dtype=np.intp)).tolist()
+    return Walked(scores, list(loop.preferences), stated, right, rho)
+
+
+def calibration(
+    stated: Sequence[float], right: Sequence[bool], bins: int = 10
+) -> list[dict[str, float]]:
+    """Stated probability against observed frequency, in ``bins`` equal bins of ``[0, 1]``."""
+    p = np.asarray(stated, dtype=np.float64)
+    hit = np.asarray(right, dtype=np.float64)
+    which = np.minimum((p * bins).astype(int), bins - 1)
+    out = []
+    for b in range(bins):
+        mine = which == b
+        if mine.any():
+            out.append(
+                {
+                    "lo": b / bins,
+                    "hi": (b + 1) / bins,
+                    "count": int(mine.sum()),
+                    "stated": float(p[mine].mean()),
+                    "observed": float(hit[mine].mean()),
+                }
+            )
+    return out
+
+
+def population_bench(
+    config: ExperimentConfig,
+    objectives: FloatArray,
+    trials: int,
+    *,
+    seed: int = 0,
+    jobs: int = 1,
+    tolerance: float = 0.05,
+    samples: int = 300,
+) -> dict[str, object]:
+    """The JSON of ``gaitpref bench population`` (module docstring)."""
+    grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
+    if len(grids) < 2:
+        raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
+    if trials < 1:
+        raise ValueError(f"trials must be >= 1, got {trials}")
+    n_jobs = resolve_jobs(jobs)
+
+    def run(calls: list[tuple[int, Sequence[Sequence[Preference]] | None]]) -> list[Walked]:
+        args = [(config, grids[k], trials, (seed, k), o, tolerance, samples) for k, o in calls]
+        if n_jobs == 1:
+            return [_walk(*a) for a in args]
+        from joblib import Parallel, delayed
+
+        parallel = Parallel(n_jobs=n_jobs, backend="loky", inner_max_num_threads=1)
+        return list(parallel(delayed(_walk)(*a) for a in args))
+
+    cold = run([(k, None) for k in range(len(grids))])
+    others = [[cold[j].preferences for j in range(len(grids)) if j != k] for k in range(len(grids))]
+    warm = run([(k, others[k]) for k in range(len(grids))])
+    stated = [p for w in (*cold, *warm) for p in w.stated]
+    right = [r for w in (*cold, *warm) for r in w.right]
+    return {
+        "subjects": [
+            {"subject": k, "cold": c.scores, "warm": w.scores, "rho": w.rho}
+            for k, (c, w) in enumerate(zip(cold, warm, strict=True))
+        ],
+        "calibration": calibration(stated, right),
+        "trials": trials,
+        "tolerance": tolerance,
+        "seed": seed,
+    }
+
+
+def synthetic_population(
+    objectives: FloatArray, rho: float, subjects: int, shared: int = 0, first: int = 1
+) -> FloatArray:
+    """``subjects`` utilities ``sqrt(rho) z_shared + sqrt(1 - rho) z_(first + s)`` from
+    standardised objectives ``z`` (rows of ``objectives``, each flattened)."""
+    flat = np.asarray(objectives, dtype=np.float64).reshape(len(objectives), -1)
+    z = (flat - flat.mean(axis=1, keepdims=True)) / flat.std(axis=1, keepdims=True)
+    own = z[first : first + subjects]
+    if own.shape[0] != subjects:
+        raise ValueError(f"need {first + subjects} objectives, got {len(objectives)}")
+    out: FloatArray = np.sqrt(rho) * z[shared] + np.sqrt(1.0 - rho) * own
+    return out
+
+
+__all__ = ["Walked", "calibration", "population_bench", "synthetic_population"]

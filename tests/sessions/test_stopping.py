@@ -1,0 +1,63 @@
+"""The session's confidence and its ``[stop]`` rule: blind validation opens when it says so."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gaitpref import Session
+from gaitpref.config import ExperimentConfig, load_config, parse_config
+from gaitpref.errors import ConfigError
+from gaitpref.storage import MemoryStorage
+from tests.sessions.sessionkit import CONFIG, Drive, state_of
+
+
+def _config(stop: str) -> ExperimentConfig:
+    return parse_config(load_config(CONFIG).text + "\n[stop]\n" + stop, default_name=CONFIG)
+
+
+def test_max_trials_opens_blind_validation_once_and_replays(drive: Drive) -> None:
+    db = MemoryStorage()
+    s = Session.create(db, _config("max_trials = 4\n"), "S01")
+    drive(s, 3)
+    assert s.validation_plan is None and s.stop_reason() is None
+    drive(s, 1)
+    assert s.stop_reason() == "4 trials reached max_trials = 4"
+    plan = s.validation_plan
+    assert plan is not None and plan.round == 1
+    again = Session.open(db, s.id)
+    assert again.validation_plan == plan  # logged, and replayed
+    s.answer_validation(1, "ABC")
+    drive(s, 2)  # the operator may go on: the rule does not reopen validation
+    assert s.validation_plan is None and len(s.validations()) == 1
+
+
+def test_confidence_rule_opens_validation_when_the_model_is_sure_enough(drive: Drive) -> None:
+    s = Session.create(MemoryStorage(), _config("confidence = 0.5\ntolerance = 0.1\n"), "S01")
+    for _ in range(40):
+        if s.validation_plan is not None:
+            break
+        before = s.confidence().probability
+        assert before < 0.5
+        drive(s, 1)
+    assert s.validation_plan is not None, "the rule never triggered in 40 answers"
+    assert s.confidence().probability >= 0.5
+
+
+def test_confidence_is_reproducible_and_leaves_the_loop_alone(drive: Drive) -> None:
+    s = Session.create(MemoryStorage(), CONFIG, "S01")
+    drive(s, 5)
+    mean, _var, query, rng = state_of(s)
+    first, second = s.confidence(), s.confidence()
+    assert first == second
+    assert state_of(s)[2:] == (query, rng)
+    assert first.recommended == int(np.argmax(mean))
+    assert first.sentence("G7").endswith("that G7 is within 5% of the best")
+    assert s.stop_reason() is None  # no [stop] table, no rule
+
+
+def test_a_bad_stop_table_names_the_key() -> None:
+    with pytest.raises(ConfigError, match=r"\[stop\]\.confidence"):
+        _config("confidence = 1.5\n")
+    with pytest.raises(ConfigError, match=r"\[stop\]"):
+        _config("patience = 3\n")

@@ -1,0 +1,31 @@
+"""The terminal with a ``[stop]`` rule: the confidence after every answer, then validation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pexpect
+
+from gaitpref import Session
+from gaitpref.config import load_config
+from tests.sessions.sessionkit import CONFIG
+from tests.sessions.test_terminal import _answer, _spawn
+
+
+def test_the_terminal_shows_the_confidence_and_moves_to_validation(tmp_path: Path) -> None:
+    config = tmp_path / "stop.toml"
+    config.write_text(load_config(CONFIG).text + "\n[stop]\nmax_trials = 2\n", encoding="utf-8")
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, config, "S01", seed=3).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 1: run G\d+")
+    _answer(child, None, "2")
+    child.expect("saved: trial 1")
+    child.expect(r"\d+% that G\d+ is within 5% of the best")
+    child.expect(r"Trial 2: run G\d+")
+    _answer(child, "1", "0")
+    child.expect("saved: trial 2")
+    child.expect(r"\d+% that G\d+ is within 5% of the best")
+    child.expect("Blind validation, round 1")  # max_trials = 2: the rule opened it
+    child.sendline("q")
+    child.expect(pexpect.EOF)

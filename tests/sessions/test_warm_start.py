@@ -1,0 +1,120 @@
+"""Warm starts: earlier sessions' answers in a new session's model; read, recorded, replayed."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitpref import Session, load_config
+from gaitpref.errors import ReplayError
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from gaitpref.storage import MemoryStorage, Storage
+from tests.sessions.sessionkit import CONFIG, state_of
+
+
+def _run(session: Session, subject: SimulatedSubject, answers: int) -> None:
+    for _ in range(answers):
+        q = session.next_query()
+        comparisons, suggestions = subject.respond(q)
+        session.answer(q.id, comparisons, suggestions)
+
+
+def _earlier(db: str | Storage) -> list[int]:
+    """Two earlier subjects (S01 twice, S02 once) with the same utility."""
+    space = load_config(CONFIG).space
+    ids = []
+    for code, seed in (("S01", 1), ("S01", 2), ("S02", 3)):
+        with Session.create(db, CONFIG, code, seed=seed) as s:
+            _run(s, SimulatedSubject(space, bump_utility(space), seed=seed), 6)
+            ids.append(s.id)
+    return ids
+
+
+def _snapshot(db: str | Storage, ids: list[int]) -> list[object]:
+    out: list[object] = []
+    for i in ids:
+        with Session.open(db, i) as s:
+            out.append((s.record, [(e.seq, e.kind, e.payload, e.at) for e in s.events()]))
+    return out
+
+
+def test_a_warm_start_is_recorded_replays_and_never_writes_to_what_it_reads(
+    db: str | Storage,
+) -> None:
+    ids = _earlier(db)
+    before = _snapshot(db, ids)
+    space = load_config(CONFIG).space
+    s = Session.create(db, CONFIG, "S03", seed=5, prior_from=["S01", ids[2]])
+    created = s.events()[0].payload
+    assert [p["session"] for p in created["prior_from"]] == ids
+    assert 0.0 < created["prior_rho"] < 1.0
+    assert s.record.meta["prior_from"] == created["prior_from"]
+    _run(s, SimulatedSubject(space, bump_utility(space), seed=5), 5)
+    mean, var, query, rng = state_of(s)
+    again = Session.open(db, s.id)
+    mean2, var2, query2, rng2 = state_of(again)
+    assert np.array_equal(mean, mean2) and np.array_equal(var, var2)
+    assert (query, rng) == (query2, rng2)
+    assert _snapshot(db, ids) == before  # read, never written
+
+
+def test_the_earlier_answers_shape_the_first_query() -> None:
+    db = MemoryStorage()
+    ids = _earlier(db)
+    cold = Session.create(db, CONFIG, "S03", seed=5)
+    warm = Session.create(db, CONFIG, "S04", seed=5, prior_from=ids)
+    space = load_config(CONFIG).space
+    best = int(np.argmax(bump_utility(space)))
+    assert np.all(cold.posterior().mean == 0.0)
+    mean = warm.posterior().mean
+    assert abs(int(np.argmax(mean)) - best) <= 2  # the earlier subjects' best, before any answer
+    assert warm.posterior().variance.min() < cold.posterior().variance.min()
+
+
+def test_replay_refuses_when_an_earlier_session_changed(tmp_path: Path) -> None:
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    s = Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]])
+    s.close()
+    with Session.open(url, ids[0]) as earlier:  # going on afterwards is fine
+        earlier.note("walked again later")
+    Session.open(url, s.id).close()
+    with sqlite3.connect(path) as con:  # an edit of the stored log (by another tool) is not
+        con.execute("DROP TRIGGER events_no_update")
+        con.execute(
+            "UPDATE events SET payload = replace(payload, '\"first\"', '\"second\"') "
+            "WHERE session_id = ? AND kind = 'comparison_answered'",
+            (ids[0],),
+        )
+    with pytest.raises(ReplayError, match=f"session {ids[0]} \\(subject S01\\).*has changed"):
+        Session.open(url, s.id)
+
+
+def test_prior_from_names_what_it_cannot_use() -> None:
+    db = MemoryStorage()
+    ids = _earlier(db)
+    with pytest.raises(ValueError, match="subject 'S09' has no sessions"):
+        Session.create(db, CONFIG, "S03", prior_from=["S09"])
+    with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
+        Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
+
+
+def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    ids = _earlier(url)
+    args = ["session", "new", "--config", CONFIG, "--subject", "S03", "--db", url]
+    result = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", str(ids[2])])
+    assert result.exit_code == 0, result.output
+    new_id = int(result.output.split()[1].rstrip(":"))
+    with Session.open(url, new_id) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
+    bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
+    assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output
