@@ -18,14 +18,15 @@ Two subjects, each of them rating every executed gait at the objective's quartil
 - ``noiseless``: the paper's subject, and exact ratings;
 - ``noisy``: the learning study's subject (``IndifferentUser``, probit noise 0.05 and
   indifference band 0.05 on the objectives' scale) with rating noise 0.05 on the normalised
-  objective (0 worst gait, 1 best; the quartiles of a 2-D objective lie about 0.1 apart).
+  objective (0 worst gait, 1 best; the quartiles of a 2-D objective lie about 0.15 apart).
 
 Arms: ``prefs`` (preferences alone, no rating scale), ``rated`` (preferences and ratings),
 ``avoid-0.5``/``avoid-1``/``avoid-2``/``avoid-0`` (ratings and ``[safety] avoid = ["very bad"]``
-with that ``lambda``), ``random`` (ratings and preferences on uniformly random gaits: the floor of
-the rating-accuracy comparison), ``random+avoid-1`` (random among the region of interest,
-``lambda = 1``: the region of avoidance on a strategy that does not avoid bad gaits by itself) and ``infogain`` (ratings, strategy ``information-gain``: only when
-this gaitpref has that strategy).  Run ``k`` of every arm uses objective ``k`` and the same
+with that ``lambda``), ``random`` (ratings and preferences on uniformly random gaits: the floor
+of the rating-accuracy comparison), ``random+avoid-1`` (random among the region of interest,
+``lambda = 1``: the region of avoidance on a strategy that does not avoid bad gaits by itself)
+and ``infogain`` (ratings, strategy ``information-gain``: only when this gaitpref has it).
+Run ``k`` of every arm uses objective ``k`` and the same
 seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of
 ``posterior.rating_probabilities``) after 30 and 60 trials, over the true region of interest
