@@ -6,7 +6,9 @@ One iteration (n = 1, b = 1, the paper's protocol)::
       compare with trial 4: g07 (step_length=0.1229 m)
     Trial 5 against trial 4: 1 this one, 2 the previous one, 0 no preference  (u undo, q quit)
     Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
-    Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter
+    Rating of trial 5: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip     (with [feedback.rating])
+    Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter,
+      x write and flag trial 5 unsafe
     saved: trial 5
 
 Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
@@ -28,7 +30,8 @@ from types import FrameType
 
 from rich.console import Console
 
-from gaitpref.errors import FeedbackError, SessionStateError
+from gaitpref.errors import FeedbackError, NoSafeGaitError, SessionStateError
+from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.records import (
     SessionQuery,
@@ -54,7 +57,7 @@ PAUSE_SIGNALS = (signal.SIGINT, signal.SIGHUP)
 
 def gait_name(session: Session, action: int) -> str:
     """The gait's library id, or ``G<action>`` without a library (as the console names it)."""
-    return session.gait_id(action) or f"G{action}"
+    return session.gait_name(action)
 
 
 def _move_words(feature: Feature) -> tuple[str, str, str, str]:
@@ -144,7 +147,12 @@ class Terminal:
                         self.validate()
                         return
                     try:
-                        self._one(s.next_query())
+                        query = s.next_query()
+                    except NoSafeGaitError as exc:
+                        self.console.print(f"No gait to propose: {exc}", markup=False)
+                        raise _QuitError from None
+                    try:
+                        self._one(query)
                     except _UndoError:
                         self._undo()
             except _QuitError:
@@ -179,18 +187,58 @@ class Terminal:
             self.console.print(f"  compare with trial {t}: {self._gait(a)}", markup=False)
         while True:
             comparisons, said = self._comparisons(q)
+            ratings, rated = self._ratings(q)
             suggestions, words = self._suggestions(q)
-            summary = "; ".join(said + words) or "no comparison, no suggestion"
-            key = self.ask(f"Write: {summary}.  y yes, n re-enter", {"y": "", "n": ""}, "y")
+            summary = "; ".join(said + rated + words) or "no comparison, no suggestion"
+            flag = "x write and flag " + ("trial " if len(q.trials) == 1 else "trials ")
+            flag += ", ".join(map(str, q.trials)) + " unsafe"
+            key = self.ask(
+                f"Write: {summary}.  y yes, n re-enter, {flag}", {"y": "", "n": "", "x": ""}, "y"
+            )
             if key == "n":
                 continue
+            reason = self._reason() if key == "x" else ""
             try:
-                s.answer(q.id, comparisons, suggestions)
+                s.answer(q.id, [*comparisons, *ratings], suggestions)
             except (QueryError, FeedbackError) as exc:
                 self.console.print(f"  not written: {exc}", markup=False)
                 return
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+            if reason:
+                for t in dict.fromkeys(q.trials):
+                    s.flag_unsafe(t, reason)
+                self.console.print(
+                    f"flagged unsafe: trial {', '.join(map(str, q.trials))} ({reason}); "
+                    "its gait and its neighbours will not be proposed again",
+                    markup=False,
+                )
             return
+
+    def _reason(self) -> str:
+        """Why the trial is unsafe (asked until given)."""
+        while True:
+            self.console.print("Why is it unsafe? (a few words)", markup=False)
+            text = self.read().strip()
+            if text:
+                return text[:2000]
+
+    def _ratings(self, q: SessionQuery) -> tuple[list[object], list[str]]:
+        """A rating per executed trial when the config asks for them (Enter skips)."""
+        scale = self.session.config.ordinal
+        if scale is None:
+            return [], []
+        out: list[object] = []
+        said: list[str] = []
+        keys = {str(k + 1): label for k, label in enumerate(scale.categories)}
+        options = ", ".join(f"{k} {label}" for k, label in keys.items())
+        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+            key = self.ask(
+                f"Rating of trial {t}: {options}, Enter to skip", {**keys, "": ""}, default=""
+            )
+            if key:
+                out.append(Rating(a, keys[key]))
+                said.append(f"trial {t} rated {keys[key]}")
+        return out, said
 
     def _gait(self, action: int) -> str:
         return f"{gait_name(self.session, action)} ({self.session.config.space.describe(action)})"

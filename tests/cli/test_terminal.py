@@ -56,3 +56,51 @@ def test_a_typed_ranking_is_confirmed_before_it_is_written() -> None:
     assert "Write the ranking BAC?  y yes, n re-enter" in text
     assert "Write the ranking ABC?" in text and "Unblinded" in text
     assert ["".join(v.ranking) for v in session.validations()] == ["ABC"]
+
+
+RATED = """
+name = "rated-terminal"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+unit = "m"
+words = ["longer", "shorter"]
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+fit = "fixed"
+[cospar]
+strategy = "self-sparring"
+[feedback.rating]
+labels = ["very bad", "bad", "okay", "good"]
+[safety]
+unsafe_radius = 0.1
+"""
+
+
+def test_ratings_are_asked_skippable_and_written() -> None:
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    # trial 1: rated 4 (good), no suggestion, written; trial 2: compared, rating skipped
+    terminal, console = _terminal(session, "4", "0", "y", "1", "", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Rating of trial 1: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip" in text
+    assert "trial 1 rated good" in text
+    rated = [e.payload for e in session.events() if e.kind == "rating_given"]
+    assert [(r["trial"], r["category"]) for r in rated] == [(1, "good")]
+    assert len(session.trials()) == 2
+
+
+def test_x_writes_the_answer_and_flags_the_trial_unsafe() -> None:
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    terminal, console = _terminal(session, "", "0", "x", "knee buckled")
+    terminal.run()
+    assert "flagged unsafe: trial 1 (knee buckled)" in console.export_text()
+    action = session.trials()[0].action
+    assert session.unsafe_flags() == {1: (action, "knee buckled")}

@@ -455,3 +455,24 @@ def test_sessions_beyond_the_kept_ones_are_reopened_from_the_log(
     q = c.get(f"/api/sessions/{first}/query").json()
     assert q["trials_done"] == 1 and q["buffer"][0]["trial"] == 1
     assert list(state._open) == [first]
+
+
+def test_a_busy_session_is_409_for_posts_and_never_for_reads(
+    client: TestClient, db_url: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.storage import base, open_storage
+
+    sid = new_session(client)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    monkeypatch.setattr(base, "WRITER_WAIT_S", 0.05)
+    other = open_storage(db_url)  # another process's writer, holding the session's turn
+    with other.writer_turn(sid):
+        r = client.get(f"/api/sessions/{sid}/query")
+        assert r.status_code == 503 and r.headers["retry-after"] == "1"
+        assert f"session {sid}" in r.json()["detail"] and "busy" in r.json()["detail"]
+        assert client.get(f"/sessions/{sid}").status_code == 503  # the trial page
+        r = client.post(f"/api/sessions/{sid}/notes", json={"text": "hello"})
+        assert r.status_code == 409 and "busy" in r.json()["detail"]
+    other.close()
+    assert client.get(f"/api/sessions/{sid}/query").json() == q
+    assert client.post(f"/api/sessions/{sid}/notes", json={"text": "hello"}).status_code == 200

@@ -124,3 +124,41 @@ def test_refused_libraries_and_paths(
     r = console.post("/api/sessions", json={"config": NAMED, "subject": "S01"})
     assert r.status_code == 422 and "no such gait library" in r.text
     assert console.get("/api/sessions").json() == []
+
+
+def _files_under(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*")) if folder.exists() else []
+
+
+def test_a_refused_upload_writes_nothing(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary], tmp_path: Path
+) -> None:
+    data, _ = library_bytes
+    libs = tmp_path / "libs"
+    r = upload(console, NAMED, ("other.json", data))  # the config names another file
+    assert r.status_code == 422 and "name the uploaded file" in r.text
+    r = upload(console, OWN_SPACE % "[0.85, 1.0, 1.15]", ("lib.json", data))  # another grid
+    assert r.status_code == 422 and "<code>library_file</code>" in r.text
+    # a config and library that fit, refused later by the session (seed out of range)
+    csrf = forms_of(console.get("/").text)["create-form"].fields["csrf_token"]
+    files = {"config_file": ("study.toml", NAMED.encode()), "library_file": ("lib.json", data)}
+    r = console.post(
+        "/sessions", data={"csrf_token": csrf, "subject": "S01", "seed": str(2**64)}, files=files
+    )
+    assert r.status_code == 422 and "seed" in r.text
+    assert _files_under(libs) == []
+    assert console.get("/api/sessions").json() == []
+    assert upload(console, NAMED, ("lib.json", data)).status_code == 303  # then a good one
+    assert [p.name for p in _files_under(libs) if p.is_file()] == ["lib.json"]
+
+
+def test_a_refused_upload_keeps_a_library_another_session_uses(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary], tmp_path: Path
+) -> None:
+    data, _ = library_bytes
+    assert upload(console, NAMED, ("lib.json", data)).status_code == 303
+    kept = [p for p in _files_under(tmp_path / "libs") if p.is_file()]
+    r = upload(console, OWN_SPACE % "[0.85, 1.0, 1.15]", ("lib.json", data))
+    assert r.status_code == 422
+    assert [p for p in _files_under(tmp_path / "libs") if p.is_file()] == kept
+    assert console.get("/api/sessions/1/query").status_code == 200

@@ -105,3 +105,54 @@ def test_pages_reuse_a_valid_csrf_cookie(client: TestClient) -> None:
     renewed = csrf_of(client.get("/").text)
     assert renewed not in ("forged.value", first)
     assert client.cookies.get(CSRF_COOKIE) == renewed
+
+
+def _redirect_of(path: str) -> tuple[int, str]:
+    """Status and Location of the token middleware for a raw request path (no URL parsing:
+    an HTTP client would read ``//evil.example/`` as a host)."""
+    import asyncio
+
+    from gaitpref.console.security import AccessMiddleware
+
+    sent: list[dict[str, object]] = []
+
+    async def app(scope: object, receive: object, send: object) -> None:
+        raise AssertionError("the request reached the application")
+
+    async def receive() -> dict[str, object]:
+        return {"type": "http.request", "body": b""}
+
+    async def send(message: dict[str, object]) -> None:
+        sent.append(message)
+
+    scope = {
+        "type": "http",
+        "method": "GET",
+        "path": path,
+        "root_path": "",
+        "query_string": f"token={TOKEN}&page=2".encode(),
+        "headers": [(b"host", b"testserver")],
+    }
+    asyncio.run(AccessMiddleware(app, TOKEN)(scope, receive, send))  # type: ignore[arg-type]
+    start = sent[0]
+    headers = dict(start["headers"])  # type: ignore[call-overload]
+    return int(start["status"]), headers[b"location"].decode()  # type: ignore[call-overload]
+
+
+@pytest.mark.parametrize(
+    ("path", "expected"),
+    [
+        ("//evil.example/", "/evil.example/"),
+        ("///evil.example/x", "/evil.example/x"),
+        ("/\\evil.example/", "/evil.example/"),
+        ("/\t/evil.example", "/%09/evil.example"),
+        ("/sessions/3", "/sessions/3"),
+    ],
+)
+def test_the_token_redirect_never_leaves_the_console(path: str, expected: str) -> None:
+    assert _redirect_of(path) == (303, f"{expected}?page=2")
+
+
+def test_the_token_redirect_over_http(guarded: TestClient) -> None:
+    r = guarded.get("/sessions/3", params={"token": TOKEN, "page": "2"})
+    assert r.status_code == 303 and r.headers["location"] == "/sessions/3?page=2"

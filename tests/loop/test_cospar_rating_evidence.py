@@ -61,11 +61,11 @@ class StarsKind(FeedbackKind[Stars]):
     def __init__(self, with_third: bool = True) -> None:
         self.with_third = with_third
 
-    def parse(self, space: Space, raw: object, query: QueryView, where: str) -> Stars:
+    def parse(self, raw: object, query: QueryView, context: ModelContext, where: str) -> Stars:
         if isinstance(raw, Stars):
             raw = (raw.action, raw.label)
         action, label = expect_fields(raw, ("action", "label"), where)
-        a = grid_index(space, action, where)
+        a = grid_index(context.space, action, where)
         if a not in query.actions:
             raise FeedbackError(f"{where}: action {a} was not executed in this query")
         return Stars(a, SCALE.label_index(label))
@@ -81,7 +81,7 @@ class StarsKind(FeedbackKind[Stars]):
         lik = rating_likelihood(SCALE, VARIANCE, [int(str(o.value)) for o in observations])
         return lik if self.with_third else _TermsOnly(lik)
 
-    def payload(self, record: Stars, query: TrialQuery, space: Space) -> EventPayload:
+    def payload(self, record: Stars, query: TrialQuery, context: ModelContext) -> EventPayload:
         trial = query.trial_of(record.action)
         return StarsGiven(query=query.id, trial=trial, action=record.action, label=record.label)
 

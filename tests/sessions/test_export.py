@@ -113,3 +113,82 @@ def test_a_tampered_export_is_refused_and_nothing_written(
         import_session(target, tmp_path)
     with pytest.raises(ExportError, match="not an empty folder"):
         export_session(s, out, "csv")
+
+
+@pytest.mark.parametrize("table", ["trials.csv", "posterior.csv", "comparisons.csv"])
+def test_every_file_in_the_manifest_is_checked(
+    tmp_path: Path, sqlite_url: str, drive: Drive, table: str
+) -> None:
+    s = _session(sqlite_url, drive)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    path = out / table
+    path.write_text(path.read_text().replace("\n", "\n\n", 1))  # one edited table
+    target = MemoryStorage()
+    with pytest.raises(ExportError, match=f"{table} does not match its SHA-256"):
+        import_session(target, out)
+    path.unlink()
+    with pytest.raises(ExportError, match=f"lacks {table}"):
+        import_session(target, out)
+    assert target.list_sessions() == []
+
+
+def test_a_manifest_naming_a_file_outside_the_export_is_refused(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    s = _session(sqlite_url, drive)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    (tmp_path / "elsewhere.txt").write_text("x")
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["files"]["../elsewhere.txt"] = "0" * 64
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(ExportError, match="not inside the export"):
+        import_session(MemoryStorage(), out)
+
+
+def test_importing_the_same_export_twice_needs_as_new(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    from gaitpref.sessions.export import origin_of
+
+    s = _session(sqlite_url, drive)
+    out = tmp_path / "export"
+    export_session(s, out, "json")
+    target = f"sqlite:///{tmp_path / 'other.db'}"
+    first = import_session(target, out)
+    with pytest.raises(ExportError, match=f"imported before as session {first.id}.*--as-new"):
+        import_session(target, out)
+    assert [r.id for r in Session.list_sessions(target)] == [first.id]
+    second = import_session(target, out, as_new=True)
+    assert second.id == first.id + 1
+    assert origin_of(second.record) == f"imported from session {s.id}"
+    # into the database that holds the exported session itself
+    with pytest.raises(ExportError, match=f"the exported session itself, as session {s.id}"):
+        import_session(sqlite_url, out)
+    assert origin_of(s.record) is None
+    first.close()
+    second.close()
+
+
+def test_session_list_marks_imported_sessions(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    s = _session(sqlite_url, drive)
+    export_session(s, tmp_path / "export", "csv")
+    target = f"sqlite:///{tmp_path / 'other.db'}"
+    runner = CliRunner()
+    ok = runner.invoke(app, ["session", "import", str(tmp_path / "export"), "--db", target])
+    assert ok.exit_code == 0, ok.output
+    again = runner.invoke(app, ["session", "import", str(tmp_path / "export"), "--db", target])
+    assert again.exit_code != 0 and "--as-new" in again.output
+    new = ["session", "import", str(tmp_path / "export"), "--db", target, "--as-new"]
+    assert runner.invoke(app, new).exit_code == 0
+    listing = runner.invoke(app, ["session", "list", "--db", target], env={"COLUMNS": "200"})
+    assert listing.output.count(f"imported from session {s.id}") == 2
+    plain = runner.invoke(app, ["session", "list", "--db", sqlite_url], env={"COLUMNS": "200"})
+    assert "imported" not in plain.output

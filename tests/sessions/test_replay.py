@@ -95,7 +95,9 @@ def test_other_numerics_stop_replay_naming_both_versions(
     drive(s, 4)
     monkeypatch.setattr(gaitpref.sessions.session, "software_version", lambda: "9.9.9")
     monkeypatch.setattr(  # numerics that propose other actions
-        Posterior, "argmax_samples", lambda self, rng, size: np.full(size, np.argmin(self.mean))
+        Posterior,
+        "argmax_samples",
+        lambda self, rng, size, allowed=None: np.full(size, np.argmin(self.mean)),
     )
     with pytest.raises(ReplayError, match=r"(?s)query_issued.*actions.*gaitpref 0\.1\.0.*9\.9\.9"):
         Session.open(sqlite_url, s.id)

@@ -102,3 +102,24 @@ def test_undo_waits_for_the_flag_and_reasons_are_required(tmp_path: Path) -> Non
             s.undo()
         s.withdraw_unsafe(1)
         s.undo()
+
+
+def test_exports_name_gaits_and_mark_unsafe_trials(tmp_path: Path) -> None:
+    import csv
+
+    from gaitpref.sessions import export_session
+
+    with Session.create(f"sqlite:///{tmp_path / 'u.db'}", parse_config(CONFIG), "S01") as s:
+        for k in range(3):
+            _answer(s, k)
+        s.flag_unsafe(2, "knee hyperextension")
+        export_session(s, tmp_path / "out")
+        actions = [t.action for t in s.trials()]
+    with (tmp_path / "out" / "trials.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [r["gait"] for r in rows] == [f"G{a}" for a in actions]
+    assert [r["unsafe"] for r in rows] == ["false", "true", "false"]
+    assert rows[1]["unsafe_reason"] == "knee hyperextension"
+    with (tmp_path / "out" / "comparisons.csv").open() as f:
+        first = next(csv.DictReader(f))
+    assert first["first_gait"] == f"G{first['first_action']}"

@@ -161,3 +161,27 @@ def test_postgres_password_is_masked(postgres_server: str) -> None:
     with pytest.raises(StorageConnectError) as err:
         open_storage(postgres_server.replace("gaitpref@", "gaitpref:secret@") + "/missing_db")
     assert "secret" not in str(err.value) and "***" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("stored", "problem"), [("{not json", "is not JSON"), ("[1, 2]", "a JSON list, not an object")]
+)
+def test_a_damaged_payload_names_the_session_and_the_event(
+    tmp_path: Path, stored: str, problem: str
+) -> None:
+    url = f"sqlite:///{tmp_path / 'd.db'}"
+    store = SQLStorage(url)
+    sid = store.create_session(SPEC, [NewEvent("session_created", {})]).id
+    store.append(sid, 1, [NewEvent("note", {"text": "a"}), NewEvent("note", {"text": "b"})])
+    store.close()
+    with sqlite3.connect(tmp_path / "d.db") as raw:  # damage done outside gaitpref
+        triggers = raw.execute("SELECT name FROM sqlite_master WHERE type = 'trigger'").fetchall()
+        for (name,) in triggers:
+            raw.execute(f'DROP TRIGGER "{name}"')
+        raw.execute("UPDATE events SET payload = ? WHERE seq = 3", (stored,))
+    store = SQLStorage(url)
+    with pytest.raises(StorageError, match=f"session {sid}, event 3 \\(note\\)") as info:
+        store.events(sid)
+    assert problem in str(info.value)
+    assert [e.payload for e in store.events(sid, after=3)] == []
+    store.close()

@@ -80,21 +80,11 @@ def db_upgrade(db: DbOption = None) -> None:
 @db_app.command("status")
 def db_status(db: DbOption = None) -> None:
     """Show the database's URL, schema revision and number of sessions."""
-    from gaitpref.storage import migrate, open_storage, resolve_url
+    from gaitpref.storage import resolve_url
+    from gaitpref.storage.sql import database_status
 
-    def run() -> tuple[str, int, int]:
-        url = resolve_url(db)
-        storage = open_storage(url, create=False)
-        try:
-            return url, len(storage.list_sessions()), len(storage.list_subjects())
-        finally:
-            storage.close()
-
-    url, sessions, subjects = guard(run)
-    console.print(
-        f"{url}: schema revision {migrate.head_revision()}, {sessions} sessions, "
-        f"{subjects} subjects"
-    )
+    # missing, interrupted upgrade, needs upgrade, newer, or its revision and counts
+    console.print(guard(lambda: database_status(resolve_url(db))))
 
 
 # -- session -----------------------------------------------------------------------------------
@@ -185,7 +175,7 @@ def list_sessions(
             r.subject,
             r.config_name,
             str(r.seed),
-            r.status,
+            r.status + (f" ({r.origin})" if r.origin else ""),
             str(r.last_seq),
             r.created_at.strftime("%Y-%m-%d %H:%M"),
             r.updated_at.strftime("%Y-%m-%d %H:%M"),
@@ -329,11 +319,14 @@ def export(
 def import_(
     folder: Annotated[Path, typer.Argument(metavar="FOLDER", help="An export folder.")],
     db: DbOption = None,
+    as_new: Annotated[
+        bool, typer.Option("--as-new", help="Import a session the database already holds again.")
+    ] = False,
 ) -> None:
     """Rebuild a session from an export (checked by replay before anything is written)."""
     from gaitpref.sessions import import_session
 
-    session = guard(lambda: import_session(db, folder))
+    session = guard(lambda: import_session(db, folder, as_new=as_new))
     was = session.record.meta["imported_from"]["session_id"]
     console.print(f"imported as session {session.id} (was {was}) in {session.storage.url}")
     session.close()

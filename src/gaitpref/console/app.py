@@ -22,7 +22,8 @@ from fastapi.staticfiles import StaticFiles
 from gaitpref import __version__
 from gaitpref.console import api, pages
 from gaitpref.console.errors import HANDLED, refusal
-from gaitpref.console.figures import FigureCache
+from gaitpref.console.figures import FigureRenderer
+from gaitpref.console.limits import MAX_LIST, BodyLimitMiddleware
 from gaitpref.console.security import AccessMiddleware, Csrf
 from gaitpref.console.service import SessionService
 from gaitpref.console.templating import page_error
@@ -51,6 +52,7 @@ def create_app(
     @asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         yield
+        app.state.figures.close()
         service.close()
 
     app = FastAPI(
@@ -59,35 +61,48 @@ def create_app(
         description=(
             "Run a CoSpar gait-preference session at the bench. The JSON API under /api/ does "
             "what the pages do; 409 means the query is stale or already answered (nothing was "
-            "written), 422 names the malformed field."
+            "written), 422 names the malformed field, 413 refuses a body over 1 MB or a list "
+            "over 256 items."
         ),
         lifespan=lifespan,
     )
     app.state.service = service
     app.state.csrf = Csrf(csrf_secret)
-    app.state.figures = FigureCache()
+    app.state.figures = FigureRenderer()
     app.state.token_required = token is not None
     app.include_router(api.router)
     app.include_router(pages.router)
     app.mount("/static", StaticFiles(directory=HERE / "static"), name="static")
+    app.add_middleware(BodyLimitMiddleware)  # inside the token check: strangers get 401 first
     app.add_middleware(AccessMiddleware, token=token, allowed_hosts=allowed_hosts)
 
     async def handle(request: Request, exc: Exception) -> Response:
         if isinstance(exc, pydantic.ValidationError):
             raise exc  # a bug in the console's own models, not the client's input
-        ref = refusal(exc)
+        ref = refusal(exc, request.method)
+        retry = {"retry-after": "1"} if ref.status == 503 else None
         if request.url.path.startswith("/api/"):
-            return JSONResponse(ref.api_body(), status_code=ref.status)
-        return page_error(request, ref)
+            return JSONResponse(ref.api_body(), status_code=ref.status, headers=retry)
+        response = page_error(request, ref)
+        response.headers.update(retry or {})
+        return response
 
     for kind in HANDLED:
         app.add_exception_handler(kind, handle)
 
     async def invalid(request: Request, exc: Exception) -> Response:
         assert isinstance(exc, RequestValidationError)
-        if request.url.path.startswith("/api/"):
-            return await request_validation_exception_handler(request, exc)
         errors = exc.errors()
+        if request.url.path.startswith("/api/"):
+            long = [e for e in errors if e.get("type") == "too_long"]
+            if long:  # a list past its documented maximum: 413, as for a body past its size
+                where = ".".join(str(p) for p in long[0]["loc"][1:])
+                most = long[0].get("ctx", {}).get("max_length", MAX_LIST)
+                return JSONResponse(
+                    {"detail": f"{where}: at most {most} items (see docs/console.md)"},
+                    status_code=413,
+                )
+            return await request_validation_exception_handler(request, exc)
         field = ".".join(str(p) for p in errors[0]["loc"][1:]) if errors else ""
         return page_error(
             request, refusal(ValueError(f"{field}: {errors[0]['msg']}" if errors else "bad input"))

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import re
 import tempfile
@@ -24,11 +25,11 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
 from gaitpref.console.errors import InputError
+from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
 
 #: grids larger than this are refused at creation (the console draws and sends every action)
 MAX_ACTIONS = 250_000
-MAX_LIBRARY_BYTES = 64_000_000
 
 
 def default_library_dir(url: str) -> Path:
@@ -50,10 +51,26 @@ class Chosen:
 
     config: ExperimentConfig
     library: GaitLibrary | None
+    #: the library file this choice wrote (None: none, or it was there before); see :func:`discard`
+    written: Path | None = None
 
 
-def store_library(folder: Path, data: bytes, filename: str | None) -> tuple[Path, GaitLibrary]:
-    """Check an uploaded gait library and keep it under ``folder`` (content-addressed)."""
+def discard(written: Path | None) -> None:
+    """Remove a library file that a refused session creation wrote (and its emptied folder)."""
+    if written is None:
+        return
+    written.unlink(missing_ok=True)
+    with contextlib.suppress(OSError):  # not empty: another session's file of that prefix
+        written.parent.rmdir()
+
+
+def store_library(
+    folder: Path, data: bytes, filename: str | None
+) -> tuple[Path, GaitLibrary, bool]:
+    """Check an uploaded gait library and keep it under ``folder`` (content-addressed).
+
+    Returns its path, the library, and whether this call wrote the file (it was not there).
+    """
     if len(data) > MAX_LIBRARY_BYTES:
         raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
     name = _safe_name(filename, "gaits.json")
@@ -65,12 +82,13 @@ def store_library(folder: Path, data: bytes, filename: str | None) -> tuple[Path
         except (GaitLibraryError, ValueError, OSError) as exc:
             raise InputError("library_file", f"not a usable gait library: {exc}") from None
     target = folder / hashlib.sha256(data).hexdigest()[:16] / name
-    if not target.exists():
+    wrote = not target.exists()
+    if wrote:
         target.parent.mkdir(parents=True, exist_ok=True)
         part = target.with_suffix(target.suffix + ".part")
         part.write_bytes(data)
         part.replace(target)
-    return target, GaitLibrary.load(target)
+    return target, GaitLibrary.load(target), wrote
 
 
 def _named_library(text: str) -> str | None:
@@ -120,10 +138,25 @@ def choose_config(
     name: str | None = None,
     library: tuple[bytes, str | None] | None = None,
 ) -> Chosen:
-    """The config (and library) for a new session; :class:`InputError` names what is wrong."""
-    uploaded: tuple[Path, GaitLibrary] | None = None
-    if library is not None:
-        uploaded = store_library(library_dir, *library)
+    """The config (and library) for a new session; :class:`InputError` names what is wrong.
+
+    An uploaded library is kept only if the choice succeeds; the caller :func:`discard` s
+    ``Chosen.written`` if the session is then not created, so a refused upload leaves nothing.
+    """
+    if library is None:
+        return _choose(source, library_dir, name, None)
+    path, lib, wrote = store_library(library_dir, *library)
+    try:
+        chosen = _choose(source, library_dir, name, (path, lib))
+    except BaseException:
+        discard(path if wrote else None)
+        raise
+    return Chosen(chosen.config, chosen.library, path if wrote else None)
+
+
+def _choose(
+    source: str, library_dir: Path, name: str | None, uploaded: tuple[Path, GaitLibrary] | None
+) -> Chosen:
     if source in shipped_configs():
         cfg = load_config(source)
     else:

@@ -8,6 +8,8 @@ error                                       status  meaning
 ``QueryError``                              409     stale, unknown or already-answered query
 ``SessionStateError``                       409     paused/finished session, nothing to undo...
 ``ConflictError``                           409     another writer changed the session first
+``SessionBusyError``                        409     another writer held the session too long
+                                                    (a POST; a GET gets 503 with Retry-After)
 ``SessionFinishedError``                    409     the session takes no more events
 ``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
 ``InputError`` (console) / ``ValueError``   422     any other refused input
@@ -37,6 +39,7 @@ from gaitpref.loop.cospar import QueryError
 from gaitpref.storage import (
     ConflictError,
     SchemaError,
+    SessionBusyError,
     SessionFinishedError,
     SessionNotFoundError,
     StorageConnectError,
@@ -63,6 +66,7 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (QueryError, 409, "stale query"),
     (SessionStateError, 409, "not now"),
     (ConflictError, 409, "changed elsewhere"),
+    (SessionBusyError, 409, "session busy"),
     (SessionFinishedError, 409, "finished"),
     (SchemaError, 503, "database schema"),
     (StorageConnectError, 503, "database unreachable"),
@@ -111,10 +115,15 @@ def _field_of(exc: BaseException) -> str | None:
     return None
 
 
-def refusal(exc: BaseException) -> Refusal:
-    """How ``exc`` is reported: status, a short title and the full message."""
+def refusal(exc: BaseException, method: str = "POST") -> Refusal:
+    """How ``exc`` is reported (for a request of ``method``): status, title and message.
+
+    Reads never answer 409: a session busy past the bounded wait is 503 for them.
+    """
     for kind, status, title in STATUS_OF:
         if isinstance(exc, kind):
+            if isinstance(exc, SessionBusyError) and method in ("GET", "HEAD"):
+                status = 503
             detail = str(exc) or title
             if status == 409 and isinstance(exc, QueryError | ConflictError):
                 detail += "; nothing was written"

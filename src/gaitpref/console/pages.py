@@ -18,8 +18,8 @@ from starlette.datastructures import UploadFile
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
-from gaitpref.console.configs import MAX_LIBRARY_BYTES
 from gaitpref.console.errors import CsrfError, InputError
+from gaitpref.console.limits import MAX_LIBRARY_BYTES, MAX_UPLOAD
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
@@ -35,7 +35,6 @@ from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
-MAX_UPLOAD = 200_000  # bytes of an uploaded config
 
 
 def _service(request: Request) -> SessionService:
@@ -269,22 +268,13 @@ async def session_png(request: Request, session_id: SessionId) -> Response:
 
 async def _figure(request: Request, session_id: int, kind: str) -> Response:
     service = _service(request)
-    session = await run_in_threadpool(service.get, session_id)
-    cache: figures.FigureCache = request.app.state.figures
-    key = (session_id, session.last_seq, kind)
-    png = cache.get(key)
-    if png is None:
-        if kind == "session":
-            png = await run_in_threadpool(figures.session_png, session)
-        else:
-            trials = [t.action for t in session.trials()]
-            png = await run_in_threadpool(
-                figures.posterior_png,
-                session.posterior(),
-                trials,
-                title=f"session {session_id}: posterior after {len(trials)} trials",
-            )
-        cache.put(key, png)
+    version = await run_in_threadpool(lambda: service.get(session_id).last_seq)
+    renderer: figures.FigureRenderer = request.app.state.figures
+
+    def fetch() -> tuple[int, figures.Picture]:  # in the drawing queue, not a request's thread
+        return service.read(session_id, lambda s: (s.last_seq, figures.picture_of(s, kind)))
+
+    png = await renderer.png(session_id, kind, version, fetch)
     return Response(png, media_type="image/png", headers={"cache-control": "no-store"})
 
 

@@ -12,6 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr
 
+from gaitpref.console.limits import MAX_LIST
 from gaitpref.feedback import Outcome
 from gaitpref.space import Move
 
@@ -90,10 +91,10 @@ class AnswerIn(_Request):
 
     query_id: Id
     comparisons: list[ComparisonTriple] = Field(
-        default_factory=list, max_length=256, examples=[[[12, 7, "first"]]]
+        default_factory=list, max_length=MAX_LIST, examples=[[[12, 7, "first"]]]
     )
     suggestions: list[SuggestionTriple] = Field(
-        default_factory=list, max_length=256, examples=[[[12, "step_length", "+small"]]]
+        default_factory=list, max_length=MAX_LIST, examples=[[[12, "step_length", "+small"]]]
     )
     note: Note | None = None
 

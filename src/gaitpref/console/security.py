@@ -24,7 +24,7 @@ import secrets
 from collections.abc import Iterable
 from http.cookies import SimpleCookie
 from typing import TYPE_CHECKING
-from urllib.parse import parse_qsl, urlencode
+from urllib.parse import parse_qsl, quote, urlencode
 
 if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlette
     from starlette.types import ASGIApp, Receive, Scope, Send
@@ -70,6 +70,16 @@ def _hostname(header: str) -> str:
     return header.rsplit(":", 1)[0].lower()
 
 
+def local_path(path: str) -> str:
+    """``path`` (decoded, as in the ASGI scope) as a redirect target: a path on this console.
+
+    Never a network location: ``//evil.example/x`` or ``/\\evil.example`` would send a browser
+    to another host, so the leading run of slashes and backslashes becomes one ``/``, and every
+    character that could end the path or change its meaning is percent-encoded.
+    """
+    return "/" + quote(path.lstrip("/\\"), safe="/:@!$&'()*+,;=-._~")
+
+
 class AccessMiddleware:
     """Refuse requests without the access token (if one is set) or with a foreign Host header."""
 
@@ -107,7 +117,8 @@ class AccessMiddleware:
                 await _send_plain(send, 401, {"detail": "wrong access token in the address"})
                 return
             rest = urlencode([(k, v) for k, v in query if k != "token"])
-            location = scope.get("root_path", "") + scope["path"] + (f"?{rest}" if rest else "")
+            location = local_path(scope.get("root_path", "") + scope["path"])
+            location += f"?{rest}" if rest else ""
             cookie = f"{TOKEN_COOKIE}={self.token}; HttpOnly; SameSite=Strict; Path=/"
             await send(
                 {

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal, TypeVar
 
-from gaitpref.console.configs import choose_config, default_library_dir
+from gaitpref.console.configs import choose_config, default_library_dir, discard
 from gaitpref.console.errors import InputError
 from gaitpref.errors import SessionStateError
 from gaitpref.sessions.session import Answered, Session, SessionQuery
@@ -124,9 +124,13 @@ class SessionService:
         chosen = choose_config(
             config, library_dir=self.library_dir, name=config_name, library=library
         )
-        session = Session.create(
-            self.storage, chosen.config, subject, seed=seed, library=chosen.library
-        )
+        try:
+            session = Session.create(
+                self.storage, chosen.config, subject, seed=seed, library=chosen.library
+            )
+        except BaseException:
+            discard(chosen.written)  # a refused upload leaves no file behind
+            raise
         self._keep(session)
         return session
 

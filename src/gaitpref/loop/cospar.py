@@ -268,6 +268,8 @@ class CoSpar:
         query: Query | int,
         answers: Iterable[object] = (),
         suggestions: Iterable[object] = (),
+        *,
+        comparisons: Iterable[object] = (),
     ) -> Answer:
         """Record the answer to ``query`` and refit the posterior.
 
@@ -276,11 +278,12 @@ class CoSpar:
         outcome)`` items of ``answers`` are comparisons (``i``, ``j`` grid indices of actions in
         the query, ``outcome`` one of ``"first"``, ``"second"``, ``"none"``) and ``suggestions``
         holds ``(action, feature, move)`` for executed actions; a move that clips back to the same
-        point is ignored.  Raises :class:`QueryError` / :class:`FeedbackError` and changes
-        nothing on bad input.
+        point is ignored; ``comparisons=`` (a keyword, as 0.1 named the argument) is the same as
+        giving the comparisons in ``answers``.  Raises :class:`QueryError` /
+        :class:`FeedbackError` and changes nothing on bad input.
         """
         q = self._check_query(query)
-        records = self._parse(q, answers, suggestions)
+        records = self._parse(q, [*answers, *_as_comparisons(comparisons)], suggestions)
         context = self.context()
         prefs: list[Preference] = []
         ties: list[Tie] = []
@@ -553,6 +556,16 @@ class CoSpar:
             single=single,
             single_likelihood=single_likelihood,
         )
+
+
+def _as_comparisons(items: Iterable[object]) -> list[object]:
+    """``comparisons=`` items: raw triples or :class:`Comparison` records, nothing else."""
+    out = list(items)
+    for k, item in enumerate(out):
+        kind = kind_of(item)
+        if kind is not None and not isinstance(item, Comparison):
+            raise FeedbackError(f"comparison {k}: expected (i, j, outcome), got {item!r}")
+    return out
 
 
 def _merged(

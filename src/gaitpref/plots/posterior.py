@@ -3,9 +3,11 @@
 The data of a picture is computed first (:class:`PosteriorPicture`, plain arrays), then rendered
 with matplotlib (Agg backend, no screen needed):
 
-- 1-D: posterior mean +- 2 standard deviations, a few joint posterior samples, the trials;
-- 2-D: a heat map of the posterior mean with the trials in chronological order (numbered), and
-  optionally the true objective beside it.
+- 1-D: posterior mean +- 2 standard deviations (:data:`gaitpref.plots.BAND_SD`, the band of
+  every figure), a few joint posterior samples, the trials coloured by order (colour bar);
+- 2-D: a heat map of the posterior mean (colour bar) with the trials in chronological order
+  (shaded by order, their own colour bar), the best posterior mean starred and, when the true
+  objective is known, its best marked with an X; a legend names the marks.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from gaitpref.model.posterior import Posterior
+from gaitpref.plots import BAND_LABEL, BAND_SD
 from gaitpref.space import FloatArray, IntArray, Space
 
 
@@ -72,20 +75,22 @@ def _axis_label(space: Space, k: int) -> str:
 def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
     x = pic.space.features[0].array
     ax = fig.add_subplot(1, 1, 1)
-    ax.fill_between(x, pic.mean - 2 * pic.std, pic.mean + 2 * pic.std, alpha=0.25, label="±2 sd")
+    half = BAND_SD * pic.std
+    ax.fill_between(x, pic.mean - half, pic.mean + half, alpha=0.25, label=BAND_LABEL)
     ax.plot(x, pic.mean, lw=2, label="posterior mean")
     for k, s in enumerate(pic.samples):
         ax.plot(x, s, lw=0.8, ls="--", label="posterior samples" if k == 0 else None)
     if pic.trials.size:
-        ax.scatter(
+        dots = ax.scatter(
             x[pic.trials],
             pic.mean[pic.trials],
-            c=np.arange(pic.trials.size),
+            c=np.arange(1, pic.trials.size + 1),
             cmap="viridis",
             zorder=3,
             s=20,
             label="trials (colour: order)",
         )
+        fig.colorbar(dots, ax=ax, fraction=0.046, label="trial")
     if pic.objective is not None:
         ax2 = ax.twinx()
         ax2.plot(x, pic.objective, color="k", lw=1, alpha=0.6)
@@ -99,7 +104,7 @@ def _heat(ax: Axes, pic: PosteriorPicture, values: FloatArray, title: str) -> No
     fx, fy = pic.space.features
     grid = values.reshape(pic.space.shape)
     mesh = ax.pcolormesh(fy.array, fx.array, grid, shading="nearest", cmap="viridis")
-    plt.colorbar(mesh, ax=ax, fraction=0.046)
+    plt.colorbar(mesh, ax=ax, fraction=0.046, label=title)
     ax.set_xlabel(_axis_label(pic.space, 1))
     ax.set_ylabel(_axis_label(pic.space, 0))
     ax.set_title(title)
@@ -115,15 +120,29 @@ def _draw_2d(pic: PosteriorPicture, fig: Figure) -> None:
     if pic.trials.size:
         pts = pic.space.points[pic.trials]
         ax.plot(pts[:, 1], pts[:, 0], color="w", lw=0.6, alpha=0.6)
-        ax.scatter(
-            pts[:, 1], pts[:, 0], c=np.arange(pic.trials.size), cmap="autumn", s=14, zorder=3
+        dots = ax.scatter(
+            pts[:, 1],
+            pts[:, 0],
+            c=np.arange(1, pic.trials.size + 1),
+            cmap="Greys",
+            edgecolors="k",
+            linewidths=0.5,
+            s=18,
+            zorder=3,
+            label="trials (shade: order)",
         )
-        best = pic.space.points[int(np.argmax(pic.mean))]
-        ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4)
+        fig.colorbar(dots, ax=ax, fraction=0.046, label="trial")
+    best = pic.space.points[int(np.argmax(pic.mean))]
+    ax.scatter(
+        [best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
+        label="best posterior mean",
+    )  # fmt: skip
     if pic.objective is not None:
         true_best = pic.space.points[int(np.argmax(pic.objective))]
         for a in axes:
-            a.scatter([true_best[1]], [true_best[0]], marker="x", s=80, c="k", zorder=4)
+            a.scatter([true_best[1]], [true_best[0]], marker="x", s=80, c="k", zorder=4,
+                      label="true best")  # fmt: skip
+    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
 
 
 def render(pic: PosteriorPicture) -> Figure:

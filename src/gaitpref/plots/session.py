@@ -1,11 +1,13 @@
 """The figure of a session, as in the paper's Figs. 2 and 3 (one row per subject there).
 
-- 1-D: the posterior mean +- one standard deviation with a few joint samples and the trials;
+- 1-D: the posterior mean +- 2 standard deviations (:data:`gaitpref.plots.BAND_SD`, as every
+  figure) with a few joint samples and the trials;
   beside it the trials in chronological order (trial number upwards) over a background that
   shows, row by row, the posterior mean after each trial ("the background depicting the posterior
   preference mean at each step length").
-- 2-D: a heat map of the posterior mean with the trials numbered in order and the best action
-  starred.
+- 2-D: a heat map of the posterior mean with the trials numbered in order (one label per gait:
+  ``"3, 7"`` when it was tried twice; dark numbers with a light outline, readable on every colour)
+  and the best action starred; a legend names the star and the crosses.
 - With a blind validation: the subject's ranking of gaits A/B/C against their posterior mean.
 
 Excluded trials are drawn as crosses.  :func:`session_picture` collects plain arrays from a
@@ -27,8 +29,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
+from gaitpref.plots import BAND_LABEL, BAND_SD
 from gaitpref.space import FloatArray, IntArray, Space
 
 if TYPE_CHECKING:
@@ -87,7 +91,8 @@ def _label(space: Space, k: int) -> str:
 
 def _posterior_1d(ax: Axes, pic: SessionPicture) -> None:
     x = pic.space.features[0].array
-    ax.fill_between(x, pic.mean - pic.std, pic.mean + pic.std, alpha=0.25, label="mean ± sd")
+    half = BAND_SD * pic.std
+    ax.fill_between(x, pic.mean - half, pic.mean + half, alpha=0.25, label=BAND_LABEL)
     ax.plot(x, pic.mean, lw=2, label="posterior mean")
     for k, s in enumerate(pic.samples):
         ax.plot(x, s, lw=0.7, ls="--", alpha=0.8, label="posterior samples" if k == 0 else None)
@@ -127,14 +132,34 @@ def _heat_2d(ax: Axes, pic: SessionPicture) -> None:
     pts = pic.space.points[pic.trials]
     if pic.trials.size:
         ax.plot(pts[:, 1], pts[:, 0], color="w", lw=0.6, alpha=0.7)
-        for k, (p, bad) in enumerate(zip(pts, pic.excluded, strict=True), start=1):
-            ax.annotate(str(k), (p[1], p[0]), color="r" if bad else "w", fontsize=7,
-                        ha="center", va="center")  # fmt: skip
+        for action, numbers in trial_numbers(pic).items():
+            p = pic.space.points[action]
+            ax.annotate(numbers, (p[1], p[0]), color="k", fontsize=7, ha="center", va="center",
+                        path_effects=[OUTLINE], zorder=5)  # fmt: skip
+        if pic.excluded.any():
+            bad = pts[pic.excluded]
+            ax.scatter(bad[:, 1], bad[:, 0], marker="x", c="r", s=50, zorder=4,
+                       label="excluded trial")  # fmt: skip
     best = pic.space.points[int(np.argmax(pic.mean))]
-    ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4)
+    ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
+               label="best posterior mean")  # fmt: skip
+    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
     ax.set_xlabel(_label(pic.space, 1))
     ax.set_ylabel(_label(pic.space, 0))
     ax.set_title("posterior mean and trials (numbered)")
+
+
+#: dark trial numbers with a light outline: readable on the dark and the yellow end of viridis
+OUTLINE = withStroke(linewidth=2.5, foreground="w")
+
+
+def trial_numbers(pic: SessionPicture) -> dict[int, str]:
+    """The label of each gait tried: its trial numbers in order (``"3, 7, 12"``), one per gait,
+    so that repeated gaits do not print numbers on top of each other."""
+    seen: dict[int, list[str]] = {}
+    for k, action in enumerate(pic.trials, start=1):
+        seen.setdefault(int(action), []).append(str(k))
+    return {a: ", ".join(ks) for a, ks in seen.items()}
 
 
 def _validation(ax: Axes, pic: SessionPicture) -> None:

@@ -8,7 +8,9 @@ An export folder is readable without gaitpref:
   names, at the same relative path, when there is one);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
   ``version`` (the payload's schema version), ``payload``);
-- tables as CSV (``--format csv``) or JSON (``--format json``): ``trials``, ``comparisons`` (with
+- tables as CSV (``--format csv``) or JSON (``--format json``), every gait named as the terminal
+  and the console name it (``gait``: the library's id, or ``G<action>``): ``trials`` (with
+  ``unsafe`` flags and their reasons), ``comparisons`` (with
   ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
   deviation of every action) and ``validation``; and one table per other feedback kind the
   session holds (its kind's :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``,
@@ -34,7 +36,14 @@ import numpy as np
 from gaitpref.errors import ExportError, ReplayError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions.session import Session
-from gaitpref.storage import MemoryStorage, NewEvent, SessionSpec, Storage, open_storage
+from gaitpref.storage import (
+    MemoryStorage,
+    NewEvent,
+    SessionRecord,
+    SessionSpec,
+    Storage,
+    open_storage,
+)
 from gaitpref.storage.base import check_status
 
 FORMAT = "gaitpref-session-export"
@@ -155,6 +164,7 @@ def posterior_summary(session: Session) -> dict[str, Any]:
 
 def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
     space = session.config.space
+    unsafe = session.unsafe_flags()
     trials = [
         {
             "trial": t.number,
@@ -162,6 +172,9 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "action": t.action,
             **space.values_of(t.action),
             "gait_id": session.gait_id(t.action),
+            "gait": session.gait_name(t.action),
+            "unsafe": t.number in unsafe,
+            "unsafe_reason": unsafe.get(t.number, (0, ""))[1],
             "excluded": t.excluded is not None,
             "exclusion_reason": t.excluded,
             "exclusion_detail": t.exclusion_detail,
@@ -179,6 +192,8 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "second_trial": c.second_trial,
             "first_action": c.first,
             "second_action": c.second,
+            "first_gait": session.gait_name(c.first),
+            "second_gait": session.gait_name(c.second),
             "outcome": c.outcome,
             "preferred_trial": None
             if c.tie
@@ -196,6 +211,7 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "query": s.query,
             "trial": s.trial,
             "action": s.action,
+            "gait": session.gait_name(s.action),
             "feature": s.feature,
             "move": s.move,
             "target_action": s.target,
@@ -212,6 +228,7 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "action": a,
             **space.values_of(a),
             "gait_id": session.gait_id(a),
+            "gait": session.gait_name(a),
             "mean": float(mean[a]),
             "sd": float(sd[a]),
         }
@@ -286,9 +303,15 @@ def _cell(value: object) -> object:
 
 
 # -- import ------------------------------------------------------------------------------------
-def import_session(db: str | Storage | None, folder: Path) -> Session:
-    """Rebuild the exported session in ``db`` (a new id); checked before anything is written."""
+def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = False) -> Session:
+    """Rebuild the exported session in ``db`` (a new id); checked before anything is written.
+
+    Every file the manifest lists must match its SHA-256.  A session already in ``db`` (imported
+    from this export before, or the exported session itself) is refused unless ``as_new``; the
+    new session's metadata says where it came from (``imported_from``, see :func:`origin_of`).
+    """
     manifest = _read_manifest(folder)
+    _check_files(folder, manifest)
     config_text = _read_checked(folder, "config.toml", manifest)
     if hashlib.sha256(config_text.encode()).hexdigest() != manifest.get("config_sha256"):
         raise ExportError("config.toml does not match the manifest's config_sha256")
@@ -311,6 +334,8 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
                     "session_id": info["id"],
                     "exported_at": manifest.get("exported_at"),
                     "exported_by": manifest.get("software_version"),
+                    "events_sha256": manifest["files"]["events.jsonl"],
+                    "created_at": info.get("created_at"),
                 },
             },
         )
@@ -323,6 +348,8 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
     try:
+        if not as_new:
+            _check_not_imported(storage, spec, info)
         record = storage.create_session(spec, events, status)
         session = Session.open(storage, record.id)
     except BaseException:
@@ -331,6 +358,54 @@ def import_session(db: str | Storage | None, folder: Path) -> Session:
         raise
     session._owns = owns  # closing the session closes the database it opened
     return session
+
+
+def origin_of(record: SessionRecord) -> str | None:
+    """``"imported from session N"`` for a session made by :func:`import_session`, else None."""
+    return record.origin
+
+
+def _check_not_imported(storage: Storage, spec: SessionSpec, info: dict[str, Any]) -> None:
+    """Refuse an export whose session ``storage`` already holds (imported, or the original)."""
+    mine = spec.meta["imported_from"]
+    for rec in storage.list_sessions(spec.subject):
+        origin = rec.meta.get("imported_from")
+        again = isinstance(origin, dict) and origin.get("events_sha256") == mine["events_sha256"]
+        original = (
+            rec.config_sha256 == spec.config_sha256
+            and rec.seed == spec.seed
+            and rec.created_at.isoformat() == info.get("created_at")
+        )
+        if again or original:
+            how = "imported before as" if again else "the exported session itself, as"
+            raise ExportError(
+                f"this export (session {info.get('id')} of subject {spec.subject}) is already in "
+                f"{storage.url}: {how} session {rec.id}; nothing was written.  To keep a second "
+                "copy under a new id, import it with --as-new"
+            )
+
+
+def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
+    """Every file the manifest lists is inside the folder and matches its SHA-256."""
+    files = dict(manifest["files"])
+    library = manifest.get("gait_library")
+    if isinstance(library, dict) and isinstance(library.get("file"), str):
+        files.setdefault(library["file"], library.get("sha256"))
+    for name in ("config.toml", "events.jsonl"):
+        if name not in files:
+            raise ExportError(f"manifest.json lists no {name}")
+    root = folder.resolve()
+    for name, expected in sorted(files.items()):
+        path = (folder / str(name)).resolve()
+        if Path(str(name)).is_absolute() or not path.is_relative_to(root):
+            raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
+        if not path.is_file():
+            raise ExportError(f"the export lacks {name}, which manifest.json lists")
+        if hashlib.sha256(path.read_bytes()).hexdigest() != expected:
+            raise ExportError(
+                f"{name} does not match its SHA-256 in manifest.json (was it edited?); "
+                "nothing was written"
+            )
 
 
 def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:

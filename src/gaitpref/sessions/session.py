@@ -16,7 +16,10 @@ Every write is committed before the call returns (one answer is one transaction)
 written when a call raises.  One writer per session: writes are checked against the last event
 the session has seen, so two writers cannot both answer the same query (the loser gets
 :class:`~gaitpref.storage.ConflictError` or a stale-query :class:`~gaitpref.loop.cospar.QueryError`
-and is brought up to date).  A ``Session`` object is safe to share between threads.
+and is brought up to date).  Writers take turns (``Storage.writer_turn``: fair, bounded,
+shared between processes on SQLite) and catch up with each other before they write, so a second
+writer is not starved; past the bounded wait :class:`~gaitpref.storage.SessionBusyError` names
+the session.  A ``Session`` object is safe to share between threads.
 """
 
 from __future__ import annotations
@@ -54,6 +57,7 @@ from gaitpref.storage import (
     ConflictError,
     EventRecord,
     NewEvent,
+    SessionBusyError,
     SessionRecord,
     SessionSpec,
     Status,
@@ -78,6 +82,7 @@ class Session:
         self.config = config_of(record)
         self._state = self._fresh_state()
         self._broken = False
+        self._in_turn = False
 
     # -- making and opening ------------------------------------------------------------------
     @classmethod
@@ -228,11 +233,19 @@ class Session:
         event = st.derive_query()
         try:
             records = self._write([event])
-        except ConflictError:
+        except ConflictError:  # a writer that does not take turns: catch up and ask once more
             self._rebuild()
             if self._state.pending is not None:
                 return self._state.pending
-            raise
+            st = self._state
+            try:
+                records = self._write([st.derive_query()])
+            except ConflictError:
+                self._rebuild()
+                raise SessionBusyError(
+                    f"session {self.id} is busy: another writer kept appending while a query "
+                    "was being issued; nothing was written, try again"
+                ) from None
         st.commit(records)
         assert st.pending is not None
         return st.pending
@@ -247,15 +260,18 @@ class Session:
         query_id: int,
         answers: Iterable[object] = (),
         suggestions: Iterable[object] = (),
+        *,
+        comparisons: Iterable[object] = (),
     ) -> Answered:
         """Answer the pending query with feedback records of any registered kind (as for
         ``CoSpar.tell``; raw ``(i, j, outcome)`` items are comparisons, and ``suggestions``
-        takes ``(action, feature, move)``: the paper's convenience form).
+        takes ``(action, feature, move)``: the paper's convenience form; ``comparisons=`` as a
+        keyword is the same as giving them in ``answers``).
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, and a session that is finished or paused.
         """
-        comps, suggs = list(answers), list(suggestions)
+        comps, suggs = [*answers, *comparisons], list(suggestions)
         return self._locked(lambda: self._answer(query_id, comps, suggs, retry=True))
 
     def _answer(
@@ -456,7 +472,13 @@ class Session:
         return list(self._state.notes)
 
     def gait_id(self, action: int) -> str | None:
+        """The gait library's id of ``action`` (None without a library)."""
         return self._state.gait_id(action)
+
+    def gait_name(self, action: int) -> str:
+        """How the terminal, the console and exports name a gait: its library id, or
+        ``G<action>`` without a library."""
+        return self._state.gait_id(action) or f"G{int(action)}"
 
     def describe(self, action: int) -> str:
         """Feature values with units, and the gait id when there is a library."""
@@ -480,14 +502,33 @@ class Session:
             self._catch_up()
             return True
 
-        return self._locked(run)
+        return self._locked(run, catch_up=False)
 
     # -- internals -----------------------------------------------------------------------------
-    def _locked(self, fn: Callable[[], T]) -> T:
+    def _locked(self, fn: Callable[[], T], catch_up: bool = True) -> T:
+        """``fn()`` with this object's lock and the session's writer turn held, up to date.
+
+        The turn (``Storage.writer_turn``: fair, bounded, shared with other processes) is taken
+        around the whole operation, and the events other writers appended are replayed first,
+        so the append at its end does not lose a compare-and-set to another writer, and two
+        writers alternate.  Past the bounded wait: :class:`~gaitpref.storage.SessionBusyError`.
+        """
         with self._lock:
-            if self._broken:
-                self._rebuild()
-            return fn()
+            if self._in_turn:  # an operation inside an operation: the turn is held already
+                return fn()
+            with self.storage.writer_turn(self.id):
+                self._in_turn = True
+                try:
+                    if self._broken:
+                        self._rebuild()
+                    elif catch_up and self._moved_on():
+                        self._catch_up()  # another writer moved the session on
+                    return fn()
+                finally:
+                    self._in_turn = False
+
+    def _moved_on(self) -> bool:
+        return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
         meta = self._record.meta

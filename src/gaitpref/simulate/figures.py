@@ -18,6 +18,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from gaitpref.plots import BAND_LABEL, BAND_SD
 from gaitpref.simulate.compass import Snapshot
 from gaitpref.simulate.tables import Curves
 from gaitpref.space import FloatArray
@@ -30,6 +31,14 @@ def _band(ax: Axes, curves: Curves, name: str, color: str, label: str) -> None:
     ax.plot(t, m, color=color, lw=1.4, label=label)
     if np.all(np.isfinite(se)):
         ax.fill_between(t, m - se, m + se, color=color, alpha=0.25, lw=0)
+
+
+def _floor_of(ax: Axes) -> float:
+    """The lower y limit: 0.3 (the paper's), or lower so that no line or band is clipped."""
+    lows = [float(np.nanmin(np.asarray(line.get_ydata()))) for line in ax.get_lines()]
+    lows += [float(np.nanmin(np.asarray(c.get_paths()[0].vertices)[:, 1])) for c in ax.collections]
+    low = min([0.3, *[v for v in lows if np.isfinite(v)]])
+    return 0.3 if low >= 0.3 else float(np.floor((low - 0.02) * 10) / 10)
 
 
 def plot_paper_2d(
@@ -51,9 +60,9 @@ def plot_paper_2d(
             t, m, _ = ours.curve(floor)
             ax.plot(t, m, color=_FLOOR, lw=1.0, ls="--", label="random selection")
         ax.set_title(name.replace("_", " ").replace("n", "n=", 1).replace(" b", ", b="))
-        ax.set_ylim(0.3, 1.0)
         ax.set_xlim(0, int(ours.curve(name)[0].max()) + 1)
         ax.grid(alpha=0.3)
+    axes[0].set_ylim(min(_floor_of(ax) for ax in axes[: len(order)]), 1.0)  # y is shared
     for ax in axes[len(order) :]:
         ax.set_visible(False)
     for ax in axes[::cols]:
@@ -85,8 +94,8 @@ def plot_compass_gait(
     axes[0].axvline(x[best], color="0.6", ls=":", lw=1)
     axes[0].set(title=cot_label, xlabel="step length (m)", ylabel="cost of transport")
     for ax, snap in zip(axes[1:], snapshots, strict=False):
-        lo, hi = snap.mean - 2 * snap.std, snap.mean + 2 * snap.std
-        ax.fill_between(x, lo, hi, color=_OURS, alpha=0.2, lw=0, label="mean +- 2 sd")
+        lo, hi = snap.mean - BAND_SD * snap.std, snap.mean + BAND_SD * snap.std
+        ax.fill_between(x, lo, hi, color=_OURS, alpha=0.2, lw=0, label=BAND_LABEL)
         ax.plot(x, snap.mean, color=_OURS, lw=1.5, label="posterior mean")
         for k, s in enumerate(snap.samples):
             ax.plot(x, s, color="0.3", lw=0.8, ls="--", label="samples" if k == 0 else None)

@@ -34,12 +34,16 @@ from __future__ import annotations
 
 import json
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any, Literal, get_args
 
 from gaitpref.errors import StorageError
+
+#: the most a writer waits for its turn on a session before :class:`SessionBusyError` (seconds)
+WRITER_WAIT_S = 5.0
 
 Status = Literal["active", "paused", "finished"]
 STATUSES: tuple[Status, ...] = get_args(Status)
@@ -56,6 +60,10 @@ class SessionFinishedError(StorageError):
 
 class ConflictError(StorageError):
     """Another writer appended to the session since this one last read it."""
+
+
+class SessionBusyError(StorageError):
+    """Another writer held the session's turn past the bounded wait; nothing was written."""
 
 
 class SchemaError(StorageError):
@@ -119,6 +127,14 @@ class SessionRecord:
     last_seq: int
     meta: JSONObject
 
+    @property
+    def origin(self) -> str | None:
+        """``"imported from session N"`` for a session made by an import, else None."""
+        origin = self.meta.get("imported_from")
+        if not isinstance(origin, dict):
+            return None
+        return f"imported from session {origin.get('session_id')}"
+
 
 @dataclass(frozen=True)
 class SubjectRecord:
@@ -172,6 +188,19 @@ class Storage(ABC):
     @abstractmethod
     def events(self, session_id: int, after: int = 0) -> list[EventRecord]:
         """The session's events with ``seq > after``, in order."""
+
+    @contextmanager
+    def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
+        """Hold session ``session_id``'s turn among its writers (fair; waits at most ``wait_s``,
+        default :data:`WRITER_WAIT_S`).
+
+        Writers that take turns around catch-up, compute and append never lose the append's
+        compare-and-set to each other, and alternate instead of starving (see
+        :mod:`gaitpref.storage.turns`).  Raises :class:`SessionBusyError` past ``wait_s``.  The
+        default holds nothing (one process: ``Session``'s own lock is enough); the optimistic
+        append keeps the data right either way.
+        """
+        yield
 
     def close(self) -> None:  # noqa: B027 - optional for backends that hold nothing
         """Release connections; the storage is not used afterwards."""

@@ -5,6 +5,9 @@
   queue instead of failing half-way.
 - PostgreSQL (``postgresql+psycopg://user@host/db``): the session row is locked
   (``SELECT ... FOR UPDATE``) while a batch is appended.
+- SQLite files: the writers of a session take turns (:mod:`gaitpref.storage.turns`, lock files in
+  ``<db>.turns/``), so that two processes answering one session alternate instead of one
+  starving the other.
 - Both: the append is a compare-and-set on ``sessions.last_seq`` and ``(session_id, seq)`` is the
   events' primary key, so two writers can never both append the same sequence number.
 
@@ -21,7 +24,17 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import Connection, Engine, create_engine, event, insert, select, update
+from sqlalchemy import (
+    Connection,
+    Engine,
+    Text,
+    create_engine,
+    event,
+    insert,
+    select,
+    type_coerce,
+    update,
+)
 from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 from sqlalchemy.engine import URL, make_url
@@ -29,7 +42,7 @@ from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, SQLAlchemy
 from sqlalchemy.pool import StaticPool
 
 from gaitpref.errors import StorageError
-from gaitpref.storage import migrate
+from gaitpref.storage import base, migrate
 from gaitpref.storage.base import (
     ConflictError,
     EventRecord,
@@ -51,6 +64,7 @@ from gaitpref.storage.base import (
 from gaitpref.storage.schema import events as events_t
 from gaitpref.storage.schema import sessions as sessions_t
 from gaitpref.storage.schema import subjects as subjects_t
+from gaitpref.storage.turns import FileTurns
 
 BUSY_TIMEOUT_S = 30.0
 
@@ -96,6 +110,10 @@ class SQLStorage(Storage):
                 raise StorageConnectError(
                     f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
                 )
+        self._turns: FileTurns | None = None
+        if self._sqlite and not _sqlite_memory(parsed):
+            path = Path(parsed.database or "").resolve()
+            self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
         self.engine = _engine(parsed)
         try:
             with self._write() as conn:
@@ -214,15 +232,35 @@ class SQLStorage(Storage):
             found = conn.execute(select(sessions_t.c.id).where(sessions_t.c.id == sid)).first()
             if found is None:
                 raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
+            raw = type_coerce(events_t.c.payload, Text).label("payload")  # parsed below, by row
             rows = conn.execute(
-                select(events_t)
+                select(
+                    events_t.c.session_id,
+                    events_t.c.seq,
+                    events_t.c.kind,
+                    raw,
+                    events_t.c.at,
+                    events_t.c.version,
+                )
                 .where(events_t.c.session_id == sid, events_t.c.seq > after)
                 .order_by(events_t.c.seq)
             ).all()
         return [
-            EventRecord(r.session_id, r.seq, r.kind, r.payload, as_utc(r.at), r.version)
+            EventRecord(r.session_id, r.seq, r.kind, _payload(r, self.url), as_utc(r.at), r.version)
             for r in rows
         ]
+
+    @contextmanager
+    def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
+        """SQLite files: a fair turn shared by every process (lock files in ``<db>.turns/``).
+
+        PostgreSQL: none yet (the row lock and the compare-and-set keep the data right).
+        """
+        if self._turns is None:
+            yield
+            return
+        with self._turns.turn(_sid(session_id), base.WRITER_WAIT_S if wait_s is None else wait_s):
+            yield
 
     def close(self) -> None:
         self.engine.dispose()
@@ -274,6 +312,55 @@ def upgrade_database(url: str) -> str:
         engine.dispose()
     SQLStorage(url).close()  # opens it the way every command will
     return _masked(parsed)
+
+
+def database_status(url: str) -> str:
+    """One line on the database at ``url`` (creates nothing, writes nothing).
+
+    Says which of these it is: missing; created or upgraded but interrupted before the schema
+    was committed (an empty file, or leftover ``-wal``/``-journal`` files); a gaitpref database
+    at the newest revision, with its counts; one that needs ``gaitpref db upgrade``; one from a
+    newer gaitpref; or not a gaitpref database.
+    """
+    parsed = parse_url(url)
+    where = _masked(parsed)
+    if parsed.get_backend_name() == "sqlite" and not _sqlite_memory(parsed):
+        path = Path(parsed.database or "")
+        near = (path.with_name(path.name + suffix) for suffix in ("-wal", "-journal"))
+        leftovers = [p.name for p in near if p.exists()]
+        if not path.exists():
+            return (
+                f"{where}: no database (the file {str(path)!r} does not exist); create one with "
+                "`gaitpref db upgrade`"
+            )
+        if path.stat().st_size == 0 or (leftovers and not _has_tables(parsed)):
+            extra = f" (left over: {', '.join(leftovers)})" if leftovers else ""
+            return (
+                f"{where}: the file exists but holds no committed schema{extra}: its creation "
+                "or upgrade was interrupted before it committed; nothing in it is lost "
+                "(no session was ever written); run `gaitpref db upgrade` again"
+            )
+    try:
+        store = SQLStorage(url, create=False)
+    except StorageError as exc:
+        return f"{where}: {exc}"
+    try:
+        sessions, subjects = len(store.list_sessions()), len(store.list_subjects())
+    finally:
+        store.close()
+    return (
+        f"{where}: schema revision {migrate.head_revision()} (the newest), {sessions} sessions, "
+        f"{subjects} subjects"
+    )
+
+
+def _has_tables(url: URL) -> bool:
+    engine = create_engine(url)
+    try:
+        with engine.connect() as conn:
+            return bool(conn.exec_driver_sql("SELECT name FROM sqlite_master").first())
+    finally:
+        engine.dispose()
 
 
 # -- helpers -----------------------------------------------------------------------------------
@@ -335,6 +422,27 @@ def _rows(sid: int, after: int, events: Sequence[NewEvent], stamp: Any) -> list[
         }
         for k, e in enumerate(events)
     ]
+
+
+def _payload(row: Any, where: str) -> dict[str, Any]:
+    """An event's stored payload as a JSON object, or an error naming session, event, problem."""
+    value = row.payload
+    if isinstance(value, str | bytes):
+        try:
+            value = json.loads(value)
+        except ValueError as exc:
+            raise StorageError(
+                f"session {row.session_id}, event {row.seq} ({row.kind}) in {where}: the stored "
+                f"payload is not JSON ({exc}); the database was altered or damaged outside "
+                "gaitpref: restore it from a backup"
+            ) from None
+    if not isinstance(value, dict):
+        raise StorageError(
+            f"session {row.session_id}, event {row.seq} ({row.kind}) in {where}: the stored "
+            f"payload is a JSON {type(value).__name__}, not an object; the database was altered "
+            "or damaged outside gaitpref: restore it from a backup"
+        )
+    return value
 
 
 def _session(row: Any) -> SessionRecord:

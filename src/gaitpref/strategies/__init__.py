@@ -12,6 +12,7 @@ from typing import Any
 from gaitpref.strategies.acquire import ConfidentEubo, Eubo
 from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
 from gaitpref.strategies.hybrid import GatedEubo, Switch
+from gaitpref.strategies.infogain import InformationGain
 
 #: Every strategy by name: the class, constructed with its settings as keywords.
 STRATEGY_CLASSES: dict[str, type[Any]] = {
@@ -20,6 +21,7 @@ STRATEGY_CLASSES: dict[str, type[Any]] = {
     "gated-eubo": GatedEubo,
     "eubo-then-sparring": Switch,
     "confident-eubo": ConfidentEubo,
+    "information-gain": InformationGain,
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_CLASSES)
 #: The settings a config may give each strategy (``[cospar.strategy_settings]``); the defaults
@@ -30,6 +32,7 @@ STRATEGY_SETTINGS: dict[str, tuple[str, ...]] = {
     "gated-eubo": ("gates",),
     "eubo-then-sparring": ("trials",),
     "confident-eubo": ("beta", "candidates"),
+    "information-gain": ("candidates",),
 }
 
 
@@ -60,6 +63,7 @@ __all__ = [
     "ConfidentEubo",
     "Eubo",
     "GatedEubo",
+    "InformationGain",
     "SelfSparring",
     "Strategy",
     "Switch",

@@ -1,0 +1,72 @@
+"""Request bodies and lists have documented maximums (413 beyond them), checked before parsing."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+
+from fastapi.testclient import TestClient
+
+from gaitpref.console.limits import MAX_FORM_BODY, MAX_JSON_BODY, MAX_LIST
+from tests.console.conftest import event_count, new_session
+
+
+def test_a_body_over_the_limit_is_refused_before_it_is_parsed(client: TestClient) -> None:
+    sid = new_session(client)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    huge = {"query_id": q["query_id"], "suggestions": [[0, "step_length", "+small"]] * 200_000}
+    data = json.dumps(huge).encode()
+    assert len(data) > MAX_JSON_BODY
+    before = event_count(client, sid)
+    r = client.post(
+        f"/api/sessions/{sid}/answers", content=data, headers={"content-type": "application/json"}
+    )
+    assert r.status_code == 413
+    assert f"{MAX_JSON_BODY:,} bytes" in r.json()["detail"]
+    assert event_count(client, sid) == before
+
+
+def test_a_chunked_body_without_length_is_cut_at_the_limit(client: TestClient) -> None:
+    sid = new_session(client)
+
+    def chunks() -> Iterator[bytes]:  # no Content-Length: the server counts what arrives
+        yield b'{"text": "'
+        for _ in range(100):
+            yield b"x" * 64_000
+        yield b'"}'
+
+    r = client.post(
+        f"/api/sessions/{sid}/notes", content=chunks(), headers={"content-type": "application/json"}
+    )
+    assert r.status_code == 413
+    assert event_count(client, sid) == 1  # only session_created: no note
+
+
+def test_a_declared_length_over_the_limit_is_refused_unread(client: TestClient) -> None:
+    r = client.post(
+        "/sessions",
+        content=b"x" * 10,
+        headers={"content-length": str(MAX_FORM_BODY + 1), "content-type": "text/plain"},
+    )
+    assert r.status_code == 413
+
+
+def test_a_list_over_its_maximum_is_413_naming_the_field(client: TestClient) -> None:
+    sid = new_session(client)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    body = {
+        "query_id": q["query_id"],
+        "comparisons": [[0, 1, "first"]] * (MAX_LIST + 1),
+    }
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 413
+    assert r.json()["detail"].startswith(f"comparisons: at most {MAX_LIST} items")
+    ok = {"query_id": q["query_id"], "comparisons": [[i, j, "first"] for i, j in q["comparisons"]]}
+    assert client.post(f"/api/sessions/{sid}/answers", json=ok).status_code == 200
+
+
+def test_the_limits_are_documented() -> None:
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[2] / "docs" / "console.md").read_text()
+    assert "413" in doc and f"{MAX_LIST}" in doc and "1 MB" in doc

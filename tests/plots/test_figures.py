@@ -1,0 +1,121 @@
+"""Figures say what they show (issue 15, item 13): legends and colour bars for every mark, trial
+numbers readable and not stacked, the same +-2 sd band everywhere, no clipped learning curve."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from matplotlib.collections import PolyCollection
+from matplotlib.figure import Figure
+
+from gaitpref import Session
+from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots.posterior import posterior_picture, render
+from gaitpref.plots.session import render_session, session_picture, trial_numbers
+from gaitpref.storage import MemoryStorage
+
+
+def _session(config: str, answers: int) -> Session:
+    s = Session.create(MemoryStorage(), config, "S01", seed=4)
+    for _ in range(answers):
+        q = s.next_query()
+        other = q.buffer[0] if q.buffer else q.actions[-1]
+        pair = [(q.actions[0], other, "first")] if q.actions[0] != other else []
+        s.answer(q.id, pair, [])
+    return s
+
+
+def _legend_texts(fig: Figure) -> set[str]:
+    return {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().texts}
+
+
+def _colour_bar_labels(fig: Figure) -> list[str]:
+    return [ax.get_ylabel() for ax in fig.axes if ax.get_label() == "<colorbar>"]
+
+
+@pytest.fixture(scope="module")
+def one_d() -> Session:
+    return _session("exo-1d-step-length", 6)
+
+
+@pytest.fixture(scope="module")
+def two_d() -> Session:
+    return _session("exo-2d-length-duration", 12)
+
+
+def test_the_1d_figures_share_the_2_sd_band(one_d: Session) -> None:
+    post = one_d.posterior()
+    mean, std = np.asarray(post.mean), np.asarray(post.std)
+    for fig in (
+        render(posterior_picture(post, [t.action for t in one_d.trials()], samples=0)),
+        render_session(session_picture(one_d, samples=0)),
+    ):
+        band = next(c for c in fig.axes[0].collections if isinstance(c, PolyCollection))
+        ys = band.get_paths()[0].vertices[:, 1]
+        assert np.isclose(ys.max(), (mean + BAND_SD * std).max())
+        assert np.isclose(ys.min(), (mean - BAND_SD * std).min())
+        assert BAND_LABEL in _legend_texts(fig)
+        plt.close(fig)
+    assert BAND_SD == 2.0
+
+
+def test_the_posterior_figure_names_its_marks(two_d: Session) -> None:
+    post = two_d.posterior()
+    trials = [t.action for t in two_d.trials()]
+    objective = np.linspace(0.0, 1.0, len(post.mean))
+    fig = render(posterior_picture(post, trials, objective, samples=0))
+    legend = _legend_texts(fig)
+    assert {"best posterior mean", "true best", "trials (shade: order)"} <= legend
+    assert "trial" in _colour_bar_labels(fig)
+    assert {"true objective", "posterior mean"} <= set(_colour_bar_labels(fig))
+    plt.close(fig)
+
+
+def test_repeated_gaits_get_one_readable_label(two_d: Session) -> None:
+    from dataclasses import replace
+
+    tried = np.array([5, 5, 9, 5, 12], dtype=np.intp)  # gait 5 tried three times
+    pic = replace(session_picture(two_d, samples=0), trials=tried, excluded=np.zeros(5, dtype=bool))
+    labels = trial_numbers(pic)
+    assert labels == {5: "1, 2, 4", 9: "3", 12: "5"}  # one label per gait tried
+    fig = render_session(pic)
+    texts = [t for t in fig.axes[0].texts]
+    assert len(texts) == len(labels)
+    assert all(t.get_color() == "k" and t.get_path_effects() for t in texts)  # not white on yellow
+    assert "best posterior mean" in _legend_texts(fig)
+    plt.close(fig)
+
+
+def test_the_learning_curves_are_not_clipped(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.simulate.figures import plot_paper_2d
+    from gaitpref.simulate.tables import Curves
+
+    trials = np.arange(1, 21)
+    low = np.linspace(0.12, 0.9, 20)  # starts far below the paper's 0.3
+
+    def curves(shift: float) -> Curves:
+        n = len(trials)
+        return Curves(
+            np.array(["n1_b1"] * n + ["random"] * n),
+            np.concatenate([trials, trials]),
+            np.concatenate([low + shift, np.full(n, 0.25)]),
+            np.full(2 * n, 0.01),
+        )
+
+    captured: list[Figure] = []
+    original = Figure.savefig
+
+    def keep(self: Figure, *args: object, **kwargs: object) -> None:
+        captured.append(self)
+        original(self, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Figure, "savefig", keep)
+    plot_paper_2d(curves(0.0), curves(0.05), tmp_path / "curves.png")
+    ax = captured[0].axes[0]
+    assert ax.get_ylim()[0] <= 0.12 - 0.01  # the lowest band is inside the axes
+    assert ax.get_ylim()[1] == 1.0

@@ -1,0 +1,65 @@
+"""``gaitpref db status`` tells a missing database from one whose upgrade was interrupted."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from gaitpref.storage.sql import database_status, upgrade_database
+
+KILLED_UPGRADE = textwrap.dedent(
+    """
+    import os, sys
+    from gaitpref.storage import migrate
+    from gaitpref.storage.sql import upgrade_database
+    real = migrate.upgrade
+    def killed(connection, revision="head"):
+        real(connection, revision)  # the tables are made, the transaction is not committed
+        os._exit(9)
+    migrate.upgrade = killed
+    upgrade_database(sys.argv[1])
+    """
+)
+
+
+def test_an_interrupted_upgrade_is_named_as_such(tmp_path: Path) -> None:
+    path = tmp_path / "lab.db"
+    url = f"sqlite:///{path}"
+    done = subprocess.run([sys.executable, "-c", KILLED_UPGRADE, url], capture_output=True)
+    assert done.returncode == 9, done.stderr.decode()[-2000:]
+    assert path.exists()
+    line = database_status(url)
+    assert "does not exist" not in line
+    assert "interrupted" in line and "gaitpref db upgrade" in line
+    upgrade_database(url)  # the advice works
+    assert "0 sessions" in database_status(url)
+
+
+def test_an_empty_file_and_a_missing_one(tmp_path: Path) -> None:
+    (tmp_path / "empty.db").touch()
+    assert "interrupted" in database_status(f"sqlite:///{tmp_path / 'empty.db'}")
+    missing = database_status(f"sqlite:///{tmp_path / 'none.db'}")
+    assert "does not exist" in missing and not (tmp_path / "none.db").exists()
+
+
+def test_a_database_from_a_newer_gaitpref(tmp_path: Path) -> None:
+    import sqlite3
+
+    url = f"sqlite:///{tmp_path / 'new.db'}"
+    upgrade_database(url)
+    with sqlite3.connect(tmp_path / "new.db") as raw:
+        raw.execute("UPDATE alembic_version SET version_num = 'ffff_future'")
+    assert "newer gaitpref" in database_status(url)
+
+
+def test_the_db_status_command_says_so(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    (tmp_path / "lab.db").touch()
+    result = CliRunner().invoke(app, ["db", "status", "--db", f"sqlite:///{tmp_path / 'lab.db'}"])
+    assert result.exit_code == 0, result.output
+    assert "interrupted" in result.output and "does not exist" not in result.output
