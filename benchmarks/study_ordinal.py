@@ -265,8 +265,22 @@ def _cache(grid: str, scenario: str, arm: str) -> Path:
     return CACHE / grid / scenario / f"{arm}.json"
 
 
+def _cached(path: Path, arm: Arm, count: int) -> bool:
+    """Whether ``path`` holds ``count`` runs with every field this version records."""
+    if not path.is_file():
+        return False
+    runs = json.loads(path.read_text())["runs"]
+    return len(runs) >= count and (not arm.rated or all("fit_acc_roi_30" in r for r in runs))
+
+
 def run(
-    arms: list[Arm], grids: list[str], scenarios: list[str], counts: dict[str, int], jobs: int
+    arms: list[Arm],
+    grids: list[str],
+    scenarios: list[str],
+    counts: dict[str, int],
+    jobs: int,
+    skip_cached: bool = False,
+    infogain_2d: int | None = None,
 ) -> None:
     for grid in grids:
         for scenario in scenarios:
@@ -275,9 +289,14 @@ def run(
                     print(f"skipping {arm.name}: this gaitpref has no strategy {arm.strategy!r}")
                     continue
                 path = _cache(grid, scenario, arm.name)
+                count = counts[grid]
+                if arm.name == "infogain" and grid == "2d" and infogain_2d is not None:
+                    count = min(count, infogain_2d)
+                if skip_cached and _cached(path, arm, count):
+                    continue
                 start = time.perf_counter()
                 rows = Parallel(n_jobs=jobs)(
-                    delayed(run_one)(arm, grid, scenario, k) for k in range(counts[grid])
+                    delayed(run_one)(arm, grid, scenario, k) for k in range(count)
                 )
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_text(json.dumps({"arm": arm.name, "runs": rows}))
@@ -319,6 +338,14 @@ def _metrics(runs: list[dict[str, object]]) -> dict[str, np.ndarray]:
     for key in ACCURACY:
         out[key] = np.array([float(r.get(key, np.nan)) for r in runs])  # type: ignore[arg-type]
     return out
+
+
+def _paired(
+    a: list[dict[str, object]], b: list[dict[str, object]]
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """Metrics of two arms over the objectives both ran (run ``k`` is objective ``k``)."""
+    n = min(len(a), len(b))
+    return _metrics(a[:n]), _metrics(b[:n])
 
 
 def _se(x: np.ndarray) -> float:
@@ -446,8 +473,7 @@ def _comparisons(data: Data) -> list[str]:
                 for base in bases:
                     if (grid, scenario, arm) not in data or (grid, scenario, base) not in data:
                         continue
-                    a = _metrics(data[(grid, scenario, arm)])
-                    b = _metrics(data[(grid, scenario, base)])
+                    a, b = _paired(data[(grid, scenario, arm)], data[(grid, scenario, base)])
                     fewer = b["worst"].mean() > 0 and a["worst"].mean() <= 0.3 * b["worst"].mean()
                     loss = (a["all"] - b["all"]).mean() >= -0.01
                     lines.append(
@@ -470,8 +496,7 @@ def _comparisons(data: Data) -> list[str]:
         for scenario in SCENARIOS:
             if (grid, scenario, "rated") not in data or (grid, scenario, "prefs") not in data:
                 continue
-            a = _metrics(data[(grid, scenario, "rated")])
-            b = _metrics(data[(grid, scenario, "prefs")])
+            a, b = _paired(data[(grid, scenario, "rated")], data[(grid, scenario, "prefs")])
             d = a["early"] - b["early"]
             lines.append(
                 f"| {grid} | {scenario} | {_pm(d, True)} | {_pm(a['all'] - b['all'], True)} "
@@ -501,9 +526,9 @@ def _comparisons(data: Data) -> list[str]:
             for base in ("random", "rated"):
                 if (grid, scenario, "infogain") not in data or (grid, scenario, base) not in data:
                     continue
-                a = _metrics(data[(grid, scenario, "infogain")])
-                b = _metrics(data[(grid, scenario, base)])
-                cells = [grid, scenario, f"infogain - {base}"]
+                a, b = _paired(data[(grid, scenario, "infogain")], data[(grid, scenario, base)])
+                cells_n = f" ({a['all'].size} objectives)"
+                cells = [grid, scenario, f"infogain - {base}{cells_n}"]
                 cells += [_pm(a[k] - b[k], True) for k in ACCURACY]
                 lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
@@ -554,6 +579,8 @@ def main() -> None:
     r.add_argument("--arms", default="all", help="comma-separated arm names, or 'all'")
     r.add_argument("--scenarios", default=",".join(SCENARIOS))
     r.add_argument("--jobs", type=int, default=2)
+    r.add_argument("--skip-cached", action="store_true", help="keep complete cached cells")
+    r.add_argument("--infogain-2d", type=int, default=None, help="2-D objectives for infogain")
     sub.add_parser("report")
     args = parser.parse_args()
     if args.command == "report":
@@ -562,7 +589,8 @@ def main() -> None:
     names = {a.name: a for a in ARMS}
     arms = ARMS if args.arms == "all" else [names[n] for n in args.arms.split(",")]
     counts = {"2d": args.objectives, "3d": args.objectives_3d}
-    run(arms, args.grids.split(","), args.scenarios.split(","), counts, args.jobs)
+    grids, scenarios = args.grids.split(","), args.scenarios.split(",")
+    run(arms, grids, scenarios, counts, args.jobs, args.skip_cached, args.infogain_2d)
 
 
 if __name__ == "__main__":
