@@ -25,7 +25,9 @@ Arms: ``prefs`` (preferences alone, no rating scale), ``rated`` (preferences and
 with that ``lambda``), ``random`` (ratings and preferences on uniformly random gaits: the floor
 of the rating-accuracy comparison), ``random+avoid-1`` (random among the region of interest,
 ``lambda = 1``: the region of avoidance on a strategy that does not avoid bad gaits by itself)
-and ``infogain`` (ratings, strategy ``information-gain``: only when this gaitpref has it).
+``infogain`` (ratings, strategy ``information-gain``: only when this gaitpref has it) and
+``infogain+avoid-1`` (information gain over the region of interest, ``lambda = 1``: ROIAL's
+mode).
 Run ``k`` of every arm uses objective ``k`` and the same
 seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of
@@ -148,6 +150,12 @@ ARMS = [
     Arm("random", strategy="random", note="ratings, gaits drawn uniformly at random"),
     Arm("random+avoid-1", lam=1.0, strategy="random", note="random among the ROI, lambda 1"),
     Arm("infogain", strategy="information-gain", note="ratings, strategy information-gain"),
+    Arm(
+        "infogain+avoid-1",
+        lam=1.0,
+        strategy="information-gain",
+        note="information gain over the ROI (ROIAL's mode), lambda 1",
+    ),
 ]
 
 
@@ -161,6 +169,7 @@ AVOIDANCE = [  # (arm with a region of avoidance, the arms without it to compare
     ("avoid-2", ("rated", "prefs")),
     ("avoid-0", ("rated",)),
     ("random+avoid-1", ("random",)),
+    ("infogain+avoid-1", ("infogain",)),
 ]
 
 
@@ -290,7 +299,7 @@ def run(
                     continue
                 path = _cache(grid, scenario, arm.name)
                 count = counts[grid]
-                if arm.name == "infogain" and grid == "2d" and infogain_2d is not None:
+                if arm.strategy == "information-gain" and grid == "2d" and infogain_2d is not None:
                     count = min(count, infogain_2d)
                 if skip_cached and _cached(path, arm, count):
                     continue
@@ -523,12 +532,16 @@ def _comparisons(data: Data) -> list[str]:
     ]
     for grid in GRIDS:
         for scenario in SCENARIOS:
-            for base in ("random", "rated"):
-                if (grid, scenario, "infogain") not in data or (grid, scenario, base) not in data:
+            for arm, base in [
+                ("infogain", "random"),
+                ("infogain", "rated"),
+                ("infogain+avoid-1", "random+avoid-1"),
+                ("infogain+avoid-1", "rated"),
+            ]:
+                if (grid, scenario, arm) not in data or (grid, scenario, base) not in data:
                     continue
-                a, b = _paired(data[(grid, scenario, "infogain")], data[(grid, scenario, base)])
-                cells_n = f" ({a['all'].size} objectives)"
-                cells = [grid, scenario, f"infogain - {base}{cells_n}"]
+                a, b = _paired(data[(grid, scenario, arm)], data[(grid, scenario, base)])
+                cells = [grid, scenario, f"{arm} - {base} ({a['all'].size} objectives)"]
                 cells += [_pm(a[k] - b[k], True) for k in ACCURACY]
                 lines.append("| " + " | ".join(cells) + " |")
     lines.append("")
