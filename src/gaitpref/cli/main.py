@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -93,26 +94,88 @@ def simulate_once(
     minimize: bool = False,
     coactive: bool = False,
     show_progress: bool = False,
+    rating_quantiles: Sequence[float] = (),
+    rating_noise: float = 0.0,
 ) -> SimulationResult:
-    """One simulated experiment with ``config`` against ``objective`` (seeded by ``seed``)."""
+    """One simulated experiment with ``config`` against ``objective`` (seeded by ``seed``).
+
+    With ``rating_quantiles`` a simulated subject also rates every executed gait, its category
+    boundaries at those quantiles of the objective (``OrdinalRater``, ordinal noise
+    ``rating_noise`` on the normalised objective); the rater's generator is a third child of
+    ``seed``, so the loop and the user draw the same numbers with or without it.
+    """
     import numpy as np
 
+    from gaitpref.simulate.raters import OrdinalRater
     from gaitpref.simulate.run import run_simulation
     from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 
-    loop_seed, user_seed = np.random.SeedSequence(seed).spawn(2)
+    loop_seed, user_seed, rater_seed = np.random.SeedSequence(seed).spawn(3)
     loop = config.make_loop(seed=np.random.default_rng(loop_seed))
     user = SimulatedUser(
         config.space, objective, np.random.default_rng(user_seed), minimize=minimize
     )
     helper = GradientCoactive(config.space, objective, minimize=minimize) if coactive else None
+    rater = None
+    if rating_quantiles:
+        rater = OrdinalRater(
+            config.space,
+            objective,
+            tuple(rating_quantiles),
+            np.random.default_rng(rater_seed),
+            noise=rating_noise,
+            minimize=minimize,
+        )
     if not show_progress:
-        return run_simulation(loop, user, trials, helper)
+        return run_simulation(loop, user, trials, helper, rater=rater)
     with progress_bar(transient=True) as bar:
         task = bar.add_task("trials", total=trials)
         return run_simulation(
-            loop, user, trials, helper, progress=lambda done: bar.update(task, completed=done)
+            loop,
+            user,
+            trials,
+            helper,
+            progress=lambda done: bar.update(task, completed=done),
+            rater=rater,
         )
+
+
+def rating_quantiles_for(config: ExperimentConfig, text: str | None, noise: float) -> list[float]:
+    """The ``--rating-quantiles`` of ``simulate``, checked against the config's rating scale.
+
+    Raises ``ValueError`` naming the problem: quantiles that are not numbers increasing inside
+    (0, 1), a config without ``[feedback.rating]``, or a count that is not one fewer than its
+    labels.
+    """
+    import itertools
+    import math
+
+    if text is None:
+        if noise != 0:
+            raise ValueError("--rating-noise needs --rating-quantiles (the simulated rater)")
+        return []
+    try:
+        q = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ValueError(
+            f"--rating-quantiles must be comma-separated numbers, got {text!r}"
+        ) from None
+    if not q or any(not 0 < v < 1 for v in q) or any(b <= a for a, b in itertools.pairwise(q)):
+        raise ValueError(f"--rating-quantiles must increase strictly inside (0, 1), got {text!r}")
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ValueError(f"--rating-noise must be a number >= 0, got {noise!r}")
+    if config.ordinal is None:
+        raise ValueError(
+            f"--rating-quantiles: config {config.name!r} has no [feedback.rating] table; give it "
+            f"one with {len(q) + 1} labels (one more than the {len(q)} quantiles), worst first"
+        )
+    if config.ordinal.size != len(q) + 1:
+        raise ValueError(
+            f"--rating-quantiles: {len(q)} quantiles make {len(q) + 1} categories, but "
+            f"[feedback.rating] of config {config.name!r} has {config.ordinal.size} labels "
+            f"({', '.join(config.ordinal.categories)}); give one quantile fewer than labels"
+        )
+    return q
 
 
 @app.command()
@@ -127,9 +190,24 @@ def simulate(
     trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
     seed: Annotated[int | None, typer.Option(help="Seed (default: the config's).")] = None,
     coactive: Annotated[bool, typer.Option(help="Simulate coactive suggestions.")] = False,
+    rating_quantiles: Annotated[
+        str | None,
+        typer.Option(
+            help="Rate every executed gait: category boundaries at these quantiles of the "
+            "objective, e.g. 0.25,0.5,0.75 (the config's [feedback.rating] needs one more label)."
+        ),
+    ] = None,
+    rating_noise: Annotated[
+        float,
+        typer.Option(help="The rater's ordinal noise, on the normalised objective (0 to 1)."),
+    ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Run one simulated CoSpar experiment against an objective over the config's grid."""
+    """Run one simulated CoSpar experiment against an objective over the config's grid.
+
+    With --rating-quantiles a simulated subject also rates every executed gait; --json then
+    gives the ratings per trial ("ratings", 1 = worst) beside the executed "actions".
+    """
     from rich.table import Table
 
     from gaitpref.simulate.users import objective_on_grid
@@ -140,6 +218,7 @@ def simulate(
         objective_on_grid(cfg.space, obj)
     except ValueError as exc:
         fail(f"objective {str(objective)!r}: {exc}")
+    quantiles = guard(lambda: rating_quantiles_for(cfg, rating_quantiles, rating_noise))
     use_seed = cfg.seed if seed is None else seed
     start = time.perf_counter()
     result = simulate_once(
@@ -150,6 +229,8 @@ def simulate(
         minimize=minimize,
         coactive=coactive,
         show_progress=not as_json,
+        rating_quantiles=quantiles,
+        rating_noise=rating_noise,
     )
     elapsed = time.perf_counter() - start
     if as_json:
@@ -164,6 +245,10 @@ def simulate(
         if lo <= trials:
             table.add_row(f"{lo}-{min(hi, trials)}", f"{score[lo - 1 : hi].mean():.3f}")
     console.print(table)
+    if result.ratings is not None and cfg.ordinal is not None:
+        counts = [int((result.ratings == k).sum()) for k in range(1, cfg.ordinal.size + 1)]
+        given = zip(counts, cfg.ordinal.categories, strict=True)
+        console.print("ratings given: " + ", ".join(f"{c} {name!r}" for c, name in given))
     best = result.posterior_argmax
     console.print(
         f"posterior argmax: action {best} ({cfg.space.describe(best)}), normalized objective "

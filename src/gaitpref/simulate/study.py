@@ -12,6 +12,13 @@ Strategies: ``"cospar"`` (Algorithm 1 with ``n``, ``b`` and optionally the paper
 coactive feedback, :class:`~gaitpref.simulate.users.GradientCoactive`) and ``"random"`` (each
 trial a grid action drawn uniformly: the floor to read learning curves against).
 
+Ratings and safety as arms: a setting with ``rating_quantiles`` has the simulated subject rate
+every executed gait (:class:`~gaitpref.simulate.raters.OrdinalRater`, boundaries at those
+quantiles of the objective, ordinal noise ``rating_noise``), and ``config`` carries the
+``[feedback.rating]`` and ``[safety]`` tables of a config as TOML text (parsed as a config's,
+with the study's ``noise`` as the default rating noise): the loop's rating scale and its region
+of avoidance.  A run's ratings go to the run table's ``rating`` column.
+
 Notation: ``A`` grid actions, ``K`` objectives (rows of ``Study.objectives``, ``K x A``),
 ``T`` trials per run (a trial is one executed action).
 """
@@ -19,6 +26,8 @@ Notation: ``A`` grid actions, ``K`` objectives (rows of ``Study.objectives``, ``
 from __future__ import annotations
 
 import hashlib
+import itertools
+import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -27,8 +36,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitpref.config import ExperimentConfig
+from gaitpref.config.feedback import parse_rating, parse_safety
+from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.loop.cospar import CoSpar
+from gaitpref.loop.safety import Safety
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.ordinal import Ordinal
+from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.simulate.run import run_simulation
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import FloatArray, IntArray, Space
@@ -36,9 +50,43 @@ from gaitpref.space import FloatArray, IntArray, Space
 Strategy = Literal["cospar", "random"]
 
 
+_CONFIG_TABLES = ("feedback", "safety")
+
+
+def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal | None, Safety]:
+    """The rating scale and safety settings of a setting's ``config`` text.
+
+    ``text`` holds only ``[feedback.rating]`` and ``[safety]`` tables; ``noise`` is the default
+    rating noise (the study's).  Errors are :class:`~gaitpref.errors.ConfigError` naming
+    ``where`` (the setting) and the table and key.
+    """
+    try:
+        top = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{where}: config text is not TOML: {exc}") from None
+    extra = sorted(set(top) - set(_CONFIG_TABLES))
+    if extra:
+        raise ConfigError(
+            f"{where}: config text may hold only [feedback.rating] and [safety] tables, "
+            f"got {', '.join(extra)}",
+            table=extra[0],
+        )
+    try:
+        ordinal = parse_rating(top.get("feedback", {}), noise)
+        return ordinal, parse_safety(top.get("safety", {}), ordinal)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}", table=exc.table, key=exc.key) from None
+
+
 @dataclass(frozen=True)
 class Setting:
-    """One arm of a study: CoSpar with ``(n, b)`` and coactive feedback or not, or random."""
+    """One arm of a study: CoSpar with ``(n, b)`` and coactive feedback or not, or random.
+
+    ``rating_quantiles``: the simulated subject rates every executed gait, category boundaries
+    at these quantiles of the objective (ordinal noise ``rating_noise`` on the normalised
+    objective).  ``config``: ``[feedback.rating]`` (needed with ratings, one label more than
+    quantiles) and ``[safety]`` tables as TOML text, e.g. ``[safety] avoid = ["very bad"]``.
+    """
 
     name: str
     n: int = 1
@@ -46,8 +94,13 @@ class Setting:
     coactive: bool = False
     strategy: Strategy = "cospar"
     coactive_weight: float = 1.0
+    rating_quantiles: tuple[float, ...] = ()
+    rating_noise: float = 0.0
+    config: str = ""
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "rating_quantiles", tuple(float(q) for q in self.rating_quantiles))
+        self._check_ratings()
         if not self.name or any(c in self.name for c in ",\n\"'"):
             raise ValueError(f"setting name must be non-empty without commas/quotes: {self.name!r}")
         if self.strategy not in ("cospar", "random"):
@@ -62,6 +115,25 @@ class Setting:
                 )
             if not self.coactive_weight > 0:
                 raise ValueError(f"setting {self.name!r}: coactive_weight must be > 0")
+
+    def _check_ratings(self) -> None:
+        where = f"setting {self.name!r}"
+        q = self.rating_quantiles
+        if q and (any(not 0 < v < 1 for v in q) or any(b <= a for a, b in itertools.pairwise(q))):
+            raise ValueError(f"{where}: rating_quantiles must increase inside (0, 1), got {q}")
+        if not (np.isfinite(self.rating_noise) and self.rating_noise >= 0):
+            raise ValueError(f"{where}: rating_noise must be >= 0, got {self.rating_noise!r}")
+        if self.rating_noise and not q:
+            raise ValueError(f"{where}: rating_noise needs rating_quantiles (the rater)")
+        ordinal, safety = parse_setting_config(self.config, 0.01, where)
+        if q and (ordinal is None or ordinal.size != len(q) + 1):
+            has = "no [feedback.rating]" if ordinal is None else f"{ordinal.size} labels"
+            raise ValueError(
+                f"{where}: {len(q)} rating_quantiles need a [feedback.rating] table with "
+                f"{len(q) + 1} labels in config, which has {has}"
+            )
+        if self.strategy == "random" and (safety.avoid or safety.unsafe_radius):
+            raise ValueError(f"{where}: random selection takes no [safety] settings")
 
     @classmethod
     def random(cls, name: str = "random") -> Setting:
@@ -94,6 +166,7 @@ class RunResult:
     seed: int
     actions: IntArray  # (T,)
     normalized: FloatArray  # (T,)
+    ratings: IntArray | None = None  # (T,) when the setting rates: 1 (worst) to K
 
 
 def _name_key(name: str) -> tuple[int, ...]:
@@ -112,16 +185,30 @@ def run_seed_sequence(
 def run_one(task: RunTask) -> RunResult:
     """Run one simulated experiment (pure: the result depends on ``task`` only)."""
     s = task.setting
-    loop_ss, user_ss = run_seed_sequence(
+    loop_ss, user_ss, rater_ss = run_seed_sequence(
         task.study_seed, s.name, task.objective_id, task.seed
-    ).spawn(2)
+    ).spawn(3)  # the first two children are those of spawn(2): runs without ratings unchanged
     user = SimulatedUser(
         task.space, task.objective, np.random.default_rng(user_ss), task.minimize, task.user_noise
     )
+    ordinal, safety = parse_setting_config(s.config, task.noise, f"setting {s.name!r}")
+    rater = None
+    if s.rating_quantiles:
+        rater = OrdinalRater(
+            task.space,
+            task.objective,
+            s.rating_quantiles,
+            np.random.default_rng(rater_ss),
+            s.rating_noise,
+            task.minimize,
+        )
+    ratings: IntArray | None = None
     if s.strategy == "random":
         actions = np.random.default_rng(loop_ss).integers(0, len(task.space), size=task.trials)
         actions = actions.astype(np.intp)
         normalized = user.normalized(actions)
+        if rater is not None:
+            ratings = np.array([rater.rate(int(a)) for a in actions], dtype=np.intp)
     else:
         loop = CoSpar(
             task.space,
@@ -131,13 +218,20 @@ def run_one(task: RunTask) -> RunResult:
             buffer=s.buffer,
             coactive_weight=s.coactive_weight,
             seed=np.random.default_rng(loop_ss),
+            ordinal=ordinal,
+            safety=safety,
         )
         coactive = (
             GradientCoactive(task.space, task.objective, task.minimize) if s.coactive else None
         )
-        result = run_simulation(loop, user, task.trials, coactive)
-        actions, normalized = result.actions, result.normalized_objective
-    return RunResult(s.name, task.objective_id, task.seed, actions, normalized)
+        try:
+            result = run_simulation(loop, user, task.trials, coactive, rater=rater)
+        except NoSafeGaitError as exc:  # a run cannot end early: its table row would be short
+            raise NoSafeGaitError(
+                f"setting {s.name!r}, objective {task.objective_id}, seed {task.seed}: {exc}"
+            ) from None
+        actions, normalized, ratings = result.actions, result.normalized_objective, result.ratings
+    return RunResult(s.name, task.objective_id, task.seed, actions, normalized, ratings)
 
 
 @dataclass(frozen=True, eq=False)

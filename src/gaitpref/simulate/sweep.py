@@ -121,6 +121,7 @@ def _table(results: list[RunResult], expected: int) -> RunTable:
     if len(results) != expected:
         raise RuntimeError(f"{expected - len(results)} of {expected} runs returned no result")
     T = results[0].actions.size
+    rated = any(r.ratings is not None for r in results)
     return RunTable(
         np.repeat([r.setting for r in results], T),
         np.repeat([r.objective_id for r in results], T),
@@ -128,6 +129,9 @@ def _table(results: list[RunResult], expected: int) -> RunTable:
         np.tile(np.arange(1, T + 1), len(results)),
         np.concatenate([r.actions for r in results]),
         np.concatenate([r.normalized for r in results]),
+        np.concatenate([np.zeros(T, np.intp) if r.ratings is None else r.ratings for r in results])
+        if rated
+        else None,
     )
 
 

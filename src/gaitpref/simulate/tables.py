@@ -1,7 +1,9 @@
 """Tidy tables of a study: one row per run and trial, and per-setting learning curves.
 
 The run table has the columns ``setting, objective, seed, trial, action, normalized_objective``
-(``trial`` counts executed actions from 1; ``action`` is a flat grid index).  A curve is the mean
+(``trial`` counts executed actions from 1; ``action`` is a flat grid index), and ``rating`` when
+a setting's simulated subject rated the executed gaits (``1`` worst to ``K``; ``0`` in the rows
+of settings that did not rate).  A curve is the mean
 of ``normalized_objective`` over a setting's runs at each trial, with its standard error
 ``sd / sqrt(runs)`` (``sd`` with ``ddof = 1``; NaN for a single run), as in the paper's Fig. 4.
 
@@ -50,13 +52,24 @@ class RunTable:
     trial: IntArray
     action: IntArray
     normalized_objective: FloatArray
+    rating: IntArray | None = None  # the rating given at each trial (0: not rated)
 
     def __post_init__(self) -> None:
-        sizes = {len(getattr(self, c)) for c in RUN_COLUMNS}
+        sizes = {len(getattr(self, c)) for c in self.columns}
         if len(sizes) != 1:
             raise ValueError(f"run table columns differ in length: {sorted(sizes)}")
         for name, dtype in zip(RUN_COLUMNS, _RUN_DTYPES, strict=True):
             object.__setattr__(self, name, _frozen(np.asarray(getattr(self, name), dtype=dtype)))
+        if self.rating is not None:
+            rating = _frozen(np.asarray(self.rating, dtype=np.intp))
+            if rating.size and rating.min() < 0:
+                raise ValueError("run table column rating holds labels 1..K, or 0 (not rated)")
+            object.__setattr__(self, "rating", rating)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The table's columns: :data:`RUN_COLUMNS`, and ``rating`` when it has ratings."""
+        return RUN_COLUMNS if self.rating is None else (*RUN_COLUMNS, "rating")
 
     def __len__(self) -> int:
         return int(self.trial.size)
@@ -83,9 +96,19 @@ class RunTable:
         out: FloatArray = values.reshape(-1, width)
         return out
 
+    def ratings(self, setting: str) -> IntArray:
+        """``runs x trials`` ratings of one setting (0: not rated), runs in table order."""
+        if self.rating is None:
+            raise KeyError("this run table has no ratings (no setting rated)")
+        width = self.matrix(setting).shape[1]
+        out: IntArray = self.rating[self.setting == setting].reshape(-1, width)
+        return out
+
     def equals(self, other: RunTable) -> bool:
         """Exact equality of every column."""
-        return all(np.array_equal(getattr(self, c), getattr(other, c)) for c in RUN_COLUMNS)
+        return self.columns == other.columns and all(
+            np.array_equal(getattr(self, c), getattr(other, c)) for c in self.columns
+        )
 
     def rows(self) -> Iterator[tuple[str, int, int, int, int, float]]:
         yield from zip(*(getattr(self, c).tolist() for c in RUN_COLUMNS), strict=True)
@@ -94,7 +117,13 @@ class RunTable:
     def concat(cls, tables: Sequence[RunTable]) -> RunTable:
         if not tables:
             raise ValueError("nothing to concatenate")
-        return cls(*(np.concatenate([getattr(t, c) for t in tables]) for c in RUN_COLUMNS))
+        rating = None
+        if any(t.rating is not None for t in tables):
+            rating = np.concatenate(
+                [np.zeros(len(t), np.intp) if t.rating is None else t.rating for t in tables]
+            )
+        s, o, sd, t, a, v = (np.concatenate([getattr(t, c) for t in tables]) for c in RUN_COLUMNS)
+        return cls(s, o, sd, t, a, v, rating)
 
 
 @dataclass(frozen=True, eq=False)
@@ -189,13 +218,14 @@ def write_table(table: RunTable, path: str | Path) -> Path:
     path = Path(path)
     if _is_parquet(path):
         pa, pq = _pyarrow()
-        pq.write_table(pa.table({c: getattr(table, c) for c in RUN_COLUMNS}), path)
+        pq.write_table(pa.table({c: getattr(table, c) for c in table.columns}), path)
         return path
+    ratings = [] if table.rating is None else table.rating.tolist()
     with _open_text(path, "w") as fh:
         w = csv.writer(fh, lineterminator="\n")
-        w.writerow(RUN_COLUMNS)
-        for s, o, sd, t, a, v in table.rows():
-            w.writerow((s, o, sd, t, a, repr(v)))
+        w.writerow(table.columns)
+        for k, (s, o, sd, t, a, v) in enumerate(table.rows()):
+            w.writerow((s, o, sd, t, a, repr(v), *ratings[k : k + 1]))
     return path
 
 
@@ -205,11 +235,19 @@ def read_table(path: str | Path) -> RunTable:
     if _is_parquet(path):
         _, pq = _pyarrow()
         t = pq.read_table(path)
-        return RunTable(*(t.column(c).to_numpy() for c in RUN_COLUMNS))
-    cols = _read_csv(path, RUN_COLUMNS)
+        rating = t.column("rating").to_numpy() if "rating" in t.column_names else None
+        s, o, sd, tr, a, v = (t.column(c).to_numpy() for c in RUN_COLUMNS)
+        return RunTable(s, o, sd, tr, a, v, rating)
+    cols = _read_csv(path, RUN_COLUMNS, optional=("rating",))
     objective, seed, trial, action = (np.array(c, dtype=np.intp) for c in cols[1:5])
     return RunTable(
-        np.array(cols[0], dtype=str), objective, seed, trial, action, np.array(cols[5], dtype=float)
+        np.array(cols[0], dtype=str),
+        objective,
+        seed,
+        trial,
+        action,
+        np.array(cols[5], dtype=float),
+        None if cols[6] is None else np.array(cols[6], dtype=np.intp),
     )
 
 
@@ -241,14 +279,19 @@ def read_curves(path: str | Path, columns: Sequence[str] = CURVE_COLUMNS) -> Cur
     )
 
 
-def _read_csv(path: Path, columns: tuple[str, ...]) -> list[list[str]]:
+def _read_csv(
+    path: Path, columns: tuple[str, ...], optional: tuple[str, ...] = ()
+) -> list[list[str]]:
+    """The named columns' cells; an ``optional`` column the file lacks comes back as None."""
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     with _open_text(path, "r") as fh:
-        return _parse_csv(fh, columns, str(path))
+        return _parse_csv(fh, columns, str(path), optional)
 
 
-def _parse_csv(fh: Any, columns: tuple[str, ...], where: str) -> list[list[str]]:
+def _parse_csv(
+    fh: Any, columns: tuple[str, ...], where: str, optional: tuple[str, ...] = ()
+) -> list[Any]:
     reader = csv.reader(fh)
     header = next(reader, None)
     if header is None:
@@ -256,11 +299,13 @@ def _parse_csv(fh: Any, columns: tuple[str, ...], where: str) -> list[list[str]]
     missing = [c for c in columns if c not in header]
     if missing:
         raise ValueError(f"{where}: missing column(s) {', '.join(missing)}; header is {header}")
-    idx = [header.index(c) for c in columns]
-    out: list[list[str]] = [[] for _ in columns]
+    wanted = [*columns, *(c for c in optional if c in header)]
+    idx = [header.index(c) for c in wanted]
+    out: list[list[str]] = [[] for _ in wanted]
     for line, row in enumerate(reader, start=2):
         if len(row) != len(header):
             raise ValueError(f"{where}:{line}: {len(row)} fields, header has {len(header)}")
         for k, i in enumerate(idx):
             out[k].append(row[i])
-    return out
+    found = dict(zip(wanted, out, strict=True))
+    return [*out[: len(columns)], *(found.get(c) for c in optional)]

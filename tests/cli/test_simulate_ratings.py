@@ -1,0 +1,123 @@
+"""``gaitpref simulate --rating-quantiles``: a simulated subject rates every executed gait."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+from gaitpref.config import load_config
+from gaitpref.data import paper_objectives
+
+runner = CliRunner()
+LABELS = '["very bad", "bad", "okay", "good"]'
+
+
+def _config(tmp_path: Path, extra: str) -> Path:
+    path = tmp_path / "rated.toml"
+    path.write_text(load_config("synthetic-2d").text + "\n" + extra, encoding="utf-8")
+    return path
+
+
+@pytest.fixture
+def objective_file(tmp_path: Path) -> Path:
+    path = tmp_path / "objective.npy"
+    np.save(path, paper_objectives()[7])
+    return path
+
+
+def _run(config: Path, objective: Path, *extra: str) -> tuple[int, str, str]:
+    args = ["simulate", str(config), "--objective", str(objective), "--trials", "16"]
+    result = runner.invoke(app, [*args, "--seed", "4", *extra])
+    return result.exit_code, result.stdout, result.stderr
+
+
+def test_json_gives_the_executed_actions_and_their_true_ratings(
+    tmp_path: Path, objective_file: Path
+) -> None:
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n")
+    code, out, err = _run(cfg, objective_file, "--rating-quantiles", "0.25,0.5,0.75", "--json")
+    assert code == 0, err
+    payload = json.loads(out)
+    for key in ("config", "seed", "seconds", "trials", "actions", "normalized_objective"):
+        assert key in payload  # every field of a run without ratings is kept
+    actions, ratings = payload["actions"], payload["ratings"]
+    assert len(actions) == len(ratings) == 16
+    # a noiseless rater gives the true quartile of the executed gait's objective
+    obj = paper_objectives()[7].reshape(-1)
+    norm = (obj - obj.min()) / (obj.max() - obj.min())
+    truth = 1 + np.searchsorted(np.quantile(norm, [0.25, 0.5, 0.75]), norm[actions], "right")
+    assert ratings == truth.tolist()
+    rerun = _run(cfg, objective_file, "--rating-quantiles", "0.25,0.5,0.75", "--json")
+    again = json.loads(rerun[1])
+    assert again["actions"] == actions and again["ratings"] == ratings
+
+
+def test_rating_noise_changes_some_ratings_and_stays_seeded(
+    tmp_path: Path, objective_file: Path
+) -> None:
+    cfg = _config(tmp_path, '[feedback.rating]\nlabels = ["bad", "good"]\n')
+    args = ("--rating-quantiles", "0.5", "--json")
+    clean = json.loads(_run(cfg, objective_file, *args)[1])
+    noisy = [json.loads(_run(cfg, objective_file, *args, "--rating-noise", "0.5")[1])]
+    noisy.append(json.loads(_run(cfg, objective_file, *args, "--rating-noise", "0.5")[1]))
+    assert noisy[0] == {**noisy[1], "seconds": noisy[0]["seconds"]}
+    obj = paper_objectives()[7].reshape(-1)
+    norm = (obj - obj.min()) / (obj.max() - obj.min())
+    median = np.quantile(norm, 0.5)
+    assert clean["ratings"] == (1 + (norm[clean["actions"]] >= median)).tolist()
+    truth = 1 + (norm[noisy[0]["actions"]] >= median)
+    assert set(noisy[0]["ratings"]) <= {1, 2}
+    assert noisy[0]["ratings"] != truth.tolist()  # noise 0.5 on a 0..1 scale flips some
+
+
+def test_no_ratings_without_the_option(tmp_path: Path, objective_file: Path) -> None:
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n")
+    code, out, _ = _run(cfg, objective_file, "--json")
+    assert code == 0 and "ratings" not in json.loads(out)
+
+
+def test_the_human_output_counts_the_ratings(tmp_path: Path, objective_file: Path) -> None:
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n")
+    code, out, err = _run(cfg, objective_file, "--rating-quantiles", "0.25,0.5,0.75")
+    assert code == 0, err
+    assert "ratings given:" in out and "'very bad'" in out and "'good'" in out
+
+
+@pytest.mark.parametrize(
+    ("extra", "options", "message"),
+    [
+        ("", ["--rating-quantiles", "0.5"], "has no [feedback.rating] table"),
+        (
+            f"[feedback.rating]\nlabels = {LABELS}\n",
+            ["--rating-quantiles", "0.3,0.6"],
+            "2 quantiles make 3 categories, but [feedback.rating]",
+        ),
+        (
+            f"[feedback.rating]\nlabels = {LABELS}\n",
+            ["--rating-quantiles", "0.5,0.25,0.75"],
+            "must increase strictly inside (0, 1)",
+        ),
+        (
+            f"[feedback.rating]\nlabels = {LABELS}\n",
+            ["--rating-quantiles", "a,b,c"],
+            "comma-separated numbers",
+        ),
+        (f"[feedback.rating]\nlabels = {LABELS}\n", ["--rating-noise", "0.1"], "needs"),
+        (
+            f"[feedback.rating]\nlabels = {LABELS}\n",
+            ["--rating-quantiles", "0.25,0.5,0.75", "--rating-noise", "-1"],
+            "--rating-noise must be a number >= 0",
+        ),
+    ],
+)
+def test_errors_name_the_problem(
+    tmp_path: Path, objective_file: Path, extra: str, options: list[str], message: str
+) -> None:
+    code, _, err = _run(_config(tmp_path, extra), objective_file, *options, "--json")
+    assert code == 2
+    assert message in " ".join(err.split())
