@@ -82,3 +82,18 @@ def test_undo_exclude_export_import(tmp_path: Path) -> None:
     assert [r["undone"] for r in rows] == ["false", "false", "false", "true", "false"]
     with import_session(f"sqlite:///{tmp_path / 'b.db'}", tmp_path / "out") as copy:
         assert np.array_equal(np.asarray(copy.posterior().mean), mean)
+
+
+def test_the_posterior_rates_with_the_fitted_thresholds(tmp_path: Path) -> None:
+    """After a refit fits the thresholds, rating probabilities and the region of avoidance use
+    them (the thresholds the fit used), not the prior's quantiles."""
+    with _session(f"sqlite:///{tmp_path / 'r.db'}") as s:
+        loop = s._state.loop
+        assert loop.hyper.thresholds is not None
+        post = s.posterior()
+        assert post.ordinal is not None
+        assert post.ordinal.thresholds == loop.hyper.thresholds
+        assert post.ordinal.categories == tuple(LABELS)
+        assert loop.gp.ordinal is not None and loop.gp.ordinal.thresholds is None  # the config's
+        probs = post.rating_probabilities([0, 7, 14])
+        assert np.allclose(probs.sum(axis=1), 1.0)

@@ -534,9 +534,20 @@ class CoSpar:
         hyper: Hyperparameters | None = None,
     ) -> Posterior:
         """The posterior given ``answers`` (default model: the current kernel, band and
-        thresholds)."""
+        thresholds).  With fitted ordinal thresholds, the posterior's rating scale carries them,
+        so its rating probabilities and the region of avoidance use what the fit used."""
         gp = self.gp if gp is None else gp
         hyper = self.hyper if hyper is None else hyper
+        posterior = self._fit_model(answers, gp, hyper)
+        scale = gp.ordinal
+        if hyper.thresholds is None or scale is None:
+            return posterior
+        fitted = Ordinal(scale.categories, hyper.thresholds, scale.noise)
+        return dataclasses.replace(posterior, ordinal=fitted)
+
+    def _fit_model(
+        self, answers: list[Answer], gp: PreferenceGP, hyper: Hyperparameters
+    ) -> Posterior:
         band = hyper.band
         single, single_likelihood = self._singles(answers, hyper.thresholds)
         if (
