@@ -27,7 +27,7 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_triangular
+from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
 from gaitpref.model.cross import CrossCovariance
@@ -123,6 +123,17 @@ class Posterior:
     @property
     def std(self) -> FloatArray:
         return np.sqrt(self.variance)
+
+    def visited_solve(self, k_v: FloatArray) -> FloatArray:
+        """``L^-T (p - (R R^T)^-1 p)`` with ``p = L^-1 k_v`` (columns of ``k_v``, ``m x c``):
+        with ``K_{x,V}`` on the left it gives the data's correction to ``cov(f_x, f_y)`` for
+        ``k_v = K_{V,y}`` (the module docstring's ``P^T P - Q^T Q`` for given columns)."""
+        assert self.fit is not None
+        L, R = self.fit.chol_prior, self.fit.chol_hessian
+        p = solve_triangular(L, k_v, lower=True, check_finite=False)
+        t = p - cho_solve((R, True), p, check_finite=False)
+        out: FloatArray = solve_triangular(L, t, lower=True, trans="T", check_finite=False)
+        return out
 
     def covariance_at(self, actions: ArrayLike) -> FloatArray:
         """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""

@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import cho_solve, solve_triangular
+from scipy.linalg import solve_triangular
 from scipy.special import entr, ndtr
 
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
@@ -125,16 +125,6 @@ def rating_information(
     return out
 
 
-def _visited_solve(posterior: Posterior, k_vr: FloatArray) -> FloatArray:
-    """``L^-T (p - (R R^T)^-1 p)`` with ``p = L^-1 k_vr``."""
-    assert posterior.fit is not None
-    L, R = posterior.fit.chol_prior, posterior.fit.chol_hessian
-    p = solve_triangular(L, k_vr, lower=True, check_finite=False)
-    t = p - cho_solve((R, True), p, check_finite=False)
-    out: FloatArray = solve_triangular(L, t, lower=True, trans="T", check_finite=False)
-    return out
-
-
 def covariance_with_reference(
     posterior: Posterior, actions: IntArray, reference: int
 ) -> FloatArray:
@@ -145,7 +135,7 @@ def covariance_with_reference(
     if posterior.fit is None:
         return out
     k_vr = posterior.cross.rows(ref).T  # m x 1
-    out -= posterior.cross.rows(actions) @ _visited_solve(posterior, k_vr)[:, 0]
+    out -= posterior.cross.rows(actions) @ posterior.visited_solve(k_vr)[:, 0]
     return out
 
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
 from gaitpref.model.posterior import Posterior
@@ -46,16 +45,6 @@ def eubo_pair(
     return out
 
 
-def _visited_solve(posterior: Posterior, k_vy: FloatArray) -> FloatArray:
-    """``L^-T (p - (R R^T)^-1 p)`` with ``p = L^-1 k_vy`` (columns of ``k_vy``)."""
-    assert posterior.fit is not None
-    L, R = posterior.fit.chol_prior, posterior.fit.chol_hessian
-    p = solve_triangular(L, k_vy, lower=True, check_finite=False)
-    t = p - cho_solve((R, True), p, check_finite=False)
-    out: FloatArray = solve_triangular(L, t, lower=True, trans="T", check_finite=False)
-    return out
-
-
 def covariance_with(posterior: Posterior, action: int) -> FloatArray:
     """``cov(f_x, f_action)`` for every action ``x`` (length ``A``)."""
     space, kernel = posterior.space, posterior.kernel
@@ -63,7 +52,7 @@ def covariance_with(posterior: Posterior, action: int) -> FloatArray:
     out = kernel.cross(space, col)[:, 0].copy()
     if posterior.fit is None:
         return out
-    w = _visited_solve(posterior, posterior.visited_cross(col).T)[:, 0]
+    w = posterior.visited_solve(posterior.visited_cross(col).T)[:, 0]
     for start in range(0, len(space), _ROW_BLOCK):
         rows = np.arange(start, min(start + _ROW_BLOCK, len(space)), dtype=np.intp)
         out[rows] -= posterior.visited_cross(rows) @ w
@@ -77,7 +66,7 @@ def covariance_among(posterior: Posterior, actions: IntArray) -> FloatArray:
     if posterior.fit is None:
         return out
     k_vc = posterior.visited_cross(actions).T
-    out = out - k_vc.T @ _visited_solve(posterior, k_vc)
+    out = out - k_vc.T @ posterior.visited_solve(k_vc)
     return 0.5 * (out + out.T)
 
 
