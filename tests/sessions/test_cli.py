@@ -108,3 +108,19 @@ def test_default_database_from_the_environment(tmp_path: Path, monkeypatch: obje
     monkeypatch.setenv("GAITPREF_DB", f"sqlite:///{tmp_path / 'env.db'}")
     _ok("session", "new", "--config", CONFIG, "--subject", "S01")
     assert (tmp_path / "env.db").is_file()
+
+
+def test_unsafe_flag_and_withdrawal_from_the_cli(tmp_path: Path, drive: Drive) -> None:
+    db = str(tmp_path / "lab.db")
+    s = Session.create(f"sqlite:///{db}", CONFIG, "S01", seed=2)
+    drive(s, 3)
+    s.close()
+    assert "give --reason" in _fails("session", "unsafe", "1", "2", "--db", db)
+    out = _ok("session", "unsafe", "1", "2", "--reason", "knee gave way", "--db", db)
+    assert "trial 2 flagged unsafe (knee gave way)" in out
+    assert "already flagged" in _fails("session", "unsafe", "1", "2", "--reason", "x", "--db", db)
+    with Session.open(f"sqlite:///{db}", 1) as again:
+        assert again.unsafe_flags()[2][1] == "knee gave way"
+    assert "withdrawn" in _ok("session", "unsafe", "1", "2", "--withdraw", "--db", db)
+    with Session.open(f"sqlite:///{db}", 1) as again:
+        assert again.unsafe_flags() == {}

@@ -285,6 +285,34 @@ def exclude(
         console.print(f"trial {trial} excluded ({reason}); the record stays")
 
 
+@session_app.command("unsafe")
+def unsafe(
+    session_id: IdArgument,
+    trial: Annotated[int, typer.Argument(metavar="TRIAL", help="The trial number.")],
+    reason: Annotated[
+        str, typer.Option(help="Why it was unsafe (required to flag; shown in exports).")
+    ] = "",
+    withdraw: Annotated[
+        bool, typer.Option("--withdraw", help="Take the trial's unsafe flag back.")
+    ] = False,
+    db: DbOption = None,
+) -> None:
+    """Flag a trial unsafe: its gait, and those within [safety].unsafe_radius, are never
+    proposed again (--withdraw takes the flag back)."""
+    with _opened(db, session_id) as session:
+        if withdraw:
+            guard(lambda: session.withdraw_unsafe(trial))
+            console.print(f"trial {trial}: unsafe flag withdrawn")
+            return
+        if not reason.strip():
+            fail("give --reason: what made the trial unsafe")
+        guard(lambda: session.flag_unsafe(trial, reason))
+        console.print(
+            f"trial {trial} flagged unsafe ({reason}); its gait and its neighbours will not be "
+            "proposed again"
+        )
+
+
 @session_app.command("note")
 def note(
     session_id: IdArgument,
