@@ -183,6 +183,26 @@ class _Entries:
     bounds: list[tuple[float, float]]
 
 
+def prior_bounds(
+    space: Space, priors: list[tuple[float, float] | None]
+) -> list[tuple[float, float]]:
+    """Bounds of each entry of ``theta`` from its prior ``(centre, sd)`` (None: unbounded):
+    3 sd either side, and a log lengthscale (the first ``d`` entries) never below half its
+    feature's grid step."""
+    bounds = []
+    for k, p in enumerate(priors):
+        if p is None:
+            bounds.append((-np.inf, np.inf))
+            continue
+        lo, hi = p[0] - 3 * p[1], p[0] + 3 * p[1]
+        if k < space.ndim and len(space.features[k]) > 1:
+            step = float(np.min(np.diff(space.features[k].array)))
+            lo = max(lo, float(np.log(0.5 * step)))
+            hi = max(hi, lo)
+        bounds.append((float(lo), float(hi)))
+    return bounds
+
+
 def _entries(
     space: Space, prior: HyperPrior, start: Hyperparameters, singles: SingleData | None
 ) -> _Entries:
@@ -196,17 +216,7 @@ def _entries(
         else:
             priors += prior.threshold_priors(centre)
     free = np.array([p is not None and p[1] > 0 for p in priors])
-    bounds = []
-    for k, p in enumerate(priors):
-        if p is None:
-            bounds.append((-np.inf, np.inf))
-            continue
-        lo, hi = p[0] - 3 * p[1], p[0] + 3 * p[1]
-        if k < space.ndim and len(space.features[k]) > 1:
-            step = float(np.min(np.diff(space.features[k].array)))
-            lo = max(lo, float(np.log(0.5 * step)))
-            hi = max(hi, lo)
-        bounds.append((float(lo), float(hi)))
+    bounds = prior_bounds(space, priors)
     return _Entries(
         np.array([p[0] if p else 0.0 for p in priors]),
         np.array([p[1] if p else 1.0 for p in priors]),

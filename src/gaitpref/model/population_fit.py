@@ -22,7 +22,7 @@ from scipy.optimize import minimize
 
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
-from gaitpref.model.hyperfit import HyperPrior
+from gaitpref.model.hyperfit import HyperPrior, prior_bounds
 from gaitpref.model.population import check_rho, logit, population_evidence
 from gaitpref.model.singles import SingleData
 from gaitpref.model.threads import one_blas_thread
@@ -70,16 +70,7 @@ def _priors(
     """Centre, sd and bounds of every entry of ``theta`` (sd 0: held)."""
     entries = [None if p is None else (float(np.log(p.median)), p.sd) for p in prior.all()]
     entries.append((logit(rho_prior.median), rho_prior.sd))
-    bounds = []
-    for k, p in enumerate(entries):
-        if p is None:
-            bounds.append((-np.inf, np.inf))
-            continue
-        lo, hi = p[0] - 3 * p[1], p[0] + 3 * p[1]
-        if k < space.ndim and len(space.features[k]) > 1:
-            lo = max(lo, float(np.log(0.5 * np.min(np.diff(space.features[k].array)))))
-            hi = max(hi, lo)
-        bounds.append((lo, hi))
+    bounds = prior_bounds(space, entries)
     centre = np.array([p[0] if p else 0.0 for p in entries])
     sd = np.array([p[1] if p else 0.0 for p in entries])
     return centre, sd, bounds
