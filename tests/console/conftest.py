@@ -1,4 +1,5 @@
-"""Fixtures for console tests: an application over a temporary SQLite database."""
+"""Fixtures for console tests: an application over a temporary SQLite database, and for the
+browser tests a Chromium (module-scoped) and a console served on loopback."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from gaitpref.console import create_app
+from tests.console.live import HOW_TO_ENABLE, chromium_path, launch_chromium, serve
 
 
 @pytest.fixture
@@ -22,6 +24,26 @@ def db_url(tmp_path: Path) -> str:
 def client(db_url: str) -> Iterator[TestClient]:
     with TestClient(create_app(db_url)) as c:
         yield c
+
+
+@pytest.fixture(scope="module")
+def chromium() -> Iterator[Any]:
+    """Debian's Chromium through Playwright (skips, or fails under CI=true, without it)."""
+    if chromium_path() is None:
+        pytest.skip(f"no Chromium on this machine: {HOW_TO_ENABLE}")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = launch_chromium(p)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def live(tmp_path: Path) -> Iterator[str]:
+    """A console on loopback over its own SQLite file; yields its base URL."""
+    with serve(create_app(f"sqlite:///{tmp_path / 'live.db'}")) as url:
+        yield url
 
 
 def new_session(client: TestClient, config: str = "exo-1d-step-length", **extra: Any) -> int:

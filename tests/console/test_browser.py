@@ -7,35 +7,13 @@ from __future__ import annotations
 import csv
 import io
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 
-from gaitpref.console import create_app
-from tests.console.live import HOW_TO_ENABLE, chromium_path, launch_chromium, serve
-
 pytestmark = pytest.mark.browser
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    if chromium_path() is None:
-        pytest.skip(f"no Chromium on this machine: {HOW_TO_ENABLE}")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        yield browser
-        browser.close()
-
-
-@pytest.fixture
-def live(tmp_path: Path) -> Iterator[str]:
-    with serve(create_app(f"sqlite:///{tmp_path / 'browser.db'}")) as url:
-        yield url
 
 
 def saved(page: Any, trial: int) -> None:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import csv
 import io
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -15,31 +14,11 @@ import httpx
 import pytest
 
 from gaitpref.config import parse_config
-from gaitpref.console import create_app
 from gaitpref.loop.safety import near
-from tests.console.live import HOW_TO_ENABLE, chromium_path, launch_chromium, serve
 from tests.console.test_first_hour import LAYOUT_PROBLEMS
 from tests.console.test_ratings_safety import rated_config
 
 pytestmark = pytest.mark.browser
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    if chromium_path() is None:
-        pytest.skip(f"no Chromium on this machine: {HOW_TO_ENABLE}")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        yield browser
-        browser.close()
-
-
-@pytest.fixture
-def live(tmp_path: Path) -> Iterator[str]:
-    with serve(create_app(f"sqlite:///{tmp_path / 'ratings.db'}")) as url:
-        yield url
 
 
 def review_and_confirm(page: Any, flash: str) -> None:

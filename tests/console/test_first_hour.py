@@ -4,7 +4,6 @@ at 1024 px (a landscape tablet)."""
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +13,7 @@ from fastapi.testclient import TestClient
 
 from gaitpref.console import create_app
 from tests.console.htmlforms import forms_of
-from tests.console.live import HOW_TO_ENABLE, chromium_path, launch_chromium, serve
+from tests.console.live import serve
 
 
 def test_the_new_session_form_preselects_no_config(client: TestClient) -> None:
@@ -63,18 +62,6 @@ LAYOUT_PROBLEMS = """() => {
   }
   return problems;
 }"""
-
-
-@pytest.fixture
-def chromium() -> Iterator[Any]:
-    if chromium_path() is None:
-        pytest.skip(f"no Chromium on this machine: {HOW_TO_ENABLE}")
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        browser = launch_chromium(p)
-        yield browser
-        browser.close()
 
 
 @pytest.mark.browser
