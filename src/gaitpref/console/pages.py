@@ -194,7 +194,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             space = session.config.space
             said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
             return views.answer_summary(
-                space, pending, comparisons, suggestions, session.gait_id, said
+                space, pending, comparisons, suggestions, session.gait_name, said
             )
 
         lines = await run_in_threadpool(service.read, session_id, summary)
@@ -310,7 +310,7 @@ def _validation_page(request: Request, session: Session) -> Response:
         []
         if plan is None
         else [
-            (g.label, views.gait_view(space, g.action, gait_id=session.gait_id(g.action)))
+            (g.label, views.gait_view(space, g.action, gait_id=session.gait_name(g.action)))
             for g in plan.gaits
         ]
     )
@@ -318,7 +318,7 @@ def _validation_page(request: Request, session: Session) -> Response:
         (
             r,
             {
-                lbl: views.gait_view(space, a, gait_id=session.gait_id(a))
+                lbl: views.gait_view(space, a, gait_id=session.gait_name(a))
                 for lbl, a in r.actions.items()
             },
         )

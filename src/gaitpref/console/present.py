@@ -27,7 +27,7 @@ def gait_out(session: Session, action: int, trial: int | None = None) -> GaitOut
     values = space.values_of(action)
     return GaitOut(
         index=int(action),
-        gait_id=session.gait_id(action) or f"G{int(action)}",
+        gait_id=session.gait_name(action),
         values={k: float(v) for k, v in values.items()},
         units={f.name: f.unit for f in space.features},
         trial=trial,
@@ -53,8 +53,14 @@ def query_out(session: Session, query: SessionQuery) -> QueryOut:
         gait_out(session, a, t) for a, t in zip(query.buffer, query.buffer_trials, strict=True)
     ]
     groups = views.comparison_groups(
-        [views.gait_view(session.config.space, g.index, trial=g.trial) for g in actions],
-        [views.gait_view(session.config.space, g.index, trial=g.trial) for g in buffer],
+        [
+            views.gait_view(session.config.space, g.index, trial=g.trial, gait_id=g.gait_id)
+            for g in actions
+        ],
+        [
+            views.gait_view(session.config.space, g.index, trial=g.trial, gait_id=g.gait_id)
+            for g in buffer
+        ],
     )
     return QueryOut(
         session_id=session.id,

@@ -266,7 +266,7 @@ def pending_of(session: Session) -> Pending:
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:
-    gaits = ", ".join(session.gait_id(a) or f"G{a}" for a in query.actions)
+    gaits = ", ".join(session.gait_name(a) for a in query.actions)
     return f"device acknowledged query {query.id} (gaits {gaits})"
 
 

@@ -61,7 +61,7 @@ def chronology(session: Session) -> list[ChronoRow]:
         ChronoRow(
             t.number,
             t.query,
-            views.gait_view(space, t.action, trial=t.number, gait_id=session.gait_id(t.action)),
+            views.gait_view(space, t.action, trial=t.number, gait_id=session.gait_name(t.action)),
             tuple(compared.get(t.number, ())),
             tuple(suggested.get(t.number, ())),
             t.excluded,
@@ -81,11 +81,11 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     buffer: list[views.GaitView] = []
     if query is not None:
         actions = [
-            views.gait_view(space, a, trial=t, gait_id=session.gait_id(a))
+            views.gait_view(space, a, trial=t, gait_id=session.gait_name(a))
             for a, t in zip(query.actions, query.trials, strict=True)
         ]
         buffer = [
-            views.gait_view(space, a, trial=t, gait_id=session.gait_id(a))
+            views.gait_view(space, a, trial=t, gait_id=session.gait_name(a))
             for a, t in zip(query.buffer, query.buffer_trials, strict=True)
         ]
     post = session.posterior()
@@ -110,7 +110,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "multi": len(actions) > 1,
         "chronology": chronology(session),
         "notes": list(reversed(session.notes()))[:20],
-        "best": views.gait_view(space, best, gait_id=session.gait_id(best)),
+        "best": views.gait_view(space, best, gait_id=session.gait_name(best)),
         "best_mean": float(mean[best]),
         "learned": bool(mean.max() > mean.min()),
         "trials_done": len(trials),
