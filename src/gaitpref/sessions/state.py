@@ -27,7 +27,14 @@ import numpy as np
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError, SessionStateError
-from gaitpref.feedback import Comparison, Preference, Suggestion, kind_of
+from gaitpref.feedback import (
+    Comparison,
+    ComparisonAnswered,
+    Preference,
+    Suggestion,
+    SuggestionGiven,
+    kind_of,
+)
 from gaitpref.loop.cospar import Answer, CoSpar, QueryError
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import (
@@ -347,7 +354,7 @@ class SessionState:
             if r.kind == log.TRIAL:
                 told.trial_rows.append(len(self.trials_log))
                 self.trials_log.append(Trial(p["trial"], query.id, p["action"], r.seq))
-            elif r.kind == "comparison_answered":
+            elif r.kind == ComparisonAnswered.kind:
                 told.comparison_rows.append(len(self.comparisons_log))
                 self.comparisons_log.append(
                     ComparisonRecord(
@@ -360,7 +367,7 @@ class SessionState:
                         p["second_trial"],
                     )
                 )
-            elif r.kind == "suggestion_given":
+            elif r.kind == SuggestionGiven.kind:
                 told.suggestion_rows.append(len(self.suggestions_log))
                 self.suggestions_log.append(
                     SuggestionRecord(
