@@ -343,7 +343,8 @@ def database_status(url: str) -> str:
     try:
         store = SQLStorage(url, create=False)
     except StorageError as exc:
-        return f"{where}: {exc}"
+        text = str(exc)  # most name the database already
+        return text if text.startswith(where) else f"{where}: {text}"
     try:
         sessions, subjects = len(store.list_sessions()), len(store.list_subjects())
     finally:
