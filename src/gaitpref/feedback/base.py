@@ -118,7 +118,8 @@ R = TypeVar("R", bound=Hashable)
 
 @dataclass(frozen=True)
 class ExportTable:
-    """Where a kind's records go in a session export: a table name and its columns."""
+    """Where a kind's records go in a session export: a table name and the payload fields it
+    shows, in order (empty: every field)."""
 
     name: str
     columns: tuple[str, ...] = field(default=())
@@ -168,8 +169,11 @@ class FeedbackKind(ABC, Generic[R]):
         """The record a stored payload holds (replay tells it to the loop again)."""
 
     def export_row(self, payload: EventPayload) -> dict[str, Any]:
-        """One row of the export table; default: the payload's fields."""
-        return payload.to_json()
+        """One row of the export table; default: the payload's fields named by
+        ``export.columns`` (every field when it names none)."""
+        data = payload.to_json()
+        columns = self.export.columns
+        return {c: data[c] for c in columns} if columns else data
 
     @property
     def event_kind(self) -> str:
