@@ -16,7 +16,7 @@ family                     raised when
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
                            export cannot be read
 :class:`StorageError`      a database cannot be read or written; nothing was written
-:class:`GaitError`         a gait library or a gait simulation failed
+:class:`GaitError`         a gait library, a gait generator or a gait simulation failed
 =========================  ====================================================================
 """
 
@@ -94,6 +94,10 @@ class GaitLibraryError(GaitError, ValueError):
     """A gait library file that cannot be read, or a library that does not fit its config."""
 
 
+class GaitGeneratorError(GaitError, ValueError):
+    """A gait generator that is unknown or cannot make gaits over the given features."""
+
+
 class SimulationError(GaitError, RuntimeError):
     """A gait simulation that cannot go on (a fall, a non-finite state, no impact)."""
 
@@ -104,6 +108,7 @@ __all__ = [
     "ExportError",
     "FeedbackError",
     "GaitError",
+    "GaitGeneratorError",
     "GaitLibraryError",
     "GaitprefError",
     "ModelError",

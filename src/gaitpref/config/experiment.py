@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from gaitpref.config.generator import GeneratorSpec
 from gaitpref.config.schema import DEFAULTS_VERSION, EARLIER_DEFAULTS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.learning import Learning
@@ -46,6 +47,7 @@ class ExperimentConfig:
     sampler: str = "auto"
     library: GaitLibrary | None = field(default=None, repr=False, compare=False)
     library_path: str | None = None
+    generator: GeneratorSpec | None = None  # [gaits] generator: gaits made on demand
     strategy_settings: dict[str, Any] = field(default_factory=dict)
     defaulted: frozenset[str] = field(default=frozenset(), repr=False, compare=False)
     defaults_version: str = DEFAULTS_VERSION

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from gaitpref.config.schema import FEATURE, GAITS, MAX_FEATURES, check_table
+from gaitpref.config.schema import FEATURE, MAX_FEATURES, check_table
 from gaitpref.config.specs import fail
 from gaitpref.space import Feature, Space
 
@@ -20,9 +20,8 @@ if TYPE_CHECKING:
     from gaitpref.gaits.library import GaitLibrary
 
 
-def parse_gaits(raw: object, base_dir: str | Path | None) -> tuple[GaitLibrary, str]:
+def parse_gaits(gaits: dict[str, Any], base_dir: str | Path | None) -> tuple[GaitLibrary, str]:
     """The gait library ``[gaits].library`` names (relative to ``base_dir``) and its path."""
-    gaits, _ = check_table(raw, "gaits", GAITS)
     name = gaits["library"]
     if not name:
         fail("gaits", "library", "must be the path of a gait library file")

@@ -45,6 +45,14 @@ features then come from the library's axes and every action has a gait id:
     [gaits]
     library = "gaits.json"         # relative to the config file's folder
 
+Or a config keeps its ``[space]`` and names a gait generator: each proposed point gets its gait
+made when first proposed (``generator.py``; ``docs/gaits.md``, "Gaits on demand"):
+
+    [gaits]
+    generator = "compass-hzd"      # the HZD optimisation of gaitpref.gaits
+    speed = 0.2                    # its fixed settings (m/s; or a step_duration feature)
+    avoid_radius = 0.05            # optional: taken out around a gait that cannot be made
+
 Every key, its type, default and allowed values are declared once in ``schema.py``
 (:data:`~gaitpref.config.schema.DEFAULTS` is the table of defaults); every error is a
 :class:`ConfigError` that reads ``[table].key: what is wrong (allowed: ...)`` and carries
@@ -70,6 +78,7 @@ from typing import Any
 
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.feedback import parse_rating, parse_safety
+from gaitpref.config.generator import parse_generator
 from gaitpref.config.grid import parse_gaits, parse_space
 from gaitpref.config.model import (
     check_model,
@@ -82,6 +91,7 @@ from gaitpref.config.schema import (
     COSPAR,
     DEFAULTS,
     DEFAULTS_VERSION,
+    GAITS,
     MAX_ACTIONS,
     STRATEGY_TABLES,
     TOP,
@@ -145,11 +155,24 @@ def parse_config(
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"config is not valid TOML: {exc}") from None
     top, _ = check_table(raw, "", TOP)
-    library, library_path = None, None
-    if top["gaits"] is not None:
+    library, library_path, generator = None, None, None
+    gaits, gaits_defaulted = (
+        check_table(top["gaits"], "gaits", GAITS) if top["gaits"] is not None else ({}, set())
+    )
+    if gaits and gaits["generator"] is not None:
+        if gaits["library"] is not None:
+            fail("gaits", "generator", "give either library or generator, not both")
+        space = parse_space(top["space"], max_actions)
+        generator = parse_generator(gaits, space)
+    elif gaits:
+        if gaits["library"] is None:
+            fail("gaits", None, 'needs library = "FILE" or generator = "NAME"')
+        given = [k for k in ("speed", "avoid_radius") if k not in gaits_defaulted]
+        if given:
+            fail("gaits", given[0], "is a gait generator's setting; a library takes none")
         if top["space"] is not None:
             fail("gaits", None, "give either [space] or [gaits].library (its axes are the space)")
-        library, library_path = parse_gaits(top["gaits"], base_dir)
+        library, library_path = parse_gaits(gaits, base_dir)
         space = library.space()
         if len(space) > max_actions:
             fail("gaits", "library", f"has {len(space)} gaits; at most {max_actions} are allowed")
@@ -178,6 +201,7 @@ def parse_config(
         sampler=check_sampler(model, len(space)),
         library=library,
         library_path=library_path,
+        generator=generator,
         strategy_settings=settings,
         ordinal=ordinal,
         safety=safety,

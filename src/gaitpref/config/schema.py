@@ -84,7 +84,7 @@ TOP: Final[dict[str, Key]] = {
     "name": Key(Text(MAX_NAME), None),  # None: the file's name
     "description": Key(Text(MAX_TEXT), ""),
     "space": Key(Table("one table per feature"), None),
-    "gaits": Key(Table('library = "FILE"'), None),
+    "gaits": Key(Table('library = "FILE" or generator = "NAME"'), None),
     "model": Key(Table("the GP model")),
     "cospar": Key(Table("the loop's settings"), {}),
     "feedback": Key(Table("[feedback.rating]: ordinal ratings"), {}),
@@ -119,7 +119,12 @@ FEATURE: Final[dict[str, Key]] = {
     "coactive": Key(Coactive(), (0.1, 0.2)),
     "words": Key(Words(), ("more", "less")),
 }
-GAITS: Final[dict[str, Key]] = {"library": Key(Text(4096))}
+GAITS: Final[dict[str, Key]] = {
+    "library": Key(Text(4096), None),  # a gait library file, or:
+    "generator": Key(Text(MAX_NAME), None),  # a gait generator (gaits made on demand)
+    "speed": Key(Number(0.0, 100.0, open_lo=True), None),  # the generator's fixed speed, m/s
+    "avoid_radius": Key(Number(0.0, 1.0), 0.05),  # around an infeasible proposal, of ranges
+}
 MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),
     "signal_variance": Key(SCALE),

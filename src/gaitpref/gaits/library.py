@@ -15,7 +15,7 @@ Notation: ``A`` grid points, ``shape`` the per-axis value counts, ``prod(shape) 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -66,6 +66,17 @@ def check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | N
             raise GaitLibraryError(f"axis {name}: values must be positive and finite, got {values}")
         if np.any(np.diff(arr) <= 0):
             raise GaitLibraryError(f"axis {name}: values must be strictly increasing")
+
+
+def gait_id_of(values: Mapping[str, float], speed: float | None) -> str:
+    """The id of the gait with these axis values (in axis order), e.g. ``L0.130-T0.950``, or
+    ``L0.130-V0.200`` at a fixed ``speed``; a library and gaits made on demand share it."""
+    parts = []
+    for name, value in values.items():
+        parts.append(f"{AXES[name].letter}{value:.3f}")
+        if name == "step_length" and speed is not None:
+            parts.append(f"V{speed:.3f}")
+    return "-".join(parts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,12 +201,7 @@ class GaitLibrary:
     def gait_id(self, index: int) -> str:
         """A stable short id from the grid values, e.g. ``L0.130-T0.950`` (``-V0.200`` at a fixed
         speed, ``-W0.270`` with a width label)."""
-        parts = []
-        for name, value in self.parameters(index).items():
-            parts.append(f"{AXES[name].letter}{value:.3f}")
-            if name == "step_length" and self.speed is not None:
-                parts.append(f"V{self.speed:.3f}")
-        return "-".join(parts)
+        return gait_id_of(self.parameters(index), self.speed)
 
     def index_of_id(self, gait_id: str) -> int:
         for i in range(len(self)):

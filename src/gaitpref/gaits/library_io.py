@@ -58,24 +58,26 @@ def _num(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def gait_entry(g: Gait) -> dict[str, Any]:
+    """One gait's fields as stored in a library (and in a gait cache): ``degree`` to
+    ``max_friction_ratio``, without its grid index, id and parameters."""
+    entry: dict[str, Any] = {
+        "degree": g.degree,
+        "alpha": [[_num(v) for v in row] for row in g.alpha],
+    }
+    entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[:3]})
+    entry["orbit_state"] = [_num(v) for v in g.orbit_state]
+    entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[3:]})
+    entry.update({"feasible": g.feasible, "solver_status": g.status, "solver_message": g.message})
+    return entry
+
+
 def to_document(lib: GaitLibrary) -> dict[str, Any]:
     """The library as a JSON-ready dictionary (schema version 1)."""
     gaits = []
     for i, g in enumerate(lib.gaits):
-        entry: dict[str, Any] = {
-            "index": i,
-            "id": lib.gait_id(i),
-            "parameters": lib.parameters(i),
-            "degree": g.degree,
-            "alpha": [[_num(v) for v in row] for row in g.alpha],
-        }
-        entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[:3]})
-        entry["orbit_state"] = [_num(v) for v in g.orbit_state]
-        entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[3:]})
-        entry.update(
-            {"feasible": g.feasible, "solver_status": g.status, "solver_message": g.message}
-        )
-        gaits.append(entry)
+        entry = {"index": i, "id": lib.gait_id(i), "parameters": lib.parameters(i)}
+        gaits.append({**entry, **gait_entry(g)})
     import gaitpref  # late: gaitpref/__init__ may still be importing this package
 
     formulation: dict[str, Any] = dict(lib.settings.to_dict())
@@ -108,7 +110,7 @@ def save_library(lib: GaitLibrary, path: str | Path) -> None:
     os.replace(tmp, target)
 
 
-class _Reader:
+class Reader:
     """Typed access to a parsed document; every error names the source and the field."""
 
     def __init__(self, source: str) -> None:
@@ -144,7 +146,7 @@ def from_document(
     data: Any, source: str = "<document>", allow_infeasible: bool = False
 ) -> GaitLibrary:
     """Validate a parsed document and build the :class:`GaitLibrary`."""
-    r = _Reader(source)
+    r = Reader(source)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise r.fail("format", f"not a gait library (expected format {FORMAT!r})")
     version = data.get("schema_version")
@@ -202,16 +204,24 @@ def from_document(
     return lib
 
 
-def _gait(r: _Reader, entry: Any, k: int, degree: int) -> Gait:
+def _gait(r: Reader, entry: Any, k: int, degree: int) -> Gait:
     where = f"gaits[{k}]."
     if not isinstance(entry, dict):
         raise r.fail(f"gaits[{k}]", "expected an object")
     if r.get(entry, "index", where) != k:
         raise r.fail(f"{where}index", f"expected {k} (gaits are stored in grid order)")
-    if r.get(entry, "degree", where) != degree:
-        raise r.fail(f"{where}degree", f"expected {degree} (the formulation's degree)")
     if not isinstance(r.get(entry, "parameters", where), dict):
         raise r.fail(f"{where}parameters", "expected an object")
+    length = r.number(r.get(entry, "parameters", where), "step_length", f"{where}parameters.")
+    return read_gait_entry(r, entry, where, degree, length)
+
+
+def read_gait_entry(r: Reader, entry: Any, where: str, degree: int, step_length: float) -> Gait:
+    """The :class:`Gait` stored as :func:`gait_entry` wrote it (every field checked)."""
+    if not isinstance(entry, dict):
+        raise r.fail(where.rstrip("."), "expected an object")
+    if r.get(entry, "degree", where) != degree:
+        raise r.fail(f"{where}degree", f"expected {degree} (the formulation's degree)")
     feasible = r.get(entry, "feasible", where)
     status = r.get(entry, "solver_status", where)
     message = r.get(entry, "solver_message", where)
@@ -224,9 +234,7 @@ def _gait(r: _Reader, entry: Any, k: int, degree: int) -> Gait:
                      "solver_message a string")  # fmt: skip
     nums = {key: r.number(entry, key, where, nullable=True) for key in _NUMBERS}
     return Gait(
-        step_length=r.number(
-            r.get(entry, "parameters", where), "step_length", f"{where}parameters."
-        ),
+        step_length=step_length,
         alpha=r.matrix(r.get(entry, "alpha", where), (1, degree + 1), f"{where}alpha"),
         orbit_state=r.matrix(r.get(entry, "orbit_state", where), (4,), f"{where}orbit_state"),
         feasible=feasible,

@@ -25,7 +25,7 @@ does for a trial spoiled by a device fault or a stumble.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Collection, Hashable, Iterable, Mapping
+from collections.abc import Callable, Collection, Hashable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -168,6 +168,8 @@ class CoSpar:
                 raise ValueError("a region of avoidance needs a rating scale (ordinal=...)")
             self.safety.threshold(ordinal, kernel.variance)  # checks avoid < categories
         self.unsafe: set[int] = set()  # actions flagged unsafe (flag_unsafe)
+        self.avoided: dict[int, float] = {}  # action -> radius never proposed again (avoid)
+        self._avoided_mask: NDArray[np.bool_] | None = None
         self.posterior: Posterior = self.gp.prior()
         self.answers: list[Answer] = []
         self.pending: Query | None = None
@@ -217,7 +219,10 @@ class CoSpar:
 
     def allowed(self) -> NDArray[np.bool_] | None:
         """The actions the next query may propose (None: all; ``loop/safety.py``)."""
-        return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
+        mask = self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
+        if self._avoided_mask is None:
+            return mask
+        return ~self._avoided_mask if mask is None else mask & ~self._avoided_mask
 
     def flag_unsafe(self, action: int) -> bool:
         """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``.
@@ -227,10 +232,29 @@ class CoSpar:
         whether it was.
         """
         self.unsafe.add(self.space.check_index(action))
+        return self._withdraw_if(lambda: near(self.space, self.unsafe, self.safety.unsafe_radius))
+
+    def avoid(self, action: int, radius: float) -> bool:
+        """Never propose ``action`` again, nor the actions within ``radius`` of it (features
+        scaled to ``[0, 1]``, as for unsafe flags): e.g. a gait that cannot be made.  Unlike an
+        unsafe flag it is never taken back.  A pending query that proposes such an action is
+        withdrawn as by :meth:`flag_unsafe`; returns whether it was."""
+        if not (np.isfinite(radius) and 0 <= radius <= 1):
+            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        index = self.space.check_index(action)
+        self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
+        banned = near(self.space, [index], self.avoided[index])
+        if self._avoided_mask is not None:
+            banned |= self._avoided_mask
+        self._avoided_mask = banned
+        return self._withdraw_if(lambda: banned)
+
+    def _withdraw_if(self, banned_now: Callable[[], NDArray[np.bool_]]) -> bool:
+        """Withdraw the pending query if it proposes an action ``banned_now()`` bans."""
         pending = self.pending
         if pending is None:
             return False
-        banned = near(self.space, self.unsafe, self.safety.unsafe_radius)
+        banned = banned_now()
         if not any(banned[a] for a in pending.actions):
             return False
         if self._rng_before_pending is not None:
@@ -262,7 +286,8 @@ class CoSpar:
         if allowed is not None and not allowed.any():
             raise NoSafeGaitError(
                 "no gait may be proposed: every gait is in the region of avoidance or near a gait "
-                f"flagged unsafe ({len(self.unsafe)} flagged); nothing was proposed"
+                f"flagged unsafe ({len(self.unsafe)} flagged) or avoided ({len(self.avoided)}, "
+                "e.g. gaits that cannot be made); nothing was proposed"
             )
         self._rng_before_pending = self.rng.bit_generator.state
         context = AskContext(

@@ -5,7 +5,9 @@ A session's log is a sequence of events (``storage/base.py``).  Each answer is o
 kind's own payload class, ``gaitpref.feedback``: ``comparison_answered``, ``suggestion_given``,
 ...) and, when the answer triggered a hyperparameter fit, its ``hyperparameters_refit`` event,
 all carrying the query's id.  A query's ``id`` is the sequence number of its ``query_issued``
-event: unique in the session and never reused.
+event: unique in the session and never reused.  With gaits made on demand, a query is a batch too:
+``gait_made`` for each gait new to the session and ``gait_infeasible`` for each proposal whose gait
+cannot be made (the loop proposes again without it), then the ``query_issued``.
 
 Payloads are validated when written (:func:`new_event`) and when read (:func:`read_payload`,
 which also checks the stored schema version).  Replay compares each re-derived event with the
@@ -85,6 +87,35 @@ class TrialExecuted(EventPayload):
     action: int
     values: Annotated[dict[str, float], Recorded]
     gait_id: Annotated[str | None, Recorded] = None
+
+
+class GaitMade(EventPayload):
+    """``gait_made``: the gait of a proposed action, made on demand (or found in the gait cache)
+    the first time the session proposed it (``gaits/on_demand.py``); logged with its query.
+    ``key`` is the gait's content address in the cache, ``warm_start`` the key it started from."""
+
+    kind: ClassVar[str] = "gait_made"
+    action: int
+    gait_id: str
+    key: str
+    values: Annotated[dict[str, float], Recorded]
+    cot: Annotated[float, Recorded]
+    warm_start: Annotated[str | None, Recorded] = None
+
+
+class GaitInfeasible(EventPayload):
+    """``gait_infeasible``: a proposed action whose gait cannot be made.  It is never shown as a
+    trial; it and the actions within ``radius`` of it (``[gaits].avoid_radius``) are never
+    proposed again, and the next proposal follows in the same batch (``reason``: the solver's)."""
+
+    kind: ClassVar[str] = "gait_infeasible"
+    action: int
+    gait_id: str
+    key: str
+    radius: float
+    values: Annotated[dict[str, float], Recorded]
+    reason: Annotated[str, Recorded]
+    warm_start: Annotated[str | None, Recorded] = None
 
 
 class HyperValues(BaseModel):
@@ -212,6 +243,8 @@ class Finished(EventPayload):
 SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     Created,
     QueryIssued,
+    GaitMade,
+    GaitInfeasible,
     TrialExecuted,
     HyperparametersRefit,
     Undo,
@@ -229,6 +262,8 @@ _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
 
 CREATED = Created.kind
 QUERY = QueryIssued.kind
+GAIT_MADE = GaitMade.kind
+GAIT_INFEASIBLE = GaitInfeasible.kind
 TRIAL = TrialExecuted.kind
 REFIT = HyperparametersRefit.kind
 UNDO = Undo.kind
@@ -255,6 +290,11 @@ def payload_class(kind: str) -> type[EventPayload] | None:
 def is_feedback(kind: str) -> bool:
     """Whether events of ``kind`` store a feedback record."""
     return kind_for_event(kind) is not None
+
+
+def is_query_part(kind: str) -> bool:
+    """Whether events of ``kind`` are written in a query's batch, before its ``query_issued``."""
+    return kind in (GAIT_MADE, GAIT_INFEASIBLE)
 
 
 def is_answer_part(kind: str) -> bool:
@@ -328,6 +368,8 @@ __all__ = [
     "BlindGaitShown",
     "Created",
     "Finished",
+    "GaitInfeasible",
+    "GaitMade",
     "HyperValues",
     "HyperparametersRefit",
     "Note",
@@ -346,6 +388,7 @@ __all__ = [
     "describe_mismatch",
     "is_answer_part",
     "is_feedback",
+    "is_query_part",
     "new_event",
     "payload_class",
     "read_payload",

@@ -37,6 +37,16 @@ class SessionQuery:
 
 
 @dataclass(frozen=True)
+class InfeasibleGait:
+    """A proposal whose gait could not be made (event ``seq``): never shown as a trial."""
+
+    seq: int
+    action: int
+    gait_id: str
+    reason: str
+
+
+@dataclass(frozen=True)
 class Trial:
     """An executed trial.  ``undone``: its answer was taken back (the number is reused)."""
 

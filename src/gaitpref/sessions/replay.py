@@ -6,7 +6,7 @@ the session's seed, the answer's terms, the exclusion, the validation order) and
 log on the payload class's checked fields.  The first difference raises
 :class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's events (one
 transaction: trials, one event per feedback record of any registered kind, the refit) are
-replayed together.
+replayed together, and so are a query's (the gaits made on demand for it, then the query).
 """
 
 from __future__ import annotations
@@ -42,6 +42,15 @@ def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
             _replay_answer(state, records[i:j])
             i = j
             continue
+        if log.is_query_part(r.kind) or r.kind == log.QUERY:
+            j = i
+            while j < len(records) and log.is_query_part(records[j].kind):
+                j += 1
+                if j < len(records):
+                    log.read_payload(records[j])
+            _replay_query(state, records[i : j + 1])
+            i = j + 1
+            continue
         _replay_one(state, r)
         i += 1
 
@@ -54,13 +63,7 @@ def _check(r: EventRecord, derived: NewEvent) -> None:
 def _replay_one(state: SessionState, r: EventRecord) -> None:
     p = r.payload
     try:
-        if r.kind == log.QUERY:
-            if state.pending is not None:
-                raise ReplayError(
-                    f"event {r.seq}: a query was issued while {state.pending.id} was pending"
-                )
-            _check(r, state.derive_query())
-        elif r.kind == log.UNDO:
+        if r.kind == log.UNDO:
             _check(r, state.undo_event())
         elif r.kind == log.EXCLUDED:
             _check(r, state.exclude_event(p["trial"], p["reason"], p.get("detail", "")))
@@ -76,6 +79,32 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
     except (SessionStateError, QueryError, ValueError, KeyError) as exc:
         raise ReplayError(f"event {r.seq} ({r.kind}) cannot be applied: {exc}") from None
     state.commit([r])
+
+
+def _replay_query(state: SessionState, group: Sequence[EventRecord]) -> None:
+    """A query's batch: the gaits made on demand for it (if any), then its ``query_issued``."""
+    first, last = group[0], group[-1]
+    if last.kind != log.QUERY:
+        raise ReplayError(
+            f"event {first.seq} ({first.kind}): gaits made for a query that was never issued"
+        )
+    if state.pending is not None:
+        raise ReplayError(
+            f"event {last.seq}: a query was issued while {state.pending.id} was pending"
+        )
+    try:
+        derived = state.derive_query()
+    except (SessionStateError, QueryError, ValueError, RuntimeError) as exc:
+        raise ReplayError(f"event {first.seq} ({first.kind}) cannot be applied: {exc}") from None
+    kinds = [d.kind for d in derived]
+    if kinds != [r.kind for r in group]:
+        raise ReplayError(
+            f"event {first.seq}: the log issues this query with {[r.kind for r in group]}, "
+            f"replay with {kinds}"
+        )
+    for r, d in zip(group, derived, strict=True):
+        _check(r, d)
+    state.commit(group)
 
 
 def _replay_answer(state: SessionState, group: Sequence[EventRecord]) -> None:

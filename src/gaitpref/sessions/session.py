@@ -41,6 +41,7 @@ from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
     FeedbackEntry,
+    InfeasibleGait,
     SessionQuery,
     SuggestionRecord,
     Trial,
@@ -51,6 +52,7 @@ from gaitpref.sessions.stored_config import (
     GaitLibraryLike,
     check_same_config,
     config_of,
+    gait_cache_of,
     gait_ids_of,
     library_meta,
     software_version,
@@ -84,6 +86,7 @@ class Session:
         self._owns = owns_storage
         self._lock = threading.RLock()
         self.config = config_of(record)
+        self._gait_cache = gait_cache_of(storage, self.config)
         self._state = self._fresh_state()
         self._broken = False
         self._in_turn = False
@@ -245,25 +248,34 @@ class Session:
             )
         if st.pending is not None:
             return st.pending
-        event = st.derive_query()
         try:
-            records = self._write([event])
+            records = self._write(self._derived_query(st))
         except ConflictError:  # a writer that does not take turns: catch up and ask once more
             self._rebuild()
             if self._state.pending is not None:
                 return self._state.pending
             st = self._state
             try:
-                records = self._write([st.derive_query()])
+                records = self._write(self._derived_query(st))
             except ConflictError:
                 self._rebuild()
                 raise SessionBusyError(
                     f"session {self.id} is busy: another writer kept appending while a query "
                     "was being issued; nothing was written, try again"
                 ) from None
+        except BaseException:
+            self._broken = True  # gaits made on demand may have moved the loop: rebuild
+            raise
         st.commit(records)
         assert st.pending is not None
         return st.pending
+
+    def _derived_query(self, st: SessionState) -> list[NewEvent]:
+        try:
+            return st.derive_query()
+        except BaseException:
+            self._broken = True  # the loop may have avoided gaits that were not logged
+            raise
 
     @property
     def pending(self) -> SessionQuery | None:
@@ -369,6 +381,10 @@ class Session:
             self._append([st.withdraw_unsafe_event(trial)])
 
         self._locked(run)
+
+    def infeasible_gaits(self) -> list[InfeasibleGait]:
+        """Proposals whose gait could not be made (gaits on demand): never shown as trials."""
+        return list(self._state.infeasible)
 
     def unsafe_flags(self) -> dict[int, tuple[int, str]]:
         """Trials flagged unsafe: trial -> (action, reason)."""
@@ -567,7 +583,7 @@ class Session:
         return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
-        return prepare_state(self.storage, self._record, self.config)
+        return prepare_state(self.storage, self._record, self.config, self._gait_cache)
 
     def _catch_up(self) -> None:
         """Replay the events this object has not seen."""

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,10 +37,12 @@ from gaitpref.feedback import (
 )
 from gaitpref.loop.cospar import Answer, CoSpar, QueryError
 from gaitpref.sessions import events as log
+from gaitpref.sessions.gaits import propose_with_gaits
 from gaitpref.sessions.records import (
     REASONS,
     ComparisonRecord,
     FeedbackEntry,
+    InfeasibleGait,
     Reason,
     SessionQuery,
     SuggestionRecord,
@@ -54,6 +56,10 @@ from gaitpref.sessions.validation import (
     unblind,
 )
 from gaitpref.storage import EventRecord, NewEvent, Status
+
+if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a config names a generator
+    from gaitpref.gaits.gait_cache import GaitCache
+    from gaitpref.gaits.on_demand import OnDemandGaits
 
 _VALIDATION_STREAM = 0x7A11DA7E  # the validation order's generator: (seed, this, round)
 _STATUS_OF: dict[str, Status] = {
@@ -104,9 +110,22 @@ class SessionState:
     unsafe: dict[int, tuple[int, str]] = field(default_factory=dict)  # trial -> (action, reason)
     rounds: list[_Round] = field(default_factory=list)
     notes: list[tuple[int, str]] = field(default_factory=list)
+    gait_cache: GaitCache | None = field(default=None, repr=False)  # gaits made on demand
+    on_demand: OnDemandGaits | None = field(init=False, default=None)
+    infeasible: list[InfeasibleGait] = field(default_factory=list)
+    walkable: list[int] = field(default_factory=list)  # actions with a feasible gait, in order
 
     def __post_init__(self) -> None:
         self.loop = self.config.make_loop(seed=self.seed)
+        spec = self.config.generator
+        if spec is not None:
+            from gaitpref.gaits.gait_cache import GaitCache
+            from gaitpref.gaits.on_demand import OnDemandGaits
+
+            space = self.config.space
+            cache = self.gait_cache if self.gait_cache is not None else GaitCache()
+            ranges = [f.span for f in space]
+            self.on_demand = OnDemandGaits(spec.make(space), cache, ranges)
 
     # -- views ---------------------------------------------------------------------------------
     @property
@@ -121,22 +140,26 @@ class SessionState:
         return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None
 
     # -- derive: queries -----------------------------------------------------------------------
-    def derive_query(self) -> NewEvent:
-        """Ask CoSpar for the next proposal (the same one until it is answered)."""
-        q = self.loop.ask()
+    def derive_query(self) -> list[NewEvent]:
+        """Ask CoSpar for the next proposal (the same one until it is answered): its
+        ``query_issued`` event, after the gaits made on demand for it (``gaits.py``)."""
+        events: list[NewEvent] = []
+        if self.on_demand is None:
+            q = self.loop.ask()
+        else:
+            events, q = propose_with_gaits(self.loop, self.on_demand, self.config)
         done = self.trial_actions
         numbers = [t for t, _ in done]
         start = numbers[-1] + 1 if numbers else 1
         buffered = numbers[len(numbers) - len(q.buffer) :] if q.buffer else []
-        return log.new_event(
-            log.QueryIssued(
-                query_loop_id=int(q.id),
-                actions=[int(a) for a in q.actions],
-                buffer=[int(b) for b in q.buffer],
-                trials=list(range(start, start + len(q.actions))),
-                buffer_trials=buffered,
-            )
+        issued = log.QueryIssued(
+            query_loop_id=int(q.id),
+            actions=[int(a) for a in q.actions],
+            buffer=[int(b) for b in q.buffer],
+            trials=list(range(start, start + len(q.actions))),
+            buffer_trials=buffered,
         )
+        return [*events, log.new_event(issued)]
 
     def _query_of(self, seq: int, payload: dict[str, Any]) -> SessionQuery:
         return SessionQuery(
@@ -297,8 +320,9 @@ class SessionState:
             np.random.SeedSequence(self.seed, spawn_key=(_VALIDATION_STREAM, round_))
         )
         mean = np.asarray(self.loop.posterior.mean)
+        shown = None if self.on_demand is None else sorted(set(self.walkable))
         try:
-            plan, roles = blind_plan(round_, mean, rng)
+            plan, roles = blind_plan(round_, mean, rng, shown)
         except ValueError as exc:
             raise SessionStateError(f"cannot start a blind validation: {exc}") from None
         gaits = [
@@ -431,6 +455,10 @@ class SessionState:
             current = self.open_round
             assert current is not None
             current.result = unblind(current.plan, current.roles, current.values, p["ranking"])
+        elif r.kind == log.GAIT_MADE:
+            self.walkable.append(p["action"])  # a gait the subject may walk (validation)
+        elif r.kind == log.GAIT_INFEASIBLE:  # the loop avoids it since derive_query
+            self.infeasible.append(InfeasibleGait(r.seq, p["action"], p["gait_id"], p["reason"]))
         elif r.kind == log.NOTE:
             self.notes.append((r.seq, p["text"]))
         elif r.kind in _STATUS_OF:
@@ -487,6 +515,8 @@ class SessionState:
 
     # -- other ----------------------------------------------------------------------------------
     def gait_id(self, action: int) -> str | None:
+        if self.on_demand is not None:
+            return self.on_demand.generator.gait_id(self.config.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]
 
     def check_open(self, what: str) -> None:

@@ -16,9 +16,10 @@ from typing import TYPE_CHECKING, Any, TypeAlias
 
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ReplayError
-from gaitpref.storage import SessionRecord
+from gaitpref.storage import SessionRecord, Storage
 
 if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a library is used
+    from gaitpref.gaits.gait_cache import GaitCache
     from gaitpref.gaits.library import GaitLibrary
 
 #: what names the gait of each grid action: a gait library, a list of ids or an action -> id map
@@ -126,3 +127,24 @@ def gait_ids_of(library: GaitLibraryLike | None, size: int) -> list[str] | None:
     if not all(isinstance(g, str) and g for g in ids):
         raise ValueError("gait ids must be non-empty strings")
     return [str(g) for g in ids]
+
+
+#: the folder beside a SQLite database that caches gaits made on demand: ``lab.db.gaits/``
+GAIT_CACHE_SUFFIX = ".gaits"
+
+
+def gait_cache_of(storage: Storage, config: ExperimentConfig) -> GaitCache | None:
+    """The cache of gaits made on demand for ``config`` (None when it names no generator).
+
+    A folder next to the database (``lab.db.gaits/``, one JSON file per gait, named by its
+    content address) rather than a table: the cache is derived data (the log holds every gait's
+    key, id and verdict, and replay makes a missing gait again), so it needs none of the event
+    store's guarantees or migrations; files can be read, copied or deleted without gaitpref, and
+    every session of the database shares them.  A database that is not a local file (memory,
+    PostgreSQL) caches in memory, per session object.
+    """
+    if config.generator is None:
+        return None
+    from gaitpref.gaits.gait_cache import GaitCache
+
+    return GaitCache(storage.folder_beside(GAIT_CACHE_SUFFIX))

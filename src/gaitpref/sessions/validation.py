@@ -65,9 +65,20 @@ class ValidationResult:
     kendall_tau: float
 
 
-def validation_actions(mean: ArrayLike) -> tuple[int, int, int]:
-    """The actions at the maximum, the mean and the minimum of the posterior mean."""
+def validation_actions(
+    mean: ArrayLike, candidates: Sequence[int] | None = None
+) -> tuple[int, int, int]:
+    """The actions at the maximum, the mean and the minimum of the posterior mean (among
+    ``candidates`` when given: the gaits made on demand that can be walked)."""
     mu = np.asarray(mean, dtype=np.float64).ravel()
+    if candidates is not None:
+        among = np.asarray(candidates, dtype=np.intp)
+        if among.size < 3:
+            raise ValueError(
+                f"blind validation needs at least 3 gaits; {among.size} have been made so far"
+            )
+        best, middle, worst = validation_actions(mu[among])
+        return int(among[best]), int(among[middle]), int(among[worst])
     if mu.size < 3:
         raise ValueError(f"blind validation needs at least 3 actions; the grid has {mu.size}")
     best, worst = int(np.argmax(mu)), int(np.argmin(mu))
@@ -81,10 +92,13 @@ def validation_actions(mean: ArrayLike) -> tuple[int, int, int]:
 
 
 def blind_plan(
-    round_: int, mean: ArrayLike, rng: np.random.Generator
+    round_: int,
+    mean: ArrayLike,
+    rng: np.random.Generator,
+    candidates: Sequence[int] | None = None,
 ) -> tuple[ValidationPlan, dict[str, str]]:
     """A plan with a random order, and the hidden label -> role map."""
-    actions = dict(zip(ROLES, validation_actions(mean), strict=True))
+    actions = dict(zip(ROLES, validation_actions(mean, candidates), strict=True))
     order = [ROLES[int(k)] for k in rng.permutation(len(ROLES))]
     plan = ValidationPlan(
         round_,

@@ -18,6 +18,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError
@@ -26,8 +27,11 @@ from gaitpref.loop.warm import WarmStart, warm_data, warm_start
 from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
-from gaitpref.sessions.stored_config import config_of
+from gaitpref.sessions.stored_config import config_of, gait_cache_of
 from gaitpref.storage import EventRecord, SessionRecord, Storage
+
+if TYPE_CHECKING:
+    from gaitpref.gaits.gait_cache import GaitCache
 
 
 def log_sha256(events: Sequence[EventRecord]) -> str:
@@ -108,12 +112,17 @@ def make_warm_start(
 
 
 def prepare_state(
-    storage: Storage, record: SessionRecord, config: ExperimentConfig | None = None
+    storage: Storage,
+    record: SessionRecord,
+    config: ExperimentConfig | None = None,
+    gait_cache: GaitCache | None = None,
 ) -> SessionState:
     """A fresh state for ``record`` (its parsed ``config``, if at hand), with its warm start
-    when it has one (not yet replayed)."""
+    when it has one (not yet replayed); gaits made on demand come from ``gait_cache`` (default:
+    the database's, ``stored_config.gait_cache_of``)."""
     config = config_of(record) if config is None else config
-    state = SessionState(config, record.seed, record.meta.get("gait_ids"))
+    cache = gait_cache if gait_cache is not None else gait_cache_of(storage, config)
+    state = SessionState(config, record.seed, record.meta.get("gait_ids"), gait_cache=cache)
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]

@@ -38,6 +38,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any, Literal, get_args
 
 from gaitpref.errors import StorageError
@@ -201,6 +202,11 @@ class Storage(ABC):
         append keeps the data right either way.
         """
         yield
+
+    def folder_beside(self, suffix: str) -> Path | None:
+        """A folder next to the database for data derived from its sessions (``<file><suffix>``,
+        e.g. the cache of gaits made on demand); None when the database is not a local file."""
+        return None
 
     def close(self) -> None:  # noqa: B027 - optional for backends that hold nothing
         """Release connections; the storage is not used afterwards."""

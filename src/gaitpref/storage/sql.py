@@ -111,8 +111,10 @@ class SQLStorage(Storage):
                     f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
                 )
         self._turns: FileTurns | None = None
+        self._file: Path | None = None
         if self._sqlite and not _sqlite_memory(parsed):
             path = Path(parsed.database or "").resolve()
+            self._file = path
             self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
         self.engine = _engine(parsed)
         try:
@@ -261,6 +263,9 @@ class SQLStorage(Storage):
             return
         with self._turns.turn(_sid(session_id), base.WRITER_WAIT_S if wait_s is None else wait_s):
             yield
+
+    def folder_beside(self, suffix: str) -> Path | None:
+        return None if self._file is None else self._file.with_name(self._file.name + suffix)
 
     def close(self) -> None:
         self.engine.dispose()

@@ -1,0 +1,114 @@
+"""A content-addressed cache of gaits made on demand: one JSON file per gait, named by its key.
+
+The key (:meth:`~gaitpref.gaits.generator.GaitGenerator.key`) is a SHA-256 of the generator's
+name, its settings and the gait's parameters, so an entry never changes meaning: writers of the
+same key write the same kind of document, and a rename makes each write atomic.  A session's
+cache is the folder ``<database file>.gaits/`` next to a SQLite database (``gaitpref.sessions``
+says why); without a folder (in-memory or server databases) it lives in memory only.
+
+The cache is derived data: a session's log holds what replay checks (each gait's key, id and
+verdict), so an entry that is missing, unreadable or of another format is made again (and
+rewritten), never trusted.  Document (``format = "gaitpref-gait"``, schema version 1)::
+
+    {"format", "schema_version", "key", "generator", "settings", "parameters",
+     "warm_start": key | null, "gait": {"step_length", the fields of a gait in a library file}}
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from gaitpref.errors import GaitLibraryError
+from gaitpref.gaits.gait import Gait
+from gaitpref.gaits.library_io import Reader, gait_entry, read_gait_entry
+
+FORMAT = "gaitpref-gait"
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True, eq=False)
+class CachedGait:
+    """A gait with its key and the key of the gait it was warm-started from."""
+
+    key: str
+    gait: Gait
+    warm_start: str | None
+
+
+class GaitCache:
+    """Gaits by key, in ``folder`` (created when first written) or, without one, in memory."""
+
+    def __init__(self, folder: str | Path | None = None) -> None:
+        self.folder = None if folder is None else Path(folder)
+        self._memory: dict[str, CachedGait] = {}
+        self.hits = 0
+        self.misses = 0
+
+    def path(self, key: str) -> Path | None:
+        return None if self.folder is None else self.folder / f"{key}.json"
+
+    def get(self, key: str) -> CachedGait | None:
+        """The cached gait of ``key``, or None (missing or unreadable: make it again)."""
+        found = self._memory.get(key) or self._read(key)
+        if found is None:
+            self.misses += 1
+            return None
+        self.hits += 1
+        self._memory[key] = found
+        return found
+
+    def put(self, entry: CachedGait, document: dict[str, Any]) -> None:
+        """Keep ``entry``; ``document`` (generator, settings, parameters) goes into its file."""
+        self._memory[entry.key] = entry
+        target = self.path(entry.key)
+        if target is None:
+            return
+        doc = {
+            "format": FORMAT,
+            "schema_version": SCHEMA_VERSION,
+            "key": entry.key,
+            **document,
+            "warm_start": entry.warm_start,
+            "gait": {"step_length": entry.gait.step_length, **gait_entry(entry.gait)},
+        }
+        text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{entry.key[:16]}.")
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as out:
+                out.write(text)
+            os.replace(tmp, target)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+
+    def _read(self, key: str) -> CachedGait | None:
+        path = self.path(key)
+        if path is None or not path.is_file():
+            return None
+        r = Reader(str(path))
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+            if (
+                not isinstance(doc, dict)
+                or doc.get("format") != FORMAT
+                or doc.get("schema_version") != SCHEMA_VERSION
+                or doc.get("key") != key
+            ):
+                return None
+            raw = r.get(doc, "gait", "")
+            degree = r.get(raw, "degree", "gait.")
+            length = r.number(raw, "step_length", "gait.")
+            gait = read_gait_entry(r, raw, "gait.", degree, length)
+            warm = doc.get("warm_start")
+            return CachedGait(key, gait, warm if isinstance(warm, str) else None)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, GaitLibraryError, ValueError):
+            return None
+
+
+__all__ = ["FORMAT", "SCHEMA_VERSION", "CachedGait", "GaitCache"]

@@ -1,0 +1,188 @@
+"""Gait generators: a point of a config's space in, an optimised gait out (issue 13, item 4).
+
+The paper ends with "going beyond precomputed gait libraries to generating new gaits".  A
+generator makes the gait of one parameter vector when a session first proposes it: the vector is
+a float array in the features' units, in the space's feature order, so a grid point and (later) a
+point of a continuous space are the same thing to it.  ``compass-hzd`` is the HZD optimisation of
+:mod:`gaitpref.gaits.optimize` (the paper's Section "Gait Generation for Bipedal Robots", eqs.
+(3)-(5): minimum mechanical COT, Reher et al. 2016 eqs. 17-18) at a fixed forward speed or over a
+``step_duration`` feature; a ``step_width`` feature is a label, as in a library (the planar compass
+gait has no width).
+
+A generator's :meth:`~GaitGenerator.key` is a SHA-256 of its name, its fixed settings and the
+parameters that decide the gait: the content address of the gait in a cache
+(:mod:`gaitpref.gaits.gait_cache`).  Generators are registered by name
+(:func:`register_generator`); a config names one with ``[gaits] generator = "compass-hzd"``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from gaitpref.errors import GaitGeneratorError
+from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
+from gaitpref.gaits.library import AXES, gait_id_of
+from gaitpref.gaits.optimize import optimize_gait
+from gaitpref.gaits.params import CompassGaitParams
+from gaitpref.space import FloatArray
+
+
+class GaitGenerator(ABC):
+    """Makes the gait of a parameter vector over ``features`` (names, in the space's order)."""
+
+    name: ClassVar[str]
+    features: tuple[str, ...]
+
+    @abstractmethod
+    def settings(self) -> dict[str, Any]:
+        """The fixed settings (JSON), part of every gait's key."""
+
+    @abstractmethod
+    def parameters(self, vector: FloatArray) -> dict[str, float]:
+        """The values of ``vector`` that decide its gait (labels left out)."""
+
+    @abstractmethod
+    def gait_id(self, vector: FloatArray) -> str:
+        """The id shown and logged for the gait of ``vector`` (as a library's)."""
+
+    @abstractmethod
+    def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+        """The gait of ``vector`` (flagged infeasible, with the reason, when there is none)."""
+
+    def key(self, vector: FloatArray) -> str:
+        """The content address of ``vector``'s gait: SHA-256 of name, settings and parameters."""
+        document = {
+            "generator": self.name,
+            "settings": self.settings(),
+            "parameters": self.parameters(vector),
+        }
+        text = json.dumps(document, sort_keys=True, allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    def check(self, vector: FloatArray) -> FloatArray:
+        arr = np.asarray(vector, dtype=np.float64)
+        if arr.shape != (len(self.features),) or not np.all(np.isfinite(arr)):
+            raise GaitGeneratorError(
+                f"{self.name}: a parameter vector has {len(self.features)} finite values "
+                f"({', '.join(self.features)}), got {vector!r}"
+            )
+        return arr
+
+
+class CompassHZD(GaitGenerator):
+    """The compass gait's minimum-COT HZD gait (:func:`~gaitpref.gaits.optimize_gait`).
+
+    Features: ``step_length`` (m, required), ``step_duration`` (s) or else a fixed ``speed``
+    (m/s), and optionally ``step_width`` (a label with no effect on the dynamics).
+    """
+
+    name: ClassVar[str] = "compass-hzd"
+
+    def __init__(
+        self,
+        features: Sequence[str],
+        speed: float | None = None,
+        params: CompassGaitParams | None = None,
+        hzd: HZDSettings | None = None,
+    ) -> None:
+        self.features = tuple(features)
+        unknown = [f for f in self.features if f not in AXES]
+        if unknown or "step_length" not in self.features:
+            raise GaitGeneratorError(
+                f"{self.name} makes gaits over {', '.join(AXES)} (step_length required); "
+                f"the space has {', '.join(self.features)}"
+            )
+        timed = "step_duration" in self.features
+        if timed == (speed is not None):
+            raise GaitGeneratorError(
+                f"{self.name} needs a fixed speed or a step_duration feature, exactly one "
+                f"(speed = {speed!r}; features {', '.join(self.features)})"
+            )
+        if speed is not None and not (np.isfinite(speed) and speed > 0):
+            raise GaitGeneratorError(f"{self.name}: speed must be positive, got {speed!r}")
+        self.speed = None if speed is None else float(speed)
+        self.params = params or CompassGaitParams()
+        self.hzd = hzd or HZDSettings()
+
+    def settings(self) -> dict[str, Any]:
+        return {
+            "model": self.params.to_dict(),
+            "formulation": self.hzd.to_dict(),
+            "speed": self.speed,
+        }
+
+    def _values(self, vector: FloatArray) -> dict[str, float]:
+        """The vector's values by feature, in the library's axis order."""
+        arr = self.check(vector)
+        named = {n: float(v) for n, v in zip(self.features, arr, strict=True)}
+        return {n: named[n] for n in AXES if n in named}
+
+    def parameters(self, vector: FloatArray) -> dict[str, float]:
+        values = self._values(vector)
+        values.pop("step_width", None)  # a label: every width shares its gait
+        return values
+
+    def gait_id(self, vector: FloatArray) -> str:
+        return gait_id_of(self._values(vector), self.speed)
+
+    def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+        p = self.parameters(vector)
+        try:
+            request = GaitRequest(
+                p["step_length"], step_duration=p.get("step_duration"), speed=self.speed
+            )
+        except ValueError as exc:
+            raise GaitGeneratorError(f"{self.name}: {exc}") from None
+        return optimize_gait(request, self.params, self.hzd, warm_start=warm_start)
+
+
+GeneratorFactory = Callable[[Sequence[str], Mapping[str, Any]], GaitGenerator]
+
+
+def _compass_hzd(features: Sequence[str], settings: Mapping[str, Any]) -> GaitGenerator:
+    extra = sorted(set(settings) - {"speed"})
+    if extra:
+        raise GaitGeneratorError(f"compass-hzd takes the setting speed only, got {extra}")
+    return CompassHZD(features, speed=settings.get("speed"))
+
+
+_GENERATORS: dict[str, GeneratorFactory] = {CompassHZD.name: _compass_hzd}
+
+
+def register_generator(name: str, factory: GeneratorFactory) -> None:
+    """Make ``factory(features, settings)`` available as ``[gaits] generator = name``."""
+    if not isinstance(name, str) or not name:
+        raise GaitGeneratorError(f"a generator's name is a non-empty string, got {name!r}")
+    _GENERATORS[name] = factory
+
+
+def generator_names() -> tuple[str, ...]:
+    return tuple(sorted(_GENERATORS))
+
+
+def make_generator(
+    name: str, features: Sequence[str], settings: Mapping[str, Any] | None = None
+) -> GaitGenerator:
+    """The generator ``name`` over ``features``; :class:`GaitGeneratorError` says what is wrong."""
+    factory = _GENERATORS.get(name)
+    if factory is None:
+        raise GaitGeneratorError(
+            f"no gait generator {name!r} (known: {', '.join(generator_names())})"
+        )
+    return factory(tuple(features), dict(settings or {}))
+
+
+__all__ = [
+    "CompassHZD",
+    "GaitGenerator",
+    "GeneratorFactory",
+    "generator_names",
+    "make_generator",
+    "register_generator",
+]

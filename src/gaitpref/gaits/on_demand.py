@@ -1,0 +1,101 @@
+"""Gaits on demand: a point gets its gait when first proposed, warm-started from the nearest.
+
+The paper's future work ("generating new gaits" rather than a precomputed library; issue 13, item
+4).  :class:`OnDemandGaits` is one session's view: the gaits it has made, in the order it made
+them.  The gait of a parameter vector is, in turn,
+
+1. the one this session already made for the same gait id;
+2. the cached one (:class:`~gaitpref.gaits.gait_cache.GaitCache`, content-addressed by the
+   generator's key), used as it is;
+3. a new one from the generator, warm-started from the nearest *feasible* gait this session made
+   before (Euclidean distance with each feature divided by its range, as for the unsafe radius;
+   the earliest of equally near ones), then cached.
+
+Because the warm start depends only on the session's own earlier gaits, a session that replays
+its log with an empty cache makes the same gaits again in the same order.
+
+Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from gaitpref.gaits.gait import Gait
+from gaitpref.gaits.gait_cache import CachedGait, GaitCache
+from gaitpref.gaits.generator import GaitGenerator
+from gaitpref.space import FloatArray
+
+
+@dataclass(frozen=True, eq=False)
+class MadeGait:
+    """The gait of ``vector``: its key, id, and the key it was warm-started from (if any)."""
+
+    key: str
+    vector: FloatArray
+    gait: Gait
+    gait_id: str
+    warm_start: str | None
+    from_cache: bool
+
+    @property
+    def feasible(self) -> bool:
+        return self.gait.feasible
+
+
+class OnDemandGaits:
+    """One session's gaits made on demand by ``generator``; ``ranges`` scale the distances."""
+
+    def __init__(self, generator: GaitGenerator, cache: GaitCache, ranges: Sequence[float]):
+        scale = np.asarray(ranges, dtype=np.float64)
+        if scale.shape != (len(generator.features),):
+            raise ValueError(f"ranges needs {len(generator.features)} values, got {scale.shape}")
+        self.generator = generator
+        self.cache = cache
+        self.scale = np.where(scale > 0, scale, 1.0)
+        self._by_id: dict[str, MadeGait] = {}  # a label (step width) shares its gait's key
+        self._feasible: list[MadeGait] = []
+
+    @property
+    def made(self) -> list[MadeGait]:
+        """Every gait this session has made or looked up, in order."""
+        return list(self._by_id.values())
+
+    def nearest(self, vector: FloatArray) -> MadeGait | None:
+        """The feasible gait made so far nearest to ``vector`` (None: none yet)."""
+        if not self._feasible:
+            return None
+        points = np.stack([m.vector for m in self._feasible])
+        d2 = np.sum(((points - vector) / self.scale) ** 2, axis=1)
+        return self._feasible[int(np.argmin(d2))]
+
+    def get(self, vector: FloatArray) -> tuple[MadeGait, bool]:
+        """The gait of ``vector`` and whether it is new to this session."""
+        vec = self.generator.check(vector)
+        key, name = self.generator.key(vec), self.generator.gait_id(vec)
+        known = self._by_id.get(name)
+        if known is not None:
+            return known, False
+        cached = self.cache.get(key)
+        if cached is not None:
+            made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
+        else:
+            warm = self.nearest(vec)
+            gait = self.generator.make(vec, None if warm is None else warm.gait)
+            made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
+            document = {
+                "generator": self.generator.name,
+                "settings": self.generator.settings(),
+                "parameters": self.generator.parameters(vec),
+            }
+            self.cache.put(CachedGait(key, gait, made.warm_start), document)
+        self._by_id[name] = made
+        if made.feasible:
+            self._feasible.append(made)
+        return made, True
+
+
+__all__ = ["MadeGait", "OnDemandGaits"]
