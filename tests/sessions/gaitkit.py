@@ -1,0 +1,83 @@
+"""A quick stand-in gait generator for tests of gaits on demand (no optimisation).
+
+``FakeSteps`` makes a "gait" over a ``step_length`` feature (and any labels) at once: feasible
+when the step length is at least ``FakeSteps.below`` (a class setting a test may change), and it
+records every call with the step length of its warm start, so tests can see what was made and
+from where.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from gaitpref.gaits import Gait, GaitGenerator, register_generator
+from gaitpref.space import FloatArray
+
+NAME = "test-steps"
+
+
+class FakeSteps(GaitGenerator):
+    name: ClassVar[str] = NAME
+    below: ClassVar[float] = 0.3
+    calls: ClassVar[list[tuple[float, float | None]]] = []  # (step length, warm start's)
+
+    def __init__(self, features: Sequence[str], settings: Mapping[str, Any]) -> None:
+        self.features = tuple(features)
+        self.k = self.features.index("step_length")
+
+    def settings(self) -> dict[str, Any]:
+        return {"below": self.below}
+
+    def parameters(self, vector: FloatArray) -> dict[str, float]:
+        return {"step_length": float(self.check(vector)[self.k])}
+
+    def gait_id(self, vector: FloatArray) -> str:
+        return "-".join(f"{n[0].upper()}{v:.3f}" for n, v in zip(self.features, vector, strict=True))
+
+    def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+        length = self.parameters(vector)["step_length"]
+        FakeSteps.calls.append((length, None if warm_start is None else warm_start.step_length))
+        ok = length >= self.below
+        return Gait(
+            step_length=length,
+            step_duration=1.0,
+            alpha=np.full((1, 7), length),
+            phase_start=-0.1,
+            phase_end=0.1,
+            orbit_state=np.zeros(4),
+            cot=(length - 0.5) ** 2,
+            delta_squared=0.9,
+            feasible=ok,
+            status=0 if ok else 8,
+            message="optimal: fake" if ok else f"infeasible: step length {length:.3f} too short",
+            min_normal_force=100.0,
+            max_friction_ratio=0.1,
+        )
+
+
+register_generator(NAME, FakeSteps)
+
+CONFIG = f"""
+name = "on-demand-1d"
+[space.step_length]
+min = 0.0
+max = 1.0
+num = 21
+unit = "m"
+[space.step_width]
+values = [0.2, 0.3]
+[gaits]
+generator = "{NAME}"
+avoid_radius = 0.1
+[model]
+lengthscale = 0.2
+signal_variance = 0.005
+noise = 0.02
+fit = "fixed"
+[cospar]
+seed = 4
+strategy = "self-sparring"
+"""

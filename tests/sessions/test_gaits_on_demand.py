@@ -1,0 +1,168 @@
+"""Gaits made on demand in a session: an infeasible gait never reaches the subject; it is logged
+with its reason, its neighbourhood is avoided and the next proposal is made; replay reproduces
+both, from the gait cache or, without it, by making the gaits again."""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitpref import ReplayError, Session
+from gaitpref.config import parse_config
+from gaitpref.loop.safety import near
+from tests.sessions.gaitkit import CONFIG, FakeSteps
+
+
+@pytest.fixture(autouse=True)
+def _fresh_generator() -> Iterator[None]:
+    FakeSteps.below, FakeSteps.calls = 0.3, []
+    yield
+    FakeSteps.below, FakeSteps.calls = 0.3, []
+
+
+def _run(url: str, queries: int) -> Session:
+    """A subject who prefers short steps: drives the loop towards the infeasible ones."""
+    s = Session.create(url, parse_config(CONFIG), subject="S01")
+    space = s.config.space
+    for _ in range(queries):
+        q = s.next_query()
+        a = q.actions[0]
+        b = q.buffer[0] if q.buffer else None
+        if b is None or b == a:
+            s.answer(q.id, [])
+            continue
+        shorter = space.values_of(a)["step_length"] < space.values_of(b)["step_length"]
+        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+    return s
+
+
+def _lengths(s: Session, actions: list[int]) -> list[float]:
+    return [s.config.space.values_of(a)["step_length"] for a in actions]
+
+
+def test_an_infeasible_gait_is_logged_avoided_and_never_walked(tmp_path: Path) -> None:
+    s = _run(f"sqlite:///{tmp_path / 'lab.db'}", 12)
+    infeasible = s.infeasible_gaits()
+    assert infeasible, "the subject's preference for short steps reaches the infeasible ones"
+    # nothing the subject walked, and nothing any query proposed, is infeasible
+    walked = [t.action for t in s.trials()]
+    assert min(_lengths(s, walked)) >= FakeSteps.below
+    events = s.events()
+    kinds = [e.kind for e in events]
+    for e in events:
+        if e.kind == "query_issued":
+            assert min(_lengths(s, e.payload["actions"])) >= FakeSteps.below
+    # each infeasible proposal: its reason, the same batch's next proposal is made, and the
+    # neighbourhood is never proposed afterwards
+    space = s.config.space
+    for bad in infeasible:
+        k = next(i for i, e in enumerate(events) if e.seq == bad.seq)
+        assert "too short" in bad.reason and bad.gait_id == s.gait_name(bad.action)
+        assert events[k].payload["radius"] == 0.1
+        nxt = kinds.index("query_issued", k)
+        assert all(kinds[j] in ("gait_made", "gait_infeasible") for j in range(k, nxt))
+        banned = near(space, [bad.action], 0.1)
+        later = [a for e in events[nxt:] if e.kind == "query_issued" for a in e.payload["actions"]]
+        assert not any(banned[a] for a in later)
+    # the gait id is shown and logged as with a library
+    trial_events = [e for e in events if e.kind == "trial_executed"]
+    assert all(e.payload["gait_id"] == s.gait_name(e.payload["action"]) for e in trial_events)
+    assert trial_events[0].payload["gait_id"].startswith("S")  # the fake's id: S<length>-S<width>
+
+
+def test_replay_reproduces_infeasible_proposals_with_and_without_the_cache(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = _run(url, 10)
+    before = (s.trials(), s.infeasible_gaits(), s.pending, [e.kind for e in s.events()])
+    made = len(FakeSteps.calls)
+    assert made > 0 and (tmp_path / "lab.db.gaits").is_dir()
+    assert len(list((tmp_path / "lab.db.gaits").glob("*.json"))) == made
+    # from the cache: nothing is made again
+    again = Session.open(url, s.id)
+    assert len(FakeSteps.calls) == made
+    assert (again.trials(), again.infeasible_gaits(), again.pending) == before[:3]
+    # without it: every gait is made again, in the same order, from the same warm starts
+    shutil.rmtree(tmp_path / "lab.db.gaits")
+    rebuilt = Session.open(url, s.id)
+    assert FakeSteps.calls[made:] == FakeSteps.calls[:made]
+    assert (rebuilt.trials(), rebuilt.infeasible_gaits(), rebuilt.pending) == before[:3]
+    # and the session goes on as it would have
+    q1, q2 = again.next_query(), rebuilt.next_query()
+    assert (q1.id, q1.actions) == (q2.id, q2.actions)
+
+
+def test_replay_refuses_a_generator_that_now_decides_otherwise(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = _run(url, 10)
+    assert s.infeasible_gaits()
+    shutil.rmtree(tmp_path / "lab.db.gaits")
+    FakeSteps.below = 0.0  # every gait is feasible now (and its keys differ)
+    with pytest.raises(ReplayError, match="gait_infeasible|gait_made|key"):
+        Session.open(url, s.id)
+
+
+def test_warm_starts_come_from_the_nearest_feasible_gait_made_before(tmp_path: Path) -> None:
+    s = _run(f"sqlite:///{tmp_path / 'lab.db'}", 12)
+    space = s.config.space
+    lo, span = space.points.min(axis=0), np.ptp(space.points, axis=0)
+    feasible: list[tuple[str, np.ndarray]] = []  # (key, scaled point), in the order made
+    seen: set[str] = set()
+    checked = 0
+    for e in s.events():
+        if e.kind not in ("gait_made", "gait_infeasible"):
+            continue
+        p = e.payload
+        x = (space.point(p["action"]) - lo) / span
+        if p["key"] not in seen:  # made here, not found in the cache under a width label
+            if not feasible:
+                assert p["warm_start"] is None
+            else:
+                d = [(k, float(np.sum((v - x) ** 2))) for k, v in feasible]
+                from_warm = [dk for k, dk in d if k == p["warm_start"]]
+                assert from_warm and min(from_warm) == pytest.approx(min(dk for _, dk in d))
+                checked += 1
+        seen.add(p["key"])
+        if e.kind == "gait_made":
+            feasible.append((p["key"], x))
+    assert checked >= 3
+    # and the generator was handed those gaits
+    assert [w is None for _, w in FakeSteps.calls][:1] == [True]
+    assert all(w is not None and w >= FakeSteps.below for _, w in FakeSteps.calls[1:])
+
+
+def test_a_width_label_shares_its_gait_and_its_cache_entry(tmp_path: Path) -> None:
+    s = _run(f"sqlite:///{tmp_path / 'lab.db'}", 12)
+    logged = [e.payload for e in s.events() if e.kind in ("gait_made", "gait_infeasible")]
+    by_key: dict[str, set[str]] = {}
+    for p in logged:
+        by_key.setdefault(p["key"], set()).add(p["gait_id"])
+    lengths = {round(p["values"]["step_length"], 9) for p in logged}
+    assert len(by_key) == len(lengths)  # one key per step length, whatever the width
+    assert len({length for length, _ in FakeSteps.calls}) == len(FakeSteps.calls)
+
+
+def test_blind_validation_shows_only_gaits_that_were_made(tmp_path: Path) -> None:
+    s = _run(f"sqlite:///{tmp_path / 'lab.db'}", 10)
+    made = {e.payload["action"] for e in s.events() if e.kind == "gait_made"}
+    plan = s.start_validation()
+    assert {g.action for g in plan.gaits} <= made
+    assert len(made) < len(s.config.space)  # the unrestricted plan could pick an unmade one
+    mean = np.asarray(s.posterior().mean)
+    assert max(mean[a] for a in made) == max(mean[g.action] for g in plan.gaits)
+
+
+def test_a_memory_database_makes_gaits_again_when_reopened() -> None:
+    from gaitpref.storage import MemoryStorage
+
+    storage = MemoryStorage()
+    s = _run(storage, 6)  # type: ignore[arg-type]
+    made = len(FakeSteps.calls)
+    again = Session.open(storage, s.id)
+    assert len(FakeSteps.calls) == 2 * made
+    assert again.trials() == s.trials()
