@@ -1,0 +1,149 @@
+"""Gaits on demand below the sessions: the compass-hzd generator, its content-addressed cache
+and the warm start from the nearest gait already made."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitpref import ConfigError
+from gaitpref.config import parse_config
+from gaitpref.gaits import (
+    CachedGait,
+    GaitCache,
+    GaitGeneratorError,
+    GaitRequest,
+    OnDemandGaits,
+    make_generator,
+    optimize_gait,
+)
+
+
+def _same_gait(a: object, b: object) -> bool:
+    fields = ("step_length", "step_duration", "cot", "delta_squared", "feasible", "message")
+    return all(getattr(a, f) == getattr(b, f) for f in fields) and all(
+        np.array_equal(getattr(a, f), getattr(b, f)) for f in ("alpha", "orbit_state")
+    )
+
+
+def test_the_key_is_a_content_address_of_generator_settings_and_parameters() -> None:
+    g = make_generator("compass-hzd", ["step_length", "step_width"], {"speed": 0.2})
+    key = g.key(np.array([0.12, 0.25]))
+    assert len(key) == 64 and key == g.key(np.array([0.12, 0.25]))
+    assert g.key(np.array([0.12, 0.30])) == key  # the width is a label: the same gait
+    assert g.gait_id(np.array([0.12, 0.30])) == "L0.120-V0.200-W0.300"  # as a library's id
+    assert g.key(np.array([0.13, 0.25])) != key
+    faster = make_generator("compass-hzd", ["step_length", "step_width"], {"speed": 0.25})
+    assert faster.key(np.array([0.12, 0.25])) != key
+    timed = make_generator("compass-hzd", ["step_duration", "step_length"])
+    assert timed.gait_id(np.array([0.9, 0.12])) == "L0.120-T0.900"  # the library's axis order
+
+
+@pytest.mark.parametrize(
+    ("name", "features", "settings", "problem"),
+    [
+        ("walker-9000", ["step_length"], {"speed": 0.2}, "no gait generator 'walker-9000'"),
+        ("compass-hzd", ["stride"], {"speed": 0.2}, "step_length required"),
+        ("compass-hzd", ["step_length"], {}, "fixed speed or a step_duration feature"),
+        ("compass-hzd", ["step_length", "step_duration"], {"speed": 0.2}, "exactly one"),
+        ("compass-hzd", ["step_length"], {"speed": 0.2, "gain": 3}, "speed only"),
+    ],
+)
+def test_generator_errors_name_the_problem(
+    name: str, features: list[str], settings: dict[str, float], problem: str
+) -> None:
+    with pytest.raises(GaitGeneratorError, match=problem):
+        make_generator(name, features, settings)
+
+
+def test_a_gait_made_on_demand_is_warm_started_from_the_nearest_and_cached(
+    tmp_path: Path,
+) -> None:
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    cache = GaitCache(tmp_path / "gaits")
+    gaits = OnDemandGaits(g, cache, [0.1])
+    short, new = gaits.get(np.array([0.10]))
+    assert new and short.feasible and short.warm_start is None and not short.from_cache
+    far, _ = gaits.get(np.array([0.16]))
+    near, _ = gaits.get(np.array([0.11]))
+    assert near.warm_start == short.key  # 0.10 is nearer than 0.16
+    assert _same_gait(near.gait, optimize_gait(GaitRequest(0.11, speed=0.2), warm_start=short.gait))
+    assert gaits.get(np.array([0.11])) == (near, False)  # this session has it already
+    # a second session finds all three in the folder, as they were made
+    files = sorted(p.name for p in (tmp_path / "gaits").glob("*.json"))
+    assert files == sorted(f"{m.key}.json" for m in (short, far, near))
+    other = OnDemandGaits(g, GaitCache(tmp_path / "gaits"), [0.1])
+    found, new = other.get(np.array([0.11]))
+    assert new and found.from_cache and found.warm_start == short.key
+    assert _same_gait(found.gait, near.gait)
+
+
+def test_an_unreadable_cache_entry_is_made_again(tmp_path: Path) -> None:
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    made, _ = OnDemandGaits(g, GaitCache(tmp_path), [0.1]).get(np.array([0.12]))
+    path = tmp_path / f"{made.key}.json"
+    path.write_text(path.read_text()[:100])
+    cache = GaitCache(tmp_path)
+    assert cache.get(made.key) is None and cache.misses == 1
+    again, _ = OnDemandGaits(g, cache, [0.1]).get(np.array([0.12]))
+    assert not again.from_cache and _same_gait(again.gait, made.gait)
+    assert GaitCache(tmp_path).get(made.key) is not None  # rewritten whole
+
+
+def test_an_infeasible_gait_is_cached_with_its_reason(tmp_path: Path) -> None:
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    made, _ = OnDemandGaits(g, GaitCache(tmp_path), [0.1]).get(np.array([0.02]))
+    assert not made.feasible and made.gait.message.startswith("infeasible: ")
+    cached = GaitCache(tmp_path).get(made.key)
+    assert isinstance(cached, CachedGait) and not cached.gait.feasible
+    assert cached.gait.message == made.gait.message
+
+
+CONFIG = """
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 11
+[gaits]
+generator = "compass-hzd"
+speed = 0.2
+[model]
+lengthscale = 0.03
+signal_variance = 1e-4
+noise = 0.01
+"""
+
+
+def test_a_config_names_a_generator_with_its_settings() -> None:
+    cfg = parse_config(CONFIG)
+    assert cfg.generator is not None and cfg.library is None
+    assert (cfg.generator.name, cfg.generator.settings) == ("compass-hzd", {"speed": 0.2})
+    assert cfg.generator.avoid_radius == 0.05  # the default
+    generator = cfg.generator.make(cfg.space)
+    assert generator.gait_id(cfg.space.point(0)) == "L0.080-V0.200"
+
+
+@pytest.mark.parametrize(
+    ("edit", "problem"),
+    [
+        (('speed = 0.2', 'speed = 0.2\nlibrary = "x.json"'), r"\[gaits\].generator: give either"),
+        (('generator = "compass-hzd"', 'generator = "nope"'), r"\[gaits\].generator: no gait gen"),
+        (("speed = 0.2", ""), r"\[gaits\].generator: .*fixed speed"),
+        (("speed = 0.2", "speed = -1"), r"\[gaits\].speed: must be"),
+        (("speed = 0.2", "speed = 0.2\navoid_radius = 2"), r"\[gaits\].avoid_radius: must be"),
+        (("num = 11", "num = 400"), r"\[space.step_length\]: values too close"),
+        (('generator = "compass-hzd"\nspeed = 0.2', ""), r"\[gaits\]: needs library"),
+        (("[space.step_length]", "[space.stride]"), r"step_length required"),
+    ],
+)
+def test_generator_config_errors_name_the_key(edit: tuple[str, str], problem: str) -> None:
+    with pytest.raises(ConfigError, match=problem):
+        parse_config(CONFIG.replace(*edit))
+
+
+def test_a_library_config_takes_no_generator_settings() -> None:
+    text = '[gaits]\nlibrary = "lib.json"\nspeed = 0.2\n[model]' + CONFIG.split("[model]")[1]
+    with pytest.raises(ConfigError, match=r"\[gaits\].speed: is a gait generator's setting"):
+        parse_config(text)
