@@ -128,7 +128,7 @@ def test_a_config_names_a_generator_with_its_settings() -> None:
 @pytest.mark.parametrize(
     ("edit", "problem"),
     [
-        (('speed = 0.2', 'speed = 0.2\nlibrary = "x.json"'), r"\[gaits\].generator: give either"),
+        (("speed = 0.2", 'speed = 0.2\nlibrary = "x.json"'), r"\[gaits\].generator: give either"),
         (('generator = "compass-hzd"', 'generator = "nope"'), r"\[gaits\].generator: no gait gen"),
         (("speed = 0.2", ""), r"\[gaits\].generator: .*fixed speed"),
         (("speed = 0.2", "speed = -1"), r"\[gaits\].speed: must be"),

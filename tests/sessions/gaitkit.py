@@ -35,7 +35,9 @@ class FakeSteps(GaitGenerator):
         return {"step_length": float(self.check(vector)[self.k])}
 
     def gait_id(self, vector: FloatArray) -> str:
-        return "-".join(f"{n[0].upper()}{v:.3f}" for n, v in zip(self.features, vector, strict=True))
+        return "-".join(
+            f"{n[0].upper()}{v:.3f}" for n, v in zip(self.features, vector, strict=True)
+        )
 
     def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
         length = self.parameters(vector)["step_length"]

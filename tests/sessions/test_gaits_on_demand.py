@@ -103,7 +103,7 @@ def test_replay_refuses_a_generator_that_now_decides_otherwise(tmp_path: Path) -
     assert s.infeasible_gaits()
     shutil.rmtree(tmp_path / "lab.db.gaits")
     FakeSteps.below = 0.0  # every gait is feasible now (and its keys differ)
-    with pytest.raises(ReplayError, match="gait_infeasible|gait_made|key"):
+    with pytest.raises(ReplayError, match=r"gait_infeasible|gait_made|key"):
         Session.open(url, s.id)
 
 
