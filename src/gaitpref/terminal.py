@@ -34,6 +34,7 @@ from gaitpref.errors import FeedbackError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.records import (
+    InfeasibleGait,
     SessionQuery,
 )
 from gaitpref.sessions.session import Session
@@ -147,7 +148,9 @@ class Terminal:
                         self.validate()
                         return
                     try:
+                        skipped = len(s.infeasible_gaits())
                         query = s.next_query()
+                        self._say_infeasible(s.infeasible_gaits()[skipped:])
                     except NoSafeGaitError as exc:
                         self.console.print(f"No gait to propose: {exc}", markup=False)
                         raise _QuitError from None
@@ -157,6 +160,15 @@ class Terminal:
                         self._undo()
             except _QuitError:
                 self._pause()
+
+    def _say_infeasible(self, skipped: list[InfeasibleGait]) -> None:
+        """Gaits made on demand that could not be made: skipped, never shown to the subject."""
+        for bad in skipped:
+            self.console.print(
+                f"  gait {bad.gait_id} cannot be made; skipped, with the gaits near it "
+                f"({bad.reason})",
+                markup=False,
+            )
 
     def _pause(self) -> None:
         """Pause the session, then say how to resume (the terminal may be gone: ignore that)."""

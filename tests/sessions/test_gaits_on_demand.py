@@ -202,3 +202,39 @@ def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(tmp_path: 
     shutil.rmtree(tmp_path / "lab.db.gaits")
     again = Session.open(url, s.id)  # every gait optimised again, the same verdicts
     assert again.infeasible_gaits() == [bad] and again.trials() == s.trials()
+
+
+def test_the_terminal_says_which_gaits_were_skipped(tmp_path: Path) -> None:
+    from io import StringIO
+
+    from rich.console import Console
+
+    from gaitpref.terminal import Terminal
+
+    s = Session.create(f"sqlite:///{tmp_path / 'lab.db'}", parse_config(CONFIG), subject="S01")
+    out = StringIO()
+    length = s.config.space.values_of
+
+    def read(_: str) -> str:
+        last = out.getvalue().splitlines()[-1]
+        q = s.pending
+        if len(s.trials()) >= 12:
+            return "q"
+        if "this one" in last and q is not None:
+            a, b = q.actions[0], q.buffer[0]
+            return "1" if length(a)["step_length"] <= length(b)["step_length"] else "2"
+        return "y" if last.startswith("Write") else "0"
+
+    Terminal(s, Console(file=out, width=200), read=read).run()
+    text = out.getvalue()
+    assert s.infeasible_gaits()
+    for bad in s.infeasible_gaits():
+        assert f"gait {bad.gait_id} cannot be made; skipped" in text
+        assert f"run {bad.gait_id}" not in text
+
+
+def test_a_generator_session_takes_no_library() -> None:
+    from gaitpref.storage import MemoryStorage
+
+    with pytest.raises(ValueError, match="on demand.*takes no gait library"):
+        Session.create(MemoryStorage(), parse_config(CONFIG), "S01", library=["a"] * 42)

@@ -107,6 +107,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "ratings": views.rating_groups(categories, actions),
         "categories": categories,
         "unsafe": session.unsafe_flags(),
+        "infeasible": list(reversed(session.infeasible_gaits()))[:20],
         "multi": len(actions) > 1,
         "chronology": chronology(session),
         "notes": list(reversed(session.notes()))[:20],

@@ -116,6 +116,11 @@ class Session:
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
             raise ValueError(f"seed must be an integer in 0 .. 2**63 - 1, got {use_seed!r}")
         meta = library_meta(cfg)
+        if library is not None and cfg.generator is not None:
+            raise ValueError(
+                f"config {cfg.name!r} makes its gaits on demand ([gaits] generator = "
+                f"{cfg.generator.name!r}); it takes no gait library"
+            )
         if library is None and cfg.library is not None:
             library = cfg.library
         gait_ids = gait_ids_of(library, len(cfg.space))

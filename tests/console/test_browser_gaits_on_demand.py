@@ -1,0 +1,64 @@
+"""A session with gaits made on demand (``[gaits] generator = "compass-hzd"``), run in a real
+headless Chromium: the config uploaded, every gait optimised when first proposed, the 0.02 m
+steps (no gait at 0.2 m/s) skipped and listed, never offered as a trial.  The issue's browser
+test is on a continuous 3-parameter space; this one is on a grid (continuous spaces are issue
+13's items 1-3)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from tests.console.test_browser import answer_by_clicks
+
+pytestmark = pytest.mark.browser
+
+CONFIG = """
+name = "compass-on-demand"
+[space.step_length]
+values = [0.02, 0.04, 0.06, 0.08, 0.10, 0.12, 0.14]
+unit = "m"
+words = ["longer", "shorter"]
+[gaits]
+generator = "compass-hzd"
+speed = 0.2
+avoid_radius = 0.0
+[model]
+lengthscale = 0.03
+signal_variance = 1e-4
+noise = 0.01
+fit = "fixed"
+[cospar]
+strategy = "self-sparring"
+seed = 3
+"""
+
+
+def test_gaits_on_demand_in_the_browser(chromium: Any, live: str, tmp_path: Path) -> None:
+    config = tmp_path / "on-demand.toml"
+    config.write_text(CONFIG, encoding="utf-8")
+    context = chromium.new_context(viewport={"width": 1280, "height": 1000})
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(live + "/")
+    page.fill("#subject", "S01")
+    page.set_input_files("input[name=config_file]", str(config))
+    page.click("#create")
+    page.wait_for_selector("text=Run now: trial 1")
+    answer_by_clicks(page, 1, None, "no change")
+    for trial in range(2, 6):
+        answer_by_clicks(page, trial, "this one", "no change")
+    assert page.locator("text=Gaits that could not be made").count() == 1
+    skipped = page.locator("ul.infeasible li")
+    assert skipped.count() == 1 and "L0.020-V0.200" in skipped.inner_text()
+    walked = page.locator("#chronology tbody").inner_text()
+    assert walked.count("-V0.200") >= 5 and "L0.020" not in walked
+    events = httpx.get(f"{live}/api/sessions/1/events").json()
+    kinds = [e["kind"] for e in events]
+    assert kinds.count("gait_infeasible") == 1 and kinds.count("gait_made") >= 4
+    assert errors == []
+    context.close()
