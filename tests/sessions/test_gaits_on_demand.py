@@ -236,5 +236,5 @@ def test_the_terminal_says_which_gaits_were_skipped(tmp_path: Path) -> None:
 def test_a_generator_session_takes_no_library() -> None:
     from gaitpref.storage import MemoryStorage
 
-    with pytest.raises(ValueError, match="on demand.*takes no gait library"):
+    with pytest.raises(ValueError, match=r"on demand.*takes no gait library"):
         Session.create(MemoryStorage(), parse_config(CONFIG), "S01", library=["a"] * 42)
