@@ -13,33 +13,14 @@ import httpx
 import pytest
 
 from tests.console.test_browser import answer_by_clicks
+from tests.sessions.gaitkit import COMPASS
 
 pytestmark = pytest.mark.browser
-
-CONFIG = """
-name = "compass-on-demand"
-[space.step_length]
-values = [0.02, 0.04, 0.06, 0.08, 0.10, 0.12, 0.14]
-unit = "m"
-words = ["longer", "shorter"]
-[gaits]
-generator = "compass-hzd"
-speed = 0.2
-avoid_radius = 0.0
-[model]
-lengthscale = 0.03
-signal_variance = 1e-4
-noise = 0.01
-fit = "fixed"
-[cospar]
-strategy = "self-sparring"
-seed = 3
-"""
 
 
 def test_gaits_on_demand_in_the_browser(chromium: Any, live: str, tmp_path: Path) -> None:
     config = tmp_path / "on-demand.toml"
-    config.write_text(CONFIG, encoding="utf-8")
+    config.write_text(COMPASS, encoding="utf-8")
     context = chromium.new_context(viewport={"width": 1280, "height": 1000})
     page = context.new_page()
     errors: list[str] = []

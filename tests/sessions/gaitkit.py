@@ -83,3 +83,24 @@ fit = "fixed"
 seed = 4
 strategy = "self-sparring"
 """
+
+#: the real compass-hzd generator on a grid whose shortest step (0.02 m) has no gait at 0.2 m/s;
+#: with its seed, a subject who always prefers the new gait reaches it by the third query
+COMPASS = """
+name = "compass-on-demand"
+[space.step_length]
+values = [0.02, 0.04, 0.06, 0.08, 0.10, 0.12, 0.14]
+unit = "m"
+[gaits]
+generator = "compass-hzd"
+speed = 0.2
+avoid_radius = 0.0
+[model]
+lengthscale = 0.03
+signal_variance = 1e-4
+noise = 0.01
+fit = "fixed"
+[cospar]
+strategy = "self-sparring"
+seed = 3
+"""

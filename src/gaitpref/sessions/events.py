@@ -89,33 +89,33 @@ class TrialExecuted(EventPayload):
     gait_id: Annotated[str | None, Recorded] = None
 
 
-class GaitMade(EventPayload):
-    """``gait_made``: the gait of a proposed action, made on demand (or found in the gait cache)
-    the first time the session proposed it (``gaits/on_demand.py``); logged with its query.
-    ``key`` is the gait's content address in the cache, ``warm_start`` the key it started from."""
+class GaitPayload(EventPayload):
+    """What a gait made on demand is logged with: the proposed ``action``, its gait id, its
+    content address ``key`` in the gait cache and the key it was warm-started from."""
 
-    kind: ClassVar[str] = "gait_made"
     action: int
     gait_id: str
     key: str
     values: Annotated[dict[str, float], Recorded]
-    cot: Annotated[float, Recorded]
     warm_start: Annotated[str | None, Recorded] = None
 
 
-class GaitInfeasible(EventPayload):
+class GaitMade(GaitPayload):
+    """``gait_made``: the gait of a proposed action, made on demand (or found in the gait cache)
+    the first time the session proposed it (``gaits/on_demand.py``); logged with its query."""
+
+    kind: ClassVar[str] = "gait_made"
+    cot: Annotated[float, Recorded]
+
+
+class GaitInfeasible(GaitPayload):
     """``gait_infeasible``: a proposed action whose gait cannot be made.  It is never shown as a
     trial; it and the actions within ``radius`` of it (``[gaits].avoid_radius``) are never
     proposed again, and the next proposal follows in the same batch (``reason``: the solver's)."""
 
     kind: ClassVar[str] = "gait_infeasible"
-    action: int
-    gait_id: str
-    key: str
     radius: float
-    values: Annotated[dict[str, float], Recorded]
     reason: Annotated[str, Recorded]
-    warm_start: Annotated[str | None, Recorded] = None
 
 
 class HyperValues(BaseModel):
@@ -370,6 +370,7 @@ __all__ = [
     "Finished",
     "GaitInfeasible",
     "GaitMade",
+    "GaitPayload",
     "HyperValues",
     "HyperparametersRefit",
     "Note",
