@@ -219,3 +219,27 @@ def test_a_generator_session_takes_no_library() -> None:
 
     with pytest.raises(ValueError, match=r"on demand.*takes no gait library"):
         Session.create(MemoryStorage(), parse_config(CONFIG), "S01", library=["a"] * 42)
+
+
+def test_a_query_that_could_not_be_written_is_derived_again_from_the_log(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.storage import StorageError
+
+    FakeSteps.below = 0.9  # most proposals cannot be made
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = Session.create(url, parse_config(CONFIG), subject="S01")
+    real = s.storage.append
+
+    def fail(*args: object, **kwargs: object) -> object:
+        raise StorageError("disk full")
+
+    monkeypatch.setattr(s.storage, "append", fail)
+    with pytest.raises(StorageError):
+        s.next_query()  # gaits were made and avoided, nothing was written
+    monkeypatch.setattr(s.storage, "append", real)
+    q = s.next_query()
+    logged = [e.kind for e in s.events()]
+    assert logged.count("gait_infeasible") >= 1  # logged this time, with the query
+    again = Session.open(url, s.id)
+    assert again.pending == q and again.infeasible_gaits() == s.infeasible_gaits()

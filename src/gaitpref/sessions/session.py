@@ -268,19 +268,17 @@ class Session:
                     f"session {self.id} is busy: another writer kept appending while a query "
                     "was being issued; nothing was written, try again"
                 ) from None
-        except BaseException:
-            self._broken = True  # gaits made on demand may have moved the loop: rebuild
-            raise
         st.commit(records)
+        self._broken = False
         assert st.pending is not None
         return st.pending
 
     def _derived_query(self, st: SessionState) -> list[NewEvent]:
-        try:
-            return st.derive_query()
-        except BaseException:
-            self._broken = True  # the loop may have avoided gaits that were not logged
-            raise
+        """The query's events; until they are written and booked the state counts as broken
+        (rebuilt from the log by the next operation): deriving them may have moved the loop
+        (gaits made on demand that it now avoids)."""
+        self._broken = True
+        return st.derive_query()
 
     @property
     def pending(self) -> SessionQuery | None:
