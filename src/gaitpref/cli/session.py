@@ -107,7 +107,7 @@ def new(
     db: DbOption = None,
 ) -> None:
     """Start a session of SUBJECT with CONFIG; prints its id."""
-    from gaitpref.sessions import Session
+    from gaitpref.sessions import Session, read_prior_from
 
     def run() -> Session:
         library = None
@@ -115,7 +115,7 @@ def new(
             if not gait_ids.is_file():
                 raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
             library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
-        prior = [int(p) if p.isdigit() else p for p in prior_from or []]
+        prior = read_prior_from(prior_from or [])
         return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
     session = guard(run)

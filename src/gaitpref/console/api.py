@@ -88,8 +88,11 @@ def list_sessions(request: Request) -> list[SessionItemOut]:
 
 @router.post("/sessions", response_model=CreatedOut, status_code=status.HTTP_201_CREATED)
 def create_session(request: Request, body: CreateSessionIn) -> CreatedOut:
-    """A new session from a shipped config's name or a TOML config's text."""
-    session = service_of(request).create(body.config, body.subject, body.seed)
+    """A new session from a shipped config's name or a TOML config's text, warm-started from
+    ``prior_from`` (earlier session ids or subject codes) when given."""
+    session = service_of(request).create(
+        body.config, body.subject, body.seed, prior_from=body.prior_from
+    )
     return CreatedOut(id=session.id)
 
 

@@ -31,6 +31,7 @@ from gaitpref.console.service import (
 )
 from gaitpref.console.templating import render
 from gaitpref.console.trial_page import trial_context
+from gaitpref.sessions import read_prior_from
 from gaitpref.sessions.records import REASONS
 from gaitpref.sessions.session import Session
 
@@ -129,8 +130,14 @@ async def create_session(request: Request) -> Response:
             raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
         library = (data, lib_file.filename)
     name = upload_name.rsplit(".", 1)[0] if upload_name else None
+    try:
+        prior = read_prior_from([fields.get("prior_from", "")])
+    except ValueError as exc:
+        raise InputError("prior_from", str(exc)) from None
     session = await run_in_threadpool(
-        lambda: service_of(request).create(source, subject, seed, config_name=name, library=library)
+        lambda: service_of(request).create(
+            source, subject, seed, config_name=name, library=library, prior_from=prior
+        )
     )
     return see_other(f"/sessions/{session.id}")
 

@@ -47,6 +47,15 @@ class CreateSessionIn(_Request):
     seed: Annotated[StrictInt, Field(ge=0, le=MAX_ID)] | None = Field(
         default=None, description="the session's seed (default: the config's)"
     )
+    prior_from: list[
+        Annotated[StrictInt, Field(ge=1, le=MAX_ID)]
+        | Annotated[StrictStr, Field(pattern=SUBJECT_PATTERN)]
+    ] = Field(
+        default_factory=list,
+        max_length=1000,
+        description="warm start from these earlier sessions (ids) or subjects' sessions (codes)",
+        examples=[[3, "S02"]],
+    )
 
 
 class CreatedOut(BaseModel):

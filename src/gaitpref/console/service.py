@@ -119,15 +119,22 @@ class SessionService:
         *,
         config_name: str | None = None,
         library: tuple[bytes, str | None] | None = None,
+        prior_from: Sequence[int | str] = (),
     ) -> Session:
         """A new session from a shipped config's name or a config's TOML text, optionally with
-        an uploaded gait library (``(bytes, file name)``); see :mod:`gaitpref.console.configs`."""
+        an uploaded gait library (``(bytes, file name)``; see :mod:`gaitpref.console.configs`)
+        and warm-started from earlier sessions (``prior_from``: ids or subject codes)."""
         chosen = choose_config(
             config, library_dir=self.library_dir, name=config_name, library=library
         )
         try:
             session = Session.create(
-                self.storage, chosen.config, subject, seed=seed, library=chosen.library
+                self.storage,
+                chosen.config,
+                subject,
+                seed=seed,
+                library=chosen.library,
+                prior_from=prior_from,
             )
         except BaseException:
             discard(chosen.written)  # a refused upload leaves no file behind

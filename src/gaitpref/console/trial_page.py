@@ -92,6 +92,8 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
     best = int(np.argmax(mean))
     trials = session.trials()
+    learned = bool(mean.max() > mean.min())
+    sure = session.confidence() if learned else None
     ordinal = session.config.ordinal
     categories = ordinal.categories if ordinal is not None else ()
     return {
@@ -113,7 +115,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "notes": list(reversed(session.notes()))[:20],
         "best": views.gait_view(space, best, gait_id=session.gait_name(best)),
         "best_mean": float(mean[best]),
-        "learned": bool(mean.max() > mean.min()),
+        "learned": learned,
+        "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
+        "regret": None if sure is None else sure.relative_regret,
+        "prior_from": [p["session"] for p in session.record.meta.get("prior_from", [])],
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",
         "features": space.features,

@@ -7,6 +7,8 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 - :class:`Session` (``session.py``): create, open, next query, answer, undo, exclude, validate.
 - records (``records.py``): :class:`SessionQuery`, :class:`Trial`, :class:`ComparisonRecord`,
   :class:`SuggestionRecord`, :class:`Answered`.
+- warm starts from earlier sessions (``warm.py``; :func:`read_prior_from` reads typed ids
+  and subject codes), the confidence after every answer (``confidence.py``);
 - blind validation (``validation.py``), export and import (``export.py``), the stored config
   (``stored_config.py``) and the simulated demo subject (``demo.py``).
 """
@@ -27,6 +29,7 @@ from gaitpref.sessions.records import (
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.stored_config import GaitLibraryLike, software_version
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+from gaitpref.sessions.warm import read_prior_from
 
 __all__ = [
     "REASONS",
@@ -49,5 +52,6 @@ __all__ = [
     "export_session",
     "import_session",
     "posterior_summary",
+    "read_prior_from",
     "software_version",
 ]

@@ -90,6 +90,7 @@ class Session:
         self._state = self._fresh_state()
         self._broken = False
         self._in_turn = False
+        self._sure: tuple[int, Confidence] | None = None  # (last_seq, its confidence)
 
     # -- making and opening ------------------------------------------------------------------
     @classmethod
@@ -433,8 +434,15 @@ class Session:
     def confidence(self) -> Confidence:
         """How sure the model is of its recommendation (``sessions/confidence.py``), with the
         config's ``[stop]`` tolerance and sample count: ``.sentence(name)`` reads
-        "88% that G95 is within 5% of the best"."""
-        return self._locked(lambda: session_confidence(self._state, self.config.stop))
+        "88% that G95 is within 5% of the best".  Kept until the log moves on."""
+
+        def run() -> Confidence:
+            seq = self._state.last_seq
+            if self._sure is None or self._sure[0] != seq:
+                self._sure = (seq, session_confidence(self._state, self.config.stop))
+            return self._sure[1]
+
+        return self._locked(run)
 
     def stop_reason(self) -> str | None:
         """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Sequence
+import re
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING
 
 from gaitpref.config import ExperimentConfig
@@ -28,7 +29,8 @@ from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.sessions.stored_config import config_of, gait_cache_of
-from gaitpref.storage import EventRecord, SessionRecord, Storage
+from gaitpref.storage import EventRecord, SessionRecord, Storage, StorageError
+from gaitpref.storage.base import check_subject
 
 if TYPE_CHECKING:
     from gaitpref.gaits.gait_cache import GaitCache
@@ -39,6 +41,28 @@ def log_sha256(events: Sequence[EventRecord]) -> str:
     rows = [[e.seq, e.kind, e.version, e.payload] for e in events]
     text = json.dumps(rows, sort_keys=True, separators=(",", ":"), allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def read_prior_from(items: Iterable[str]) -> list[int | str]:
+    """Typed ``prior_from`` items (the CLI's repeated ``--prior-from``, the console's field):
+    each item may hold several, separated by commas or spaces; digits are a session id, anything
+    else a subject code.  ValueError names an item that is neither."""
+    out: list[int | str] = []
+    for item in items:
+        for token in re.split(r"[,\s]+", item.strip()):
+            if not token:
+                continue
+            if token.isdigit():
+                out.append(int(token))
+                continue
+            try:
+                out.append(check_subject(token))
+            except StorageError:
+                raise ValueError(
+                    f"prior_from: {token!r} is neither a session id nor a subject code "
+                    "(letters, digits, '-', '_' and '.')"
+                ) from None
+    return out
 
 
 def resolve_prior(
@@ -140,5 +164,6 @@ __all__ = [
     "log_sha256",
     "make_warm_start",
     "prepare_state",
+    "read_prior_from",
     "resolve_prior",
 ]

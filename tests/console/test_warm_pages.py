@@ -1,0 +1,88 @@
+"""Warm starts and the confidence in the console without a browser: the create form's and the
+API's ``prior_from``, the trial page's confidence after every answer, refused items."""
+
+from __future__ import annotations
+
+import re
+
+from fastapi.testclient import TestClient
+
+from tests.console.conftest import answer_once, new_session
+from tests.console.htmlforms import forms_of
+
+SENTENCE = re.compile(r'id="confidence"><b>(\d+)% that (G\d+) is within 5% of the best</b>')
+
+
+def _earlier(client: TestClient, answers: int = 4) -> int:
+    sid = new_session(client)
+    for _ in range(answers):
+        answer_once(client, sid)
+    return sid
+
+
+def _create(client: TestClient, subject: str, prior_from: str) -> tuple[int, str]:
+    create = forms_of(client.get("/").text)["create-form"]
+    assert "prior_from" in create.fields  # the form has the field, empty
+    data = {
+        "csrf_token": create.fields["csrf_token"],
+        "subject": subject,
+        "config": "exo-1d-step-length",
+        "prior_from": prior_from,
+    }
+    r = client.post("/sessions", data=data, follow_redirects=False)
+    return r.status_code, r.text if r.status_code != 303 else r.headers["location"]
+
+
+def test_the_create_form_warm_starts_from_a_subject_code(client: TestClient) -> None:
+    earlier = _earlier(client)
+    before = client.get(f"/api/sessions/{earlier}/events").json()
+    code, where = _create(client, "S02", " S01 ")
+    assert code == 303
+    sid = int(where.rsplit("/", 1)[1])
+    created = client.get(f"/api/sessions/{sid}/events").json()[0]["payload"]
+    assert [p["session"] for p in created["prior_from"]] == [earlier]
+    assert 0.0 <= created["prior_rho"] <= 1.0
+    page = client.get(f"/sessions/{sid}").text
+    assert f"Warm-started from session {earlier}." in page
+    assert SENTENCE.search(page)  # the earlier subject's answers already say something
+    assert client.get(f"/api/sessions/{earlier}/events").json() == before  # only read
+
+
+def test_the_trial_page_states_the_confidence_after_every_answer(client: TestClient) -> None:
+    sid = new_session(client)
+    assert 'id="confidence"' not in client.get(f"/sessions/{sid}").text  # nothing learnt yet
+    seen = []
+    for _ in range(4):
+        answer_once(client, sid)
+        page = client.get(f"/sessions/{sid}").text
+        m = SENTENCE.search(page)
+        if "No preference learned yet" in page:  # the first trial: nothing to compare with
+            assert m is None
+            continue
+        assert m, "no confidence after an answer"
+        assert "expected shortfall if you stop now" in page
+        seen.append((int(m.group(1)), m.group(2)))
+        again = SENTENCE.search(client.get(f"/sessions/{sid}").text)
+        assert again and (int(again.group(1)), again.group(2)) == seen[-1]  # same state, same
+    assert len(seen) >= 3
+
+
+def test_refused_prior_from_items_name_the_field(client: TestClient) -> None:
+    _earlier(client, answers=1)
+    code, text = _create(client, "S02", "S01, J@ne")
+    assert code == 422 and "<code>prior_from</code>" in text and "J@ne" in text
+    code, text = _create(client, "S02", "S09")
+    assert code == 422 and "S09" in text and "has no sessions" in text
+    assert len(client.get("/api/sessions").json()) == 1
+
+
+def test_the_api_takes_prior_from(client: TestClient) -> None:
+    earlier = _earlier(client, answers=2)
+    sid = new_session(client, prior_from=[earlier])
+    created = client.get(f"/api/sessions/{sid}/events").json()[0]["payload"]
+    assert [p["session"] for p in created["prior_from"]] == [earlier]
+    r = client.post(
+        "/api/sessions",
+        json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": ["no name"]},
+    )
+    assert r.status_code == 422
