@@ -12,9 +12,14 @@ An export folder is readable without gaitpref:
   and the console name it (``gait``: the library's id, or ``G<action>``): ``trials`` (with
   ``unsafe`` flags and their reasons), ``comparisons`` (with
   ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
-  deviation of every action) and ``validation``; and one table per other feedback kind the
-  session holds (its kind's :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``,
-  ``query``, the kind's columns, ``undone``, ``excluded``, ``at``).
+  deviation of every action), ``validation`` and ``confidence`` (after every answer, undo and
+  exclusion: ``seq`` of its last event, ``answers`` and ``trials`` in force, the recommended
+  ``action`` and ``gait``, the ``probability`` that it is within ``tolerance`` of the range of
+  the best, the expected shortfall ``regret`` in utility units and ``relative_regret`` as a
+  fraction of the range, the posterior ``samples`` behind them, ``at``); and one table per
+  other feedback kind the session holds (its kind's
+  :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``, ``query``, the kind's
+  columns, ``undone``, ``excluded``, ``at``).
 
 :func:`import_session` needs only the manifest, the config and the events: it replays them in
 memory first (checking every step and the exported posterior summary) and only then writes the
@@ -49,7 +54,7 @@ from gaitpref.storage.base import check_status
 FORMAT = "gaitpref-session-export"
 FORMAT_VERSION = 1
 Format = Literal["csv", "json"]
-TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation")
+TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "confidence")
 
 
 # -- export ------------------------------------------------------------------------------------
@@ -249,12 +254,17 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
         for r in session.validations()
         for label in sorted(r.actions)
     ]
+    confidence = [
+        {**row, "gait": session.gait_name(row["action"]), "at": at.get(row["seq"])}
+        for row in session.confidence_history()
+    ]
     return {
         "trials": trials,
         "comparisons": comparisons,
         "suggestions": suggestions,
         "posterior": posterior,
         "validation": validation,
+        "confidence": confidence,
         **_other_feedback(session, at),
     }
 

@@ -11,7 +11,7 @@ replayed together, and so are a query's (the gaits made on demand for it, then t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from gaitpref.errors import QueryError, ReplayError, SessionStateError
 from gaitpref.feedback import kind_for_event
@@ -20,8 +20,13 @@ from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord, NewEvent
 
 
-def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
-    """Apply logged ``records`` to ``state``, re-deriving and checking each one."""
+def replay(
+    state: SessionState,
+    records: Sequence[EventRecord],
+    after: Callable[[SessionState, EventRecord], None] | None = None,
+) -> None:
+    """Apply logged ``records`` to ``state``, re-deriving and checking each one; ``after`` is
+    called with the state and the last event of each step (one event, or an answer's events)."""
     i = 0
     while i < len(records):
         r = records[i]
@@ -40,6 +45,8 @@ def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
                     log.read_payload(records[j])
                 j += 1
             _replay_answer(state, records[i:j])
+            if after is not None:
+                after(state, records[j - 1])
             i = j
             continue
         if log.is_query_part(r.kind) or r.kind == log.QUERY:
@@ -52,6 +59,8 @@ def replay(state: SessionState, records: Sequence[EventRecord]) -> None:
             i = j + 1
             continue
         _replay_one(state, r)
+        if after is not None:
+            after(state, r)
         i += 1
 
 

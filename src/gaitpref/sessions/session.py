@@ -28,7 +28,7 @@ import contextlib
 import threading
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import ReplayError, SessionStateError
@@ -36,7 +36,7 @@ from gaitpref.loop.cospar import QueryError
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
-from gaitpref.sessions.confidence import session_confidence, stop_reason
+from gaitpref.sessions.confidence import confidence_history, session_confidence, stop_reason
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
@@ -443,6 +443,13 @@ class Session:
             return self._sure[1]
 
         return self._locked(run)
+
+    def confidence_history(self) -> list[dict[str, Any]]:
+        """The confidence after every answer, undo and exclusion so far, as it was stated then
+        (``sessions/confidence.py``; the log is replayed afresh): the export's table."""
+        return self._locked(
+            lambda: confidence_history(self._fresh_state(), self.events(), self.config.stop)
+        )
 
     def stop_reason(self) -> str | None:
         """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
