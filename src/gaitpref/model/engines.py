@@ -72,11 +72,16 @@ class DenseEngine:
         self.root_t = np.ascontiguousarray(self.prior.scale * root.T)  # so z @ root_t
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
+        return self.prior_parts(rng, size)[0]
+
+    def prior_parts(
+        self, rng: np.random.Generator, size: int
+    ) -> tuple[FloatArray, FloatArray | None]:
+        """Prior samples (as :meth:`prior_samples`, the same generator use and values) and
+        their jitter part ``sqrt(jitter) z'`` (None without jitter)."""
         z, z_jitter = self.prior.draw(rng, size)
         out: FloatArray = z @ self.root_t
-        if z_jitter is not None:
-            out += self.prior.jitter_scale * z_jitter
-        return out
+        return _plus_jitter(out, self.prior.jitter_scale, z_jitter)
 
     def cross(self, visited: IntArray) -> CrossCovariance:
         return DenseCross(self.space, self.kernel, visited)
@@ -97,11 +102,29 @@ class ScalableEngine:
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
         return self.prior.sample(rng, size)
 
+    def prior_parts(
+        self, rng: np.random.Generator, size: int
+    ) -> tuple[FloatArray, FloatArray | None]:
+        """As :meth:`DenseEngine.prior_parts`."""
+        z, z_jitter = self.prior.draw(rng, size)
+        return _plus_jitter(self.prior.transform(z, None), self.prior.jitter_scale, z_jitter)
+
     def cross(self, visited: IntArray) -> CrossCovariance:
         split = khatri_rao_split(self.space.shape, visited.shape[0], self.block_elements)
         if split is None:
             return RowBlockCross(self.space, self.kernel, visited, self.block_elements)
         return KhatriRaoCross(self.space, self.kernel, visited, split, self.block_elements)
+
+
+def _plus_jitter(
+    out: FloatArray, scale: float, z_jitter: FloatArray | None
+) -> tuple[FloatArray, FloatArray | None]:
+    """``out + scale z'`` in place (the same rounding as adding it at once) and ``scale z'``."""
+    if z_jitter is None:
+        return out, None
+    part: FloatArray = scale * z_jitter
+    out += part
+    return out, part
 
 
 GridEngine = DenseEngine | ScalableEngine

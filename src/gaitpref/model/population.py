@@ -142,30 +142,41 @@ class PopulationPosterior(Posterior):
     def visited_cross(self, actions: ArrayLike) -> FloatArray:
         return self.cross.rows(np.asarray(actions, dtype=np.intp))
 
-    def _prior_draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray]:
+    def _jitter_columns(self) -> tuple[IntArray, FloatArray]:
+        gaits, subjects = self._nodes
+        return gaits, np.where(subjects == self.target, 1.0, self.rho)
+
+    def _prior_draw(
+        self, rng: np.random.Generator, size: int
+    ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
         """The subject's own part first (so ``rho = 0`` draws as one subject), then the shared
         part, then the other subjects' own parts on their visited gaits, in subject order.
 
         With ``rho = 0`` the factors are block-diagonal by subject and the other subjects' draws
         cannot reach this subject's samples: they are left at 0 and the generator moves exactly
-        as a single-subject posterior's does."""
+        as a single-subject posterior's does.  The third entry is the jitter part of the
+        subject's grid draw, ``sqrt(1 - rho) e_own + sqrt(rho) e_shared``."""
         gaits, subjects = self._nodes
         rho = self.rho
-        own = self.engine.prior_samples(rng, size) if rho < 1.0 else None
-        shared = self.engine.prior_samples(rng, size) if rho > 0.0 else None
+        own, e_own = self.engine.prior_parts(rng, size) if rho < 1.0 else (None, None)
+        shared, e_shared = self.engine.prior_parts(rng, size) if rho > 0.0 else (None, None)
+        e: FloatArray | None
         if own is None:
             assert shared is not None
-            f = shared
+            f, e = shared, e_shared
         elif shared is None:
-            f = own
+            f, e = own, e_own
         else:
             f = np.sqrt(1.0 - rho) * own + np.sqrt(rho) * shared
+            e = None
+            if e_own is not None and e_shared is not None:
+                e = np.sqrt(1.0 - rho) * e_own + np.sqrt(rho) * e_shared
         f_visited = np.empty((size, gaits.shape[0]))
         mine = subjects == self.target
         f_visited[:, mine] = f[:, gaits[mine]]
         if rho == 0.0:  # the others' nodes are independent of this subject: no draw needed
             f_visited[:, ~mine] = 0.0
-            return f, f_visited
+            return f, f_visited, e
         for s in np.unique(subjects[~mine]):
             nodes = np.flatnonzero(subjects == s)
             at = gaits[nodes]
@@ -175,7 +186,7 @@ class PopulationPosterior(Posterior):
             if shared is not None:
                 part += np.sqrt(rho) * shared[:, at]
             f_visited[:, nodes] = part
-        return f, f_visited
+        return f, f_visited, e
 
 
 @dataclass(frozen=True)

@@ -184,30 +184,51 @@ class Posterior:
         out: FloatArray = K - P.T @ P + Q.T @ Q
         return out
 
-    def sample(self, rng: np.random.Generator, size: int = 1) -> FloatArray:
+    def sample(self, rng: np.random.Generator, size: int = 1, *, nugget: bool = True) -> FloatArray:
         """``size x A`` joint samples of the utilities over every action.
 
+        ``nugget=False``: samples of the smooth part of the utility, without the kernel's
+        jitter (the grid's independent per-gait term, ``kernels.py``), from the same draws:
+        with ``f = g + e`` (``e`` the jitter's white noise), ``g = f - e - jitter C`` where
+        ``C`` is the pathwise correction's coefficient on the visited columns (the jitter's share
+        of ``K_{:,V}``).  The generator is used exactly as with the nugget.
+
         Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
-        place, plus the engine's bounded blocks.
+        place (and the jitter's draw without the nugget), plus the engine's bounded blocks.
         """
         if size < 0:
             raise ValueError(f"size must be >= 0, got {size}")
         if self.fit is None or size == 0:
-            return self.engine.prior_samples(rng, size)
-        f, f_visited = self._prior_draw(rng, size)
+            f, e = self.engine.prior_parts(rng, size)
+            if not nugget and e is not None:
+                f -= e
+            return f
+        f, f_visited, e = self._prior_draw(rng, size)
         L, R = self.fit.chol_prior, self.fit.chol_hessian
         w = solve_triangular(L, f_visited.T, lower=True, check_finite=False)
         v = solve_triangular(R, w, lower=True, trans="T", check_finite=False) - w
         coef = solve_triangular(L, v, lower=True, trans="T", check_finite=False)
         coef += self._alpha[:, None]
         self.cross.add_product(f, coef)
+        if not nugget and e is not None:
+            f -= e
+            columns, weight = self._jitter_columns()
+            np.add.at(f, (slice(None), columns), -self.kernel.jitter * (coef.T * weight))
         return f
 
-    def _prior_draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray]:
-        """A joint prior draw over every action (``size x A``) and the visited set (``size x
-        m``); here the visited set is part of the grid (``model/population.py`` overrides it)."""
-        f = self.engine.prior_samples(rng, size)
-        return f, f[:, self.visited]
+    def _jitter_columns(self) -> tuple[IntArray, FloatArray]:
+        """The grid action of each visited node and the weight of the jitter in its column of
+        ``K_{:,V}`` (here the visited set is part of the grid: every weight is 1)."""
+        return self.visited, np.ones(self.visited.shape[0])
+
+    def _prior_draw(
+        self, rng: np.random.Generator, size: int
+    ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+        """A joint prior draw over every action (``size x A``), the visited set (``size x
+        m``) and the draw's jitter part over every action (None without jitter); here the
+        visited set is part of the grid (``model/population.py`` overrides it)."""
+        f, e = self.engine.prior_parts(rng, size)
+        return f, f[:, self.visited], e
 
     def argmax_samples(
         self, rng: np.random.Generator, size: int, allowed: NDArray[np.bool_] | None = None
