@@ -102,3 +102,27 @@ def test_the_rule_triggers_on_confidence_or_trials() -> None:
         StopRule(confidence=1.5)
     with pytest.raises(ValueError, match="tolerance"):
         StopRule(tolerance=1.0)
+
+
+def test_the_confidence_is_about_the_smooth_utility_not_the_jitter() -> None:
+    """With a large jitter (an independent term per gait), subjects whose utility is the smooth
+    part of a prior draw: without data the stated probability is the observed frequency (as
+    above); samples with the jitter would state far less (their "best" is the largest of many
+    independent draws)."""
+    kernel = SquaredExponential(0.15, 1.0, 1.0)  # jitter as large as the signal
+    engine = make_engine(SPACE, kernel, "dense")
+    prior = CoSpar(SPACE, kernel, NOISE, n=2, seed=0).posterior
+    stated, observed, with_jitter = [], [], []
+    for seed in range(200):
+        f, e = engine.prior_parts(np.random.default_rng([seed, 1]), 1)
+        assert e is not None
+        user = SimulatedUser(SPACE, (f - e)[0], np.random.default_rng(seed))
+        sure = confidence(prior, np.random.default_rng([seed, 2]), samples=300)
+        stated.append(sure.probability)
+        observed.append(_truly_within(user, sure.recommended, 0.05))
+        g = prior.sample(np.random.default_rng([seed, 2]), 300)
+        best = g.max(axis=1)
+        with_jitter.append(np.mean(best - g[:, 0] <= 0.05 * (best - g.min(axis=1))))
+    p, hit, low = np.mean(stated), np.mean(observed), np.mean(with_jitter)
+    assert abs(p - hit) < 0.03, (p, hit)  # measured: 0.156 stated, 0.135 observed
+    assert hit - low > 0.05, (low, hit)  # measured: 0.070 with the jitter

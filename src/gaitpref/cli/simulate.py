@@ -202,6 +202,13 @@ def population(
     jobs: Jobs = 1,
     seed: Annotated[int, typer.Option(help="study seed")] = 0,
     tolerance: Annotated[float, typer.Option(help="'within' as a fraction of the range")] = 0.05,
+    user_noise: Annotated[
+        float,
+        typer.Option(
+            min=0.0,
+            help="the simulated subjects' probit noise, in the objectives' units (0: noiseless)",
+        ),
+    ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Each subject held out in turn: cold, then warm-started from the others (same seeds)."""
@@ -217,7 +224,9 @@ def population(
             raise ValueError(f"objectives file {str(objectives)!r} does not exist")
         arr = np.load(objectives, allow_pickle=False)
         cfg = load_config(config)
-        return population_bench(cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance)
+        return population_bench(
+            cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise
+        )
 
     result = guard(run)
     if as_json:

@@ -1,13 +1,21 @@
 """How sure are we: the chance that the recommended gait is good enough, and when to stop.
 
-From joint posterior samples ``f^(1..S)`` (pathwise, ``model/posterior.py``) and the recommended
-gait ``r`` (the posterior mean's argmax, the gait blind validation calls "max"):
+From joint posterior samples ``f^(1..S)`` of the smooth utility (pathwise,
+``model/posterior.py``, ``nugget=False``) and the recommended gait ``r`` (the posterior mean's
+argmax, the gait blind validation calls "max"):
 
 - the probability that ``r`` is within a tolerance of the subject's best,
   ``P(max f - f_r <= tol (max f - min f))``, with the tolerance a fraction of the utility's
   range (the same normalisation as the paper's normalised objective, Fig. 4);
 - the expected shortfall (simple regret) of stopping now, ``E[max f - f_r]``, in utility units
   and as a fraction of the range.
+
+The samples leave out the kernel's jitter (``kernels.py``: the paper's "noise variance", an
+independent term per gait; 10% of the prior variance in the synthetic configs): the question is
+about the subject's utility over the gait parameters, and with the jitter in every sampled gait
+"the best" of a sample is the largest of many independent draws, a gait no answer could point
+to, and the probability falls far below the observed frequency
+(``docs/results/population/``).
 
 Both are Monte Carlo averages over ``samples`` draws (their standard error is at most
 ``0.5 / sqrt(samples)``), computed in blocks so that no more than :data:`BLOCK_ELEMENTS` values
@@ -93,7 +101,7 @@ def confidence(
     done = 0
     while done < samples:
         size = min(block, samples - done)
-        f = posterior.sample(rng, size)
+        f = posterior.sample(rng, size, nugget=False)
         if allowed is not None:
             f = f[:, allowed]
             at = int(np.count_nonzero(allowed[:rec]))

@@ -2,10 +2,11 @@
 
 The objectives hold one utility grid per subject (``S x A``).  Every subject first walks ``T``
 trials alone (the cold run, simulated as ``gaitpref simulate`` does: the config's loop, a
-noiseless simulated user, comparisons only); then, for each held-out subject, the same run
-again (same seeds) warm-started from the other subjects' cold runs (``loop/warm.py``: their
-preferences through the population kernel, ``rho`` learned from them).  A trial's score is the
-normalised objective of its executed gait (1 at the subject's best, 0 at the worst).
+simulated user, noiseless unless ``user_noise`` is given, comparisons only); then, for each
+held-out subject, the same run again (same seeds) warm-started from the other subjects' cold
+runs (``loop/warm.py``: their preferences through the population kernel, ``rho`` learned from
+them).  A trial's score is the normalised objective of its executed gait (1 at the subject's
+best, 0 at the worst).
 
 After every answer, in both runs, the loop states its confidence (``loop/stopping.py``): the
 probability that its recommended gait is within ``tolerance`` of the best, and the truth is
@@ -54,6 +55,7 @@ def _walk(
     others: Sequence[Sequence[Preference]] | None,
     tolerance: float,
     samples: int,
+    user_noise: float = 0.0,
 ) -> Walked:
     loop_ss, user_ss, sure_ss = np.random.SeedSequence(list(seeds)).spawn(3)
     loop: CoSpar = config.make_loop(seed=np.random.default_rng(loop_ss))
@@ -62,7 +64,7 @@ def _walk(
         warm = warm_start(config.space, loop.hyper, loop.prior, others)
         loop.warm_start(warm)
         rho = warm.rho
-    user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss))
+    user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss), noise=user_noise)
     sure_rng = np.random.default_rng(sure_ss)
     utility = user.utility
     span = float(utility.max() - utility.min())
@@ -112,8 +114,10 @@ def population_bench(
     jobs: int = 1,
     tolerance: float = 0.05,
     samples: int = 300,
+    user_noise: float = 0.0,
 ) -> dict[str, object]:
-    """The JSON of ``gaitpref bench population`` (module docstring)."""
+    """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
+    simulated subjects' probit noise in the objectives' units (``simulate/users.py``)."""
     grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
@@ -122,7 +126,10 @@ def population_bench(
     n_jobs = resolve_jobs(jobs)
 
     def run(calls: list[tuple[int, Sequence[Sequence[Preference]] | None]]) -> list[Walked]:
-        args = [(config, grids[k], trials, (seed, k), o, tolerance, samples) for k, o in calls]
+        args = [
+            (config, grids[k], trials, (seed, k), o, tolerance, samples, user_noise)
+            for k, o in calls
+        ]
         if n_jobs == 1:
             return [_walk(*a) for a in args]
         from joblib import Parallel, delayed
@@ -144,6 +151,7 @@ def population_bench(
         "trials": trials,
         "tolerance": tolerance,
         "seed": seed,
+        "user_noise": user_noise,
     }
 
 
