@@ -203,6 +203,11 @@ class CoSpar:
         return [t for a in self.answers for t in a.ties]
 
     @property
+    def singles(self) -> list[ActionObservation]:
+        """The single-action terms in the model (ratings: every answer's, less the excluded)."""
+        return [o for a in self.answers for o in self._kept_singles(a)]
+
+    @property
     def executed(self) -> list[int]:
         """Every executed action, in order (one entry per trial)."""
         return [x for a in self.answers for x in a.query.actions]

@@ -3,8 +3,14 @@
 A :class:`WarmStart` holds the earlier subjects' observations as population data (node codes
 ``subject * A + gait``, ``model/population.py``; the new subject is subject 0, the earlier ones
 1, 2, ...) and the shared fraction ``rho``.  :func:`warm_start` builds it from each earlier
-subject's preferences and learns ``rho`` by the evidence when two or more earlier subjects are
-given (how alike they are to each other); with one, ``rho`` is the prior's median.  The new
+subject's observations and learns ``rho`` by the evidence when two or more earlier subjects are
+given (how alike they are to each other); with one, ``rho`` is the prior's median.
+
+An earlier subject is either their preferences alone (what warm starts carried first, kept for
+the sessions that recorded it) or an :class:`Earlier`: every registered kind's terms in force,
+pair terms (preferences, and ties when the new loop models them) and single-action terms
+(ratings), each made with the new loop's likelihood (:func:`warm_terms`), as its own answers
+are.  The new
 subject's answers join those data in every fit (``CoSpar.warm_start``): with ``rho = 0`` their
 posterior is the one they would have had alone.
 """
@@ -16,14 +22,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gaitpref.feedback import Preference
+from gaitpref.feedback import ActionObservation, ModelContext, Preference, Tie, kinds
+from gaitpref.loop.learning import pair_data
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperPrior
-from gaitpref.model.likelihood import ActionLikelihood
+from gaitpref.model.likelihood import ActionLikelihood, StackedActionLikelihood
 from gaitpref.model.population import PopulationModel, check_rho
 from gaitpref.model.population_fit import LogitNormal, fit_population
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.singles import SingleData
 from gaitpref.space import IntArray, Space
 
 
@@ -34,9 +42,50 @@ class WarmStart:
     data: PairData
     rho: float
     subjects: int  # earlier subjects
+    singles: SingleData | None = None  # their single-action terms (node codes), if any
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rho", check_rho(self.rho))
+
+
+@dataclass(frozen=True)
+class Earlier:
+    """One earlier subject's terms in force: preferences, ties and single-action observations."""
+
+    preferences: Sequence[Preference]
+    ties: Sequence[Tie] = ()
+    singles: Sequence[ActionObservation] = ()
+
+
+def warm_terms(
+    context: ModelContext, model_ties: bool, earlier: Sequence[Earlier]
+) -> tuple[PairData, SingleData | None]:
+    """The earlier subjects' terms as population data (subject ``k + 1`` for the k-th), made as
+    the new loop makes its own (``context``: its noise and rating scale; ties modelled or not):
+    pair terms by :func:`~gaitpref.loop.learning.pair_data`, single-action terms by each
+    registered kind's likelihood."""
+    size = len(context.space)
+    offsets = [(k + 1) * size for k in range(len(earlier))]
+    parts = [pair_data(e.preferences, e.ties, context.noise, model_ties) for e in earlier]
+    shifted = list(zip(parts, offsets, strict=True))
+    data = PairData(
+        np.concatenate([np.zeros(0, np.intp)] + [d.first + o for d, o in shifted]),
+        np.concatenate([np.zeros(0, np.intp)] + [d.second + o for d, o in shifted]),
+        np.concatenate([np.zeros(0)] + [d.sigma for d in parts]),
+        np.concatenate([np.zeros(0, bool)] + [d.banded for d in parts]),
+        np.concatenate([np.zeros(0, bool)] + [d.tie for d in parts]),
+    )
+    codes: list[int] = []
+    likelihoods: list[tuple[int, ActionLikelihood]] = []
+    for kind in kinds():
+        mine = [(o, k) for k, e in enumerate(earlier) for o in e.singles if o.kind == kind.name]
+        if mine:
+            codes += [offsets[k] + o.action for o, k in mine]
+            likelihoods.append((len(mine), kind.action_likelihood([o for o, _ in mine], context)))
+    if not codes:
+        return data, None
+    stacked = StackedActionLikelihood(tuple(likelihoods))
+    return data, SingleData(np.asarray(codes, dtype=np.intp), stacked)
 
 
 def warm_data(space: Space, earlier: Sequence[Sequence[Preference]]) -> PairData:
@@ -56,21 +105,36 @@ def warm_start(
     space: Space,
     hyper: Hyperparameters,
     prior: HyperPrior,
-    earlier: Sequence[Sequence[Preference]],
+    earlier: Sequence[Sequence[Preference]] | Sequence[Earlier],
     rho_prior: LogitNormal | None = None,
+    *,
+    context: ModelContext | None = None,
+    model_ties: bool = False,
 ) -> WarmStart:
-    """The warm start from the earlier subjects' preferences (one sequence per subject)."""
+    """The warm start from the earlier subjects: their preferences (one sequence per subject),
+    or every term of theirs (:class:`Earlier`, made with the new loop's ``context`` and
+    ``model_ties``; :func:`warm_terms`)."""
     rho_prior = LogitNormal() if rho_prior is None else rho_prior
-    data = warm_data(space, earlier)
+    singles = None
+    terms = [e for e in earlier if isinstance(e, Earlier)]
+    if terms:
+        if context is None or len(terms) != len(earlier):
+            raise ValueError("earlier subjects' terms (Earlier) need the new loop's context")
+        data, singles = warm_terms(context, model_ties, terms)
+        counts = [len(e.preferences) + len(e.ties) + len(e.singles) for e in terms]
+    else:
+        prefs = [e for e in earlier if not isinstance(e, Earlier)]
+        data = warm_data(space, prefs)
+        counts = [len(p) for p in prefs]
     rho = rho_prior.median
-    with_data = sum(1 for p in earlier if p)
+    with_data = sum(1 for c in counts if c)
     if with_data >= 2 and rho_prior.sd > 0:
         held = HyperPrior(
             tuple(type(p)(p.median, 0.0) for p in prior.lengthscale),
             type(prior.variance)(prior.variance.median, 0.0),
         )  # only rho: the kernel stays the config's (the new subject's refits move it)
-        rho = fit_population(space, hyper, rho, data, held, rho_prior).rho_after
-    return WarmStart(data, rho, len(earlier))
+        rho = fit_population(space, hyper, rho, data, held, rho_prior, singles=singles).rho_after
+    return WarmStart(data, rho, len(earlier), singles)
 
 
 def warm_posterior(
@@ -91,10 +155,19 @@ def warm_posterior(
         np.concatenate([own.tie, warm.data.tie]),
     )
     model = PopulationModel(gp.space, gp.kernel, warm.rho, gp.noise, gp.sampler, gp.ordinal)
+    if warm.singles is not None:  # the new subject's single-action terms first, then theirs
+        theirs = warm.singles
+        if single is None or single_likelihood is None:
+            single, single_likelihood = theirs.actions, theirs.likelihood
+        else:
+            single_likelihood = StackedActionLikelihood(
+                ((single.shape[0], single_likelihood), (theirs.size, theirs.likelihood))
+            )
+            single = np.concatenate([single, theirs.actions])
     return model.posterior(
         data.first, data.second, data.likelihood(band), 0,
         single=single, single_likelihood=single_likelihood,
     )  # fmt: skip
 
 
-__all__ = ["WarmStart", "warm_data", "warm_posterior", "warm_start"]
+__all__ = ["Earlier", "WarmStart", "warm_data", "warm_posterior", "warm_start", "warm_terms"]

@@ -213,7 +213,7 @@ class Posterior:
         if not nugget and e is not None:
             f -= e
             columns, weight = self._jitter_columns()
-            np.add.at(f, (slice(None), columns), -self.kernel.jitter * (coef.T * weight))
+            np.add.at(f.T, columns, -self.kernel.jitter * (coef * weight[:, None]))
         return f
 
     def _jitter_columns(self) -> tuple[IntArray, FloatArray]:

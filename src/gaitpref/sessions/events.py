@@ -16,7 +16,7 @@ logged one on the payload class's :meth:`~gaitpref.payloads.EventPayload.checked
 
 from __future__ import annotations
 
-from typing import Annotated, Any, ClassVar
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import (
     BaseModel,
@@ -56,14 +56,21 @@ class Created(EventPayload):
     # warm starts (0.2; absent in 0.1.0 logs): the earlier sessions read, and the shared fraction
     prior_from: list[PriorSession] = Field(default_factory=list)
     prior_rho: float | None = None
+    # what the warm start carries: "all" (every registered kind's terms in force: preferences,
+    # ties, ratings); absent: their preferences only (the first warm starts, replayed as written)
+    prior_terms: Literal["all"] | None = None
 
     @model_serializer(mode="wrap")
     def _without_a_cold_start(self, handler: SerializerFunctionWrapHandler) -> Any:
-        """A session without a warm start stores what 0.1 stored."""
+        """A session without a warm start stores what 0.1 stored (and one whose warm start
+        carries preferences only, what it stored then)."""
         out = handler(self)
-        if isinstance(out, dict) and not out.get("prior_from"):
-            out.pop("prior_from", None)
-            out.pop("prior_rho", None)
+        if isinstance(out, dict):
+            if out.get("prior_terms") is None:
+                out.pop("prior_terms", None)
+            if not out.get("prior_from"):
+                out.pop("prior_from", None)
+                out.pop("prior_rho", None)
         return out
 
 

@@ -135,6 +135,7 @@ class Session:
             rho = make_warm_start(storage, cfg, prior, use_seed).rho
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
+            meta["prior_terms"] = "all"
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -155,6 +156,7 @@ class Session:
                 gait_library=gait_ids is not None,
                 prior_from=prior,
                 prior_rho=rho,
+                prior_terms="all" if prior else None,
             )
         )
         record = storage.create_session(spec, [created])

@@ -11,6 +11,12 @@ preferences in force (after exclusions) enter the new subject's model, one subje
 Earlier sessions are only read: nothing is written to them, and they may go on afterwards (the
 hash covers the log up to the recorded event only).  A changed log is a
 :class:`~gaitpref.errors.ReplayError` naming the session.
+
+A warm start made now carries every registered kind's terms in force (preferences, ties when the
+new config models them, ratings given on the new config's rating scale; ``loop/warm.py``,
+:class:`~gaitpref.loop.warm.Earlier`) and
+records ``prior_terms = "all"``; one recorded without it carried preferences only and is rebuilt
+so, so that it replays as it was written.
 """
 
 from __future__ import annotations
@@ -23,8 +29,7 @@ from typing import TYPE_CHECKING
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError
-from gaitpref.feedback import Preference
-from gaitpref.loop.warm import WarmStart, warm_data, warm_start
+from gaitpref.loop.warm import Earlier, WarmStart, warm_data, warm_start, warm_terms
 from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -104,8 +109,15 @@ def describe_prior(storage: Storage, records: Sequence[SessionRecord]) -> list[P
     return out
 
 
-def _earlier_preferences(storage: Storage, prior: PriorSession) -> list[Preference]:
-    """The preferences in force in an earlier session after its recorded event, replayed."""
+def _categories(config: ExperimentConfig) -> tuple[str, ...] | None:
+    return None if config.ordinal is None else tuple(config.ordinal.categories)
+
+
+def _earlier_terms(
+    storage: Storage, prior: PriorSession, scale: tuple[str, ...] | None = None
+) -> Earlier:
+    """The terms in force in an earlier session after its recorded event, replayed; its
+    single-action terms (ratings) only when its rating scale is ``scale``, the new one's."""
     record = storage.get_session(prior.session)
     events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
     if log_sha256(events) != prior.sha256:
@@ -116,23 +128,40 @@ def _earlier_preferences(storage: Storage, prior: PriorSession) -> list[Preferen
         )
     state = prepare_state(storage, record)
     replay(state, events)
-    return list(state.loop.preferences)
+    loop = state.loop
+    same_scale = scale is not None and _categories(state.config) == scale
+    return Earlier(loop.preferences, loop.ties, loop.singles if same_scale else ())
 
 
-def earlier_subjects(storage: Storage, prior: Sequence[PriorSession]) -> list[list[Preference]]:
-    """The earlier sessions' preferences, one list per subject code (in order of first id)."""
-    by_subject: dict[str, list[Preference]] = {}
+def earlier_subjects(
+    storage: Storage, prior: Sequence[PriorSession], config: ExperimentConfig | None = None
+) -> list[Earlier]:
+    """The earlier sessions' terms, one :class:`Earlier` per subject code (in order of first
+    id); ratings only from sessions rated on ``config``'s scale (None: no ratings)."""
+    scale = None if config is None else _categories(config)
+    by_subject: dict[str, list[Earlier]] = {}
     for p in prior:
-        by_subject.setdefault(p.subject, []).extend(_earlier_preferences(storage, p))
-    return list(by_subject.values())
+        by_subject.setdefault(p.subject, []).append(_earlier_terms(storage, p, scale))
+    return [
+        Earlier(
+            [x for e in group for x in e.preferences],
+            [x for e in group for x in e.ties],
+            [x for e in group for x in e.singles],
+        )
+        for group in by_subject.values()
+    ]
 
 
 def make_warm_start(
     storage: Storage, config: ExperimentConfig, prior: Sequence[PriorSession], seed: int
 ) -> WarmStart:
-    """The warm start of a new session, ``rho`` learned from the earlier subjects."""
+    """The warm start of a new session, every term carried, ``rho`` learned from the earlier
+    subjects."""
     loop = config.make_loop(seed=seed)
-    return warm_start(config.space, loop.hyper, loop.prior, earlier_subjects(storage, prior))
+    return warm_start(
+        config.space, loop.hyper, loop.prior, earlier_subjects(storage, prior, config),
+        context=loop.context(), model_ties=loop.learning.ties == "model",
+    )  # fmt: skip
 
 
 def prepare_state(
@@ -150,11 +179,18 @@ def prepare_state(
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]
-        groups = earlier_subjects(storage, prior)
+        groups = earlier_subjects(storage, prior, config)
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
-        state.loop.warm_start(WarmStart(warm_data(config.space, groups), rho, len(groups)))
+        if record.meta.get("prior_terms") == "all":
+            loop = state.loop
+            terms = warm_terms(loop.context(), loop.learning.ties == "model", groups)
+            warm = WarmStart(terms[0], rho, len(groups), terms[1])
+        else:  # recorded before warm starts carried every term: preferences only
+            prefs = [g.preferences for g in groups]
+            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups))
+        state.loop.warm_start(warm)
     return state
 
 
