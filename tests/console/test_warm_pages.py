@@ -51,6 +51,7 @@ def test_the_create_form_warm_starts_from_a_subject_code(client: TestClient) -> 
 def test_the_trial_page_states_the_confidence_after_every_answer(client: TestClient) -> None:
     sid = new_session(client)
     assert 'id="confidence"' not in client.get(f"/sessions/{sid}").text  # nothing learnt yet
+    assert client.get(f"/api/sessions/{sid}/posterior").json()["confidence"] is None
     seen = []
     for _ in range(4):
         answer_once(client, sid)
@@ -64,6 +65,9 @@ def test_the_trial_page_states_the_confidence_after_every_answer(client: TestCli
         seen.append((int(m.group(1)), m.group(2)))
         again = SENTENCE.search(client.get(f"/sessions/{sid}").text)
         assert again and (int(again.group(1)), again.group(2)) == seen[-1]  # same state, same
+        api = client.get(f"/api/sessions/{sid}/posterior").json()["confidence"]
+        assert api["sentence"] == f"{seen[-1][0]}% that {seen[-1][1]} is within 5% of the best"
+        assert 0.0 <= api["probability"] <= 1.0 and api["tolerance"] == 0.05
     assert len(seen) >= 3
 
 

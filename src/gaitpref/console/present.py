@@ -6,6 +6,7 @@ import numpy as np
 
 from gaitpref.console import views
 from gaitpref.console.schemas import (
+    ConfidenceOut,
     FeatureOut,
     GaitOut,
     PosteriorOut,
@@ -116,6 +117,17 @@ def posterior_out(session: Session) -> PosteriorOut:
     mean = np.asarray(post.mean, dtype=float)
     sd = np.asarray(post.std, dtype=float)
     space = session.config.space
+    confidence = None
+    if mean.max() > mean.min():  # something learnt (the trial page shows it then too)
+        sure = session.confidence()
+        confidence = ConfidenceOut(
+            sentence=sure.sentence(session.gait_name(sure.recommended)),
+            probability=sure.probability,
+            tolerance=sure.tolerance,
+            regret=sure.regret,
+            relative_regret=sure.relative_regret,
+            samples=sure.samples,
+        )
     return PosteriorOut(
         session_id=session.id,
         features=list(space.names),
@@ -124,6 +136,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))),
         trials=[t.action for t in session.trials()],
+        confidence=confidence,
     )
 
 

@@ -160,6 +160,17 @@ class ExcludeIn(_Request):
     detail: Annotated[StrictStr, Field(max_length=500)] = ""
 
 
+class ConfidenceOut(BaseModel):
+    """How sure the model is of its recommended gait (``gaitpref.loop.stopping``)."""
+
+    sentence: str = Field(examples=["88% that G95 is within 5% of the best"])
+    probability: float = Field(description="P(the gait is within tolerance of the best)")
+    tolerance: float = Field(description="a fraction of the utility's range")
+    regret: float = Field(description="expected shortfall of stopping now, utility units")
+    relative_regret: float = Field(description="the same as a fraction of the range")
+    samples: int
+
+
 class PosteriorOut(BaseModel):
     """Posterior mean and standard deviation of the utility of every action (grid order)."""
 
@@ -170,6 +181,9 @@ class PosteriorOut(BaseModel):
     sd: list[float]
     argmax: GaitOut
     trials: list[int] = Field(description="executed actions in trial order")
+    confidence: ConfidenceOut | None = Field(
+        default=None, description="how sure the model is of argmax (None before any answer)"
+    )
 
 
 class SessionItemOut(BaseModel):
