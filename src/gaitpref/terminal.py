@@ -216,7 +216,8 @@ class Terminal:
                 self.console.print(f"  not written: {exc}", markup=False)
                 return
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
-            if s.config.stop.active:  # [stop]: how sure the model is, after every answer
+            mean = s.posterior().mean
+            if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
                 sure = s.confidence()
                 line = sure.sentence(gait_name(s, sure.recommended))
                 self.console.print(f"  {line}", markup=False)

@@ -29,3 +29,16 @@ def test_the_terminal_shows_the_confidence_and_moves_to_validation(tmp_path: Pat
     child.expect("Blind validation, round 1")  # max_trials = 2: the rule opened it
     child.sendline("q")
     child.expect(pexpect.EOF)
+
+
+def test_without_a_rule_the_terminal_still_shows_the_confidence(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, CONFIG, "S01", seed=3).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 1: run G\d+")
+    _answer(child, None, "2")  # a suggestion: something learnt
+    child.expect("saved: trial 1")
+    child.expect(r"\d+% that G\d+ is within 5% of the best")
+    child.expect(r"Trial 2: run G\d+")
+    child.sendline("q")
+    child.expect(pexpect.EOF)
