@@ -27,7 +27,9 @@ of the rating-accuracy comparison), ``random+avoid-1`` (random among the region 
 ``lambda = 1``: the region of avoidance on a strategy that does not avoid bad gaits by itself)
 ``infogain`` (ratings, strategy ``information-gain``: only when this gaitpref has it) and
 ``infogain+avoid-1`` (information gain over the region of interest, ``lambda = 1``: ROIAL's
-mode).
+mode); ``avoid-risk``, ``random+risk`` and ``infogain+risk``: the same with the default rule
+(``[safety] avoid = ["very bad"]`` alone: avoided when ``P(rated "very bad") > 0.35``,
+``loop/safety.py``).
 Run ``k`` of every arm uses objective ``k`` and the same
 seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of
@@ -104,7 +106,8 @@ noise = 0.01
 class Arm:
     name: str
     rated: bool = True
-    lam: float | None = None  # [safety] lambda; None: no region of avoidance
+    lam: float | None = None  # [safety] lambda (ROIAL's bound); None: see risk
+    risk: bool = False  # [safety] avoid = ["very bad"] with the default rule (risk 0.35)
     strategy: str = ""  # "" the default; "random": uniform over the allowed gaits
     note: str = ""
 
@@ -120,6 +123,8 @@ class Arm:
             out += f"\n[feedback.rating]\nlabels = {LABELS}\n"
         if self.lam is not None:
             out += f'\n[safety]\navoid = ["very bad"]\nlambda = {self.lam}\n'
+        elif self.risk:
+            out += '\n[safety]\navoid = ["very bad"]\n'
         return out
 
     def config(self, grid: str) -> ExperimentConfig:
@@ -147,14 +152,22 @@ ARMS = [
     Arm("avoid-1", lam=1.0, note="as avoid-0.5 with lambda 1"),
     Arm("avoid-2", lam=2.0, note="as avoid-0.5 with lambda 2"),
     Arm("avoid-0", lam=0.0, note="as avoid-0.5 with lambda 0 (the posterior mean alone)"),
+    Arm("avoid-risk", risk=True, note='ratings, [safety] avoid = ["very bad"], default risk 0.35'),
     Arm("random", strategy="random", note="ratings, gaits drawn uniformly at random"),
     Arm("random+avoid-1", lam=1.0, strategy="random", note="random among the ROI, lambda 1"),
+    Arm("random+risk", risk=True, strategy="random", note="random among the ROI, risk 0.35"),
     Arm("infogain", strategy="information-gain", note="ratings, strategy information-gain"),
     Arm(
         "infogain+avoid-1",
         lam=1.0,
         strategy="information-gain",
         note="information gain over the ROI (ROIAL's mode), lambda 1",
+    ),
+    Arm(
+        "infogain+risk",
+        risk=True,
+        strategy="information-gain",
+        note="information gain over the ROI (ROIAL's mode), risk 0.35",
     ),
 ]
 
@@ -168,8 +181,11 @@ AVOIDANCE = [  # (arm with a region of avoidance, the arms without it to compare
     ("avoid-1", ("rated", "prefs")),
     ("avoid-2", ("rated", "prefs")),
     ("avoid-0", ("rated",)),
+    ("avoid-risk", ("rated", "prefs")),
     ("random+avoid-1", ("random",)),
+    ("random+risk", ("random",)),
     ("infogain+avoid-1", ("infogain",)),
+    ("infogain+risk", ("infogain",)),
 ]
 
 
@@ -537,6 +553,9 @@ def _comparisons(data: Data) -> list[str]:
                 ("infogain", "rated"),
                 ("infogain+avoid-1", "random+avoid-1"),
                 ("infogain+avoid-1", "rated"),
+                ("infogain+risk", "random+risk"),
+                ("infogain+risk", "infogain"),
+                ("infogain+risk", "rated"),
             ]:
                 if (grid, scenario, arm) not in data or (grid, scenario, base) not in data:
                     continue
@@ -554,7 +573,7 @@ def _figure(data: Data) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["prefs", "rated", "avoid-1", "random", "infogain"]
+    shown = ["prefs", "rated", "random", "random+risk", "infogain", "infogain+risk"]
     panels = [(g, s) for g in GRIDS for s in SCENARIOS]
     fig, axes = plt.subplots(2, len(panels), figsize=(4 * len(panels), 7), sharex=True)
     for col, (grid, scenario) in enumerate(panels):

@@ -64,7 +64,7 @@ def _record(text: str, meta: dict[str, object]) -> SessionRecord:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.2"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.3"}
     assert config_of(_record(BARE, library_meta(bare))).buffer == 1
     explicit = parse_config(BARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}

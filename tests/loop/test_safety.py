@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from numpy.typing import NDArray
+from scipy.special import ndtr
 
 from gaitpref import CoSpar, Feature, Space, SquaredExponential
 from gaitpref.errors import NoSafeGaitError
@@ -46,14 +48,22 @@ def _loop(strategy: str, n: int, buffer: int, safety: Safety, seed: int) -> CoSp
     n=st.integers(1, 3),
     buffer=st.integers(0, 2),
     lam=st.floats(0.0, 2.0),
+    risk=st.one_of(st.none(), st.sampled_from([0.3, 0.35, 0.5, 0.8])),
     radius=st.sampled_from([0.0, 0.1, 0.3]),
     seed=st.integers(0, 10_000),
     flags=st.lists(st.integers(0, len(SPACE) - 1), max_size=3),
 )
 def test_no_strategy_proposes_an_avoided_or_flagged_gait(
-    strategy: str, n: int, buffer: int, lam: float, radius: float, seed: int, flags: list[int]
+    strategy: str,
+    n: int,
+    buffer: int,
+    lam: float,
+    risk: float | None,
+    radius: float,
+    seed: int,
+    flags: list[int],
 ) -> None:
-    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius)
+    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius, risk=risk)
     loop = _loop(strategy, n, buffer, safety, seed)
     for a in flags:
         loop.flag_unsafe(a)
@@ -67,8 +77,7 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
             return
         q = loop.ask()
         banned = near(SPACE, loop.unsafe, radius) if loop.unsafe else np.zeros(len(SPACE), bool)
-        upper = np.asarray(loop.posterior.mean) + lam * np.asarray(loop.posterior.std)
-        avoided = upper < safety.threshold(SCALE, KERNEL.variance)
+        avoided = _avoided(loop, lam, risk)
         for a in q.actions:
             assert not banned[a], f"{strategy} proposed {a}, near an unsafe flag"
             assert not avoided[a], f"{strategy} proposed {a}, in the region of avoidance"
@@ -80,6 +89,19 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
                     seen.add(frozenset((a, b)))
                     answers.append(Comparison(a, b, "first" if truth[a] > truth[b] else "second"))
         loop.tell(q, answers)
+
+
+def _avoided(loop: CoSpar, lam: float, risk: float | None) -> NDArray[np.bool_]:
+    """The region of avoidance, written out: ROIAL's bound or the probability of a "very bad"
+    rating, with the posterior's thresholds."""
+    post = loop.posterior
+    scale = post.ordinal if post.ordinal is not None else SCALE
+    t1 = scale.thresholds_for(KERNEL.variance)[0]
+    mean, var = np.asarray(post.mean), np.asarray(post.variance)
+    if risk is None:
+        out: NDArray[np.bool_] = mean + lam * np.sqrt(var) < t1
+        return out
+    return np.asarray(ndtr((t1 - mean) / np.sqrt(scale.noise**2 + var)) > risk)
 
 
 def test_rating_everything_worst_empties_the_region_and_nothing_is_proposed() -> None:

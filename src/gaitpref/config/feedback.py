@@ -9,7 +9,10 @@
     [safety]                                 # optional
     avoid = ["very bad"]                     # the worst categories to keep away from (a prefix
                                              # of the labels); needs [feedback.rating]
-    lambda = 1.0                             # avoided when mu + lambda sd < the threshold above
+    # risk = 0.35                            # avoided when P(an avoided rating) > risk
+                                             # (default: avoid / K + 0.1)
+    # lambda = 1.0                           # instead of risk: ROIAL's bound, avoided when
+                                             # mu + lambda sd < the threshold above
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
                                              # feature's range; 0: the gait alone)
 
@@ -23,9 +26,16 @@ from typing import Any
 
 import numpy as np
 
-from gaitpref.config.schema import FEEDBACK, RATING, SAFETY, check_table
+from gaitpref.config.schema import (
+    DEFAULTS_VERSION,
+    FEEDBACK,
+    RATING,
+    SAFETY,
+    check_table,
+    defaults_for,
+)
 from gaitpref.config.specs import fail
-from gaitpref.loop.safety import Safety
+from gaitpref.loop.safety import Safety, default_risk
 from gaitpref.model.ordinal import Ordinal
 
 
@@ -50,10 +60,13 @@ def parse_rating(raw: object, noise: float) -> Ordinal | None:
     return Ordinal(labels, thresholds, rating["noise"] if rating["noise"] is not None else noise)
 
 
-def parse_safety(raw: object, ordinal: Ordinal | None) -> Safety:
-    """The settings of ``[safety]`` (no region of avoidance when ``avoid`` is empty)."""
+def parse_safety(
+    raw: object, ordinal: Ordinal | None, defaults: str = DEFAULTS_VERSION
+) -> tuple[Safety, frozenset[str]]:
+    """The settings of ``[safety]`` (no region of avoidance when ``avoid`` is empty) with the
+    defaults of version ``defaults``, and the keys that left the rule to them (``safety.risk``)."""
     safety: dict[str, Any]
-    safety, _ = check_table(raw, "safety", SAFETY)
+    safety, defaulted = check_table(raw, "safety", SAFETY, defaults_for(defaults, "safety"))
     avoid: tuple[str, ...] = tuple(safety["avoid"])
     if avoid:
         if ordinal is None:
@@ -67,7 +80,35 @@ def parse_safety(raw: object, ordinal: Ordinal | None) -> Safety:
             )
         if len(avoid) >= ordinal.size:
             fail("safety", "avoid", "must leave at least one category to propose")
-    return Safety(len(avoid), safety["lambda"], safety["unsafe_radius"])
+    risk = _risk(safety, defaulted, len(avoid), ordinal)
+    relied = frozenset({"safety.risk"}) if avoid and {"lambda", "risk"} <= defaulted else None
+    return Safety(
+        len(avoid), safety["lambda"], safety["unsafe_radius"], risk
+    ), relied or frozenset()
+
+
+def _risk(
+    safety: dict[str, Any], defaulted: frozenset[str], avoid: int, ordinal: Ordinal | None
+) -> float | None:
+    """The region's ``risk`` (None: ROIAL's bound with ``lambda``, given or the old default)."""
+    if "lambda" not in defaulted:
+        if "risk" not in defaulted:
+            fail("safety", "risk", "give either risk or lambda (ROIAL's bound), not both")
+        return None
+    risk: float | str | None = safety["risk"]
+    if risk is None or not avoid or ordinal is None:
+        return None
+    if risk == "auto":
+        return default_risk(avoid, ordinal.size)
+    prior = avoid / ordinal.size
+    if ordinal.thresholds is None and float(risk) <= prior:
+        fail(
+            "safety",
+            "risk",
+            f"must exceed {prior:g}, the probability of an avoided rating before any data "
+            f"(else every gait is avoided before the first rating), got {risk}",
+        )
+    return float(risk)
 
 
 __all__ = ["parse_rating", "parse_safety"]

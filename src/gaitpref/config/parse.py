@@ -183,7 +183,7 @@ def parse_config(
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
-    safety = parse_safety(top["safety"], ordinal)
+    safety, relied = parse_safety(top["safety"], ordinal, defaults)
     stop = parse_stop(top["stop"])
     return ExperimentConfig(
         name=top["name"] if top["name"] is not None else default_name,
@@ -206,7 +206,7 @@ def parse_config(
         ordinal=ordinal,
         safety=safety,
         stop=stop,
-        defaulted=frozenset(f"cospar.{k}" for k in defaulted),
+        defaulted=frozenset(f"cospar.{k}" for k in defaulted) | relied,
         defaults_version=defaults,
     )
 

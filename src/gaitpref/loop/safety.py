@@ -1,17 +1,33 @@
 """The gaits a loop may propose: a region of avoidance and the operator's "unsafe" flags.
 
 ROIAL (Li, Tucker et al., ICRA 2021): with ordinal ratings, the gaits expected to be rated in the
-avoided (worst) categories form the *region of avoidance*; its complement, the *region of
-interest*, is
+avoided (worst) categories form the *region of avoidance*.  Two rules, with ``t_avoid`` the
+threshold just above the avoided categories (``t_1`` when only the worst is avoided), the
+rating noise ``s`` and the posterior ``f_a ~ N(mu_a, sd_a^2)``:
 
-    ROI = { a : mu_a + lambda * sd_a >= t_avoid }
+- ``risk`` (the default): a gait is avoided when the subject is more likely than ``risk`` to
+  rate it in an avoided category, the predictive probability of ``model/ordinal.py``
 
-where ``t_avoid`` is the threshold just above the avoided categories (``t_1`` when only the worst
-is avoided) and ``lambda`` a confidence: a gait is avoided only when even its upper bound lies
-below ``t_avoid``.  Besides, a trial the operator flagged "unsafe" removes its gait and every
-gait within ``unsafe_radius`` of it (Euclidean, each feature scaled to ``[0, 1]`` by its range)
-from every future query.  No strategy proposes outside :meth:`Safety.allowed`; when it is empty
-the loop raises :class:`~gaitpref.errors.NoSafeGaitError` and proposes nothing.
+      P(rating_a <= avoid) = Phi((t_avoid - mu_a) / sqrt(s^2 + sd_a^2)) > risk;
+
+  with the thresholds at the prior predictive's quantiles an unrated gait far from the data has
+  ``avoid / K`` there, so ``risk`` must exceed it (the default is ``avoid / K + 0.1``): a gait
+  is avoided once the ratings make an avoided rating likelier than before any data.
+- ``lambda`` (ROIAL's upper bound, given in the config): the region of interest is
+
+      ROI = { a : mu_a + lambda * sd_a >= t_avoid },
+
+  a gait is avoided only when even its upper bound lies below ``t_avoid``: ``P(f_a < t_avoid) >
+  Phi(lambda)``, 0.84 for ``lambda = 1``.  With the rating noise as large as the prior's sd (the
+  default) a rating moves ``mu_a`` by well under one ``sd_a``, and this rule excludes almost no
+  gait within 60 trials (``docs/results/ordinal/``).
+
+Both use the thresholds the posterior's rating scale carries (fitted by the evidence when the
+config does not fix them), the ones its Laplace fit used.  Besides, a trial the operator
+flagged "unsafe" removes its gait and every gait within ``unsafe_radius`` of it (Euclidean, each
+feature scaled to ``[0, 1]`` by its range) from every future query.  No strategy proposes
+outside :meth:`Safety.allowed`; when it is empty the loop raises
+:class:`~gaitpref.errors.NoSafeGaitError` and proposes nothing.
 """
 
 from __future__ import annotations
@@ -22,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from gaitpref.model.ordinal import Ordinal
+from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import Space
 
@@ -31,12 +47,15 @@ BoolArray = NDArray[np.bool_]
 
 @dataclass(frozen=True)
 class Safety:
-    """``avoid`` worst categories (0: no region of avoidance), its confidence ``lam`` and the
-    radius around gaits flagged unsafe (a fraction of each feature's range)."""
+    """``avoid`` worst categories (0: no region of avoidance), its rule (``risk``: the largest
+    probability of an avoided rating a proposed gait may have; None: ROIAL's upper bound with
+    confidence ``lam``) and the radius around gaits flagged unsafe (a fraction of each feature's
+    range)."""
 
     avoid: int = 0
     lam: float = 1.0
     unsafe_radius: float = 0.0
+    risk: float | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
@@ -45,6 +64,8 @@ class Safety:
             raise ValueError(f"lambda must be a finite number >= 0, got {self.lam!r}")
         if not (np.isfinite(self.unsafe_radius) and 0 <= self.unsafe_radius <= 1):
             raise ValueError(f"unsafe_radius must be in [0, 1], got {self.unsafe_radius!r}")
+        if self.risk is not None and not (np.isfinite(self.risk) and 0 < self.risk < 1):
+            raise ValueError(f"risk must be a probability in (0, 1), got {self.risk!r}")
 
     def threshold(self, ordinal: Ordinal, signal_variance: float) -> float:
         """``t_avoid``: the threshold above the avoided categories."""
@@ -62,14 +83,30 @@ class Safety:
             return None
         mask = np.ones(len(posterior.space), dtype=bool)
         if self.avoid:
-            if ordinal is None:
-                raise ValueError("a region of avoidance needs the loop's rating scale")
-            t = self.threshold(ordinal, posterior.kernel.variance)
-            upper = np.asarray(posterior.mean) + self.lam * np.asarray(posterior.std)
-            mask &= upper >= t
+            mask &= ~self.avoided(posterior, ordinal)
         if unsafe:
             mask &= ~near(posterior.space, unsafe, self.unsafe_radius)
         return mask
+
+    def avoided(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray:
+        """The region of avoidance (module docstring), with the posterior's rating scale (its
+        fitted thresholds) or else ``ordinal``."""
+        scale = posterior.ordinal if posterior.ordinal is not None else ordinal
+        if scale is None:
+            raise ValueError("a region of avoidance needs the loop's rating scale")
+        v = posterior.kernel.variance
+        mean = np.asarray(posterior.mean)
+        if self.risk is None:
+            out: BoolArray = mean + self.lam * np.asarray(posterior.std) < self.threshold(scale, v)
+            return out
+        self.threshold(scale, v)  # checks that a category is left to propose
+        probs = rating_probabilities(scale, v, mean, np.asarray(posterior.variance))
+        return np.asarray(probs[:, : self.avoid].sum(axis=1) > self.risk)
+
+
+def default_risk(avoid: int, categories: int) -> float:
+    """``avoid / K + 0.1``: avoided once an avoided rating is 0.1 likelier than before any data."""
+    return avoid / categories + 0.1
 
 
 def near(space: Space, centres: Collection[int], radius: float) -> BoolArray:
@@ -86,4 +123,4 @@ def near(space: Space, centres: Collection[int], radius: float) -> BoolArray:
     return out
 
 
-__all__ = ["BoolArray", "Safety", "near"]
+__all__ = ["BoolArray", "Safety", "default_risk", "near"]

@@ -10,8 +10,8 @@ with matplotlib (Agg backend, no screen needed):
   objective is known, its best marked with an X; a legend names the marks.
 
 With ``safety`` (ROIAL's region of avoidance and the operator's unsafe flags,
-:mod:`gaitpref.plots.safety`), both kinds shade the avoided gaits (``mu + lambda sd`` below the
-threshold) and mark each gait flagged unsafe with the radius around it.
+:mod:`gaitpref.plots.safety`), both kinds shade the avoided gaits (``Safety.avoided``, the loop's
+own rule) and mark each gait flagged unsafe with the radius around it.
 """
 
 from __future__ import annotations

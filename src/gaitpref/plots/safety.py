@@ -1,14 +1,13 @@
 """The region of avoidance and the operator's unsafe flags, drawn over a posterior figure.
 
-ROIAL (Li, Tucker et al., ICRA 2021): a gait is in the *region of avoidance* when even its upper
-confidence bound lies below the threshold above the avoided rating categories,
-
-    mu_a + lambda * sd_a < t_avoid            (``gaitpref.loop.safety``)
-
-and a gait flagged "unsafe" removes itself and every gait within ``unsafe_radius`` of it (each
-feature scaled to ``[0, 1]`` by its range).  :func:`safety_shading` computes both masks from a
-posterior (the same rule the loop uses to keep gaits out of its queries); :func:`draw_1d` and
-:func:`draw_2d` shade them on a figure's axes, with legend entries.
+ROIAL (Li, Tucker et al., ICRA 2021): a gait is in the *region of avoidance* when the subject is
+more likely than ``risk`` to rate it in an avoided category (or, with ROIAL's ``lambda``, when
+even its upper bound ``mu_a + lambda sd_a`` lies below the threshold above the avoided
+categories; ``gaitpref.loop.safety``), and a gait flagged "unsafe" removes itself and every
+gait within ``unsafe_radius`` of it (each feature scaled to ``[0, 1]`` by its range).
+:func:`safety_shading` computes both masks from a posterior (the same rule the loop uses to keep
+gaits out of its queries); :func:`draw_1d` and :func:`draw_2d` shade them on a figure's axes,
+with legend entries.
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ from gaitpref.model.posterior import Posterior
 from gaitpref.space import FloatArray, IntArray, Space
 
 BoolArray = NDArray[np.bool_]
-AVOID_LABEL = "region of avoidance (mu + lambda sd < threshold)"
+AVOID_LABEL = "region of avoidance"
 NEAR_LABEL = "within the unsafe radius"
 FLAG_LABEL = "flagged unsafe"
 AVOID_COLOUR = "0.45"
@@ -38,7 +37,7 @@ UNSAFE_COLOUR = "#b91c1c"
 class SafetyShading:
     """What to shade: the avoided gaits, the flagged ones and the gaits near them."""
 
-    avoid: BoolArray  # mu + lam * sd < threshold (all False without a region of avoidance)
+    avoid: BoolArray  # Safety.avoided (all False without a region of avoidance)
     threshold: float | None  # t_avoid on the utility scale (None: no region of avoidance)
     unsafe: IntArray  # flagged actions
     near: BoolArray  # within unsafe_radius of a flagged action (flagged ones included)
@@ -59,10 +58,10 @@ def safety_shading(
     n = len(posterior.space)
     avoid = np.zeros(n, dtype=bool)
     threshold: float | None = None
-    if safety.avoid and ordinal is not None:
-        threshold = float(safety.threshold(ordinal, posterior.kernel.variance))
-        upper = np.asarray(posterior.mean) + safety.lam * np.asarray(posterior.std)
-        avoid = upper < threshold
+    scale = posterior.ordinal if posterior.ordinal is not None else ordinal
+    if safety.avoid and scale is not None:
+        threshold = float(safety.threshold(scale, posterior.kernel.variance))
+        avoid = safety.avoided(posterior, scale)
     flagged = np.asarray(sorted({int(a) for a in unsafe}), dtype=np.intp)
     close = (
         near(posterior.space, flagged.tolist(), safety.unsafe_radius)

@@ -73,7 +73,7 @@ def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal |
         )
     try:
         ordinal = parse_rating(top.get("feedback", {}), noise)
-        return ordinal, parse_safety(top.get("safety", {}), ordinal)
+        return ordinal, parse_safety(top.get("safety", {}), ordinal)[0]
     except ConfigError as exc:
         raise ConfigError(f"{where}: {exc}", table=exc.table, key=exc.key) from None
 
