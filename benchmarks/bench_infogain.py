@@ -7,12 +7,14 @@ the 57,750-gait grid):
 - ``6d``: the ``synthetic-6d`` config, 57,750 actions, ``sampler = "scalable"`` (candidates
   screened, ``strategies/infogain.py``).
 
-Each with preferences alone and with ordinal ratings (four categories at the objective's
-quartiles, ``OrdinalRater``).  A simulated user (a smooth GP objective, as ``bench_large.py``)
-answers CoSpar (n = 1, b = 1, the strategy ``information-gain`` with its defaults) until the data
-holds 100 comparisons; the next ``--iterations`` iterations are timed one by one; then on to 300
-comparisons and the same again.  Wall time and this process's CPU time are both recorded: the
-machine is shared, so CPU time is the steadier figure.
+Each with preferences alone, with ordinal ratings (four categories at the objective's quartiles,
+``OrdinalRater``) and with ratings and a region of avoidance (``avoid = 1`` with the default rule,
+``risk = 0.35``: ROIAL's mode, information gain over the region of interest; the region needs every
+action's posterior variance at each ask). A simulated user (a smooth GP objective, as
+``bench_large.py``) answers CoSpar (n = 1, b = 1, the strategy ``information-gain`` with its
+defaults) until the data holds 100 comparisons; the next ``--iterations`` iterations are timed one
+by one; then on to 300 comparisons and the same again. Wall time and this process's CPU time are
+both recorded: the machine is shared, so CPU time is the steadier figure.
 
     python benchmarks/bench_infogain.py [--iterations 10] [--cases 2d 6d]
 
@@ -31,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from gaitpref import CoSpar, SimulatedUser, load_config
+from gaitpref.loop.safety import Safety, default_risk
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.strategies import InformationGain
@@ -44,12 +47,15 @@ except ImportError:  # run as a module
 
 RESULTS = Path(__file__).parent / "results"
 CHECKPOINTS = (100, 300)
+MODES = ("prefs", "ratings", "ratings + region")
 
 
-def run_case(name: str, rated: bool, iterations: int) -> list[dict[str, object]]:
+def run_case(name: str, mode: str, iterations: int) -> list[dict[str, object]]:
     cfg = load_config({"2d": "synthetic-2d", "6d": "synthetic-6d"}[name])
     space, kernel, noise = cfg.space, cfg.kernel, cfg.noise
+    rated = mode != "prefs"
     ordinal = Ordinal(["very bad", "bad", "okay", "good"], noise=noise) if rated else None
+    region = Safety(avoid=1, risk=default_risk(1, 4)) if mode == "ratings + region" else None
     loop = CoSpar(
         space,
         kernel,
@@ -60,6 +66,7 @@ def run_case(name: str, rated: bool, iterations: int) -> list[dict[str, object]]
         strategy=InformationGain(),
         sampler="scalable" if name == "6d" else "auto",
         ordinal=ordinal,
+        safety=region,
     )
     objective = gp_objective(space, kernel.lengthscales(space.ndim)[0], seed=7)
     user = SimulatedUser(space, objective, np.random.default_rng(1))
@@ -86,7 +93,7 @@ def run_case(name: str, rated: bool, iterations: int) -> list[dict[str, object]]
             {
                 "case": name,
                 "actions": len(space),
-                "ratings": rated,
+                "answers": mode,
                 "sampler": loop.posterior.sampler,
                 "comparisons": target,
                 "visited": visited,
@@ -115,14 +122,14 @@ def _markdown(info: dict[str, object], rows: list[dict[str, object]]) -> str:
         "under 0.5 s on 57,750 actions. Mind the load average below: wall times include waiting",
         "for a core.",
         "",
-        "| grid | actions | ratings | path | comparisons | visited | median ask (ms) |"
+        "| grid | actions | answers | path | comparisons | visited | median ask (ms) |"
         " p95 ask (ms) | ask CPU (ms) | median tell (ms) | median iteration (ms) |"
         " distinct / executed |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['case']} | {r['actions']:,} | {'yes' if r['ratings'] else 'no'} | "
+            f"| {r['case']} | {r['actions']:,} | {r['answers']} | "
             f"{r['sampler']} | {r['comparisons']} | {r['visited']} | {r['median_ask_ms']:.1f} | "
             f"{r['p95_ask_ms']:.1f} | {r['median_ask_cpu_ms']:.1f} | {r['median_tell_ms']:.1f} | "
             f"{r['median_iteration_ms']:.1f} | {r['distinct_executed']} / {r['executed']} |"
@@ -136,17 +143,17 @@ def main() -> None:
     parser.add_argument("--iterations", type=int, default=10)
     parser.add_argument("--cases", nargs="*", default=["2d", "6d"])
     parser.add_argument("--case", help=argparse.SUPPRESS)  # internal: one case, JSON to stdout
-    parser.add_argument("--rated", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--mode", choices=MODES, default="prefs", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.case:
-        print(json.dumps(run_case(args.case, args.rated, args.iterations)))
+        print(json.dumps(run_case(args.case, args.mode, args.iterations)))
         return
     rows: list[dict[str, object]] = []
     for name in args.cases:
-        for rated in (False, True):
-            print(f"case {name}, ratings {rated} ...", file=sys.stderr, flush=True)
+        for mode in MODES:
+            print(f"case {name}, {mode} ...", file=sys.stderr, flush=True)
             command = [sys.executable, __file__, "--case", name, "--iterations"]
-            command += [str(args.iterations), *(["--rated"] if rated else [])]
+            command += [str(args.iterations), "--mode", mode]
             out = subprocess.run(command, check=True, capture_output=True, text=True)
             rows += json.loads(out.stdout.strip().splitlines()[-1])
     info = machine_description()

@@ -63,3 +63,18 @@ def test_the_region_uses_the_posteriors_thresholds() -> None:
     assert not safety.avoided(low, SCALE).any()  # and far above t_1 = -0.5
     roial = Safety(avoid=1, lam=1.0)
     assert roial.avoided(high, SCALE).all() and not roial.avoided(low, SCALE).any()
+
+
+def test_screening_by_the_variances_bounds_changes_no_decision() -> None:
+    post = _rated([2, 3, 5, 9, 12], [25, 30, 31, 40])
+    mean, var = np.asarray(post.mean), np.asarray(post.variance)  # the whole grid's, densely
+    t1, t2 = SCALE.thresholds_for(KERNEL.variance)[:2]
+    for lam in (0.0, 0.5, 1.0, 2.0):
+        assert np.array_equal(
+            _avoided(Safety(avoid=1, lam=lam), post), mean + lam * np.sqrt(var) < t1
+        )
+    for risk in (0.26, 0.35, 0.5, 0.9):
+        dense = ndtr((t1 - mean) / np.sqrt(SCALE.noise**2 + var)) > risk
+        assert np.array_equal(_avoided(Safety(avoid=1, risk=risk), post), dense)
+    dense = ndtr((t2 - mean) / np.sqrt(SCALE.noise**2 + var)) > 0.6
+    assert np.array_equal(_avoided(Safety(avoid=2, risk=0.6), post), dense)

@@ -135,6 +135,20 @@ class Posterior:
         out: FloatArray = solve_triangular(L, t, lower=True, trans="T", check_finite=False)
         return out
 
+    def variance_at(self, actions: ArrayLike) -> FloatArray:
+        """Posterior marginal variance of the given actions only, ``O(len(actions) m^2)``."""
+        idx = np.asarray(actions, dtype=np.intp)
+        var = np.asarray(self.kernel.diagonal(self.space), dtype=np.float64)[idx]
+        if self.fit is None or idx.size == 0:
+            return var
+        P = solve_triangular(
+            self.fit.chol_prior, self.cross.rows(idx).T, lower=True, check_finite=False
+        )
+        Q = solve_triangular(self.fit.chol_hessian, P, lower=True, check_finite=False)
+        var += np.einsum("ij,ij->j", Q, Q) - np.einsum("ij,ij->j", P, P)
+        out: FloatArray = np.maximum(var, 0.0)
+        return out
+
     def covariance_at(self, actions: ArrayLike) -> FloatArray:
         """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""
         idx = np.asarray(actions, dtype=np.intp)

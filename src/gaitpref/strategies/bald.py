@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.linalg import solve_triangular
 from scipy.special import entr, ndtr
 
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
@@ -141,16 +140,7 @@ def covariance_with_reference(
 
 def variance_at(posterior: Posterior, actions: IntArray) -> FloatArray:
     """The posterior variance of ``actions`` only (``O(c m^2)``, not the whole grid's)."""
-    idx = np.asarray(actions, dtype=np.intp)
-    var = np.asarray(posterior.kernel.diagonal(posterior.space), dtype=np.float64)[idx]
-    if posterior.fit is None or idx.size == 0:
-        return var
-    P = solve_triangular(
-        posterior.fit.chol_prior, posterior.cross.rows(idx).T, lower=True, check_finite=False
-    )
-    Q = solve_triangular(posterior.fit.chol_hessian, P, lower=True, check_finite=False)
-    out: FloatArray = np.maximum(var + np.einsum("ij,ij->j", Q, Q) - np.einsum("ij,ij->j", P, P), 0)
-    return out
+    return posterior.variance_at(actions)
 
 
 def information_against(
