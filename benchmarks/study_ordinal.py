@@ -356,6 +356,8 @@ def _metrics(runs: list[dict[str, object]]) -> dict[str, np.ndarray]:
         "early": s[:, :20].mean(axis=1),
         "all": s.mean(axis=1),
         "worst": (c == 1).mean(axis=1),
+        "worst_1_5": (c[:, :5] == 1).mean(axis=1),  # before the region can know anything
+        "worst_6_60": (c[:, 5:] == 1).mean(axis=1),
         "seconds": np.array([float(r["seconds"]) for r in runs]),  # type: ignore[arg-type]
         "stopped": np.array([int(r["stopped"]) for r in runs]),  # type: ignore[call-overload]
         "roi_size": np.array([int(r["roi_size"]) for r in runs]),  # type: ignore[call-overload]
@@ -469,8 +471,8 @@ def _summary(data: Data) -> None:
         "## What ran",
         "",
         f"{runs} runs of 60 trials ({len(data)} grid x subject x arm cells), "
-        f"{seconds / 60:.0f} minutes of run time in all (the sum of each run's wall time, two",
-        "joblib workers with one BLAS thread each).  `s/run` is wall time on a machine shared",
+        f"{seconds / 60:.0f} minutes of run time in all (the sum of each run's wall time, one",
+        "process, `--jobs 1`, one BLAS thread).  `s/run` is wall time on a machine shared",
         "with other work (see the load below): read it as a rough cost, not a speed result.",
         "",
     ]
@@ -488,9 +490,12 @@ def _comparisons(data: Data) -> list[str]:
         "1-60, at no more than 0.01 loss of mean normalised objective over trials 1-60.",
         "`reduction` is `1 - worst(arm) / worst(base)` with a paired bootstrap standard error.",
         "",
+        "`1-5` and `6-60`: the worst share over trials 1-5 (before the region knows anything: the",
+        "first gaits are all but random) and over trials 6-60, arm / base.",
+        "",
         "| grid | subject | arm - base | worst share: arm | base | reduction | paired diff "
-        "| objective 1-60: paired diff | met |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| 1-5 | 6-60 | objective 1-60: paired diff | met |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for grid in GRIDS:
         for scenario in SCENARIOS:
@@ -505,6 +510,8 @@ def _comparisons(data: Data) -> list[str]:
                         f"| {grid} | {scenario} | {arm} - {base} | {a['worst'].mean():.3f} "
                         f"| {b['worst'].mean():.3f} | {_reduction(a['worst'], b['worst'])} "
                         f"| {_pm(a['worst'] - b['worst'], True)} "
+                        f"| {a['worst_1_5'].mean():.3f} / {b['worst_1_5'].mean():.3f} "
+                        f"| {a['worst_6_60'].mean():.3f} / {b['worst_6_60'].mean():.3f} "
                         f"| {_pm(a['all'] - b['all'], True)} "
                         f"| {'yes' if fewer and loss else 'no'} |"
                     )
