@@ -9,12 +9,13 @@ the 57,750-gait grid):
 
 Each with preferences alone, with ordinal ratings (four categories at the objective's quartiles,
 ``OrdinalRater``) and with ratings and a region of avoidance (``avoid = 1`` with the default rule,
-``risk = 0.35``: ROIAL's mode, information gain over the region of interest; the region needs every
-action's posterior variance at each ask). A simulated user (a smooth GP objective, as
-``bench_large.py``) answers CoSpar (n = 1, b = 1, the strategy ``information-gain`` with its
-defaults) until the data holds 100 comparisons; the next ``--iterations`` iterations are timed one
-by one; then on to 300 comparisons and the same again. Wall time and this process's CPU time are
-both recorded: the machine is shared, so CPU time is the steadier figure.
+``risk = 0.35``: ROIAL's mode, information gain over the region of interest; at each ask the region
+needs the posterior variance of the gaits its bounds leave undecided, ``loop/safety.py``). A
+simulated user (a smooth GP objective, as ``bench_large.py``) answers CoSpar (n = 1, b = 1, the
+strategy ``information-gain`` with its defaults) until the data holds 100 comparisons; the next
+``--iterations`` iterations are timed one by one; then on to 300 comparisons and the same again.
+Wall time and this process's CPU time are both recorded: the machine is shared, so CPU time is the
+steadier figure.
 
     python benchmarks/bench_infogain.py [--iterations 10] [--cases 2d 6d]
 

@@ -149,7 +149,7 @@ ARMS = [
     Arm("prefs", rated=False, note="preferences alone"),
     Arm("rated", note="preferences and ratings"),
     Arm("avoid-0.5", lam=0.5, note='ratings, [safety] avoid = ["very bad"], lambda 0.5'),
-    Arm("avoid-1", lam=1.0, note="as avoid-0.5 with lambda 1"),
+    Arm("avoid-1", lam=1.0, note="ratings, ROIAL's bound: [safety] lambda = 1"),
     Arm("avoid-2", lam=2.0, note="as avoid-0.5 with lambda 2"),
     Arm("avoid-0", lam=0.0, note="as avoid-0.5 with lambda 0 (the posterior mean alone)"),
     Arm("avoid-risk", risk=True, note='ratings, [safety] avoid = ["very bad"], default risk 0.35'),
