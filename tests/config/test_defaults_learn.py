@@ -72,3 +72,25 @@ def test_a_session_records_the_defaults_its_config_relies_on() -> None:
 
 def test_a_session_recorded_by_0_1_replays_with_0_1_defaults() -> None:
     assert config_of(_record(BARE, {})).buffer == 0
+
+
+RATED = BARE + '[cospar]\nbuffer = 1\n[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+AVOID = '[safety]\navoid = ["very bad"]\n'
+
+
+def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
+    cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3
+    assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.3"}
+    assert config_of(_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
+    for explicit in ("lambda = 1.0\n", "risk = 0.5\n"):
+        assert not parse_config(RATED + AVOID + explicit).relies_on_changed_defaults
+    assert not parse_config(RATED).relies_on_changed_defaults  # no region: no rule relied on
+
+
+def test_a_region_recorded_before_0_3_replays_with_roials_bound() -> None:
+    for version in ("0.1", "0.2"):
+        old = parse_config(RATED + AVOID, defaults=version).safety
+        assert old.risk is None and old.lam == 1.0
+    # a 0.2 session that relied on no changed default stored no version: 0.1's apply
+    assert config_of(_record(RATED + AVOID, {})).safety.risk is None

@@ -65,3 +65,35 @@ def test_without_the_tables_nothing_changes() -> None:
 def test_errors_name_the_table_and_key(extra: str, where: str) -> None:
     with pytest.raises(ConfigError, match=where):
         parse_config(BASE + extra)
+
+
+AVOID = '[safety]\navoid = ["very bad"]\n'
+
+
+def test_avoid_alone_takes_the_default_risk() -> None:
+    assert parse_config(BASE + RATING + AVOID).safety.risk == pytest.approx(1 / 4 + 0.1)
+    three = RATING.replace('"okay", "good"', '"good"')
+    assert parse_config(BASE + three + AVOID).safety.risk == pytest.approx(1 / 3 + 0.1)
+    roial = parse_config(BASE + RATING + AVOID + "lambda = 0.5\n").safety
+    assert roial.risk is None and roial.lam == 0.5  # ROIAL's bound when lambda is given
+    assert parse_config(BASE + RATING + AVOID + "risk = 0.5\n").safety.risk == 0.5
+    assert parse_config(BASE).safety.risk is None
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("lambda = 1.0\nrisk = 0.5\n", r"\[safety\].risk: give either risk or lambda"),
+        ("risk = 0.25\n", r"\[safety\].risk: must exceed 0.25"),
+        ("risk = 0\n", r"\[safety\].risk"),
+        ("risk = 1.5\n", r"\[safety\].risk"),
+    ],
+)
+def test_bad_rules_name_the_key(extra: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        parse_config(BASE + RATING + AVOID + extra)
+
+
+def test_fixed_thresholds_allow_any_risk() -> None:
+    fixed = RATING + "thresholds = [-0.1, 0.0, 0.1]\n"
+    assert parse_config(BASE + fixed + AVOID + "risk = 0.1\n").safety.risk == 0.1
