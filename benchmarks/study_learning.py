@@ -108,9 +108,12 @@ class Arm:
     model: str
     lengthscale: float = 0.15
     note: str = ""
+    settings: str = ""  # [cospar.strategy_settings] lines
 
     def config(self) -> ExperimentConfig:
         text = _TEMPLATE.format(ls=self.lengthscale, model=self.model, strategy=self.strategy)
+        if self.settings:
+            text += f"\n[cospar.strategy_settings]\n{self.settings}\n"
         return parse_config(text)
 
 
@@ -137,6 +140,14 @@ ARMS = [
     Arm("gated+fitc@2x", "gated-eubo", _fit_centred(0.3), 0.3, "prior at a 2x wrong guess"),
     Arm("gated+fitc@0.5x", "gated-eubo", _fit_centred(0.075), 0.075, "prior at a 0.5x guess"),
     Arm("gated+ties+fit@2x", "gated-eubo", TIES_FIT, 0.30, "gated + both, starting 2x wrong"),
+    # issue 16: EUBO among the plausible maximisers (32 joint draws), gated by 1 or 3 draws
+    Arm("plausible", "plausible-eubo", PAPER, note="EUBO among 32 draws' argmaxes, 1 gate"),
+    Arm("plausible-g3", "plausible-eubo", PAPER, note="the same, 3 gates", settings="gates = 3"),
+    Arm("plausible+fit", "plausible-eubo", FIT, note="plausible-eubo, lengthscales fitted"),
+    Arm("plausible@2x", "plausible-eubo", PAPER, 0.30, "plausible-eubo, lengthscale 2x"),
+    Arm("plausible@0.5x", "plausible-eubo", PAPER, 0.075, "plausible-eubo, lengthscale 0.5x"),
+    Arm("plausible+fit@2x", "plausible-eubo", FIT, 0.30, "plausible + fit, starting 2x"),
+    Arm("plausible+fit@0.5x", "plausible-eubo", FIT, 0.075, "plausible + fit, starting 0.5x"),
 ]
 SCENARIOS = ("noiseless", "noisy")
 DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)

@@ -103,6 +103,7 @@ from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
 from gaitpref.space import Space
+from gaitpref.strategies import make_strategy
 
 #: What a config that omits the learning keys gets (the study in docs/results/learning).
 DEFAULT_TIES: TiesMode = DEFAULTS["model"]["ties"]
@@ -227,4 +228,9 @@ def _strategy_settings(cospar: dict[str, Any]) -> dict[str, Any]:
     table, _ = check_table(
         given, "cospar.strategy_settings", STRATEGY_TABLES[name], for_what=f" for strategy {name!r}"
     )
-    return {k: table[k] for k in given}
+    settings = {k: table[k] for k in given}
+    try:  # what one key cannot say alone (plausible-eubo: gates <= samples)
+        make_strategy(name, **table)
+    except ValueError as exc:
+        fail("cospar.strategy_settings", None, f"{exc} (strategy {name!r})")
+    return settings
