@@ -93,6 +93,7 @@ FIT = 'ties = "drop"\nfit = "evidence"\nrefit_every = 20'
 TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"\nrefit_every = 20'
 FIT10 = 'ties = "drop"\nfit = "evidence"\nrefit_every = 10'
 FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
+G3 = "gates = 3"  # [cospar.strategy_settings] of plausible-eubo with 3 gates
 
 
 def _fit_centred(lengthscale: float) -> str:
@@ -141,13 +142,21 @@ ARMS = [
     Arm("gated+fitc@0.5x", "gated-eubo", _fit_centred(0.075), 0.075, "prior at a 0.5x guess"),
     Arm("gated+ties+fit@2x", "gated-eubo", TIES_FIT, 0.30, "gated + both, starting 2x wrong"),
     # issue 16: EUBO among the plausible maximisers (32 joint draws), gated by 1 or 3 draws
-    Arm("plausible", "plausible-eubo", PAPER, note="EUBO among 32 draws' argmaxes, 1 gate"),
-    Arm("plausible-g3", "plausible-eubo", PAPER, note="the same, 3 gates", settings="gates = 3"),
-    Arm("plausible+fit", "plausible-eubo", FIT, note="plausible-eubo, lengthscales fitted"),
-    Arm("plausible@2x", "plausible-eubo", PAPER, 0.30, "plausible-eubo, lengthscale 2x"),
-    Arm("plausible@0.5x", "plausible-eubo", PAPER, 0.075, "plausible-eubo, lengthscale 0.5x"),
-    Arm("plausible+fit@2x", "plausible-eubo", FIT, 0.30, "plausible + fit, starting 2x"),
-    Arm("plausible+fit@0.5x", "plausible-eubo", FIT, 0.075, "plausible + fit, starting 0.5x"),
+    Arm(
+        "plausible",
+        "plausible-eubo",
+        PAPER,
+        note="EUBO among 32 draws' argmaxes, 1 gate",
+        settings="gates = 1",
+    ),
+    Arm("plausible-g3", "plausible-eubo", PAPER, note="the same, 3 gates", settings=G3),
+    Arm(
+        "plausible-g3+fit", "plausible-eubo", FIT, note="3 gates, lengthscales fitted", settings=G3
+    ),
+    Arm("plausible-g3@2x", "plausible-eubo", PAPER, 0.30, "3 gates, lengthscale 2x", G3),
+    Arm("plausible-g3@0.5x", "plausible-eubo", PAPER, 0.075, "3 gates, lengthscale 0.5x", G3),
+    Arm("plausible-g3+fit@2x", "plausible-eubo", FIT, 0.30, "3 gates + fit, starting 2x", G3),
+    Arm("plausible-g3+fit@0.5x", "plausible-eubo", FIT, 0.075, "3 gates + fit, from 0.5x", G3),
 ]
 SCENARIOS = ("noiseless", "noisy")
 DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)
@@ -171,11 +180,12 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("self-sparring: ties + fit", "paper+ties+fit", "paper"),
     ("plausible-eubo instead of gated-eubo", "plausible", "gated"),
     ("plausible-eubo instead of the old default", "plausible", "gated+fit"),
-    ("plausible-eubo instead of self-sparring", "plausible", "paper"),
-    ("plausible-eubo: 3 gates instead of 1", "plausible-g3", "plausible"),
-    ("plausible-eubo: lengthscales fitted", "plausible+fit", "plausible"),
-    ("plausible-eubo: fitted, kernel 2x wrong", "plausible+fit@2x", "plausible@2x"),
-    ("plausible-eubo: fitted, kernel 0.5x wrong", "plausible+fit@0.5x", "plausible@0.5x"),
+    ("plausible-eubo, 3 gates, instead of 1", "plausible-g3", "plausible"),
+    ("plausible-eubo, 3 gates, instead of the old default", "plausible-g3", "gated+fit"),
+    ("plausible-eubo, 3 gates, instead of self-sparring", "plausible-g3", "paper"),
+    ("plausible-eubo, 3 gates: lengthscales fitted", "plausible-g3+fit", "plausible-g3"),
+    ("... fitted, kernel 2x too long", "plausible-g3+fit@2x", "plausible-g3@2x"),
+    ("... fitted, kernel 2x too short", "plausible-g3+fit@0.5x", "plausible-g3@0.5x"),
 ]
 #: Issue 16's targets for the default, noiseless subject (the noisy subject: 0.01 below each).
 TARGETS = {"early": 0.77, "late": 0.93, "end": 0.97, "argmax": 0.99}
@@ -419,7 +429,7 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["paper", "gated", "gated+fit", "plausible", "plausible-g3", "plausible+fit"]
+    shown = ["paper", "gated", "gated+fit", "plausible", "plausible-g3", "plausible-g3+fit"]
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, scenario in zip(axes, SCENARIOS, strict=True):
         for name in shown:
