@@ -7,7 +7,7 @@ The public API::
     posterior = gaitpref.PreferenceGP(space, kernel, noise=0.02).posterior(winners, losers)
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0)   # ask() / tell()
     loop = gaitpref.CoSpar(space, kernel, 0.02, n=1, buffer=1, seed=0,
-                           strategy=gaitpref.make_strategy("plausible-eubo"),
+                           strategy=gaitpref.make_strategy("gated-eubo"),
                            learning=gaitpref.Learning(fit="evidence", refit_every=20))
     config = gaitpref.load_config("exo-1d-step-length")                    # or a TOML path
     session = gaitpref.Session.create("sqlite:///lab.db", config, subject="S01")  # durable

@@ -64,23 +64,11 @@ def _record(text: str, meta: dict[str, object]) -> SessionRecord:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.3"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.2"}
     assert config_of(_record(BARE, library_meta(bare))).buffer == 1
-    explicit = parse_config(BARE + '[cospar]\nbuffer = 1\nstrategy = "plausible-eubo"\n')
+    explicit = parse_config(BARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 
 
 def test_a_session_recorded_by_0_1_replays_with_0_1_defaults() -> None:
     assert config_of(_record(BARE, {})).buffer == 0
-    assert config_of(_record(BARE, {})).strategy == "gated-eubo"
-
-
-def test_a_session_recorded_with_0_2_defaults_keeps_gated_eubo() -> None:
-    """Issue 16 made plausible-eubo the default; a 0.2 session that relied on the default
-    strategy replays with gated-eubo, and a new one gets plausible-eubo."""
-    old = config_of(_record(BARE, {"config_defaults": "0.2"}))
-    assert old.strategy == "gated-eubo" and old.buffer == 1
-    assert type(old.make_loop().strategy).__name__ == "GatedEubo"
-    assert parse_config(BARE).strategy == "plausible-eubo"
-    explicit = parse_config(BARE + '[cospar]\nbuffer = 1\nstrategy = "plausible-eubo"\n')
-    assert not explicit.relies_on_changed_defaults

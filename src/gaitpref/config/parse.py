@@ -28,12 +28,12 @@
     buffer = 1                     # previous trials compared with (0..64; default 1, the paper)
     coactive_weight = 1.0
     seed = 0
-    strategy = "plausible-eubo"    # optional: see gaitpref.strategies.STRATEGIES
+    strategy = "gated-eubo"        # optional: see gaitpref.strategies.STRATEGIES
 
     [cospar.strategy_settings]     # optional: the chosen strategy's settings
-    samples = 32                   # plausible-eubo: joint draws whose argmaxes may be run (1..4096)
-    gates = 3                      # gated-eubo (default 1), plausible-eubo (default 3): draws read
+    gates = 1                      # gated-eubo (default 1), plausible-eubo (default 3): draws read
                                    # by the gate (1..1000)
+    # samples = 32                 # plausible-eubo: joint draws whose argmaxes may run (1..4096)
     # trials = 20                  # eubo-then-sparring: trials of EUBO before self-sparring
     # beta = 1.0                   # confident-eubo: width of the confidence bounds (0..100)
     # candidates = 64              # eubo, confident-eubo: top actions for the first pair

@@ -147,7 +147,7 @@ COSPAR: Final[dict[str, Key]] = {
     "buffer": Key(Integer(0, MAX_QUERY), 1),
     "coactive_weight": Key(Number(MIN_SCALE, 1e6), 1.0),
     "seed": Key(Integer(0, 2**63 - 1), 0),
-    "strategy": Key(Choice(STRATEGIES), "plausible-eubo"),
+    "strategy": Key(Choice(STRATEGIES), "gated-eubo"),
     "strategy_settings": Key(Table("the strategy's settings"), {}),
 }
 
@@ -184,14 +184,9 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.3"
-#: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
-#: 0.2: ``strategy = "gated-eubo"``, before the learning study of issue 16).  A session stored
-#: without a defaults version replays with 0.1's.
-EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
-    "0.1": {"cospar": {"buffer": 0, "strategy": "gated-eubo"}},
-    "0.2": {"cospar": {"strategy": "gated-eubo"}},
-}
+DEFAULTS_VERSION: Final = "0.2"
+#: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``).
+EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {"0.1": {"cospar": {"buffer": 0}}}
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).
 DEFAULTS: Final[dict[str, dict[str, Any]]] = {

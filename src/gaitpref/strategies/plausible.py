@@ -17,9 +17,10 @@ best)``, so the gait repeats with probability ``1 - (1 - p)^gates``); otherwise 
 challenger of the best buffered gait among the plausible maximisers runs.  Three gates (the
 default) repeat a gait the posterior thinks best with ``p = 0.5`` seven times in eight: in the
 learning study (``docs/results/learning``) they gained 0.016 over trials 31-150 against one gate
-and lost nothing over trials 1-20, where ``p`` is small and the gate rarely fires.  With no buffer the first action is the
-first draw's argmax and the others are EUBO challengers, as in gated EUBO.  When every plausible
-maximiser is already a reference, EUBO falls back to the whole grid (``acquire.eubo_fill``).
+and lost nothing over trials 1-20, where ``p`` is small and the gate rarely fires.  With no
+buffer the first action is the first draw's argmax and the others are EUBO challengers, as in
+gated EUBO.  When every plausible maximiser is already a reference, EUBO falls back to the whole
+grid (``acquire.eubo_fill``).
 
 Every draw uses ``context.rng`` and only ``context.allowed`` actions, so the strategy replays
 exactly from the loop's seed and never leaves the region of interest.
