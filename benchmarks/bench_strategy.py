@@ -85,7 +85,7 @@ def main() -> None:
     one_run(None, 99)  # warm-up (imports, caches)
     default = DEFAULTS["cospar"]["strategy"]
     arms: dict[str, str | None] = {f"default ({default})": None}
-    arms.update({s: s for s in ("gated-eubo", "self-sparring") if s != default})
+    arms.update({s: s for s in ("plausible-eubo", "gated-eubo", "self-sparring") if s != default})
     results: dict[str, dict[str, float]] = {}
     for name, strategy in arms.items():
         times = np.array([t for k in range(args.runs) for t in one_run(strategy, k)])
