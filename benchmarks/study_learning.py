@@ -317,6 +317,8 @@ def _summary(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
         "mean over runs (objectives) with its standard error; `vs paper` is the paired difference",
         "from the `paper` arm of the same scenario (same objectives and seeds), with its standard",
         "error.  `argmax` is the normalised objective of the final posterior mean's best action.",
+        "The arms of the first study (issue 8) that issue 16 did not re-run are in",
+        "[issue8/summary.md](issue8/summary.md), as recorded.",
         "",
     ]
     for scenario in SCENARIOS:
