@@ -1,8 +1,9 @@
 """Speed of the default strategy's ask + tell late in a session (issue 16: under 5 ms at trial 150).
 
-A config that sets only the space and the model (the paper's 30 x 30 synthetic grid and kernel)
-runs the defaults for new configs (``gaitpref.config.DEFAULTS``: strategy, hyperparameter fit,
-``n = 1, b = 1``); the same config with ``strategy`` set times the other strategies beside it.
+The learning study's config (``study_learning.config_text``: the paper's 30 x 30 synthetic grid
+and kernel, ``n = 1, b = 1``) with no learning keys runs the defaults for new configs
+(``gaitpref.config.DEFAULTS``: strategy, lengthscales fitted every 20 answers); the same config
+with another ``strategy`` times the other strategies beside it.
 Each run answers 150 trials with the paper's simulated subject and coactive suggestions (the
 answers are not timed) and times ``ask`` and ``tell`` of trials 141-150 (the refit of trial 140
 is outside the window; trial 160's would be the next).
@@ -27,39 +28,20 @@ from gaitpref.data import paper_objectives
 
 try:
     from _machine import machine_description, machine_markdown
+    from study_learning import config_text
 except ImportError:  # run as a module
     from benchmarks._machine import machine_description, machine_markdown
+    from benchmarks.study_learning import config_text
 
 RESULTS = Path(__file__).parent / "results"
 TRIALS, WINDOW = 150, 10
-
-BARE = """
-[space.x]
-min = 0.0
-max = 1.0
-num = 30
-coactive = [0.06, 0.10]
-
-[space.y]
-min = 0.0
-max = 1.0
-num = 30
-coactive = [0.06, 0.10]
-
-[model]
-lengthscale = 0.15
-signal_variance = 1e-4
-jitter = 1e-5
-noise = 0.01
-"""
 
 
 def one_run(strategy: str | None, k: int) -> list[tuple[float, float, float]]:
     """(ask, tell, ask + tell CPU) seconds of the last ``WINDOW`` trials of one run on objective
     ``k``; the first two are wall-clock time, the third the process's CPU time (one BLAS thread),
     which a loaded shared machine inflates far less."""
-    text = BARE if strategy is None else BARE + f'\n[cospar]\nstrategy = "{strategy}"\n'
-    cfg = parse_config(text)
+    cfg = parse_config(config_text(strategy or DEFAULTS["cospar"]["strategy"]))
     objective = paper_objectives()[k]
     loop = cfg.make_loop(seed=k)
     user = SimulatedUser(cfg.space, objective, np.random.default_rng(k))

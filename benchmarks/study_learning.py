@@ -105,6 +105,12 @@ def _fit_centred(lengthscale: float) -> str:
     return FIT + f"\n[model.prior]\nlengthscale = {{ x = {guess}, y = {guess} }}"
 
 
+def config_text(strategy: str, model: str = "", lengthscale: float = 0.15) -> str:
+    """The study's config: the synthetic 30 x 30 grid, ``n = 1, b = 1``, ``strategy``, and the
+    ``[model]`` keys ``model`` (empty: the defaults for new configs) with ``lengthscale``."""
+    return _TEMPLATE.format(ls=lengthscale, model=model, strategy=strategy)
+
+
 @dataclass(frozen=True)
 class Arm:
     name: str
@@ -115,7 +121,7 @@ class Arm:
     settings: str = ""  # [cospar.strategy_settings] lines
 
     def config(self) -> ExperimentConfig:
-        text = _TEMPLATE.format(ls=self.lengthscale, model=self.model, strategy=self.strategy)
+        text = config_text(self.strategy, self.model, self.lengthscale)
         if self.settings:
             text += f"\n[cospar.strategy_settings]\n{self.settings}\n"
         return parse_config(text)
