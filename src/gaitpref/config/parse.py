@@ -31,7 +31,9 @@
     strategy = "gated-eubo"        # optional: see gaitpref.strategies.STRATEGIES
 
     [cospar.strategy_settings]     # optional: the chosen strategy's settings
-    gates = 1                      # gated-eubo: posterior samples drawn for the gate (1..1000)
+    gates = 1                      # gated-eubo (default 1), plausible-eubo (default 3): draws read
+                                   # by the gate (1..1000)
+    # samples = 32                 # plausible-eubo: joint draws whose argmaxes may run (1..4096)
     # trials = 20                  # eubo-then-sparring: trials of EUBO before self-sparring
     # beta = 1.0                   # confident-eubo: width of the confidence bounds (0..100)
     # candidates = 64              # eubo, confident-eubo: top actions for the first pair
@@ -103,6 +105,7 @@ from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
 from gaitpref.space import Space
+from gaitpref.strategies import make_strategy
 
 #: What a config that omits the learning keys gets (the study in docs/results/learning).
 DEFAULT_TIES: TiesMode = DEFAULTS["model"]["ties"]
@@ -227,4 +230,9 @@ def _strategy_settings(cospar: dict[str, Any]) -> dict[str, Any]:
     table, _ = check_table(
         given, "cospar.strategy_settings", STRATEGY_TABLES[name], for_what=f" for strategy {name!r}"
     )
-    return {k: table[k] for k in given}
+    settings = {k: table[k] for k in given}
+    try:  # what one key cannot say alone (plausible-eubo: gates <= samples)
+        make_strategy(name, **table)
+    except ValueError as exc:
+        fail("cospar.strategy_settings", None, f"{exc} (strategy {name!r})")
+    return settings

@@ -158,6 +158,7 @@ _SETTING_SPECS: Final[dict[str, Spec]] = {
     "trials": Integer(0, 1_000_000),
     "beta": Number(0.0, 100.0),
     "candidates": Integer(2, 4096),
+    "samples": Integer(1, 4096),
 }
 
 

@@ -13,6 +13,7 @@ from gaitpref.strategies.acquire import ConfidentEubo, Eubo
 from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
 from gaitpref.strategies.hybrid import GatedEubo, Switch
 from gaitpref.strategies.infogain import InformationGain
+from gaitpref.strategies.plausible import PlausibleEubo
 
 #: Every strategy by name: the class, constructed with its settings as keywords.
 STRATEGY_CLASSES: dict[str, type[Any]] = {
@@ -22,6 +23,7 @@ STRATEGY_CLASSES: dict[str, type[Any]] = {
     "eubo-then-sparring": Switch,
     "confident-eubo": ConfidentEubo,
     "information-gain": InformationGain,
+    "plausible-eubo": PlausibleEubo,
 }
 STRATEGIES: tuple[str, ...] = tuple(STRATEGY_CLASSES)
 #: The settings a config may give each strategy (``[cospar.strategy_settings]``); the defaults
@@ -33,6 +35,7 @@ STRATEGY_SETTINGS: dict[str, tuple[str, ...]] = {
     "eubo-then-sparring": ("trials",),
     "confident-eubo": ("beta", "candidates"),
     "information-gain": ("candidates",),
+    "plausible-eubo": ("samples", "gates"),
 }
 
 
@@ -64,6 +67,7 @@ __all__ = [
     "Eubo",
     "GatedEubo",
     "InformationGain",
+    "PlausibleEubo",
     "SelfSparring",
     "Strategy",
     "Switch",
