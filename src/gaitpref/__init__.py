@@ -35,8 +35,9 @@ if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig, load_config, shipped_configs
     from gaitpref.feedback import Comparison, Preference, Rating, Suggestion, Tie
     from gaitpref.gaits import GaitLibrary
-    from gaitpref.loop import Answer, CoSpar, Learning, Query
+    from gaitpref.loop import Answer, CoSpar, Learning, LineCoSpar, Query
     from gaitpref.model import Ordinal, Posterior, PreferenceGP, SquaredExponential
+    from gaitpref.pointset import PointSet
     from gaitpref.sessions import REASONS, Session, SessionQuery
     from gaitpref.simulate.noisy import IndifferentUser
     from gaitpref.simulate.run import SimulationResult, run_simulation
@@ -59,6 +60,8 @@ _LAZY = {
     "GaitLibrary": "gaitpref.gaits",
     "Answer": "gaitpref.loop",
     "CoSpar": "gaitpref.loop",
+    "LineCoSpar": "gaitpref.loop",
+    "PointSet": "gaitpref.pointset",
     "Learning": "gaitpref.loop",
     "Query": "gaitpref.loop",
     "Ordinal": "gaitpref.model",
@@ -116,8 +119,10 @@ __all__ = [
     "GradientCoactive",
     "IndifferentUser",
     "Learning",
+    "LineCoSpar",
     "Move",
     "Ordinal",
+    "PointSet",
     "Posterior",
     "Preference",
     "PreferenceGP",

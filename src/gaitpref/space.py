@@ -11,11 +11,17 @@ a signed fraction of the feature's range; the suggestion is the grid value neare
 ``current + fraction * (max - min)``, clipped to the grid, and a move that lands back on the current
 point carries no feedback (``None``).
 
+A feature may instead be *continuous* (``Feature.interval``: a range with no grid values, issue
+13); a space with one has no finite grid and runs on the line path (``pointset.py``,
+``loop/line.py``), where a coactive move is the same fraction of the range, clipped and not
+snapped.
+
 Notation: ``A`` actions, ``d`` features, feature ``f`` has ``n_f`` values; ``points`` is ``A x d``.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -45,6 +51,7 @@ class Feature:
     unit: str = ""
     coactive: tuple[float, float] = (0.1, 0.2)
     words: tuple[str, str] = ("more", "less")
+    continuous: bool = False
 
     def __init__(
         self,
@@ -53,6 +60,8 @@ class Feature:
         unit: str = "",
         coactive: Sequence[float] = (0.1, 0.2),
         words: Sequence[str] = ("more", "less"),
+        *,
+        continuous: bool = False,
     ) -> None:
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"feature name must be an identifier, got {name!r}")
@@ -63,6 +72,8 @@ class Feature:
             raise ValueError(f"feature {name!r}: values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
+        if continuous and arr.size != 2:
+            raise ValueError(f"feature {name!r}: a continuous feature is given as (min, max)")
         small, big = (float(c) for c in coactive)
         if not (0 < small <= big <= 1):
             raise ValueError(
@@ -76,6 +87,14 @@ class Feature:
         object.__setattr__(self, "unit", str(unit))
         object.__setattr__(self, "coactive", (small, big))
         object.__setattr__(self, "words", (str(words[0]), str(words[1])))
+        object.__setattr__(self, "continuous", bool(continuous))
+
+    @classmethod
+    def interval(cls, name: str, lo: float, hi: float, **kwargs: object) -> Feature:
+        """A continuous feature over ``[lo, hi]`` (``values`` holds the two bounds)."""
+        if not hi > lo:
+            raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
+        return cls(name, (lo, hi), continuous=True, **kwargs)  # type: ignore[arg-type]
 
     @classmethod
     def linspace(cls, name: str, lo: float, hi: float, num: int, **kwargs: object) -> Feature:
@@ -98,16 +117,34 @@ class Feature:
         """``max - min`` of the values (0 for a single value)."""
         return self.values[-1] - self.values[0]
 
-    def move(self, value_index: int, move: Move) -> int | None:
-        """Value index after a coactive move, or ``None`` when it clips back to the same value."""
+    @property
+    def step(self) -> float | None:
+        """The smallest gap between grid values (None: continuous or a single value)."""
+        if self.continuous or len(self.values) < 2:
+            return None
+        return float(np.min(np.diff(self.array)))
+
+    def snap(self, value: float) -> float:
+        """``value`` clipped to the range and, for a discrete feature, the nearest grid value."""
+        clipped = min(max(float(value), self.values[0]), self.values[-1])
+        if self.continuous:
+            return clipped
+        return self.values[int(np.argmin(np.abs(self.array - clipped)))]
+
+    def move_value(self, value: float, move: Move) -> float | None:
+        """The value after a coactive move from ``value`` (a fraction of the range, clipped and
+        snapped as :meth:`snap`), or ``None`` when it lands back on ``value``."""
         if move not in MOVES:
             raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
         fraction = self.coactive[1] if move.endswith("big") else self.coactive[0]
         sign = 1.0 if move.startswith("+") else -1.0
-        target = self.values[value_index] + sign * fraction * self.span
-        target = min(max(target, self.values[0]), self.values[-1])
-        new = int(np.argmin(np.abs(self.array - target)))
-        return None if new == value_index else new
+        new = self.snap(value + sign * fraction * self.span)
+        return None if new == value else new
+
+    def move(self, value_index: int, move: Move) -> int | None:
+        """Value index after a coactive move, or ``None`` when it clips back to the same value."""
+        new = self.move_value(self.values[value_index], move)
+        return None if new is None else self.values.index(new)
 
 
 @dataclass(frozen=True)
@@ -134,7 +171,25 @@ class Space:
         return iter(self.features)
 
     @property
+    def continuous(self) -> bool:
+        """Whether any feature is continuous (then the space has no finite grid)."""
+        return any(f.continuous for f in self.features)
+
+    @property
+    def grid_size(self) -> int | None:
+        """The number of grid points as an exact integer (None for a continuous space)."""
+        if self.continuous:
+            return None
+        return math.prod(len(f) for f in self.features)
+
+    @property
     def shape(self) -> tuple[int, ...]:
+        if self.continuous:
+            names = ", ".join(f.name for f in self.features if f.continuous)
+            raise ValueError(
+                f"the space has continuous features ({names}) and no finite grid: it runs on "
+                "the line path ([cospar] subspace = 'line')"
+            )
         return tuple(len(f) for f in self.features)
 
     @property
@@ -172,6 +227,13 @@ class Space:
         if not 0 <= i < len(self):
             raise IndexError(f"action index {i} is off the grid (0..{len(self) - 1})")
         return i
+
+    def points_of(self, actions: Sequence[int]) -> FloatArray:
+        """Feature values of ``actions`` (``k x d``) without building every grid point."""
+        idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
+        multi = np.unravel_index(idx, self.shape)
+        cols = [f.array[m] for f, m in zip(self.features, multi, strict=True)]
+        return np.stack(cols, axis=1) if cols else np.zeros((0, 0))
 
     def point(self, index: int) -> FloatArray:
         """Feature values of the action with flat index ``index``."""

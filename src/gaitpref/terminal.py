@@ -258,7 +258,7 @@ class Terminal:
         return out, said
 
     def _gait(self, action: int) -> str:
-        return f"{gait_name(self.session, action)} ({self.session.config.space.describe(action)})"
+        return f"{gait_name(self.session, action)} ({self.session.space.describe(action)})"
 
     def _comparisons(self, q: SessionQuery) -> tuple[list[tuple[int, int, str]], list[str]]:
         out: list[tuple[int, int, str]] = []
@@ -296,7 +296,7 @@ class Terminal:
     def _suggestions(self, q: SessionQuery) -> tuple[list[tuple[int, str, str]], list[str]]:
         out: list[tuple[int, str, str]] = []
         said: list[str] = []
-        space = self.session.config.space
+        space = self.session.space
         for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
             for f in space.features:
                 words = _move_words(f)

@@ -73,7 +73,7 @@ def _error(text: str) -> ConfigError:
             SPACE.replace("num = 11", 'num = "11"') + MODEL,
             "space.x",
             "num",
-            "[space.x].num: must be an integer from 1 to 1000000, got '11'",
+            "[space.x].num: must be an integer from 1 to 4611686018427387904, got '11'",
         ),
         (SPACE + "unit = 3\n" + MODEL, "space.x", "unit", "[space.x].unit: must be text"),
         (

@@ -25,6 +25,7 @@ noise = 0.02
 [cospar]
 n = 1
 buffer = 1
+subspace = "grid"  # the full grid asked for (without it, such a num is continuous: issue 13)
 """
 
 CHILD = textwrap.dedent(

@@ -184,7 +184,12 @@ def simulate(
         str, typer.Argument(metavar="CONFIG", help="Config TOML file or shipped config name.")
     ],
     objective: Annotated[
-        Path, typer.Option(help=".npy file: one utility per grid point, shaped like the grid.")
+        str,
+        typer.Option(
+            help=".npy file: one utility per grid point, shaped like the grid; or PATH.py:NAME, "
+            "a function of an m x d array of points (features' units) returning m utilities; "
+            "or a built-in: hartmann6, random-gp[:SEED]."
+        ),
     ],
     minimize: Annotated[bool, typer.Option(help="Lower objective values are better.")] = False,
     trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
@@ -201,25 +206,43 @@ def simulate(
         float,
         typer.Option(help="The rater's ordinal noise, on the normalised objective (0 to 1)."),
     ] = 0.0,
+    noise: Annotated[
+        float,
+        typer.Option(help="The simulated subject's probit noise (objectives over points)."),
+    ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Run one simulated CoSpar experiment against an objective over the config's grid.
+    """Run one simulated CoSpar experiment against an objective over the config's grid or, for
+    PATH.py:NAME and the built-ins, over points (also on the line path of continuous spaces).
 
     With --rating-quantiles a simulated subject also rates every executed gait; --json then
-    gives the ratings per trial ("ratings", 1 = worst) beside the executed "actions".
+    gives the ratings per trial ("ratings", 1 = worst) beside the executed "actions".  --json
+    gives the executed points' feature values per query ("points") and the objective there, and
+    the final posterior's best point ("best_point", "best_objective").
     """
     from rich.table import Table
 
+    from gaitpref.cli.points import is_grid_objective, run_command
     from gaitpref.simulate.users import objective_on_grid
 
     cfg = _load_config_or_fail(config)
-    obj = _load_objective(objective)
+    use_seed = cfg.seed if seed is None else seed
+    if not is_grid_objective(objective):
+        if rating_quantiles:
+            fail("--rating-quantiles needs a .npy objective over the grid")
+        run_command(cfg, objective, trials, use_seed, coactive, noise, as_json)
+        return
+    if cfg.subspace == "line":
+        fail(
+            f"objective {objective!r}: config {cfg.name!r} runs on the line path (no grid to "
+            "hold a .npy objective); give PATH.py:NAME, hartmann6 or random-gp"
+        )
+    obj = _load_objective(Path(objective))
     try:
         objective_on_grid(cfg.space, obj)
     except ValueError as exc:
         fail(f"objective {str(objective)!r}: {exc}")
     quantiles = guard(lambda: rating_quantiles_for(cfg, rating_quantiles, rating_noise))
-    use_seed = cfg.seed if seed is None else seed
     start = time.perf_counter()
     result = simulate_once(
         cfg,
@@ -234,7 +257,17 @@ def simulate(
     )
     elapsed = time.perf_counter() - start
     if as_json:
-        payload = {"config": cfg.name, "seed": use_seed, "seconds": elapsed, **result.to_json()}
+        best = result.posterior_argmax
+        payload = {
+            "config": cfg.name,
+            "seed": use_seed,
+            "seconds": elapsed,
+            **result.to_json(),
+            "points": [[p] for p in cfg.space.points_of(result.actions.tolist()).tolist()],
+            "objective": [[float(v)] for v in obj.reshape(-1)[result.actions]],
+            "best_point": cfg.space.points_of([best])[0].tolist(),
+            "best_objective": float(obj.reshape(-1)[best]),
+        }
         typer.echo(json.dumps(payload))
         return
     score = result.normalized_objective

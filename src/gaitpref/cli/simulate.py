@@ -4,6 +4,7 @@
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
+    gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
 ``sweep``, files in ``tables``/``report``/``figures``).
@@ -239,6 +240,64 @@ def population(
         cold = np.mean([np.mean(s["cold"][lo:hi]) for s in subjects])
         warm = np.mean([np.mean(s["warm"][lo:hi]) for s in subjects])
         _console.print(f"trials {part}: cold {cold:.3f}, warm {warm:.3f} ({warm - cold:+.3f})")
+
+
+@bench_app.command("continuous")
+def continuous(
+    config: Annotated[str, typer.Argument(metavar="CONFIG", help="config file or shipped name")],
+    objective: Annotated[
+        str,
+        typer.Option(
+            help="PATH.py:NAME (a function of an m x d array of points returning m utilities), "
+            "hartmann6 or random-gp[:SEED] (random-gp alone: run k draws objective k)"
+        ),
+    ],
+    runs: Annotated[int, typer.Option(min=1, help="runs (seeds 0..runs-1)")] = 5,
+    trials: Annotated[int, typer.Option(min=1, help="executed trials per run")] = 150,
+    coactive: Annotated[bool, typer.Option(help="simulate coactive suggestions")] = False,
+    noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """A sweep over seeds against an objective over points (grid or line path, issue 13):
+    the learning curve and the final best point's objective, mean and standard error."""
+    import functools
+    import json
+
+    import numpy as np
+
+    from gaitpref.cli.points import load_point_objective, simulate_points
+    from gaitpref.config import load_config
+
+    cfg = guard(lambda: load_config(config))
+    results = []
+    for seed in range(runs):
+        spec = f"random-gp:{seed}" if objective == "random-gp" else objective
+        fn = load_point_objective(spec, cfg)
+        run = functools.partial(
+            simulate_points, cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise
+        )
+        results.append(guard(run))
+    curves = np.array([r.curve[:trials] for r in results])
+    best = np.array([r.best_objective for r in results])
+    out = {
+        "config": cfg.name,
+        "objective": objective,
+        "path": cfg.subspace,
+        "runs": [{"seed": k, **r.to_json()} for k, r in enumerate(results)],
+        "mean_curve": curves.mean(axis=0).tolist(),
+        "best_objective_mean": float(best.mean()),
+        "best_objective_se": float(best.std(ddof=1) / np.sqrt(runs)) if runs > 1 else 0.0,
+    }
+    if as_json:
+        typer.echo(json.dumps(out))
+        return
+    for lo, hi in [(1, 10), (11, 50), (51, 100), (101, trials)]:
+        if lo <= trials:
+            _console.print(f"trials {lo}-{min(hi, trials)}: {curves[:, lo - 1 : hi].mean():.4g}")
+    _console.print(
+        f"final best point's objective: {out['best_objective_mean']:.4g} "
+        f"+- {out['best_objective_se']:.2g} (SE, {runs} runs, {cfg.subspace} path)"
+    )
 
 
 if __name__ == "__main__":  # python -m gaitpref.cli.simulate

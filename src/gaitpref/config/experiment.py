@@ -13,6 +13,8 @@ from gaitpref.config.generator import GeneratorSpec
 from gaitpref.config.schema import DEFAULTS_VERSION, EARLIER_DEFAULTS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.learning import Learning
+from gaitpref.loop.line import LineCoSpar
+from gaitpref.loop.lines import LineSettings
 from gaitpref.loop.safety import Safety
 from gaitpref.loop.stopping import StopRule
 from gaitpref.model.kernels import SquaredExponential
@@ -54,6 +56,8 @@ class ExperimentConfig:
     ordinal: Ordinal | None = None  # [feedback.rating]
     safety: Safety = field(default_factory=Safety)  # [safety]
     stop: StopRule = field(default_factory=StopRule)  # [stop]
+    subspace: str = "grid"  # [cospar] subspace, resolved: "grid" or "line" (issue 13)
+    line: LineSettings = field(default_factory=LineSettings)  # line_points, line_direction
 
     @property
     def sha256(self) -> str:
@@ -86,11 +90,16 @@ class ExperimentConfig:
         return None if self.library is None else self.library.gait_id(index)
 
     def make_loop(self, seed: int | np.random.Generator | None = None) -> CoSpar:
-        """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's)."""
-        return CoSpar(
-            self.space,
-            self.kernel,
-            self.noise,
+        """A fresh :class:`CoSpar` loop with these settings (``seed`` overrides the config's):
+        a :class:`LineCoSpar` on the line path."""
+        if self.subspace == "line":
+            return LineCoSpar(
+                self.space, self.kernel, self.noise, line=self.line, **self._loop(seed)
+            )
+        return CoSpar(self.space, self.kernel, self.noise, **self._loop(seed))
+
+    def _loop(self, seed: int | np.random.Generator | None = None) -> dict[str, Any]:
+        return dict(
             n=self.n,
             buffer=self.buffer,
             coactive_weight=self.coactive_weight,

@@ -81,7 +81,7 @@ from typing import Any
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.config.generator import parse_generator
-from gaitpref.config.grid import parse_gaits, parse_space
+from gaitpref.config.grid import grid_too_large, parse_gaits, parse_space
 from gaitpref.config.model import (
     check_model,
     check_sampler,
@@ -104,6 +104,7 @@ from gaitpref.config.specs import fail
 from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
+from gaitpref.loop.lines import LineSettings
 from gaitpref.space import Space
 from gaitpref.strategies import make_strategy
 
@@ -180,9 +181,12 @@ def parse_config(
         if len(space) > max_actions:
             fail("gaits", "library", f"has {len(space)} gaits; at most {max_actions} are allowed")
     else:
-        space = parse_space(top["space"], max_actions)
+        cospar_raw = top["cospar"]
+        grid = isinstance(cospar_raw, dict) and cospar_raw.get("subspace") == "grid"
+        space = parse_space(top["space"], max_actions, grid)
     model = check_model(top["model"])
-    cospar, defaulted = _cospar(top["cospar"], space, defaults)
+    cospar, defaulted = _cospar(top["cospar"], space, defaults, max_actions)
+    on_line = cospar["subspace"] == "line"
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
@@ -201,7 +205,9 @@ def parse_config(
         text=text,
         strategy=cospar["strategy"],
         learning=make_learning(model, space),
-        sampler=check_sampler(model, len(space)),
+        sampler=check_sampler(model, 0 if on_line else len(space)),
+        subspace="line" if on_line else "grid",
+        line=LineSettings(cospar["line_points"], cospar["line_direction"]),
         library=library,
         library_path=library_path,
         generator=generator,
@@ -214,8 +220,18 @@ def parse_config(
     )
 
 
-def _cospar(raw: object, space: Space, defaults: str) -> tuple[dict[str, Any], frozenset[str]]:
+def _cospar(
+    raw: object, space: Space, defaults: str, max_actions: int
+) -> tuple[dict[str, Any], frozenset[str]]:
+    """``[cospar]`` checked; ``subspace`` resolved to ``"grid"`` or ``"line"``."""
     cospar, defaulted = check_table(raw, "cospar", COSPAR, defaults_for(defaults, "cospar"))
+    why = grid_too_large(space, max_actions)
+    if cospar["subspace"] == "grid" and why is not None:
+        fail("cospar", "subspace", f"is 'grid' but {why}: use subspace = 'line' (or 'auto')")
+    if cospar["subspace"] == "auto":
+        cospar["subspace"] = "grid" if why is None else "line"
+    if cospar["subspace"] == "line":
+        return cospar, defaulted
     size = len(space)
     for key in ("n", "buffer"):
         if cospar[key] > size:

@@ -39,11 +39,14 @@ from gaitpref.config.specs import (
 )
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FIT_MODES, TIES_MODES
+from gaitpref.loop.lines import DIRECTIONS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
 
 #: A grid (the product of every feature's ``num`` or ``values``) has at most this many actions.
 MAX_ACTIONS: Final = 1_000_000
+#: ``[cospar] subspace``: the full grid, the line path, or the line path when no grid fits.
+SUBSPACES: Final = ("auto", "grid", "line")
 #: At most this many features (``[space.<feature>]`` tables).
 MAX_FEATURES: Final = 32
 #: Actions per query (``n``) and remembered trials (``buffer``): each at most this many.
@@ -114,7 +117,7 @@ STOP: Final[dict[str, Key]] = {
 FEATURE: Final[dict[str, Key]] = {
     "min": Key(Number(), None),
     "max": Key(Number(), None),
-    "num": Key(Integer(1, MAX_ACTIONS), None),
+    "num": Key(Integer(1, 2**62), None),  # None, or past MAX_ACTIONS: continuous
     "values": Key(Numbers(Number(), 1, MAX_ACTIONS), None),
     "unit": Key(Text(MAX_NAME), ""),
     "coactive": Key(Coactive(), (0.1, 0.2)),
@@ -150,6 +153,10 @@ COSPAR: Final[dict[str, Key]] = {
     "seed": Key(Integer(0, 2**63 - 1), 0),
     "strategy": Key(Choice(STRATEGIES), "gated-eubo"),
     "strategy_settings": Key(Table("the strategy's settings"), {}),
+    # issue 13: the full grid, or LineCoSpar's lines ("auto": lines when no grid fits)
+    "subspace": Key(Choice(SUBSPACES), "auto"),
+    "line_points": Key(Integer(2, 4096), 50),
+    "line_direction": Key(Choice(DIRECTIONS), "random"),
 }
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.

@@ -181,7 +181,7 @@ def _choose(
             _inside(library_dir, named)
             base = library_dir
         cfg = parse_config(source, default_name=stem, base_dir=base, max_actions=MAX_ACTIONS)
-    if len(cfg.space) > MAX_ACTIONS:
+    if cfg.subspace == "grid" and len(cfg.space) > MAX_ACTIONS:
         raise InputError(
             "config",
             f"the grid has {len(cfg.space)} actions; the console serves at most {MAX_ACTIONS}",

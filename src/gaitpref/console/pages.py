@@ -198,7 +198,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             pending = session.pending
             if pending is None or pending.id != query_id:
                 raise session_query_error(session, query_id)
-            space = session.config.space
+            space = session.space
             said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
             return views.answer_summary(
                 space, pending, comparisons, suggestions, session.gait_name, said
@@ -311,7 +311,7 @@ async def validation_page(request: Request, session_id: SessionId) -> Response:
 
 
 def _validation_page(request: Request, session: Session) -> Response:
-    space = session.config.space
+    space = session.space
     plan = session.validation_plan
     gaits = (
         []

@@ -24,7 +24,7 @@ from gaitpref.storage import SessionRecord
 
 
 def gait_out(session: Session, action: int, trial: int | None = None) -> GaitOut:
-    space = session.config.space
+    space = session.space
     values = space.values_of(action)
     return GaitOut(
         index=int(action),
@@ -44,7 +44,7 @@ def features_out(session: Session) -> list[FeatureOut]:
             words=f.words,
             moves=views.move_words(f),
         )
-        for f in session.config.space.features
+        for f in session.space.features
     ]
 
 
@@ -55,13 +55,10 @@ def query_out(session: Session, query: SessionQuery) -> QueryOut:
     ]
     groups = views.comparison_groups(
         [
-            views.gait_view(session.config.space, g.index, trial=g.trial, gait_id=g.gait_id)
+            views.gait_view(session.space, g.index, trial=g.trial, gait_id=g.gait_id)
             for g in actions
         ],
-        [
-            views.gait_view(session.config.space, g.index, trial=g.trial, gait_id=g.gait_id)
-            for g in buffer
-        ],
+        [views.gait_view(session.space, g.index, trial=g.trial, gait_id=g.gait_id) for g in buffer],
     )
     return QueryOut(
         session_id=session.id,
@@ -116,7 +113,7 @@ def posterior_out(session: Session) -> PosteriorOut:
     post = session.posterior()
     mean = np.asarray(post.mean, dtype=float)
     sd = np.asarray(post.std, dtype=float)
-    space = session.config.space
+    space = session.space
     confidence = None
     if mean.max() > mean.min():  # something learnt (the trial page shows it then too)
         sure = session.confidence()

@@ -38,7 +38,7 @@ def _outcome_text(first: int, second: int, outcome: str, trial: int) -> str:
 
 def chronology(session: Session) -> list[ChronoRow]:
     """The trials in force, newest first, with their comparisons and suggestions."""
-    space = session.config.space
+    space = session.space
     compared: dict[int, list[str]] = {}
     for c in session.comparisons():
         if c.undone:
@@ -75,7 +75,7 @@ def chronology(session: Session) -> list[ChronoRow]:
 
 def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     """Everything ``trial.html`` renders."""
-    space = session.config.space
+    space = session.space
     query = pending.query
     actions: list[views.GaitView] = []
     buffer: list[views.GaitView] = []

@@ -2,10 +2,14 @@
 
 - :class:`CoSpar` (``cospar.py``): ask for a query, tell it feedback records of any registered kind.
 - :class:`Learning` (``learning.py``): ties and hyperparameter refits.
+- :class:`LineCoSpar` (``line.py``, ``lines.py``): the line path for continuous spaces and grids
+  past memory (LineCoSpar, Tucker et al. IROS 2020), its :class:`LineSettings` and :class:`Line`.
 """
 
 from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.loop.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode, pair_data
+from gaitpref.loop.line import LineCoSpar
+from gaitpref.loop.lines import Line, LineSettings
 from gaitpref.loop.safety import Safety
 
 __all__ = [
@@ -15,6 +19,9 @@ __all__ = [
     "CoSpar",
     "FitMode",
     "Learning",
+    "Line",
+    "LineCoSpar",
+    "LineSettings",
     "Query",
     "QueryError",
     "Safety",

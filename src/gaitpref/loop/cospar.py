@@ -25,7 +25,8 @@ does for a trial spoiled by a device fault or a stumble.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Collection, Hashable, Iterable, Mapping
+from collections.abc import Callable, Collection, Hashable, Iterable, Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -46,6 +47,7 @@ from gaitpref.feedback import (
     kinds,
 )
 from gaitpref.loop.learning import Learning, pair_data
+from gaitpref.loop.lines import Line
 from gaitpref.loop.safety import Safety, near
 from gaitpref.loop.warm import WarmStart, warm_posterior
 from gaitpref.model.evidence import Hyperparameters, PairData
@@ -57,6 +59,7 @@ from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
+from gaitpref.pointset import PointSet
 from gaitpref.space import Space
 from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
 
@@ -68,6 +71,11 @@ class Query:
     id: int
     actions: tuple[int, ...]
     buffer: tuple[int, ...]
+    #: the actions' feature values (features' units), one row per action; what a gait
+    #: generator makes a gait for
+    points: tuple[tuple[float, ...], ...] = dataclasses.field(default=(), compare=False)
+    #: on the line path, the subspace the actions were chosen along (``loop/lines.py``)
+    line: Line | None = dataclasses.field(default=None, compare=False)
 
     @property
     def members(self) -> tuple[int, ...]:
@@ -142,6 +150,7 @@ class CoSpar:
             raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
         if not (np.isfinite(coactive_weight) and coactive_weight > 0):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        _check_grid(space)
         self.space = space
         self.gp = PreferenceGP(space, kernel, noise, sampler=sampler, ordinal=ordinal)
         self.learning = Learning() if learning is None else learning
@@ -300,7 +309,8 @@ class CoSpar:
         )
         with one_blas_thread():
             actions = tuple(int(a) for a in self.strategy.propose(context))
-        self.pending = Query(self._next_id, actions, self._buffer)
+        points = tuple(tuple(row) for row in self.space.points_of(actions).tolist())
+        self.pending = Query(self._next_id, actions, self._buffer, points)
         self._next_id += 1
         return self.pending
 
@@ -324,7 +334,18 @@ class CoSpar:
         :class:`FeedbackError` and changes nothing on bad input.
         """
         q = self._check_query(query)
-        records = self._parse(q, [*answers, *_as_comparisons(comparisons)], suggestions)
+        with self._all_or_nothing():
+            return self._tell(q, [*answers, *_as_comparisons(comparisons)], suggestions)
+
+    @contextmanager
+    def _all_or_nothing(self) -> Iterator[None]:
+        """Where :meth:`tell` keeps its promise to change nothing when it raises: nothing to
+        undo here (the loop's state changes only at the end); the line path's point set
+        grows before the fit and goes back (``line.py``)."""
+        yield
+
+    def _tell(self, q: Query, answers: Iterable[object], suggestions: Iterable[object]) -> Answer:
+        records = self._parse(q, answers, suggestions)
         context = self.context()
         prefs: list[Preference] = []
         ties: list[Tie] = []
@@ -613,6 +634,31 @@ class CoSpar:
             init=self.posterior,
             single=single,
             single_likelihood=single_likelihood,
+        )
+
+
+#: The full-grid path refuses grids past this many actions (its posterior reads every one);
+#: :class:`~gaitpref.loop.line.LineCoSpar` runs on any space.
+GRID_LIMIT_ACTIONS = 10_000_000
+
+
+def _check_grid(space: Space) -> None:
+    """A clear refusal where the full-grid path would not fit (issue 13, item 3)."""
+    if isinstance(space, PointSet):
+        return  # the line path's explicit points
+    if space.continuous:
+        names = ", ".join(f.name for f in space.features if f.continuous)
+        raise ValueError(
+            f"CoSpar runs on a grid, and {names} are continuous: use gaitpref.loop.line."
+            "LineCoSpar (the line path; [cospar] subspace = 'line' in a config)"
+        )
+    size = space.grid_size
+    if size is not None and size > GRID_LIMIT_ACTIONS:
+        raise ValueError(
+            f"the grid has {size:,} actions; the full-grid path holds at most "
+            f"{GRID_LIMIT_ACTIONS:,} (a {size:,} x m cross-covariance and {size:,}-long samples "
+            "would not fit in memory): use gaitpref.loop.line.LineCoSpar (the line path; "
+            "[cospar] subspace = 'line' in a config)"
         )
 
 

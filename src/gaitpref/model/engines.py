@@ -21,6 +21,7 @@ Notation: ``A`` actions, ``m`` visited, ``s`` samples, ``n_f`` values of feature
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Literal, get_args
 
 import numpy as np
@@ -33,6 +34,7 @@ from gaitpref.model.kronecker import (
     KroneckerPriorSampler,
     khatri_rao_split,
 )
+from gaitpref.pointset import PointSet
 from gaitpref.space import FloatArray, IntArray, Space
 
 SamplerName = Literal["auto", "dense", "scalable"]
@@ -127,11 +129,52 @@ def _plus_jitter(
     return out, part
 
 
-GridEngine = DenseEngine | ScalableEngine
+class PointEngine:
+    """The dense path on a :class:`~gaitpref.pointset.PointSet` (no grid, no Kronecker
+    structure): the prior's square root from the eigendecomposition of the points' correlation
+    matrix (clipped at zero as ``kronecker.py`` does), the jitter as an independent term."""
+
+    name: Literal["dense", "scalable"] = "dense"
+
+    def __init__(self, space: PointSet, kernel: SquaredExponential) -> None:
+        self.space, self.kernel = space, kernel
+        self.jitter_scale = float(np.sqrt(kernel.jitter))
+
+    @cached_property
+    def root_t(self) -> FloatArray:
+        """The transposed square root of the jitter-free prior covariance (first draw only)."""
+        size = len(self.space)
+        if not size:
+            return np.zeros((0, 0))
+        plain = SquaredExponential(self.kernel.lengthscale, self.kernel.variance)
+        eigval, eigvec = np.linalg.eigh(plain.cross(self.space, np.arange(size)))
+        return np.ascontiguousarray((eigvec * np.sqrt(np.clip(eigval, 0.0, None))).T)
+
+    def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
+        return self.prior_parts(rng, size)[0]
+
+    def prior_parts(
+        self, rng: np.random.Generator, size: int
+    ) -> tuple[FloatArray, FloatArray | None]:
+        """As :meth:`DenseEngine.prior_parts`."""
+        n = len(self.space)
+        z = rng.standard_normal((size, n))
+        z_jitter = rng.standard_normal((size, n)) if self.jitter_scale else None
+        out: FloatArray = z @ self.root_t
+        return _plus_jitter(out, self.jitter_scale, z_jitter)
+
+    def cross(self, visited: IntArray) -> CrossCovariance:
+        return DenseCross(self.space, self.kernel, visited)
+
+
+GridEngine = DenseEngine | ScalableEngine | PointEngine
 
 
 def make_engine(space: Space, kernel: SquaredExponential, sampler: str = "auto") -> GridEngine:
-    """The engine for ``sampler`` ("auto", "dense" or "scalable") on ``space``."""
+    """The engine for ``sampler`` ("auto", "dense" or "scalable") on ``space``; a point set
+    always takes :class:`PointEngine`."""
+    if isinstance(space, PointSet):
+        return PointEngine(space, kernel)
     if resolve_sampler(sampler, len(space)) == "dense":
         return DenseEngine(space, kernel)
     return ScalableEngine(space, kernel)

@@ -195,8 +195,8 @@ def prior_bounds(
             bounds.append((-np.inf, np.inf))
             continue
         lo, hi = p[0] - 3 * p[1], p[0] + 3 * p[1]
-        if k < space.ndim and len(space.features[k]) > 1:
-            step = float(np.min(np.diff(space.features[k].array)))
+        step = space.features[k].step if k < space.ndim else None
+        if step is not None:
             lo = max(lo, float(np.log(0.5 * step)))
             hi = max(hi, lo)
         bounds.append((float(lo), float(hi)))

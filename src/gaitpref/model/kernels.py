@@ -9,6 +9,10 @@ On a Cartesian grid the kernel factorises, ``K = s^2 (K_1 (x) ... (x) K_d) + jit
 per-feature ``n_f x n_f`` correlation matrices ``K_f``; any block ``K[rows, cols]`` is the product
 of per-feature gathers, so no ``A x A`` matrix is ever needed.
 
+On a :class:`~gaitpref.pointset.PointSet` (the line path's explicit points, issue 13) there is no
+grid: ``K[rows, cols]`` is computed from the points' coordinates, with the jitter where a row and
+a column are the same point.
+
 Notation: ``A`` grid points, ``m`` columns asked for, ``d`` features.
 """
 
@@ -19,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.pointset import PointSet
 from gaitpref.space import FloatArray, IntArray, Space
 
 
@@ -75,6 +80,8 @@ class SquaredExponential:
         the result is a column-wise Khatri-Rao product built by broadcasting, never an
         ``A x m`` fancy-index gather per feature.
         """
+        if isinstance(space, PointSet):
+            return self._cross_points(space, cols, rows)
         cols = np.asarray(cols, dtype=np.intp)
         m = cols.shape[0]
         col_mi = np.unravel_index(cols, space.shape)
@@ -90,6 +97,21 @@ class SquaredExponential:
             out = np.full((row_idx.shape[0], m), self.variance)
             for g, r in zip(gathered, row_mi, strict=True):
                 out *= g[r]
+        if self.jitter:
+            out += self.jitter * (row_idx[:, None] == cols[None, :])
+        return out
+
+    def _cross_points(self, space: PointSet, cols: IntArray, rows: IntArray | None) -> FloatArray:
+        """``K[rows, cols]`` from the points' coordinates (a point set: no grid structure)."""
+        cols = np.asarray(cols, dtype=np.intp)
+        row_idx = np.arange(len(space)) if rows is None else np.asarray(rows, dtype=np.intp)
+        scale = np.asarray(self.lengthscales(space.ndim))
+        x_rows = space.points[row_idx] / scale
+        x_cols = space.points[cols] / scale
+        sq = np.zeros((row_idx.shape[0], cols.shape[0]))
+        for j in range(space.ndim):
+            sq += (x_rows[:, j, None] - x_cols[None, :, j]) ** 2
+        out: FloatArray = self.variance * np.exp(-0.5 * sq)
         if self.jitter:
             out += self.jitter * (row_idx[:, None] == cols[None, :])
         return out

@@ -74,8 +74,24 @@ class Created(EventPayload):
         return out
 
 
+class LineDrawn(BaseModel):
+    """The line a line-path query was chosen along (``loop/lines.py``): its seed, origin,
+    unit direction (range-normalised) and points (the features' units)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    seed: int
+    origin: list[float]
+    direction: list[float]
+    points: list[list[float]]
+
+
 class QueryIssued(EventPayload):
-    """``query_issued``: run ``actions`` as trials ``trials``; compare with ``buffer``."""
+    """``query_issued``: run ``actions`` as trials ``trials``; compare with ``buffer``.
+
+    On the line path (issue 13; absent on the grid path, as 0.1 wrote every query) also the
+    actions' ``points`` (feature values, one row per action) and the ``line`` they were chosen
+    along; replay re-derives and compares both.
+    """
 
     kind: ClassVar[str] = "query_issued"
     query_loop_id: int
@@ -83,6 +99,18 @@ class QueryIssued(EventPayload):
     buffer: list[int]
     trials: list[int]
     buffer_trials: list[int]
+    points: list[list[float]] | None = None
+    line: LineDrawn | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_a_line(self, handler: SerializerFunctionWrapHandler) -> Any:
+        """A grid-path query stores what 0.1 stored."""
+        out = handler(self)
+        if isinstance(out, dict):
+            for key in ("points", "line"):
+                if out.get(key) is None:
+                    out.pop(key, None)
+        return out
 
 
 class TrialExecuted(EventPayload):
@@ -380,6 +408,7 @@ __all__ = [
     "GaitPayload",
     "HyperValues",
     "HyperparametersRefit",
+    "LineDrawn",
     "Note",
     "Paused",
     "PriorSession",

@@ -156,7 +156,7 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     pending = session.pending
     return {
         "argmax": best,
-        "argmax_values": session.config.space.values_of(best),
+        "argmax_values": session.space.values_of(best),
         "argmax_gait_id": session.gait_id(best),
         "mean_at_argmax": float(post.mean[best]),
         "sd_at_argmax": float(post.std[best]),
@@ -168,7 +168,7 @@ def posterior_summary(session: Session) -> dict[str, Any]:
 
 
 def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
-    space = session.config.space
+    space = session.space
     unsafe = session.unsafe_flags()
     trials = [
         {

@@ -34,10 +34,10 @@ def propose_with_gaits(
     """
     assert config.generator is not None
     radius = config.generator.avoid_radius
-    space = config.space
     events: list[NewEvent] = []
     while True:
         query = loop.ask()
+        space = loop.space  # the grid, or the line path's points (which the ask may extend)
         bad = []
         for action in dict.fromkeys(query.actions):  # each distinct action once, in order
             made, new = gaits.get(space.point(action))

@@ -3,7 +3,7 @@ became of them (undone, excluded).  The events they are read from are in ``event
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
@@ -21,6 +21,9 @@ class SessionQuery:
     buffer: tuple[int, ...]
     trials: tuple[int, ...]
     buffer_trials: tuple[int, ...]
+    #: the actions' feature values (features' units), one row per action: the point a gait
+    #: generator makes a gait for
+    points: tuple[tuple[float, ...], ...] = field(default=(), compare=False)
 
     @property
     def members(self) -> tuple[int, ...]:

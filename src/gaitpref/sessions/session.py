@@ -59,6 +59,7 @@ from gaitpref.sessions.stored_config import (
 )
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.sessions.warm import describe_prior, make_warm_start, prepare_state, resolve_prior
+from gaitpref.space import Space
 from gaitpref.storage import (
     ConflictError,
     EventRecord,
@@ -124,7 +125,9 @@ class Session:
             )
         if library is None and cfg.library is not None:
             library = cfg.library
-        gait_ids = gait_ids_of(library, len(cfg.space))
+        if library is not None and cfg.subspace == "line":
+            raise ValueError("a gait library names the gaits of a grid; this config runs on lines")
+        gait_ids = None if library is None else gait_ids_of(library, len(cfg.space))
         if gait_ids is not None:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
@@ -543,6 +546,12 @@ class Session:
         """``(sequence number, text)`` of every note."""
         return list(self._state.notes)
 
+    @property
+    def space(self) -> Space:
+        """The actions' space: the config's grid, or on the line path the points so far
+        (a :class:`~gaitpref.pointset.PointSet`: action ``a`` is its row ``a``)."""
+        return self._state.loop.space
+
     def gait_id(self, action: int) -> str | None:
         """The gait library's id of ``action`` (None without a library)."""
         return self._state.gait_id(action)
@@ -554,7 +563,7 @@ class Session:
 
     def describe(self, action: int) -> str:
         """Feature values with units, and the gait id when there is a library."""
-        text = self.config.space.describe(action)
+        text = self.space.describe(action)
         gait = self.gait_id(action)
         return f"{text} [gait {gait}]" if gait is not None else text
 

@@ -35,7 +35,7 @@ from gaitpref.feedback import (
     SuggestionGiven,
     kind_of,
 )
-from gaitpref.loop.cospar import Answer, CoSpar, QueryError
+from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.sessions import events as log
 from gaitpref.sessions.gaits import propose_with_gaits
 from gaitpref.sessions.records import (
@@ -158,6 +158,7 @@ class SessionState:
             buffer=[int(b) for b in q.buffer],
             trials=list(range(start, start + len(q.actions))),
             buffer_trials=buffered,
+            **_line_fields(q),
         )
         return [*events, log.new_event(issued)]
 
@@ -169,7 +170,13 @@ class SessionState:
             buffer=tuple(payload["buffer"]),
             trials=tuple(payload["trials"]),
             buffer_trials=tuple(payload["buffer_trials"]),
+            points=tuple(tuple(p) for p in payload.get("points") or self._points(payload)),
         )
+
+    def _points(self, payload: dict[str, Any]) -> list[list[float]]:
+        """A grid query's points (its log holds only the actions)."""
+        out: list[list[float]] = self.loop.space.points_of(payload["actions"]).tolist()
+        return out
 
     # -- derive: answers -----------------------------------------------------------------------
     def tell(
@@ -188,7 +195,7 @@ class SessionState:
 
     def answer_events(self, query: SessionQuery, answer: Answer) -> list[NewEvent]:
         """The answer's batch: its trials, one event per feedback record, and its refit."""
-        space = self.config.space
+        space = self.loop.space  # the grid, or the line path's point set
         events = [
             log.new_event(
                 log.TrialExecuted(
@@ -540,6 +547,22 @@ class SessionState:
         return QueryError(
             f"query {query_id!r} is not the pending query ({pending}): it is stale or unknown"
         )
+
+
+def _line_fields(query: Query) -> dict[str, Any]:
+    """A line-path query's points and line, as its ``query_issued`` event stores them."""
+    if query.line is None:
+        return {}
+    line = query.line
+    return {
+        "points": [list(p) for p in query.points],
+        "line": log.LineDrawn(
+            seed=line.seed,
+            origin=list(line.origin),
+            direction=list(line.direction),
+            points=line.points.tolist(),
+        ),
+    }
 
 
 def _spoiled(p: Preference, members: set[int], executed: set[int]) -> bool:

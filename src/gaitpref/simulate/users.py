@@ -79,16 +79,22 @@ class SimulatedUser:
         A pair of grid actions is compared once even when an action appears twice in the query
         (``n >= 3`` can draw the same argmax twice): the loop accepts each pair once.
         """
-        out: list[Comparison] = []
-        seen: set[tuple[int, int]] = set()
-        for i in query.actions:
-            for j in query.members:
-                key = (min(i, j), max(i, j))
-                if key in seen or i == j:
-                    continue
-                seen.add(key)
-                out.append(Comparison(i, j, self.compare(i, j)))
-        return out
+        return [Comparison(i, j, self.compare(i, j)) for i, j in query_pairs(query)]
+
+
+def query_pairs(query: Query) -> list[tuple[int, int]]:
+    """The pairs a simulated user compares: every executed action against every other member of
+    the query, each pair of actions once (the loop accepts each pair once)."""
+    out: list[tuple[int, int]] = []
+    seen: set[tuple[int, int]] = set()
+    for i in query.actions:
+        for j in query.members:
+            key = (min(i, j), max(i, j))
+            if key in seen or i == j:
+                continue
+            seen.add(key)
+            out.append((i, j))
+    return out
 
 
 @dataclass

@@ -1,0 +1,210 @@
+"""The line path: CoSpar whose every query is chosen along a one-dimensional subspace.
+
+LineCoSpar (Tucker, Cheng et al., IROS 2020, Algorithm 1) for spaces that no grid holds:
+continuous features, or a grid too large to enumerate (issue 13).  Each ask draws a line through
+the current best point (the posterior mean's argmax over the points so far; a random point
+first) with the direction rule of :class:`~gaitpref.loop.lines.LineSettings`, discretised into
+a fixed number of points (``loop/lines.py``).  The posterior lives on a
+:class:`~gaitpref.pointset.PointSet`: the *table* of points executed or suggested so far, plus
+the current line while a query is chosen.  Since the Laplace fit depends only on the visited
+points, the posterior over the table and the line is the same Gaussian as the full model's
+restricted to those points (``tests/loop/test_line.py`` checks it against the full grid).  The
+query strategy (self-sparring, EUBO, gated EUBO, information gain) runs unchanged on that
+posterior with ``allowed`` set to the line's points, so it chooses along the line.
+
+Actions are rows of the table: they keep their index for the whole session, and a point seen
+twice (a line through a visited point, a coactive suggestion landing on one) is one action.
+A coactive suggestion adds the point it names to the table before the answer is fitted.  Every
+line takes a seed from the loop's generator; the query carries its line (seed, origin,
+direction, points), which a session logs and checks on replay.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Hashable, Iterable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from gaitpref.errors import NoSafeGaitError, QueryError
+from gaitpref.feedback import FeedbackKind, Suggestion
+from gaitpref.loop.cospar import Answer, CoSpar, Query
+from gaitpref.loop.lines import LineSettings, draw_line, normalised
+from gaitpref.loop.warm import WarmStart
+from gaitpref.model.engines import make_engine
+from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import one_blas_thread
+from gaitpref.pointset import PointSet, empty_points
+from gaitpref.space import FloatArray, Space
+from gaitpref.strategies.base import AskContext
+
+
+def on_points(posterior: Posterior, space: PointSet) -> Posterior:
+    """The same posterior read over ``space``, whose first rows are ``posterior``'s points (the
+    fit on the visited points is unchanged; only where it is read changes)."""
+    if posterior.space is space:
+        return posterior
+    return dataclasses.replace(posterior, space=space, engine=make_engine(space, posterior.kernel))
+
+
+class LineCoSpar(CoSpar):
+    """CoSpar on the line path over ``domain`` (any :class:`Space`: continuous features, or a
+    grid too large to enumerate); ``line`` sets the points per line and the direction rule.
+    The other arguments are :class:`CoSpar`'s."""
+
+    space: PointSet
+
+    def __init__(
+        self,
+        domain: Space,
+        kernel: SquaredExponential,
+        noise: float,
+        *,
+        line: LineSettings | None = None,
+        **settings: Any,
+    ) -> None:
+        if isinstance(domain, PointSet):
+            raise TypeError("the line path takes the features' space, not a point set")
+        super().__init__(empty_points(domain), kernel, noise, **settings)
+        self.domain = domain
+        self.line_settings = LineSettings() if line is None else line
+        self._tables: dict[int, PointSet] = {}  # query id -> the table right after its ask
+        self._table_before_pending: PointSet = self.space
+
+    # -- the table ---------------------------------------------------------------------------
+    def _use_table(self, table: PointSet) -> None:
+        if table is not self.space:
+            self.space = table
+            self.gp = self._gp(self.hyper)
+        self.posterior = on_points(self.posterior, table)
+
+    def best_point(self) -> FloatArray | None:
+        """The posterior mean's argmax over the table (None before the first query)."""
+        if len(self.space) == 0:
+            return None
+        out: FloatArray = self.space.points[self.posterior.argmax].copy()
+        return out
+
+    def _towards(self) -> FloatArray | None:
+        """The last answer's coactive direction (normalised), if it had suggestions."""
+        if not self.answers:
+            return None
+        moves = [
+            self.space.points[p.winner] - self.space.points[p.loser]
+            for p in self.answers[-1].preferences
+            if p.source == "coactive"
+        ]
+        if not moves:
+            return None
+        return normalised(self.domain, np.sum(moves, axis=0))
+
+    # -- ask / tell --------------------------------------------------------------------------
+    def ask(self) -> Query:
+        """The next query, chosen along a fresh line through the current best point."""
+        if self.pending is not None:
+            return self.pending
+        state = self.rng.bit_generator.state
+        seed = int(self.rng.integers(2**63 - 1))
+        line = draw_line(self.domain, self.line_settings, seed, self.best_point(), self._towards())
+        space, line_ids = self.space.extended(line.points)
+        with one_blas_thread():
+            posterior = on_points(self.posterior, space)
+            allowed = np.zeros(len(space), dtype=bool)
+            allowed[line_ids] = True
+            safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe)
+            if safe is not None:
+                allowed &= safe
+            if self.avoided:
+                allowed &= ~self._avoided_on(space)
+            if not allowed.any():
+                self.rng.bit_generator.state = state
+                raise NoSafeGaitError(
+                    "no gait on this line may be proposed: every point is in the region of "
+                    f"avoidance or near a gait flagged unsafe ({len(self.unsafe)} flagged)"
+                )
+            context = AskContext(
+                posterior, self.n, self._buffer, len(self.executed), self.rng, allowed
+            )
+            chosen = [int(a) for a in self.strategy.propose(context)]
+        self._rng_before_pending = state
+        self._table_before_pending = self.space
+        table, actions = self.space.extended(space.points[chosen])
+        self._use_table(table)
+        points = tuple(tuple(row) for row in table.points[actions].tolist())
+        query = Query(self._next_id, tuple(int(a) for a in actions), self._buffer, points, line)
+        self._tables[query.id] = table
+        self.pending = query
+        self._next_id += 1
+        return query
+
+    @contextmanager
+    def _all_or_nothing(self) -> Iterator[None]:
+        """A :meth:`tell` that raises leaves the table (and so the model) as it was: the points
+        its coactive suggestions added go again."""
+        saved = (self.space, self.gp, self.posterior)
+        try:
+            yield
+        except BaseException:
+            self.space, self.gp, self.posterior = saved
+            raise
+
+    def _parse(
+        self, query: Query, answers: Iterable[object], suggestions: Iterable[object]
+    ) -> list[tuple[FeedbackKind[Any], Hashable]]:
+        records = super()._parse(query, answers, suggestions)
+        targets = [
+            self.space.move_target(r.action, r.feature, r.move)
+            for _, r in records
+            if isinstance(r, Suggestion)
+        ]
+        found = [t for t in targets if t is not None]
+        if found:
+            self._use_table(self.space.extended(np.array(found))[0])
+        return records
+
+    def undo(self) -> Answer:
+        """As :meth:`CoSpar.undo`; the table goes back to right after the query's ask."""
+        answer = super().undo()
+        self._use_table(self._tables[answer.query.id])
+        return answer
+
+    def flag_unsafe(self, action: int) -> bool:
+        withdrawn = super().flag_unsafe(action)
+        if withdrawn:
+            self._use_table(self._table_before_pending)
+        return withdrawn
+
+    def avoid(self, action: int, radius: float) -> bool:
+        """As :meth:`CoSpar.avoid` (never propose ``action`` nor the points within ``radius``,
+        a fraction of each feature's range); on the line path the neighbourhood is taken out of
+        every later line."""
+        if not (np.isfinite(radius) and 0 <= radius <= 1):
+            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        index = self.space.check_index(action)
+        self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
+        withdrawn = self._withdraw_if(lambda: self._avoided_on(self.space))
+        if withdrawn:
+            self._use_table(self._table_before_pending)
+        return withdrawn
+
+    def _avoided_on(self, space: PointSet) -> NDArray[np.bool_]:
+        """The points of ``space`` within an avoided action's radius (features scaled by
+        their ranges)."""
+        span = np.array([f.span if f.span > 0 else 1.0 for f in self.domain.features])
+        scaled = space.points / span
+        out = np.zeros(len(space), dtype=bool)
+        for centre, radius in self.avoided.items():
+            d2 = np.sum((scaled - scaled[centre]) ** 2, axis=1)
+            out |= d2 <= radius**2 * (1 + 1e-12)
+            out[centre] = True
+        return out
+
+    def warm_start(self, warm: WarmStart) -> None:
+        raise QueryError("warm starts from earlier subjects need the full grid, not the line path")
+
+
+__all__ = ["LineCoSpar", "LineSettings", "on_points"]

@@ -1,0 +1,160 @@
+"""One-dimensional subspaces through the current best point: LineBO / LineCoSpar lines.
+
+LineBO (Kirschner et al., ICML 2019, Algorithm 1) restricts each acquisition to a line
+``{x_best + t v}`` through the current best point, with a random direction ``v`` (or a
+coordinate direction, CoordinateLineBO); LineCoSpar (Tucker et al., IROS 2020, Section III-B)
+does the same for preference feedback and discretises the line into a fixed number of points.
+Here directions live in range-normalised coordinates ``u_f = (x_f - min_f) / (max_f - min_f)``
+so no feature dominates by its units; the line is clipped to the box ``[0, 1]^d`` and
+discretised into ``points`` equally spaced values of ``t`` (plus ``t = 0``, the best point
+itself).  Each feature is then snapped (:meth:`gaitpref.space.Feature.snap`): a discrete
+feature to its nearest grid value, a continuous one only clipped.
+
+Directions: ``"random"`` (uniform on the sphere), ``"coordinate"`` (one feature chosen at
+random) or ``"coactive"`` (from the last executed point towards the point the user's coactive
+suggestions point to, else random).
+
+Every line takes its own seed, drawn from the loop's generator, so the log can name it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal, get_args
+
+import numpy as np
+
+from gaitpref.space import FloatArray, Space
+
+Direction = Literal["random", "coordinate", "coactive"]
+DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
+
+
+@dataclass(frozen=True)
+class LineSettings:
+    """How the line path draws its subspaces: points per line and the direction rule."""
+
+    points: int = 50
+    direction: Direction = "random"
+
+    def __post_init__(self) -> None:
+        if isinstance(self.points, bool) or not isinstance(self.points, int) or self.points < 2:
+            raise ValueError(f"a line needs at least 2 points, got points = {self.points!r}")
+        if self.direction not in DIRECTIONS:
+            raise ValueError(
+                f"line direction must be one of {', '.join(DIRECTIONS)}; got {self.direction!r}"
+            )
+
+
+@dataclass(frozen=True)
+class Line:
+    """One drawn subspace: its seed, origin and unit direction (normalised coordinates) and
+    its points in the features' units (``k x d``, distinct, in order of ``t``)."""
+
+    seed: int
+    origin: tuple[float, ...]
+    direction: tuple[float, ...]
+    points: FloatArray = field(repr=False)
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            "seed": self.seed,
+            "origin": list(self.origin),
+            "direction": list(self.direction),
+            "points": self.points.tolist(),
+        }
+
+
+def _spans(space: Space) -> tuple[FloatArray, FloatArray]:
+    lo = np.array([f.values[0] for f in space.features])
+    span = np.array([f.span for f in space.features])
+    return lo, span
+
+
+def random_point(space: Space, rng: np.random.Generator) -> FloatArray:
+    """A point drawn uniformly from the box, snapped to the features' grids."""
+    lo, span = _spans(space)
+    u = rng.uniform(size=space.ndim)
+    return np.array([f.snap(v) for f, v in zip(space.features, lo + u * span, strict=True)])
+
+
+def direction(
+    space: Space, rule: Direction, rng: np.random.Generator, towards: FloatArray | None = None
+) -> FloatArray:
+    """A unit direction in normalised coordinates (zero on single-valued features).
+
+    ``towards`` (normalised coordinates) is the coactive direction; it is used by ``"coactive"``
+    when it is given and not zero.
+    """
+    _, span = _spans(space)
+    free = span > 0
+    if not free.any():
+        raise ValueError("every feature has a single value: there is no line to draw")
+    if rule == "coactive" and towards is not None and np.any(towards[free] != 0):
+        v = np.where(free, towards, 0.0)
+    elif rule == "coordinate":
+        v = np.zeros(space.ndim)
+        v[int(rng.choice(np.flatnonzero(free)))] = 1.0
+    else:
+        v = np.where(free, rng.standard_normal(space.ndim), 0.0)
+    out: FloatArray = v / np.linalg.norm(v)
+    return out
+
+
+def line_points(space: Space, origin: FloatArray, v: FloatArray, count: int) -> FloatArray:
+    """``count`` points of the line ``origin + t v`` across the box, plus the origin, snapped;
+    repeats (from snapping) removed, in order of ``t``."""
+    lo, span = _spans(space)
+    safe = np.where(span > 0, span, 1.0)
+    u0 = (origin - lo) / safe
+    t_lo, t_hi = -np.inf, np.inf
+    for u, vj in zip(u0, v, strict=True):
+        if vj > 0:
+            t_lo, t_hi = max(t_lo, -u / vj), min(t_hi, (1 - u) / vj)
+        elif vj < 0:
+            t_lo, t_hi = max(t_lo, (1 - u) / vj), min(t_hi, -u / vj)
+    ts = np.union1d(np.linspace(min(t_lo, 0.0), max(t_hi, 0.0), count), [0.0])
+    raw = lo + (u0[None, :] + ts[:, None] * v[None, :]) * span
+    snapped = np.array(
+        [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
+    )
+    snapped[ts == 0.0] = origin  # exactly the best point, not a rounding of it
+    _, first = np.unique(snapped, axis=0, return_index=True)
+    out: FloatArray = snapped[np.sort(first)]
+    return out
+
+
+def draw_line(
+    space: Space,
+    settings: LineSettings,
+    seed: int,
+    origin: FloatArray | None,
+    towards: FloatArray | None = None,
+) -> Line:
+    """The line of seed ``seed`` through ``origin`` (a random point when None)."""
+    rng = np.random.default_rng(seed)
+    start = random_point(space, rng) if origin is None else np.asarray(origin, dtype=np.float64)
+    v = direction(space, settings.direction, rng, towards)
+    points = line_points(space, start, v, settings.points)
+    points.setflags(write=False)
+    return Line(seed, tuple(start.tolist()), tuple(v.tolist()), points)
+
+
+def normalised(space: Space, delta: FloatArray) -> FloatArray:
+    """A difference of points in normalised coordinates (per feature's range)."""
+    _, span = _spans(space)
+    out: FloatArray = np.where(span > 0, delta / np.where(span > 0, span, 1.0), 0.0)
+    return out
+
+
+__all__ = [
+    "DIRECTIONS",
+    "Direction",
+    "Line",
+    "LineSettings",
+    "direction",
+    "draw_line",
+    "line_points",
+    "normalised",
+    "random_point",
+]

@@ -1,0 +1,100 @@
+"""A session on continuous features (issue 13): its lines are logged and it replays exactly."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gaitpref import ReplayError, Session
+from gaitpref.config import parse_config
+
+TEXT = """\
+name = "continuous-3d"
+[space.step_length]
+min = 0.08
+max = 0.18
+unit = "m"
+[space.step_duration]
+min = 0.8
+max = 1.2
+unit = "s"
+[space.step_width]
+min = 0.1
+max = 0.3
+num = 5
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.1, step_width = 0.08 }
+signal_variance = 1.0
+noise = 0.05
+jitter = 1e-6
+refit_every = 4
+[cospar]
+strategy = "gated-eubo"
+line_points = 30
+line_direction = "coactive"
+"""
+
+
+def _utility(point: tuple[float, ...]) -> float:
+    target = np.array([0.13, 1.05, 0.2])
+    scale = np.array([0.1, 0.4, 0.2])
+    return float(-np.sum(((np.asarray(point) - target) / scale) ** 2))
+
+
+def _drive(session: Session, n: int) -> None:
+    for k in range(n):
+        q = session.next_query()
+        a, p = q.actions[0], q.points[0]
+        comps = []
+        for b in q.buffer:
+            if b != a:
+                pb = tuple(session.space.points[b])
+                comps.append((a, b, "first" if _utility(p) > _utility(pb) else "second"))
+        suggestions = [(a, "step_length", "+small" if p[0] < 0.13 else "-small")] if k % 2 else []
+        session.answer(q.id, comps, suggestions)
+
+
+def test_a_continuous_session_replays_exactly(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    cfg = parse_config(TEXT)
+    assert cfg.subspace == "line" and cfg.space.continuous
+    s = Session.create(url, cfg, "S01", seed=11)
+    _drive(s, 6)
+    s.undo()
+    _drive(s, 3)
+    s.exclude(s.trials()[2].number, "stumble")
+    _drive(s, 2)
+    q = s.next_query()
+    reopened = Session.open(url, s.id)
+    np.testing.assert_array_equal(reopened.posterior().mean, s.posterior().mean)
+    np.testing.assert_array_equal(reopened.space.points, s.space.points)
+    assert reopened.pending == q and reopened.pending.points == q.points  # type: ignore[union-attr]
+    assert reopened.describe(q.actions[0]) == s.describe(q.actions[0])
+    reopened.answer(q.id, [(q.actions[0], q.buffer[0], "first")])
+    s.refresh()
+    assert reopened.next_query() == s.next_query()
+    events = [e for e in s.events() if e.kind == "query_issued"]
+    line = events[-1].payload["line"]
+    assert set(line) == {"seed", "origin", "direction", "points"}
+    assert events[-1].payload["points"][0] in line["points"]
+    reopened.close()
+    s.close()
+
+
+def test_other_lines_stop_replay(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    s = Session.create(url, parse_config(TEXT), "S01", seed=2)
+    _drive(s, 3)
+    s.close()
+    import gaitpref.loop.line as line_module
+
+    drawn = line_module.draw_line
+
+    def shifted(space, settings, seed, origin, towards=None):  # type: ignore[no-untyped-def]
+        return drawn(space, settings, seed + 1, origin, towards)
+
+    monkeypatch.setattr(line_module, "draw_line", shifted)
+    with pytest.raises(ReplayError, match="line"):
+        Session.open(url, s.id)
