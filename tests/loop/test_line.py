@@ -231,3 +231,20 @@ def test_a_grid_past_memory_runs_on_lines_with_a_clear_message_for_the_full_grid
         CoSpar(huge, SquaredExponential(0.3, 1.0), 0.05)
     with pytest.raises(ValueError, match=r"x are continuous: use gaitpref.loop.line.LineCoSpar"):
         CoSpar(Space([Feature.interval("x", 0.0, 1.0)]), SquaredExponential(0.3, 1.0), 0.05)
+
+
+def test_an_avoided_point_and_its_neighbourhood_leave_every_later_line() -> None:
+    domain = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 2.0)])
+    loop = LineCoSpar(domain, SquaredExponential(0.3, 1.0, 1e-6), 0.05, n=1, buffer=1, seed=6)
+    q = loop.ask()
+    loop.tell(q, [])
+    q = loop.ask()
+    bad = q.actions[0]
+    centre = loop.space.points[bad] / np.array([1.0, 2.0])
+    assert loop.avoid(bad, 0.2)  # the pending query proposed it: withdrawn
+    assert loop.pending is None and len(loop.space) == 1  # its point left the table
+    for _ in range(8):
+        q = loop.ask()
+        for p in q.points:
+            assert np.linalg.norm(np.array(p) / np.array([1.0, 2.0]) - centre) > 0.2
+        loop.tell(q, [(a, b, "first") for a in q.actions for b in q.buffer if a != b])

@@ -74,6 +74,7 @@ class LineCoSpar(CoSpar):
         self.line_settings = LineSettings() if line is None else line
         self._tables: dict[int, PointSet] = {}  # query id -> the table right after its ask
         self._table_before_pending: PointSet = self.space
+        self._avoided_points: list[tuple[FloatArray, float]] = []  # (point, radius): avoid
 
     # -- the table ---------------------------------------------------------------------------
     def _use_table(self, table: PointSet) -> None:
@@ -118,7 +119,7 @@ class LineCoSpar(CoSpar):
             safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe)
             if safe is not None:
                 allowed &= safe
-            if self.avoided:
+            if self._avoided_points:
                 allowed &= ~self._avoided_on(space)
             if not allowed.any():
                 self.rng.bit_generator.state = state
@@ -180,27 +181,27 @@ class LineCoSpar(CoSpar):
 
     def avoid(self, action: int, radius: float) -> bool:
         """As :meth:`CoSpar.avoid` (never propose ``action`` nor the points within ``radius``,
-        a fraction of each feature's range); on the line path the neighbourhood is taken out of
-        every later line."""
+        a fraction of each feature's range); on the line path the neighbourhood, kept by its
+        point (a withdrawn query's points leave the table), is taken out of every later line."""
         if not (np.isfinite(radius) and 0 <= radius <= 1):
             raise ValueError(f"radius must be in [0, 1], got {radius!r}")
         index = self.space.check_index(action)
         self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
+        self._avoided_points.append((self.space.points[index].copy(), float(radius)))
         withdrawn = self._withdraw_if(lambda: self._avoided_on(self.space))
         if withdrawn:
             self._use_table(self._table_before_pending)
         return withdrawn
 
     def _avoided_on(self, space: PointSet) -> NDArray[np.bool_]:
-        """The points of ``space`` within an avoided action's radius (features scaled by
-        their ranges)."""
+        """The points of ``space`` within an avoided point's radius (features scaled by their
+        ranges)."""
         span = np.array([f.span if f.span > 0 else 1.0 for f in self.domain.features])
         scaled = space.points / span
         out = np.zeros(len(space), dtype=bool)
-        for centre, radius in self.avoided.items():
-            d2 = np.sum((scaled - scaled[centre]) ** 2, axis=1)
+        for centre, radius in self._avoided_points:
+            d2 = np.sum((scaled - centre / span) ** 2, axis=1)
             out |= d2 <= radius**2 * (1 + 1e-12)
-            out[centre] = True
         return out
 
     def warm_start(self, warm: WarmStart) -> None:
