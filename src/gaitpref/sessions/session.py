@@ -58,7 +58,13 @@ from gaitpref.sessions.stored_config import (
     software_version,
 )
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
-from gaitpref.sessions.warm import describe_prior, make_warm_start, prepare_state, resolve_prior
+from gaitpref.sessions.warm import (
+    RELEARN_EVERY,
+    describe_prior,
+    make_warm_start,
+    prepare_state,
+    resolve_prior,
+)
 from gaitpref.storage import (
     ConflictError,
     EventRecord,
@@ -136,6 +142,7 @@ class Session:
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
             meta["prior_terms"] = "all"
+            meta["prior_relearn_every"] = RELEARN_EVERY
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -157,6 +164,7 @@ class Session:
                 prior_from=prior,
                 prior_rho=rho,
                 prior_terms="all" if prior else None,
+                prior_relearn_every=RELEARN_EVERY if prior else None,
             )
         )
         record = storage.create_session(spec, [created])

@@ -16,7 +16,9 @@ A warm start made now carries every registered kind's terms in force (preference
 new config models them, ratings given on the new config's rating scale; ``loop/warm.py``,
 :class:`~gaitpref.loop.warm.Earlier`) and
 records ``prior_terms = "all"``; one recorded without it carried preferences only and is rebuilt
-so, so that it replays as it was written.
+so, so that it replays as it was written.  Likewise a warm start made now re-learns the new
+subject's share every ``prior_relearn_every`` answers (``loop/warm.py``, a ``share_refit`` event
+each time); one recorded without it holds ``rho`` fixed at creation, as it was run.
 """
 
 from __future__ import annotations
@@ -29,7 +31,14 @@ from typing import TYPE_CHECKING
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError
-from gaitpref.loop.warm import Earlier, WarmStart, warm_data, warm_start, warm_terms
+from gaitpref.loop.warm import (
+    RELEARN_EVERY,
+    Earlier,
+    WarmStart,
+    warm_data,
+    warm_start,
+    warm_terms,
+)
 from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -183,18 +192,22 @@ def prepare_state(
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
+        every = record.meta.get("prior_relearn_every", 0)  # absent: recorded before, rho held
+        if isinstance(every, bool) or not isinstance(every, int):
+            raise ReplayError(f"session {record.id}: prior_relearn_every is not an int: {every!r}")
         if record.meta.get("prior_terms") == "all":
             loop = state.loop
             terms = warm_terms(loop.context(), loop.learning.ties == "model", groups)
-            warm = WarmStart(terms[0], rho, len(groups), terms[1])
+            warm = WarmStart(terms[0], rho, len(groups), terms[1], relearn_every=every)
         else:  # recorded before warm starts carried every term: preferences only
             prefs = [g.preferences for g in groups]
-            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups))
+            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups), relearn_every=every)
         state.loop.warm_start(warm)
     return state
 
 
 __all__ = [
+    "RELEARN_EVERY",
     "describe_prior",
     "earlier_subjects",
     "log_sha256",
