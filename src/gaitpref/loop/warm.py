@@ -44,7 +44,6 @@ from gaitpref.model.share_fit import ShareFit, fit_share
 from gaitpref.model.singles import SingleData
 from gaitpref.space import IntArray, Space
 
-
 RELEARN_EVERY = 2  # warm starts made now re-learn the new subject's share every 2 answers
 
 
@@ -61,6 +60,7 @@ class WarmStart:
     share: float | None = None
     relearn_every: int = 0
     share_prior: LogitNormal | None = None
+    gate: float | None = None  # nats the evidence must favour sharing by (None: plain MAP)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rho", check_rho(self.rho))
@@ -231,7 +231,8 @@ def relearn_share(
     if single is not None and single_likelihood is not None:
         singles = SingleData(single, single_likelihood)
     start = warm.rho if warm.share is None else warm.share
-    return fit_share(space, hyper, warm.rho, start, data, warm.prior_of_share, singles)
+    prior = warm.prior_of_share
+    return fit_share(space, hyper, warm.rho, start, data, prior, singles, gate=warm.gate)
 
 
 __all__ = [

@@ -72,10 +72,13 @@ def fit_share(
     prior: LogitNormal,
     singles: SingleData | None = None,
     *,
+    gate: float | None = None,
     max_evaluations: int = 25,
 ) -> ShareFit:
     """MAP ``share`` of subject 0 given population data (node codes), ``rho`` and ``hyper``
-    held; from ``share`` (the start, also what is kept on failure)."""
+    held; from ``share`` (the start, also what is kept on failure).  With a ``gate`` (nats) the
+    MAP is taken only where its log evidence exceeds that of ``share = 0`` (the subject alone)
+    by more than ``gate``; otherwise ``share = 0``."""
     rho, share = check_rho(rho), check_rho(share)
     if prior.sd <= 0 or not 0.0 < rho < 1.0 or data.size + (singles.size if singles else 0) == 0:
         return ShareFit(share, share, False, "nothing to fit", 0, np.nan, np.nan)
@@ -105,10 +108,39 @@ def fit_share(
             options={"maxiter": max_evaluations, "xatol": 0.05},
         )  # fmt: skip
     x, value = float(res.x), float(res.fun)
+    if gate is not None:
+        return _gated(space, hyper, rho, share, data, singles, _sigmoid(x), gate, evaluations)
     if not value < first:
         message = f"kept the starting value: the fit did not improve ({res.message})"
         return ShareFit(share, share, False, message, evaluations, -first, -first)
     return ShareFit(share, _sigmoid(x), True, str(res.message), evaluations, -first, -value)
+
+
+def _gated(
+    space: Space,
+    hyper: Hyperparameters,
+    rho: float,
+    share: float,
+    data: PairData,
+    singles: SingleData | None,
+    best: float,
+    gate: float,
+    evaluations: int,
+) -> ShareFit:
+    """``best`` if its log evidence beats the subject alone (``share = 0``) by ``gate``, else 0."""
+    try:
+        with one_blas_thread():
+            alone = population_evidence(space, hyper, rho, data, singles=singles, share=0.0)
+            shared = population_evidence(space, hyper, rho, data, singles=singles, share=best)
+    except _FAILURES:
+        message = "kept the starting value: the evidence cannot be evaluated at the gate"
+        return ShareFit(share, share, False, message, evaluations + 2, np.nan, np.nan)
+    margin = shared.value - alone.value
+    if margin > gate:
+        message = f"shares: the evidence favours {best:.3g} over 0 by {margin:.3g} nats"
+        return ShareFit(share, best, True, message, evaluations + 2, alone.value, shared.value)
+    message = f"alone: the evidence favours {best:.3g} over 0 by {margin:.3g} nats only"
+    return ShareFit(share, 0.0, True, message, evaluations + 2, alone.value, shared.value)
 
 
 __all__ = ["ShareFit", "fit_share", "share_objective"]

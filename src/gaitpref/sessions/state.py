@@ -20,7 +20,6 @@ answer's trial numbers are given again to the next answer.
 from __future__ import annotations
 
 import math
-
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
