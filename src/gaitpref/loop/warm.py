@@ -44,7 +44,10 @@ from gaitpref.model.share_fit import ShareFit, fit_share
 from gaitpref.model.singles import SingleData
 from gaitpref.space import IntArray, Space
 
-RELEARN_EVERY = 2  # warm starts made now re-learn the new subject's share every 2 answers
+# warm starts made now: the new subject starts alone (share 0) and, after every answer, shares
+# as much as the evidence says if it favours sharing over being alone (SHARE_GATE nats)
+RELEARN_EVERY = 1
+SHARE_GATE = 0.0
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import confidence
-from gaitpref.loop.warm import RELEARN_EVERY, warm_start
+from gaitpref.loop.warm import RELEARN_EVERY, SHARE_GATE, warm_start
 from gaitpref.simulate.sweep import resolve_jobs
 from gaitpref.simulate.users import SimulatedUser, objective_on_grid
 from gaitpref.space import FloatArray
@@ -65,7 +65,11 @@ def _walk(
     rho = None
     if others is not None:
         warm = warm_start(config.space, loop.hyper, loop.prior, others)
-        loop.warm_start(dataclasses.replace(warm, relearn_every=relearn_every))
+        if relearn_every:  # start alone, share as the evidence says (as sessions made now)
+            warm = dataclasses.replace(
+                warm, share=0.0, relearn_every=relearn_every, gate=SHARE_GATE
+            )
+        loop.warm_start(warm)
         rho = warm.rho
     user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss), noise=user_noise)
     sure_rng = np.random.default_rng(sure_ss)
@@ -124,7 +128,8 @@ def population_bench(
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
     simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
     ``relearn_every``: the warm runs re-learn the new subject's share every so many answers
-    (0: ``rho`` held, as warm starts recorded before 0.2's share refits)."""
+    (0: ``rho`` held, as warm starts recorded before share refits; otherwise the new subject
+    starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``)."""
     grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
