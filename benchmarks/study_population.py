@@ -102,7 +102,8 @@ def _mean(subjects: list[dict], arm: str, stop: int) -> tuple[float, float]:
 
 def _warm_cold_table(results: dict, trials: int) -> list[str]:
     lines = [
-        "| rho | subjects | learnt rho (mean) | new subject's share at the end (mean; alone) | cold 1-10 | warm 1-10 | warm - cold 1-10 | "
+        "| rho | subjects | learnt rho (mean) | share at the end (mean; alone) | "
+        "cold 1-10 | warm 1-10 | warm - cold 1-10 | "
         f"cold 1-{trials} | warm 1-{trials} | warm - cold 1-{trials} | target |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]

@@ -125,6 +125,6 @@ def test_the_share_fit_maximises_the_objective_and_the_gate_lets_go(small_space:
         assert best >= max(grid) - 1e-3
         gated = fit_share(small_space, HYPER, 0.6, 0.0, data, prior, gate=1.0)
         if like:  # agreeing with the others: the evidence supports sharing
-            assert fit.after > 0.8 and gated.after == pytest.approx(fit.after, abs=0.05)
+            assert fit.after > 0.7 and gated.after == pytest.approx(fit.after, abs=0.05)
         else:  # reversed: let go of the others
-            assert fit.after < 0.2 and gated.after == 0.0
+            assert fit.after < 0.3 and gated.after == 0.0

@@ -63,6 +63,9 @@ class Created(EventPayload):
     # the new subject's share re-learned every k answers (``share_refit`` events); absent: rho
     # held for the whole session (warm starts recorded before, replayed as written)
     prior_relearn_every: int | None = None
+    # with it: the new subject starts alone (share 0) and shares only where the evidence favours
+    # sharing over being alone by more than this many nats (``loop/warm.py``)
+    prior_share_gate: float | None = None
 
     @model_serializer(mode="wrap")
     def _without_a_cold_start(self, handler: SerializerFunctionWrapHandler) -> Any:
@@ -72,8 +75,9 @@ class Created(EventPayload):
         if isinstance(out, dict):
             if out.get("prior_terms") is None:
                 out.pop("prior_terms", None)
-            if out.get("prior_relearn_every") is None:
-                out.pop("prior_relearn_every", None)
+            for key in ("prior_relearn_every", "prior_share_gate"):
+                if out.get(key) is None:
+                    out.pop(key, None)
             if not out.get("prior_from"):
                 out.pop("prior_from", None)
                 out.pop("prior_rho", None)

@@ -60,6 +60,7 @@ from gaitpref.sessions.stored_config import (
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.sessions.warm import (
     RELEARN_EVERY,
+    SHARE_GATE,
     describe_prior,
     make_warm_start,
     prepare_state,
@@ -143,6 +144,7 @@ class Session:
             meta["prior_rho"] = rho
             meta["prior_terms"] = "all"
             meta["prior_relearn_every"] = RELEARN_EVERY
+            meta["prior_share_gate"] = SHARE_GATE
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -165,6 +167,7 @@ class Session:
                 prior_rho=rho,
                 prior_terms="all" if prior else None,
                 prior_relearn_every=RELEARN_EVERY if prior else None,
+                prior_share_gate=SHARE_GATE if prior else None,
             )
         )
         record = storage.create_session(spec, [created])

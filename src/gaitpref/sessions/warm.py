@@ -27,12 +27,13 @@ import hashlib
 import json
 import re
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError
 from gaitpref.loop.warm import (
     RELEARN_EVERY,
+    SHARE_GATE,
     Earlier,
     WarmStart,
     warm_data,
@@ -173,6 +174,21 @@ def make_warm_start(
     )  # fmt: skip
 
 
+def _relearning(record: SessionRecord) -> dict[str, Any]:
+    """How the warm start re-learns the new subject's share, as recorded: absent (recorded
+    before), ``rho`` held; else the subject starts alone, re-learned every so many answers."""
+    every = record.meta.get("prior_relearn_every")
+    if every is None:
+        return {}
+    gate = record.meta.get("prior_share_gate")
+    if isinstance(every, bool) or not isinstance(every, int) or not isinstance(gate, float):
+        raise ReplayError(
+            f"session {record.id}: its warm start's prior_relearn_every ({every!r}) or "
+            f"prior_share_gate ({gate!r}) is not what was written"
+        )
+    return {"share": 0.0, "relearn_every": every, "gate": gate}
+
+
 def prepare_state(
     storage: Storage,
     record: SessionRecord,
@@ -192,22 +208,21 @@ def prepare_state(
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
-        every = record.meta.get("prior_relearn_every", 0)  # absent: recorded before, rho held
-        if isinstance(every, bool) or not isinstance(every, int):
-            raise ReplayError(f"session {record.id}: prior_relearn_every is not an int: {every!r}")
+        relearn = _relearning(record)
         if record.meta.get("prior_terms") == "all":
             loop = state.loop
             terms = warm_terms(loop.context(), loop.learning.ties == "model", groups)
-            warm = WarmStart(terms[0], rho, len(groups), terms[1], relearn_every=every)
+            warm = WarmStart(terms[0], rho, len(groups), terms[1], **relearn)
         else:  # recorded before warm starts carried every term: preferences only
             prefs = [g.preferences for g in groups]
-            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups), relearn_every=every)
+            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups), **relearn)
         state.loop.warm_start(warm)
     return state
 
 
 __all__ = [
     "RELEARN_EVERY",
+    "SHARE_GATE",
     "describe_prior",
     "earlier_subjects",
     "log_sha256",
