@@ -26,6 +26,7 @@ the others is let go of them.  ``relearn_every = 0`` (warm starts recorded befor
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -173,6 +174,23 @@ def warm_start(
     return WarmStart(data, rho, len(earlier), singles)
 
 
+def _parts(size: int, likelihood: ActionLikelihood) -> tuple[tuple[int, ActionLikelihood], ...]:
+    """A likelihood's blocks, a stacked one's flattened (the evidence needs flat parts)."""
+    if isinstance(likelihood, StackedActionLikelihood):
+        return likelihood.parts
+    return ((size, likelihood),)
+
+
+def _held(likelihood: ActionLikelihood) -> ActionLikelihood:
+    """The likelihood with its thresholds held (the share fit fits ``share`` alone)."""
+    if getattr(likelihood, "thresholds_fixed", True) is False and dataclasses.is_dataclass(
+        likelihood
+    ):
+        held: ActionLikelihood = dataclasses.replace(likelihood, thresholds_fixed=True)
+        return held
+    return likelihood
+
+
 def _joined(
     warm: WarmStart,
     own: PairData,
@@ -193,7 +211,10 @@ def _joined(
             single, single_likelihood = theirs.actions, theirs.likelihood
         else:
             single_likelihood = StackedActionLikelihood(
-                ((single.shape[0], single_likelihood), (theirs.size, theirs.likelihood))
+                (
+                    *_parts(single.shape[0], single_likelihood),
+                    *_parts(theirs.size, theirs.likelihood),
+                )
             )
             single = np.concatenate([single, theirs.actions])
     return data, single, single_likelihood
@@ -232,7 +253,8 @@ def relearn_share(
     data, single, single_likelihood = _joined(warm, own, single, single_likelihood)
     singles = None
     if single is not None and single_likelihood is not None:
-        singles = SingleData(single, single_likelihood)
+        parts = tuple((n, _held(p)) for n, p in _parts(single.shape[0], single_likelihood))
+        singles = SingleData(single, StackedActionLikelihood(parts))
     start = warm.rho if warm.share is None else warm.share
     prior = warm.prior_of_share
     return fit_share(space, hyper, warm.rho, start, data, prior, singles, gate=warm.gate)

@@ -22,11 +22,17 @@ from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.population import check_rho, logit, population_evidence
 from gaitpref.model.population_fit import LogitNormal
-from gaitpref.model.singles import SingleData
+from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
 
-_FAILURES = (ConvergenceError, PriorNotPositiveDefiniteError, LinAlgError, FloatingPointError)
+_FAILURES = (
+    ConvergenceError,
+    PriorNotPositiveDefiniteError,
+    LinAlgError,
+    FloatingPointError,
+    UnsupportedLikelihoodError,  # a kind without third(): the evidence is not available
+)
 _EDGE = 1e-6
 
 
