@@ -33,6 +33,7 @@ import numpy as np
 
 from gaitpref.config import load_config
 from gaitpref.data import paper_objectives
+from gaitpref.loop.warm import RELEARN_EVERY
 from gaitpref.simulate.population import population_bench, synthetic_population
 
 try:
@@ -61,6 +62,10 @@ def main() -> None:
     parser.add_argument("--calibration-subjects", type=int, default=12)
     parser.add_argument("--calibration-trials", type=int, default=30)
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument(
+        "--relearn-every", type=int, default=RELEARN_EVERY,
+        help="re-learn the new subject's share every so many answers (0: rho held)",
+    )  # fmt: skip
     args = parser.parse_args()
     config = load_config("synthetic-2d")
     objectives = paper_objectives()
@@ -70,7 +75,7 @@ def main() -> None:
     for rho, subjects in zip(rhos, _per_rho(args.subjects, rhos), strict=True):
         clinic = synthetic_population(objectives, rho, subjects)
         results["noiseless"][str(rho)] = population_bench(
-            config, clinic, args.trials, jobs=args.jobs
+            config, clinic, args.trials, jobs=args.jobs, relearn_every=args.relearn_every
         )
         print(f"noiseless, rho = {rho}: done at {time.perf_counter() - start:.0f} s", flush=True)
     loop = config.make_loop(seed=0)
@@ -79,8 +84,9 @@ def main() -> None:
         for rho in [float(r) for r in args.calibration_rho.split(",")]:
             clinic = synthetic_population(objectives, rho, args.calibration_subjects)
             results["model_noise"][str(rho)] = population_bench(
-                config, clinic, args.calibration_trials, jobs=args.jobs, user_noise=noise
-            )
+                config, clinic, args.calibration_trials, jobs=args.jobs, user_noise=noise,
+                relearn_every=args.relearn_every,
+            )  # fmt: skip
             print(f"model noise, rho = {rho}: done at {time.perf_counter() - start:.0f} s")
     seconds = time.perf_counter() - start
     OUT.mkdir(parents=True, exist_ok=True)
@@ -96,13 +102,17 @@ def _mean(subjects: list[dict], arm: str, stop: int) -> tuple[float, float]:
 
 def _warm_cold_table(results: dict, trials: int) -> list[str]:
     lines = [
-        "| rho | subjects | learnt rho (mean) | cold 1-10 | warm 1-10 | warm - cold 1-10 | "
+        "| rho | subjects | learnt rho (mean) | share at the end (mean; alone) | "
+        "cold 1-10 | warm 1-10 | warm - cold 1-10 | "
         f"cold 1-{trials} | warm 1-{trials} | warm - cold 1-{trials} | target |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for rho, out in results.items():
         subjects = out["subjects"]
         row = [rho, str(len(subjects)), f"{np.mean([s['rho'] for s in subjects]):.2f}"]
+        shares = [s["share"] for s in subjects if s.get("share") is not None]
+        alone = sum(1 for x in shares if x == 0.0)
+        row.append(f"{np.mean(shares):.2f} ({alone} of {len(shares)} at 0)" if shares else "rho")
         gains = []
         for stop in (10, trials):
             cold, cold_se = _mean(subjects, "cold", stop)
@@ -162,7 +172,8 @@ def summary(results: dict, args: argparse.Namespace, noise: float, seconds: floa
         f"`python benchmarks/study_population.py --subjects {args.subjects} --trials "
         f"{args.trials} --rho {args.rho} --calibration-rho {args.calibration_rho} "
         f"--calibration-subjects {args.calibration_subjects} --calibration-trials "
-        f"{args.calibration_trials} --jobs {args.jobs}` ({seconds:.0f} s).",
+        f"{args.calibration_trials} --relearn-every {args.relearn_every} --jobs {args.jobs}` "
+        f"({seconds:.0f} s).",
         "",
         "## Warm against cold (noiseless subjects)",
         "",

@@ -45,8 +45,8 @@ def test_a_warm_started_session_from_the_create_form(chromium: Any, live: str) -
     sid = int(page.url.rsplit("/", 1)[1])
     assert sid != earlier
     assert page.inner_text("#warm") == f"Warm-started from session {earlier}."
-    # the earlier subject's answers already say something before this subject's first answer
-    assert SENTENCE.match(page.inner_text("#confidence b"))
+    # a warm start made now starts the subject alone (prior_share_gate): the confidence comes
+    # with their answers, as in a cold session
 
     for trial in (1, 2, 3):
         if trial > 1:
@@ -56,6 +56,8 @@ def test_a_warm_started_session_from_the_create_form(chromium: Any, live: str) -
         page.wait_for_selector("#confirm-dialog[open]")
         page.click("#confirm-dialog [data-confirm-yes]")
         page.wait_for_selector(f"#flash:has-text('Saved: trial {trial}.')")
+        if trial == 1:  # no comparison yet ("no change" alone): nothing learnt
+            continue
         assert SENTENCE.match(page.inner_text("#confidence b")), f"no confidence after {trial}"
         assert "expected shortfall" in page.inner_text("#confidence")
 

@@ -44,7 +44,10 @@ def test_the_create_form_warm_starts_from_a_subject_code(client: TestClient) -> 
     assert 0.0 <= created["prior_rho"] <= 1.0
     page = client.get(f"/sessions/{sid}").text
     assert f"Warm-started from session {earlier}." in page
-    assert SENTENCE.search(page)  # the earlier subject's answers already say something
+    # a warm start made now starts the subject alone (prior_share_gate): nothing is learnt
+    # before their first answer; the share is re-learned after each (tests/sessions)
+    assert created["prior_relearn_every"] == 1
+    assert not SENTENCE.search(page)
     assert client.get(f"/api/sessions/{earlier}/events").json() == before  # only read
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import sqlite3
 from pathlib import Path
 
@@ -11,6 +12,7 @@ import pytest
 from gaitpref import Session, load_config
 from gaitpref.errors import ReplayError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from gaitpref.sessions.warm import prepare_state
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.sessionkit import CONFIG, state_of
 
@@ -61,17 +63,35 @@ def test_a_warm_start_is_recorded_replays_and_never_writes_to_what_it_reads(
     assert _snapshot(db, ids) == before  # read, never written
 
 
-def test_the_earlier_answers_shape_the_first_query() -> None:
+def test_a_warm_start_made_now_starts_alone_and_shares_once_the_answers_agree() -> None:
     db = MemoryStorage()
     ids = _earlier(db)
     cold = Session.create(db, CONFIG, "S03", seed=5)
     warm = Session.create(db, CONFIG, "S04", seed=5, prior_from=ids)
+    created = warm.events()[0].payload
+    assert created["prior_relearn_every"] == 1 and created["prior_share_gate"] == 0.0
     space = load_config(CONFIG).space
     best = int(np.argmax(bump_utility(space)))
-    assert np.all(cold.posterior().mean == 0.0)
-    mean = warm.posterior().mean
-    assert abs(int(np.argmax(mean)) - best) <= 2  # the earlier subjects' best, before any answer
-    assert warm.posterior().variance.min() < cold.posterior().variance.min()
+    assert np.array_equal(cold.posterior().mean, warm.posterior().mean)  # alone at first
+    _run(warm, SimulatedSubject(space, bump_utility(space), seed=5), 4)
+    refits = [e.payload for e in warm.events() if e.kind == "share_refit"]
+    assert len(refits) == 4 and refits[0]["before"] == 0.0
+    loop = warm._state.loop
+    assert loop.warm is not None and loop.warm.share == refits[-1]["after"] > 0.0
+    assert abs(int(np.argmax(warm.posterior().mean)) - best) <= 2
+    mean = np.asarray(warm.posterior().mean).copy()
+    with Session.open(db, warm.id) as again:  # the share refits replay exactly
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+        assert again._state.loop.warm is not None
+        assert again._state.loop.warm.share == loop.warm.share
+    # recorded before share refits (no prior_relearn_every): rho held, the others shape the
+    # first query, as such sessions ran
+    meta = {k: v for k, v in warm.record.meta.items() if not k.startswith("prior_")}
+    meta.update(prior_from=warm.record.meta["prior_from"], prior_rho=warm.record.meta["prior_rho"])
+    old = prepare_state(db, dataclasses.replace(warm.record, meta=meta))
+    assert old.loop.warm is not None and old.loop.warm.share is None
+    assert old.loop.warm.relearn_every == 0
+    assert abs(int(np.argmax(old.loop.posterior.mean)) - best) <= 2
 
 
 def test_replay_refuses_when_an_earlier_session_changed(tmp_path: Path) -> None:

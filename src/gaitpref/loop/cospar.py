@@ -49,7 +49,7 @@ from gaitpref.feedback import (
 from gaitpref.loop.learning import Learning, pair_data
 from gaitpref.loop.lines import Line
 from gaitpref.loop.safety import Safety, near
-from gaitpref.loop.warm import WarmStart, warm_posterior
+from gaitpref.loop.warm import WarmStart, relearn_share, warm_posterior
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
@@ -57,6 +57,7 @@ from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.share_fit import ShareFit
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.pointset import PointSet
@@ -101,6 +102,7 @@ class Answer:
     ignored: tuple[Hashable, ...]
     posterior_before: Posterior = dataclasses.field(repr=False, compare=False)
     refit: HyperFit | None = None  # the hyperparameter fit this answer triggered, if any
+    share_refit: ShareFit | None = None  # the warm start's share refit it triggered, if any
 
     @property
     def comparisons(self) -> tuple[Comparison, ...]:
@@ -370,13 +372,22 @@ class CoSpar:
             _light(self.posterior),
         )
         answers_now = [*self.answers, answer]
+        warm = self.warm
         with one_blas_thread():  # may raise: nothing changed yet
             refit = self._refit(answers_now)
             hyper = self.hyper if refit is None else refit.after
             gp = self.gp if hyper == self.hyper else self._gp(hyper)
-            new_posterior = self._fit(answers_now, gp, hyper)
-        if refit is not None:
-            answer = dataclasses.replace(answer, refit=refit)
+            share = self._relearn_share(answers_now, hyper)
+            try:
+                if share is not None and self.warm is not None:
+                    self.warm = dataclasses.replace(self.warm, share=share.after)
+                new_posterior = self._fit(answers_now, gp, hyper)
+            finally:
+                self.warm = warm
+        if share is not None and warm is not None:
+            self.warm = dataclasses.replace(warm, share=share.after)
+        if refit is not None or share is not None:
+            answer = dataclasses.replace(answer, refit=refit, share_refit=share)
         self.answers.append(answer)
         self.posterior = new_posterior
         self.gp, self.hyper = gp, hyper
@@ -422,6 +433,8 @@ class CoSpar:
             self.rng.bit_generator.state = self._rng_before_pending
             self._next_id = self.pending.id
         answer = self.answers.pop()
+        if answer.share_refit is not None and self.warm is not None:
+            self.warm = dataclasses.replace(self.warm, share=answer.share_refit.before)
         if answer.refit is not None and answer.refit.before != self.hyper:
             self.hyper = answer.refit.before  # the hyperparameters from before its refit
             self.gp = self._gp(self.hyper)
@@ -577,6 +590,14 @@ class CoSpar:
         if single is not None and single_likelihood is not None:
             singles = SingleData(single, single_likelihood)
         return fit_hyperparameters(self.space, self.hyper, data, self.prior, singles=singles)
+
+    def _relearn_share(self, answers: list[Answer], hyper: Hyperparameters) -> ShareFit | None:
+        """The warm start's share refit when its schedule says so (``loop/warm.py``)."""
+        if self.warm is None or not self.warm.relearns(len(answers)):
+            return None
+        single, single_likelihood = self._singles(answers, hyper.thresholds)
+        own = self._data(answers)
+        return relearn_share(self.warm, self.space, hyper, own, single, single_likelihood)
 
     def _fit(
         self,

@@ -13,10 +13,20 @@ pair terms (preferences, and ties when the new loop models them) and single-acti
 are.  The new
 subject's answers join those data in every fit (``CoSpar.warm_start``): with ``rho = 0`` their
 posterior is the one they would have had alone.
+
+Re-learning the new subject's share (``relearn_every = k > 0``, what sessions created now
+record): every ``k`` of the new subject's answers, the new subject's own shared fraction
+``share`` (``model/population.py``: their covariance with the others is ``sqrt(share rho) k``)
+is refitted by the evidence of all the data, the others' ``rho`` and the kernel held
+(:func:`relearn_share`, ``model/share_fit.py``), under a logit-normal prior centred on ``rho``:
+the others' data set where it starts, the new subject's answers move it, and a subject unlike
+the others is let go of them.  ``relearn_every = 0`` (warm starts recorded before) holds
+``share = rho`` for the whole session, as they were run.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -31,21 +41,48 @@ from gaitpref.model.likelihood import ActionLikelihood, StackedActionLikelihood
 from gaitpref.model.population import PopulationModel, check_rho
 from gaitpref.model.population_fit import LogitNormal, fit_population
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.share_fit import ShareFit, fit_share
 from gaitpref.model.singles import SingleData
 from gaitpref.space import IntArray, Space
+
+# warm starts made now: the new subject starts alone (share 0) and, after every answer, shares
+# as much as the evidence says if it favours sharing over being alone (SHARE_GATE nats)
+RELEARN_EVERY = 1
+SHARE_GATE = 0.0
 
 
 @dataclass(frozen=True)
 class WarmStart:
-    """Earlier subjects' observations (node codes; the new subject is 0) and ``rho``."""
+    """Earlier subjects' observations (node codes; the new subject is 0) and ``rho``; the new
+    subject's own ``share`` (None: ``rho``), re-learned every ``relearn_every`` answers (0:
+    never) under ``share_prior`` (default: centred on ``rho``, sd 1.5)."""
 
     data: PairData
     rho: float
     subjects: int  # earlier subjects
     singles: SingleData | None = None  # their single-action terms (node codes), if any
+    share: float | None = None
+    relearn_every: int = 0
+    share_prior: LogitNormal | None = None
+    gate: float | None = None  # nats the evidence must favour sharing by (None: plain MAP)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rho", check_rho(self.rho))
+        if self.share is not None:
+            object.__setattr__(self, "share", check_rho(self.share))
+        if isinstance(self.relearn_every, bool) or self.relearn_every < 0:
+            raise ValueError(f"relearn_every must be an int >= 0, got {self.relearn_every!r}")
+
+    @property
+    def prior_of_share(self) -> LogitNormal:
+        """The prior of the new subject's share: the given one, else centred on ``rho``."""
+        if self.share_prior is not None:
+            return self.share_prior
+        return LogitNormal(min(max(self.rho, 1e-3), 1 - 1e-3), 1.5)
+
+    def relearns(self, answers: int) -> bool:
+        """Whether the share is refitted after the new subject's ``answers``-th answer."""
+        return self.relearn_every > 0 and answers > 0 and answers % self.relearn_every == 0
 
 
 @dataclass(frozen=True)
@@ -137,6 +174,52 @@ def warm_start(
     return WarmStart(data, rho, len(earlier), singles)
 
 
+def _parts(size: int, likelihood: ActionLikelihood) -> tuple[tuple[int, ActionLikelihood], ...]:
+    """A likelihood's blocks, a stacked one's flattened (the evidence needs flat parts)."""
+    if isinstance(likelihood, StackedActionLikelihood):
+        return likelihood.parts
+    return ((size, likelihood),)
+
+
+def _held(likelihood: ActionLikelihood) -> ActionLikelihood:
+    """The likelihood with its thresholds held (the share fit fits ``share`` alone)."""
+    if getattr(likelihood, "thresholds_fixed", True) is False and dataclasses.is_dataclass(
+        likelihood
+    ):
+        held: ActionLikelihood = dataclasses.replace(likelihood, thresholds_fixed=True)
+        return held
+    return likelihood
+
+
+def _joined(
+    warm: WarmStart,
+    own: PairData,
+    single: IntArray | None,
+    single_likelihood: ActionLikelihood | None,
+) -> tuple[PairData, IntArray | None, ActionLikelihood | None]:
+    """The new subject's observations first, then the earlier subjects'."""
+    data = PairData(
+        np.concatenate([own.first, warm.data.first]),
+        np.concatenate([own.second, warm.data.second]),
+        np.concatenate([own.sigma, warm.data.sigma]),
+        np.concatenate([own.banded, warm.data.banded]),
+        np.concatenate([own.tie, warm.data.tie]),
+    )
+    if warm.singles is not None:  # the new subject's single-action terms first, then theirs
+        theirs = warm.singles
+        if single is None or single_likelihood is None:
+            single, single_likelihood = theirs.actions, theirs.likelihood
+        else:
+            single_likelihood = StackedActionLikelihood(
+                (
+                    *_parts(single.shape[0], single_likelihood),
+                    *_parts(theirs.size, theirs.likelihood),
+                )
+            )
+            single = np.concatenate([single, theirs.actions])
+    return data, single, single_likelihood
+
+
 def warm_posterior(
     warm: WarmStart,
     gp: PreferenceGP,
@@ -147,27 +230,43 @@ def warm_posterior(
 ) -> Posterior:
     """The new subject's posterior given their own observations ``own`` (grid indices) and the
     earlier subjects' (``warm``), in one population fit."""
-    data = PairData(
-        np.concatenate([own.first, warm.data.first]),
-        np.concatenate([own.second, warm.data.second]),
-        np.concatenate([own.sigma, warm.data.sigma]),
-        np.concatenate([own.banded, warm.data.banded]),
-        np.concatenate([own.tie, warm.data.tie]),
+    data, single, single_likelihood = _joined(warm, own, single, single_likelihood)
+    model = PopulationModel(
+        gp.space, gp.kernel, warm.rho, gp.noise, gp.sampler, gp.ordinal, warm.share
     )
-    model = PopulationModel(gp.space, gp.kernel, warm.rho, gp.noise, gp.sampler, gp.ordinal)
-    if warm.singles is not None:  # the new subject's single-action terms first, then theirs
-        theirs = warm.singles
-        if single is None or single_likelihood is None:
-            single, single_likelihood = theirs.actions, theirs.likelihood
-        else:
-            single_likelihood = StackedActionLikelihood(
-                ((single.shape[0], single_likelihood), (theirs.size, theirs.likelihood))
-            )
-            single = np.concatenate([single, theirs.actions])
     return model.posterior(
         data.first, data.second, data.likelihood(band), 0,
         single=single, single_likelihood=single_likelihood,
     )  # fmt: skip
 
 
-__all__ = ["Earlier", "WarmStart", "warm_data", "warm_posterior", "warm_start", "warm_terms"]
+def relearn_share(
+    warm: WarmStart,
+    space: Space,
+    hyper: Hyperparameters,
+    own: PairData,
+    single: IntArray | None = None,
+    single_likelihood: ActionLikelihood | None = None,
+) -> ShareFit:
+    """The new subject's share refitted by the evidence of all the data (theirs and the earlier
+    subjects'), from the current one (``model/share_fit.py``)."""
+    data, single, single_likelihood = _joined(warm, own, single, single_likelihood)
+    singles = None
+    if single is not None and single_likelihood is not None:
+        parts = tuple((n, _held(p)) for n, p in _parts(single.shape[0], single_likelihood))
+        singles = SingleData(single, StackedActionLikelihood(parts))
+    start = warm.rho if warm.share is None else warm.share
+    prior = warm.prior_of_share
+    return fit_share(space, hyper, warm.rho, start, data, prior, singles, gate=warm.gate)
+
+
+__all__ = [
+    "RELEARN_EVERY",
+    "Earlier",
+    "WarmStart",
+    "relearn_share",
+    "warm_data",
+    "warm_posterior",
+    "warm_start",
+    "warm_terms",
+]

@@ -22,6 +22,13 @@ visited gaits with a column scaling.  Its samples (pathwise, ``posterior.py``) n
 prior draw of the subject's grid and the visited nodes: ``g`` and ``h_t`` over the grid by the
 model's engine, ``h_s`` of the other subjects on their visited gaits only (a Cholesky factor).
 
+The new subject (subject 0) may have a shared fraction of their own, ``share`` (``rho_0``):
+``f(x, 0) = sqrt(rho_0) g(x) + sqrt(1 - rho_0) h_0(x)``, the others as above, so the
+new subject's covariance with another subject is ``sqrt(rho_0 rho) k(x, x')`` (a rank-one-plus-
+diagonal task covariance, Bonilla et al. 2008, eq. (2), with per-task loadings); ``share = None``
+is ``rho_0 = rho``, the model above, and ``share = 0`` leaves the new subject alone.  It is
+re-learned as the new subject answers (``share_fit.py``, ``loop/warm.py``).
+
 The evidence (``evidence.py``, GPML eq. (5.20)-(5.24)) gains the entry ``logit rho`` with
 ``dK / dlogit rho = rho (1 - rho) k(x, x') [s != s']``; :func:`fit_population` maximises it
 with the lengthscales (and whatever else the :class:`HyperPrior` frees) under a logit-normal
@@ -73,15 +80,42 @@ def node_codes(space: Space, gaits: IntArray, subjects: IntArray) -> IntArray:
     return out
 
 
+def check_share(rho: float, share: float | None) -> float | None:
+    """The new subject's shared fraction (None: ``rho``); it needs ``rho < 1``."""
+    if share is None:
+        return None
+    value = check_rho(share)
+    if rho >= 1.0:
+        raise ValueError("the new subject's shared fraction (share) needs rho < 1")
+    return value
+
+
+def subject_weights(
+    rows: IntArray, cols: IntArray, rho: float, share: float | None = None
+) -> FloatArray:
+    """The task covariance between subjects ``rows`` and ``cols``: 1 for the same subject,
+    ``rho`` between two others, ``sqrt(rho share)`` between subject 0 and another."""
+    same = rows[:, None] == cols[None, :]
+    out: FloatArray = np.where(same, 1.0, rho)
+    if share is not None:
+        new = (rows[:, None] == 0) != (cols[None, :] == 0)
+        out = np.where(new, rho if share == rho else float(np.sqrt(rho * share)), out)
+    return out
+
+
 def population_prior(
-    space: Space, kernel: SquaredExponential, rho: float, rows: IntArray, cols: IntArray
+    space: Space,
+    kernel: SquaredExponential,
+    rho: float,
+    rows: IntArray,
+    cols: IntArray,
+    share: float | None = None,
 ) -> FloatArray:
     """``k((x, s), (x', s'))`` between node codes ``rows`` and ``cols``."""
     size = len(space)
     out: FloatArray = kernel.cross(space, cols % size, rows=rows % size)
     if rho < 1.0:
-        same = (rows // size)[:, None] == (cols // size)[None, :]
-        out *= np.where(same, 1.0, rho)
+        out *= subject_weights(rows // size, cols // size, rho, share)
     return out
 
 
@@ -124,6 +158,21 @@ class PopulationPosterior(Posterior):
 
     rho: float = 0.0
     target: int = 0
+    share: float | None = None  # subject 0's own shared fraction (None: rho)
+
+    @property
+    def _other(self) -> float:
+        """The task covariance of the target with any other subject."""
+        if self.share is None or self.share == self.rho:
+            return self.rho
+        if self.target != 0:
+            raise ValueError("a posterior with the new subject's share is subject 0's")
+        return float(np.sqrt(self.rho * self.share))
+
+    @property
+    def _mix(self) -> float:
+        """The target's shared fraction."""
+        return self.rho if self.share is None else self.share
 
     @cached_property
     def _nodes(self) -> tuple[IntArray, IntArray]:
@@ -135,7 +184,7 @@ class PopulationPosterior(Posterior):
     def cross(self) -> CrossCovariance:
         gaits, subjects = self._nodes
         unique, inverse = np.unique(gaits, return_inverse=True)
-        weight = np.where(subjects == self.target, 1.0, self.rho)
+        weight = np.where(subjects == self.target, 1.0, self._other)
         base = self.engine.cross(unique.astype(np.intp))
         return SubjectCross(base, self.visited, inverse.astype(np.intp), weight)
 
@@ -144,7 +193,7 @@ class PopulationPosterior(Posterior):
 
     def _jitter_columns(self) -> tuple[IntArray, FloatArray]:
         gaits, subjects = self._nodes
-        return gaits, np.where(subjects == self.target, 1.0, self.rho)
+        return gaits, np.where(subjects == self.target, 1.0, self._other)
 
     def _prior_draw(
         self, rng: np.random.Generator, size: int
@@ -157,9 +206,9 @@ class PopulationPosterior(Posterior):
         as a single-subject posterior's does.  The third entry is the jitter part of the
         subject's grid draw, ``sqrt(1 - rho) e_own + sqrt(rho) e_shared``."""
         gaits, subjects = self._nodes
-        rho = self.rho
-        own, e_own = self.engine.prior_parts(rng, size) if rho < 1.0 else (None, None)
-        shared, e_shared = self.engine.prior_parts(rng, size) if rho > 0.0 else (None, None)
+        rho, mix = self.rho, self._mix
+        own, e_own = self.engine.prior_parts(rng, size) if mix < 1.0 else (None, None)
+        shared, e_shared = self.engine.prior_parts(rng, size) if mix > 0.0 else (None, None)
         e: FloatArray | None
         if own is None:
             assert shared is not None
@@ -167,14 +216,14 @@ class PopulationPosterior(Posterior):
         elif shared is None:
             f, e = own, e_own
         else:
-            f = np.sqrt(1.0 - rho) * own + np.sqrt(rho) * shared
+            f = np.sqrt(1.0 - mix) * own + np.sqrt(mix) * shared
             e = None
             if e_own is not None and e_shared is not None:
-                e = np.sqrt(1.0 - rho) * e_own + np.sqrt(rho) * e_shared
+                e = np.sqrt(1.0 - mix) * e_own + np.sqrt(mix) * e_shared
         f_visited = np.empty((size, gaits.shape[0]))
         mine = subjects == self.target
         f_visited[:, mine] = f[:, gaits[mine]]
-        if rho == 0.0:  # the others' nodes are independent of this subject: no draw needed
+        if self._other == 0.0:  # the others' nodes are independent of this subject: no draw
             f_visited[:, ~mine] = 0.0
             return f, f_visited, e
         for s in np.unique(subjects[~mine]):
@@ -199,9 +248,11 @@ class PopulationModel:
     noise: float
     sampler: str = "auto"
     ordinal: Ordinal | None = None
+    share: float | None = None  # subject 0's own shared fraction (None: rho)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "rho", check_rho(self.rho))
+        object.__setattr__(self, "share", check_share(self.rho, self.share))
 
     @cached_property
     def engine(self) -> GridEngine:
@@ -225,14 +276,15 @@ class PopulationModel:
         if first.size == 0 and (single is None or single.size == 0):
             return Posterior(self.space, self.kernel, None, engine, self.noise, self.ordinal)
         visited, a, b, s = self.indices(first, second, single)
-        k_vv = population_prior(self.space, self.kernel, self.rho, visited, visited)
+        k_vv = population_prior(self.space, self.kernel, self.rho, visited, visited, self.share)
         fit = fit_laplace(
             k_vv, visited, a, b, likelihood, init, single=s, single_likelihood=single_likelihood
         )
         target = 0 if self.rho >= 1.0 else int(target)
         return PopulationPosterior(
-            self.space, self.kernel, fit, engine, self.noise, self.ordinal, self.rho, target
-        )
+            self.space, self.kernel, fit, engine, self.noise, self.ordinal, self.rho, target,
+            self.share,
+        )  # fmt: skip
 
     def indices(
         self, first: IntArray, second: IntArray, single: IntArray | None = None
@@ -259,21 +311,25 @@ def population_evidence(
     init: FloatArray | None = None,
     *,
     singles: SingleData | None = None,
+    share: float | None = None,
 ) -> Evidence:
     """The Laplace evidence of population data (node codes) and its gradient in
     ``(hyper.log_vector(), logit rho)``: the single-subject entries, then ``logit rho``.
 
     ``rho`` must lie in ``(0, 1)`` for the gradient (``dlogit``); at 0 or 1 its entry is 0.
+    With the new subject's ``share`` the value is exact but the gradient's ``logit rho`` entry
+    is not defined (NaN): ``share_fit.py`` fits ``share`` alone from values.
     Fitted thresholds are not supported here (``hyper.thresholds`` must be None).
     """
     rho = check_rho(rho)
+    share = check_share(rho, share)
     if hyper.thresholds is not None:
         raise ValueError("population_evidence does not fit ordinal thresholds")
     if singles is not None and singles.size == 0:
         singles = None
     if data.size == 0 and singles is None:
         raise ValueError("the evidence needs at least one observation")
-    model = PopulationModel(space, hyper.kernel(), rho, 1.0)
+    model = PopulationModel(space, hyper.kernel(), rho, 1.0, share=share)
     single = None if singles is None else singles.actions
     visited, a, b, s = model.indices(data.first, data.second, single)
     kernel = hyper.kernel()
@@ -281,18 +337,21 @@ def population_evidence(
     gaits, subjects = visited % size, visited // size
     full = kernel.cross(space, gaits, rows=gaits)
     same = subjects[:, None] == subjects[None, :]
-    K = full * np.where(same, 1.0, rho)
+    weights = subject_weights(subjects, subjects, rho, share)
+    K = full * weights
     d = space.ndim
 
     def kernel_gradient(B: FloatArray) -> FloatArray:
         out = np.zeros(d + 2)
         points = space.points[gaits]
-        se = (full - kernel.jitter * (gaits[:, None] == gaits[None, :])) * np.where(same, 1.0, rho)
+        se = (full - kernel.jitter * (gaits[:, None] == gaits[None, :])) * weights
         for j, ell in enumerate(hyper.lengthscale):
             dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2
             out[j] = float(np.sum(dK * B))
         out[d] = float(np.sum(K * B))
         out[d + 1] = rho * (1.0 - rho) * float(np.sum(np.where(same, 0.0, full) * B))
+        if share is not None:
+            out[d + 1] = np.nan
         return out
 
     ev = evidence_from_prior(K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init)
@@ -306,8 +365,10 @@ __all__ = [
     "PopulationPosterior",
     "SubjectCross",
     "check_rho",
+    "check_share",
     "logit",
     "node_codes",
     "population_evidence",
     "population_prior",
+    "subject_weights",
 ]

@@ -3,7 +3,8 @@
 A session's log is a sequence of events (``storage/base.py``).  Each answer is one batch: the
 ``trial_executed`` events of the query's actions, then one event per feedback record (the
 kind's own payload class, ``gaitpref.feedback``: ``comparison_answered``, ``suggestion_given``,
-...) and, when the answer triggered a hyperparameter fit, its ``hyperparameters_refit`` event,
+...) and, when the answer triggered a hyperparameter fit, its ``hyperparameters_refit`` event
+(and, in a warm-started session that re-learns the new subject's share, its ``share_refit``),
 all carrying the query's id.  A query's ``id`` is the sequence number of its ``query_issued``
 event: unique in the session and never reused.  With gaits made on demand, a query is a batch too:
 ``gait_made`` for each gait new to the session and ``gait_infeasible`` for each proposal whose gait
@@ -59,6 +60,12 @@ class Created(EventPayload):
     # what the warm start carries: "all" (every registered kind's terms in force: preferences,
     # ties, ratings); absent: their preferences only (the first warm starts, replayed as written)
     prior_terms: Literal["all"] | None = None
+    # the new subject's share re-learned every k answers (``share_refit`` events); absent: rho
+    # held for the whole session (warm starts recorded before, replayed as written)
+    prior_relearn_every: int | None = None
+    # with it: the new subject starts alone (share 0) and shares only where the evidence favours
+    # sharing over being alone by more than this many nats (``loop/warm.py``)
+    prior_share_gate: float | None = None
 
     @model_serializer(mode="wrap")
     def _without_a_cold_start(self, handler: SerializerFunctionWrapHandler) -> Any:
@@ -68,6 +75,9 @@ class Created(EventPayload):
         if isinstance(out, dict):
             if out.get("prior_terms") is None:
                 out.pop("prior_terms", None)
+            for key in ("prior_relearn_every", "prior_share_gate"):
+                if out.get(key) is None:
+                    out.pop(key, None)
             if not out.get("prior_from"):
                 out.pop("prior_from", None)
                 out.pop("prior_rho", None)
@@ -189,6 +199,21 @@ class HyperparametersRefit(EventPayload):
     observations: Annotated[int, Recorded]
 
 
+class ShareRefit(EventPayload):
+    """``share_refit``: the new subject's shared fraction refitted by the evidence after this
+    answer (a warm start that re-learns it; ``model/share_fit.py``)."""
+
+    kind: ClassVar[str] = "share_refit"
+    query: int
+    before: float
+    after: float
+    accepted: bool
+    message: Annotated[str, Recorded]
+    evaluations: Annotated[int, Recorded]
+    objective_before: Annotated[float | None, Recorded]
+    objective_after: Annotated[float | None, Recorded]
+
+
 class Undo(EventPayload):
     """``undo``: the answer to ``query`` (its trials) is taken back."""
 
@@ -282,6 +307,7 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     GaitInfeasible,
     TrialExecuted,
     HyperparametersRefit,
+    ShareRefit,
     Undo,
     TrialExcluded,
     TrialFlaggedUnsafe,
@@ -301,6 +327,7 @@ GAIT_MADE = GaitMade.kind
 GAIT_INFEASIBLE = GaitInfeasible.kind
 TRIAL = TrialExecuted.kind
 REFIT = HyperparametersRefit.kind
+SHARE_REFIT = ShareRefit.kind
 UNDO = Undo.kind
 EXCLUDED = TrialExcluded.kind
 UNSAFE = TrialFlaggedUnsafe.kind
@@ -334,7 +361,7 @@ def is_query_part(kind: str) -> bool:
 
 def is_answer_part(kind: str) -> bool:
     """Whether events of ``kind`` belong to an answer's batch."""
-    return kind in (TRIAL, REFIT) or is_feedback(kind)
+    return kind in (TRIAL, REFIT, SHARE_REFIT) or is_feedback(kind)
 
 
 def new_event(payload: EventPayload) -> NewEvent:
@@ -414,6 +441,7 @@ __all__ = [
     "PriorSession",
     "QueryIssued",
     "Resumed",
+    "ShareRefit",
     "TrialExcluded",
     "TrialExecuted",
     "TrialFlaggedUnsafe",

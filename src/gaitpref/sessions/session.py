@@ -58,7 +58,14 @@ from gaitpref.sessions.stored_config import (
     software_version,
 )
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
-from gaitpref.sessions.warm import describe_prior, make_warm_start, prepare_state, resolve_prior
+from gaitpref.sessions.warm import (
+    RELEARN_EVERY,
+    SHARE_GATE,
+    describe_prior,
+    make_warm_start,
+    prepare_state,
+    resolve_prior,
+)
 from gaitpref.space import Space
 from gaitpref.storage import (
     ConflictError,
@@ -139,6 +146,8 @@ class Session:
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
             meta["prior_terms"] = "all"
+            meta["prior_relearn_every"] = RELEARN_EVERY
+            meta["prior_share_gate"] = SHARE_GATE
         version = software_version()
         spec = SessionSpec(
             subject=subject,
@@ -160,6 +169,8 @@ class Session:
                 prior_from=prior,
                 prior_rho=rho,
                 prior_terms="all" if prior else None,
+                prior_relearn_every=RELEARN_EVERY if prior else None,
+                prior_share_gate=SHARE_GATE if prior else None,
             )
         )
         record = storage.create_session(spec, [created])

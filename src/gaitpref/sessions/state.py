@@ -19,6 +19,7 @@ answer's trial numbers are given again to the next answer.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -218,6 +219,19 @@ class SessionState:
                 {"query": query.id, **answer.refit.to_json()}, "hyperparameters_refit"
             )
             events.append(log.new_event(refit))
+        share = answer.share_refit
+        if share is not None:
+
+            def finite(x: float) -> float | None:
+                return x if math.isfinite(x) else None
+
+            payload = log.ShareRefit(
+                query=query.id, before=share.before, after=share.after, accepted=share.accepted,
+                message=share.message, evaluations=share.evaluations,
+                objective_before=finite(share.objective_before),
+                objective_after=finite(share.objective_after),
+            )  # fmt: skip
+            events.append(log.new_event(payload))
         return events
 
     def revert_tell(self) -> None:

@@ -16,7 +16,9 @@ A warm start made now carries every registered kind's terms in force (preference
 new config models them, ratings given on the new config's rating scale; ``loop/warm.py``,
 :class:`~gaitpref.loop.warm.Earlier`) and
 records ``prior_terms = "all"``; one recorded without it carried preferences only and is rebuilt
-so, so that it replays as it was written.
+so, so that it replays as it was written.  Likewise a warm start made now re-learns the new
+subject's share every ``prior_relearn_every`` answers (``loop/warm.py``, a ``share_refit`` event
+each time); one recorded without it holds ``rho`` fixed at creation, as it was run.
 """
 
 from __future__ import annotations
@@ -25,11 +27,19 @@ import hashlib
 import json
 import re
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import ReplayError
-from gaitpref.loop.warm import Earlier, WarmStart, warm_data, warm_start, warm_terms
+from gaitpref.loop.warm import (
+    RELEARN_EVERY,
+    SHARE_GATE,
+    Earlier,
+    WarmStart,
+    warm_data,
+    warm_start,
+    warm_terms,
+)
 from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -164,6 +174,21 @@ def make_warm_start(
     )  # fmt: skip
 
 
+def _relearning(record: SessionRecord) -> dict[str, Any]:
+    """How the warm start re-learns the new subject's share, as recorded: absent (recorded
+    before), ``rho`` held; else the subject starts alone, re-learned every so many answers."""
+    every = record.meta.get("prior_relearn_every")
+    if every is None:
+        return {}
+    gate = record.meta.get("prior_share_gate")
+    if isinstance(every, bool) or not isinstance(every, int) or not isinstance(gate, float):
+        raise ReplayError(
+            f"session {record.id}: its warm start's prior_relearn_every ({every!r}) or "
+            f"prior_share_gate ({gate!r}) is not what was written"
+        )
+    return {"share": 0.0, "relearn_every": every, "gate": gate}
+
+
 def prepare_state(
     storage: Storage,
     record: SessionRecord,
@@ -183,18 +208,21 @@ def prepare_state(
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
+        relearn = _relearning(record)
         if record.meta.get("prior_terms") == "all":
             loop = state.loop
             terms = warm_terms(loop.context(), loop.learning.ties == "model", groups)
-            warm = WarmStart(terms[0], rho, len(groups), terms[1])
+            warm = WarmStart(terms[0], rho, len(groups), terms[1], **relearn)
         else:  # recorded before warm starts carried every term: preferences only
             prefs = [g.preferences for g in groups]
-            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups))
+            warm = WarmStart(warm_data(config.space, prefs), rho, len(groups), **relearn)
         state.loop.warm_start(warm)
     return state
 
 
 __all__ = [
+    "RELEARN_EVERY",
+    "SHARE_GATE",
     "describe_prior",
     "earlier_subjects",
     "log_sha256",

@@ -20,6 +20,7 @@ over standardised objectives ``z`` (the paper's, ``gaitpref.data``).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -29,7 +30,7 @@ from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import confidence
-from gaitpref.loop.warm import warm_start
+from gaitpref.loop.warm import RELEARN_EVERY, SHARE_GATE, warm_start
 from gaitpref.simulate.sweep import resolve_jobs
 from gaitpref.simulate.users import SimulatedUser, objective_on_grid
 from gaitpref.space import FloatArray
@@ -45,6 +46,7 @@ class Walked:
     stated: list[float]
     right: list[bool]
     rho: float | None = None
+    share: float | None = None  # the new subject's share at the end (warm, re-learned)
 
 
 def _walk(
@@ -56,12 +58,17 @@ def _walk(
     tolerance: float,
     samples: int,
     user_noise: float = 0.0,
+    relearn_every: int = RELEARN_EVERY,
 ) -> Walked:
     loop_ss, user_ss, sure_ss = np.random.SeedSequence(list(seeds)).spawn(3)
     loop: CoSpar = config.make_loop(seed=np.random.default_rng(loop_ss))
     rho = None
     if others is not None:
         warm = warm_start(config.space, loop.hyper, loop.prior, others)
+        if relearn_every:  # start alone, share as the evidence says (as sessions made now)
+            warm = dataclasses.replace(
+                warm, share=0.0, relearn_every=relearn_every, gate=SHARE_GATE
+            )
         loop.warm_start(warm)
         rho = warm.rho
     user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss), noise=user_noise)
@@ -79,7 +86,8 @@ def _walk(
         stated.append(sure.probability)
         right.append(bool(utility.max() - utility[sure.recommended] <= tolerance * span))
     scores = user.normalized(np.asarray(executed[:trials], dtype=np.intp)).tolist()
-    return Walked(scores, list(loop.preferences), stated, right, rho)
+    share = None if loop.warm is None else loop.warm.share
+    return Walked(scores, list(loop.preferences), stated, right, rho, share)
 
 
 def calibration(
@@ -115,9 +123,13 @@ def population_bench(
     tolerance: float = 0.05,
     samples: int = 300,
     user_noise: float = 0.0,
+    relearn_every: int = RELEARN_EVERY,
 ) -> dict[str, object]:
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
-    simulated subjects' probit noise in the objectives' units (``simulate/users.py``)."""
+    simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
+    ``relearn_every``: the warm runs re-learn the new subject's share every so many answers
+    (0: ``rho`` held, as warm starts recorded before share refits; otherwise the new subject
+    starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``)."""
     grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
@@ -127,7 +139,7 @@ def population_bench(
 
     def run(calls: list[tuple[int, Sequence[Sequence[Preference]] | None]]) -> list[Walked]:
         args = [
-            (config, grids[k], trials, (seed, k), o, tolerance, samples, user_noise)
+            (config, grids[k], trials, (seed, k), o, tolerance, samples, user_noise, relearn_every)
             for k, o in calls
         ]
         if n_jobs == 1:
@@ -144,7 +156,7 @@ def population_bench(
     right = [r for w in (*cold, *warm) for r in w.right]
     return {
         "subjects": [
-            {"subject": k, "cold": c.scores, "warm": w.scores, "rho": w.rho}
+            {"subject": k, "cold": c.scores, "warm": w.scores, "rho": w.rho, "share": w.share}
             for k, (c, w) in enumerate(zip(cold, warm, strict=True))
         ],
         "calibration": calibration(stated, right),
@@ -152,6 +164,7 @@ def population_bench(
         "tolerance": tolerance,
         "seed": seed,
         "user_noise": user_noise,
+        "relearn_every": relearn_every,
     }
 
 

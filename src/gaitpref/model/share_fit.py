@@ -1,0 +1,152 @@
+"""The new subject's shared fraction from the evidence: a 1-D type-II MAP fit of ``share``.
+
+The population kernel with the new subject's own loading (``population.py``): subject 0's
+covariance with every earlier subject is ``sqrt(share rho) k(x, x')``, the earlier subjects'
+``rho`` and the kernel held.  As the new subject answers, ``share`` is re-learned by maximising
+the Laplace evidence (GPML eq. (3.32), ``evidence.py``) plus a logit-normal log prior over
+``logit share`` (bounded at 3 prior sd), by Brent's bounded method on values only (no gradient:
+one coordinate; ``scipy.optimize.minimize_scalar``).  Only the new subject's data can move it:
+the earlier subjects' evidence does not depend on ``share``.  A fit that fails or does not improve
+the objective keeps the starting value and says so (:class:`ShareFit`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import LinAlgError
+from scipy.optimize import minimize_scalar
+
+from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
+from gaitpref.model.evidence import Hyperparameters, PairData
+from gaitpref.model.population import check_rho, logit, population_evidence
+from gaitpref.model.population_fit import LogitNormal
+from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
+from gaitpref.model.threads import one_blas_thread
+from gaitpref.space import Space
+
+_FAILURES = (
+    ConvergenceError,
+    PriorNotPositiveDefiniteError,
+    LinAlgError,
+    FloatingPointError,
+    UnsupportedLikelihoodError,  # a kind without third(): the evidence is not available
+)
+_EDGE = 1e-6
+
+
+@dataclass(frozen=True)
+class ShareFit:
+    """One fit of the new subject's shared fraction: before and after (equal unless
+    ``accepted``), with the objective (log evidence plus log prior) at both."""
+
+    before: float
+    after: float
+    accepted: bool
+    message: str
+    evaluations: int
+    objective_before: float
+    objective_after: float
+
+
+def _sigmoid(x: float) -> float:
+    return float(1.0 / (1.0 + np.exp(-x)))
+
+
+def share_objective(
+    space: Space,
+    hyper: Hyperparameters,
+    rho: float,
+    share: float,
+    data: PairData,
+    prior: LogitNormal,
+    singles: SingleData | None = None,
+) -> float:
+    """Log evidence plus the log prior of ``logit share`` (up to a constant)."""
+    ev = population_evidence(space, hyper, rho, data, singles=singles, share=share)
+    z = (logit(min(max(share, _EDGE), 1 - _EDGE)) - logit(prior.median)) / prior.sd
+    return float(ev.value - 0.5 * z * z)
+
+
+def fit_share(
+    space: Space,
+    hyper: Hyperparameters,
+    rho: float,
+    share: float,
+    data: PairData,
+    prior: LogitNormal,
+    singles: SingleData | None = None,
+    *,
+    gate: float | None = None,
+    max_evaluations: int = 25,
+) -> ShareFit:
+    """MAP ``share`` of subject 0 given population data (node codes), ``rho`` and ``hyper``
+    held; from ``share`` (the start, also what is kept on failure).  With a ``gate`` (nats) the
+    MAP is taken only where its log evidence exceeds that of ``share = 0`` (the subject alone)
+    by more than ``gate``; otherwise ``share = 0``."""
+    rho, share = check_rho(rho), check_rho(share)
+    if prior.sd <= 0 or not 0.0 < rho < 1.0 or data.size + (singles.size if singles else 0) == 0:
+        return ShareFit(share, share, False, "nothing to fit", 0, np.nan, np.nan)
+    if hyper.thresholds is not None:
+        hyper = Hyperparameters(hyper.lengthscale, hyper.variance, hyper.jitter, hyper.band)
+    centre = logit(prior.median)
+    lo, hi = centre - 3 * prior.sd, centre + 3 * prior.sd
+    evaluations = 0
+
+    def negative(x: float) -> float:
+        nonlocal evaluations
+        evaluations += 1
+        try:
+            value = share_objective(space, hyper, rho, _sigmoid(x), data, prior, singles)
+        except _FAILURES:
+            return 1e10
+        return -value if np.isfinite(value) else 1e10
+
+    with one_blas_thread():
+        start = float(np.clip(logit(min(max(share, _EDGE), 1 - _EDGE)), lo, hi))
+        first = negative(start)
+        if first >= 1e10:
+            message = "kept the starting value: the evidence cannot be evaluated there"
+            return ShareFit(share, share, False, message, 1, np.nan, np.nan)
+        res = minimize_scalar(
+            negative, bounds=(lo, hi), method="bounded",
+            options={"maxiter": max_evaluations, "xatol": 0.05},
+        )  # fmt: skip
+    x, value = float(res.x), float(res.fun)
+    if gate is not None:
+        return _gated(space, hyper, rho, share, data, singles, _sigmoid(x), gate, evaluations)
+    if not value < first:
+        message = f"kept the starting value: the fit did not improve ({res.message})"
+        return ShareFit(share, share, False, message, evaluations, -first, -first)
+    return ShareFit(share, _sigmoid(x), True, str(res.message), evaluations, -first, -value)
+
+
+def _gated(
+    space: Space,
+    hyper: Hyperparameters,
+    rho: float,
+    share: float,
+    data: PairData,
+    singles: SingleData | None,
+    best: float,
+    gate: float,
+    evaluations: int,
+) -> ShareFit:
+    """``best`` if its log evidence beats the subject alone (``share = 0``) by ``gate``, else 0."""
+    try:
+        with one_blas_thread():
+            alone = population_evidence(space, hyper, rho, data, singles=singles, share=0.0)
+            shared = population_evidence(space, hyper, rho, data, singles=singles, share=best)
+    except _FAILURES:
+        message = "kept the starting value: the evidence cannot be evaluated at the gate"
+        return ShareFit(share, share, False, message, evaluations + 2, np.nan, np.nan)
+    margin = shared.value - alone.value
+    if margin > gate:
+        message = f"shares: the evidence favours {best:.3g} over 0 by {margin:.3g} nats"
+        return ShareFit(share, best, True, message, evaluations + 2, alone.value, shared.value)
+    message = f"alone: the evidence favours {best:.3g} over 0 by {margin:.3g} nats only"
+    return ShareFit(share, 0.0, True, message, evaluations + 2, alone.value, shared.value)
+
+
+__all__ = ["ShareFit", "fit_share", "share_objective"]
