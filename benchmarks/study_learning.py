@@ -96,6 +96,7 @@ FIT = 'ties = "drop"\nfit = "evidence"\nrefit_every = 20'
 TIES_FIT = 'ties = "model"\nfit = "evidence"\ntie_band = "fit"\nrefit_every = 20'
 FIT10 = 'ties = "drop"\nfit = "evidence"\nrefit_every = 10'
 FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
+AVG = FIT + '\nhyper = "average"'  # issue 16 item 2: lengthscale hypotheses averaged
 G3 = "gates = 3"  # [cospar.strategy_settings] of plausible-eubo with 3 gates
 
 
@@ -166,6 +167,10 @@ ARMS = [
     Arm("plausible-g3@0.5x", "plausible-eubo", PAPER, 0.075, "3 gates, lengthscale 0.5x", G3),
     Arm("plausible-g3+fit@2x", "plausible-eubo", FIT, 0.30, "3 gates + fit, starting 2x", G3),
     Arm("plausible-g3+fit@0.5x", "plausible-eubo", FIT, 0.075, "3 gates + fit, from 0.5x", G3),
+    # issue 16 item 2: the fitted lengthscales x {0.5, 0.71, 1, 1.41, 2}, weighted by evidence
+    Arm("gated+avg", "gated-eubo", AVG, note="5 lengthscale hypotheses averaged"),
+    Arm("gated+avg@2x", "gated-eubo", AVG, 0.30, "averaged, starting 2x wrong"),
+    Arm("gated+avg@0.5x", "gated-eubo", AVG, 0.075, "averaged, starting 0.5x wrong"),
 ]
 SCENARIOS = ("noiseless", "noisy")
 DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)
@@ -196,6 +201,9 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("plausible-eubo, 3 gates, + fit instead of the old default", "plausible-g3+fit", "gated+fit"),
     ("... fitted, kernel 2x too long", "plausible-g3+fit@2x", "plausible-g3@2x"),
     ("... fitted, kernel 2x too short", "plausible-g3+fit@0.5x", "plausible-g3@0.5x"),
+    ("hypotheses averaged instead of one MAP fit", "gated+avg", "gated+fit"),
+    ("... averaged, kernel 2x too long", "gated+avg@2x", "gated+fit@2x"),
+    ("... averaged, kernel 2x too short", "gated+avg@0.5x", "gated+fit@0.5x"),
 ]
 #: Issue 16's candidates for the default (their targets are reported beside the default's).
 CANDIDATES = ("plausible-g3+fit", "plausible-g3")

@@ -62,6 +62,9 @@ def test_every_key_is_read() -> None:
     learning = cfg.learning
     assert learning.ties == "model" and learning.tie_band is None and learning.fit == "evidence"
     assert learning.refit_every == 4 and learning.prior is not None
+    assert learning.hyper == "map" and learning.hypotheses == (0.5, 0.71, 1.0, 1.41, 2.0)
+    averaged = _cfg('hyper = "average"\nhypotheses = [0.5, 1, 2]', "").learning
+    assert averaged.hyper == "average" and averaged.hypotheses == (0.5, 1.0, 2.0)
     assert learning.prior.lengthscale[1] == LogNormal(0.02, 0.5)
     assert learning.prior.lengthscale[0].median == pytest.approx(0.025)  # default: range / 4
     assert learning.prior.variance == LogNormal(0.005, 1.0)
@@ -86,6 +89,11 @@ def test_every_key_is_read() -> None:
             r'\[model\].tie_band: must be "fit" or a finite number >= 1e-12',
         ),
         ("refit_every = 0", "", r"\[model\].refit_every: must be an integer >= 1"),
+        ('hyper = "mean"', "", r"\[model\].hyper: must be one of map, average"),
+        ('fit = "fixed"\nhyper = "average"', "", r"\[model\]: hyper = 'average' needs fit"),
+        ("hypotheses = []", "", r"\[model\].hypotheses: must be a list of 1..15 numbers"),
+        ("hypotheses = [1, 0]", "", r"\[model\].hypotheses: must be a list of 1..15 numbers"),
+        ("hypotheses = [1, 1]", "", r"\[model\]: hypotheses must differ"),
         ("[model.prior]\nnoise = [1, 1]", "", r"\[model.prior\]: unknown key 'noise'"),
         ("[model.prior]\nsignal_variance = 1", "", r"must be \[median, sd\]"),
         (

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from gaitpref import Session, load_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
@@ -56,3 +57,51 @@ def test_refits_are_logged_and_replayed_exactly(tmp_path: Path) -> None:
     again.undo()  # the 10th answer (no refit)
     again.undo()  # the 9th, which refitted: back to the hyperparameters of the 6th's refit
     assert again._state.loop.hyper == told[1].after
+
+
+def test_averaged_refits_log_their_hypotheses_and_replay_exactly(tmp_path: Path) -> None:
+    path = tmp_path / "averaged.toml"
+    path.write_text(
+        FITTED.replace("refit_every = 3", 'refit_every = 3\nhyper = "average"').replace(
+            '"self-sparring"', '"gated-eubo"'
+        )
+    )
+    url = f"sqlite:///{tmp_path / 'average.db'}"
+    config = load_config(path)
+    assert config.learning.hyper == "average"
+    session = Session.create(url, config, "S01", seed=4)
+    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
+    for _ in range(10):
+        q = session.next_query()
+        session.answer(q.id, *subject.respond(q))
+    refits = [e for e in session.events() if e.kind == "hyperparameters_refit"]
+    told = session._state.loop.refits
+    assert len(refits) == 3
+    assert [e.payload["hypotheses"] for e in refits] == [r.to_json()["hypotheses"] for r in told]
+    weights = [h["weight"] for h in refits[-1].payload["hypotheses"]]
+    assert len(weights) == 5 and sum(weights) == pytest.approx(1.0)
+    trials = [e.payload["action"] for e in session.events() if e.kind == "trial_executed"]
+    mean = np.asarray(session.posterior().mean).copy()
+    session.close()
+
+    again = Session.open(url, session.id)  # replays: re-derives every proposal and refit
+    np.testing.assert_array_equal(again.posterior().mean, mean)
+    assert again._state.loop.hypotheses == session._state.loop.hypotheses
+    q = again.next_query()
+    again.answer(q.id, *subject.respond(q))
+    assert [e.payload["action"] for e in again.events() if e.kind == "trial_executed"][
+        :-1
+    ] == trials
+
+
+def test_map_refits_are_written_without_hypotheses(tmp_path: Path) -> None:
+    path = tmp_path / "fitted.toml"
+    path.write_text(FITTED)
+    config = load_config(path)
+    session = Session.create(f"sqlite:///{tmp_path / 'map.db'}", config, "S01", seed=4)
+    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
+    for _ in range(3):
+        q = session.next_query()
+        session.answer(q.id, *subject.respond(q))
+    (refit,) = [e for e in session.events() if e.kind == "hyperparameters_refit"]
+    assert "hypotheses" not in refit.payload

@@ -15,7 +15,7 @@ from typing import Any, cast
 
 from gaitpref.config.schema import MAX_SIGNAL_TO_NOISE, MODEL, PRIOR, Key, check_table
 from gaitpref.config.specs import SCALE, LogNormalPair, fail
-from gaitpref.loop.learning import FitMode, Learning, TiesMode
+from gaitpref.loop.learning import FitMode, HyperMode, Learning, TiesMode
 from gaitpref.model.engines import resolve_sampler
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
 from gaitpref.model.kernels import SquaredExponential
@@ -123,6 +123,8 @@ def make_learning(model: dict[str, Any], space: Space) -> Learning:
             cast(FitMode, model["fit"]),
             model["refit_every"],
             HyperPrior(tuple(scales), variance, band_prior),
+            cast(HyperMode, model["hyper"]),
+            tuple(model["hypotheses"]),
         )
     except ValueError as exc:
         fail("model", None, str(exc))

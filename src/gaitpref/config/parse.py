@@ -18,6 +18,8 @@
     # tie_band = "fit"             # with ties = "model": a number, or "fit"
     fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
     refit_every = 20               # optional: answers between hyperparameter refits
+    hyper = "map"                  # optional: "average" weighs lengthscale hypotheses
+    hypotheses = [0.5, 0.71, 1, 1.41, 2]  # optional: their factors of the fitted lengthscales
 
     [model.prior]                  # optional: log-normal priors as [median, sd of the log]
     lengthscale = { step_length = [0.025, 0.7] }

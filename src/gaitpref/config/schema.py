@@ -38,7 +38,7 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
-from gaitpref.loop.learning import FIT_MODES, TIES_MODES
+from gaitpref.loop.learning import FIT_MODES, HYPER_MODES, HYPOTHESES, TIES_MODES
 from gaitpref.loop.lines import DIRECTIONS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
@@ -139,6 +139,8 @@ MODEL: Final[dict[str, Key]] = {
     "tie_band": Key(ScaleOrFit(), None),  # None: "fit" with fit = "evidence", else required
     "fit": Key(Choice(FIT_MODES), "evidence"),
     "refit_every": Key(Integer(1, 1_000_000), 20),
+    "hyper": Key(Choice(HYPER_MODES), "map"),  # "average": over lengthscale hypotheses
+    "hypotheses": Key(Numbers(Number(0.01, 100.0, open_lo=True), 1, 15), HYPOTHESES),
     "prior": Key(Table("log-normal priors [median, sd]"), {}),
 }
 PRIOR: Final[dict[str, Key]] = {

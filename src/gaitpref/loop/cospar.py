@@ -53,6 +53,7 @@ from gaitpref.loop.warm import WarmStart, relearn_share, warm_posterior
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
+from gaitpref.model.hypermix import Hypothesis, weigh_hypotheses
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
 from gaitpref.model.ordinal import Ordinal
@@ -192,6 +193,7 @@ class CoSpar:
         self._dropped_singles: dict[int, frozenset[int]] = {}  # ... and single-action terms
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
         self.warm: WarmStart | None = None  # earlier subjects' answers (warm_start)
+        self._gps: dict[Hyperparameters, PreferenceGP] = {}  # the hypotheses' (hyper="average")
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -227,6 +229,43 @@ class CoSpar:
     def refits(self) -> list[HyperFit]:
         """Every hyperparameter fit so far, in order (each also on its :class:`Answer`)."""
         return [a.refit for a in self.answers if a.refit is not None]
+
+    @property
+    def hypotheses(self) -> tuple[Hypothesis, ...]:
+        """The lengthscale hypotheses and weights of the last refit (``hyper = "average"``;
+        empty otherwise or before the first refit)."""
+        refits = self.refits
+        return refits[-1].hypotheses if refits else ()
+
+    def mixture_mean(self) -> NDArray[np.float64]:
+        """The posterior mean at every action, averaged over the hypotheses by weight (the
+        posterior's own mean without hypotheses); its argmax is the recommendation."""
+        hypotheses = self.hypotheses
+        if not hypotheses:
+            return np.asarray(self.posterior.mean, dtype=np.float64)
+        with one_blas_thread():
+            means = [h.weight * self._posterior_under(h).mean for h in hypotheses if h.weight > 0]
+        return np.asarray(np.sum(means, axis=0), dtype=np.float64)
+
+    def _posterior_under(self, hypothesis: Hypothesis) -> Posterior:
+        """The posterior under ``hypothesis`` (the loop's own under the fitted kernel)."""
+        if hypothesis.hyper == self.hyper:
+            return self.posterior
+        gp = self._gps.get(hypothesis.hyper)
+        if gp is None:
+            if len(self._gps) > 4 * len(self.learning.hypotheses):
+                self._gps.clear()
+            gp = self._gps[hypothesis.hyper] = self._gp(hypothesis.hyper)
+        return self._fit(self.answers, gp, hypothesis.hyper)
+
+    def _ask_posterior(self) -> Posterior:
+        """The posterior a query is proposed under: with hypotheses, one drawn by weight from
+        the loop's generator (the first step of a Thompson draw from the mixture)."""
+        hypotheses = self.hypotheses
+        if len(hypotheses) < 2:
+            return self.posterior
+        k = int(self.rng.choice(len(hypotheses), p=[h.weight for h in hypotheses]))
+        return self._posterior_under(hypotheses[k])
 
     @property
     def buffer(self) -> tuple[int, ...]:
@@ -306,9 +345,9 @@ class CoSpar:
                 "e.g. gaits that cannot be made); nothing was proposed"
             )
         self._rng_before_pending = self.rng.bit_generator.state
-        context = AskContext(
-            self.posterior, self.n, self._buffer, len(self.executed), self.rng, allowed
-        )
+        with one_blas_thread():
+            posterior = self._ask_posterior()
+        context = AskContext(posterior, self.n, self._buffer, len(self.executed), self.rng, allowed)
         with one_blas_thread():
             actions = tuple(int(a) for a in self.strategy.propose(context))
         points = tuple(tuple(row) for row in self.space.points_of(actions).tolist())
@@ -589,7 +628,14 @@ class CoSpar:
         singles = None
         if single is not None and single_likelihood is not None:
             singles = SingleData(single, single_likelihood)
-        return fit_hyperparameters(self.space, self.hyper, data, self.prior, singles=singles)
+        fit = fit_hyperparameters(self.space, self.hyper, data, self.prior, singles=singles)
+        if self.learning.hyper != "average":
+            return fit
+        factors = self.learning.hypotheses
+        hypotheses = weigh_hypotheses(
+            self.space, fit.after, factors, data, self.prior, singles=singles
+        )
+        return dataclasses.replace(fit, hypotheses=hypotheses)
 
     def _relearn_share(self, answers: list[Answer], hyper: Hyperparameters) -> ShareFit | None:
         """The warm start's share refit when its schedule says so (``loop/warm.py``)."""

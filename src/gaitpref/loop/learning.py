@@ -13,6 +13,11 @@
   evidence plus priors (``model/hyperfit.py``), warm-started from the current values.  Single-
   action terms (ratings) take part; ordinal thresholds the config leaves unset are fitted with
   the rest (``Hyperparameters.thresholds``), and the posterior uses the fitted ones.
+- ``hyper``: ``"map"`` uses the one fitted kernel; ``"average"`` (needs ``fit="evidence"``)
+  also weighs the lengthscale hypotheses ``hypotheses`` (factors of the fitted lengthscales) by
+  Laplace evidence x prior at every refit (``model/hypermix.py``): each ask draws a hypothesis
+  by weight from the loop's generator and proposes under its posterior, and the recommendation
+  is the argmax of the weighted mean.
 
 :func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
 """
@@ -33,6 +38,10 @@ TiesMode = Literal["drop", "model"]
 FitMode = Literal["fixed", "evidence"]
 TIES_MODES: tuple[TiesMode, ...] = ("drop", "model")
 FIT_MODES: tuple[FitMode, ...] = ("fixed", "evidence")
+HyperMode = Literal["map", "average"]
+HYPER_MODES: tuple[HyperMode, ...] = ("map", "average")
+#: The default lengthscale hypotheses of ``hyper = "average"``: factors of the fitted ones.
+HYPOTHESES: tuple[float, ...] = (0.5, 0.71, 1.0, 1.41, 2.0)
 
 
 @dataclass(frozen=True)
@@ -44,6 +53,8 @@ class Learning:
     fit: FitMode = "fixed"
     refit_every: int = 20
     prior: HyperPrior | None = None  # None: model.hyperfit.default_prior
+    hyper: HyperMode = "map"
+    hypotheses: tuple[float, ...] = HYPOTHESES
 
     def __post_init__(self) -> None:
         if self.ties not in TIES_MODES:
@@ -61,6 +72,16 @@ class Learning:
                 raise ValueError(f"tie_band must be positive, got {self.tie_band!r}")
         elif self.ties == "model" and self.fit == "fixed":
             raise ValueError("ties = 'model' with fit = 'fixed' needs a tie_band (a number)")
+        if self.hyper not in HYPER_MODES:
+            raise ValueError(f"hyper must be one of {', '.join(HYPER_MODES)}; got {self.hyper!r}")
+        if self.hyper == "average" and self.fit != "evidence":
+            raise ValueError("hyper = 'average' needs fit = 'evidence'")
+        if not self.hypotheses or not all(
+            isinstance(c, float | int) and np.isfinite(c) and c > 0 for c in self.hypotheses
+        ):
+            raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
+        if len(set(self.hypotheses)) != len(self.hypotheses):
+            raise ValueError(f"hypotheses must differ, got {self.hypotheses!r}")
 
     @property
     def learns_band(self) -> bool:

@@ -43,6 +43,7 @@ from scipy.optimize import minimize
 
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
+from gaitpref.model.hypermix import Hypothesis
 from gaitpref.model.singles import SingleData
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import FloatArray, Space
@@ -136,6 +137,9 @@ class HyperFit:
     objective_before: float  # log evidence + log prior at ``before``
     objective_after: float  # ... at ``after``
     observations: int
+    #: lengthscale hypotheses around ``after`` and their weights (``hypermix.py``); empty when
+    #: the loop keeps the one MAP kernel
+    hypotheses: tuple[Hypothesis, ...] = ()
 
     def to_json(self) -> dict[str, object]:
         """A plain JSON record for logs (sessions store it with the answer that triggered it);
@@ -155,7 +159,7 @@ class HyperFit:
                 out["thresholds"] = list(h.thresholds)
             return out
 
-        return {
+        out: dict[str, object] = {
             "before": values(self.before),
             "after": values(self.after),
             "accepted": self.accepted,
@@ -167,6 +171,9 @@ class HyperFit:
             "objective_after": finite(self.objective_after),
             "observations": self.observations,
         }
+        if self.hypotheses:  # only when averaged: older records stay as they were
+            out["hypotheses"] = [h.to_json() for h in self.hypotheses]
+        return out
 
 
 _FAILURES = (ConvergenceError, PriorNotPositiveDefiniteError, LinAlgError, FloatingPointError)

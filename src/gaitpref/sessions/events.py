@@ -182,6 +182,18 @@ class HyperValues(BaseModel):
         return out
 
 
+class HypothesisValues(BaseModel):
+    """One lengthscale hypothesis of a refit with ``[model].hyper = "average"``
+    (``model/hypermix.py``): its factor of the fitted lengthscales, the lengthscales, its log
+    evidence plus log prior (None: its Laplace fit failed) and its weight."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    factor: float
+    lengthscale: list[float]
+    objective: float | None
+    weight: float
+
+
 class HyperparametersRefit(EventPayload):
     """``hyperparameters_refit``: the evidence fit an answer triggered (``model/hyperfit.py``)."""
 
@@ -197,6 +209,15 @@ class HyperparametersRefit(EventPayload):
     objective_before: Annotated[float | None, Recorded]
     objective_after: Annotated[float | None, Recorded]
     observations: Annotated[int, Recorded]
+    #: only with ``hyper = "average"``; absent otherwise (as every earlier refit was written)
+    hypotheses: list[HypothesisValues] | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_hypotheses(self, handler: SerializerFunctionWrapHandler) -> Any:
+        out = handler(self)
+        if isinstance(out, dict) and out.get("hypotheses") is None:
+            out.pop("hypotheses", None)
+        return out
 
 
 class ShareRefit(EventPayload):

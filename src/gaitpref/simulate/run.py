@@ -82,6 +82,14 @@ def run_simulation(
         actions=actions,
         normalized_objective=user.normalized(actions),
         posterior=posterior,
-        argmax_normalized_objective=float(user.normalized([posterior.argmax])[0]),
+        argmax_normalized_objective=float(user.normalized([_recommended(loop)])[0]),
         ratings=None if rater is None else np.asarray(rated[:trials], dtype=np.intp),
     )
+
+
+def _recommended(loop: CoSpar) -> int:
+    """The recommended action: the posterior mean's argmax (the mixture's, when the loop
+    averages over lengthscale hypotheses)."""
+    if not loop.hypotheses:
+        return int(loop.posterior.argmax)
+    return int(np.argmax(loop.mixture_mean()))
