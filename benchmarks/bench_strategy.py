@@ -34,14 +34,15 @@ except ImportError:  # run as a module
     from benchmarks.study_learning import config_text
 
 RESULTS = Path(__file__).parent / "results"
+AVERAGE = 'hyper = "average"'  # issue 16 item 2: lengthscale hypotheses averaged
 TRIALS, WINDOW = 150, 10
 
 
-def one_run(strategy: str | None, k: int) -> list[tuple[float, float, float]]:
+def one_run(strategy: str | None, k: int, model: str = "") -> list[tuple[float, float, float]]:
     """(ask, tell, ask + tell CPU) seconds of the last ``WINDOW`` trials of one run on objective
     ``k``; the first two are wall-clock time, the third the process's CPU time (one BLAS thread),
-    which a loaded shared machine inflates far less."""
-    cfg = parse_config(config_text(strategy or DEFAULTS["cospar"]["strategy"]))
+    which a loaded shared machine inflates far less.  ``model``: ``[model]`` keys added."""
+    cfg = parse_config(config_text(strategy or DEFAULTS["cospar"]["strategy"], model))
     objective = paper_objectives()[k]
     loop = cfg.make_loop(seed=k)
     user = SimulatedUser(cfg.space, objective, np.random.default_rng(k))
@@ -66,11 +67,14 @@ def main() -> None:
     args = parser.parse_args()
     one_run(None, 99)  # warm-up (imports, caches)
     default = DEFAULTS["cospar"]["strategy"]
-    arms: dict[str, str | None] = {f"default ({default})": None}
-    arms.update({s: s for s in ("plausible-eubo", "gated-eubo", "self-sparring") if s != default})
+    arms: dict[str, tuple[str | None, str]] = {f"default ({default})": (None, "")}
+    arms.update(
+        {s: (s, "") for s in ("plausible-eubo", "gated-eubo", "self-sparring") if s != default}
+    )
+    arms["gated-eubo, hyper = average"] = ("gated-eubo", AVERAGE)
     results: dict[str, dict[str, float]] = {}
-    for name, strategy in arms.items():
-        times = np.array([t for k in range(args.runs) for t in one_run(strategy, k)])
+    for name, (strategy, model) in arms.items():
+        times = np.array([t for k in range(args.runs) for t in one_run(strategy, k, model)])
         both = times[:, 0] + times[:, 1]
         results[name] = {
             "median_ask_tell_cpu_ms": 1e3 * float(np.median(times[:, 2])),

@@ -254,10 +254,12 @@ def run(arms: list[Arm], scenarios: list[str], objectives: int, jobs: int) -> No
         for arm in arms:
             path = _cache(scenario, arm.name)
             start = time.perf_counter()
+            # runs are deterministic (seeded): a cached prefix (a screen) is kept, not re-run
+            done = json.loads(path.read_text())["runs"][:objectives] if path.exists() else []
             out = Parallel(n_jobs=jobs)(
-                delayed(run_one)(arm, scenario, k) for k in range(objectives)
+                delayed(run_one)(arm, scenario, k) for k in range(len(done), objectives)
             )
-            rows = [{**o, "scores": np.asarray(o["scores"]).tolist()} for o in out]
+            rows = done + [{**o, "scores": np.asarray(o["scores"]).tolist()} for o in out]
             path.parent.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps({"arm": arm.name, "scenario": scenario, "runs": rows}))
             s = np.array([r["scores"] for r in rows])

@@ -32,16 +32,22 @@ strategy = "self-sparring"
 """
 
 
-def test_refits_are_logged_and_replayed_exactly(tmp_path: Path) -> None:
-    path = tmp_path / "fitted.toml"
-    path.write_text(FITTED)
+def _answered(tmp_path: Path, text: str, answers: int) -> tuple[str, Session, SimulatedSubject]:
+    """A session of config ``text`` (its database url, it, its subject) after ``answers``."""
+    path = tmp_path / "config.toml"
+    path.write_text(text)
     url = f"sqlite:///{tmp_path / 'refit.db'}"
     config = load_config(path)
     session = Session.create(url, config, "S01", seed=4)
     subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
-    for _ in range(10):
+    for _ in range(answers):
         q = session.next_query()
         session.answer(q.id, *subject.respond(q))
+    return url, session, subject
+
+
+def test_refits_are_logged_and_replayed_exactly(tmp_path: Path) -> None:
+    url, session, _ = _answered(tmp_path, FITTED, 10)
     refits = [e for e in session.events() if e.kind == "hyperparameters_refit"]
     assert len(refits) == 3  # after answers 3, 6 and 9
     told = session._state.loop.refits
@@ -60,20 +66,9 @@ def test_refits_are_logged_and_replayed_exactly(tmp_path: Path) -> None:
 
 
 def test_averaged_refits_log_their_hypotheses_and_replay_exactly(tmp_path: Path) -> None:
-    path = tmp_path / "averaged.toml"
-    path.write_text(
-        FITTED.replace("refit_every = 3", 'refit_every = 3\nhyper = "average"').replace(
-            '"self-sparring"', '"gated-eubo"'
-        )
-    )
-    url = f"sqlite:///{tmp_path / 'average.db'}"
-    config = load_config(path)
-    assert config.learning.hyper == "average"
-    session = Session.create(url, config, "S01", seed=4)
-    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
-    for _ in range(10):
-        q = session.next_query()
-        session.answer(q.id, *subject.respond(q))
+    text = FITTED.replace("refit_every = 3", 'refit_every = 3\nhyper = "average"')
+    url, session, subject = _answered(tmp_path, text.replace("self-sparring", "gated-eubo"), 10)
+    assert session._state.loop.learning.hyper == "average"
     refits = [e for e in session.events() if e.kind == "hyperparameters_refit"]
     told = session._state.loop.refits
     assert len(refits) == 3
@@ -95,13 +90,6 @@ def test_averaged_refits_log_their_hypotheses_and_replay_exactly(tmp_path: Path)
 
 
 def test_map_refits_are_written_without_hypotheses(tmp_path: Path) -> None:
-    path = tmp_path / "fitted.toml"
-    path.write_text(FITTED)
-    config = load_config(path)
-    session = Session.create(f"sqlite:///{tmp_path / 'map.db'}", config, "S01", seed=4)
-    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=2)
-    for _ in range(3):
-        q = session.next_query()
-        session.answer(q.id, *subject.respond(q))
+    _, session, _ = _answered(tmp_path, FITTED, 3)
     (refit,) = [e for e in session.events() if e.kind == "hyperparameters_refit"]
     assert "hypotheses" not in refit.payload

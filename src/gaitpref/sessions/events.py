@@ -176,10 +176,14 @@ class HyperValues(BaseModel):
 
     @model_serializer(mode="wrap")
     def _without_unfitted_thresholds(self, handler: SerializerFunctionWrapHandler) -> Any:
-        out = handler(self)
-        if isinstance(out, dict) and out.get("thresholds") is None:
-            out.pop("thresholds", None)
-        return out
+        return _without_none(handler(self), "thresholds")
+
+
+def _without_none(out: Any, key: str) -> Any:
+    """A serialised payload without ``key`` when it is None (a field older records lack)."""
+    if isinstance(out, dict) and out.get(key) is None:
+        out.pop(key, None)
+    return out
 
 
 class HypothesisValues(BaseModel):
@@ -214,10 +218,7 @@ class HyperparametersRefit(EventPayload):
 
     @model_serializer(mode="wrap")
     def _without_hypotheses(self, handler: SerializerFunctionWrapHandler) -> Any:
-        out = handler(self)
-        if isinstance(out, dict) and out.get("hypotheses") is None:
-            out.pop("hypotheses", None)
-        return out
+        return _without_none(handler(self), "hypotheses")
 
 
 class ShareRefit(EventPayload):
