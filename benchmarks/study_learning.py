@@ -22,8 +22,10 @@ objective of its final posterior-mean argmax.
 parts); ``report`` writes ``docs/results/learning/``: ``runs.csv`` (one row per run),
 ``curves.csv`` (mean and standard error per trial), ``summary.md`` and ``learning.png``; the
 summary ends with issue 16's targets for the default arm.  Issue 16 ran only its own arms
-(``plausible*``) beside the first study's cached ``paper`` and ``gated+fit`` runs; the first
-study's results are kept in ``docs/results/learning/issue8/``.
+(``plausible*``) beside the first study's cached ``paper`` and ``gated+fit`` runs, and its item
+2 the ``gated+avg`` arms (lengthscale hypotheses averaged, ``[model] hyper = "average"``); the
+first study's results are kept in ``docs/results/learning/issue8/``.  ``run`` keeps a cached
+prefix of an arm's runs (a screen on fewer objectives) and runs only the rest.
 Workers use one BLAS thread each (``joblib``, ``n_jobs`` = ``--jobs``).
 """
 
@@ -206,7 +208,7 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("... averaged, kernel 2x too short", "gated+avg@0.5x", "gated+fit@0.5x"),
 ]
 #: Issue 16's candidates for the default (their targets are reported beside the default's).
-CANDIDATES = ("plausible-g3+fit", "plausible-g3")
+CANDIDATES = ("plausible-g3+fit", "plausible-g3", "gated+avg")
 #: Issue 16's targets for the default, noiseless subject (the noisy subject: 0.01 below each).
 TARGETS = {"early": 0.77, "late": 0.93, "end": 0.97, "argmax": 0.99}
 PHASES = {"early": "trials 1-20", "late": "trials 31-150", "end": "trials 121-150"}
@@ -455,6 +457,7 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
     import matplotlib.pyplot as plt
 
     shown = ["paper", "gated", "gated+fit", "plausible", "plausible-g3", "plausible-g3+fit"]
+    shown.append("gated+avg")  # issue 16 item 2
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, scenario in zip(axes, SCENARIOS, strict=True):
         for name in shown:
