@@ -9,7 +9,7 @@ whole 150-trial run in 8-D.
 - ``150-trial 8-D run``: the whole simulated run on an 8-D box (Hartmann-6 on the first six
   features), the same settings, wall clock per run over ``--runs`` seeds.
 
-    PYTHONPATH=src python benchmarks/bench_continuous.py [--iterations 30] [--runs 3]
+    python benchmarks/bench_continuous.py [--iterations 30] [--runs 3]
 
 Writes benchmarks/results/continuous.md and continuous.json.
 """
@@ -22,12 +22,16 @@ import time
 from pathlib import Path
 
 import numpy as np
-from benchmarks._machine import machine_description, machine_markdown
 
 from gaitpref import Feature, Space, SquaredExponential
 from gaitpref.loop.line import LineCoSpar
 from gaitpref.loop.lines import LineSettings
 from gaitpref.simulate.continuous import builtin, random_gp_lengthscale
+
+try:
+    from _machine import machine_description, machine_markdown
+except ImportError:  # run as a module
+    from benchmarks._machine import machine_description, machine_markdown
 from gaitpref.simulate.points import PointCoactive, PointUser, run_points
 from gaitpref.strategies import make_strategy
 
@@ -104,7 +108,7 @@ def main() -> None:
     (OUT / "continuous.json").write_text(json.dumps(result, indent=2) + "\n")
     md = f"""# The line path on continuous spaces (issue 13)
 
-`PYTHONPATH=src python benchmarks/bench_continuous.py` - LineCoSpar, n = 1, b = 1,
+`python benchmarks/bench_continuous.py` - LineCoSpar, n = 1, b = 1,
 self-sparring, 50 points per line, noiseless simulated subject with gradient-threshold coactive
 feedback.  The 2-core shared VM, loaded by other work while it ran.
 

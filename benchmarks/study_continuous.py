@@ -6,7 +6,7 @@ coactive feedback, noiseless and noisy subjects; against random selection, and i
 full 57,750-gait grid (11 x 10 x 7 x 5 x 5 x 3 values over the same box) with the line path run on
 that same grid (lines snapped to it) and on the continuous box.  One process, seeds 0..S-1.
 
-    PYTHONPATH=src python benchmarks/study_continuous.py --seeds 4 [--subset] [--out DIR]
+    python benchmarks/study_continuous.py --seeds 4 [--subset] [--out DIR]
 """
 
 from __future__ import annotations
@@ -157,7 +157,7 @@ def report(results: Path, out: Path) -> None:
     lines = [
         "# The line path on continuous spaces (issue 13)",
         "",
-        "`PYTHONPATH=src python benchmarks/study_continuous.py --seeds 6` then `--report`.",
+        "`python benchmarks/study_continuous.py --seeds 6` then `--report`.",
         f"{TRIALS} trials, n = 1, b = 1, self-sparring (LineCoSpar's rule), 50 points per line,",
         "random line directions, fixed kernel (lengthscale 0.25 of the range for Hartmann-6, the",
         "objective's own for the random GP; signal variance 1, jitter 1e-6), model probit noise",
