@@ -5,10 +5,10 @@ in order; both shade the region of avoidance and mark the gaits flagged unsafe, 
 radius, when the session has them.  A space with no 1-D or 2-D grid (continuous features, the
 line path, more features) gets the posterior at each trial's point instead
 (:mod:`gaitpref.plots.trials`), for both figures.  matplotlib's figure registry is not
-thread-safe, so drawing is serialized, in one drawing thread that requests await (:class:`FigureRenderer`: a
-figure never holds a worker thread that an answer needs); finished pictures are kept in a small
-cache keyed by (session, version), where the version changes with every event the session
-writes.
+thread-safe, so drawing is serialized, in one drawing thread that requests await
+(:class:`FigureRenderer`: a figure never holds a worker thread that an answer needs); finished
+pictures are kept in a small cache keyed by (session, version), where the version changes with
+every event the session writes.
 """
 
 from __future__ import annotations
