@@ -18,7 +18,7 @@ from fastapi import APIRouter, Body, Path, Query, Request, Response, status
 from fastapi.concurrency import run_in_threadpool
 
 from gaitpref.config import load_config, shipped_configs
-from gaitpref.console import present, views
+from gaitpref.console import present
 from gaitpref.console.answers import feedback_records
 from gaitpref.console.schemas import (
     MAX_ID,
@@ -72,7 +72,7 @@ def configs() -> list[ConfigOut]:
             ConfigOut(
                 name=name,
                 grid=None if cfg.space.continuous else list(cfg.space.shape),
-                space=views.space_words(cfg.space),
+                space=cfg.space.words,
                 n=cfg.n,
                 buffer=cfg.buffer,
                 description=cfg.description,

@@ -42,13 +42,6 @@ def fmt_value(value: float) -> str:
     return f"{value:.4g}"
 
 
-def space_words(space: Space) -> str:
-    """A config's space in a few words: ``15 x 10``, or ``continuous: a, b, c`` with no grid."""
-    if space.continuous:
-        return "continuous: " + ", ".join(space.names)
-    return " x ".join(str(len(f)) for f in space.features)
-
-
 def pretty(name: str) -> str:
     """``step_length`` -> ``step length``."""
     return name.replace("_", " ")
