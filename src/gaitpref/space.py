@@ -193,6 +193,13 @@ class Space:
         return tuple(len(f) for f in self.features)
 
     @property
+    def words(self) -> str:
+        """The space in a few words: ``15 x 10``, or ``continuous: a, b, c`` with no grid."""
+        if self.continuous:
+            return "continuous: " + ", ".join(self.names)
+        return " x ".join(str(len(f)) for f in self.features)
+
+    @property
     def names(self) -> tuple[str, ...]:
         return tuple(f.name for f in self.features)
 

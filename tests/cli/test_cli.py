@@ -89,6 +89,7 @@ def test_configs_lists_the_shipped_configs() -> None:
     result = runner.invoke(app, ["configs"])
     assert result.exit_code == 0
     assert "exo-1d-step-length" in result.output and "synthetic-2d" in result.output
+    assert "compass-continuous-3d" in result.output and "continuous:" in result.output
 
 
 def test_demo_writes_its_figure(tmp_path: Path) -> None:

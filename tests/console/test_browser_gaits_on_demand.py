@@ -1,8 +1,8 @@
 """A session with gaits made on demand (``[gaits] generator = "compass-hzd"``), run in a real
 headless Chromium: the config uploaded, every gait optimised when first proposed, the 0.02 m
 steps (no gait at 0.2 m/s) skipped and listed, never offered as a trial.  The issue's browser
-test is on a continuous 3-parameter space; this one is on a grid (continuous spaces are issue
-13's items 1-3)."""
+test on a continuous 3-parameter space is ``test_browser_continuous.py``; this one is on a grid.
+"""
 
 from __future__ import annotations
 

@@ -16,6 +16,7 @@ from gaitpref.feedback import Comparison, Rating
 from gaitpref.loop import Safety
 from gaitpref.loop.safety import near
 from gaitpref.model.ordinal import Ordinal
+from gaitpref.pointset import PointSet
 from gaitpref.strategies import STRATEGIES, make_strategy
 
 SPACE = Space(
@@ -128,6 +129,17 @@ def test_unsafe_radius_and_unflag() -> None:
     assert np.array_equal(loop.allowed(), ~banned)
     loop.unflag_unsafe(31)
     assert loop.allowed() is None
+
+
+def test_near_scales_by_the_features_ranges_not_the_points_present() -> None:
+    """On a point set the radius is the same fraction of each feature's range as on the grid,
+    however little of the range the points present span."""
+    pts = PointSet(SPACE, [[0.10, 1.0], [0.12, 1.0], [0.10, 1.06], [0.13, 1.0]])
+    banned = near(pts, [0], 0.25)
+    span = np.array([0.10, 0.30])  # dense reference: each feature divided by its declared range
+    d = np.sqrt((((pts.points - pts.points[0]) / span) ** 2).sum(axis=1))
+    assert np.array_equal(banned, d <= 0.25)
+    assert banned.tolist() == [True, True, True, False]
 
 
 def test_bad_safety_settings_are_refused() -> None:

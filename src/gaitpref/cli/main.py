@@ -298,12 +298,11 @@ def list_configs() -> None:
     from gaitpref.config import load_config, shipped_configs
 
     table = Table(title="shipped configs")
-    for col in ("name", "grid", "n", "b", "description"):
+    for col in ("name", "space", "n", "b", "description"):
         table.add_column(col)
     for name in shipped_configs():
         cfg = load_config(name)
-        grid = " x ".join(str(s) for s in cfg.space.shape)
-        table.add_row(name, grid, str(cfg.n), str(cfg.buffer), cfg.description)
+        table.add_row(name, cfg.space.words, str(cfg.n), str(cfg.buffer), cfg.description)
     console.print(table)
 
 

@@ -61,6 +61,8 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
         fail("gaits", "generator", str(exc))
     first = [f.values[0] for f in space]
     for k, feature in enumerate(space):
+        if feature.continuous:  # its points' ids carry a content hash (gaits/on_demand.py)
+            continue
         ids = set()
         for value in feature.values:
             point = list(first)

@@ -71,7 +71,8 @@ def configs() -> list[ConfigOut]:
         out.append(
             ConfigOut(
                 name=name,
-                grid=list(cfg.space.shape),
+                grid=None if cfg.space.continuous else list(cfg.space.shape),
+                space=cfg.space.words,
                 n=cfg.n,
                 buffer=cfg.buffer,
                 description=cfg.description,

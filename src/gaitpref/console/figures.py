@@ -2,11 +2,13 @@
 
 1-D spaces: posterior mean +- 2 sd with the trials; 2-D: a heat map of the mean with the trials
 in order; both shade the region of avoidance and mark the gaits flagged unsafe, with their
-radius, when the session has them.  matplotlib's figure registry is not thread-safe, so
-drawing is serialized, in one drawing thread that requests await (:class:`FigureRenderer`: a
-figure never holds a worker thread that an answer needs); finished pictures are kept in a small
-cache keyed by (session, version), where the version changes with every event the session
-writes.
+radius, when the session has them.  A space with no 1-D or 2-D grid (continuous features, the
+line path, more features) gets the posterior at each trial's point instead
+(:mod:`gaitpref.plots.trials`), for both figures.  matplotlib's figure registry is not
+thread-safe, so drawing is serialized, in one drawing thread that requests await
+(:class:`FigureRenderer`: a figure never holds a worker thread that an answer needs); finished
+pictures are kept in a small cache keyed by (session, version), where the version changes with
+every event the session writes.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from gaitpref.model import Posterior
 from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
 from gaitpref.plots.safety import safety_shading
 from gaitpref.plots.session import SessionPicture, render_session, session_picture
+from gaitpref.plots.trials import TrialsPicture, on_a_grid, render_trials, trials_picture
 from gaitpref.sessions.session import Session
 
 _DRAW_LOCK = threading.Lock()
@@ -61,16 +64,18 @@ def session_png(session: Session, *, dpi: int = 90) -> bytes:
     return _png(lambda: render_session(pic), dpi)
 
 
-Picture = PosteriorPicture | SessionPicture
+Picture = PosteriorPicture | SessionPicture | TrialsPicture
 
 
 def picture_of(session: Session, kind: str) -> Picture:
     """The data of a session's ``kind`` figure ("posterior" or "session"), read now."""
-    if kind == "session":
-        return session_picture(session)
+    post = session.posterior()
     trials = [t.action for t in session.trials()]
     title = f"session {session.id}: posterior after {len(trials)} trials"
-    post = session.posterior()
+    if not on_a_grid(post.space):  # continuous, or past 2-D: the posterior at the trials
+        return trials_picture(post, trials, title=title)
+    if kind == "session":
+        return session_picture(session)
     config = session.config
     unsafe = [action for action, _ in session.unsafe_flags().values()]
     shade = None
@@ -83,6 +88,8 @@ def png_of(pic: Picture, dpi: int = 90) -> bytes:
     """A picture's PNG bytes (a plain function of plain data: runs in the drawing process)."""
     if isinstance(pic, SessionPicture):
         return _png(lambda: render_session(pic), dpi)
+    if isinstance(pic, TrialsPicture):
+        return _png(lambda: render_trials(pic), dpi)
     return _png(lambda: render(pic), dpi)
 
 

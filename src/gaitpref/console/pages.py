@@ -89,8 +89,10 @@ async def sessions_page(request: Request) -> Response:
 
 
 @functools.cache
-def _shipped() -> list[tuple[str, ExperimentConfig]]:
-    return [(name, load_config(name)) for name in shipped_configs()]
+def _shipped() -> list[tuple[str, ExperimentConfig, str]]:
+    """The shipped configs, each with its space in words."""
+    configs = [(name, load_config(name)) for name in shipped_configs()]
+    return [(name, cfg, cfg.space.words) for name, cfg in configs]
 
 
 async def _upload_text(upload: UploadFile | None, field: str) -> str | None:

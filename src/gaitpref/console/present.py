@@ -128,7 +128,7 @@ def posterior_out(session: Session) -> PosteriorOut:
     return PosteriorOut(
         session_id=session.id,
         features=list(space.names),
-        shape=list(space.shape),
+        shape=None if space.continuous else list(space.shape),
         mean=mean.tolist(),
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))),

@@ -176,7 +176,10 @@ class PosteriorOut(BaseModel):
 
     session_id: int
     features: list[str]
-    shape: list[int]
+    shape: list[int] | None = Field(
+        description="the grid's shape (None: no grid; mean and sd are over the points present, "
+        "the visited points and the current line)"
+    )
     mean: list[float]
     sd: list[float]
     argmax: GaitOut
@@ -249,7 +252,8 @@ class UnsafeIn(_Request):
 
 class ConfigOut(BaseModel):
     name: str
-    grid: list[int]
+    grid: list[int] | None = Field(description="values per feature (None: continuous features)")
+    space: str = Field(description="the space in words, e.g. '15 x 10' or 'continuous: ...'")
     n: int
     buffer: int
     description: str

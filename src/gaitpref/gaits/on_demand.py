@@ -11,6 +11,11 @@ them.  The gait of a parameter vector is, in turn,
    before (Euclidean distance with each feature divided by its range, as for the unsafe radius;
    the earliest of equally near ones), then cached.
 
+On a space with continuous features two proposed points may agree to the generator's displayed
+digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator's followed by
+``#`` and 8 hex digits of the SHA-256 of the point's float64 bytes (:func:`exact_gait_id`); grid
+ids stay the generator's, so sessions logged before replay unchanged.
+
 Because the warm start depends only on the session's own earlier gaits, a session that replays
 its log with an empty cache makes the same gaits again in the same order.
 
@@ -19,6 +24,7 @@ Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -46,16 +52,31 @@ class MadeGait:
         return self.gait.feasible
 
 
-class OnDemandGaits:
-    """One session's gaits made on demand by ``generator``; ``ranges`` scale the distances."""
+def exact_gait_id(generator: GaitGenerator, vector: FloatArray) -> str:
+    """``generator``'s id of ``vector`` and ``#`` + 8 hex digits of its float64 bytes' SHA-256."""
+    arr = np.ascontiguousarray(generator.check(vector), dtype="<f8")
+    return f"{generator.gait_id(arr)}#{hashlib.sha256(arr.tobytes()).hexdigest()[:8]}"
 
-    def __init__(self, generator: GaitGenerator, cache: GaitCache, ranges: Sequence[float]):
+
+class OnDemandGaits:
+    """One session's gaits made on demand by ``generator``; ``ranges`` scale the distances;
+    ``exact`` ids (:func:`exact_gait_id`) for a space with continuous features."""
+
+    def __init__(
+        self,
+        generator: GaitGenerator,
+        cache: GaitCache,
+        ranges: Sequence[float],
+        *,
+        exact: bool = False,
+    ):
         scale = np.asarray(ranges, dtype=np.float64)
         if scale.shape != (len(generator.features),):
             raise ValueError(f"ranges needs {len(generator.features)} values, got {scale.shape}")
         self.generator = generator
         self.cache = cache
         self.scale = np.where(scale > 0, scale, 1.0)
+        self.exact = exact
         self._by_id: dict[str, MadeGait] = {}  # a label (step width) shares its gait's key
         self._feasible: list[MadeGait] = []
 
@@ -63,6 +84,12 @@ class OnDemandGaits:
     def made(self) -> list[MadeGait]:
         """Every gait this session has made or looked up, in order."""
         return list(self._by_id.values())
+
+    def gait_id(self, vector: FloatArray) -> str:
+        """The id shown and logged for ``vector``'s gait."""
+        if self.exact:
+            return exact_gait_id(self.generator, vector)
+        return self.generator.gait_id(vector)
 
     def nearest(self, vector: FloatArray) -> MadeGait | None:
         """The feasible gait made so far nearest to ``vector`` (None: none yet)."""
@@ -75,7 +102,7 @@ class OnDemandGaits:
     def get(self, vector: FloatArray) -> tuple[MadeGait, bool]:
         """The gait of ``vector`` and whether it is new to this session."""
         vec = self.generator.check(vector)
-        key, name = self.generator.key(vec), self.generator.gait_id(vec)
+        key, name = self.generator.key(vec), self.gait_id(vec)
         known = self._by_id.get(name)
         if known is not None:
             return known, False
@@ -98,4 +125,4 @@ class OnDemandGaits:
         return made, True
 
 
-__all__ = ["MadeGait", "OnDemandGaits"]
+__all__ = ["MadeGait", "OnDemandGaits", "exact_gait_id"]

@@ -128,11 +128,15 @@ def default_risk(avoid: int, categories: int) -> float:
 
 
 def near(space: Space, centres: Collection[int], radius: float) -> BoolArray:
-    """Actions within ``radius`` (features scaled to ``[0, 1]``) of any of ``centres``."""
+    """Actions within ``radius`` (each feature scaled to ``[0, 1]`` by its range) of ``centres``.
+
+    The scale is the features' declared ranges, not the spread of the points present: on a point
+    set (a line and the visited points) the radius means the same as on the full grid.
+    """
     points = space.points
-    lo, hi = points.min(axis=0), points.max(axis=0)
-    span = np.where(hi > lo, hi - lo, 1.0)
-    scaled = (points - lo) / span
+    lo = np.array([f.values[0] for f in space.features], dtype=np.float64)
+    span = np.array([f.span for f in space.features], dtype=np.float64)
+    scaled = (points - lo) / np.where(span > 0, span, 1.0)
     out = np.zeros(len(space), dtype=bool)
     for c in centres:
         d2 = np.sum((scaled - scaled[int(c)]) ** 2, axis=1)

@@ -126,7 +126,8 @@ class SessionState:
             space = self.config.space
             cache = self.gait_cache if self.gait_cache is not None else GaitCache()
             ranges = [f.span for f in space]
-            self.on_demand = OnDemandGaits(spec.make(space), cache, ranges)
+            exact = space.continuous  # points off a grid: ids that cannot collide
+            self.on_demand = OnDemandGaits(spec.make(space), cache, ranges, exact=exact)
 
     # -- views ---------------------------------------------------------------------------------
     @property
@@ -537,7 +538,7 @@ class SessionState:
     # -- other ----------------------------------------------------------------------------------
     def gait_id(self, action: int) -> str | None:
         if self.on_demand is not None:
-            return self.on_demand.generator.gait_id(self.config.space.point(action))
+            return self.on_demand.gait_id(self.loop.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]
 
     def check_open(self, what: str) -> None:

@@ -1,0 +1,90 @@
+"""The posterior at the trials' points, for a space with no grid to draw (issue 13).
+
+A continuous space (or one with more than two features) has no 1-D curve or 2-D heat map like the
+paper's Figs. 2-6: its posterior lives on the points visited and the current line (LineCoSpar,
+Tucker et al. 2020).  This figure says so and shows what there is: the posterior mean +- 2 sd
+(:data:`gaitpref.plots.BAND_SD`) at each trial's point, in trial order, and the best posterior
+mean so far, with its feature values in the caption.  Data first (:class:`TrialsPicture`), then
+rendered with matplotlib (Agg).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
+
+from gaitpref.model.posterior import Posterior
+from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.pointset import PointSet
+from gaitpref.space import FloatArray, Space
+
+
+@dataclass(frozen=True)
+class TrialsPicture:
+    """What the figure shows: the posterior at each trial's point and the best point's."""
+
+    mean: FloatArray  # at the trials' points, in trial order
+    std: FloatArray
+    best_mean: float
+    best: str  # the best point's feature values, as words
+    why: str  # why no grid is drawn
+    title: str
+
+
+def on_a_grid(space: Space) -> bool:
+    """Whether the paper's figures can draw ``space``: a full 1-D or 2-D grid."""
+    return space.ndim <= 2 and not space.continuous and not isinstance(space, PointSet)
+
+
+def trials_picture(
+    posterior: Posterior, trials: Sequence[int], *, title: str = ""
+) -> TrialsPicture:
+    """The posterior at ``trials`` (actions of ``posterior.space``) and at its argmax."""
+    space = posterior.space
+    idx = np.asarray(trials, dtype=np.intp)
+    mean = np.asarray(posterior.mean)
+    best = int(np.argmax(mean))
+    why = (
+        "continuous features: no grid to draw"
+        if space.continuous
+        else f"{space.ndim} features: no 1-D or 2-D grid to draw"
+    )
+    words = ", ".join(f"{n} {v:.3f}" for n, v in space.values_of(best).items())
+    return TrialsPicture(
+        mean=mean[idx].copy(),
+        std=np.sqrt(posterior.variance_at(idx)) if idx.size else np.zeros(0),
+        best_mean=float(mean[best]),
+        best=words,
+        why=why,
+        title=title,
+    )
+
+
+def render_trials(pic: TrialsPicture) -> Figure:
+    """A matplotlib figure of the picture."""
+    fig = plt.figure(figsize=(6.5, 4.5))
+    ax = fig.add_subplot(1, 1, 1)
+    x = np.arange(1, pic.mean.size + 1)
+    if x.size:
+        ax.errorbar(x, pic.mean, yerr=BAND_SD * pic.std, fmt="o", ms=4, label=BAND_LABEL)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.axhline(pic.best_mean, color="k", lw=1, ls="--", label="best posterior mean")
+    ax.set_xlabel(f"trial ({pic.why}; the posterior at each trial's point)")
+    ax.set_ylabel("utility")
+    ax.set_title(f"best: {pic.best}", fontsize=9)
+    ax.legend(loc="best", fontsize=8)
+    if pic.title:
+        fig.suptitle(pic.title)
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["TrialsPicture", "on_a_grid", "render_trials", "trials_picture"]

@@ -1,0 +1,57 @@
+"""A console session on a continuous 3-parameter space with gaits made on demand (issue 13):
+the config list names the space in words, the trial page, the posterior figures (the posterior
+at the trials' points: there is no grid to draw), the API's posterior and the export all work."""
+
+from __future__ import annotations
+
+import io
+import re
+import zipfile
+
+from fastapi.testclient import TestClient
+
+from tests.console.conftest import new_session
+
+CONFIG = "compass-continuous-3d"
+ID = re.compile(r"^L\d\.\d{3}-T\d\.\d{3}-W\d\.\d{3}#[0-9a-f]{8}$")
+
+
+def test_a_continuous_generator_session_in_the_console(client: TestClient) -> None:
+    listed = {c["name"]: c for c in client.get("/api/configs").json()}
+    assert listed[CONFIG]["grid"] is None
+    assert listed[CONFIG]["space"] == "continuous: step_length, step_duration, step_width"
+    assert listed["exo-2d-length-duration"]["space"] == "15 x 10"
+    assert "continuous: step_length, step_duration, step_width" in client.get("/").text
+    sid = new_session(client, CONFIG)
+    shown: list[str] = []
+    for _ in range(5):
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        shown += [g["gait_id"] for g in q["actions"]]
+        body = {
+            "query_id": q["query_id"],
+            "comparisons": [[i, j, "first"] for i, j in q["comparisons"]],
+        }
+        assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+    assert all(ID.match(g) for g in shown)
+    logged = [
+        e["payload"]["gait_id"]
+        for e in client.get(f"/api/sessions/{sid}/events").json()
+        if e["kind"] == "trial_executed"
+    ]
+    assert logged == shown
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200 and shown[-1] in page.text
+    for figure in ("posterior.png", "figure.png"):
+        r = client.get(f"/sessions/{sid}/{figure}")
+        assert r.status_code == 200 and r.content.startswith(b"\x89PNG")
+    post = client.get(f"/api/sessions/{sid}/posterior").json()
+    assert post["shape"] is None and len(post["mean"]) == len(post["sd"]) > len(shown)
+    assert ID.match(post["argmax"]["gait_id"])
+    export = client.get(f"/sessions/{sid}/export.zip")
+    assert export.status_code == 200
+    with zipfile.ZipFile(io.BytesIO(export.content)) as z:
+        trials = next(n for n in z.namelist() if n.endswith("trials.csv"))
+        text = z.read(trials).decode()
+    assert all(g in text for g in shown)
+    assert client.post(f"/api/sessions/{sid}/undo").status_code == 200
+    assert client.get(f"/sessions/{sid}").status_code == 200
