@@ -11,7 +11,9 @@ import pytest
 
 from gaitpref import Session, load_config
 from gaitpref.errors import ReplayError
+from gaitpref.sessions import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from gaitpref.sessions.export import export_session, import_session
 from gaitpref.sessions.warm import prepare_state
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.sessionkit import CONFIG, state_of
@@ -138,3 +140,18 @@ def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
     bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
     assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output
+
+
+def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions(
+    tmp_path: Path,
+) -> None:
+    db = MemoryStorage()
+    ids = _earlier(db)
+    with Session.create(db, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        space = load_config(CONFIG).space
+        _run(s, SimulatedSubject(space, bump_utility(space), seed=9), 2)
+        export_session(s, tmp_path / "export", fmt="json")
+    before = [r.id for r in db.list_sessions()]
+    with pytest.raises(ExportError, match=rf"warm-started from earlier sessions {ids[0]} \(S01\)"):
+        import_session(db, tmp_path / "export", as_new=True)
+    assert [r.id for r in db.list_sessions()] == before

@@ -329,6 +329,7 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     info = manifest["session"]
     meta = dict(info.get("meta", {})) if isinstance(info.get("meta"), dict) else {}
     _find_library(folder, manifest, meta)
+    _refuse_warm_start(info, meta)
     try:
         status = check_status(info["status"])
         spec = SessionSpec(
@@ -368,6 +369,24 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
         raise
     session._owns = owns  # closing the session closes the database it opened
     return session
+
+
+def _refuse_warm_start(info: dict[str, Any], meta: dict[str, Any]) -> None:
+    """A warm-started session's model is rebuilt from the earlier sessions' logs, which an export
+    does not carry (nor can an import in memory reach them): refused, naming them, before
+    anything is written."""
+    prior = meta.get("prior_from")
+    if not prior:
+        return
+    try:
+        named = ", ".join(f"{p['session']} ({p['subject']})" for p in prior)
+    except (KeyError, TypeError):
+        raise ExportError("manifest.json: bad prior_from in the session's meta") from None
+    raise ExportError(
+        f"session {info.get('id')} was warm-started from earlier sessions {named}: its model is "
+        "rebuilt from their logs, which an export does not carry, so it cannot be imported "
+        "(nothing was written); its answers are all in the export's tables"
+    )
 
 
 def origin_of(record: SessionRecord) -> str | None:
