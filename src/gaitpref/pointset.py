@@ -25,7 +25,15 @@ from gaitpref.space import FloatArray, IntArray, Move, Space
 class PointSet(Space):
     """Explicit points (``A x d``, the features' units) over the features of ``domain``."""
 
-    def __init__(self, domain: Space, points: ArrayLike) -> None:
+    def __init__(
+        self,
+        domain: Space,
+        points: ArrayLike,
+        *,
+        known: dict[tuple[float, ...], int] | None = None,
+    ) -> None:
+        """``known`` (from :meth:`extended`) is every row's first index, given when it is
+        already known so that it is not rebuilt from all the points."""
         super().__init__(domain.features)
         arr = np.array(points, dtype=np.float64).reshape(-1, domain.ndim)
         for j, f in enumerate(domain.features):
@@ -36,8 +44,9 @@ class PointSet(Space):
                 )
         arr.setflags(write=False)
         object.__setattr__(self, "points", arr)  # shadows Space.points (a cached property)
-        rows = {tuple(row): k for k, row in reversed(list(enumerate(arr.tolist())))}
-        object.__setattr__(self, "_rows", rows)
+        if known is None:
+            known = {tuple(row): k for k, row in reversed(list(enumerate(arr.tolist())))}
+        object.__setattr__(self, "_rows", known)
 
     def __len__(self) -> int:
         return int(self.points.shape[0])
@@ -103,7 +112,8 @@ class PointSet(Space):
             ids[k] = found
         if not rows:
             return self, ids
-        return PointSet(self, np.concatenate([self.points, np.array(rows)])), ids
+        known = {**self._rows, **seen}  # type: ignore[attr-defined]
+        return PointSet(self, np.concatenate([self.points, np.array(rows)]), known=known), ids
 
     def move_target(self, index: int, feature: str | int, move: Move) -> FloatArray | None:
         """The point a coactive move of ``feature`` from action ``index`` suggests (the
