@@ -44,9 +44,17 @@ class CrossCovariance(Protocol):
 class DenseCross:
     """``K_{:,V}`` held as one ``A x m`` matrix."""
 
-    def __init__(self, space: Space, kernel: SquaredExponential, visited: IntArray) -> None:
+    def __init__(
+        self,
+        space: Space,
+        kernel: SquaredExponential,
+        visited: IntArray,
+        matrix: FloatArray | None = None,
+    ) -> None:
+        """``matrix``, when given, is ``K_{:,V}`` already computed (the same floats as
+        ``kernel.cross(space, visited)``)."""
         self.visited = visited
-        self.matrix = kernel.cross(space, visited)
+        self.matrix = kernel.cross(space, visited) if matrix is None else matrix
         self.matrix.setflags(write=False)
 
     def add_product(self, out: FloatArray, coef: FloatArray) -> None:

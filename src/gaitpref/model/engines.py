@@ -141,13 +141,17 @@ class PointEngine:
         self.jitter_scale = float(np.sqrt(kernel.jitter))
 
     @cached_property
+    def plain(self) -> FloatArray:
+        """The jitter-free prior covariance of every point (computed once per engine)."""
+        plain = SquaredExponential(self.kernel.lengthscale, self.kernel.variance)
+        return plain.cross(self.space, np.arange(len(self.space)))
+
+    @cached_property
     def root_t(self) -> FloatArray:
         """The transposed square root of the jitter-free prior covariance (first draw only)."""
-        size = len(self.space)
-        if not size:
+        if not len(self.space):
             return np.zeros((0, 0))
-        plain = SquaredExponential(self.kernel.lengthscale, self.kernel.variance)
-        eigval, eigvec = np.linalg.eigh(plain.cross(self.space, np.arange(size)))
+        eigval, eigvec = np.linalg.eigh(self.plain)
         return np.ascontiguousarray((eigvec * np.sqrt(np.clip(eigval, 0.0, None))).T)
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
@@ -164,7 +168,14 @@ class PointEngine:
         return _plus_jitter(out, self.jitter_scale, z_jitter)
 
     def cross(self, visited: IntArray) -> CrossCovariance:
-        return DenseCross(self.space, self.kernel, visited)
+        """``K_{:,V}``; once :attr:`plain` is computed, its columns plus the jitter where a row
+        is its column: each entry the same floating-point operations as the kernel's."""
+        if "plain" not in self.__dict__:
+            return DenseCross(self.space, self.kernel, visited)
+        matrix: FloatArray = np.take(self.plain, visited, axis=1)  # C order, as the kernel's
+        if self.kernel.jitter:
+            matrix += self.kernel.jitter * (np.arange(len(self.space))[:, None] == visited[None, :])
+        return DenseCross(self.space, self.kernel, visited, matrix)
 
 
 GridEngine = DenseEngine | ScalableEngine | PointEngine
