@@ -34,7 +34,7 @@ from gaitpref.feedback import FeedbackKind, Suggestion
 from gaitpref.loop.cospar import Answer, CoSpar, Query
 from gaitpref.loop.lines import LineSettings, draw_line, normalised
 from gaitpref.loop.warm import WarmStart
-from gaitpref.model.engines import make_engine
+from gaitpref.model.engines import PointEngine
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.threads import one_blas_thread
@@ -48,7 +48,9 @@ def on_points(posterior: Posterior, space: PointSet) -> Posterior:
     fit on the visited points is unchanged; only where it is read changes)."""
     if posterior.space is space:
         return posterior
-    return dataclasses.replace(posterior, space=space, engine=make_engine(space, posterior.kernel))
+    base = posterior.engine if isinstance(posterior.engine, PointEngine) else None
+    engine = PointEngine(space, posterior.kernel, base)
+    return dataclasses.replace(posterior, space=space, engine=engine)
 
 
 class LineCoSpar(CoSpar):

@@ -136,15 +136,49 @@ class PointEngine:
 
     name: Literal["dense", "scalable"] = "dense"
 
-    def __init__(self, space: PointSet, kernel: SquaredExponential) -> None:
+    def __init__(
+        self, space: PointSet, kernel: SquaredExponential, base: PointEngine | None = None
+    ) -> None:
+        """``base`` is an engine over the first points of ``space`` with the same kernel
+        (a line's points appended to the table): :attr:`plain` starts from its ``K_VV`` when
+        its visited set was all its points."""
         self.space, self.kernel = space, kernel
         self.jitter_scale = float(np.sqrt(kernel.jitter))
+        self._base = base
+        self._square: FloatArray | None = None  # K over every point, jitter included
 
     @cached_property
     def plain(self) -> FloatArray:
-        """The jitter-free prior covariance of every point (computed once per engine)."""
+        """The jitter-free prior covariance of every point (computed once per engine).  Rows
+        a base engine already has are taken from it: its ``K`` less the jitter is exactly this
+        matrix (off the diagonal ``x + 0.0 = x``; on it ``s^2 exp(0) = s^2``), and the new
+        block's transpose is exact (``(a - b)^2 = (b - a)^2``)."""
         plain = SquaredExponential(self.kernel.lengthscale, self.kernel.variance)
-        return plain.cross(self.space, np.arange(len(self.space)))
+        size = len(self.space)
+        known = self._known_block()
+        self._base = None
+        if known is None:
+            return plain.cross(self.space, np.arange(size))
+        start = known.shape[0]
+        out = np.empty((size, size))
+        out[:start, :start] = known
+        out[np.diag_indices(start)] = self.kernel.variance
+        new = plain.cross(self.space, np.arange(size), rows=np.arange(start, size))
+        out[start:] = new
+        out[:start, start:] = new[:, :start].T
+        return out
+
+    def _known_block(self) -> FloatArray | None:
+        """The base engine's ``K`` over all its points, when it has one and is a prefix."""
+        base = self._base
+        if base is None or base._square is None or base.kernel != self.kernel:
+            return None
+        start = len(base.space)
+        if start > len(self.space) or not np.array_equal(
+            base.space.points, self.space.points[:start]
+        ):
+            return None
+        return base._square
 
     @cached_property
     def root_t(self) -> FloatArray:
@@ -171,11 +205,17 @@ class PointEngine:
         """``K_{:,V}``; once :attr:`plain` is computed, its columns plus the jitter where a row
         is its column: each entry the same floating-point operations as the kernel's."""
         if "plain" not in self.__dict__:
-            return DenseCross(self.space, self.kernel, visited)
+            return self._remember(DenseCross(self.space, self.kernel, visited))
         matrix: FloatArray = np.take(self.plain, visited, axis=1)  # C order, as the kernel's
         if self.kernel.jitter:
             matrix += self.kernel.jitter * (np.arange(len(self.space))[:, None] == visited[None, :])
         return DenseCross(self.space, self.kernel, visited, matrix)
+
+    def _remember(self, cross: DenseCross) -> DenseCross:
+        """Keep ``K`` over every point when ``cross`` is it (a line's engine starts there)."""
+        if np.array_equal(cross.visited, np.arange(len(self.space))):
+            self._square = cross.matrix
+        return cross
 
 
 GridEngine = DenseEngine | ScalableEngine | PointEngine
