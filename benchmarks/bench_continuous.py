@@ -121,13 +121,20 @@ A whole 150-trial run on an 8-D box (Hartmann-6 on six features, with coactive f
 median {r["median_s"]:.2f} s over {r["runs"]} seeds (max {r["max_s"]:.2f} s), including the
 simulated subject and its finite-difference gradients.
 
-Where the time goes (cProfile, same case): the kernel from coordinates (about a third: the
-line's cross-covariance with the visited points, the prior root over table + line, `K_VV` of
-the Laplace fit, each recomputed), the eigendecomposition behind the prior root of table + line
-(about 400 points), and the Laplace fit's Newton steps on about 340 visited points.  A Cholesky
-root with a 1e-10 nugget instead of the eigendecomposition halved the ask in one measurement
-under the same load (58 ms to 30 ms); it is not adopted here because the study in
-`docs/results/continuous/` was run with the eigendecomposition and must reproduce from its seeds.
+Where the time goes (cProfile, same case, after the reuse below; per ask + tell, loaded VM):
+the eigendecomposition behind the prior root of table + line (about 400 points, ~15-18 ms),
+the Laplace fit's Newton steps on about 340 visited points (~12-14 ms in `fit_laplace`, plus
+~7-9 ms of Cholesky factors), and the kernel from coordinates (~13 ms over four blocks: the
+table's `K[:, V]` at the ask, the line's rows of the prior matrix, `K_VV` of the fit, the old
+posterior read over the grown table).  Reused rather than recomputed, with the same floats
+(checked bit for bit on seeded runs and three cells of the committed study): the line's
+`K[:, V]` is taken from the prior matrix behind its root, that matrix starts from the table's
+`K_VV` when every table point is visited, the kernel fills preallocated buffers, and a grown
+point set extends its row lookup instead of rebuilding it.  Before this (same machine, load
+3.5): median 79 ms, ask 35 ms.  A Cholesky root with a 1e-10 nugget instead of the
+eigendecomposition halved the ask in one measurement under load (58 ms to 30 ms); it is not
+adopted because the study in `docs/results/continuous/` was run with the eigendecomposition
+and must reproduce from its seeds.
 
 Machine:
 
