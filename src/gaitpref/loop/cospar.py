@@ -411,20 +411,16 @@ class CoSpar:
             _light(self.posterior),
         )
         answers_now = [*self.answers, answer]
-        warm = self.warm
         with one_blas_thread():  # may raise: nothing changed yet
             refit = self._refit(answers_now)
             hyper = self.hyper if refit is None else refit.after
             gp = self.gp if hyper == self.hyper else self._gp(hyper)
             share = self._relearn_share(answers_now, hyper)
-            try:
-                if share is not None and self.warm is not None:
-                    self.warm = dataclasses.replace(self.warm, share=share.after)
-                new_posterior = self._fit(answers_now, gp, hyper)
-            finally:
-                self.warm = warm
-        if share is not None and warm is not None:
-            self.warm = dataclasses.replace(warm, share=share.after)
+            warm = self.warm
+            if share is not None and warm is not None:
+                warm = dataclasses.replace(warm, share=share.after)
+            new_posterior = self._fit(answers_now, gp, hyper, warm)
+        self.warm = warm
         if refit is not None or share is not None:
             answer = dataclasses.replace(answer, refit=refit, share_refit=share)
         self.answers.append(answer)
@@ -650,13 +646,15 @@ class CoSpar:
         answers: list[Answer],
         gp: PreferenceGP | None = None,
         hyper: Hyperparameters | None = None,
+        warm: WarmStart | None = None,
     ) -> Posterior:
-        """The posterior given ``answers`` (default model: the current kernel, band and
-        thresholds).  With fitted ordinal thresholds, the posterior's rating scale carries them,
-        so its rating probabilities and the region of avoidance use what the fit used."""
+        """The posterior given ``answers`` (default model: the current kernel, band, thresholds
+        and warm start).  With fitted ordinal thresholds, the posterior's rating scale carries
+        them, so its rating probabilities and the region of avoidance use what the fit used."""
         gp = self.gp if gp is None else gp
         hyper = self.hyper if hyper is None else hyper
-        posterior = self._fit_model(answers, gp, hyper)
+        warm = self.warm if warm is None else warm
+        posterior = self._fit_model(answers, gp, hyper, warm)
         scale = gp.ordinal
         if hyper.thresholds is None or scale is None:
             return posterior
@@ -664,13 +662,15 @@ class CoSpar:
         return dataclasses.replace(posterior, ordinal=fitted)
 
     def _fit_model(
-        self, answers: list[Answer], gp: PreferenceGP, hyper: Hyperparameters
+        self,
+        answers: list[Answer],
+        gp: PreferenceGP,
+        hyper: Hyperparameters,
+        warm: WarmStart | None,
     ) -> Posterior:
         band = hyper.band
         single, single_likelihood = self._singles(answers, hyper.thresholds)
-        if (
-            self.learning.ties == "drop" and self.warm is None
-        ):  # the paper's likelihood, bit for bit
+        if self.learning.ties == "drop" and warm is None:  # the paper's likelihood, bit for bit
             prefs = [p for a in answers for p in self._kept(a)]
             winners = np.array([p.winner for p in prefs], dtype=np.intp)
             losers = np.array([p.loser for p in prefs], dtype=np.intp)
@@ -687,10 +687,8 @@ class CoSpar:
                 single=single,
                 single_likelihood=single_likelihood,
             )
-        if self.warm is not None:
-            return warm_posterior(
-                self.warm, gp, self._data(answers), band, single, single_likelihood
-            )
+        if warm is not None:
+            return warm_posterior(warm, gp, self._data(answers), band, single, single_likelihood)
         data = self._data(answers)
         if data.size == 0 and single is None:
             return gp.prior()
