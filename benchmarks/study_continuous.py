@@ -236,8 +236,11 @@ def report(results: Path, out: Path) -> None:
             if row == 1:
                 ax.set_xlabel("trial")
             if col == 0:
-                ax.set_ylabel("fraction random -> optimum (executed, 10-trial mean)")
-            ax.legend(fontsize=6)
+                ax.set_ylabel("fraction random -> optimum")
+            ax.legend(
+                fontsize=6, loc="upper left" if d == 6 else "lower right", ncol=2 if d == 6 else 1
+            )
+    fig.suptitle("executed points, 10-trial moving mean (0: random selection, 1: the optimum)")
     fig.tight_layout()
     fig.savefig(out / "curves.png", dpi=110)
     lines += ["", "![learning curves](curves.png)", ""]
