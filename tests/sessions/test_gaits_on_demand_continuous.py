@@ -43,7 +43,7 @@ noise = 0.01
 fit = "fixed"
 [cospar]
 strategy = "self-sparring"
-seed = 2
+seed = 0
 line_points = 20
 """
 

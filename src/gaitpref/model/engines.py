@@ -25,6 +25,7 @@ from functools import cached_property
 from typing import Literal, get_args
 
 import numpy as np
+from scipy.linalg import lapack
 
 from gaitpref.model.cross import CrossCovariance, DenseCross, RowBlockCross
 from gaitpref.model.kernels import SquaredExponential
@@ -118,6 +119,46 @@ class ScalableEngine:
         return KhatriRaoCross(self.space, self.kernel, visited, split, self.block_elements)
 
 
+def psd_root_t(matrix: FloatArray) -> FloatArray:
+    """``R`` (``n x n``) with ``R^T R = matrix`` for a symmetric positive semi-definite
+    ``matrix``, possibly rank-deficient, by LAPACK's pivoted Cholesky ``dpstrf`` (Higham,
+    *Accuracy and Stability of Numerical Algorithms*, 2002, Section 10.3).
+
+    ``dpstrf`` gives a permutation ``p`` and a lower ``n x r`` factor ``L`` with
+    ``matrix[p][:, p] = L L^T``, so ``R[:r, p] = L^T`` and the rows past the numerical rank ``r``
+    are zero.  It stops when the largest diagonal entry of the remaining Schur complement is at
+    most ``n u max_k matrix_kk`` (``u`` the unit roundoff, LAPACK's default tolerance); that
+    complement is semi-definite, so no entry it leaves out exceeds that size: ``R^T R`` equals
+    ``matrix`` to ``n u max_k matrix_kk`` plus rounding.  ``O(n^2 r / 3)`` time, about ten times
+    faster than an eigendecomposition at ``n = 400``.
+
+    ``matrix`` must be semi-definite (a kernel's Gram matrix is).  ValueError if it is not square
+    and finite, or if a diagonal entry of ``R^T R`` falls short of the matrix's by more than
+    ``sqrt(u) max_k matrix_kk`` (a negative direction the factor left out; an indefinite
+    remainder with a small diagonal would pass this check).
+    """
+    if matrix.ndim != 2 or matrix.shape[0] != matrix.shape[1]:
+        raise ValueError(f"the prior covariance must be square, got shape {matrix.shape}")
+    n = matrix.shape[0]
+    root = np.zeros((n, n))
+    if not n:
+        return root
+    if not np.all(np.isfinite(matrix)):
+        raise ValueError(f"the prior covariance of the {n} points is not finite")
+    factor, piv, rank, info = lapack.dpstrf(matrix, lower=1)
+    if info < 0:  # an illegal argument: a wrapper bug, never the matrix
+        raise ValueError(f"LAPACK dpstrf rejected argument {-info} of the prior covariance")
+    root[:rank, piv - 1] = np.tril(factor[:, :rank]).T
+    diagonal = np.diagonal(matrix)
+    missed = diagonal - np.einsum("ij,ij->j", root, root)
+    if missed.min() < -np.sqrt(np.finfo(float).eps) * diagonal.max():
+        raise ValueError(
+            f"the prior covariance of the {n} points is not positive semi-definite (a diagonal "
+            f"entry of its pivoted Cholesky factor is off by {-missed.min():.3g})"
+        )
+    return root
+
+
 def _plus_jitter(
     out: FloatArray, scale: float, z_jitter: FloatArray | None
 ) -> tuple[FloatArray, FloatArray | None]:
@@ -131,8 +172,9 @@ def _plus_jitter(
 
 class PointEngine:
     """The dense path on a :class:`~gaitpref.pointset.PointSet` (no grid, no Kronecker
-    structure): the prior's square root from the eigendecomposition of the points' correlation
-    matrix (clipped at zero as ``kronecker.py`` does), the jitter as an independent term."""
+    structure): the prior's square root from the pivoted Cholesky factor of the points'
+    jitter-free covariance (:func:`psd_root_t`: exact for a semi-definite, rank-deficient
+    matrix), the jitter as an independent term."""
 
     name: Literal["dense", "scalable"] = "dense"
 
@@ -183,10 +225,7 @@ class PointEngine:
     @cached_property
     def root_t(self) -> FloatArray:
         """The transposed square root of the jitter-free prior covariance (first draw only)."""
-        if not len(self.space):
-            return np.zeros((0, 0))
-        eigval, eigvec = np.linalg.eigh(self.plain)
-        return np.ascontiguousarray((eigvec * np.sqrt(np.clip(eigval, 0.0, None))).T)
+        return psd_root_t(self.plain)
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
         return self.prior_parts(rng, size)[0]
