@@ -79,9 +79,18 @@ def ask_tell_12d(iterations: int) -> dict[str, object]:
         "comparisons": f"{start_comparisons}-{len(loop.preferences)}",
         "points_in_table": len(loop.space),
         "median_s": float(np.median(times)),
+        "median_se_s": _median_se(times),
         "p95_s": float(np.percentile(times, 95)),
         "median_ask_s": float(np.median(asks)),
+        "times_s": times,
     }
+
+
+def _median_se(values: list[float], resamples: int = 2000) -> float:
+    """The bootstrap standard error of the median (seeded: the same times give the same)."""
+    rng = np.random.default_rng(0)
+    draws = rng.choice(np.asarray(values), (resamples, len(values)))
+    return float(np.std(np.median(draws, axis=1), ddof=1))
 
 
 def run_8d(runs: int) -> dict[str, object]:
@@ -115,26 +124,35 @@ feedback.  The 2-core shared VM, loaded by other work while it ran.
 | case | comparisons | points in the table | median (s) | p95 (s) | median ask (s) | target |
 |---|---|---|---|---|---|---|
 | ask + tell, 12-D box, random-GP objective | {a["comparisons"]} | {a["points_in_table"]} | \
-{a["median_s"]:.4f} | {a["p95_s"]:.4f} | {a["median_ask_s"]:.4f} | under 0.05 s |
+{a["median_s"]:.4f} (se {a["median_se_s"]:.4f}) | {a["p95_s"]:.4f} | {a["median_ask_s"]:.4f} | \
+under 0.05 s |
+
+The median's standard error is the bootstrap's over the {args.iterations} timed iterations.
 
 A whole 150-trial run on an 8-D box (Hartmann-6 on six features, with coactive feedback):
 median {r["median_s"]:.2f} s over {r["runs"]} seeds (max {r["max_s"]:.2f} s), including the
 simulated subject and its finite-difference gradients.
 
-Where the time goes (cProfile, same case, after the reuse below; per ask + tell, loaded VM):
-the eigendecomposition behind the prior root of table + line (about 400 points, ~15-18 ms),
-the Laplace fit's Newton steps on about 340 visited points (~12-14 ms in `fit_laplace`, plus
-~7-9 ms of Cholesky factors), and the kernel from coordinates (~13 ms over four blocks: the
-table's `K[:, V]` at the ask, the line's rows of the prior matrix, `K_VV` of the fit, the old
-posterior read over the grown table).  Reused rather than recomputed, with the same floats
-(checked bit for bit on seeded runs and three cells of the committed study): the line's
-`K[:, V]` is taken from the prior matrix behind its root, that matrix starts from the table's
-`K_VV` when every table point is visited, the kernel fills preallocated buffers, and a grown
-point set extends its row lookup instead of rebuilding it.  Before this (same machine, load
-3.5): median 79 ms, ask 35 ms.  A Cholesky root with a 1e-10 nugget instead of the
-eigendecomposition halved the ask in one measurement under load (58 ms to 30 ms); it is not
-adopted because the study in `docs/results/continuous/` was run with the eigendecomposition
-and must reproduce from its seeds.
+Where the time goes (cProfile, same case, per ask + tell, load 7.9 from other work): the
+Laplace fit's Newton steps on the visited points (~26 ms in `fit_laplace`, ~6.5 ms of it
+Cholesky factors), the kernel from coordinates (~12 ms over four blocks: the table's `K[:, V]`
+at the ask, the line's rows of the prior matrix, `K_VV` of the fit, the old posterior read over
+the grown table), and the prior root of table + line (about 340 points, ~3.5 ms).  The root is
+LAPACK's pivoted Cholesky factor (`dpstrf`, `engines.psd_root_t`): it stops at the numerical
+rank, so it is exact for the jitter-free, semi-definite and rank-deficient matrix of a line's
+close points (`R^T R` equals the matrix to about 1e-14, `tests/model/test_psd_root.py`), where
+the eigendecomposition it replaced took ~15-18 ms (single-threaded on the same 339-point
+matrix: 13-27 ms against 1.1-1.8 ms).  Its draws differ from the eigendecomposition's for the
+same seed: the study in `docs/results/continuous/` is rerun with it.  Reused rather than
+recomputed, with the same floats (checked bit for bit): the line's `K[:, V]` is taken from the
+prior matrix behind its root, that matrix starts from the table's `K_VV` when every table point
+is visited, the kernel fills preallocated buffers, and a grown point set extends its row lookup
+instead of rebuilding it.  Before the root change (load 1.5): median 67 ms, ask 29 ms; before
+the reuse (load 3.5): 79 ms, ask 35 ms.  A run's table differs between the roots (other draws,
+other lines): at 300 comparisons it holds 288 points with this root and 342 with the
+eigendecomposition, so the fit and the kernels are on smaller matrices here too.  Interleaved
+runs at load 7.2-7.8 (same conditions): the eigendecomposition's code a median 78-120 ms (ask
+34-53 ms), this one 50-64 ms (ask 16-23 ms).
 
 Machine:
 
