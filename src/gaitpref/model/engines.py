@@ -129,8 +129,8 @@ def psd_root_t(matrix: FloatArray) -> FloatArray:
     are zero.  It stops when the largest diagonal entry of the remaining Schur complement is at
     most ``n u max_k matrix_kk`` (``u`` the unit roundoff, LAPACK's default tolerance); that
     complement is semi-definite, so no entry it leaves out exceeds that size: ``R^T R`` equals
-    ``matrix`` to ``n u max_k matrix_kk`` plus rounding.  ``O(n^2 r / 3)`` time, about ten times
-    faster than an eigendecomposition at ``n = 400``.
+    ``matrix`` to ``n u max_k matrix_kk`` plus rounding.  ``O(n r^2)`` time, about ten times
+    faster than an eigendecomposition at a few hundred points.
 
     ``matrix`` must be semi-definite (a kernel's Gram matrix is).  ValueError if it is not square
     and finite, or if a diagonal entry of ``R^T R`` falls short of the matrix's by more than
