@@ -86,6 +86,7 @@ LABELS = '["very bad", "bad", "okay", "good"]'
 GRIDS = ("2d", "3d")
 SCENARIOS = ("noiseless", "noisy")
 LENGTHSCALE_3D = 0.25
+CAUTIOUS = 0.6  # [safety] cautious of the *+cautious arms (screened on 12 2-D objectives)
 
 _AXIS = """
 [space.{name}]
@@ -108,6 +109,7 @@ class Arm:
     rated: bool = True
     lam: float | None = None  # [safety] lambda (ROIAL's bound); None: see risk
     risk: bool = False  # [safety] avoid = ["very bad"] with the default rule (risk 0.35)
+    cautious: float | None = None  # with risk: [safety] cautious (the two-level rule)
     strategy: str = ""  # "" the default; "random": uniform over the allowed gaits
     note: str = ""
 
@@ -125,6 +127,8 @@ class Arm:
             out += f'\n[safety]\navoid = ["very bad"]\nlambda = {self.lam}\n'
         elif self.risk:
             out += '\n[safety]\navoid = ["very bad"]\n'
+            if self.cautious is not None:
+                out += f"cautious = {self.cautious}\n"
         return out
 
     def config(self, grid: str) -> ExperimentConfig:
@@ -169,6 +173,26 @@ ARMS = [
         strategy="information-gain",
         note="information gain over the ROI (ROIAL's mode), risk 0.35",
     ),
+    Arm(
+        "avoid-cautious",
+        risk=True,
+        cautious=CAUTIOUS,
+        note=f"ratings, risk 0.35 and cautious {CAUTIOUS}: known-safe gaits while there are any",
+    ),
+    Arm(
+        "random+cautious",
+        risk=True,
+        cautious=CAUTIOUS,
+        strategy="random",
+        note=f"random among the allowed gaits, cautious {CAUTIOUS}",
+    ),
+    Arm(
+        "infogain+cautious",
+        risk=True,
+        cautious=CAUTIOUS,
+        strategy="information-gain",
+        note=f"information gain over the allowed gaits, cautious {CAUTIOUS}",
+    ),
 ]
 
 
@@ -186,6 +210,9 @@ AVOIDANCE = [  # (arm with a region of avoidance, the arms without it to compare
     ("random+risk", ("random",)),
     ("infogain+avoid-1", ("infogain",)),
     ("infogain+risk", ("infogain",)),
+    ("avoid-cautious", ("rated", "prefs", "avoid-risk")),
+    ("random+cautious", ("random",)),
+    ("infogain+cautious", ("infogain",)),
 ]
 
 

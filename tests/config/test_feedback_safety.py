@@ -97,3 +97,37 @@ def test_bad_rules_name_the_key(extra: str, message: str) -> None:
 def test_fixed_thresholds_allow_any_risk() -> None:
     fixed = RATING + "thresholds = [-0.1, 0.0, 0.1]\n"
     assert parse_config(BASE + fixed + AVOID + "risk = 0.1\n").safety.risk == 0.1
+
+
+def test_cautious_is_off_unless_given() -> None:
+    assert parse_config(BASE + RATING + AVOID).safety.cautious is None
+    assert parse_config(BASE + RATING + AVOID + "cautious = 0\n").safety.cautious is None
+    cfg = parse_config(BASE + RATING + AVOID + "cautious = 0.6\n")
+    assert cfg.safety.cautious == 0.6 and cfg.safety.risk == pytest.approx(0.35)
+    assert cfg.safety.explore == 1.0
+    assert parse_config(BASE + RATING + AVOID + "cautious = 0.6\nexplore = 0\n").safety.explore == 0
+    assert cfg.make_loop().safety.cautious == 0.6
+    assert "safety.cautious" not in cfg.defaulted  # off by default in every version
+    for version in ("0.1", "0.2", "0.3"):  # sessions recorded earlier replay without it
+        assert parse_config(BASE + RATING + AVOID, defaults=version).safety.cautious is None
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("cautious = 1\n", r"\[safety\].cautious: must be below 1"),
+        ("cautious = -0.1\n", r"\[safety\].cautious: must be a finite number >= 0"),
+        ('cautious = "yes"\n', r"\[safety\].cautious"),
+        ("cautious = 0.5\nlambda = 1.0\n", r"\[safety\].cautious: needs the risk rule"),
+        ("explore = 2.0\n", r"\[safety\].explore: is a setting of the cautious level"),
+        ("cautious = 0.5\nexplore = -1\n", r"\[safety\].explore: must be a finite number"),
+    ],
+)
+def test_bad_cautious_levels_name_the_key(extra: str, message: str) -> None:
+    with pytest.raises(ConfigError, match=message):
+        parse_config(BASE + RATING + AVOID + extra)
+
+
+def test_cautious_needs_a_region_of_avoidance() -> None:
+    with pytest.raises(ConfigError, match=r"\[safety\].cautious: needs a region of avoidance"):
+        parse_config(BASE + RATING + "[safety]\ncautious = 0.5\n")

@@ -50,6 +50,7 @@ def _loop(strategy: str, n: int, buffer: int, safety: Safety, seed: int) -> CoSp
     buffer=st.integers(0, 2),
     lam=st.floats(0.0, 2.0),
     risk=st.one_of(st.none(), st.sampled_from([0.3, 0.35, 0.5, 0.8])),
+    cautious=st.one_of(st.none(), st.sampled_from([0.3, 0.6, 0.9])),
     radius=st.sampled_from([0.0, 0.1, 0.3]),
     seed=st.integers(0, 10_000),
     flags=st.lists(st.integers(0, len(SPACE) - 1), max_size=3),
@@ -60,11 +61,13 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
     buffer: int,
     lam: float,
     risk: float | None,
+    cautious: float | None,
     radius: float,
     seed: int,
     flags: list[int],
 ) -> None:
-    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius, risk=risk)
+    cautious = cautious if risk is not None else None
+    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius, risk=risk, cautious=cautious)
     loop = _loop(strategy, n, buffer, safety, seed)
     for a in flags:
         loop.flag_unsafe(a)
@@ -78,7 +81,7 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
             return
         q = loop.ask()
         banned = near(SPACE, loop.unsafe, radius) if loop.unsafe else np.zeros(len(SPACE), bool)
-        avoided = _avoided(loop, lam, risk)
+        avoided = _avoided(loop, lam, risk, cautious, banned)
         for a in q.actions:
             assert not banned[a], f"{strategy} proposed {a}, near an unsafe flag"
             assert not avoided[a], f"{strategy} proposed {a}, in the region of avoidance"
@@ -92,9 +95,17 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
         loop.tell(q, answers)
 
 
-def _avoided(loop: CoSpar, lam: float, risk: float | None) -> NDArray[np.bool_]:
+def _avoided(
+    loop: CoSpar,
+    lam: float,
+    risk: float | None,
+    cautious: float | None = None,
+    banned: NDArray[np.bool_] | None = None,
+) -> NDArray[np.bool_]:
     """The region of avoidance, written out: ROIAL's bound or the probability of a "very bad"
-    rating, with the posterior's thresholds."""
+    rating, with the posterior's thresholds; with ``cautious``, while a gait away from the
+    ``banned`` ones is known-safe, every gait neither known-safe nor possibly better than all of
+    them."""
     post = loop.posterior
     scale = post.ordinal if post.ordinal is not None else SCALE
     t1 = scale.thresholds_for(KERNEL.variance)[0]
@@ -102,7 +113,15 @@ def _avoided(loop: CoSpar, lam: float, risk: float | None) -> NDArray[np.bool_]:
     if risk is None:
         out: NDArray[np.bool_] = mean + lam * np.sqrt(var) < t1
         return out
-    return np.asarray(ndtr((t1 - mean) / np.sqrt(scale.noise**2 + var)) > risk)
+    p = ndtr((t1 - mean) / np.sqrt(scale.noise**2 + var))
+    if cautious is not None:
+        unrated = ndtr(t1 / np.sqrt(scale.noise**2 + KERNEL.variance + KERNEL.jitter))
+        known = p <= min(cautious * unrated, risk)
+        pool = known & ~(np.zeros_like(known) if banned is None else banned)
+        if pool.any():  # unexplored gaits only if mu + sd (explore = 1) beats every pool gait's
+            upper = mean + np.sqrt(var)
+            return np.asarray(~(known | ((p <= risk) & (upper > upper[pool].max()))))
+    return np.asarray(p > risk)
 
 
 def test_rating_everything_worst_empties_the_region_and_nothing_is_proposed() -> None:

@@ -106,6 +106,8 @@ SAFETY: Final[dict[str, Key]] = {
     "avoid": Key(Labels(1, 9), ()),  # the worst categories, e.g. ["very bad"]
     "lambda": Key(Number(0.0, 100.0), 1.0),  # given: ROIAL's upper-bound rule, this confidence
     "risk": Key(Number(0.0, 1.0, open_lo=True), "auto"),  # "auto": avoid / K + 0.1 (safety.py)
+    "cautious": Key(Number(0.0, 1.0), 0.0),  # two-level rule (safety.py); 0: off
+    "explore": Key(Number(0.0, 100.0), 1.0),  # with cautious: mu + explore sd beats known-safe
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
 }
 STOP: Final[dict[str, Key]] = {

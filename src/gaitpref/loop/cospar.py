@@ -274,10 +274,11 @@ class CoSpar:
 
     def allowed(self) -> NDArray[np.bool_] | None:
         """The actions the next query may propose (None: all; ``loop/safety.py``)."""
-        mask = self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
         if self._avoided_mask is None:
-            return mask
-        return ~self._avoided_mask if mask is None else mask & ~self._avoided_mask
+            return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
+        makeable = ~self._avoided_mask
+        mask = self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe, makeable)
+        return makeable if mask is None else mask & makeable
 
     def flag_unsafe(self, action: int) -> bool:
         """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``.

@@ -118,11 +118,11 @@ class LineCoSpar(CoSpar):
             posterior = on_points(self.posterior, space)
             allowed = np.zeros(len(space), dtype=bool)
             allowed[line_ids] = True
-            safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe)
-            if safe is not None:
-                allowed &= safe
             if self._avoided_points:
                 allowed &= ~self._avoided_on(space)
+            safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe, allowed)
+            if safe is not None:
+                allowed &= safe
             if not allowed.any():
                 self.rng.bit_generator.state = state
                 raise NoSafeGaitError(

@@ -22,6 +22,21 @@ rating noise ``s`` and the posterior ``f_a ~ N(mu_a, sd_a^2)``:
   default) a rating moves ``mu_a`` by well under one ``sd_a``, and this rule excludes almost no
   gait within 60 trials (``docs/results/ordinal/``).
 
+With ``risk``, an optional cautious level (``cautious``, a share in (0, 1); SafeOpt's idea of
+expanding from gaits known to be safe, Sui et al., ICML 2015): with ``p_0`` the probability of
+an avoided rating at a gait with no data (posterior mean 0, the prior's variance), a gait is
+*known-safe* when
+
+      P(rating_a <= avoid) <= min(cautious * p_0, risk),
+
+the ratings near it having made an avoided rating at most ``cautious`` times as likely as with
+no data (relative to ``p_0``, so that thresholds fitted from only good ratings, which lower every
+gait's probability, do not make unexplored gaits known-safe).  While some gait the loop could
+propose is known-safe, the loop proposes only known-safe gaits, and an unexplored gait (one the
+``risk`` rule allows) only when it might be better than all of them: when its upper bound
+``mu_a + explore * sd_a`` exceeds every known-safe gait's.  When no gait is known-safe the
+``risk`` rule alone decides.
+
 Both use the thresholds the posterior's rating scale carries (fitted by the evidence when the
 config does not fix them), the ones its Laplace fit used.  Besides, a trial the operator
 flagged "unsafe" removes its gait and every gait within ``unsafe_radius`` of it (Euclidean, each
@@ -56,6 +71,8 @@ class Safety:
     lam: float = 1.0
     unsafe_radius: float = 0.0
     risk: float | None = None
+    cautious: float | None = None
+    explore: float = 1.0
 
     def __post_init__(self) -> None:
         if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
@@ -66,6 +83,13 @@ class Safety:
             raise ValueError(f"unsafe_radius must be in [0, 1], got {self.unsafe_radius!r}")
         if self.risk is not None and not (np.isfinite(self.risk) and 0 < self.risk < 1):
             raise ValueError(f"risk must be a probability in (0, 1), got {self.risk!r}")
+        if self.cautious is not None:
+            if self.risk is None:
+                raise ValueError("cautious needs the risk rule (risk), not ROIAL's bound")
+            if not (np.isfinite(self.cautious) and 0 < self.cautious < 1):
+                raise ValueError(f"cautious must be a fraction in (0, 1), got {self.cautious!r}")
+        if not (np.isfinite(self.explore) and self.explore >= 0):
+            raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
 
     def threshold(self, ordinal: Ordinal, signal_variance: float) -> float:
         """``t_avoid``: the threshold above the avoided categories."""
@@ -76,21 +100,34 @@ class Safety:
         return ordinal.thresholds_for(signal_variance)[self.avoid - 1]
 
     def allowed(
-        self, posterior: Posterior, ordinal: Ordinal | None, unsafe: Collection[int]
+        self,
+        posterior: Posterior,
+        ordinal: Ordinal | None,
+        unsafe: Collection[int],
+        within: BoolArray | None = None,
     ) -> BoolArray | None:
-        """Which actions may be proposed (None: every one, nothing is restricted)."""
+        """Which actions may be proposed (None: every one, nothing is restricted).
+
+        ``within``: the actions the loop would propose from besides (a line's points, the
+        actions not banned otherwise); the cautious level (``cautious``) applies when one of
+        them, away from the unsafe flags, is known-safe.
+        """
         if self.avoid == 0 and not unsafe:
             return None
         mask = np.ones(len(posterior.space), dtype=bool)
-        if self.avoid:
-            mask &= ~self.avoided(posterior, ordinal)
         if unsafe:
             mask &= ~near(posterior.space, unsafe, self.unsafe_radius)
+        if self.avoid:
+            mask &= ~self.avoided(posterior, ordinal, mask if within is None else mask & within)
         return mask
 
-    def avoided(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray:
+    def avoided(
+        self, posterior: Posterior, ordinal: Ordinal | None, within: BoolArray | None = None
+    ) -> BoolArray:
         """The region of avoidance (module docstring), with the posterior's rating scale (its
-        fitted thresholds) or else ``ordinal``.
+        fitted thresholds) or else ``ordinal``; with ``cautious``, while one of ``within``
+        (default: every gait) is known-safe, every gait neither known-safe nor possibly better
+        than all the known-safe ones.
 
         Both rules are monotone in the posterior variance, which lies between 0 and the prior's:
         a gait decided alike at both ends needs no variance, and only the others' is computed
@@ -104,22 +141,56 @@ class Safety:
         t = self.threshold(scale, v)
         mean = np.asarray(posterior.mean)
         prior = np.asarray(posterior.kernel.diagonal(posterior.space), dtype=np.float64)
-        out = self._rule(scale, v, t, mean, np.zeros_like(mean))
-        undecided = np.flatnonzero(out != self._rule(scale, v, t, mean, prior))
+        known_var: dict[int, float] = {}  # action -> posterior variance, computed once
+
+        def var_of(actions: NDArray[np.intp]) -> FloatArray:
+            todo = [a for a in actions.tolist() if a not in known_var]
+            if todo:
+                var_todo = posterior.variance_at(np.asarray(todo, dtype=np.intp))
+                known_var.update(zip(todo, var_todo.tolist(), strict=True))
+            return np.asarray([known_var[a] for a in actions.tolist()], dtype=np.float64)
+
+        def region(level: float | None) -> BoolArray:
+            out = self._rule(scale, v, t, mean, np.zeros_like(mean), level)
+            undecided = np.flatnonzero(out != self._rule(scale, v, t, mean, prior, level))
+            if undecided.size:
+                out[undecided] = self._rule(scale, v, t, mean[undecided], var_of(undecided), level)
+            return out
+
+        if self.cautious is None or self.risk is None:
+            return region(self.risk)
+        unrated = rating_probabilities(scale, v, np.zeros(1), prior[:1])[0, : self.avoid]
+        known = ~region(min(self.cautious * float(unrated.sum()), self.risk))
+        pool = np.flatnonzero(known if within is None else known & within)
+        risky = region(self.risk)
+        if not pool.size:
+            return risky
+        # an unexplored gait only when its upper bound beats every known-safe gait's
+        best = float(np.max(mean[pool] + self.explore * np.sqrt(var_of(pool))))
+        better = ~risky & ~known & (mean > best)  # above it even with no variance left
+        undecided = np.flatnonzero(
+            ~risky & ~known & ~better & (mean + self.explore * np.sqrt(prior) > best)
+        )
         if undecided.size:
-            var = posterior.variance_at(undecided)
-            out[undecided] = self._rule(scale, v, t, mean[undecided], var)
-        return out
+            better[undecided] = mean[undecided] + self.explore * np.sqrt(var_of(undecided)) > best
+        return ~(known | better)
 
     def _rule(
-        self, scale: Ordinal, v: float, t: float, mean: FloatArray, var: FloatArray
+        self,
+        scale: Ordinal,
+        v: float,
+        t: float,
+        mean: FloatArray,
+        var: FloatArray,
+        risk: float | None,
     ) -> BoolArray:
-        """Avoided at posterior ``(mean, var)``: ROIAL's bound, or the avoided ratings' chance."""
-        if self.risk is None:
+        """Avoided at posterior ``(mean, var)``: ROIAL's bound (``risk`` None), or the avoided
+        ratings' chance above ``risk``."""
+        if risk is None:
             out: BoolArray = mean + self.lam * np.sqrt(var) < t
             return out
         probs = rating_probabilities(scale, v, mean, var)
-        return np.asarray(probs[:, : self.avoid].sum(axis=1) > self.risk)
+        return np.asarray(probs[:, : self.avoid].sum(axis=1) > risk)
 
 
 def default_risk(avoid: int, categories: int) -> float:

@@ -1,0 +1,128 @@
+"""The region's cautious level (``[safety] cautious``, ``loop/safety.py``): while some gait is
+known-safe (its probability of an avoided rating at most ``cautious`` times an unrated gait's),
+only known-safe gaits are proposed; when none is, the single-level ``risk`` rule applies."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+from scipy.special import ndtr
+
+from gaitpref import CoSpar, Feature, PreferenceGP, Space, SquaredExponential
+from gaitpref.errors import NoSafeGaitError
+from gaitpref.feedback import Rating
+from gaitpref.loop import Safety
+from gaitpref.model.ordinal import Ordinal
+from gaitpref.model.posterior import Posterior
+
+SPACE = Space([Feature.linspace("x", 0.0, 1.0, 41)])
+KERNEL = SquaredExponential(lengthscale=0.1, variance=1e-4, jitter=1e-8)
+LABELS = ["very bad", "bad", "okay", "good"]
+SCALE = Ordinal(LABELS, noise=0.01)  # as the model noise: the default
+SHARP = Ordinal(LABELS, noise=0.005)  # a subject whose ratings are worth more
+CAUTIOUS = Safety(avoid=1, risk=0.35, cautious=0.6)
+SINGLE = Safety(avoid=1, risk=0.35)
+
+
+def _rated(ratings: list[tuple[int, str]], scale: Ordinal = SCALE) -> Posterior:
+    return PreferenceGP(SPACE, KERNEL, 0.01, ordinal=scale).posterior([], [], ratings=ratings)
+
+
+def _allowed(safety: Safety, post: Posterior, **kw: object) -> NDArray[np.bool_]:
+    allowed = safety.allowed(post, post.ordinal, (), **kw)  # type: ignore[arg-type]
+    assert allowed is not None
+    return allowed
+
+
+def _p_worst(post: Posterior) -> NDArray[np.float64]:
+    assert post.ordinal is not None
+    t1 = post.ordinal.thresholds_for(KERNEL.variance)[0]
+    var = np.asarray(post.variance)
+    return np.asarray(ndtr((t1 - np.asarray(post.mean)) / np.sqrt(post.ordinal.noise**2 + var)))
+
+
+def test_one_good_rating_allows_its_neighbours_and_not_the_far_unrated_gaits() -> None:
+    for scale in (SCALE, SHARP):
+        post = _rated([(20, "good")], scale)
+        allowed = _allowed(CAUTIOUS, post)
+        idx = np.flatnonzero(allowed)  # one interval around the rated gait
+        assert np.array_equal(idx, np.arange(idx[0], idx[-1] + 1)) and idx[0] < 20 < idx[-1]
+        assert 3 <= idx.size < 20 and not allowed[[0, 5, 35, 40]].any()
+        assert _allowed(SINGLE, post).all()  # the single-level rule lets every gait through
+        # known-safe: an avoided rating at most 0.6 times as likely as at a gait with no data
+        p = _p_worst(post)
+        np.testing.assert_array_equal(allowed, p <= 0.6 * p[0])
+        assert p[0] == pytest.approx(0.25, abs=0.01)  # far from the rating: the prior's quarter
+
+
+def test_unexplored_gaits_stay_allowed_while_they_might_beat_every_known_safe_one() -> None:
+    post = _rated([(20, "okay")], SHARP)  # known-safe, but only "okay"
+    p = _p_worst(post)
+    known = p <= 0.6 * p[0]
+    assert known[[19, 20, 21]].all() and not known[[0, 5, 35, 40]].any()
+    upper = np.asarray(post.mean) + np.asarray(post.std)
+    assert upper[0] > upper[known].max()  # an unrated gait's mu + sd beats the okay gait's
+    assert _allowed(CAUTIOUS, post).all()
+    strict = Safety(avoid=1, risk=0.35, cautious=0.6, explore=0.0)  # the means alone
+    assert np.array_equal(_allowed(strict, post), known)
+    # after a "good" rating no unrated gait's bound reaches the good gait's (test above); with
+    # a "very bad" rating elsewhere besides, its neighbourhood stays out too
+    post = _rated([(20, "good"), (5, "very bad")])
+    allowed = _allowed(Safety(avoid=1, risk=0.35, cautious=0.6, explore=2.0), post)
+    assert allowed[20] and not allowed[[0, 5, 10, 40]].any()
+
+
+def test_with_nothing_known_safe_the_risk_rule_decides() -> None:
+    # "okay" at the default rating noise leaves the gait near the prior's 0.25: not known-safe
+    okay = _rated([(20, "okay")])
+    assert np.array_equal(_allowed(CAUTIOUS, okay), _allowed(SINGLE, okay))
+    # only "very bad" ratings: nothing is known-safe, the fallback avoids the rated gaits alone
+    worst = _rated([(3, "very bad"), (4, "very bad"), (30, "very bad")])
+    fallback = _allowed(CAUTIOUS, worst)
+    assert np.array_equal(fallback, _allowed(SINGLE, worst))
+    assert not fallback[[3, 4, 30]].any() and fallback[[15, 20, 40]].all()
+
+
+def test_known_safe_gaits_the_loop_may_not_propose_do_not_count() -> None:
+    post = _rated([(20, "good")])
+    safe = _allowed(CAUTIOUS, post)
+    elsewhere = ~safe  # e.g. a line's points, or gaits that cannot be made: none known-safe
+    assert np.array_equal(_allowed(CAUTIOUS, post, within=elsewhere), _allowed(SINGLE, post))
+    flagged = CAUTIOUS.allowed(post, SCALE, np.flatnonzero(safe).tolist())
+    assert flagged is not None and np.array_equal(flagged, _allowed(SINGLE, post) & elsewhere)
+
+
+def test_the_loop_stays_among_known_safe_gaits_and_an_empty_region_proposes_nothing() -> None:
+    loop = CoSpar(SPACE, KERNEL, 0.01, n=1, buffer=1, seed=3, ordinal=SCALE, safety=CAUTIOUS)
+    q = loop.ask()
+    loop.tell(q, [Rating(q.actions[0], "good")])
+    known = _allowed(CAUTIOUS, loop.posterior)
+    assert not known.all() and np.array_equal(loop.allowed(), known)
+    for _ in range(5):
+        q = loop.ask()
+        assert known[q.actions[0]]
+        loop.tell(q, [Rating(q.actions[0], "good")])
+        known = _allowed(CAUTIOUS, loop.posterior)
+    loop = CoSpar(SPACE, KERNEL, 0.01, n=1, buffer=1, seed=3, ordinal=SCALE, safety=CAUTIOUS)
+    for _ in range(200):
+        allowed = loop.allowed()
+        if allowed is not None and not allowed.any():
+            break
+        q = loop.ask()
+        loop.tell(q, [Rating(q.actions[0], "very bad")])
+    else:
+        pytest.fail("the region of interest never emptied")
+    with pytest.raises(NoSafeGaitError, match="nothing was proposed"):
+        loop.ask()
+    assert loop.pending is None
+
+
+def test_bad_cautious_levels_are_refused() -> None:
+    with pytest.raises(ValueError, match="cautious needs the risk rule"):
+        Safety(avoid=1, lam=1.0, cautious=0.5)
+    for bad in (0.0, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="cautious must be a fraction"):
+            Safety(avoid=1, risk=0.35, cautious=bad)
+    with pytest.raises(ValueError, match="explore must be a finite number >= 0"):
+        Safety(avoid=1, risk=0.35, cautious=0.5, explore=-1.0)
