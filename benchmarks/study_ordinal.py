@@ -607,7 +607,8 @@ def _figure(data: Data) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["prefs", "rated", "random", "random+risk", "infogain", "infogain+risk"]
+    shown = ["prefs", "rated", "avoid-cautious", "random", "random+risk"]
+    shown += ["infogain", "infogain+risk"]
     panels = [(g, s) for g in GRIDS for s in SCENARIOS]
     fig, axes = plt.subplots(2, len(panels), figsize=(4 * len(panels), 7), sharex=True)
     for col, (grid, scenario) in enumerate(panels):

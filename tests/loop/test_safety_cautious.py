@@ -13,6 +13,8 @@ from gaitpref import CoSpar, Feature, PreferenceGP, Space, SquaredExponential
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.feedback import Rating
 from gaitpref.loop import Safety
+from gaitpref.loop.line import LineCoSpar, on_points
+from gaitpref.loop.lines import LineSettings
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
 
@@ -126,3 +128,27 @@ def test_bad_cautious_levels_are_refused() -> None:
             Safety(avoid=1, risk=0.35, cautious=bad)
     with pytest.raises(ValueError, match="explore must be a finite number >= 0"):
         Safety(avoid=1, risk=0.35, cautious=0.5, explore=-1.0)
+
+
+def test_the_line_path_proposes_only_what_the_cautious_rule_allows_on_its_line() -> None:
+    domain = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 1.0)])
+    kernel = SquaredExponential(0.2, 1e-4, 1e-8)
+    loop = LineCoSpar(
+        domain, kernel, 0.01, n=1, buffer=1, seed=4, ordinal=SCALE, safety=CAUTIOUS,
+        line=LineSettings(40),
+    )  # fmt: skip
+    restricted = 0
+    for trial in range(8):
+        q = loop.ask()
+        assert q.line is not None
+        space, line_ids = loop.space.extended(q.line.points)
+        on_line = np.zeros(len(space), dtype=bool)
+        on_line[line_ids] = True
+        post = on_points(loop.posterior, space)
+        allowed = CAUTIOUS.allowed(post, SCALE, (), on_line)
+        assert allowed is not None
+        chosen = space.find(list(q.points[0]))
+        assert chosen is not None and allowed[chosen] and on_line[chosen]
+        restricted += int(not allowed[line_ids].all())
+        loop.tell(q, [Rating(q.actions[0], "good" if trial % 3 else "okay")])
+    assert restricted  # the cautious level did leave some of a line's points out
