@@ -29,7 +29,10 @@ of the rating-accuracy comparison), ``random+avoid-1`` (random among the region 
 ``infogain+avoid-1`` (information gain over the region of interest, ``lambda = 1``: ROIAL's
 mode); ``avoid-risk``, ``random+risk`` and ``infogain+risk``: the same with the default rule
 (``[safety] avoid = ["very bad"]`` alone: avoided when ``P(rated "very bad") > 0.35``,
-``loop/safety.py``).
+``loop/safety.py``); ``avoid-cautious``, ``random+cautious`` and ``infogain+cautious``: the same
+with the opt-in cautious level, ``cautious = 0.6`` (and ``explore = 1``, its default): while some
+gait is known-safe (``P(rated "very bad")`` at most 0.6 times an unrated gait's) only known-safe
+gaits, and unexplored ones whose ``mu + sd`` beats every known-safe gait's.
 Run ``k`` of every arm uses objective ``k`` and the same
 seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of

@@ -4,6 +4,7 @@ fit the thresholds), undone, excluded and exported."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -97,3 +98,31 @@ def test_the_posterior_rates_with_the_fitted_thresholds(tmp_path: Path) -> None:
         assert loop.gp.ordinal is not None and loop.gp.ordinal.thresholds is None  # the config's
         probs = post.rating_probabilities([0, 7, 14])
         assert np.allclose(probs.sum(axis=1), 1.0)
+
+
+def test_a_session_with_the_cautious_level_replays_and_older_ones_replay_without(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'c.db'}"
+    cautious = CONFIG.replace("lambda = 2.0", "cautious = 0.6")
+    with Session.create(url, parse_config(cautious), "S01") as s:
+        for _ in range(6):
+            q = s.next_query()
+            a = q.actions[0]
+            s.answer(q.id, [Rating(a, "very bad" if a <= 3 else "good" if a >= 10 else "okay")])
+        loop = s._state.loop
+        assert loop.safety.cautious == 0.6
+        allowed = loop.allowed()
+        single = dataclasses.replace(loop.safety, cautious=None).allowed(loop.posterior, None, ())
+        assert allowed is not None and allowed.any() and not np.array_equal(allowed, single)
+        pending = s.next_query().actions
+        sid = s.id
+    with Session.open(url, sid) as again:
+        assert again._state.loop.safety == loop.safety
+        assert np.array_equal(again._state.loop.allowed(), allowed)
+        assert again.next_query().actions == pending
+    # a region recorded without the key (any defaults version) has no cautious level
+    plain = CONFIG.replace("lambda = 2.0\n", "")
+    with Session.create(f"sqlite:///{tmp_path / 'p.db'}", parse_config(plain), "S02") as s:
+        assert s._state.loop.safety.cautious is None
+        assert s._state.loop.safety.risk == pytest.approx(0.35)
