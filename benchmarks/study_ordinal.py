@@ -593,6 +593,8 @@ def _comparisons(data: Data) -> list[str]:
                 ("infogain+risk", "random+risk"),
                 ("infogain+risk", "infogain"),
                 ("infogain+risk", "rated"),
+                ("infogain+cautious", "random+cautious"),
+                ("infogain+cautious", "infogain"),
             ]:
                 if (grid, scenario, arm) not in data or (grid, scenario, base) not in data:
                     continue
