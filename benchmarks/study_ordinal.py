@@ -27,12 +27,13 @@ of the rating-accuracy comparison), ``random+avoid-1`` (random among the region 
 ``lambda = 1``: the region of avoidance on a strategy that does not avoid bad gaits by itself)
 ``infogain`` (ratings, strategy ``information-gain``: only when this gaitpref has it) and
 ``infogain+avoid-1`` (information gain over the region of interest, ``lambda = 1``: ROIAL's
-mode); ``avoid-risk``, ``random+risk`` and ``infogain+risk``: the same with the default rule
-(``[safety] avoid = ["very bad"]`` alone: avoided when ``P(rated "very bad") > 0.35``,
-``loop/safety.py``); ``avoid-cautious``, ``random+cautious`` and ``infogain+cautious``: the same
-with the opt-in cautious level, ``cautious = 0.6`` (and ``explore = 1``, its default): while some
-gait is known-safe (``P(rated "very bad")`` at most 0.6 times an unrated gait's) only known-safe
-gaits, and unexplored ones whose ``mu + sd`` beats every known-safe gait's.
+mode); ``avoid-risk``, ``random+risk`` and ``infogain+risk``: the same with the ``risk`` rule
+alone (``[safety] avoid = ["very bad"]`` and ``cautious = 0``, the default in defaults version
+0.3: avoided when ``P(rated "very bad") > 0.35``, ``loop/safety.py``); ``avoid-cautious``,
+``random+cautious`` and ``infogain+cautious``: the same with the cautious level, ``cautious =
+0.6`` and ``explore = 1`` (the defaults since defaults version 0.4): while some gait is known-safe
+(``P(rated "very bad")`` at most 0.6 times an unrated gait's) only known-safe gaits, and unexplored
+ones whose ``mu + sd`` beats every known-safe gait's.
 Run ``k`` of every arm uses objective ``k`` and the same
 seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of
@@ -89,7 +90,7 @@ LABELS = '["very bad", "bad", "okay", "good"]'
 GRIDS = ("2d", "3d")
 SCENARIOS = ("noiseless", "noisy")
 LENGTHSCALE_3D = 0.25
-CAUTIOUS = 0.6  # [safety] cautious of the *+cautious arms (screened on 12 2-D objectives)
+CAUTIOUS = 0.6  # [safety] cautious of the *+cautious arms (the default since defaults 0.4)
 
 _AXIS = """
 [space.{name}]
@@ -111,8 +112,8 @@ class Arm:
     name: str
     rated: bool = True
     lam: float | None = None  # [safety] lambda (ROIAL's bound); None: see risk
-    risk: bool = False  # [safety] avoid = ["very bad"] with the default rule (risk 0.35)
-    cautious: float | None = None  # with risk: [safety] cautious (the two-level rule)
+    risk: bool = False  # [safety] avoid = ["very bad"] with the risk rule (risk 0.35)
+    cautious: float | None = None  # with risk: [safety] cautious (None: 0, the single level)
     strategy: str = ""  # "" the default; "random": uniform over the allowed gaits
     note: str = ""
 
@@ -130,8 +131,7 @@ class Arm:
             out += f'\n[safety]\navoid = ["very bad"]\nlambda = {self.lam}\n'
         elif self.risk:
             out += '\n[safety]\navoid = ["very bad"]\n'
-            if self.cautious is not None:
-                out += f"cautious = {self.cautious}\n"
+            out += f"cautious = {0 if self.cautious is None else self.cautious}\n"
         return out
 
     def config(self, grid: str) -> ExperimentConfig:
@@ -159,10 +159,10 @@ ARMS = [
     Arm("avoid-1", lam=1.0, note="ratings, ROIAL's bound: [safety] lambda = 1"),
     Arm("avoid-2", lam=2.0, note="as avoid-0.5 with lambda 2"),
     Arm("avoid-0", lam=0.0, note="as avoid-0.5 with lambda 0 (the posterior mean alone)"),
-    Arm("avoid-risk", risk=True, note='ratings, [safety] avoid = ["very bad"], default risk 0.35'),
+    Arm("avoid-risk", risk=True, note="ratings, risk 0.35 alone (cautious = 0, as to 0.3)"),
     Arm("random", strategy="random", note="ratings, gaits drawn uniformly at random"),
     Arm("random+avoid-1", lam=1.0, strategy="random", note="random among the ROI, lambda 1"),
-    Arm("random+risk", risk=True, strategy="random", note="random among the ROI, risk 0.35"),
+    Arm("random+risk", risk=True, strategy="random", note="random among the ROI, risk 0.35 alone"),
     Arm("infogain", strategy="information-gain", note="ratings, strategy information-gain"),
     Arm(
         "infogain+avoid-1",
@@ -174,13 +174,13 @@ ARMS = [
         "infogain+risk",
         risk=True,
         strategy="information-gain",
-        note="information gain over the ROI (ROIAL's mode), risk 0.35",
+        note="information gain over the ROI (ROIAL's mode), risk 0.35 alone",
     ),
     Arm(
         "avoid-cautious",
         risk=True,
         cautious=CAUTIOUS,
-        note=f"ratings, risk 0.35 and cautious {CAUTIOUS}: known-safe gaits while there are any",
+        note=f"ratings, risk 0.35, cautious {CAUTIOUS}: the default since defaults version 0.4",
     ),
     Arm(
         "random+cautious",
@@ -612,8 +612,8 @@ def _figure(data: Data) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    shown = ["prefs", "rated", "avoid-cautious", "random", "random+risk"]
-    shown += ["infogain", "infogain+risk"]
+    shown = ["prefs", "rated", "avoid-cautious", "random", "random+cautious"]
+    shown += ["infogain", "infogain+cautious"]
     panels = [(g, s) for g in GRIDS for s in SCENARIOS]
     fig, axes = plt.subplots(2, len(panels), figsize=(4 * len(panels), 7), sharex=True)
     for col, (grid, scenario) in enumerate(panels):

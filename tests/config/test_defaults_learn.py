@@ -64,7 +64,7 @@ def _record(text: str, meta: dict[str, object]) -> SessionRecord:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.3"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.4"}
     assert config_of(_record(BARE, library_meta(bare))).buffer == 1
     explicit = parse_config(BARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
@@ -79,12 +79,18 @@ AVOID = '[safety]\navoid = ["very bad"]\n'
 
 
 def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
-    cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3
-    assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.3"}
+    cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3,
+    assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
+    assert cfg.safety.cautious == 0.6
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.4"}
     assert config_of(_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
-    for explicit in ("lambda = 1.0\n", "risk = 0.5\n"):
+    for explicit in (
+        "lambda = 1.0\n",
+        "risk = 0.5\ncautious = 0.6\n",
+        "cautious = 0\nrisk = 0.5\n",
+    ):
         assert not parse_config(RATED + AVOID + explicit).relies_on_changed_defaults
+    assert parse_config(RATED + AVOID + "risk = 0.5\n").relies_on_changed_defaults  # cautious
     assert not parse_config(RATED).relies_on_changed_defaults  # no region: no rule relied on
 
 
@@ -94,3 +100,12 @@ def test_a_region_recorded_before_0_3_replays_with_roials_bound() -> None:
         assert old.risk is None and old.lam == 1.0
     # a 0.2 session that relied on no changed default stored no version: 0.1's apply
     assert config_of(_record(RATED + AVOID, {})).safety.risk is None
+
+
+def test_a_region_recorded_with_the_0_3_defaults_replays_without_the_cautious_level() -> None:
+    old = config_of(_record(RATED + AVOID, {"config_defaults": "0.3"})).safety
+    assert old.risk == pytest.approx(1 / 3 + 0.1) and old.cautious is None
+    # a 0.3 session whose region gave risk itself relied on no changed default then and
+    # stored no version: it replays with 0.1's defaults, also without the cautious level
+    given = config_of(_record(RATED + AVOID + "risk = 0.5\n", {})).safety
+    assert given.risk == 0.5 and given.cautious is None

@@ -99,15 +99,16 @@ def test_fixed_thresholds_allow_any_risk() -> None:
     assert parse_config(BASE + fixed + AVOID + "risk = 0.1\n").safety.risk == 0.1
 
 
-def test_cautious_is_off_unless_given() -> None:
-    assert parse_config(BASE + RATING + AVOID).safety.cautious is None
+def test_a_region_under_the_risk_rule_is_cautious_by_default() -> None:
+    cfg = parse_config(BASE + RATING + AVOID)
+    assert cfg.safety.cautious == 0.6 and cfg.safety.explore == 1.0
+    assert cfg.safety.risk == pytest.approx(0.35) and cfg.make_loop().safety == cfg.safety
+    assert "safety.cautious" in cfg.defaulted  # a session records the defaults it relied on
+    given = parse_config(BASE + RATING + AVOID + "cautious = 0.3\nexplore = 2\n").safety
+    assert (given.cautious, given.explore) == (0.3, 2.0)
     assert parse_config(BASE + RATING + AVOID + "cautious = 0\n").safety.cautious is None
-    cfg = parse_config(BASE + RATING + AVOID + "cautious = 0.6\n")
-    assert cfg.safety.cautious == 0.6 and cfg.safety.risk == pytest.approx(0.35)
-    assert cfg.safety.explore == 1.0
-    assert parse_config(BASE + RATING + AVOID + "cautious = 0.6\nexplore = 0\n").safety.explore == 0
-    assert cfg.make_loop().safety.cautious == 0.6
-    assert "safety.cautious" not in cfg.defaulted  # off by default in every version
+    assert parse_config(BASE + RATING + AVOID + "lambda = 1.0\n").safety.cautious is None
+    assert parse_config(BASE + RATING).safety.cautious is None  # no region: nothing to be
     for version in ("0.1", "0.2", "0.3"):  # sessions recorded earlier replay without it
         assert parse_config(BASE + RATING + AVOID, defaults=version).safety.cautious is None
 
@@ -119,7 +120,8 @@ def test_cautious_is_off_unless_given() -> None:
         ("cautious = -0.1\n", r"\[safety\].cautious: must be a finite number >= 0"),
         ('cautious = "yes"\n', r"\[safety\].cautious"),
         ("cautious = 0.5\nlambda = 1.0\n", r"\[safety\].cautious: needs the risk rule"),
-        ("explore = 2.0\n", r"\[safety\].explore: is a setting of the cautious level"),
+        ("cautious = 0\nexplore = 2.0\n", r"\[safety\].explore: is a setting of the cautious"),
+        ("lambda = 1\nexplore = 2.0\n", r"\[safety\].explore: is a setting of the cautious"),
         ("cautious = 0.5\nexplore = -1\n", r"\[safety\].explore: must be a finite number"),
     ],
 )

@@ -121,8 +121,19 @@ def test_a_session_with_the_cautious_level_replays_and_older_ones_replay_without
         assert again._state.loop.safety == loop.safety
         assert np.array_equal(again._state.loop.allowed(), allowed)
         assert again.next_query().actions == pending
-    # a region recorded without the key (any defaults version) has no cautious level
+    # a session recorded with the 0.3 defaults (a region under risk, no cautious level)
+    # replays with them, as it ran, though the defaults now add the cautious level
     plain = CONFIG.replace("lambda = 2.0\n", "")
-    with Session.create(f"sqlite:///{tmp_path / 'p.db'}", parse_config(plain), "S02") as s:
+    assert parse_config(plain).safety.cautious == 0.6
+    url = f"sqlite:///{tmp_path / 'p.db'}"
+    with Session.create(url, parse_config(plain, defaults="0.3"), "S02") as s:
+        for _ in range(4):
+            q = s.next_query()
+            a = q.actions[0]
+            s.answer(q.id, [Rating(a, "very bad" if a <= 3 else "good" if a >= 10 else "okay")])
         assert s._state.loop.safety.cautious is None
-        assert s._state.loop.safety.risk == pytest.approx(0.35)
+        allowed, pending, sid = s._state.loop.allowed(), s.next_query().actions, s.id
+    with Session.open(url, sid) as again:
+        assert again._state.loop.safety.cautious is None
+        assert np.array_equal(again._state.loop.allowed(), allowed)
+        assert again.next_query().actions == pending

@@ -13,9 +13,9 @@
                                              # (default: avoid / K + 0.1)
     # lambda = 1.0                           # instead of risk: ROIAL's bound, avoided when
                                              # mu + lambda sd < the threshold above
-    # cautious = 0.6                         # while some gait's P(an avoided rating) is at most
-                                             # this share of an unrated gait's, propose only
-                                             # such known-safe gaits (default 0: off) ...
+    # cautious = 0.6                         # with risk: while some gait's P(an avoided rating)
+                                             # is at most this share of an unrated gait's,
+                                             # propose only such known-safe gaits ... (0: off)
     # explore = 1.0                          # ... and unexplored ones whose mu + explore sd
                                              # beats every known-safe gait's
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
@@ -86,28 +86,32 @@ def parse_safety(
         if len(avoid) >= ordinal.size:
             fail("safety", "avoid", "must leave at least one category to propose")
     risk = _risk(safety, defaulted, len(avoid), ordinal)
-    relied = frozenset({"safety.risk"}) if avoid and {"lambda", "risk"} <= defaulted else None
     cautious = _cautious(safety, defaulted, risk)
+    relied = {"safety.risk"} if avoid and {"lambda", "risk"} <= defaulted else set()
+    if cautious is not None and "cautious" in defaulted:
+        relied.add("safety.cautious")
     return Safety(
         len(avoid), safety["lambda"], safety["unsafe_radius"], risk, cautious, safety["explore"]
-    ), relied or frozenset()
+    ), frozenset(relied)
 
 
 def _cautious(
     safety: dict[str, Any], defaulted: frozenset[str], risk: float | None
 ) -> float | None:
-    """The region's cautious level (None: none, the single-level rule)."""
+    """The ``risk`` rule's cautious level (None: none, the single-level rule): the default's
+    (0.6 since defaults version 0.4) with a region of avoidance under ``risk``, or the one given."""
     cautious = float(safety["cautious"])
-    if "cautious" in defaulted or cautious == 0:
-        if "explore" not in defaulted:
-            fail("safety", "explore", "is a setting of the cautious level: give cautious too")
-        return None
-    if cautious >= 1:
+    given = "cautious" not in defaulted
+    if given and cautious >= 1:
         fail("safety", "cautious", f"must be below 1 (0: no cautious level), got {cautious:g}")
-    if not safety["avoid"]:
+    if given and cautious > 0 and not safety["avoid"]:
         fail("safety", "cautious", 'needs a region of avoidance (avoid = ["..."])')
-    if risk is None:
+    if given and cautious > 0 and risk is None:
         fail("safety", "cautious", "needs the risk rule, not ROIAL's bound (lambda)")
+    if cautious == 0 or not safety["avoid"] or risk is None:
+        if "explore" not in defaulted:
+            fail("safety", "explore", "is a setting of the cautious level, which is off here")
+        return None
     return cautious
 
 

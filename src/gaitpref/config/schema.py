@@ -106,7 +106,7 @@ SAFETY: Final[dict[str, Key]] = {
     "avoid": Key(Labels(1, 9), ()),  # the worst categories, e.g. ["very bad"]
     "lambda": Key(Number(0.0, 100.0), 1.0),  # given: ROIAL's upper-bound rule, this confidence
     "risk": Key(Number(0.0, 1.0, open_lo=True), "auto"),  # "auto": avoid / K + 0.1 (safety.py)
-    "cautious": Key(Number(0.0, 1.0), 0.0),  # two-level rule (safety.py); 0: off
+    "cautious": Key(Number(0.0, 1.0), 0.6),  # the risk rule's cautious level (safety.py); 0: off
     "explore": Key(Number(0.0, 100.0), 1.0),  # with cautious: mu + explore sd beats known-safe
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
 }
@@ -196,12 +196,14 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.3"
+DEFAULTS_VERSION: Final = "0.4"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
-#: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``).
+#: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
+#: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``).
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
-    "0.1": {"cospar": {"buffer": 0}, "safety": {"risk": None}},
-    "0.2": {"safety": {"risk": None}},
+    "0.1": {"cospar": {"buffer": 0}, "safety": {"risk": None, "cautious": 0.0}},
+    "0.2": {"safety": {"risk": None, "cautious": 0.0}},
+    "0.3": {"safety": {"cautious": 0.0}},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

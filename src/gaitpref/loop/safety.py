@@ -22,10 +22,10 @@ rating noise ``s`` and the posterior ``f_a ~ N(mu_a, sd_a^2)``:
   default) a rating moves ``mu_a`` by well under one ``sd_a``, and this rule excludes almost no
   gait within 60 trials (``docs/results/ordinal/``).
 
-With ``risk``, an optional cautious level (``cautious``, a share in (0, 1); SafeOpt's idea of
-expanding from gaits known to be safe, Sui et al., ICML 2015): with ``p_0`` the probability of
-an avoided rating at a gait with no data (posterior mean 0, the prior's variance), a gait is
-*known-safe* when
+With ``risk``, a cautious level (``cautious``, a share in (0, 1), 0.6 in a config since its
+defaults version 0.4; SafeOpt's idea of expanding from gaits known to be safe, Sui et al., ICML
+2015): with ``p_0`` the probability of an avoided rating at a gait with no data (posterior mean
+0, the prior's variance), a gait is *known-safe* when
 
       P(rating_a <= avoid) <= min(cautious * p_0, risk),
 
@@ -35,7 +35,9 @@ gait's probability, do not make unexplored gaits known-safe).  While some gait t
 propose is known-safe, the loop proposes only known-safe gaits, and an unexplored gait (one the
 ``risk`` rule allows) only when it might be better than all of them: when its upper bound
 ``mu_a + explore * sd_a`` exceeds every known-safe gait's.  When no gait is known-safe the
-``risk`` rule alone decides.
+``risk`` rule alone decides.  The upper bounds need the variance of every unexplored gait that
+the bounds 0 and the prior's leave undecided, often most of them (0.26 s of CPU on 57,750 gaits
+after 150 trials, against 0.04 s for ``risk`` alone).
 
 Both use the thresholds the posterior's rating scale carries (fitted by the evidence when the
 config does not fix them), the ones its Laplace fit used.  Besides, a trial the operator
