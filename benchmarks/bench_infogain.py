@@ -8,9 +8,12 @@ the 57,750-gait grid):
   screened, ``strategies/infogain.py``).
 
 Each with preferences alone, with ordinal ratings (four categories at the objective's quartiles,
-``OrdinalRater``) and with ratings and a region of avoidance (``avoid = 1`` with the default rule,
-``risk = 0.35``: ROIAL's mode, information gain over the region of interest; at each ask the region
-needs the posterior variance of the gaits its bounds leave undecided, ``loop/safety.py``). A
+``OrdinalRater``), with ratings and a region of avoidance under the single-level rule (``avoid =
+1``, ``risk = 0.35``, ``cautious = 0``: ROIAL's mode, information gain over the region of interest;
+at each ask the region needs the posterior variance of the gaits its bounds leave undecided,
+``loop/safety.py``), and with the region a config gets by default since defaults version 0.4
+(``risk = 0.35`` with the cautious level 0.6, ``explore = 1``: it needs the variance of most
+unrated gaits). A
 simulated user (a smooth GP objective, as ``bench_large.py``) answers CoSpar (n = 1, b = 1, the
 strategy ``information-gain`` with its defaults) until the data holds 100 comparisons; the next
 ``--iterations`` iterations are timed one by one; then on to 300 comparisons and the same again.
@@ -48,7 +51,7 @@ except ImportError:  # run as a module
 
 RESULTS = Path(__file__).parent / "results"
 CHECKPOINTS = (100, 300)
-MODES = ("prefs", "ratings", "ratings + region")
+MODES = ("prefs", "ratings", "ratings + region", "ratings + cautious region")
 
 
 def run_case(name: str, mode: str, iterations: int) -> list[dict[str, object]]:
@@ -56,7 +59,10 @@ def run_case(name: str, mode: str, iterations: int) -> list[dict[str, object]]:
     space, kernel, noise = cfg.space, cfg.kernel, cfg.noise
     rated = mode != "prefs"
     ordinal = Ordinal(["very bad", "bad", "okay", "good"], noise=noise) if rated else None
-    region = Safety(avoid=1, risk=default_risk(1, 4)) if mode == "ratings + region" else None
+    region = {
+        "ratings + region": Safety(avoid=1, risk=default_risk(1, 4)),
+        "ratings + cautious region": Safety(avoid=1, risk=default_risk(1, 4), cautious=0.6),
+    }.get(mode)
     loop = CoSpar(
         space,
         kernel,
