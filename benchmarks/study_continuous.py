@@ -1,12 +1,15 @@
 """Issue 13 study: the line path on continuous spaces (docs/results/continuous/).
 
 Hartmann-6 and random-GP objectives (``gaitpref.simulate.continuous``) in 6, 8 and 12
-dimensions, 150 trials, ``n = 1, b = 1``, self-sparring (LineCoSpar's rule), with and without
-coactive feedback, noiseless and noisy subjects; against random selection, and in 6-D against the
-full 57,750-gait grid (11 x 10 x 7 x 5 x 5 x 3 values over the same box) with the line path run on
-that same grid (lines snapped to it) and on the continuous box.  One process, seeds 0..S-1.
+dimensions, 150 trials, ``n = 1, b = 1``, with and without coactive feedback, noiseless and noisy
+subjects; against random selection, and in 6-D against the full 57,750-gait grid (11 x 10 x 7 x
+5 x 5 x 3 values over the same box) with the line path run on that same grid (lines snapped to
+it) and on the continuous box.  The line path's strategy and fit are ``--line-strategy`` and
+``--line-fit``; the full grid runs twice, with self-sparring (``grid``) and with the project's
+default for grids, gated EUBO (``grid-gated``).  One process, seeds 0..S-1.
 
-    python benchmarks/study_continuous.py --seeds 4 [--subset] [--out DIR]
+    python benchmarks/study_continuous.py --seeds 6 [--subset] [--paths grid-gated --merge]
+    python benchmarks/study_continuous.py --report
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from gaitpref import CoSpar, Feature, Space, SquaredExponential
+from gaitpref.loop.learning import Learning
 from gaitpref.loop.line import LineCoSpar
 from gaitpref.loop.lines import LineSettings
 from gaitpref.simulate.continuous import (
@@ -35,6 +39,8 @@ TRIALS = 150
 GRID_SIZES = (11, 10, 7, 5, 5, 3)  # 57,750 gaits
 NOISY = 0.2  # the noisy subject's probit noise (utility units; both objectives span ~3-4)
 PREF_NOISE = 0.05  # the model's probit noise
+PATHS = ("line", "grid", "grid-gated", "line-on-grid")
+GRID_STRATEGY = {"grid": "self-sparring", "grid-gated": "gated-eubo"}
 
 
 def box(d: int) -> Space:
@@ -51,22 +57,24 @@ def kernel(objective: str, d: int) -> SquaredExponential:
 
 
 def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, seed: int,
-            optimum: float | None) -> dict[str, Any]:  # fmt: skip
-    domain = grid6() if path in ("grid", "line-on-grid") else box(d)
+            optimum: float | None, line_strategy: str = "self-sparring",
+            line_fit: str = "fixed") -> dict[str, Any]:  # fmt: skip
+    domain = box(d) if path == "line" else grid6()
     fn = builtin(objective, domain, seed)
     if optimum is None:  # the objective's best over the domain
         optimum = float(fn(domain.points).max()) if path != "line" else \
             estimate_optimum(fn, domain, seed)[1]  # fmt: skip
     loop_seed, user_seed = np.random.SeedSequence(seed).spawn(2)
-    settings: dict[str, Any] = dict(
-        n=1, buffer=1, seed=np.random.default_rng(loop_seed),
-        strategy=make_strategy("self-sparring"),
-    )  # fmt: skip
+    settings: dict[str, Any] = dict(n=1, buffer=1, seed=np.random.default_rng(loop_seed))
     k = kernel(objective, d)
-    if path == "grid":
-        loop: CoSpar = CoSpar(domain, k, PREF_NOISE, **settings)
+    if path in GRID_STRATEGY:
+        strategy = make_strategy(GRID_STRATEGY[path])
+        loop: CoSpar = CoSpar(domain, k, PREF_NOISE, strategy=strategy, **settings)
     else:
-        loop = LineCoSpar(domain, k, PREF_NOISE, line=LineSettings(50), **settings)
+        strategy = make_strategy(line_strategy)
+        learning = Learning(fit="evidence" if line_fit == "evidence" else "fixed")
+        loop = LineCoSpar(domain, k, PREF_NOISE, line=LineSettings(50), strategy=strategy,
+                          learning=learning, **settings)  # fmt: skip
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(fn, domain, seed=seed) if coactive else None
     start = time.perf_counter()
@@ -75,6 +83,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
     return {
         "path": path, "objective": objective, "d": d, "coactive": coactive, "noise": noise,
         "seed": seed, "seconds": time.perf_counter() - start, "optimum": optimum,
+        "strategy": strategy.name, "fit": loop.learning.fit,
         "random_mean": float(rand.mean()), "worst": float(fn(domain.points).min())
         if path != "line" else float(rand.min()),
         "curve": res.curve.tolist(), "best_at": {str(k): v for k, v in res.best_at.items()},
@@ -89,6 +98,7 @@ def cells(subset: bool) -> list[tuple[str, str, int, bool, float]]:
                 for d in (6, 8, 12):
                     out.append(("line", objective, d, coactive, noise))
                 out.append(("grid", objective, 6, coactive, noise))
+                out.append(("grid-gated", objective, 6, coactive, noise))
                 out.append(("line-on-grid", objective, 6, coactive, noise))
     if subset:
         out = [c for c in out if not c[3] and c[4] == 0.0]
@@ -101,15 +111,23 @@ def main() -> None:
     parser.add_argument("--subset", action="store_true")
     parser.add_argument("--out", type=Path, default=Path("docs/results/continuous"))
     parser.add_argument("--report", action="store_true", help="summarise results.json only")
+    parser.add_argument("--paths", nargs="+", choices=PATHS, default=list(PATHS))
+    parser.add_argument("--merge", action="store_true", help="replace only these paths' runs")
+    parser.add_argument("--line-strategy", default="self-sparring")
+    parser.add_argument("--line-fit", choices=("fixed", "evidence"), default="fixed")
     args = parser.parse_args()
     if args.report:
         report(args.out / "results.json", args.out)
         return
     runs = []
     for path, objective, d, coactive, noise in cells(args.subset):
+        if path not in args.paths:
+            continue
         for seed in range(args.seeds):
             known = HARTMANN6_MAX if objective == "hartmann6" and path == "line" else None
-            r = one_run(path, objective, d, coactive, noise, seed, known)
+            r = one_run(
+                path, objective, d, coactive, noise, seed, known, args.line_strategy, args.line_fit
+            )
             runs.append(r)
             print(
                 f"{path:12s} {objective:9s} d={d:2d} co={int(coactive)} noise={noise} "
@@ -119,6 +137,9 @@ def main() -> None:
             )
     args.out.mkdir(parents=True, exist_ok=True)
     name = "results-subset.json" if args.subset else "results.json"
+    if args.merge and (args.out / name).exists():
+        old = json.loads((args.out / name).read_text())["runs"]
+        runs = [r for r in old if r["path"] not in args.paths] + runs
     (args.out / name).write_text(json.dumps({"trials": TRIALS, "runs": runs}))
 
 
@@ -141,6 +162,33 @@ def _mse(xs: list[float]) -> str:
     return f"{a.mean():.3f} ± {se:.3f}"
 
 
+def _grid_target(
+    groups: dict[tuple[Any, ...], list[dict[str, Any]]], arm: str, objective: str, co: bool,
+    noise: float,
+) -> list[str]:  # fmt: skip
+    """The 6-D target against one full-grid arm: line path (on the grid) minus the grid at trial
+    150, paired by seed (same objective draw, same seed), normalised."""
+    grid = {r["seed"]: r for r in groups.get((objective, 6, arm, co, noise), [])}
+    line = {r["seed"]: r for r in groups.get((objective, 6, "line-on-grid", co, noise), [])}
+    both = sorted(set(grid) & set(line))
+    if len(both) < 2:
+        return []
+    diffs = np.array([
+        float(_normalised(np.array(line[s]["best_at"]["150"]), line[s]))
+        - float(_normalised(np.array(grid[s]["best_at"]["150"]), grid[s]))
+        for s in both
+    ])  # fmt: skip
+    se = diffs.std(ddof=1) / np.sqrt(diffs.size)
+    verdict = "met" if diffs.mean() >= -0.03 else "not met"
+    return [
+        f"- 6-D {objective}, coactive {'yes' if co else 'no'}, noise {noise}: line path (on "
+        f"the same 57,750-gait grid) minus full grid ({arm}, "
+        f"{grid[both[0]].get('strategy', 'self-sparring')}) at trial 150 = "
+        f"{diffs.mean():+.3f} ± {se:.3f} (normalised, paired by seed; target: no worse than "
+        f"-0.03): {verdict}"
+    ]
+
+
 def report(results: Path, out: Path) -> None:
     import matplotlib
 
@@ -154,15 +202,21 @@ def report(results: Path, out: Path) -> None:
         key = (r["objective"], r["d"], r["path"], r["coactive"], r["noise"])
         groups.setdefault(key, []).append(r)
     seeds = max(len(g) for g in groups.values())
+    used: dict[str, set[str]] = {}
+    for r in runs:  # runs from before the strategy was recorded were self-sparring, fixed
+        setting = f"{r.get('strategy', 'self-sparring')}, {r.get('fit', 'fixed')} kernel"
+        used.setdefault(r["path"], set()).add(setting)
+    how = "; ".join(f"{p}: {' / '.join(sorted(used[p]))}" for p in PATHS if p in used)
     lines = [
         "# The line path on continuous spaces (issue 13)",
         "",
         "`python benchmarks/study_continuous.py --seeds 6` then `--report`.",
-        f"{TRIALS} trials, n = 1, b = 1, self-sparring (LineCoSpar's rule), 50 points per line,",
-        "random line directions, fixed kernel (lengthscale 0.25 of the range for Hartmann-6, the",
-        "objective's own for the random GP; signal variance 1, jitter 1e-6), model probit noise",
-        f"0.05; noisy subjects answer with probit noise {NOISY}.  {seeds} seeds per cell (fewer",
-        "than a full study: a shared 2-core machine); mean ± standard error over seeds.",
+        f"{TRIALS} trials, n = 1, b = 1; strategy and kernel per path: {how}.",
+        "50 points per line, random line directions; kernel (the starting one where it is",
+        "evidence-fitted): lengthscale 0.25 of the range for Hartmann-6, the objective's own for",
+        "the random GP; signal variance 1, jitter 1e-6; model probit noise 0.05; noisy subjects",
+        f"answer with probit noise {NOISY}.  {seeds} seeds per cell (fewer than a full study: a",
+        "shared 2-core machine); mean ± standard error over seeds.",
         "Random GP: a fresh draw per seed (`random-gp:SEED`, lengthscale 0.1 sqrt(d) of the",
         "range); its optimum is estimated (random search + L-BFGS-B). Hartmann-6 acts on the",
         "first six features; in 8-D and 12-D the others are irrelevant.",
@@ -188,23 +242,11 @@ def report(results: Path, out: Path) -> None:
             f"{_mse(e60)} | {_mse(b150)} | {_mse(n150)} | {sec:.1f} |"
         )
     lines += ["", "## Targets", ""]
-    for objective in ("hartmann6", "random-gp"):
-        for co in (False, True):
-            for noise in (0.0, NOISY):
-                grid = groups.get((objective, 6, "grid", co, noise), [])
-                line = groups.get((objective, 6, "line-on-grid", co, noise), [])
-                if not grid or not line:
-                    continue
-                ng = np.array([_normalised(np.array(r["best_at"]["150"]), r) for r in grid])
-                nl = np.array([_normalised(np.array(r["best_at"]["150"]), r) for r in line])
-                diff = nl.mean() - ng.mean()
-                se = np.sqrt(ng.var(ddof=1) / ng.size + nl.var(ddof=1) / nl.size)
-                verdict = "met" if diff >= -0.03 else "not met"
-                lines.append(
-                    f"- 6-D {objective}, coactive {'yes' if co else 'no'}, noise {noise}: line "
-                    f"path (on the same 57,750-gait grid) minus full grid at trial 150 = "
-                    f"{diff:+.3f} ± {se:.3f} (normalised; target: no worse than -0.03): {verdict}"
-                )
+    for arm in ("grid", "grid-gated"):
+        for objective in ("hartmann6", "random-gp"):
+            for co in (False, True):
+                for noise in (0.0, NOISY):
+                    lines += _grid_target(groups, arm, objective, co, noise)
     for objective in ("hartmann6", "random-gp"):
         for d in (8, 12):
             for co in (False, True):
@@ -228,7 +270,7 @@ def report(results: Path, out: Path) -> None:
                 curve = np.mean([_fraction(np.array(r["curve"]), r) for r in g], axis=0)
                 smooth = np.convolve(curve, np.ones(10) / 10, mode="valid")
                 label = f"{path}{' +coactive' if co else ''}{' noisy' if noise else ''}"
-                style = "-" if path == "line" else ("--" if path == "grid" else ":")
+                style = {"line": "-", "grid": "--", "grid-gated": "-."}.get(path, ":")
                 ax.plot(np.arange(10, TRIALS + 1), smooth, style, label=label)
             ax.axhline(0.0, color="grey", lw=0.8)
             ax.axhline(1.0, color="grey", lw=0.8)
