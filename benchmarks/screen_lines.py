@@ -9,11 +9,13 @@ standard error over seeds) and appends the runs to ``--out`` (JSON lines).
     python benchmarks/screen_lines.py --seeds 3 "strategy=gated-eubo" "direction=coordinate" ...
 
 A variant is ``key=value`` pairs joined by ``,``: ``strategy`` (a strategy's name),
-``direction`` (random, coordinate), ``points`` (per line), ``scale`` (``study``: the study's
-kernel; a number: that fraction of the range for every feature), ``fit`` (fixed, evidence),
-``noise`` (the model's probit noise), ``span`` (below 1: each line cut to the segment
-``|t| <= span`` around the best point, in range-normalised units, a trust region; the screen
-patches ``gaitpref.loop.lines.line_points`` for it, the library has no such setting).
+``direction`` (random, coordinate; ``descent``: along the posterior mean's gradient at the
+best point, ``descent:0.5``: half of the lines random instead; screen only, the library has no
+such rule), ``points`` (per line), ``scale`` (``study``: the study's kernel; a number: that
+fraction of the range for every feature), ``fit`` (fixed, evidence), ``noise`` (the model's
+probit noise), ``span`` (below 1: each line cut to the segment ``|t| <= span`` around the best
+point, in range-normalised units, a trust region; the screen patches
+``gaitpref.loop.lines.line_points`` for it, the library has no such setting).
 Results: ``docs/results/continuous/notes.md``.
 """
 
@@ -30,7 +32,7 @@ import numpy as np
 import gaitpref.loop.lines as _lines
 from gaitpref import SquaredExponential
 from gaitpref.loop.learning import Learning
-from gaitpref.loop.line import LineCoSpar
+from gaitpref.loop.line import LineCoSpar, on_points
 from gaitpref.loop.lines import LineSettings
 from gaitpref.simulate.continuous import (
     HARTMANN6_MAX,
@@ -39,6 +41,7 @@ from gaitpref.simulate.continuous import (
     random_gp_lengthscale,
 )
 from gaitpref.simulate.points import PointCoactive, PointUser, random_curve, run_points
+from gaitpref.space import FloatArray
 from gaitpref.strategies import make_strategy
 
 TRIALS = 60
@@ -96,6 +99,31 @@ def _spanned(span: float) -> None:
     _lines.line_points = cut if span < 1 else original
 
 
+class DescentLines(LineCoSpar):
+    """Screen only: lines along the posterior mean's gradient at the best point (LineBO's
+    DescentLineBO, Kirschner et al. 2019), by central differences in normalised units; with
+    ``mix`` > 0, that share of the lines random instead (drawn from the loop's generator)."""
+
+    mix: float = 0.0
+
+    def _towards(self) -> FloatArray | None:
+        best = self.best_point()
+        if best is None:
+            return None
+        if self.mix > 0 and self.rng.random() < self.mix:
+            return None  # "coactive" direction without a target: a random one
+        lo, span = _lines._spans(self.domain)
+        h = 1e-3
+        ups = np.minimum(best[None, :] + h * np.diag(span), lo + span)
+        downs = np.maximum(best[None, :] - h * np.diag(span), lo)
+        space, ids = self.space.extended(np.vstack([ups, downs]))
+        mean = np.asarray(on_points(self.posterior, space).mean)
+        d = best.size
+        width = np.diag(ups - downs) / np.where(span > 0, span, 1.0)
+        grad = (mean[ids[:d]] - mean[ids[d:]]) / np.where(width > 0, width, 1.0)
+        return None if not np.any(grad) else grad
+
+
 def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) -> float:
     from study_continuous import box
 
@@ -114,7 +142,9 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
         scale = float(variant["scale"])
     _spanned(float(variant["span"]))
     loop_seed, user_seed = np.random.SeedSequence(seed).spawn(2)
-    loop = LineCoSpar(
+    descent = variant["direction"].startswith("descent")
+    direction = "coactive" if descent else variant["direction"]
+    loop = (DescentLines if descent else LineCoSpar)(
         domain,
         SquaredExponential(scale, 1.0, 1e-6),
         float(variant["noise"]),
@@ -123,8 +153,10 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
         seed=np.random.default_rng(loop_seed),
         strategy=make_strategy(variant["strategy"]),
         learning=Learning(fit=variant["fit"]),  # type: ignore[arg-type]
-        line=LineSettings(int(variant["points"]), variant["direction"]),  # type: ignore[arg-type]
+        line=LineSettings(int(variant["points"]), direction),  # type: ignore[arg-type]
     )
+    if descent and ":" in variant["direction"]:
+        loop.mix = float(variant["direction"].split(":")[1])  # type: ignore[attr-defined]
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(fn, domain, seed=seed) if coactive else None
     res = run_points(loop, fn, user, TRIALS, helper, checkpoints=(TRIALS,))

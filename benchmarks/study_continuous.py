@@ -112,6 +112,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("docs/results/continuous"))
     parser.add_argument("--report", action="store_true", help="summarise results.json only")
     parser.add_argument("--paths", nargs="+", choices=PATHS, default=list(PATHS))
+    parser.add_argument("--dims", nargs="+", type=int, default=[6, 8, 12])
     parser.add_argument("--merge", action="store_true", help="replace only these paths' runs")
     parser.add_argument("--line-strategy", default="self-sparring")
     parser.add_argument("--line-fit", choices=("fixed", "evidence"), default="fixed")
@@ -121,7 +122,7 @@ def main() -> None:
         return
     runs = []
     for path, objective, d, coactive, noise in cells(args.subset):
-        if path not in args.paths:
+        if path not in args.paths or d not in args.dims:
             continue
         for seed in range(args.seeds):
             known = HARTMANN6_MAX if objective == "hartmann6" and path == "line" else None
