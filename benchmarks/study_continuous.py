@@ -108,6 +108,7 @@ def cells(subset: bool) -> list[tuple[str, str, int, bool, float]]:
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--seeds", type=int, default=4)
+    parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--subset", action="store_true")
     parser.add_argument("--out", type=Path, default=Path("docs/results/continuous"))
     parser.add_argument("--report", action="store_true", help="summarise results.json only")
@@ -124,7 +125,7 @@ def main() -> None:
     for path, objective, d, coactive, noise in cells(args.subset):
         if path not in args.paths or d not in args.dims:
             continue
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             known = HARTMANN6_MAX if objective == "hartmann6" and path == "line" else None
             r = one_run(
                 path, objective, d, coactive, noise, seed, known, args.line_strategy, args.line_fit
