@@ -262,28 +262,37 @@ def report(results: Path, out: Path) -> None:
                         f"- {d}-D {objective}, coactive {'yes' if co else 'no'}, noise {noise}: "
                         f"best@60 fraction {_mse(list(b60))} (target >= 0.5): {verdict}"
                     )
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True)
+    from matplotlib.lines import Line2D
+
+    colour = {"line": "C0", "line-on-grid": "C2", "grid": "C7", "grid-gated": "C3"}
+    style = {(False, 0.0): "-", (False, NOISY): "--", (True, 0.0): ":", (True, NOISY): "-."}
+    panels = [(6, False), (6, True), (8, None), (12, None)]  # None: with and without coactive
+    fig, axes = plt.subplots(2, 4, figsize=(16, 7), sharex=True, sharey=True)
     for row, objective in enumerate(("hartmann6", "random-gp")):
-        for col, d in enumerate((6, 8, 12)):
+        for col, (d, coactive) in enumerate(panels):
             ax = axes[row, col]
+            shown: set[str] = set()
             for (obj, dd, path, co, noise), g in sorted(groups.items()):
-                if obj != objective or dd != d:
+                if obj != objective or dd != d or coactive not in (None, co):
                     continue
                 curve = np.mean([_fraction(np.array(r["curve"]), r) for r in g], axis=0)
                 smooth = np.convolve(curve, np.ones(10) / 10, mode="valid")
-                label = f"{path}{' +coactive' if co else ''}{' noisy' if noise else ''}"
-                style = {"line": "-", "grid": "--", "grid-gated": "-."}.get(path, ":")
-                ax.plot(np.arange(10, TRIALS + 1), smooth, style, label=label)
+                ax.plot(np.arange(10, TRIALS + 1), smooth, style[(co, noise)], color=colour[path])
+                shown.add(path)
             ax.axhline(0.0, color="grey", lw=0.8)
             ax.axhline(1.0, color="grey", lw=0.8)
-            ax.set_title(f"{objective}, {d}-D")
+            which = "" if coactive is None else (", coactive" if coactive else ", no coactive")
+            ax.set_title(f"{objective}, {d}-D{which}")
             if row == 1:
                 ax.set_xlabel("trial")
             if col == 0:
                 ax.set_ylabel("fraction random -> optimum")
-            ax.legend(
-                fontsize=6, loc="upper left" if d == 6 else "lower right", ncol=2 if d == 6 else 1
-            )
+            handles = [Line2D([], [], color=colour[p], label=p) for p in colour if p in shown]
+            for (co, nz), ls in style.items():
+                if coactive in (None, co):
+                    label = f"{'' if co else 'no '}coactive, {'noisy' if nz else 'noiseless'}"
+                    handles.append(Line2D([], [], color="k", ls=ls, label=label))
+            ax.legend(handles=handles, fontsize=6.5, loc="upper left", ncol=2)
     fig.suptitle("executed points, 10-trial moving mean (0: random selection, 1: the optimum)")
     fig.tight_layout()
     fig.savefig(out / "curves.png", dpi=110)
