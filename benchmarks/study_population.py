@@ -1,31 +1,40 @@
 """The population study (issue 14): warm starts against cold starts on synthetic clinics.
 
 Each clinic has ``S`` subjects on the paper's synthetic 2-D benchmark (``synthetic-2d``: 30 x 30
-grid, the config's loop: n = 1, b = 1, self-sparring, no coactive feedback).  Subject ``s``'s
-utility is ``sqrt(rho) z_0 + sqrt(1 - rho) z_s`` over the standardised objectives of the
-authors' set (``gaitpref.simulate.population.synthetic_population``: objective 0 is the shared
-part, objectives 1..S the individual ones, the same at every ``rho``).  For every ``rho``,
-``gaitpref bench population`` runs each subject cold and warm-started from the others (same
-seeds), and the confidence's calibration over all answers of both runs.
+grid, the config's loop: n = 1, b = 1, self-sparring, no coactive feedback).  For every
+``rho``, ``gaitpref bench population`` runs each subject cold and warm-started from the others
+(same seeds), and states the confidence after every answer of both runs.  Three parts:
 
-Two kinds of simulated subject:
+- ``noiseless``: the paper's objectives (``synthetic_population``: subject ``s``'s utility is
+  ``sqrt(rho) z_0 + sqrt(1 - rho) z_s`` over the standardised objectives of the authors' set,
+  objective 0 the shared part, objectives 1..S the individual ones), subjects answering without
+  noise as ``gaitpref simulate`` does: warm against cold, and the calibration;
+- ``model_noise``: the same objectives, subjects answering with the config's probit noise on
+  the utility's scale (the config's noise over its prior sd, times the objectives' sd of 1);
+- ``gp_draws``: the machinery check, subjects drawn from the model's own population prior
+  (``gp_population``: the config's kernel, signal variance and jitter) answering with the
+  config's noise; the recommendation is judged on the draws' smooth parts, as the confidence
+  states it.  If the confidence is calibrated here, the machinery (Laplace posterior, sampling,
+  the tolerance) is right, and a gap on the paper's objectives is the model's mismatch.
 
-- noiseless (the paper's, ``gaitpref simulate``): warm against cold, and the calibration;
-- "as the model assumes": probit noise equal to the config's, on the utility's scale (the
-  config's noise over its prior sd, times the objectives' sd of 1): the calibration when the
-  model's likelihood is the subjects' (``--calibration-rho``, ``--calibration-trials``).
+The calibration's standard error resamples whole subjects (a cluster bootstrap: one subject's
+cold and warm answers are one cluster), since answers within a run are correlated.
 
-    python benchmarks/study_population.py [--subjects 24,12,12] [--trials 20] [--rho 0,0.5,0.8]
+    python benchmarks/study_population.py [--parts noiseless,model_noise,gp_draws] ...
+    python benchmarks/study_population.py --report
 
-writes ``docs/results/population/``: ``results.json`` (the bench's JSON per ``rho``, and per
-``rho`` for the model's own noise) and ``summary.md`` (the tables against the issue's targets,
-the calibrations, the machine).
+writes ``docs/results/population/``: ``results.json`` (the bench's JSON per part and ``rho``;
+a run of some parts keeps the others' results) and ``summary.md`` (the tables against the
+issue's targets, the calibrations, the runs' commands and machines; the hand-written "What it
+shows" section of an existing summary is kept).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import shlex
+import sys
 import time
 from pathlib import Path
 
@@ -34,7 +43,12 @@ import numpy as np
 from gaitpref.config import load_config
 from gaitpref.data import paper_objectives
 from gaitpref.loop.warm import RELEARN_EVERY
-from gaitpref.simulate.population import population_bench, synthetic_population
+from gaitpref.simulate.population import (
+    cluster_bootstrap,
+    gp_population,
+    population_bench,
+    synthetic_population,
+)
 
 try:
     from _machine import machine_description, machine_markdown
@@ -42,56 +56,112 @@ except ImportError:  # run as a module
     from benchmarks._machine import machine_description, machine_markdown
 
 OUT = Path(__file__).resolve().parent.parent / "docs" / "results" / "population"
+PARTS = ("noiseless", "model_noise", "gp_draws")
+TITLES = {
+    "noiseless": "Noiseless subjects on the paper's objectives (the warm-cold runs above)",
+    "model_noise": "The paper's objectives, subjects answering with the model's noise",
+    "gp_draws": "Machinery check: subjects drawn from the model's own prior, with its noise",
+}
+LEAST = 30  # bins with fewer answers are not judged
+HAND = "## What it shows"
 
 
-def _per_rho(text: str, rhos: list[float]) -> list[int]:
+def _per_rho(text: str, rhos: list[float], flag: str) -> list[int]:
     values = [int(v) for v in text.split(",")]
     if len(values) == 1:
         values *= len(rhos)
     if len(values) != len(rhos):
-        raise SystemExit(f"--subjects: one value or one per rho ({len(rhos)}), got {text!r}")
+        raise SystemExit(f"{flag}: one value or one per rho ({len(rhos)}), got {text!r}")
     return values
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--subjects", default="24,12,12", help="one value, or one per rho")
+    parser.add_argument("--parts", default=",".join(PARTS), help="which parts to run")
+    parser.add_argument("--subjects", default="24,8,8", help="one value, or one per rho")
     parser.add_argument("--trials", type=int, default=20)
     parser.add_argument("--rho", default="0,0.5,0.8")
     parser.add_argument("--calibration-rho", default="0.5")
-    parser.add_argument("--calibration-subjects", type=int, default=12)
-    parser.add_argument("--calibration-trials", type=int, default=30)
+    parser.add_argument("--calibration-subjects", default="16")
+    parser.add_argument("--calibration-trials", type=int, default=60)
+    parser.add_argument("--gp-rho", default="0.5")
+    parser.add_argument("--gp-subjects", default="16")
+    parser.add_argument("--gp-trials", type=int, default=60)
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument(
         "--relearn-every", type=int, default=RELEARN_EVERY,
         help="re-learn the new subject's share every so many answers (0: rho held)",
     )  # fmt: skip
+    parser.add_argument("--report", action="store_true", help="summarise results.json only")
+    parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
+    path = args.out / "results.json"
+    results: dict[str, dict] = {}
+    if path.is_file():
+        results = json.loads(path.read_text(encoding="utf-8"))
+    if not args.report:
+        parts = args.parts.split(",")
+        unknown = sorted(set(parts) - set(PARTS))
+        if unknown:
+            raise SystemExit(f"--parts: unknown {unknown}; choose from {', '.join(PARTS)}")
+        for part in parts:
+            start = time.perf_counter()
+            results[part] = run_part(part, args)
+            results.setdefault("runs", {})[part] = {
+                "command": "python benchmarks/study_population.py "
+                + " ".join(shlex.quote(a) for a in sys.argv[1:]),
+                "seconds": round(time.perf_counter() - start, 1),
+                "machine": machine_description(),
+            }
+            args.out.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+            print(f"{part}: done in {results['runs'][part]['seconds']:.0f} s", flush=True)
+    old = args.out / "summary.md"
+    hand = _hand_written(old.read_text(encoding="utf-8")) if old.is_file() else ""
+    old.write_text(summary(results, hand), encoding="utf-8")
+
+
+def run_part(part: str, args: argparse.Namespace) -> dict[str, dict]:
     config = load_config("synthetic-2d")
-    objectives = paper_objectives()
-    rhos = [float(r) for r in args.rho.split(",")]
-    results: dict[str, dict] = {"noiseless": {}, "model_noise": {}}
-    start = time.perf_counter()
-    for rho, subjects in zip(rhos, _per_rho(args.subjects, rhos), strict=True):
-        clinic = synthetic_population(objectives, rho, subjects)
-        results["noiseless"][str(rho)] = population_bench(
-            config, clinic, args.trials, jobs=args.jobs, relearn_every=args.relearn_every
-        )
-        print(f"noiseless, rho = {rho}: done at {time.perf_counter() - start:.0f} s", flush=True)
     loop = config.make_loop(seed=0)
-    noise = float(loop.gp.noise) / float(np.sqrt(loop.gp.kernel.variance))
-    if args.calibration_rho:
-        for rho in [float(r) for r in args.calibration_rho.split(",")]:
-            clinic = synthetic_population(objectives, rho, args.calibration_subjects)
-            results["model_noise"][str(rho)] = population_bench(
-                config, clinic, args.calibration_trials, jobs=args.jobs, user_noise=noise,
+    noise = float(loop.gp.noise)
+    out: dict[str, dict] = {}
+    if part == "noiseless":
+        rhos = [float(r) for r in args.rho.split(",")]
+        for rho, subjects in zip(rhos, _per_rho(args.subjects, rhos, "--subjects"), strict=True):
+            clinic = synthetic_population(paper_objectives(), rho, subjects)
+            out[str(rho)] = population_bench(
+                config, clinic, args.trials, jobs=args.jobs, relearn_every=args.relearn_every
+            )
+    elif part == "model_noise":
+        rhos = [float(r) for r in args.calibration_rho.split(",")]
+        counts = _per_rho(args.calibration_subjects, rhos, "--calibration-subjects")
+        scaled = noise / float(np.sqrt(loop.gp.kernel.variance))  # objectives' sd is 1
+        for rho, subjects in zip(rhos, counts, strict=True):
+            clinic = synthetic_population(paper_objectives(), rho, subjects)
+            out[str(rho)] = population_bench(
+                config, clinic, args.calibration_trials, jobs=args.jobs, user_noise=scaled,
                 relearn_every=args.relearn_every,
             )  # fmt: skip
-            print(f"model noise, rho = {rho}: done at {time.perf_counter() - start:.0f} s")
-    seconds = time.perf_counter() - start
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "results.json").write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
-    (OUT / "summary.md").write_text(summary(results, args, noise, seconds), encoding="utf-8")
+    else:
+        rhos = [float(r) for r in args.gp_rho.split(",")]
+        counts = _per_rho(args.gp_subjects, rhos, "--gp-subjects")
+        for i, (rho, subjects) in enumerate(zip(rhos, counts, strict=True)):
+            draws, smooth = gp_population(config, rho, subjects, np.random.default_rng([14, i]))
+            out[str(rho)] = population_bench(
+                config, draws, args.gp_trials, jobs=args.jobs, user_noise=noise,
+                relearn_every=args.relearn_every, truths=smooth,
+            )  # fmt: skip
+    return out
+
+
+def _hand_written(text: str) -> str:
+    """The hand-written section of an existing summary (up to the machine section)."""
+    if HAND not in text:
+        return ""
+    body = text[text.index(HAND) :]
+    ends = [i for i in (body.find("\n## Runs"), body.find("\n## Machine")) if i >= 0]
+    return body[: min(ends)].rstrip() + "\n" if ends else body.rstrip() + "\n"
 
 
 def _mean(subjects: list[dict], arm: str, stop: int) -> tuple[float, float]:
@@ -100,7 +170,8 @@ def _mean(subjects: list[dict], arm: str, stop: int) -> tuple[float, float]:
     return float(per.mean()), float(per.std(ddof=1) / np.sqrt(per.size))
 
 
-def _warm_cold_table(results: dict, trials: int) -> list[str]:
+def _warm_cold_table(results: dict) -> list[str]:
+    trials = min(out["trials"] for out in results.values())
     lines = [
         "| rho | subjects | learnt rho (mean) | share at the end (mean; alone) | "
         "cold 1-10 | warm 1-10 | warm - cold 1-10 | "
@@ -131,10 +202,10 @@ def _warm_cold_table(results: dict, trials: int) -> list[str]:
         if r >= 0.5:
             row.append("met" if gain >= 0.05 else "**not met**")
         elif r == 0.0:
-            if gain >= -0.01:
-                row.append("met")
-            elif gain + 2 * se >= -0.01:
-                row.append("not shown: -0.01 is within 2 se")
+            if gain - 2 * se >= -0.01:
+                row.append("met (shown: -0.01 below 2 se)")
+            elif gain >= -0.01:
+                row.append("point estimate met, not shown (2 se reach below -0.01)")
             else:
                 row.append("**not met**")
         else:
@@ -143,96 +214,115 @@ def _warm_cold_table(results: dict, trials: int) -> list[str]:
     return lines
 
 
-def _calibration_table(results: dict) -> list[str]:
-    bins = _pooled(results)
+def calibration_bins(part: dict, rng_seed: int = 0) -> list[dict]:
+    """The part's answers (every rho, both arms) binned, with a cluster bootstrap over
+    subjects (a subject's cold and warm runs are one cluster)."""
+    runs = []
+    for out in part.values():
+        for s in out["subjects"]:
+            stated = s["stated"]["cold"] + s["stated"]["warm"]
+            right = s["right"]["cold"] + s["right"]["warm"]
+            runs.append((stated, right))
+    return cluster_bootstrap(runs, np.random.default_rng(rng_seed))
+
+
+def _calibration_table(bins: list[dict]) -> list[str]:
     lines = [
-        "| stated bin | answers | mean stated | observed | observed - stated | binomial se |",
-        "|---|---|---|---|---|---|",
+        "| stated bin | answers | subjects | mean stated | observed | observed - stated "
+        "| se (subjects resampled) | binomial se |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for b in bins:
-        se = np.sqrt(b["observed"] * (1 - b["observed"]) / b["count"])
-        cells = [f"{b['lo']:.1f}-{b['hi']:.1f}", str(b["count"])]
+        binom = np.sqrt(b["observed"] * (1 - b["observed"]) / b["count"])
+        cells = [f"{b['lo']:.1f}-{b['hi']:.1f}", str(b["count"]), str(b["clusters"])]
         cells += [f"{b['stated']:.3f}", f"{b['observed']:.3f}"]
-        cells += [f"{b['observed'] - b['stated']:+.3f}", f"{se:.3f}"]
+        cells += [f"{b['observed'] - b['stated']:+.3f}", f"{b['se']:.3f}", f"{binom:.3f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 
 
-def _worst(results: dict, least: int = 30) -> float:
-    """The largest |observed - stated| over bins with at least ``least`` answers."""
-    gaps = [abs(b["observed"] - b["stated"]) for b in _pooled(results) if b["count"] >= least]
-    return max(gaps) if gaps else float("nan")
+def _verdict(bins: list[dict]) -> str:
+    judged = [b for b in bins if b["count"] >= LEAST]
+    if not judged:
+        return f"No bin holds {LEAST} answers."
+    worst = max(judged, key=lambda b: abs(b["observed"] - b["stated"]))
+    gap = worst["observed"] - worst["stated"]
+    within = sum(1 for b in judged if abs(b["observed"] - b["stated"]) <= 0.05)
+    clear = [
+        f"{b['lo']:.1f}-{b['hi']:.1f}"
+        for b in judged
+        if abs(b["observed"] - b["stated"]) > 0.05 + 2 * b["se"]
+    ]
+    top = max(b["hi"] for b in judged)
+    return (
+        f"Bins with at least {LEAST} answers: {len(judged)} (up to {top:.1f}); "
+        f"{within} within 0.05.  Largest gap {gap:+.3f} (se {worst['se']:.3f}) in "
+        f"{worst['lo']:.1f}-{worst['hi']:.1f}.  Bins beyond 0.05 by more than 2 se: "
+        + (", ".join(clear) if clear else "none")
+        + "."
+    )
 
 
-def summary(results: dict, args: argparse.Namespace, noise: float, seconds: float) -> str:
-    main, matched = results["noiseless"], results["model_noise"]
-    lines = [
-        "# Warm starts on synthetic clinics (issue 14)",
+def summary(results: dict, hand: str) -> str:
+    runs = results.get("runs", {})
+    lines = ["# Warm starts on synthetic clinics (issue 14)", ""]
+    for part in PARTS:
+        if part in runs:
+            lines.append(f"- {part}: `{runs[part]['command']}` ({runs[part]['seconds']:.0f} s)")
+    lines += [
         "",
-        f"`python benchmarks/study_population.py --subjects {args.subjects} --trials "
-        f"{args.trials} --rho {args.rho} --calibration-rho {args.calibration_rho} "
-        f"--calibration-subjects {args.calibration_subjects} --calibration-trials "
-        f"{args.calibration_trials} --relearn-every {args.relearn_every} --jobs {args.jobs}` "
-        f"({seconds:.0f} s).",
-        "",
-        "## Warm against cold (noiseless subjects)",
-        "",
-        "Normalised objective of the executed gaits, mean over subjects (standard error over "
-        "subjects); warm - cold paired by subject (same seeds; mean of the per-subject "
-        "differences, its standard error).  Targets: at least +0.05 over trials 1-10 where "
-        "rho >= 0.5; no loss beyond 0.01 where rho = 0.",
-        "",
-        *_warm_cold_table(main, args.trials),
+        "Each part runs every subject cold, then warm-started from the others (same seeds); "
+        "the confidence is stated after every answer of both runs.",
+    ]
+    if "noiseless" in results:
+        lines += [
+            "",
+            "## Warm against cold (noiseless subjects)",
+            "",
+            "Normalised objective of the executed gaits, mean over subjects (standard error over "
+            "subjects); warm - cold paired by subject (same seeds; mean of the per-subject "
+            "differences, its standard error).  Targets: at least +0.05 over trials 1-10 where "
+            "rho >= 0.5; no loss beyond 0.01 where rho = 0.",
+            "",
+            *_warm_cold_table(results["noiseless"]),
+        ]
+    lines += [
         "",
         "## Calibration of the confidence",
         "",
-        "After every answer, cold and warm, all rho: the stated probability that the "
-        "recommended gait is within 5% of the range of the best, binned, against how often it "
-        "was.  Target: within 0.05 of the diagonal.  Answers of one subject's run are "
-        "correlated, so the binomial standard error is a lower bound.",
-        "",
-        f"### Subjects as the model assumes them (probit noise {noise:g} on the objectives' "
-        "scale: the config's noise over its prior sd)",
-        "",
-        *_calibration_table(matched),
-        "",
-        f"Largest gap in a bin with at least 30 answers: {_worst(matched):.3f}.",
-        "",
-        "### Noiseless subjects (the runs above)",
-        "",
-        *_calibration_table(main),
-        "",
-        f"Largest gap in a bin with at least 30 answers: {_worst(main):.3f}.",
-        "",
-        "## Machine",
-        "",
-        machine_markdown(machine_description()),
-        "",
+        "After every answer, cold and warm, all rho of the part: the stated probability that "
+        "the recommended gait is within 5% of the range of the best, binned, against how often "
+        "it was.  Target: within 0.05 of the diagonal.  The standard error of observed - stated "
+        "resamples whole subjects (2000 resamples; a subject's cold and warm runs are one "
+        "cluster): answers within a run are correlated, and the binomial standard error "
+        f"understates it.  Bins with fewer than {LEAST} answers are listed, not judged.",
     ]
+    for part in PARTS:
+        if part not in results:
+            continue
+        p = results[part]
+        rhos = ", ".join(p)
+        subjects = sum(len(o["subjects"]) for o in p.values())
+        trials = ", ".join(sorted({str(o["trials"]) for o in p.values()}))
+        noise = ", ".join(sorted({f"{o['user_noise']:g}" for o in p.values()}))
+        bins = calibration_bins(p)
+        lines += [
+            "",
+            f"### {TITLES[part]}",
+            "",
+            f"rho {rhos}; {subjects} subjects, {trials} trials each, cold and warm; the "
+            f"subjects' probit noise {noise} (utility units).",
+            "",
+            *_calibration_table(bins),
+            "",
+            _verdict(bins),
+        ]
+    lines += ["", hand.rstrip() if hand else f"{HAND}\n\n(to be written by hand)", ""]
+    lines += ["## Runs' machines", ""]
+    for part in PARTS:
+        if part in runs:
+            lines += [f"### {part}", "", machine_markdown(runs[part]["machine"]), ""]
     return "\n".join(lines)
-
-
-def _pooled(results: dict) -> list[dict]:
-    """The bins of every rho merged (count-weighted)."""
-    merged: dict[float, dict] = {}
-    for out in results.values():
-        for b in out["calibration"]:
-            m = merged.setdefault(
-                b["lo"], {"lo": b["lo"], "hi": b["hi"], "count": 0, "s": 0.0, "o": 0.0}
-            )
-            m["count"] += b["count"]
-            m["s"] += b["stated"] * b["count"]
-            m["o"] += b["observed"] * b["count"]
-    return [
-        {
-            "lo": m["lo"],
-            "hi": m["hi"],
-            "count": m["count"],
-            "stated": m["s"] / m["count"],
-            "observed": m["o"] / m["count"],
-        }
-        for _, m in sorted(merged.items())
-    ]
 
 
 if __name__ == "__main__":

@@ -6,11 +6,18 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
 from gaitpref.config import load_config
-from gaitpref.simulate.population import calibration, synthetic_population
+from gaitpref.simulate.population import (
+    calibration,
+    cluster_bootstrap,
+    gp_population,
+    population_bench,
+    synthetic_population,
+)
 
 CONFIG = "exo-1d-step-length"
 
@@ -45,3 +52,61 @@ def test_calibration_bins_and_synthetic_populations() -> None:
     alone = synthetic_population(objectives, 0.0, 3)
     z = (objectives - objectives.mean(1, keepdims=True)) / objectives.std(1, keepdims=True)
     assert np.allclose(alone, z[1:4])  # rho = 0: each their own
+
+
+def test_cluster_bootstrap_resamples_whole_subjects() -> None:
+    rng = np.random.default_rng(0)
+    # two subjects, each always right or always wrong at stated 0.5: the bin's observed
+    # frequency is 0.5, but resampling subjects moves it between 0, 0.5 and 1
+    runs = [([0.5] * 20, [True] * 20), ([0.55] * 20, [False] * 20)]
+    (b,) = cluster_bootstrap(runs, rng, resamples=4000)
+    assert (b["lo"], b["count"], b["clusters"]) == (0.5, 40, 2)
+    assert abs(b["observed"] - 0.5) < 1e-12 and abs(b["stated"] - 0.525) < 1e-12
+    binomial = np.sqrt(0.25 / 40)
+    assert b["se"] > 3 * binomial  # the clusters' spread: sd of {0, 0.5, 0.5, 1} ~ 0.35
+    assert abs(b["se"] - np.sqrt(0.125)) < 0.03
+    # independent subjects with one answer each: the bootstrap se is close to the binomial
+    hits = rng.random(400) < 0.3
+    (c,) = cluster_bootstrap([([0.31], [bool(h)]) for h in hits], rng)
+    assert abs(c["se"] - np.sqrt(c["observed"] * (1 - c["observed"]) / 400)) < 0.005
+    with pytest.raises(ValueError, match="at least one run"):
+        cluster_bootstrap([], rng)
+
+
+def test_gp_population_draws_the_models_prior_and_its_smooth_part() -> None:
+    config = load_config("synthetic-2d")
+    draws, smooth = gp_population(config, 0.5, 200, np.random.default_rng(1))
+    assert draws.shape == smooth.shape == (200, len(config.space))
+    kernel = config.make_loop(seed=0).gp.kernel
+    jitter = draws - smooth  # the independent per-gait term: variance jitter, no correlation
+    assert abs(jitter.var() / kernel.jitter - 1) < 0.05
+    assert abs(np.corrcoef(jitter[:, 0], jitter[:, 1])[0, 1]) < 0.2
+    assert abs(draws.var() / (kernel.variance + kernel.jitter) - 1) < 0.2
+    # rho = 0.5: half of each subject's variance is their own (the spread about the subjects'
+    # mean), half the shared part they all hold; rho = 0: nothing shared
+    total = kernel.variance + kernel.jitter
+    assert abs((draws - draws.mean(axis=0)).var() / total - 0.5) < 0.05
+    alone, _ = gp_population(config, 0.0, 200, np.random.default_rng(1))
+    assert abs((alone - alone.mean(axis=0)).var() / total - 1.0) < 0.1
+    assert alone.mean(axis=0).var() / total < 0.02
+    with pytest.raises(ValueError, match="rho"):
+        gp_population(config, 1.5, 2, np.random.default_rng(1))
+
+
+def test_the_bench_judges_the_recommendation_on_the_truths_given(tmp_path: Path) -> None:
+    config = load_config(CONFIG)
+    x = np.linspace(0, 1, len(config.space))
+    objectives = np.array([-((x - p) ** 2) for p in (0.6, 0.65)])
+    out = population_bench(config, objectives, 4)
+    for s in out["subjects"]:  # the answers behind the calibration, per subject and arm
+        assert len(s["stated"]["cold"]) == len(s["right"]["warm"]) == 4
+    # judged on the opposite utility: the same runs, every recommendation near the best is now
+    # near the worst
+    flipped = population_bench(config, objectives, 4, truths=-objectives)
+    for a, b in zip(out["subjects"], flipped["subjects"], strict=True):
+        assert a["cold"] == b["cold"] and a["stated"] == b["stated"]
+        assert all(
+            not (r and q) for r, q in zip(a["right"]["cold"], b["right"]["cold"], strict=True)
+        )
+    with pytest.raises(ValueError, match="truths"):
+        population_bench(config, objectives, 2, truths=objectives[:1])

@@ -52,6 +52,7 @@ class Walked:
 def _walk(
     config: ExperimentConfig,
     objective: FloatArray,
+    truth: FloatArray,
     trials: int,
     seeds: Sequence[int],
     others: Sequence[Sequence[Preference]] | None,
@@ -73,8 +74,7 @@ def _walk(
         rho = warm.rho
     user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss), noise=user_noise)
     sure_rng = np.random.default_rng(sure_ss)
-    utility = user.utility
-    span = float(utility.max() - utility.min())
+    span = float(truth.max() - truth.min())
     executed: list[int] = []
     stated: list[float] = []
     right: list[bool] = []
@@ -84,7 +84,7 @@ def _walk(
         executed.extend(query.actions)
         sure = confidence(loop.posterior, sure_rng, tolerance=tolerance, samples=samples)
         stated.append(sure.probability)
-        right.append(bool(utility.max() - utility[sure.recommended] <= tolerance * span))
+        right.append(bool(truth.max() - truth[sure.recommended] <= tolerance * span))
     scores = user.normalized(np.asarray(executed[:trials], dtype=np.intp)).tolist()
     share = None if loop.warm is None else loop.warm.share
     return Walked(scores, list(loop.preferences), stated, right, rho, share)
@@ -113,6 +113,41 @@ def calibration(
     return out
 
 
+def cluster_bootstrap(
+    runs: Sequence[tuple[Sequence[float], Sequence[bool]]],
+    rng: np.random.Generator,
+    bins: int = 10,
+    resamples: int = 2000,
+) -> list[dict[str, float]]:
+    """:func:`calibration` of all ``runs`` (``(stated, right)`` per cluster: one subject's
+    answers), with each bin's number of clusters and the standard error of its ``observed -
+    stated`` from ``resamples`` resamples of whole clusters (answers within a subject's run are
+    correlated: the binomial standard error understates it).  A resample that leaves a bin
+    empty does not count towards that bin's standard error."""
+    if not runs:
+        raise ValueError("cluster_bootstrap needs at least one run")
+    stated = [np.asarray(p, dtype=np.float64) for p, _ in runs]
+    right = [np.asarray(r, dtype=np.float64) for _, r in runs]
+    which = [np.minimum((p * bins).astype(int), bins - 1) for p in stated]
+    # per cluster and bin: count, sum of stated, sum of right
+    table = np.zeros((len(runs), 3, bins))
+    for c, (w, p, r) in enumerate(zip(which, stated, right, strict=True)):
+        table[c, 0] = np.bincount(w, minlength=bins)
+        table[c, 1] = np.bincount(w, weights=p, minlength=bins)
+        table[c, 2] = np.bincount(w, weights=r, minlength=bins)
+    picks = rng.integers(0, len(runs), size=(resamples, len(runs)))
+    sums = table[picks].sum(axis=1)  # resamples x 3 x bins
+    with np.errstate(invalid="ignore", divide="ignore"):
+        gaps = (sums[:, 2] - sums[:, 1]) / sums[:, 0]
+    out = []
+    for b in calibration(np.concatenate(stated), np.concatenate(right).astype(bool), bins):
+        k = round(b["lo"] * bins)
+        g = gaps[:, k][np.isfinite(gaps[:, k])]
+        se = float(g.std(ddof=1)) if g.size > 1 else float("nan")
+        out.append({**b, "clusters": int(np.count_nonzero(table[:, 0, k])), "se": se})
+    return out
+
+
 def population_bench(
     config: ExperimentConfig,
     objectives: FloatArray,
@@ -124,22 +159,42 @@ def population_bench(
     samples: int = 300,
     user_noise: float = 0.0,
     relearn_every: int = RELEARN_EVERY,
+    truths: FloatArray | None = None,
 ) -> dict[str, object]:
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
     simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
     ``relearn_every``: the warm runs re-learn the new subject's share every so many answers
     (0: ``rho`` held, as warm starts recorded before share refits; otherwise the new subject
-    starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``)."""
+    starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``);
+    ``truths``: the grids on which the recommendation is judged (``S x A``; None: the
+    objectives; :func:`gp_population` gives the smooth parts of prior draws)."""
     grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
+    if truths is None:
+        judged = grids
+    else:
+        judged = [objective_on_grid(config.space, t) for t in np.asarray(truths)]
+        if len(judged) != len(grids):
+            raise ValueError(f"truths: one grid per subject ({len(grids)}), got {len(judged)}")
     if trials < 1:
         raise ValueError(f"trials must be >= 1, got {trials}")
     n_jobs = resolve_jobs(jobs)
 
     def run(calls: list[tuple[int, Sequence[Sequence[Preference]] | None]]) -> list[Walked]:
         args = [
-            (config, grids[k], trials, (seed, k), o, tolerance, samples, user_noise, relearn_every)
+            (
+                config,
+                grids[k],
+                judged[k],
+                trials,
+                (seed, k),
+                o,
+                tolerance,
+                samples,
+                user_noise,
+                relearn_every,
+            )
             for k, o in calls
         ]
         if n_jobs == 1:
@@ -156,7 +211,15 @@ def population_bench(
     right = [r for w in (*cold, *warm) for r in w.right]
     return {
         "subjects": [
-            {"subject": k, "cold": c.scores, "warm": w.scores, "rho": w.rho, "share": w.share}
+            {
+                "subject": k,
+                "cold": c.scores,
+                "warm": w.scores,
+                "rho": w.rho,
+                "share": w.share,
+                "stated": {"cold": c.stated, "warm": w.stated},
+                "right": {"cold": c.right, "warm": w.right},
+            }
             for k, (c, w) in enumerate(zip(cold, warm, strict=True))
         ],
         "calibration": calibration(stated, right),
@@ -182,4 +245,32 @@ def synthetic_population(
     return out
 
 
-__all__ = ["Walked", "calibration", "population_bench", "synthetic_population"]
+def gp_population(
+    config: ExperimentConfig, rho: float, subjects: int, rng: np.random.Generator
+) -> tuple[FloatArray, FloatArray]:
+    """``subjects`` utilities drawn from the config's own population prior: ``sqrt(rho) f_0 +
+    sqrt(1 - rho) f_s`` with ``f ~ GP(0, k)`` the config's kernel (its signal variance and
+    jitter), i.e. ``k((x, s), (x', s')) = k(x, x') (rho + (1 - rho) [s = s'])``
+    (``model/population.py``); and their smooth parts (the same without the jitter's
+    independent per-gait term), on which the confidence's recommendation is judged.  Answering
+    with the config's noise (``user_noise = noise``), such subjects are the model's own
+    assumption: its stated confidence should be calibrated on them."""
+    if not 0.0 <= rho <= 1.0:
+        raise ValueError(f"rho must lie in [0, 1], got {rho!r}")
+    if subjects < 1:
+        raise ValueError(f"subjects must be >= 1, got {subjects!r}")
+    engine = config.make_loop(seed=0).posterior.engine
+    full, jitter = engine.prior_parts(rng, subjects + 1)
+    smooth = full if jitter is None else full - jitter
+    a, b = np.sqrt(rho), np.sqrt(1.0 - rho)
+    return a * full[0] + b * full[1:], a * smooth[0] + b * smooth[1:]
+
+
+__all__ = [
+    "Walked",
+    "calibration",
+    "cluster_bootstrap",
+    "gp_population",
+    "population_bench",
+    "synthetic_population",
+]
