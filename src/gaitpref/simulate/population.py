@@ -25,6 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
@@ -90,9 +91,7 @@ def _walk(
     return Walked(scores, list(loop.preferences), stated, right, rho, share)
 
 
-def calibration(
-    stated: Sequence[float], right: Sequence[bool], bins: int = 10
-) -> list[dict[str, float]]:
+def calibration(stated: ArrayLike, right: ArrayLike, bins: int = 10) -> list[dict[str, float]]:
     """Stated probability against observed frequency, in ``bins`` equal bins of ``[0, 1]``."""
     p = np.asarray(stated, dtype=np.float64)
     hit = np.asarray(right, dtype=np.float64)
