@@ -32,6 +32,7 @@ shows" section of an existing summary is kept).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import shlex
 import sys
@@ -87,6 +88,10 @@ def main() -> None:
     parser.add_argument("--gp-rho", default="0.5")
     parser.add_argument("--gp-subjects", default="16")
     parser.add_argument("--gp-trials", type=int, default=60)
+    parser.add_argument(
+        "--gp-noise", type=float, default=1.0,
+        help="the GP-draw part's noise, model's and subjects', as a multiple of the config's",
+    )  # fmt: skip
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument(
         "--relearn-every", type=int, default=RELEARN_EVERY,
@@ -144,6 +149,8 @@ def run_part(part: str, args: argparse.Namespace) -> dict[str, dict]:
                 relearn_every=args.relearn_every,
             )  # fmt: skip
     else:
+        config = dataclasses.replace(config, noise=config.noise * args.gp_noise)
+        noise = float(config.noise)
         rhos = [float(r) for r in args.gp_rho.split(",")]
         counts = _per_rho(args.gp_subjects, rhos, "--gp-subjects")
         for i, (rho, subjects) in enumerate(zip(rhos, counts, strict=True)):
@@ -214,14 +221,16 @@ def _warm_cold_table(results: dict) -> list[str]:
     return lines
 
 
-def calibration_bins(part: dict, rng_seed: int = 0) -> list[dict]:
-    """The part's answers (every rho, both arms) binned, with a cluster bootstrap over
+def calibration_bins(
+    part: dict, arms: tuple[str, ...] = ("cold", "warm"), rng_seed: int = 0
+) -> list[dict]:
+    """The part's answers (every rho, the ``arms``) binned, with a cluster bootstrap over
     subjects (a subject's cold and warm runs are one cluster)."""
     runs = []
     for out in part.values():
         for s in out["subjects"]:
-            stated = s["stated"]["cold"] + s["stated"]["warm"]
-            right = s["right"]["cold"] + s["right"]["warm"]
+            stated = [p for arm in arms for p in s["stated"][arm]]
+            right = [r for arm in arms for r in s["right"][arm]]
             runs.append((stated, right))
     return cluster_bootstrap(runs, np.random.default_rng(rng_seed))
 
@@ -311,12 +320,16 @@ def summary(results: dict, hand: str) -> str:
             f"### {TITLES[part]}",
             "",
             f"rho {rhos}; {subjects} subjects, {trials} trials each, cold and warm; the "
-            f"subjects' probit noise {noise} (utility units).",
+            f"subjects' probit noise {noise} (utility units"
+            + ("; the model's the same" if part == "gp_draws" else "")
+            + ").",
             "",
             *_calibration_table(bins),
             "",
             _verdict(bins),
         ]
+        for arm in ("cold", "warm"):
+            lines += ["", f"{arm.capitalize()} runs only: " + _verdict(calibration_bins(p, (arm,)))]
     lines += ["", hand.rstrip() if hand else f"{HAND}\n\n(to be written by hand)", ""]
     lines += ["## Runs' machines", ""]
     for part in PARTS:
