@@ -245,7 +245,8 @@ def _calibration_table(bins: list[dict]) -> list[str]:
         binom = np.sqrt(b["observed"] * (1 - b["observed"]) / b["count"])
         cells = [f"{b['lo']:.1f}-{b['hi']:.1f}", str(b["count"]), str(b["clusters"])]
         cells += [f"{b['stated']:.3f}", f"{b['observed']:.3f}"]
-        cells += [f"{b['observed'] - b['stated']:+.3f}", f"{b['se']:.3f}", f"{binom:.3f}"]
+        se = f"{b['se']:.3f}" + ("*" if b["observed"] in (0.0, 1.0) else "")
+        cells += [f"{b['observed'] - b['stated']:+.3f}", se, f"{binom:.3f}"]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
 
@@ -304,7 +305,10 @@ def summary(results: dict, hand: str) -> str:
         "it was.  Target: within 0.05 of the diagonal.  The standard error of observed - stated "
         "resamples whole subjects (2000 resamples; a subject's cold and warm runs are one "
         "cluster): answers within a run are correlated, and the binomial standard error "
-        f"understates it.  Bins with fewer than {LEAST} answers are listed, not judged.",
+        f"understates it.  Bins with fewer than {LEAST} answers are listed, not judged.  "
+        "*: every answer in the bin was wrong (or right); resampling cannot move the observed "
+        "frequency, and the se (the stated values' spread only) understates the uncertainty: "
+        "with k subjects in the bin, a rate up to about 3/k is not excluded.",
     ]
     for part in PARTS:
         if part not in results:
