@@ -35,13 +35,14 @@ def _data(space: Space, subjects: int, per: int) -> tuple[np.ndarray, np.ndarray
 
 def _smooth_reference(
     space: Space, rho: float, subjects: int, w: np.ndarray, l_: np.ndarray, who: np.ndarray,
-    target: int,
+    target: int, task: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Mean and covariance of ``g_target`` from the dense Laplace over every (gait, subject):
     ``Ks_{t,:} K^-1 f_hat`` and ``Ks_tt - Ks_{t,:} K^-1 Ks_{:,t} + Ks_{t,:} K^-1 S K^-1 Ks_{:,t}``
     with ``Ks`` the kernel without the jitter and ``S`` the Laplace covariance."""
     A = len(space)
-    task = rho + (1 - rho) * np.eye(subjects)
+    if task is None:
+        task = rho + (1 - rho) * np.eye(subjects)
     smooth = dense_kernel(space.points, SCALES, VARIANCE, 0.0)
     K = np.kron(task, smooth + JITTER * np.eye(A))
     n = w.size
@@ -100,3 +101,18 @@ def test_the_prior_without_the_nugget(small_space: Space) -> None:
     g = post.sample(np.random.default_rng(1), DRAWS, nugget=False)
     cov = dense_kernel(small_space.points, SCALES, VARIANCE, 0.0)
     assert np.max(np.abs(np.cov(g, rowvar=False) - cov)) < 6 * VARIANCE / np.sqrt(DRAWS)
+
+
+@pytest.mark.parametrize(("rho", "share"), [(0.6, 0.2), (0.3, 0.9)])
+def test_the_new_subjects_own_share(small_space: Space, rho: float, share: float) -> None:
+    """The new subject (0) with a share of their own (``model/population.py``): the task
+    covariance ``[[1, sqrt(share rho) 1^T], [., rho + (1 - rho) I]]``, jitter included."""
+    kernel = SquaredExponential(SCALES, VARIANCE, JITTER)
+    w, l_, who = _data(small_space, 3, 8)
+    model = PopulationModel(small_space, kernel, rho, SIGMA, share=share)
+    first, second = node_codes(small_space, w, who), node_codes(small_space, l_, who)
+    post = model.posterior(first, second, Probit(np.full(w.size, SIGMA)), 0)
+    task = rho + (1 - rho) * np.eye(3)
+    task[0, 1:] = task[1:, 0] = np.sqrt(share * rho)
+    mean, cov = _smooth_reference(small_space, rho, 3, w, l_, who, 0, task=task)
+    _check_moments(post, mean, cov)
