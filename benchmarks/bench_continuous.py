@@ -119,7 +119,7 @@ def main() -> None:
 
 `python benchmarks/bench_continuous.py` - LineCoSpar, n = 1, b = 1,
 self-sparring, 50 points per line, noiseless simulated subject with gradient-threshold coactive
-feedback.  The 2-core shared VM, loaded by other work while it ran.
+feedback.  The 2-core shared VM; its 1-minute load average while it ran is under Machine.
 
 | case | comparisons | points in the table | median (s) | p95 (s) | median ask (s) | target |
 |---|---|---|---|---|---|---|
