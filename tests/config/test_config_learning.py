@@ -112,3 +112,11 @@ def test_every_key_is_read() -> None:
 def test_bad_learning_keys_name_the_key(model: str, cospar: str, message: str) -> None:
     with pytest.raises(ConfigError, match=message):
         _cfg(model, cospar)
+
+
+def test_a_range_too_small_for_the_default_lengthscale_prior_is_named() -> None:
+    """A quarter of a subnormal range rounds to 0: the prior's median would not be positive."""
+    text = BASE.format(model="", cospar="")
+    text = text.replace("min = 0.25\nmax = 0.30\nnum = 6", "min = 0.0\nmax = 5e-324\nnum = 2")
+    with pytest.raises(ConfigError, match=r"\[space.step_width\]: range 5e-324 is too small"):
+        parse_config(text)

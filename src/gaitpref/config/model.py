@@ -98,6 +98,9 @@ def make_learning(model: dict[str, Any], space: Space) -> Learning:
     """Ties, the tie band, the fit mode, the refit interval and the hyperparameter prior."""
     band = _band(model)
     learns_band = model["ties"] == "model" and band is None
+    for f in space.features:  # the default lengthscale prior's median is a quarter of the range
+        if f.span > 0 and not 0.25 * f.span > 0:
+            fail(f"space.{f.name}", None, f"range {f.span!r} is too small to give a lengthscale")
     prior = default_prior(space, model["signal_variance"], model["noise"], fit_band=learns_band)
     raw, _ = check_table(model["prior"], "model.prior", PRIOR)
     scales = list(prior.lengthscale)
