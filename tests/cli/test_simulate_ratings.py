@@ -121,3 +121,39 @@ def test_errors_name_the_problem(
     code, _, err = _run(_config(tmp_path, extra), objective_file, *options, "--json")
     assert code == 2
     assert message in " ".join(err.split())
+
+
+def test_a_function_of_points_is_rated_over_the_grid_like_its_npy(tmp_path: Path) -> None:
+    """``--objective PATH.py:NAME`` with ratings on a grid config: the function is evaluated at
+    the grid's points, and the run is the one its ``.npy`` gives."""
+    module = tmp_path / "bowl.py"
+    module.write_text(
+        "import numpy as np\n\n"
+        "def f(x):\n"
+        "    x = np.asarray(x)\n"
+        "    return -((x[:, 0] - 0.3) ** 2) - 0.5 * (x[:, 1] - 0.7) ** 2\n",
+        encoding="utf-8",
+    )
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n")
+    space = load_config(str(cfg)).space
+    pts = space.points
+    grid = -((pts[:, 0] - 0.3) ** 2) - 0.5 * (pts[:, 1] - 0.7) ** 2
+    npy = tmp_path / "bowl.npy"
+    np.save(npy, grid.reshape(tuple(len(f) for f in space.features)))
+    rate = ("--rating-quantiles", "0.25,0.5,0.75", "--json")
+    code, out, err = _run(cfg, Path(f"{module}:f"), *rate)
+    assert code == 0, err
+    code_npy, out_npy, err_npy = _run(cfg, npy, *rate)
+    assert code_npy == 0, err_npy
+    by_fn, by_npy = json.loads(out), json.loads(out_npy)
+    assert by_fn["actions"] == by_npy["actions"] and by_fn["ratings"] == by_npy["ratings"]
+    assert len(set(by_fn["ratings"])) > 1  # the quartiles split the executed gaits
+
+
+def test_ratings_on_the_line_path_are_refused_by_name(tmp_path: Path) -> None:
+    args = ["simulate", "compass-continuous-3d", "--objective", "hartmann6", "--trials", "3"]
+    result = runner.invoke(app, [*args, "--rating-quantiles", "0.25,0.5,0.75"])
+    assert result.exit_code == 2
+    assert "--rating-quantiles: config 'compass-continuous-3d' runs on the line path" in " ".join(
+        result.stderr.split()
+    )

@@ -222,22 +222,32 @@ def simulate(
     """
     from rich.table import Table
 
-    from gaitpref.cli.points import is_grid_objective, run_command
+    from gaitpref.cli.points import is_grid_objective, load_point_objective, run_command
     from gaitpref.simulate.users import objective_on_grid
 
     cfg = _load_config_or_fail(config)
     use_seed = cfg.seed if seed is None else seed
-    if not is_grid_objective(objective):
-        if rating_quantiles:
-            fail("--rating-quantiles needs a .npy objective over the grid")
+    if not is_grid_objective(objective) and not rating_quantiles:
         run_command(cfg, objective, trials, use_seed, coactive, noise, as_json)
         return
     if cfg.subspace == "line":
+        if rating_quantiles:
+            fail(
+                f"--rating-quantiles: config {cfg.name!r} runs on the line path (no grid over "
+                "which to take the objective's quantiles); leave it out there"
+            )
         fail(
             f"objective {objective!r}: config {cfg.name!r} runs on the line path (no grid to "
             "hold a .npy objective); give PATH.py:NAME, hartmann6 or random-gp"
         )
-    obj = _load_objective(Path(objective))
+    if is_grid_objective(objective):
+        obj = _load_objective(Path(objective))
+    else:  # a function of points, evaluated over the grid: its quantiles are the grid's
+        import numpy as np
+
+        fn = load_point_objective(objective, cfg)
+        shape = tuple(len(f) for f in cfg.space.features)
+        obj = guard(lambda: np.asarray(fn(cfg.space.points), dtype=np.float64).reshape(shape))
     try:
         objective_on_grid(cfg.space, obj)
     except ValueError as exc:
