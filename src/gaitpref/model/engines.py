@@ -133,7 +133,7 @@ def psd_root_t(matrix: FloatArray) -> FloatArray:
     faster than an eigendecomposition at a few hundred points.
 
     ``matrix`` must be semi-definite (a kernel's Gram matrix is).  ValueError if it is not square
-    and finite, or if a diagonal entry of ``R^T R`` falls short of the matrix's by more than
+    and finite, or if a diagonal entry of ``R^T R`` exceeds the matrix's by more than
     ``sqrt(u) max_k matrix_kk`` (a negative direction the factor left out; an indefinite
     remainder with a small diagonal would pass this check).
     """
