@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from numpy.typing import NDArray
 from scipy.special import entr, ndtr
 
 from gaitpref import CoSpar, Feature, PreferenceGP, Space, SquaredExponential
@@ -17,7 +16,6 @@ from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
 from gaitpref.strategies import (
     STRATEGIES,
-    AskContext,
     InformationGain,
     SelfSparring,
     make_strategy,
@@ -30,6 +28,7 @@ from gaitpref.strategies.bald import (
     variance_at,
 )
 from gaitpref.strategies.infogain import candidate_pool
+from tests.strategies.contexts import ask_context
 
 SCALE = Ordinal(["very bad", "bad", "okay", "good"], noise=0.02)
 NOISE = 0.02
@@ -131,16 +130,6 @@ def test_covariances_and_variances_match_the_dense_posterior(
     assert np.allclose(variance_at(post, idx), np.diag(cov)[idx], atol=1e-12)
 
 
-def _context(
-    post: Posterior,
-    n: int,
-    buffer: tuple[int, ...],
-    seed: int,
-    allowed: NDArray[np.bool_] | None = None,
-) -> AskContext:
-    return AskContext(post, n, buffer, len(buffer), np.random.default_rng(seed), allowed)
-
-
 @settings(max_examples=40)
 @given(
     n=st.integers(1, 4),
@@ -158,9 +147,9 @@ def test_never_outside_the_region_and_never_a_reference(
     allowed = np.array(region)
     if not allowed.any():
         with pytest.raises(ValueError, match="no action is allowed"):
-            InformationGain().propose(_context(post, n, tuple(buffer), seed, allowed))
+            InformationGain().propose(ask_context(post, n, tuple(buffer), seed, allowed))
         return
-    picks = InformationGain().propose(_context(post, n, tuple(buffer), seed, allowed))
+    picks = InformationGain().propose(ask_context(post, n, tuple(buffer), seed, allowed))
     assert len(picks) == n and all(allowed[a] for a in picks)
     fresh = [a for a in np.flatnonzero(allowed) if a not in buffer]
     if len(fresh) >= n:  # enough new allowed actions: no reference, no repeat
@@ -185,7 +174,7 @@ def test_large_grids_screen_candidates_and_respect_the_region() -> None:
     best = np.flatnonzero(allowed)[np.argmax(np.asarray(post.mean)[allowed])]
     assert best in pool  # the highest mean is a candidate
     assert np.max(var) > 0.99 * np.max(np.asarray(post.variance)[allowed])  # so is the widest
-    picks = InformationGain(candidates=32).propose(_context(post, 3, (int(w[0]),), 0, allowed))
+    picks = InformationGain(candidates=32).propose(ask_context(post, 3, (int(w[0]),), 0, allowed))
     assert len(set(picks)) == 3 and all(allowed[a] for a in picks)
 
 
@@ -213,7 +202,7 @@ def test_after_data_in_one_corner_it_asks_away_from_it() -> None:
             (InformationGain(), far_ig, var_ig),
             (SelfSparring(), far_ss, var_ss),
         ):
-            (x,) = strategy.propose(_context(post, 1, (best,), seed))
+            (x,) = strategy.propose(ask_context(post, 1, (best,), seed))
             far.append(float(np.linalg.norm(space.points[x] - space.points[best])))
             vs.append(float(var[x]))
     assert np.mean(far_ig) > np.mean(far_ss) + 0.1, (np.mean(far_ig), np.mean(far_ss))
@@ -224,14 +213,14 @@ def test_no_buffer_starts_at_the_largest_variance_or_most_informative_rating(
     small_space: Space, small_kernel: SquaredExponential
 ) -> None:
     plain = _posterior(small_space, small_kernel, None, seed=5)
-    (x,) = InformationGain().propose(_context(plain, 1, (), 0))
+    (x,) = InformationGain().propose(ask_context(plain, 1, (), 0))
     assert x == int(np.argmax(plain.variance))
     rated = _posterior(small_space, small_kernel, SCALE, seed=5)
     values = rating_information(SCALE, small_kernel.variance, rated.mean, rated.variance)
-    first, second = InformationGain().propose(_context(rated, 2, (), 0))
+    first, second = InformationGain().propose(ask_context(rated, 2, (), 0))
     assert first == int(np.argmax(values)) and second != first
     prior = PreferenceGP(small_space, small_kernel, NOISE).prior()  # all tied: at random
-    starts = {InformationGain().propose(_context(prior, 1, (), s))[0] for s in range(10)}
+    starts = {InformationGain().propose(ask_context(prior, 1, (), s))[0] for s in range(10)}
     assert len(starts) > 3
 
 

@@ -17,6 +17,7 @@ from gaitpref.model.posterior import Posterior
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.strategies import STRATEGIES, AskContext, PlausibleEubo, make_strategy
 from gaitpref.strategies.eubo import eubo_against
+from tests.strategies.contexts import ask_context
 
 SPACE = Space([Feature.linspace("a", 0, 1, 7), Feature.linspace("b", 0, 1, 5)])
 KERNEL = SquaredExponential((0.3, 0.4), 0.005, 1e-7)
@@ -36,7 +37,7 @@ def _context(
     seed: int,
     allowed: NDArray[np.bool_] | None = None,
 ) -> AskContext:
-    return AskContext(post, n, buffer, 10, np.random.default_rng(seed), allowed)
+    return ask_context(post, n, buffer, seed, allowed, trial=10)
 
 
 def _draws(post: Posterior, seed: int, samples: int) -> list[int]:
