@@ -25,7 +25,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
@@ -91,11 +91,17 @@ def _walk(
     return Walked(scores, list(loop.preferences), stated, right, rho, share)
 
 
+def _bin_of(p: FloatArray, bins: int) -> NDArray[np.intp]:
+    """The bin of each probability among ``bins`` equal bins of ``[0, 1]`` (1 in the last)."""
+    out: NDArray[np.intp] = np.minimum((p * bins).astype(np.intp), bins - 1)
+    return out
+
+
 def calibration(stated: ArrayLike, right: ArrayLike, bins: int = 10) -> list[dict[str, float]]:
     """Stated probability against observed frequency, in ``bins`` equal bins of ``[0, 1]``."""
     p = np.asarray(stated, dtype=np.float64)
     hit = np.asarray(right, dtype=np.float64)
-    which = np.minimum((p * bins).astype(int), bins - 1)
+    which = _bin_of(p, bins)
     out = []
     for b in range(bins):
         mine = which == b
@@ -127,7 +133,7 @@ def cluster_bootstrap(
         raise ValueError("cluster_bootstrap needs at least one run")
     stated = [np.asarray(p, dtype=np.float64) for p, _ in runs]
     right = [np.asarray(r, dtype=np.float64) for _, r in runs]
-    which = [np.minimum((p * bins).astype(int), bins - 1) for p in stated]
+    which = [_bin_of(p, bins) for p in stated]
     # per cluster and bin: count, sum of stated, sum of right
     table = np.zeros((len(runs), 3, bins))
     for c, (w, p, r) in enumerate(zip(which, stated, right, strict=True)):
