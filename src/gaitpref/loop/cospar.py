@@ -488,6 +488,47 @@ class CoSpar:
         self._buffer = answer.query.buffer
         return answer
 
+    def adopt_recorded(
+        self, refit: Mapping[str, Any] | None = None, share: float | None = None
+    ) -> Answer:
+        """Replay on another machine: take the last answer's refitted values as the log has them.
+
+        ``refit`` is a logged ``hyperparameters_refit`` payload (its ``after`` values and, with
+        ``hyper = "average"``, its ``hypotheses``), ``share`` a logged ``share_refit``'s
+        ``after``.  The session's replay calls this only after checking that they equal what
+        this machine derived up to rounding (``sessions/events.py``, :func:`same_value`):
+        everything after is then derived from the log's numbers, and the replay cannot drift
+        from the recording one rounding at a time.  Returns the answer with those values.
+        """
+        if not self.answers:
+            raise QueryError("nothing to adopt: no query has been answered")
+        answer = self.answers[-1]
+        fit, share_fit = answer.refit, answer.share_refit
+        if refit is not None and fit is not None:
+            after = _hyper_from_json(refit["after"], fit.after)
+            hypotheses = fit.hypotheses
+            if refit.get("hypotheses"):
+                hypotheses = tuple(
+                    Hypothesis(
+                        float(h["factor"]),
+                        dataclasses.replace(
+                            after, lengthscale=tuple(float(v) for v in h["lengthscale"])
+                        ),
+                        None if h["objective"] is None else float(h["objective"]),
+                        float(h["weight"]),
+                    )
+                    for h in refit["hypotheses"]
+                )
+            fit = dataclasses.replace(fit, after=after, hypotheses=hypotheses)
+            self.hyper, self.gp = after, self._gp(after)
+        if share is not None and share_fit is not None and self.warm is not None:
+            share_fit = dataclasses.replace(share_fit, after=float(share))
+            self.warm = dataclasses.replace(self.warm, share=float(share))
+        self.answers[-1] = dataclasses.replace(answer, refit=fit, share_refit=share_fit)
+        with one_blas_thread():
+            self.posterior = self._fit(self.answers)
+        return self.answers[-1]
+
     def exclude(
         self,
         drops: Mapping[int, Collection[int]],
@@ -757,6 +798,20 @@ def _merged(
             raise IndexError(f"query {qid} has {size} {field}; cannot exclude index {bad[0]}")
         new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
     return new
+
+
+def _hyper_from_json(values: Mapping[str, Any], like: Hyperparameters) -> Hyperparameters:
+    """Hyperparameters as a refit logged them (``HyperFit.to_json``); a value the log leaves
+    out (``tie_band`` None, ``thresholds`` absent: not fitted) stays as in ``like``."""
+    band = values.get("tie_band")
+    thresholds = values.get("thresholds")
+    return Hyperparameters(
+        tuple(float(v) for v in values["lengthscale"]),
+        float(values["signal_variance"]),
+        float(values["jitter"]),
+        like.band if band is None else float(band),
+        like.thresholds if thresholds is None else tuple(float(t) for t in thresholds),
+    )
 
 
 __all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

@@ -12,11 +12,14 @@ cannot be made (the loop proposes again without it), then the ``query_issued``.
 
 Payloads are validated when written (:func:`new_event`) and when read (:func:`read_payload`,
 which also checks the stored schema version).  Replay compares each re-derived event with the
-logged one on the payload class's :meth:`~gaitpref.payloads.EventPayload.checked_fields`.
+logged one on the payload class's :meth:`~gaitpref.payloads.EventPayload.checked_fields`:
+numbers within a relative 1e-9 (:func:`same_value`), because another machine's BLAS rounds
+differently in the last bits; everything else exactly.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import (
@@ -426,6 +429,32 @@ def read_payload(record: EventRecord) -> EventPayload:
         raise ReplayError(f"{exc} (the stored event is left as it is)") from None
 
 
+#: how far a re-derived number may be from the logged one and still be the same: the rounding
+#: of another machine's BLAS (summation order, SIMD width), not a different computation
+REL_TOL = 1e-9
+ABS_TOL = 1e-12
+
+
+def same_value(logged: Any, derived: Any) -> bool:
+    """Whether a logged JSON value and a re-derived one agree: numbers within :data:`REL_TOL`
+    (or :data:`ABS_TOL` near zero), lists and objects item by item, everything else exactly."""
+    if isinstance(logged, bool) or isinstance(derived, bool):
+        return logged is derived
+    if isinstance(logged, int | float) and isinstance(derived, int | float):
+        if isinstance(logged, int) and isinstance(derived, int):
+            return logged == derived
+        return math.isclose(logged, derived, rel_tol=REL_TOL, abs_tol=ABS_TOL)
+    if isinstance(logged, list) and isinstance(derived, list):
+        return len(logged) == len(derived) and all(
+            same_value(a, b) for a, b in zip(logged, derived, strict=True)
+        )
+    if isinstance(logged, dict) and isinstance(derived, dict):
+        return logged.keys() == derived.keys() and all(
+            same_value(logged[k], derived[k]) for k in logged
+        )
+    return bool(logged == derived)
+
+
 def describe_mismatch(seq: int, kind: str, logged: dict[str, Any], derived: dict[str, Any]) -> str:
     """One line per checked field that differs between the log and what replay re-derived."""
     cls = payload_class(kind)
@@ -433,18 +462,19 @@ def describe_mismatch(seq: int, kind: str, logged: dict[str, Any], derived: dict
     lines = [
         f"  {name}: log has {logged.get(name)!r}, replay gives {derived.get(name)!r}"
         for name in fields
-        if logged.get(name) != derived.get(name)
+        if not same_value(logged.get(name), derived.get(name))
     ]
     return f"event {seq} ({kind}):\n" + "\n".join(lines)
 
 
 def same_event(record: EventRecord, derived: NewEvent) -> bool:
-    """Whether the logged event and the re-derived one agree on every checked field."""
+    """Whether the logged event and the re-derived one agree on every checked field (numbers
+    within rounding: :func:`same_value`)."""
     if derived.kind != record.kind:
         return False
     cls = payload_class(record.kind)
     fields = cls.checked_fields() if cls is not None else ()
-    return all(record.payload.get(f) == derived.payload.get(f) for f in fields)
+    return all(same_value(record.payload.get(f), derived.payload.get(f)) for f in fields)
 
 
 __all__ = [
@@ -480,4 +510,5 @@ __all__ = [
     "payload_class",
     "read_payload",
     "same_event",
+    "same_value",
 ]

@@ -3,18 +3,22 @@
 Each logged event is read through its payload class (validated, its schema version checked;
 ``events.py``), derived again from the state so far (``state.py``: the proposal CoSpar makes with
 the session's seed, the answer's terms, the exclusion, the validation order) and compared with the
-log on the payload class's checked fields.  The first difference raises
-:class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's events (one
-transaction: trials, one event per feedback record of any registered kind, the refit) are
-replayed together, and so are a query's (the gaits made on demand for it, then the query).
+log on the payload class's checked fields (numbers within rounding: a log written on another
+machine replays, and a refit's numbers are then taken from the log).  The first difference
+raises :class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's
+events (one transaction: trials, one event per feedback record of any registered kind, the
+refit) are replayed together, and so are a query's (the gaits made on demand for it, then the
+query).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from gaitpref.errors import QueryError, ReplayError, SessionStateError
 from gaitpref.feedback import kind_for_event
+from gaitpref.loop.cospar import Answer
 from gaitpref.sessions import events as log
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord, NewEvent
@@ -148,4 +152,24 @@ def _replay_answer(state: SessionState, group: Sequence[EventRecord]) -> None:
     except ReplayError:
         state.revert_tell()
         raise
-    state.commit(group, answer)
+    state.commit(group, _adopt_recorded(state, answer, group, derived))
+
+
+def _adopt_recorded(
+    state: SessionState, answer: Answer, group: Sequence[EventRecord], derived: Sequence[NewEvent]
+) -> Answer:
+    """The answer with its refits' numbers as the log has them where they differ in the last
+    bits from what this machine derived (another machine's rounding; already checked to agree
+    within it): what follows is then derived from the log's numbers (``CoSpar.adopt_recorded``)."""
+    refit: dict[str, Any] | None = None
+    share: float | None = None
+    for r, d in zip(group, derived, strict=True):
+        if r.payload == d.payload:  # bit for bit, as on the machine that recorded it
+            continue
+        if r.kind == log.REFIT:
+            refit = r.payload
+        elif r.kind == log.SHARE_REFIT:
+            share = float(r.payload["after"])
+    if refit is None and share is None:
+        return answer
+    return state.loop.adopt_recorded(refit, share)
