@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -78,14 +79,16 @@ def test_cot_curve_needs_a_fixed_speed_library(duration_library: GaitLibrary) ->
     ("request_", "reason"),
     [
         (GaitRequest(0.13, speed=3.0), "normal force"),
-        (GaitRequest(0.13, step_duration=20.0), "forward progress"),
+        # too slow to walk: which of the two ways of saying so the solver ends on depends on
+        # the machine's rounding (SLSQP's path; an AMD and an Intel machine differ here)
+        (GaitRequest(0.13, step_duration=20.0), "forward progress|stops or falls back"),
     ],
 )
 def test_infeasible_requests_say_so_and_why(request_: GaitRequest, reason: str) -> None:
     result = optimize_gait(request_, settings=HZDSettings(max_iterations=60))
     assert not result.feasible
     assert result.message.startswith("infeasible")
-    assert reason in result.message
+    assert re.search(reason, result.message), result.message
 
 
 def test_warm_start_reaches_the_same_gait(gait: Gait) -> None:
