@@ -98,3 +98,24 @@ def test_other_lines_stop_replay(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     monkeypatch.setattr(line_module, "draw_line", shifted)
     with pytest.raises(ReplayError, match="line"):
         Session.open(url, s.id)
+
+
+def test_session_show_draws_a_continuous_session(tmp_path: Path) -> None:
+    """`gaitpref session show` on a space the paper's figures cannot draw: the posterior at the
+    trials' points (as the console shows it), not an error."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    db = str(tmp_path / "lab.db")
+    s = Session.create(db, parse_config(TEXT), "S01", seed=11)
+    _drive(s, 5)
+    figure = tmp_path / "show.png"
+    result = CliRunner().invoke(
+        app, ["session", "show", str(s.id), "--json", "--figure", str(figure), "--db", db]
+    )
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.output)["trials"] == 5
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 10_000

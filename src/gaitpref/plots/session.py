@@ -33,6 +33,7 @@ from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
 from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots.trials import on_a_grid, render_trials, trials_picture
 from gaitpref.space import FloatArray, IntArray, Space
 
 if TYPE_CHECKING:
@@ -189,10 +190,19 @@ def render_session(pic: SessionPicture) -> Figure:
 
 
 def save_session_figure(session: Session, path: str | Path) -> Path:
-    """Draw ``session`` to ``path`` (PNG or anything matplotlib writes); returns the path."""
+    """Draw ``session`` to ``path`` (PNG or anything matplotlib writes); returns the path.
+
+    A space the paper's figures cannot draw (continuous, or more than two features) gets the
+    posterior at the trials' points instead (``plots/trials.py``), as in the console."""
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig = render_session(session_picture(session))
+    post = session.posterior()
+    if on_a_grid(post.space):
+        fig = render_session(session_picture(session))
+    else:
+        trials = [t.action for t in session.trials()]
+        title = f"session {session.id} ({session.subject}): posterior after {len(trials)} trials"
+        fig = render_trials(trials_picture(post, trials, title=title))
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out
