@@ -20,6 +20,9 @@
                                              # beats every known-safe gait's
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
                                              # feature's range; 0: the gait alone)
+    # start = [{step_length = 0.12, step_duration = 0.9}]   # gaits the operator declares safe
+                                             # (feature values, gait ids of a library, or
+                                             # action indices): executed first, known-safe
 
 ROIAL (Li, Tucker et al., ICRA 2021) for both; ``model/ordinal.py`` and ``loop/safety.py`` for
 the maths.
@@ -27,7 +30,7 @@ the maths.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -39,9 +42,14 @@ from gaitpref.config.schema import (
     check_table,
     defaults_for,
 )
-from gaitpref.config.specs import fail
+from gaitpref.config.specs import fail, shown
+from gaitpref.errors import GaitLibraryError
 from gaitpref.loop.safety import Safety, default_risk
 from gaitpref.model.ordinal import Ordinal
+from gaitpref.space import Space
+
+if TYPE_CHECKING:
+    from gaitpref.gaits.library import GaitLibrary
 
 
 def parse_rating(raw: object, noise: float) -> Ordinal | None:
@@ -66,10 +74,17 @@ def parse_rating(raw: object, noise: float) -> Ordinal | None:
 
 
 def parse_safety(
-    raw: object, ordinal: Ordinal | None, defaults: str = DEFAULTS_VERSION
+    raw: object,
+    ordinal: Ordinal | None,
+    defaults: str = DEFAULTS_VERSION,
+    space: Space | None = None,
+    library: GaitLibrary | None = None,
 ) -> tuple[Safety, frozenset[str]]:
     """The settings of ``[safety]`` (no region of avoidance when ``avoid`` is empty) with the
-    defaults of version ``defaults``, and the keys that left the rule to them (``safety.risk``)."""
+    defaults of version ``defaults``, and the keys that left the rule to them (``safety.risk``).
+
+    ``start`` names gaits of ``space``, the grid (None: the line path, which takes none), by
+    feature values, ``library``'s gait ids or action indices."""
     safety: dict[str, Any]
     safety, defaulted = check_table(raw, "safety", SAFETY, defaults_for(defaults, "safety"))
     avoid: tuple[str, ...] = tuple(safety["avoid"])
@@ -90,9 +105,70 @@ def parse_safety(
     relied = {"safety.risk"} if avoid and {"lambda", "risk"} <= defaulted else set()
     if cautious is not None and "cautious" in defaulted:
         relied.add("safety.cautious")
+    start = _start(safety["start"], space, library)
     return Safety(
-        len(avoid), safety["lambda"], safety["unsafe_radius"], risk, cautious, safety["explore"]
+        len(avoid),
+        safety["lambda"],
+        safety["unsafe_radius"],
+        risk,
+        cautious,
+        safety["explore"],
+        start,
     ), frozenset(relied)
+
+
+def _start(
+    gaits: list[str | int | dict[str, float]], space: Space | None, library: GaitLibrary | None
+) -> tuple[int, ...]:
+    """The action indices of ``[safety].start``, each checked against the grid."""
+    if not gaits:
+        return ()
+    if space is None:
+        fail("safety", "start", "names gaits of a grid; the line path (subspace = 'line') has none")
+    out: list[int] = []
+    for k, gait in enumerate(gaits, start=1):
+        where = f"gait {k} ({shown(gait)})"
+        if isinstance(gait, str):
+            if library is None:
+                fail("safety", "start", f"{where}: a gait id needs a [gaits] library")
+            try:
+                index = library.index_of_id(gait)
+            except GaitLibraryError as exc:
+                fail("safety", "start", f"{where}: {exc}")
+        elif isinstance(gait, int):
+            if gait >= len(space):
+                fail("safety", "start", f"{where}: the grid's actions are 0..{len(space) - 1}")
+            index = gait
+        else:
+            index = _at(gait, space, where)
+        if index in out:
+            fail("safety", "start", f"{where} is the same gait as gait {out.index(index) + 1}")
+        out.append(index)
+    return tuple(out)
+
+
+def _at(values: dict[str, float], space: Space, where: str) -> int:
+    """The grid action with these feature values (each a grid value, within 1e-6 of its range)."""
+    names = set(space.names)
+    if set(values) != names:
+        wrong = sorted(set(values) - names) or sorted(names - set(values))
+        what = "unknown feature" if set(values) - names else "missing feature"
+        fail(
+            "safety", "start", f"{where}: {what} {wrong[0]!r} (features: {', '.join(space.names)})"
+        )
+    idx = []
+    for f in space.features:
+        v = values[f.name]
+        k = int(np.argmin(np.abs(f.array - v)))
+        if abs(f.values[k] - v) > 1e-6 * max(f.span, 1e-12):
+            near = ", ".join(f"{x:g}" for x in sorted(f.array[np.argsort(np.abs(f.array - v))[:2]]))
+            fail(
+                "safety",
+                "start",
+                f"{where}: {f.name} = {v:g} is not a grid value (nearest: {near})",
+            )
+        idx.append(k)
+    return int(np.ravel_multi_index(tuple(idx), space.shape))
 
 
 def _cautious(

@@ -192,7 +192,8 @@ def parse_config(
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
-    safety, relied = parse_safety(top["safety"], ordinal, defaults)
+    grid = None if on_line else space
+    safety, relied = parse_safety(top["safety"], ordinal, defaults, grid, library)
     stop = parse_stop(top["stop"])
     return ExperimentConfig(
         name=top["name"] if top["name"] is not None else default_name,

@@ -23,6 +23,7 @@ from gaitpref.config.specs import (
     SCALE,
     Choice,
     Coactive,
+    Gaits,
     Integer,
     Labels,
     LogNormalPair,
@@ -109,6 +110,7 @@ SAFETY: Final[dict[str, Key]] = {
     "cautious": Key(Number(0.0, 1.0), 0.6),  # the risk rule's cautious level (safety.py); 0: off
     "explore": Key(Number(0.0, 100.0), 1.0),  # with cautious: mu + explore sd beats known-safe
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
+    "start": Key(Gaits(MAX_QUERY), ()),  # gaits the operator declares safe: executed first
 }
 STOP: Final[dict[str, Key]] = {
     "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule

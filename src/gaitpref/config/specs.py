@@ -285,3 +285,34 @@ class Labels:
         ):
             _bad(self, value, table, key)
         return tuple(value)
+
+
+@dataclass(frozen=True)
+class Gaits:
+    """A list of at most ``max_len`` gaits, each a gait id (a library's), an action index of the
+    grid (C order, from 0) or a table of feature values; which gaits they name is checked against
+    the space (``feedback.py``)."""
+
+    max_len: int
+
+    @property
+    def allowed(self) -> str:
+        return (
+            f"a list of at most {self.max_len} gaits, each a gait id, an action index >= 0 or a "
+            "table of feature values, e.g. [{step_length = 0.12, step_duration = 0.9}]"
+        )
+
+    def check(self, value: object, table: str, key: str) -> list[str | int | dict[str, float]]:
+        if not isinstance(value, list) or len(value) > self.max_len:
+            _bad(self, value, table, key)
+        out: list[str | int | dict[str, float]] = []
+        for item in value:
+            if (isinstance(item, str) and 0 < len(item) <= MAX_NAME) or (
+                isinstance(item, int) and not isinstance(item, bool) and item >= 0
+            ):
+                out.append(item)
+            elif isinstance(item, dict) and 0 < len(item) <= 4 * MAX_NAME:
+                out.append({str(k): Number().check(v, table, key) for k, v in item.items()})
+            else:
+                fail(table, key, f"must be {self.allowed}; gait {len(out) + 1} is {shown(item)}")
+        return out

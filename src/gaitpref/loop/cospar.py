@@ -179,6 +179,8 @@ class CoSpar:
             if ordinal is None:
                 raise ValueError("a region of avoidance needs a rating scale (ordinal=...)")
             self.safety.threshold(ordinal, kernel.variance)  # checks avoid < categories
+        for a in self.safety.start:
+            space.check_index(a)
         self.unsafe: set[int] = set()  # actions flagged unsafe (flag_unsafe)
         self.avoided: dict[int, float] = {}  # action -> radius never proposed again (avoid)
         self._avoided_mask: NDArray[np.bool_] | None = None
@@ -346,15 +348,37 @@ class CoSpar:
                 "e.g. gaits that cannot be made); nothing was proposed"
             )
         self._rng_before_pending = self.rng.bit_generator.state
-        with one_blas_thread():
-            posterior = self._ask_posterior()
-        context = AskContext(posterior, self.n, self._buffer, len(self.executed), self.rng, allowed)
-        with one_blas_thread():
-            actions = tuple(int(a) for a in self.strategy.propose(context))
+        actions = self._start_actions(allowed)
+        if len(actions) < self.n:
+            with one_blas_thread():
+                posterior = self._ask_posterior()
+            context = AskContext(
+                posterior,
+                self.n - len(actions),
+                self._buffer + actions,
+                len(self.executed),
+                self.rng,
+                allowed,
+            )
+            with one_blas_thread():
+                actions += tuple(int(a) for a in self.strategy.propose(context))
         points = tuple(tuple(row) for row in self.space.points_of(actions).tolist())
         self.pending = Query(self._next_id, actions, self._buffer, points)
         self._next_id += 1
         return self.pending
+
+    def _start_actions(self, allowed: NDArray[np.bool_] | None) -> tuple[int, ...]:
+        """The declared-safe gaits (``safety.start``) this query executes, in order: while fewer
+        trials than start gaits have run, those not yet executed and still allowed (an unsafe
+        flag or an avoided gait is skipped), at most ``n``; the strategy fills the rest of the
+        query, comparing with them as with the buffer."""
+        start = self.safety.start
+        executed = self.executed
+        if len(executed) >= len(start):
+            return ()
+        done = set(executed)
+        todo = [a for a in start if a not in done and (allowed is None or allowed[a])]
+        return tuple(todo[: self.n])
 
     def tell(
         self,

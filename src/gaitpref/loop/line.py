@@ -33,6 +33,7 @@ from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
 from gaitpref.loop.cospar import Answer, CoSpar, Query
 from gaitpref.loop.lines import LineSettings, draw_line, normalised
+from gaitpref.loop.safety import Safety
 from gaitpref.loop.warm import WarmStart
 from gaitpref.model.engines import PointEngine
 from gaitpref.model.kernels import SquaredExponential
@@ -71,6 +72,9 @@ class LineCoSpar(CoSpar):
     ) -> None:
         if isinstance(domain, PointSet):
             raise TypeError("the line path takes the features' space, not a point set")
+        safety = settings.get("safety")
+        if isinstance(safety, Safety) and safety.start:
+            raise ValueError("the line path takes no start gaits (safety.start): a grid does")
         super().__init__(empty_points(domain), kernel, noise, **settings)
         self.domain = domain
         self.line_settings = LineSettings() if line is None else line

@@ -35,10 +35,13 @@ gait's probability, do not make unexplored gaits known-safe).  While some gait t
 propose is known-safe, the loop proposes only known-safe gaits, and an unexplored gait (one the
 ``risk`` rule allows) only when it might be better than all of them: when its upper bound
 ``mu_a + explore * sd_a`` exceeds every known-safe gait's.  When no gait is known-safe the
-``risk`` rule alone decides.  The upper bounds need the variance of every unexplored gait that
-the bounds 0 and the prior's leave undecided, often most of them (``Posterior.variance_many``:
-information gain's iteration on 57,750 gaits at 300 comparisons 0.47 s, against 0.16 s with
-``risk`` alone; ``benchmarks/results/infogain.md``).
+``risk`` rule alone decides.  Gaits the operator declares safe (``start``, the device's nominal
+gait: SafeOpt's safe seed) are known-safe from the start, before any rating, unless the ratings
+make an avoided rating likelier than ``risk`` there (the ``risk`` rule avoids them); the loop
+executes them first (``loop/cospar.py``).  The upper bounds need the variance of every
+unexplored gait that the bounds 0 and the prior's leave undecided, often most of them
+(``Posterior.variance_many``: information gain's iteration on 57,750 gaits at 300 comparisons
+0.47 s, against 0.16 s with ``risk`` alone; ``benchmarks/results/infogain.md``).
 
 Both use the thresholds the posterior's rating scale carries (fitted by the evidence when the
 config does not fix them), the ones its Laplace fit used.  Besides, a trial the operator
@@ -76,6 +79,9 @@ class Safety:
     risk: float | None = None
     cautious: float | None = None
     explore: float = 1.0
+    #: gaits the operator declares safe (action indices): executed first, and known-safe for
+    #: the cautious level until the ratings say otherwise
+    start: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
@@ -93,6 +99,10 @@ class Safety:
                 raise ValueError(f"cautious must be a fraction in (0, 1), got {self.cautious!r}")
         if not (np.isfinite(self.explore) and self.explore >= 0):
             raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
+        if any(isinstance(a, bool) or not isinstance(a, int) or a < 0 for a in self.start):
+            raise ValueError(f"start must hold action indices >= 0, got {self.start!r}")
+        if len(set(self.start)) != len(self.start):
+            raise ValueError(f"start names a gait twice: {self.start!r}")
 
     def threshold(self, ordinal: Ordinal, signal_variance: float) -> float:
         """``t_avoid``: the threshold above the avoided categories."""
@@ -129,8 +139,8 @@ class Safety:
     ) -> BoolArray:
         """The region of avoidance (module docstring), with the posterior's rating scale (its
         fitted thresholds) or else ``ordinal``; with ``cautious``, while one of ``within``
-        (default: every gait) is known-safe, every gait neither known-safe nor possibly better
-        than all the known-safe ones.
+        (default: every gait) is known-safe (by the ratings, or declared in ``start``), every
+        gait neither known-safe nor possibly better than all the known-safe ones.
 
         Both rules are monotone in the posterior variance, which lies between 0 and the prior's:
         a gait decided alike at both ends needs no variance, and only the others' is computed
@@ -164,8 +174,12 @@ class Safety:
             return region(self.risk)
         unrated = rating_probabilities(scale, v, np.zeros(1), prior[:1])[0, : self.avoid]
         known = ~region(min(self.cautious * float(unrated.sum()), self.risk))
-        pool = np.flatnonzero(known if within is None else known & within)
         risky = region(self.risk)
+        if self.start:  # declared safe: known-safe unless the ratings put them in the region
+            declared = np.zeros(known.shape, dtype=bool)
+            declared[list(self.start)] = True
+            known |= declared & ~risky
+        pool = np.flatnonzero(known if within is None else known & within)
         if not pool.size:
             return risky
         # an unexplored gait only when its upper bound beats every known-safe gait's
