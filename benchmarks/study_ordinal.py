@@ -115,9 +115,11 @@ class Arm:
     risk: bool = False  # [safety] avoid = ["very bad"] with the risk rule (risk 0.35)
     cautious: float | None = None  # with risk: [safety] cautious (None: 0, the single level)
     strategy: str = ""  # "" the default; "random": uniform over the allowed gaits
+    start: bool = False  # [safety] start: the simulated operator's start gait (start_gait)
+    explore: float | None = None  # with cautious: [safety] explore (None: the default, 1)
     note: str = ""
 
-    def text(self, grid: str) -> str:
+    def text(self, grid: str, start: int | None = None) -> str:
         axes = ("x", "y") if grid == "2d" else ("x", "y", "z")
         num = 30 if grid == "2d" else 10
         ls = 0.15 if grid == "2d" else LENGTHSCALE_3D
@@ -132,10 +134,17 @@ class Arm:
         elif self.risk:
             out += '\n[safety]\navoid = ["very bad"]\n'
             out += f"cautious = {0 if self.cautious is None else self.cautious}\n"
+            if self.explore is not None:
+                out += f"explore = {self.explore}\n"
+        if self.start:
+            if start is None:
+                raise ValueError(f"arm {self.name} needs its start gait")
+            out += "" if self.risk or self.lam is not None else "\n[safety]\n"
+            out += f"start = [{start}]\n"
         return out
 
-    def config(self, grid: str) -> ExperimentConfig:
-        return parse_config(self.text(grid))
+    def config(self, grid: str, start: int | None = None) -> ExperimentConfig:
+        return parse_config(self.text(grid, start))
 
 
 @dataclass(frozen=True)
@@ -234,6 +243,15 @@ def objective(grid: str, k: int) -> np.ndarray:
     return paper_objectives()[k].reshape(-1) if grid == "2d" else objective_3d(k)
 
 
+def start_gait(grid: str, category: np.ndarray, k: int) -> int:
+    """The simulated operator's start gait on objective ``k``: drawn uniformly among the gaits
+    whose true category is "okay" or better (the upper half of the grid), from
+    ``default_rng(SeedSequence([STUDY_SEED, 5, 2 or 3, k]))``.  A lab knows its device's nominal
+    gait is comfortable enough, not that it is near the best one."""
+    rng = np.random.default_rng(np.random.SeedSequence([STUDY_SEED, 5, int(grid[0]), k]))
+    return int(rng.choice(np.flatnonzero(category >= 3)))
+
+
 def _loop(arm: Arm, cfg: ExperimentConfig, rng: np.random.Generator) -> CoSpar:
     if arm.strategy != "random":
         return cfg.make_loop(seed=rng)
@@ -255,8 +273,11 @@ def _loop(arm: Arm, cfg: ExperimentConfig, rng: np.random.Generator) -> CoSpar:
 
 def run_one(arm: Arm, grid: str, scenario: str, k: int) -> dict[str, object]:
     """One 60-trial run of ``arm`` on objective ``k`` of ``grid`` against ``scenario``."""
-    cfg = arm.config(grid)
     obj = objective(grid, k)
+    space = Arm("").config(grid).space
+    truth = OrdinalRater(space, obj, QUARTILES, np.random.default_rng(0))
+    category = 1 + np.searchsorted(truth.boundaries, truth.utility, side="right")
+    cfg = arm.config(grid, start_gait(grid, category, k) if arm.start else None)
     loop_ss, user_ss, rater_ss = np.random.SeedSequence([STUDY_SEED, k]).spawn(3)
     loop = _loop(arm, cfg, np.random.default_rng(loop_ss))
     rng = np.random.default_rng(user_ss)
@@ -266,8 +287,6 @@ def run_one(arm: Arm, grid: str, scenario: str, k: int) -> dict[str, object]:
     else:
         user = SimulatedUser(cfg.space, obj, rng)
     noise = RATING_NOISE if scenario == "noisy" else 0.0
-    truth = OrdinalRater(cfg.space, obj, QUARTILES, np.random.default_rng(0))
-    category = 1 + np.searchsorted(truth.boundaries, truth.utility, side="right")
     rater = None
     if arm.rated:
         rater = OrdinalRater(cfg.space, obj, QUARTILES, np.random.default_rng(rater_ss), noise)

@@ -147,42 +147,15 @@ class Safety:
         (``O(A m)`` for the means plus ``O(a m^2)`` for ``a`` undecided gaits, not the whole
         grid's ``O(A m^2)``).
         """
-        scale = posterior.ordinal if posterior.ordinal is not None else ordinal
-        if scale is None:
-            raise ValueError("a region of avoidance needs the loop's rating scale")
-        v = posterior.kernel.variance
-        t = self.threshold(scale, v)
-        mean = np.asarray(posterior.mean)
-        prior = np.asarray(posterior.kernel.diagonal(posterior.space), dtype=np.float64)
-        known_var = np.full(mean.shape, np.nan)  # posterior variances, each computed once
-
-        def var_of(actions: NDArray[np.intp]) -> FloatArray:
-            todo = np.unique(actions[np.isnan(known_var[actions])])
-            if todo.size:
-                known_var[todo] = posterior.variance_many(todo)
-            out: FloatArray = known_var[actions]
-            return out
-
-        def region(level: float | None) -> BoolArray:
-            out = self._rule(scale, v, t, mean, np.zeros_like(mean), level)
-            undecided = np.flatnonzero(out != self._rule(scale, v, t, mean, prior, level))
-            if undecided.size:
-                out[undecided] = self._rule(scale, v, t, mean[undecided], var_of(undecided), level)
-            return out
-
+        bounds = _Bounds(self, posterior, ordinal)
         if self.cautious is None or self.risk is None:
-            return region(self.risk)
-        unrated = rating_probabilities(scale, v, np.zeros(1), prior[:1])[0, : self.avoid]
-        known = ~region(min(self.cautious * float(unrated.sum()), self.risk))
-        risky = region(self.risk)
-        if self.start:  # declared safe: known-safe unless the ratings put them in the region
-            declared = np.zeros(known.shape, dtype=bool)
-            declared[list(self.start)] = True
-            known |= declared & ~risky
+            return bounds.region(self.risk)
+        known, risky = self._known(bounds)
         pool = np.flatnonzero(known if within is None else known & within)
         if not pool.size:
             return risky
         # an unexplored gait only when its upper bound beats every known-safe gait's
+        mean, prior, var_of = bounds.mean, bounds.prior, bounds.var_of
         best = float(np.max(mean[pool] + self.explore * np.sqrt(var_of(pool))))
         better = ~risky & ~known & (mean > best)  # above it even with no variance left
         undecided = np.flatnonzero(
@@ -191,6 +164,27 @@ class Safety:
         if undecided.size:
             better[undecided] = mean[undecided] + self.explore * np.sqrt(var_of(undecided)) > best
         return ~(known | better)
+
+    def known_safe(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray | None:
+        """The cautious level's known-safe gaits (None without the level): by the ratings, or
+        declared in ``start`` and not avoided by the ``risk`` rule."""
+        if self.cautious is None or self.risk is None:
+            return None
+        return self._known(_Bounds(self, posterior, ordinal))[0]
+
+    def _known(self, bounds: _Bounds) -> tuple[BoolArray, BoolArray]:
+        """The known-safe gaits and the ``risk`` rule's region (``cautious`` and ``risk`` set)."""
+        assert self.cautious is not None and self.risk is not None
+        unrated = rating_probabilities(bounds.scale, bounds.v, np.zeros(1), bounds.prior[:1])
+        known = ~bounds.region(
+            min(self.cautious * float(unrated[0, : self.avoid].sum()), self.risk)
+        )
+        risky = bounds.region(self.risk)
+        if self.start:  # declared safe: known-safe unless the ratings put them in the region
+            declared = np.zeros(known.shape, dtype=bool)
+            declared[list(self.start)] = True
+            known |= declared & ~risky
+        return known, risky
 
     def _rule(
         self,
@@ -208,6 +202,41 @@ class Safety:
             return out
         probs = rating_probabilities(scale, v, mean, var)
         return np.asarray(probs[:, : self.avoid].sum(axis=1) > risk)
+
+
+class _Bounds:
+    """The posterior's mean, prior variance and lazily computed variances for one region."""
+
+    def __init__(self, safety: Safety, posterior: Posterior, ordinal: Ordinal | None) -> None:
+        scale = posterior.ordinal if posterior.ordinal is not None else ordinal
+        if scale is None:
+            raise ValueError("a region of avoidance needs the loop's rating scale")
+        self.safety = safety
+        self.posterior = posterior
+        self.scale: Ordinal = scale
+        self.v = posterior.kernel.variance
+        self.t = safety.threshold(scale, self.v)
+        self.mean: FloatArray = np.asarray(posterior.mean)
+        self.prior: FloatArray = np.asarray(
+            posterior.kernel.diagonal(posterior.space), dtype=np.float64
+        )
+        self.known_var = np.full(self.mean.shape, np.nan)  # posterior variances, computed once
+
+    def var_of(self, actions: NDArray[np.intp]) -> FloatArray:
+        todo = np.unique(actions[np.isnan(self.known_var[actions])])
+        if todo.size:
+            self.known_var[todo] = self.posterior.variance_many(todo)
+        out: FloatArray = self.known_var[actions]
+        return out
+
+    def region(self, level: float | None) -> BoolArray:
+        """The gaits the rule at ``level`` avoids (variances only of the undecided ones)."""
+        rule, scale, v, t, mean = self.safety._rule, self.scale, self.v, self.t, self.mean
+        out = rule(scale, v, t, mean, np.zeros_like(mean), level)
+        undecided = np.flatnonzero(out != rule(scale, v, t, mean, self.prior, level))
+        if undecided.size:
+            out[undecided] = rule(scale, v, t, mean[undecided], self.var_of(undecided), level)
+        return out
 
 
 def default_risk(avoid: int, categories: int) -> float:
