@@ -208,6 +208,18 @@ ARMS = [
 ]
 
 
+START_ARMS = [  # [safety] start: the simulated operator's start gait (start_gait)
+    Arm("rated+start", start=True, note="ratings, trial 1 the start gait, no region"),
+    Arm(
+        "cautious+start",
+        risk=True,
+        cautious=CAUTIOUS,
+        start=True,
+        note=f"ratings, trial 1 the start gait, declared safe; cautious {CAUTIOUS}",
+    ),
+]
+KNOWN_AT = (1, 2, 5, 10)  # trials after which the start arms count the known-safe gaits
+
 ACCURACY = (  # posterior.rating_probabilities as given, then with the fitted thresholds
     *(f"acc_{where}_{t}" for where in ("roi", "all") for t in SNAPSHOTS),
     *(f"fit_acc_{where}_{t}" for where in ("roi", "all") for t in SNAPSHOTS),
@@ -294,6 +306,11 @@ def run_one(arm: Arm, grid: str, scenario: str, k: int) -> dict[str, object]:
     roi = category > 1
 
     def snapshot(done: int) -> None:
+        if done in KNOWN_AT and arm.start and f"known_{done}" not in accuracy:
+            known = loop.safety.known_safe(loop.posterior, loop.gp.ordinal)
+            if known is not None:
+                accuracy[f"known_{done}"] = float(np.sum(known))
+                accuracy[f"known_bad_{done}"] = float(np.sum(known & (category == 1)))
         if done in SNAPSHOTS and f"acc_roi_{done}" not in accuracy and arm.rated:
             post = loop.posterior
             probs = post.rating_probabilities(np.arange(len(cfg.space)))
@@ -677,7 +694,7 @@ def main() -> None:
     if args.command == "report":
         report()
         return
-    names = {a.name: a for a in ARMS}
+    names = {a.name: a for a in [*ARMS, *START_ARMS]}
     arms = ARMS if args.arms == "all" else [names[n] for n in args.arms.split(",")]
     counts = {"2d": args.objectives, "3d": args.objectives_3d}
     grids, scenarios = args.grids.split(","), args.scenarios.split(",")

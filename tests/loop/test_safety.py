@@ -54,6 +54,8 @@ def _loop(strategy: str, n: int, buffer: int, safety: Safety, seed: int) -> CoSp
     radius=st.sampled_from([0.0, 0.1, 0.3]),
     seed=st.integers(0, 10_000),
     flags=st.lists(st.integers(0, len(SPACE) - 1), max_size=3),
+    start=st.lists(st.integers(0, len(SPACE) - 1), max_size=3, unique=True),
+    reach=st.one_of(st.none(), st.sampled_from([0.5, 1.0, 2.0])),
 )
 def test_no_strategy_proposes_an_avoided_or_flagged_gait(
     strategy: str,
@@ -65,9 +67,19 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
     radius: float,
     seed: int,
     flags: list[int],
+    start: list[int],
+    reach: float | None,
 ) -> None:
     cautious = cautious if risk is not None else None
-    safety = Safety(avoid=1, lam=lam, unsafe_radius=radius, risk=risk, cautious=cautious)
+    safety = Safety(
+        avoid=1,
+        lam=lam,
+        unsafe_radius=radius,
+        risk=risk,
+        cautious=cautious,
+        start=tuple(start),
+        reach=reach,
+    )
     loop = _loop(strategy, n, buffer, safety, seed)
     for a in flags:
         loop.flag_unsafe(a)
@@ -79,9 +91,13 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
             with pytest.raises(NoSafeGaitError):
                 loop.ask()
             return
-        q = loop.ask()
         banned = near(SPACE, loop.unsafe, radius) if loop.unsafe else np.zeros(len(SPACE), bool)
-        avoided = _avoided(loop, lam, risk, cautious, banned)
+        avoided = _avoided(loop, lam, risk, cautious, banned, safety.start, reach)
+        done = loop.executed
+        first = [a for a in start if a not in done and not (banned | avoided)[a]]
+        q = loop.ask()
+        if len(done) < len(start):  # the declared-safe gaits first, unless flagged or avoided
+            assert q.actions[: min(n, len(first))] == tuple(first[:n])
         for a in q.actions:
             assert not banned[a], f"{strategy} proposed {a}, near an unsafe flag"
             assert not avoided[a], f"{strategy} proposed {a}, in the region of avoidance"
@@ -101,11 +117,14 @@ def _avoided(
     risk: float | None,
     cautious: float | None = None,
     banned: NDArray[np.bool_] | None = None,
+    start: tuple[int, ...] = (),
+    reach: float | None = None,
 ) -> NDArray[np.bool_]:
     """The region of avoidance, written out: ROIAL's bound or the probability of a "very bad"
     rating, with the posterior's thresholds; with ``cautious``, while a gait away from the
-    ``banned`` ones is known-safe, every gait neither known-safe nor possibly better than all of
-    them."""
+    ``banned`` ones is known-safe (by its ratings, or in ``start`` and under ``risk``), every
+    gait neither known-safe nor possibly better than all of them (and, with ``reach``, within
+    ``reach`` lengthscales of one of them)."""
     post = loop.posterior
     scale = post.ordinal if post.ordinal is not None else SCALE
     t1 = scale.thresholds_for(KERNEL.variance)[0]
@@ -117,10 +136,16 @@ def _avoided(
     if cautious is not None:
         unrated = ndtr(t1 / np.sqrt(scale.noise**2 + KERNEL.variance + KERNEL.jitter))
         known = p <= min(cautious * unrated, risk)
+        known[list(start)] |= p[list(start)] <= risk
         pool = known & ~(np.zeros_like(known) if banned is None else banned)
         if pool.any():  # unexplored gaits only if mu + sd (explore = 1) beats every pool gait's
             upper = mean + np.sqrt(var)
-            return np.asarray(~(known | ((p <= risk) & (upper > upper[pool].max()))))
+            better = (p <= risk) & (upper > upper[pool].max())
+            if reach is not None:
+                scaled = SPACE.points / np.array([0.03, 0.08])  # KERNEL's lengthscales
+                d = np.linalg.norm(scaled[:, None, :] - scaled[None, pool, :], axis=2)
+                better &= d.min(axis=1) <= reach
+            return np.asarray(~(known | better))
     return np.asarray(p > risk)
 
 

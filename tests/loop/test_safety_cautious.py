@@ -152,3 +152,68 @@ def test_the_line_path_proposes_only_what_the_cautious_rule_allows_on_its_line()
         restricted += int(not allowed[line_ids].all())
         loop.tell(q, [Rating(q.actions[0], "good" if trial % 3 else "okay")])
     assert restricted  # the cautious level did leave some of a line's points out
+
+
+def test_a_declared_start_gait_is_known_safe_until_its_ratings_say_otherwise() -> None:
+    declared = Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,))
+    prior = PreferenceGP(SPACE, KERNEL, 0.01, ordinal=SCALE).prior()
+    known = declared.known_safe(prior, SCALE)
+    assert known is not None and np.flatnonzero(known).tolist() == [20]
+    # before any rating only the start gait: no unrated gait's mu + sd beats its own
+    assert np.flatnonzero(_allowed(declared, prior)).tolist() == [20]
+    assert _allowed(CAUTIOUS, prior).all()  # undeclared: the risk rule lets every gait through
+    # one "okay" (not known-safe by the ratings alone: test above) keeps it known-safe
+    okay = _rated([(20, "okay")])
+    assert CAUTIOUS.known_safe(okay, SCALE) is not None
+    assert not CAUTIOUS.known_safe(okay, SCALE)[20]  # type: ignore[index]
+    assert declared.known_safe(okay, SCALE)[20]  # type: ignore[index]
+    # rated "very bad" until the risk rule avoids it: no longer known-safe, nor proposed
+    worst = _rated([(20, "very bad"), (20, "very bad")])
+    assert not _allowed(SINGLE, worst)[20]
+    assert not declared.known_safe(worst, SCALE)[20]  # type: ignore[index]
+    assert not _allowed(declared, worst)[20]
+    assert Safety(avoid=1, risk=0.35).known_safe(okay, SCALE) is None  # no cautious level
+
+
+def test_reach_keeps_unexplored_gaits_near_the_known_safe_ones() -> None:
+    okay = _rated([(20, "okay")], SHARP)  # the unexplored gaits' mu + sd beat it: all allowed
+    assert _allowed(Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,)), okay).all()
+    near_start = Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), reach=1.0)
+    allowed = np.flatnonzero(_allowed(near_start, okay))
+    known = near_start.known_safe(okay, SCALE)
+    assert known is not None
+    # within one lengthscale (0.1: 4 grid steps of 0.025) of a known-safe gait
+    lo, hi = np.flatnonzero(known)[[0, -1]]
+    assert allowed.tolist() == list(range(lo - 4, hi + 5))
+    with pytest.raises(ValueError, match="reach"):
+        Safety(avoid=1, risk=0.35, cautious=0.6, reach=-1.0)
+
+
+def test_the_loop_walks_the_start_gaits_first() -> None:
+    safety = Safety(avoid=1, risk=0.35, cautious=0.6, start=(30, 7))
+    loop = CoSpar(SPACE, KERNEL, 0.01, n=1, buffer=1, seed=3, ordinal=SCALE, safety=safety)
+    walked = []
+    for _ in range(3):
+        q = loop.ask()
+        walked.append(q.actions[0])
+        loop.tell(q, [Rating(q.actions[0], "okay")])
+    assert walked[:2] == [30, 7] and walked[2] not in (30, 7)
+    loop.undo()
+    loop.undo()
+    assert loop.ask().actions == (7,)  # undone: the start gait again
+    # n = 2: the start gait and the strategy's choice, compared with it as with the buffer
+    pair = CoSpar(SPACE, KERNEL, 0.01, n=2, buffer=0, seed=3, ordinal=SCALE, safety=safety)
+    q = pair.ask()
+    assert q.actions == (30, 7)
+    pair.tell(q, [Rating(30, "good"), Rating(7, "good")])
+    one = CoSpar(SPACE, KERNEL, 0.01, n=2, seed=3, ordinal=SCALE, safety=Safety(start=(12,)))
+    q = one.ask()
+    assert q.actions[0] == 12 and q.actions[1] != 12
+    # a flagged start gait is skipped
+    flagged = CoSpar(SPACE, KERNEL, 0.01, n=1, buffer=1, seed=3, ordinal=SCALE, safety=safety)
+    flagged.flag_unsafe(30)
+    assert flagged.ask().actions == (7,)
+    with pytest.raises(IndexError):
+        CoSpar(SPACE, KERNEL, 0.01, safety=Safety(start=(41,)))
+    with pytest.raises(ValueError, match="line path"):
+        LineCoSpar(SPACE, KERNEL, 0.01, ordinal=SCALE, safety=safety, line=LineSettings(5))

@@ -82,6 +82,9 @@ class Safety:
     #: gaits the operator declares safe (action indices): executed first, and known-safe for
     #: the cautious level until the ratings say otherwise
     start: tuple[int, ...] = ()
+    #: with cautious: unexplored gaits only within ``reach`` lengthscales of a known-safe gait
+    #: (None: anywhere)
+    reach: float | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
@@ -101,6 +104,8 @@ class Safety:
             raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
         if any(isinstance(a, bool) or not isinstance(a, int) or a < 0 for a in self.start):
             raise ValueError(f"start must hold action indices >= 0, got {self.start!r}")
+        if self.reach is not None and not (np.isfinite(self.reach) and self.reach > 0):
+            raise ValueError(f"reach must be a number of lengthscales > 0, got {self.reach!r}")
         if len(set(self.start)) != len(self.start):
             raise ValueError(f"start names a gait twice: {self.start!r}")
 
@@ -163,6 +168,8 @@ class Safety:
         )
         if undecided.size:
             better[undecided] = mean[undecided] + self.explore * np.sqrt(var_of(undecided)) > best
+        if self.reach is not None and better.any():
+            better &= _within(posterior, pool, self.reach)
         return ~(known | better)
 
     def known_safe(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray | None:
@@ -237,6 +244,19 @@ class _Bounds:
         if undecided.size:
             out[undecided] = rule(scale, v, t, mean[undecided], self.var_of(undecided), level)
         return out
+
+
+def _within(posterior: Posterior, centres: NDArray[np.intp], reach: float) -> BoolArray:
+    """Gaits within ``reach`` lengthscales (Euclidean, each feature in its lengthscale) of one
+    of ``centres``."""
+    points = posterior.space.points
+    scaled = points / np.asarray(posterior.kernel.lengthscales(points.shape[1]))
+    out = np.zeros(len(points), dtype=bool)
+    per_chunk = max(1, 2**21 // (len(points) * points.shape[1]))  # ~16 MB of differences
+    for chunk in np.array_split(centres, -(-centres.size // per_chunk)):
+        d2 = np.sum((scaled[:, None, :] - scaled[None, chunk, :]) ** 2, axis=2)
+        out |= np.min(d2, axis=1) <= reach**2
+    return out
 
 
 def default_risk(avoid: int, categories: int) -> float:
