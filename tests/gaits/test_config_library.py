@@ -52,3 +52,27 @@ def test_config_library_errors(tmp_path: Path) -> None:
     (tmp_path / "typo.toml").write_text(CONFIG.replace("library =", "libary ="))
     with pytest.raises(ConfigError, match=r"\[gaits\]: unknown key 'libary'"):
         load_config(tmp_path / "typo.toml")
+
+
+def test_safety_start_names_a_library_gait_by_its_id(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    duration_library.save(tmp_path / "lib.json")
+    gait = duration_library.gait_id(4)
+    text = f"""
+[gaits]
+library = "lib.json"
+[model]
+lengthscale = {{ step_length = 0.03, step_duration = 0.08 }}
+signal_variance = 0.005
+jitter = 1e-7
+noise = 0.02
+[safety]
+start = ["{gait}"]
+"""
+    (tmp_path / "study.toml").write_text(text)
+    cfg = load_config(tmp_path / "study.toml")
+    assert cfg.safety.start == (4,) and cfg.make_loop(seed=0).ask().actions == (4,)
+    (tmp_path / "bad.toml").write_text(text.replace(gait, "L9.999-T9.999"))
+    with pytest.raises(ConfigError, match=r"\[safety\].start: gait 1 .*no gait with id"):
+        load_config(tmp_path / "bad.toml")

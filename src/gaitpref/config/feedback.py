@@ -17,7 +17,9 @@
                                              # is at most this share of an unrated gait's,
                                              # propose only such known-safe gaits ... (0: off)
     # explore = 1.0                          # ... and unexplored ones whose mu + explore sd
-                                             # beats every known-safe gait's
+                                             # beats every known-safe gait's ...
+    # reach = 1.0                            # ... within reach lengthscales of a known-safe
+                                             # gait (default: anywhere)
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
                                              # feature's range; 0: the gait alone)
     # start = [{step_length = 0.12, step_duration = 0.9}]   # gaits the operator declares safe
@@ -114,6 +116,7 @@ def parse_safety(
         cautious,
         safety["explore"],
         start,
+        safety["reach"],
     ), frozenset(relied)
 
 
@@ -185,8 +188,9 @@ def _cautious(
     if given and cautious > 0 and risk is None:
         fail("safety", "cautious", "needs the risk rule, not ROIAL's bound (lambda)")
     if cautious == 0 or not safety["avoid"] or risk is None:
-        if "explore" not in defaulted:
-            fail("safety", "explore", "is a setting of the cautious level, which is off here")
+        for key in ("explore", "reach"):
+            if key not in defaulted:
+                fail("safety", key, "is a setting of the cautious level, which is off here")
         return None
     return cautious
 

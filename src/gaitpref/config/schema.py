@@ -111,6 +111,8 @@ SAFETY: Final[dict[str, Key]] = {
     "explore": Key(Number(0.0, 100.0), 1.0),  # with cautious: mu + explore sd beats known-safe
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges
     "start": Key(Gaits(MAX_QUERY), ()),  # gaits the operator declares safe: executed first
+    "reach": Key(Number(0.0, 100.0, open_lo=True), None),  # with cautious: explore only within
+    # this many lengthscales of a known-safe gait (None: anywhere)
 }
 STOP: Final[dict[str, Key]] = {
     "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule
