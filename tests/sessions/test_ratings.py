@@ -137,3 +137,26 @@ def test_a_session_with_the_cautious_level_replays_and_older_ones_replay_without
         assert again._state.loop.safety.cautious is None
         assert np.array_equal(again._state.loop.allowed(), allowed)
         assert again.next_query().actions == pending
+
+
+def test_a_declared_start_gait_is_walked_first_and_replays(tmp_path: Path) -> None:
+    text = CONFIG.replace("lambda = 2.0", "start = [{step_length = 0.13}]\nreach = 1.0")
+    cfg = parse_config(text)
+    assert cfg.safety.start == (7,) and cfg.safety.cautious == 0.6
+    url = f"sqlite:///{tmp_path / 'r.db'}"
+    with Session.create(url, cfg, "S02") as s:
+        walked = []
+        for k in range(5):
+            q = s.next_query()
+            walked.append(q.actions[0])
+            given: list[object] = [Rating(q.actions[0], LABELS[2 + k % 2])]
+            if q.buffer and q.buffer[0] != q.actions[0]:
+                given.append((q.actions[0], q.buffer[0], "first"))
+            s.answer(q.id, given)
+        mean = np.asarray(s.posterior().mean).copy()
+        pending = s.next_query().actions
+        sid = s.id
+    assert walked[0] == 7 and len(set(walked)) > 1
+    with Session.open(url, sid) as again:  # replay re-derives every proposal from the log
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+        assert again.next_query().actions == pending
