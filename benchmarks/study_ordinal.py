@@ -38,8 +38,9 @@ The start arms (``START_ARMS``; ``report-start`` writes them to ``start.md``): `
 start`` names the simulated operator's start gait, drawn uniformly among the gaits whose true
 category is "okay" or better (``start_gait``, seeded per grid and objective), walked on trial 1:
 ``rated+start`` (no region), ``cautious+start`` (the region with the cautious level, the start
-gait declared known-safe) and ``reach+start`` (the same with ``reach = 1``: unexplored gaits
-only within one lengthscale of a known-safe gait).  Run ``k`` of every arm uses objective ``k``
+gait declared known-safe), ``reach+start`` (the same with ``reach = 1``: unexplored gaits
+only within one lengthscale of a known-safe gait) and ``strict+start`` (cautious 0.4 and ``reach
+= 0.5``, the setting a screen on the 3-D noiseless cell chose).  Run ``k`` of every arm uses objective ``k``
 and the same seeds (paired comparisons).  Each run records the normalised objective and true category of every
 executed gait, and the accuracy of the predicted rating (argmax of
 ``posterior.rating_probabilities``) after 30 and 60 trials, over the true region of interest
@@ -234,10 +235,19 @@ START_ARMS = [  # [safety] start: the simulated operator's start gait (start_gai
         reach=1.0,
         note="as cautious+start, exploring only within one lengthscale of a known-safe gait",
     ),
+    Arm(
+        "strict+start",
+        risk=True,
+        cautious=0.4,
+        start=True,
+        reach=0.5,
+        note="cautious 0.4, reach 0.5: chosen by a screen on the 3-D noiseless cell",
+    ),
 ]
 START_PAIRS = [  # (arm, base): the target's reading is a region against none, all else equal
     ("cautious+start", "rated+start"),
     ("reach+start", "rated+start"),
+    ("strict+start", "rated+start"),
     ("reach+start", "cautious+start"),
     ("rated+start", "rated"),
     ("cautious+start", "avoid-cautious"),
