@@ -38,13 +38,13 @@ The start arms (``START_ARMS``; ``report-start`` writes them to ``start.md``): `
 start`` names the simulated operator's start gait, drawn uniformly among the gaits whose true
 category is "okay" or better (``start_gait``, seeded per grid and objective), walked on trial 1:
 ``rated+start`` (no region), ``cautious+start`` (the region with the cautious level, the start
-gait declared known-safe), ``reach+start`` (the same with ``reach = 1``: unexplored gaits
-only within one lengthscale of a known-safe gait) and ``strict+start`` (cautious 0.4 and ``reach
-= 0.5``, the setting a screen on the 3-D noiseless cell chose).  Run ``k`` of every arm uses objective ``k``
-and the same seeds (paired comparisons).  Each run records the normalised objective and true category of every
-executed gait, and the accuracy of the predicted rating (argmax of
-``posterior.rating_probabilities``) after 30 and 60 trials, over the true region of interest
-(gaits not truly "very bad") and over the whole grid.
+gait declared known-safe), ``reach+start`` (the same with ``reach = 1``: unexplored gaits only
+within one lengthscale of a known-safe gait) and ``strict+start`` (cautious 0.4 and ``reach =
+0.5``, the setting a screen on the 3-D noiseless cell chose).  Run ``k`` of every arm uses
+objective ``k`` and the same seeds (paired comparisons).
+Each run records the normalised objective and true category of every executed gait, and the
+accuracy of the predicted rating (argmax of ``posterior.rating_probabilities``) after 30 and 60
+trials, over the true region of interest (gaits not truly "very bad") and over the whole grid.
 
     python benchmarks/study_ordinal.py run [--grids 2d,3d] [--objectives 100] [--objectives-3d 30]
                                            [--arms a,b] [--scenarios s] [--jobs 2]
