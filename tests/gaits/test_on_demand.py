@@ -48,7 +48,7 @@ def test_the_key_is_a_content_address_of_generator_settings_and_parameters() -> 
         ("compass-hzd", ["stride"], {"speed": 0.2}, "step_length required"),
         ("compass-hzd", ["step_length"], {}, "fixed speed or a step_duration feature"),
         ("compass-hzd", ["step_length", "step_duration"], {"speed": 0.2}, "exactly one"),
-        ("compass-hzd", ["step_length"], {"speed": 0.2, "gain": 3}, "speed only"),
+        ("compass-hzd", ["step_length"], {"speed": 0.2, "gain": 3}, "max_iterations only"),
     ],
 )
 def test_generator_errors_name_the_problem(
@@ -119,7 +119,8 @@ noise = 0.01
 def test_a_config_names_a_generator_with_its_settings() -> None:
     cfg = parse_config(CONFIG)
     assert cfg.generator is not None and cfg.library is None
-    assert (cfg.generator.name, cfg.generator.settings) == ("compass-hzd", {"speed": 0.2})
+    settings = {"speed": 0.2, "max_iterations": 60}  # the iteration budget's default
+    assert (cfg.generator.name, cfg.generator.settings) == ("compass-hzd", settings)
     assert cfg.generator.avoid_radius == 0.05  # the default
     generator = cfg.generator.make(cfg.space)
     assert generator.gait_id(cfg.space.point(0)) == "L0.080-V0.200"
@@ -133,6 +134,7 @@ def test_a_config_names_a_generator_with_its_settings() -> None:
         (("speed = 0.2", ""), r"\[gaits\].generator: .*fixed speed"),
         (("speed = 0.2", "speed = -1"), r"\[gaits\].speed: must be"),
         (("speed = 0.2", "speed = 0.2\navoid_radius = 2"), r"\[gaits\].avoid_radius: must be"),
+        (("speed = 0.2", "speed = 0.2\nmax_iterations = 0"), r"\[gaits\].max_iterations: must"),
         (("num = 11", "num = 400"), r"\[space.step_length\]: values too close"),
         (('generator = "compass-hzd"\nspeed = 0.2', ""), r"\[gaits\]: needs library"),
         (("[space.step_length]", "[space.stride]"), r"step_length required"),
@@ -143,7 +145,9 @@ def test_generator_config_errors_name_the_key(edit: tuple[str, str], problem: st
         parse_config(CONFIG.replace(*edit))
 
 
-def test_a_library_config_takes_no_generator_settings() -> None:
-    text = '[gaits]\nlibrary = "lib.json"\nspeed = 0.2\n[model]' + CONFIG.split("[model]")[1]
-    with pytest.raises(ConfigError, match=r"\[gaits\].speed: is a gait generator's setting"):
+@pytest.mark.parametrize("key", ["speed = 0.2", "max_iterations = 50"])
+def test_a_library_config_takes_no_generator_settings(key: str) -> None:
+    text = f'[gaits]\nlibrary = "lib.json"\n{key}\n[model]' + CONFIG.split("[model]")[1]
+    name = key.split(" ")[0]
+    with pytest.raises(ConfigError, match=rf"\[gaits\].{name}: is a gait generator's setting"):
         parse_config(text)

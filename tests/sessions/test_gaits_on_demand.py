@@ -13,6 +13,7 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
+from gaitpref.gaits import make_generator
 from gaitpref.loop.safety import near
 from tests.sessions.gaitkit import COMPASS, CONFIG, FakeSteps
 
@@ -183,6 +184,30 @@ def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(tmp_path: 
     shutil.rmtree(tmp_path / "lab.db.gaits")
     again = Session.open(url, s.id)  # every gait optimised again, the same verdicts
     assert again.infeasible_gaits() == [bad] and again.trials() == s.trials()
+
+
+def test_a_session_recorded_before_the_iteration_budget_keeps_its_rule(tmp_path: Path) -> None:
+    """A session recorded under the 0.4 defaults (no ``[gaits] max_iterations``) stores that
+    version, makes its gaits without a budget (their keys are the unbudgeted ones) and replays
+    so; a session under the current defaults makes them within the budget, under other keys."""
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    old = Session.create(url, parse_config(COMPASS, defaults="0.4"), subject="S01")
+    new = Session.create(url, parse_config(COMPASS), subject="S02")
+    assert old.record.meta["config_defaults"] == "0.4"
+    assert new.record.meta["config_defaults"] == "0.5"
+    for s in (old, new):
+        q = s.next_query()
+        s.answer(q.id, [])
+        s.next_query()
+    space = old.config.space
+    unbounded = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    bounded = make_generator("compass-hzd", ["step_length"], {"speed": 0.2, "max_iterations": 60})
+    for s, generator in ((old, unbounded), (new, bounded)):
+        made = [e.payload for e in s.events() if e.kind == "gait_made"]
+        assert made and all(p["key"] == generator.key(space.point(p["action"])) for p in made)
+    shutil.rmtree(tmp_path / "lab.db.gaits")
+    again = Session.open(url, old.id)  # made again, without a budget: the same keys
+    assert again.events() == old.events() and again.pending == old.pending
 
 
 def test_the_terminal_says_which_gaits_were_skipped(tmp_path: Path) -> None:

@@ -30,8 +30,9 @@ from gaitpref.space import Space
 if TYPE_CHECKING:
     from gaitpref.gaits.generator import GaitGenerator
 
-#: ``[gaits]`` keys that are a generator's fixed settings (passed to its factory when given).
-GENERATOR_SETTINGS = ("speed",)
+#: ``[gaits]`` keys that are a generator's fixed settings (passed to its factory when not None;
+#: ``max_iterations`` has a default, so every generator is given it and may ignore it).
+GENERATOR_SETTINGS = ("speed", "max_iterations")
 
 
 @dataclass(frozen=True)

@@ -163,7 +163,9 @@ def parse_config(
     top, _ = check_table(raw, "", TOP)
     library, library_path, generator = None, None, None
     gaits, gaits_defaulted = (
-        check_table(top["gaits"], "gaits", GAITS) if top["gaits"] is not None else ({}, set())
+        check_table(top["gaits"], "gaits", GAITS, defaults_for(defaults, "gaits"))
+        if top["gaits"] is not None
+        else ({}, frozenset())
     )
     if gaits and gaits["generator"] is not None:
         if gaits["library"] is not None:
@@ -173,7 +175,7 @@ def parse_config(
     elif gaits:
         if gaits["library"] is None:
             fail("gaits", None, 'needs library = "FILE" or generator = "NAME"')
-        given = [k for k in ("speed", "avoid_radius") if k not in gaits_defaulted]
+        given = [k for k in ("speed", "avoid_radius", "max_iterations") if k not in gaits_defaulted]
         if given:
             fail("gaits", given[0], "is a gait generator's setting; a library takes none")
         if top["space"] is not None:
@@ -218,7 +220,9 @@ def parse_config(
         ordinal=ordinal,
         safety=safety,
         stop=stop,
-        defaulted=frozenset(f"cospar.{k}" for k in defaulted) | relied,
+        defaulted=frozenset(f"cospar.{k}" for k in defaulted)
+        | frozenset(f"gaits.{k}" for k in gaits_defaulted if generator is not None)
+        | relied,
         defaults_version=defaults,
     )
 

@@ -57,6 +57,9 @@ MAX_QUERY: Final = 64
 MAX_SIGNAL_TO_NOISE: Final = 1e6
 #: Length of a description.
 MAX_TEXT: Final = 10_000
+#: ``[gaits] max_iterations``: a gait made on demand may be given at most this many solver
+#: iterations (each costs about 10 ms with ``compass-hzd``: past this, a request is not bounded).
+MAX_GAIT_ITERATIONS: Final = 10_000
 
 LIMITS: Final[dict[str, float]] = {
     "actions": MAX_ACTIONS,
@@ -134,6 +137,8 @@ GAITS: Final[dict[str, Key]] = {
     "generator": Key(Text(MAX_NAME), None),  # a gait generator (gaits made on demand)
     "speed": Key(Number(0.0, 100.0, open_lo=True), None),  # the generator's fixed speed, m/s
     "avoid_radius": Key(Number(0.0, 1.0), 0.05),  # around an infeasible proposal, of ranges
+    # the solver iterations one gait may take, all starts together (None before defaults 0.5)
+    "max_iterations": Key(Integer(1, MAX_GAIT_ITERATIONS), 60),
 }
 MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),
@@ -200,14 +205,21 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.4"
+DEFAULTS_VERSION: Final = "0.5"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
-#: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``).
+#: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
+#: made on demand had no iteration budget, ``[gaits] max_iterations = None``).
+_UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
-    "0.1": {"cospar": {"buffer": 0}, "safety": {"risk": None, "cautious": 0.0}},
-    "0.2": {"safety": {"risk": None, "cautious": 0.0}},
-    "0.3": {"safety": {"cautious": 0.0}},
+    "0.1": {
+        "cospar": {"buffer": 0},
+        "safety": {"risk": None, "cautious": 0.0},
+        "gaits": _UNBOUNDED_GAITS,
+    },
+    "0.2": {"safety": {"risk": None, "cautious": 0.0}, "gaits": _UNBOUNDED_GAITS},
+    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS},
+    "0.4": {"gaits": _UNBOUNDED_GAITS},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

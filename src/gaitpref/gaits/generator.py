@@ -80,6 +80,10 @@ class CompassHZD(GaitGenerator):
 
     Features: ``step_length`` (m, required), ``step_duration`` (s) or else a fixed ``speed``
     (m/s), and optionally ``step_width`` (a label with no effect on the dynamics).
+    ``max_iterations`` bounds the SLSQP iterations of one gait, all starts together (``None``:
+    each start may take ``hzd.max_iterations``, as before the budget); it decides verdicts, so
+    it is one of the settings in every key, and left out of them when ``None`` (the keys of
+    gaits made before it stay what they were).
     """
 
     name: ClassVar[str] = "compass-hzd"
@@ -90,6 +94,7 @@ class CompassHZD(GaitGenerator):
         speed: float | None = None,
         params: CompassGaitParams | None = None,
         hzd: HZDSettings | None = None,
+        max_iterations: int | None = None,
     ) -> None:
         self.features = tuple(features)
         unknown = [f for f in self.features if f not in AXES]
@@ -106,16 +111,28 @@ class CompassHZD(GaitGenerator):
             )
         if speed is not None and not (np.isfinite(speed) and speed > 0):
             raise GaitGeneratorError(f"{self.name}: speed must be positive, got {speed!r}")
+        if max_iterations is not None and (
+            isinstance(max_iterations, bool)
+            or not isinstance(max_iterations, int)
+            or max_iterations < 1
+        ):
+            raise GaitGeneratorError(
+                f"{self.name}: max_iterations must be an integer >= 1, got {max_iterations!r}"
+            )
         self.speed = None if speed is None else float(speed)
+        self.max_iterations = max_iterations
         self.params = params or CompassGaitParams()
         self.hzd = hzd or HZDSettings()
 
     def settings(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "model": self.params.to_dict(),
             "formulation": self.hzd.to_dict(),
             "speed": self.speed,
         }
+        if self.max_iterations is not None:
+            out["max_iterations"] = self.max_iterations
+        return out
 
     def _values(self, vector: FloatArray) -> dict[str, float]:
         """The vector's values by feature, in the library's axis order."""
@@ -139,17 +156,27 @@ class CompassHZD(GaitGenerator):
             )
         except ValueError as exc:
             raise GaitGeneratorError(f"{self.name}: {exc}") from None
-        return optimize_gait(request, self.params, self.hzd, warm_start=warm_start)
+        return optimize_gait(
+            request,
+            self.params,
+            self.hzd,
+            warm_start=warm_start,
+            max_iterations=self.max_iterations,
+        )
 
 
 GeneratorFactory = Callable[[Sequence[str], Mapping[str, Any]], GaitGenerator]
 
 
 def _compass_hzd(features: Sequence[str], settings: Mapping[str, Any]) -> GaitGenerator:
-    extra = sorted(set(settings) - {"speed"})
+    extra = sorted(set(settings) - {"speed", "max_iterations"})
     if extra:
-        raise GaitGeneratorError(f"compass-hzd takes the setting speed only, got {extra}")
-    return CompassHZD(features, speed=settings.get("speed"))
+        raise GaitGeneratorError(
+            f"compass-hzd takes the settings speed and max_iterations only, got {extra}"
+        )
+    return CompassHZD(
+        features, speed=settings.get("speed"), max_iterations=settings.get("max_iterations")
+    )
 
 
 _GENERATORS: dict[str, GeneratorFactory] = {CompassHZD.name: _compass_hzd}

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import brentq, minimize
@@ -221,7 +221,9 @@ def _finish(problem: _Problem, x: FloatArray, status: int, message: str) -> Gait
     )
 
 
-def _solve(problem: _Problem, x0: FloatArray) -> Gait:
+def _solve(problem: _Problem, x0: FloatArray, max_iterations: int) -> tuple[Gait, int]:
+    """SLSQP from ``x0`` for at most ``max_iterations`` iterations: the gait and the iterations
+    it took (a solver error counts as none)."""
     n_free = problem.s.degree - 2
     bounds = [(-3.0, 3.0)] * n_free + [(1e-4 * problem.mean_rate, 100.0 * problem.mean_rate)]
     with warnings.catch_warnings(), np.errstate(all="ignore"):
@@ -236,11 +238,12 @@ def _solve(problem: _Problem, x0: FloatArray) -> Gait:
                     {"type": "eq", "fun": problem.equalities},
                     {"type": "ineq", "fun": problem.inequalities},
                 ],
-                options={"maxiter": problem.s.max_iterations, "ftol": problem.s.tolerance},
+                options={"maxiter": max_iterations, "ftol": problem.s.tolerance},
             )
         except (ValueError, np.linalg.LinAlgError) as exc:
-            return _finish(problem, x0, 99, f"solver error: {exc}")
-        return _finish(problem, np.asarray(res.x, dtype=np.float64), int(res.status), res.message)
+            return _finish(problem, x0, 99, f"solver error: {exc}"), 0
+        x = np.asarray(res.x, dtype=np.float64)
+        return _finish(problem, x, int(res.status), res.message), int(res.nit)
 
 
 def _better(a: Gait, b: Gait | None) -> bool:
@@ -256,14 +259,28 @@ def optimize_gait(
     params: CompassGaitParams | None = None,
     settings: HZDSettings | None = None,
     warm_start: Gait | None = None,
+    max_iterations: int | None = None,
 ) -> Gait:
     """The minimum-COT HZD gait for ``request``; infeasible requests come back flagged.
 
     ``warm_start`` (a neighbour in a grid) lends its coefficient shape; the default start is
     tried as well when the warm start does not give a feasible gait.
+
+    ``max_iterations`` bounds the SLSQP iterations of all starts together (the warm start's
+    first, the default start gets what is left): the cost of a request is then bounded and,
+    being counted in iterations rather than seconds, the verdict is the same on any machine.
+    A gait not found feasible within them is infeasible, and its message says so first
+    ("no feasible gait within N iterations"). ``None``: each start may take
+    ``settings.max_iterations`` (what gaits on demand did before the budget, and libraries do).
     """
     p = params or CompassGaitParams()
     s = settings or HZDSettings()
+    if max_iterations is not None and (
+        isinstance(max_iterations, bool)
+        or not isinstance(max_iterations, int)
+        or max_iterations < 1
+    ):
+        raise ValueError(f"max_iterations must be an integer >= 1 or None, got {max_iterations!r}")
     geo = StepGeometry.create(p, request.step_length)
     problem = _Problem(p, geo, request.target_duration, s)
     shapes: list[FloatArray | None] = []
@@ -275,14 +292,31 @@ def optimize_gait(
         span = warm_start.phase_end - warm_start.phase_start
         shapes.append(warm_start.alpha[0, 2 : s.degree] / span)
     shapes.append(None)
+    left = max_iterations
     best: Gait | None = None
+    spent: list[tuple[str, int]] = []  # (start, iterations)
     for shape in shapes:
+        if left is not None and left < 1:
+            break
         with np.errstate(all="ignore"):
             x0 = problem.initial_guess(shape)
-        gait = _solve(problem, x0)
+        gait, used = _solve(problem, x0, s.max_iterations if left is None else left)
+        spent.append(("default start" if shape is None else "warm start", used))
+        if left is not None:
+            left -= used
         if _better(gait, best):
             best = gait
         if best is not None and best.feasible:
             break
     assert best is not None
+    if max_iterations is not None and not best.feasible and left is not None and left < 1:
+        return _over_budget(best, max_iterations, spent)
     return best
+
+
+def _over_budget(gait: Gait, budget: int, spent: list[tuple[str, int]]) -> Gait:
+    """``gait`` with its message led by the budget that ran out (and what each start took)."""
+    starts = ", ".join(f"{name} {used}" for name, used in spent)
+    reasons = gait.message.removeprefix("infeasible: ")
+    text = f"infeasible: no feasible gait within {budget} iterations ({starts}); {reasons}"
+    return replace(gait, message=text)
