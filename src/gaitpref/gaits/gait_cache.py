@@ -91,24 +91,40 @@ class GaitCache:
         path = self.path(key)
         if path is None or not path.is_file():
             return None
-        r = Reader(str(path))
         try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-            if (
-                not isinstance(doc, dict)
-                or doc.get("format") != FORMAT
-                or doc.get("schema_version") != SCHEMA_VERSION
-                or doc.get("key") != key
-            ):
-                return None
-            raw = r.get(doc, "gait", "")
-            degree = r.get(raw, "degree", "gait.")
-            length = r.number(raw, "step_length", "gait.")
-            gait = read_gait_entry(r, raw, "gait.", degree, length)
-            warm = doc.get("warm_start")
-            return CachedGait(key, gait, warm if isinstance(warm, str) else None)
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError, GaitLibraryError, ValueError):
+            return read_entry(path, key)[0]
+        except GaitLibraryError:
             return None
 
 
-__all__ = ["FORMAT", "SCHEMA_VERSION", "CachedGait", "GaitCache"]
+def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
+    """The gait in the file ``path`` under ``key`` and its document (generator, settings,
+    parameters); :class:`GaitLibraryError` names the file and what is wrong with it."""
+    r = Reader(str(path))
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise r.fail("file", f"cannot be read as JSON ({exc})") from None
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        raise r.fail("format", f"not a cached gait (expected format {FORMAT!r})")
+    if doc.get("schema_version") != SCHEMA_VERSION:
+        raise r.fail("schema_version", f"{doc.get('schema_version')!r}, expected {SCHEMA_VERSION}")
+    if doc.get("key") != key:
+        raise r.fail("key", f"{doc.get('key')!r}, expected {key}")
+    document = {name: r.get(doc, name, "") for name in ("generator", "settings", "parameters")}
+    raw = r.get(doc, "gait", "")
+    degree = r.get(raw, "degree", "gait.")
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise r.fail("gait.degree", f"expected an integer, got {degree!r}")
+    length = r.number(raw, "step_length", "gait.")
+    try:
+        gait = read_gait_entry(r, raw, "gait.", degree, length)
+    except GaitLibraryError:
+        raise
+    except ValueError as exc:  # a Gait that does not hold together
+        raise r.fail("gait", str(exc)) from None
+    warm = doc.get("warm_start")
+    return CachedGait(key, gait, warm if isinstance(warm, str) else None), document
+
+
+__all__ = ["FORMAT", "SCHEMA_VERSION", "CachedGait", "GaitCache", "read_entry"]

@@ -55,15 +55,17 @@ class GaitGenerator(ABC):
     def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
         """The gait of ``vector`` (flagged infeasible, with the reason, when there is none)."""
 
-    def key(self, vector: FloatArray) -> str:
-        """The content address of ``vector``'s gait: SHA-256 of name, settings and parameters."""
-        document = {
+    def document(self, vector: FloatArray) -> dict[str, Any]:
+        """What decides ``vector``'s gait: the generator's name, settings and the parameters."""
+        return {
             "generator": self.name,
             "settings": self.settings(),
             "parameters": self.parameters(vector),
         }
-        text = json.dumps(document, sort_keys=True, allow_nan=False)
-        return hashlib.sha256(text.encode()).hexdigest()
+
+    def key(self, vector: FloatArray) -> str:
+        """The content address of ``vector``'s gait: :func:`content_key` of its document."""
+        return content_key(self.document(vector))
 
     def check(self, vector: FloatArray) -> FloatArray:
         arr = np.asarray(vector, dtype=np.float64)
@@ -73,6 +75,13 @@ class GaitGenerator(ABC):
                 f"({', '.join(self.features)}), got {vector!r}"
             )
         return arr
+
+
+def content_key(document: Mapping[str, Any]) -> str:
+    """SHA-256 of a gait's document (generator, settings, parameters) as sorted, compact JSON."""
+    decides = {k: document[k] for k in ("generator", "settings", "parameters")}
+    text = json.dumps(decides, sort_keys=True, allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
 
 
 class CompassHZD(GaitGenerator):
@@ -209,6 +218,7 @@ __all__ = [
     "CompassHZD",
     "GaitGenerator",
     "GeneratorFactory",
+    "content_key",
     "generator_names",
     "make_generator",
     "register_generator",

@@ -27,6 +27,7 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -85,6 +86,16 @@ class OnDemandGaits:
         """Every gait this session has made or looked up, in order."""
         return list(self._by_id.values())
 
+    def entries(self) -> list[tuple[CachedGait, dict[str, Any]]]:
+        """Each distinct gait of :attr:`made` (one per key, in order) with its document (what
+        the cache stores beside it: generator, settings, parameters)."""
+        out: dict[str, tuple[CachedGait, dict[str, Any]]] = {}
+        for m in self._by_id.values():
+            if m.key not in out:
+                entry = CachedGait(m.key, m.gait, m.warm_start)
+                out[m.key] = (entry, self.generator.document(m.vector))
+        return list(out.values())
+
     def gait_id(self, vector: FloatArray) -> str:
         """The id shown and logged for ``vector``'s gait."""
         if self.exact:
@@ -113,12 +124,7 @@ class OnDemandGaits:
             warm = self.nearest(vec)
             gait = self.generator.make(vec, None if warm is None else warm.gait)
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
-            document = {
-                "generator": self.generator.name,
-                "settings": self.generator.settings(),
-                "parameters": self.generator.parameters(vec),
-            }
-            self.cache.put(CachedGait(key, gait, made.warm_start), document)
+            self.cache.put(CachedGait(key, gait, made.warm_start), self.generator.document(vec))
         self._by_id[name] = made
         if made.feasible:
             self._feasible.append(made)
