@@ -84,6 +84,12 @@ seed = 4
 strategy = "self-sparring"
 """
 
+#: the fake over a continuous step length (the line path) and a continuous width label
+CONTINUOUS = (
+    CONFIG.replace("num = 21\n", "").replace("values = [0.2, 0.3]", "min = 0.2\nmax = 0.3")
+    + "line_points = 12\n"
+)
+
 #: the real compass-hzd generator on a grid whose shortest step (0.02 m) has no gait at 0.2 m/s;
 #: with its seed, a subject who always prefers the new gait reaches it by the third query
 COMPASS = """

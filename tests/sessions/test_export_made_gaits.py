@@ -19,13 +19,7 @@ from gaitpref.errors import ExportError
 from gaitpref.gaits import Gait
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.space import FloatArray
-from tests.sessions.gaitkit import CONFIG, FakeSteps
-
-#: FakeSteps over a continuous step length (the line path) and a continuous width label
-CONTINUOUS = (
-    CONFIG.replace("num = 21\n", "").replace("values = [0.2, 0.3]", "min = 0.2\nmax = 0.3")
-    + "line_points = 12\n"
-)
+from tests.sessions.gaitkit import CONFIG, CONTINUOUS, FakeSteps
 
 
 @pytest.fixture(autouse=True)

@@ -15,7 +15,7 @@ from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
 from gaitpref.gaits import make_generator
 from gaitpref.loop.safety import near
-from tests.sessions.gaitkit import COMPASS, CONFIG, FakeSteps
+from tests.sessions.gaitkit import COMPASS, CONFIG, CONTINUOUS, FakeSteps
 
 
 @pytest.fixture(autouse=True)
@@ -208,6 +208,29 @@ def test_a_session_recorded_before_the_iteration_budget_keeps_its_rule(tmp_path:
     shutil.rmtree(tmp_path / "lab.db.gaits")
     again = Session.open(url, old.id)  # made again, without a budget: the same keys
     assert again.events() == old.events() and again.pending == old.pending
+
+
+def test_on_the_line_path_an_infeasible_gait_keeps_its_point(tmp_path: Path) -> None:
+    """The proposal is withdrawn and its row of the point table goes to the next point, so the
+    row names another point later; ``InfeasibleGait.values`` is the refused point's."""
+    FakeSteps.below = 0.5
+    s = Session.create(f"sqlite:///{tmp_path / 'lab.db'}", parse_config(CONTINUOUS), "S01")
+    for _ in range(14):
+        q = s.next_query()
+        a, b = q.actions[0], (q.buffer[0] if q.buffer else None)
+        if b is None or b == a:
+            s.answer(q.id, [])
+            continue
+        shorter = q.points[0][0] < s.space.points[b][0]
+        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+    bad = s.infeasible_gaits()
+    assert bad, "the subject's short steps reach infeasible gaits"
+    logged = {e.seq: e.payload["values"] for e in s.events() if e.kind == "gait_infeasible"}
+    for g in bad:
+        assert g.values == logged[g.seq] and g.values["step_length"] < FakeSteps.below
+        assert g.gait_id.startswith(f"S{g.values['step_length']:.3f}-")
+    # the rows were given to points proposed after (as documented): look up by values
+    assert any(s.space.values_of(g.action) != g.values for g in bad)
 
 
 def test_the_terminal_says_which_gaits_were_skipped(tmp_path: Path) -> None:

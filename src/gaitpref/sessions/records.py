@@ -41,12 +41,20 @@ class SessionQuery:
 
 @dataclass(frozen=True)
 class InfeasibleGait:
-    """A proposal whose gait could not be made (event ``seq``): never shown as a trial."""
+    """A proposal whose gait could not be made (event ``seq``): never shown as a trial.
+
+    ``values``: the proposed point's feature values.  On the line path ``action`` is the row
+    the point had in the point table when it was proposed; the proposal is withdrawn and its
+    rows are given to the points proposed next, so the row names another point later: look the
+    proposal up by ``values`` or ``gait_id``, never by ``action``.  (On a grid an action is a
+    grid point, so both agree.)
+    """
 
     seq: int
     action: int
     gait_id: str
     reason: str
+    values: dict[str, float] = field(default_factory=dict, compare=False)
 
 
 @dataclass(frozen=True)

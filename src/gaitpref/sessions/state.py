@@ -480,7 +480,8 @@ class SessionState:
         elif r.kind == log.GAIT_MADE:
             self.walkable.append(p["action"])  # a gait the subject may walk (validation)
         elif r.kind == log.GAIT_INFEASIBLE:  # the loop avoids it since derive_query
-            self.infeasible.append(InfeasibleGait(r.seq, p["action"], p["gait_id"], p["reason"]))
+            bad = InfeasibleGait(r.seq, p["action"], p["gait_id"], p["reason"], dict(p["values"]))
+            self.infeasible.append(bad)
         elif r.kind == log.NOTE:
             self.notes.append((r.seq, p["text"]))
         elif r.kind in _STATUS_OF:
