@@ -1,7 +1,9 @@
 """``[gaits] generator = "NAME"``: gaits made on demand over ``[space]`` (issue 13, item 4).
 
 A config names a gait generator (``gaitpref.gaits.generator``) instead of a library; the
-generator's fixed settings are keys of ``[gaits]`` (``speed`` for ``compass-hzd``) and
+generator's fixed settings are keys of ``[gaits]`` (``speed`` for ``compass-hzd``),
+``max_iterations`` bounds the solver iterations of one gait (every generator is given it; it has
+a default since defaults version 0.5, and configs recorded before get ``None``: no budget) and
 ``avoid_radius`` is the neighbourhood (a fraction of each feature's range, as ``[safety]
 unsafe_radius``) that a proposal whose gait cannot be made takes out of every later query::
 
@@ -14,6 +16,7 @@ unsafe_radius``) that a proposal whose gait cannot be made takes out of every la
     generator = "compass-hzd"
     speed = 0.2
     avoid_radius = 0.05
+    max_iterations = 60
 
 The generator is built once here to check that it understands the features; gaits/ (SciPy's
 optimizers) is imported only when a config names a generator.

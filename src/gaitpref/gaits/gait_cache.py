@@ -8,7 +8,9 @@ says why); without a folder (in-memory or server databases) it lives in memory o
 
 The cache is derived data: a session's log holds what replay checks (each gait's key, id and
 verdict), so an entry that is missing, unreadable or of another format is made again (and
-rewritten), never trusted.  Document (``format = "gaitpref-gait"``, schema version 1)::
+rewritten), never trusted.  A session's export carries the files of its gaits
+(``gaitpref.sessions.export_gaits``); :func:`read_entry` reads one, naming what is wrong with it.
+Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",
      "warm_start": key | null, "gait": {"step_length", the fields of a gait in a library file}}

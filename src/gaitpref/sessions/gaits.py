@@ -2,9 +2,10 @@
 
 With ``[gaits] generator`` (issue 13, item 4) every action a query proposes gets its gait before
 the query is logged (``gaitpref.gaits.on_demand``: this session's gait, else the cached one, else
-a new one warm-started from the nearest feasible gait made so far).  A gait that cannot be made
-is logged as ``gait_infeasible`` with the solver's reason; the loop then never proposes it, nor
-the actions within ``[gaits].avoid_radius`` of it (:meth:`~gaitpref.loop.CoSpar.avoid`, the
+a new one warm-started from the nearest feasible gait made so far, within ``[gaits]
+max_iterations`` solver iterations, so that no gait costs more than that).  A gait that cannot be
+made is logged as ``gait_infeasible`` with the solver's reason; the loop then never proposes it,
+nor the actions within ``[gaits].avoid_radius`` of it (:meth:`~gaitpref.loop.CoSpar.avoid`, the
 unsafe-flag neighbourhood of ``loop/safety.py``), and proposes again with the same random state
 (:meth:`~gaitpref.loop.CoSpar.avoid` withdraws the proposal).  Each gait new to the session is
 logged as ``gait_made``.  Replay derives the same batch and checks it event by event
