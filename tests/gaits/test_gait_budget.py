@@ -39,12 +39,12 @@ def spent(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, int]]:
 def test_a_far_infeasible_gait_stops_within_its_budget(spent: list[tuple[int, int]]) -> None:
     warm = optimize_gait(GaitRequest(0.12, speed=0.2))  # a neighbour, as a session has one
     spent.clear()
-    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2, "max_iterations": 25})
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2, "max_iterations": 10})
     gait = g.make(np.array([0.40]), warm)  # a 0.40 m step at 0.2 m/s: no gait
     assert not gait.feasible
-    assert gait.message.startswith("infeasible: no feasible gait within 25 iterations (warm start")
+    assert gait.message.startswith("infeasible: no feasible gait within 10 iterations (warm start")
     assert "no periodic orbit" in gait.message  # and what was still violated
-    assert spent[0][0] == 25 and sum(n for _, n in spent) <= 25
+    assert spent[0][0] == 10 and sum(n for _, n in spent) <= 10
 
 
 def test_without_a_budget_each_start_has_the_formulations_limit(
