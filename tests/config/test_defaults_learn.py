@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
-
 import numpy as np
 import pytest
 
 from gaitpref import ConfigError
 from gaitpref.config import parse_config
 from gaitpref.sessions.stored_config import config_of, library_meta
-from gaitpref.storage.base import SessionRecord
+from tests.config.records import stored_record
 
 BARE = """
 [space.step_length]
@@ -50,28 +48,16 @@ def test_the_0_1_defaults_give_the_old_loop() -> None:
         parse_config(BARE, defaults="9.9")
 
 
-def _record(text: str, meta: dict[str, object]) -> SessionRecord:
-    import hashlib
-
-    now = datetime.now(UTC)
-    return SessionRecord(
-        id=1, subject="S01", config_name="bare", config_text=text,
-        config_sha256=hashlib.sha256(text.encode()).hexdigest(), seed=0,
-        software_version="0.1.0", status="active", created_at=now, updated_at=now, last_seq=1,
-        meta=meta,
-    )  # fmt: skip
-
-
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
     assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.5"}
-    assert config_of(_record(BARE, library_meta(bare))).buffer == 1
+    assert config_of(stored_record(BARE, library_meta(bare))).buffer == 1
     explicit = parse_config(BARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 
 
 def test_a_session_recorded_by_0_1_replays_with_0_1_defaults() -> None:
-    assert config_of(_record(BARE, {})).buffer == 0
+    assert config_of(stored_record(BARE, {})).buffer == 0
 
 
 RATED = BARE + '[cospar]\nbuffer = 1\n[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
@@ -83,7 +69,7 @@ def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
     assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
     assert cfg.safety.cautious == 0.6
     assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.5"}
-    assert config_of(_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
+    assert config_of(stored_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
     for explicit in (
         "lambda = 1.0\n",
         "risk = 0.5\ncautious = 0.6\n",
@@ -99,13 +85,13 @@ def test_a_region_recorded_before_0_3_replays_with_roials_bound() -> None:
         old = parse_config(RATED + AVOID, defaults=version).safety
         assert old.risk is None and old.lam == 1.0
     # a 0.2 session that relied on no changed default stored no version: 0.1's apply
-    assert config_of(_record(RATED + AVOID, {})).safety.risk is None
+    assert config_of(stored_record(RATED + AVOID, {})).safety.risk is None
 
 
 def test_a_region_recorded_with_the_0_3_defaults_replays_without_the_cautious_level() -> None:
-    old = config_of(_record(RATED + AVOID, {"config_defaults": "0.3"})).safety
+    old = config_of(stored_record(RATED + AVOID, {"config_defaults": "0.3"})).safety
     assert old.risk == pytest.approx(1 / 3 + 0.1) and old.cautious is None
     # a 0.3 session whose region gave risk itself relied on no changed default then and
     # stored no version: it replays with 0.1's defaults, also without the cautious level
-    given = config_of(_record(RATED + AVOID + "risk = 0.5\n", {})).safety
+    given = config_of(stored_record(RATED + AVOID + "risk = 0.5\n", {})).safety
     assert given.risk == 0.5 and given.cautious is None

@@ -4,18 +4,17 @@ budget is part of a gait's key only when set, and configs recorded before it kee
 
 from __future__ import annotations
 
-import hashlib
-from datetime import UTC, datetime
 from typing import Any
 
 import numpy as np
 import pytest
+from tests.config.records import stored_record
+from tests.sessions.gaitkit import COMPASS
 
 from gaitpref.config import parse_config
 from gaitpref.gaits import GaitRequest, make_generator, optimize_gait
 from gaitpref.gaits import optimize as optimize_module
 from gaitpref.sessions.stored_config import config_of, library_meta
-from gaitpref.storage import SessionRecord
 
 #: the key of the 0.12 m gait at 0.2 m/s as gaitpref wrote it before the budget existed
 KEY_BEFORE_THE_BUDGET = "83df89346fa9dea1831605abd4b780b7a19dd9f362833c9e1139cde50bf04a6d"
@@ -89,21 +88,7 @@ def test_the_budget_is_in_the_key_only_when_set() -> None:
     assert bounded.settings()["max_iterations"] == 60 and "max_iterations" not in free.settings()
 
 
-CONFIG = """
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 11
-[gaits]
-generator = "compass-hzd"
-speed = 0.2
-[model]
-lengthscale = 0.03
-signal_variance = 1e-4
-noise = 0.01
-[cospar]
-buffer = 1
-"""
+CONFIG = COMPASS.replace("[cospar]\n", "[cospar]\nbuffer = 1\n")  # no default but the budget
 
 
 def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
@@ -111,27 +96,16 @@ def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
     assert cfg.generator is not None and cfg.generator.settings["max_iterations"] == 60
     assert cfg.relies_on_changed_defaults
     assert library_meta(cfg) == {"config_defaults": "0.5"}
-    again = config_of(_stored(CONFIG, library_meta(cfg)))
+    again = config_of(stored_record(CONFIG, library_meta(cfg)))
     assert again.generator == cfg.generator
     explicit = parse_config(CONFIG.replace("speed = 0.2", "speed = 0.2\nmax_iterations = 40"))
     assert explicit.generator is not None and explicit.generator.settings["max_iterations"] == 40
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 
 
-def _stored(text: str, meta: dict[str, Any]) -> SessionRecord:
-    """A session's row holding ``text`` and ``meta``, as the database gives it back."""
-    now = datetime.now(UTC)
-    return SessionRecord(
-        id=1, subject="S01", config_name="budget", config_text=text,
-        config_sha256=hashlib.sha256(text.encode()).hexdigest(), seed=0,
-        software_version="0.2.0", status="active", created_at=now, updated_at=now, last_seq=1,
-        meta=meta,
-    )  # fmt: skip
-
-
 @pytest.mark.parametrize("meta", [{}, {"config_defaults": "0.4"}, {"config_defaults": "0.1"}])
 def test_a_session_recorded_before_the_budget_replays_without_it(meta: dict[str, str]) -> None:
-    cfg = config_of(_stored(CONFIG, meta))
+    cfg = config_of(stored_record(CONFIG, meta))
     assert cfg.generator is not None and "max_iterations" not in cfg.generator.settings
     generator = cfg.generator.make(cfg.space)
     assert generator.key(np.array([0.12])) == KEY_BEFORE_THE_BUDGET

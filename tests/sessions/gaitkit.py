@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from gaitpref import Session
 from gaitpref.gaits import Gait, GaitGenerator, register_generator
 from gaitpref.space import FloatArray
 
@@ -61,6 +62,20 @@ class FakeSteps(GaitGenerator):
 
 
 register_generator(NAME, FakeSteps)
+
+
+def prefer_short_steps(s: Session, queries: int) -> None:
+    """Answer ``queries`` queries as a subject who prefers the shorter step (on a grid or the
+    line path): drives the loop towards the short steps, which have no gait."""
+    for _ in range(queries):
+        q = s.next_query()
+        a, b = q.actions[0], (q.buffer[0] if q.buffer else None)
+        if b is None or b == a:
+            s.answer(q.id, [])
+            continue
+        shorter = q.points[0][0] < s.space.points[b][0]
+        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+
 
 CONFIG = f"""
 name = "on-demand-1d"

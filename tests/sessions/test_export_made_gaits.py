@@ -19,7 +19,7 @@ from gaitpref.errors import ExportError
 from gaitpref.gaits import Gait
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.space import FloatArray
-from tests.sessions.gaitkit import CONFIG, CONTINUOUS, FakeSteps
+from tests.sessions.gaitkit import CONFIG, CONTINUOUS, FakeSteps, prefer_short_steps
 
 
 @pytest.fixture(autouse=True)
@@ -39,14 +39,7 @@ def _exported(tmp_path: Path, text: str) -> tuple[Session, Path]:
         (tmp_path / sub).mkdir()
     FakeSteps.below = 0.5  # half the steps have no gait
     s = Session.create(f"sqlite:///{tmp_path / 'a' / 'lab.db'}", parse_config(text), "S01")
-    for _ in range(14):
-        q = s.next_query()
-        a, b = q.actions[0], (q.buffer[0] if q.buffer else None)
-        if b is None or b == a:
-            s.answer(q.id, [])
-            continue
-        shorter = q.points[0][0] < s.space.points[b][0]
-        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+    prefer_short_steps(s, 14)
     s.next_query()  # pending: the import must come back to it
     assert s.infeasible_gaits(), "the subject's short steps reach infeasible gaits"
     return s, export_session(s, tmp_path / "export", "json").parent

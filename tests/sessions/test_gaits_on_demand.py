@@ -15,7 +15,13 @@ from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
 from gaitpref.gaits import make_generator
 from gaitpref.loop.safety import near
-from tests.sessions.gaitkit import COMPASS, CONFIG, CONTINUOUS, FakeSteps
+from tests.sessions.gaitkit import (
+    COMPASS,
+    CONFIG,
+    CONTINUOUS,
+    FakeSteps,
+    prefer_short_steps,
+)
 
 
 @pytest.fixture(autouse=True)
@@ -215,14 +221,7 @@ def test_on_the_line_path_an_infeasible_gait_keeps_its_point(tmp_path: Path) -> 
     row names another point later; ``InfeasibleGait.values`` is the refused point's."""
     FakeSteps.below = 0.5
     s = Session.create(f"sqlite:///{tmp_path / 'lab.db'}", parse_config(CONTINUOUS), "S01")
-    for _ in range(14):
-        q = s.next_query()
-        a, b = q.actions[0], (q.buffer[0] if q.buffer else None)
-        if b is None or b == a:
-            s.answer(q.id, [])
-            continue
-        shorter = q.points[0][0] < s.space.points[b][0]
-        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+    prefer_short_steps(s, 14)
     bad = s.infeasible_gaits()
     assert bad, "the subject's short steps reach infeasible gaits"
     logged = {e.seq: e.payload["values"] for e in s.events() if e.kind == "gait_infeasible"}

@@ -16,6 +16,7 @@ import numpy as np
 from gaitpref import Session
 from gaitpref.config import parse_config
 from gaitpref.sessions.export import export_session
+from tests.sessions.gaitkit import prefer_short_steps
 
 #: step lengths under about 0.05 m have no compass gait (a third of the range); a subject who
 #: prefers short steps drives the lines there within a few queries
@@ -53,14 +54,7 @@ SPAN = np.array([0.08, 0.6, 0.2])
 
 def _run(url: str, queries: int) -> Session:
     s = Session.create(url, parse_config(TEXT), subject="S01")
-    for _ in range(queries):
-        q = s.next_query()
-        a, b = q.actions[0], (q.buffer[0] if q.buffer else None)
-        if b is None or b == a:
-            s.answer(q.id, [])
-            continue
-        shorter = q.points[0][0] < s.space.points[b][0]
-        s.answer(q.id, [(a, b, "first" if shorter else "second")])
+    prefer_short_steps(s, queries)
     return s
 
 
