@@ -268,7 +268,8 @@ def optimize_gait(
 
     ``max_iterations`` bounds the SLSQP iterations of all starts together (the warm start's
     first, the default start gets what is left): the cost of a request is then bounded and,
-    being counted in iterations rather than seconds, the verdict is the same on any machine.
+    being counted in iterations rather than seconds, the verdict does not depend on the
+    machine's speed or load (only, as any verdict, on its floating-point rounding).
     A gait not found feasible within them is infeasible, and its message says so first
     ("no feasible gait within N iterations"). ``None``: each start may take
     ``settings.max_iterations`` (what gaits on demand did before the budget, and libraries do).
