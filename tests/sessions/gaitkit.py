@@ -3,12 +3,13 @@
 ``FakeSteps`` makes a "gait" over a ``step_length`` feature (and any labels) at once: feasible
 when the step length is at least ``FakeSteps.below`` (a class setting a test may change), and it
 records every call with the step length of its warm start, so tests can see what was made and
-from where.
+from where.  :func:`logged_as_version_1` copies a session as gaitpref wrote it before the log
+carried the gaits; :func:`copied` copies one with its events edited.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -16,6 +17,7 @@ import numpy as np
 from gaitpref import Session
 from gaitpref.gaits import Gait, GaitGenerator, register_generator
 from gaitpref.space import FloatArray
+from gaitpref.storage import EventRecord, NewEvent, SessionSpec, Storage
 
 NAME = "test-steps"
 
@@ -75,6 +77,37 @@ def prefer_short_steps(s: Session, queries: int) -> None:
             continue
         shorter = q.points[0][0] < s.space.points[b][0]
         s.answer(q.id, [(a, b, "first" if shorter else "second")])
+
+
+GAIT_EVENTS = ("gait_made", "gait_infeasible")
+
+
+def copied(
+    storage: Storage, session_id: int, edit: Callable[[EventRecord], NewEvent | None]
+) -> int:
+    """A new session in ``storage`` with the spec and events of ``session_id``, each event as
+    ``edit`` gives it (None: as it is); the copy's id."""
+    rec = storage.get_session(session_id)
+    spec = SessionSpec(
+        rec.subject, rec.config_name, rec.config_text, rec.config_sha256, rec.seed,
+        rec.software_version, dict(rec.meta),
+    )  # fmt: skip
+    events = [
+        edit(e) or NewEvent(e.kind, e.payload, e.at, e.version) for e in storage.events(session_id)
+    ]
+    return storage.create_session(spec, events, rec.status).id
+
+
+def logged_as_version_1(storage: Storage, session_id: int) -> int:
+    """A copy of the session whose gait events are as gaitpref wrote them before they carried
+    their gait: payload version 1, the same fields but ``gait``; the copy's id."""
+
+    def old(e: EventRecord) -> NewEvent | None:
+        if e.kind not in GAIT_EVENTS or e.version == 1:
+            return None
+        return NewEvent(e.kind, {k: v for k, v in e.payload.items() if k != "gait"}, e.at, 1)
+
+    return copied(storage, session_id, old)
 
 
 CONFIG = f"""

@@ -19,7 +19,13 @@ from gaitpref.errors import ExportError
 from gaitpref.gaits import Gait
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.space import FloatArray
-from tests.sessions.gaitkit import CONFIG, CONTINUOUS, FakeSteps, prefer_short_steps
+from tests.sessions.gaitkit import (
+    CONFIG,
+    CONTINUOUS,
+    FakeSteps,
+    logged_as_version_1,
+    prefer_short_steps,
+)
 
 
 @pytest.fixture(autouse=True)
@@ -121,7 +127,10 @@ def test_a_gait_file_under_another_key_is_refused(tmp_path: Path) -> None:
 
 
 def test_an_export_without_its_gaits_is_imported_by_making_them_again(tmp_path: Path) -> None:
-    s, folder = _exported(tmp_path, CONFIG)
+    """A version-1 log (its events carry no gait) exported as before gaits were carried."""
+    s, _ = _exported(tmp_path, CONFIG)
+    old = Session.open(s.storage, logged_as_version_1(s.storage, s.id))
+    folder = export_session(old, tmp_path / "old", "json").parent
     manifest = json.loads((folder / "manifest.json").read_text())
     for name in manifest.pop("made_gaits").values():  # as exports were written before
         del manifest["files"][name]

@@ -1,6 +1,7 @@
 """Gaits made on demand in a session: an infeasible gait never reaches the subject; it is logged
 with its reason, its neighbourhood is avoided and the next proposal is made; replay reproduces
-both, from the gait cache or, without it, by making the gaits again."""
+both, from the gait cache or the log (a log written before it carried the gaits: by making them
+again; ``test_gaits_on_demand_log.py``)."""
 
 from __future__ import annotations
 
@@ -13,13 +14,15 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
-from gaitpref.gaits import make_generator
+from gaitpref.gaits import CompassHZD, Gait, make_generator
 from gaitpref.loop.safety import near
+from gaitpref.space import FloatArray
 from tests.sessions.gaitkit import (
     COMPASS,
     CONFIG,
     CONTINUOUS,
     FakeSteps,
+    logged_as_version_1,
     prefer_short_steps,
 )
 
@@ -29,6 +32,10 @@ def _fresh_generator() -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = 0.3, []
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
+
+
+def _never(self: object, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+    raise AssertionError(f"the gait of {vector} was made again")
 
 
 def _run(url: str, queries: int) -> Session:
@@ -81,7 +88,7 @@ def test_an_infeasible_gait_is_logged_avoided_and_never_walked(tmp_path: Path) -
     assert trial_events[0].payload["gait_id"].startswith("S")  # the fake's id: S<length>-S<width>
 
 
-def test_replay_reproduces_infeasible_proposals_with_and_without_the_cache(
+def test_replay_reproduces_infeasible_proposals_from_the_cache_and_from_the_log(
     tmp_path: Path,
 ) -> None:
     url = f"sqlite:///{tmp_path / 'lab.db'}"
@@ -94,10 +101,10 @@ def test_replay_reproduces_infeasible_proposals_with_and_without_the_cache(
     again = Session.open(url, s.id)
     assert len(FakeSteps.calls) == made
     assert (again.trials(), again.infeasible_gaits(), again.pending) == before[:3]
-    # without it: every gait is made again, in the same order, from the same warm starts
+    # without it: the log carries every gait, so nothing is made either
     shutil.rmtree(tmp_path / "lab.db.gaits")
     rebuilt = Session.open(url, s.id)
-    assert FakeSteps.calls[made:] == FakeSteps.calls[:made]
+    assert len(FakeSteps.calls) == made
     assert (rebuilt.trials(), rebuilt.infeasible_gaits(), rebuilt.pending) == before[:3]
     # and the session goes on as it would have
     q1, q2 = again.next_query(), rebuilt.next_query()
@@ -108,10 +115,12 @@ def test_replay_refuses_a_generator_that_now_decides_otherwise(tmp_path: Path) -
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = _run(url, 10)
     assert s.infeasible_gaits()
+    old = logged_as_version_1(s.storage, s.id)  # gaits made again on replay: by the new rule
     shutil.rmtree(tmp_path / "lab.db.gaits")
     FakeSteps.below = 0.0  # every gait is feasible now (and its keys differ)
-    with pytest.raises(ReplayError, match=r"gait_infeasible|gait_made|key"):
-        Session.open(url, s.id)
+    for session_id in (s.id, old):
+        with pytest.raises(ReplayError, match=r"gait_infeasible|gait_made|key"):
+            Session.open(url, session_id)
 
 
 def test_warm_starts_come_from_the_nearest_feasible_gait_made_before(tmp_path: Path) -> None:
@@ -164,18 +173,23 @@ def test_blind_validation_shows_only_gaits_that_were_made(tmp_path: Path) -> Non
     assert max(mean[a] for a in made) == max(mean[g.action] for g in plan.gaits)
 
 
-def test_a_memory_database_makes_gaits_again_when_reopened() -> None:
+def test_a_memory_database_reopens_from_the_log_without_making_gaits_again() -> None:
     from gaitpref.storage import MemoryStorage
 
     storage = MemoryStorage()
     s = _run(storage, 6)  # type: ignore[arg-type]
     made = len(FakeSteps.calls)
     again = Session.open(storage, s.id)
-    assert len(FakeSteps.calls) == 2 * made
+    assert len(FakeSteps.calls) == made
     assert again.trials() == s.trials()
+    old = Session.open(storage, logged_as_version_1(storage, s.id))  # the log has no gaits
+    assert len(FakeSteps.calls) == 2 * made
+    assert old.trials() == s.trials()
 
 
-def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(tmp_path: Path) -> None:
+def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """The real HZD optimisation: 0.02 m steps at 0.2 m/s have no gait (design/gaits.md)."""
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, parse_config(COMPASS), subject="S01")
@@ -188,8 +202,15 @@ def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(tmp_path: 
     made = [e.payload for e in s.events() if e.kind == "gait_made"]
     assert all(p["cot"] > 0 for p in made) and len(made) == len({p["key"] for p in made})
     shutil.rmtree(tmp_path / "lab.db.gaits")
-    again = Session.open(url, s.id)  # every gait optimised again, the same verdicts
+    old = logged_as_version_1(s.storage, s.id)
+    with monkeypatch.context() as m:
+        m.setattr(CompassHZD, "make", _never)
+        again = Session.open(url, s.id)  # every gait from the log
     assert again.infeasible_gaits() == [bad] and again.trials() == s.trials()
+    shutil.rmtree(tmp_path / "lab.db.gaits")
+    remade = Session.open(url, old)  # a version-1 log: every gait optimised again
+    assert [g.gait_id for g in remade.infeasible_gaits()] == [bad.gait_id]
+    assert remade.trials() == s.trials()
 
 
 def test_a_session_recorded_before_the_iteration_budget_keeps_its_rule(tmp_path: Path) -> None:

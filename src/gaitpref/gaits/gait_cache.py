@@ -6,10 +6,12 @@ same key write the same kind of document, and a rename makes each write atomic. 
 cache is the folder ``<database file>.gaits/`` next to a SQLite database (``gaitpref.sessions``
 says why); without a folder (in-memory or server databases) it lives in memory only.
 
-The cache is derived data: a session's log holds what replay checks (each gait's key, id and
-verdict), so an entry that is missing, unreadable or of another format is made again (and
-rewritten), never trusted.  A session's export carries the files of its gaits
-(``gaitpref.sessions.export_gaits``); :func:`read_entry` reads one, naming what is wrong with it.
+The cache is derived data: a session's log carries each gait it made (``gait_made`` version 2,
+the ``gait`` part below: :func:`gait_document`, read back by :func:`read_gait`) and replay takes
+it from there; for a log written before (version 1), an entry that is missing, unreadable or of
+another format is made again (and rewritten), never trusted.  A session's export carries the
+files of its gaits (``gaitpref.sessions.export_gaits``); :func:`read_entry` reads one, naming
+what is wrong with it.
 Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",
@@ -76,7 +78,7 @@ class GaitCache:
             "key": entry.key,
             **document,
             "warm_start": entry.warm_start,
-            "gait": {"step_length": entry.gait.step_length, **gait_entry(entry.gait)},
+            "gait": gait_document(entry.gait),
         }
         text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
         target.parent.mkdir(parents=True, exist_ok=True)
@@ -99,6 +101,31 @@ class GaitCache:
             return None
 
 
+def gait_document(gait: Gait) -> dict[str, Any]:
+    """The ``gait`` part of an entry's document: its step length and the fields of a gait in a
+    library file (``library_io.gait_entry``); a session's log carries it too (``gait_made``)."""
+    return {"step_length": gait.step_length, **gait_entry(gait)}
+
+
+def read_gait(raw: Any, source: str) -> Gait:
+    """The gait of a :func:`gait_document`; :class:`GaitLibraryError` names ``source`` and the
+    field that is wrong."""
+    return _read_gait(Reader(source), raw, "")
+
+
+def _read_gait(r: Reader, raw: Any, where: str) -> Gait:
+    degree = r.get(raw, "degree", where)
+    if isinstance(degree, bool) or not isinstance(degree, int):
+        raise r.fail(f"{where}degree", f"expected an integer, got {degree!r}")
+    length = r.number(raw, "step_length", where)
+    try:
+        return read_gait_entry(r, raw, where, degree, length)
+    except GaitLibraryError:
+        raise
+    except ValueError as exc:  # a Gait that does not hold together
+        raise r.fail(where.rstrip(".") or "gait", str(exc)) from None
+
+
 def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
     """The gait in the file ``path`` under ``key`` and its document (generator, settings,
     parameters); :class:`GaitLibraryError` names the file and what is wrong with it."""
@@ -114,19 +141,17 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
     if doc.get("key") != key:
         raise r.fail("key", f"{doc.get('key')!r}, expected {key}")
     document = {name: r.get(doc, name, "") for name in ("generator", "settings", "parameters")}
-    raw = r.get(doc, "gait", "")
-    degree = r.get(raw, "degree", "gait.")
-    if isinstance(degree, bool) or not isinstance(degree, int):
-        raise r.fail("gait.degree", f"expected an integer, got {degree!r}")
-    length = r.number(raw, "step_length", "gait.")
-    try:
-        gait = read_gait_entry(r, raw, "gait.", degree, length)
-    except GaitLibraryError:
-        raise
-    except ValueError as exc:  # a Gait that does not hold together
-        raise r.fail("gait", str(exc)) from None
+    gait = _read_gait(r, r.get(doc, "gait", ""), "gait.")
     warm = doc.get("warm_start")
     return CachedGait(key, gait, warm if isinstance(warm, str) else None), document
 
 
-__all__ = ["FORMAT", "SCHEMA_VERSION", "CachedGait", "GaitCache", "read_entry"]
+__all__ = [
+    "FORMAT",
+    "SCHEMA_VERSION",
+    "CachedGait",
+    "GaitCache",
+    "gait_document",
+    "read_entry",
+    "read_gait",
+]

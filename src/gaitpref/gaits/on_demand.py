@@ -5,9 +5,11 @@ The paper's future work ("generating new gaits" rather than a precomputed librar
 them.  The gait of a parameter vector is, in turn,
 
 1. the one this session already made for the same gait id;
-2. the cached one (:class:`~gaitpref.gaits.gait_cache.GaitCache`, content-addressed by the
+2. the one its log carries, when the session is replayed (``recorded``: the session layer
+   checks it against the log and hands it over; a recorded gait is never made again);
+3. the cached one (:class:`~gaitpref.gaits.gait_cache.GaitCache`, content-addressed by the
    generator's key), used as it is;
-3. a new one from the generator, warm-started from the nearest *feasible* gait this session made
+4. a new one from the generator, warm-started from the nearest *feasible* gait this session made
    before (Euclidean distance with each feature divided by its range, as for the unsafe radius;
    the earliest of equally near ones), then cached.
 
@@ -17,7 +19,8 @@ digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator'
 ids stay the generator's, so sessions logged before replay unchanged.
 
 Because the warm start depends only on the session's own earlier gaits, a session that replays
-its log with an empty cache makes the same gaits again in the same order.
+a log without its gaits (``gait_made`` version 1) and with an empty cache makes the same gaits
+again in the same order (on a machine that rounds as the recording one did).
 
 Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
 """
@@ -25,7 +28,7 @@ Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,7 +42,8 @@ from gaitpref.space import FloatArray
 
 @dataclass(frozen=True, eq=False)
 class MadeGait:
-    """The gait of ``vector``: its key, id, and the key it was warm-started from (if any)."""
+    """The gait of ``vector``: its key, id, and the key it was warm-started from (if any);
+    ``from_cache``: found (in the cache or the session's log), not made."""
 
     key: str
     vector: FloatArray
@@ -110,14 +114,20 @@ class OnDemandGaits:
         d2 = np.sum(((points - vector) / self.scale) ** 2, axis=1)
         return self._feasible[int(np.argmin(d2))]
 
-    def get(self, vector: FloatArray) -> tuple[MadeGait, bool]:
-        """The gait of ``vector`` and whether it is new to this session."""
+    def get(
+        self, vector: FloatArray, recorded: Callable[[str], CachedGait | None] | None = None
+    ) -> tuple[MadeGait, bool]:
+        """The gait of ``vector`` and whether it is new to this session; ``recorded(key)``,
+        called only for a gait new to the session, gives the one a log carries (None: none)."""
         vec = self.generator.check(vector)
         key, name = self.generator.key(vec), self.gait_id(vec)
         known = self._by_id.get(name)
         if known is not None:
             return known, False
-        cached = self.cache.get(key)
+        logged = None if recorded is None else recorded(key)
+        cached = logged if logged is not None else self.cache.get(key)
+        if logged is not None and self.cache.get(key) is None:
+            self.cache.put(logged, self.generator.document(vec))
         if cached is not None:
             made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
         else:

@@ -148,22 +148,45 @@ class GaitPayload(EventPayload):
     warm_start: Annotated[str | None, Recorded] = None
 
 
-class GaitMade(GaitPayload):
-    """``gait_made``: the gait of a proposed action, made on demand (or found in the gait cache)
-    the first time the session proposed it (``gaits/on_demand.py``); logged with its query."""
+class GaitMadeV1(GaitPayload):
+    """``gait_made`` as first written (payload version 1): without the gait, which replay takes
+    from the gait cache or makes again."""
 
     kind: ClassVar[str] = "gait_made"
     cot: Annotated[float, Recorded]
 
 
-class GaitInfeasible(GaitPayload):
-    """``gait_infeasible``: a proposed action whose gait cannot be made.  It is never shown as a
-    trial; it and the actions within ``radius`` of it (``[gaits].avoid_radius``) are never
-    proposed again, and the next proposal follows in the same batch (``reason``: the solver's)."""
+class GaitInfeasibleV1(GaitPayload):
+    """``gait_infeasible`` as first written (payload version 1): without the gait."""
 
     kind: ClassVar[str] = "gait_infeasible"
     radius: float
     reason: Annotated[str, Recorded]
+
+
+class GaitMade(GaitMadeV1):
+    """``gait_made``: the gait of a proposed action, made on demand (or found in the gait cache)
+    the first time the session proposed it (``gaits/on_demand.py``); logged with its query.
+
+    Version 2 carries the ``gait`` itself (``gaits/gait_cache.py``'s ``gait_document``: step
+    length, Bezier coefficients, orbit, COT, verdict and solver message; under 1 kB), so that
+    replay takes it from the log instead of optimising it again: a gait optimiser is sensitive
+    to rounding, and another machine could make another gait.  Replay checks it (``gaits.py``)
+    rather than comparing it with a re-derived one.
+    """
+
+    version: ClassVar[int] = 2
+    gait: Annotated[dict[str, Any], Recorded]
+
+
+class GaitInfeasible(GaitInfeasibleV1):
+    """``gait_infeasible``: a proposed action whose gait cannot be made.  It is never shown as a
+    trial; it and the actions within ``radius`` of it (``[gaits].avoid_radius``) are never
+    proposed again, and the next proposal follows in the same batch (``reason``: the solver's).
+    Version 2 carries the refused ``gait`` (as :class:`GaitMade`: its verdict and reason)."""
+
+    version: ClassVar[int] = 2
+    gait: Annotated[dict[str, Any], Recorded]
 
 
 class HyperValues(BaseModel):
@@ -345,6 +368,10 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     Finished,
 )
 _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
+#: earlier payload versions still read (events are never rewritten): (kind, version) -> class
+OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
+    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1)
+}
 
 CREATED = Created.kind
 QUERY = QueryIssued.kind
@@ -419,10 +446,14 @@ def read_payload(record: EventRecord) -> EventPayload:
             "feedback kind that is not registered here?)"
         )
     if record.version != cls.version:
-        raise ReplayError(
-            f"{where}: payload schema version {record.version}; this gaitpref reads version "
-            f"{cls.version} of {record.kind!r}"
-        )
+        older = OLDER_PAYLOADS.get((record.kind, record.version))
+        if older is None:
+            versions = sorted([v for k, v in OLDER_PAYLOADS if k == record.kind] + [cls.version])
+            raise ReplayError(
+                f"{where}: payload schema version {record.version}; this gaitpref reads "
+                f"{record.kind!r} of version {' or '.join(map(str, versions))}"
+            )
+        cls = older
     try:
         return cls.parse(record.payload, where)
     except PayloadError as exc:
@@ -478,12 +509,15 @@ def same_event(record: EventRecord, derived: NewEvent) -> bool:
 
 
 __all__ = [
+    "OLDER_PAYLOADS",
     "SESSION_PAYLOADS",
     "BlindGaitShown",
     "Created",
     "Finished",
     "GaitInfeasible",
+    "GaitInfeasibleV1",
     "GaitMade",
+    "GaitMadeV1",
     "GaitPayload",
     "HyperValues",
     "HyperparametersRefit",

@@ -8,27 +8,77 @@ made is logged as ``gait_infeasible`` with the solver's reason; the loop then ne
 nor the actions within ``[gaits].avoid_radius`` of it (:meth:`~gaitpref.loop.CoSpar.avoid`, the
 unsafe-flag neighbourhood of ``loop/safety.py``), and proposes again with the same random state
 (:meth:`~gaitpref.loop.CoSpar.avoid` withdraws the proposal).  Each gait new to the session is
-logged as ``gait_made``.  Replay derives the same batch and checks it event by event
-(``replay.py``): the cache only makes that fast, and a missing entry is made again.
+logged as ``gait_made``; both events carry the gait itself (payload version 2).
+
+Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
+carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
+the one derived for the proposed point, its document must read as a gait, and its verdict must
+be the event's (``gait_made`` feasible, ``gait_infeasible`` not); it is then put into the gait
+cache.  A version-1 event carries no gait: that one is taken from the cache, or made again.
 """
 
 from __future__ import annotations
 
+from collections import deque
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from gaitpref.config import ExperimentConfig
+from gaitpref.errors import GaitLibraryError, ReplayError
 from gaitpref.loop import CoSpar, Query
 from gaitpref.sessions import events as log
-from gaitpref.storage import NewEvent
+from gaitpref.storage import EventRecord, NewEvent
 
 if TYPE_CHECKING:
+    from gaitpref.gaits.gait_cache import CachedGait
     from gaitpref.gaits.on_demand import MadeGait, OnDemandGaits
 
 
+class RecordedGaits:
+    """The gaits a logged query batch carries, handed out in the log's order: the ``k``-th gait
+    new to the session during the replay of the batch is the batch's ``k``-th gait event.
+
+    Called with the key derived for the proposed point: the logged gait, checked (key,
+    document, verdict; a :class:`ReplayError` names the event), or None for an event that
+    carries none (version 1) or when the log has no more (replay then finds the difference).
+    """
+
+    def __init__(self, records: Sequence[EventRecord]) -> None:
+        self._next = deque(r for r in records if log.is_query_part(r.kind))
+
+    def __call__(self, key: str) -> CachedGait | None:
+        if not self._next:
+            return None
+        r = self._next.popleft()
+        p = r.payload
+        if "gait" not in p:
+            return None
+        where = f"event {r.seq} ({r.kind})"
+        if p["key"] != key:
+            raise ReplayError(
+                f"{where}: key: the log has {p['key']}, the proposed point's gait is {key}: "
+                "the logged gait is not the gait of this proposal"
+            )
+        from gaitpref.gaits.gait_cache import CachedGait, read_gait
+
+        try:
+            gait = read_gait(p["gait"], f"{where} gait")
+        except GaitLibraryError as exc:
+            raise ReplayError(str(exc)) from None
+        if gait.feasible != (r.kind == log.GAIT_MADE):
+            verdict = "feasible" if gait.feasible else "infeasible"
+            raise ReplayError(f"{where}: the logged gait is {verdict}, the event says otherwise")
+        return CachedGait(key, gait, p.get("warm_start"))
+
+
 def propose_with_gaits(
-    loop: CoSpar, gaits: OnDemandGaits, config: ExperimentConfig
+    loop: CoSpar,
+    gaits: OnDemandGaits,
+    config: ExperimentConfig,
+    recorded: RecordedGaits | None = None,
 ) -> tuple[list[NewEvent], Query]:
-    """The events of the gaits made for the loop's next feasible proposal, and the proposal.
+    """The events of the gaits made for the loop's next feasible proposal, and the proposal;
+    ``recorded``: on replay, the gaits the log carries for it.
 
     Terminates: each round takes at least one more action out of the proposals, and an empty
     choice raises :class:`~gaitpref.errors.NoSafeGaitError` from ``ask``.
@@ -41,7 +91,7 @@ def propose_with_gaits(
         space = loop.space  # the grid, or the line path's points (which the ask may extend)
         bad = []
         for action in dict.fromkeys(query.actions):  # each distinct action once, in order
-            made, new = gaits.get(space.point(action))
+            made, new = gaits.get(space.point(action), recorded)
             if made.feasible:
                 if new:
                     events.append(log.new_event(_made(action, made, space.values_of(action))))
@@ -55,6 +105,8 @@ def propose_with_gaits(
 
 
 def _made(action: int, made: MadeGait, values: dict[str, float]) -> log.GaitMade:
+    from gaitpref.gaits.gait_cache import gait_document
+
     return log.GaitMade(
         action=action,
         gait_id=made.gait_id,
@@ -62,12 +114,15 @@ def _made(action: int, made: MadeGait, values: dict[str, float]) -> log.GaitMade
         values=values,
         cot=float(made.gait.cot),
         warm_start=made.warm_start,
+        gait=gait_document(made.gait),
     )
 
 
 def _infeasible(
     action: int, made: MadeGait, values: dict[str, float], radius: float
 ) -> log.GaitInfeasible:
+    from gaitpref.gaits.gait_cache import gait_document
+
     return log.GaitInfeasible(
         action=action,
         gait_id=made.gait_id,
@@ -76,7 +131,8 @@ def _infeasible(
         values=values,
         reason=made.gait.message,
         warm_start=made.warm_start,
+        gait=gait_document(made.gait),
     )
 
 
-__all__ = ["propose_with_gaits"]
+__all__ = ["RecordedGaits", "propose_with_gaits"]

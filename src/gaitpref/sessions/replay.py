@@ -20,6 +20,7 @@ from gaitpref.errors import QueryError, ReplayError, SessionStateError
 from gaitpref.feedback import kind_for_event
 from gaitpref.loop.cospar import Answer
 from gaitpref.sessions import events as log
+from gaitpref.sessions.gaits import RecordedGaits
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord, NewEvent
 
@@ -106,7 +107,9 @@ def _replay_query(state: SessionState, group: Sequence[EventRecord]) -> None:
             f"event {last.seq}: a query was issued while {state.pending.id} was pending"
         )
     try:
-        derived = state.derive_query()
+        derived = state.derive_query(RecordedGaits(group))
+    except ReplayError:
+        raise
     except (SessionStateError, QueryError, ValueError, RuntimeError) as exc:
         raise ReplayError(f"event {first.seq} ({first.kind}) cannot be applied: {exc}") from None
     kinds = [d.kind for d in derived]

@@ -38,7 +38,7 @@ from gaitpref.feedback import (
 )
 from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
 from gaitpref.sessions import events as log
-from gaitpref.sessions.gaits import propose_with_gaits
+from gaitpref.sessions.gaits import RecordedGaits, propose_with_gaits
 from gaitpref.sessions.records import (
     REASONS,
     ComparisonRecord,
@@ -142,14 +142,15 @@ class SessionState:
         return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None
 
     # -- derive: queries -----------------------------------------------------------------------
-    def derive_query(self) -> list[NewEvent]:
+    def derive_query(self, recorded: RecordedGaits | None = None) -> list[NewEvent]:
         """Ask CoSpar for the next proposal (the same one until it is answered): its
-        ``query_issued`` event, after the gaits made on demand for it (``gaits.py``)."""
+        ``query_issued`` event, after the gaits made on demand for it (``gaits.py``;
+        ``recorded``: on replay, the gaits the log carries for it)."""
         events: list[NewEvent] = []
         if self.on_demand is None:
             q = self.loop.ask()
         else:
-            events, q = propose_with_gaits(self.loop, self.on_demand, self.config)
+            events, q = propose_with_gaits(self.loop, self.on_demand, self.config, recorded)
         done = self.trial_actions
         numbers = [t for t, _ in done]
         start = numbers[-1] + 1 if numbers else 1

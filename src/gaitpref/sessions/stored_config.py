@@ -137,8 +137,8 @@ def gait_cache_of(storage: Storage, config: ExperimentConfig) -> GaitCache | Non
     """The cache of gaits made on demand for ``config`` (None when it names no generator).
 
     A folder next to the database (``lab.db.gaits/``, one JSON file per gait, named by its
-    content address) rather than a table: the cache is derived data (the log holds every gait's
-    key, id and verdict, and replay makes a missing gait again), so it needs none of the event
+    content address) rather than a table: the cache is derived data (the log carries every gait,
+    and replay of an older log makes a missing gait again), so it needs none of the event
     store's guarantees or migrations; files can be read, copied or deleted without gaitpref, and
     every session of the database shares them.  A database that is not a local file (memory,
     PostgreSQL) caches in memory, per session object.
