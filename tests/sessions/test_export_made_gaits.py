@@ -1,27 +1,29 @@
-"""An export of a session with gaits made on demand carries its made gaits: an import opens it
-on a fresh database without making a gait again, checks each gait file (its SHA-256, its key
-and its verdict against the log) and names a file that does not fit; an export without them
-(written before they were carried) is imported by making the gaits again."""
+"""An export of a session with gaits made on demand carries its made gaits in its log
+(``events.jsonl``, ``gait_made`` version 2): an import opens it on a fresh database without making
+a gait again and fills the new database's gait cache; a gait edited in the export is refused,
+naming its event; a log written before (version 1) is imported by making its gaits again, also
+from an export that carries them as files (``gaits/``, a format that was never released)."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+import shutil
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from gaitpref import Session
+from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
-from gaitpref.errors import ExportError
 from gaitpref.gaits import Gait
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.space import FloatArray
 from tests.sessions.gaitkit import (
     CONFIG,
     CONTINUOUS,
+    GAIT_EVENTS,
     FakeSteps,
     logged_as_version_1,
     prefer_short_steps,
@@ -56,87 +58,73 @@ def test_an_import_opens_without_making_a_gait_again(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, text: str
 ) -> None:
     s, folder = _exported(tmp_path, text)
-    keys = {e.payload["key"] for e in s.events() if e.kind in ("gait_made", "gait_infeasible")}
+    keys = {e.payload["key"] for e in s.events() if e.kind in GAIT_EVENTS}
     manifest = json.loads((folder / "manifest.json").read_text())
-    assert set(manifest["made_gaits"]) == keys
-    assert all(manifest["files"][f] for f in manifest["made_gaits"].values())
+    assert "made_gaits" not in manifest and not (folder / "gaits").exists()  # the log has them
     monkeypatch.setattr(FakeSteps, "make", _never)
     url = f"sqlite:///{tmp_path / 'b' / 'lab.db'}"  # a fresh database directory
     imported = import_session(url, folder)
     assert imported.pending == s.pending and imported.next_query() == s.next_query()
     assert np.array_equal(imported.posterior().mean, s.posterior().mean)
     assert imported.infeasible_gaits() == s.infeasible_gaits()
-    # the gaits went into the new database's cache: reopening makes none either
+    # the gaits went into the new database's cache too
     assert {p.stem for p in (tmp_path / "b" / "lab.db.gaits").glob("*.json")} == keys
     again = Session.open(url, imported.id)
     assert again.pending == s.pending
 
 
-def _rewrite(folder: Path, name: str, edit: dict[str, object], manifest_too: bool) -> None:
-    """Change the gait file ``name``'s ``gait`` fields (and its SHA-256 in the manifest)."""
-    path = folder / name
-    doc = json.loads(path.read_text())
-    doc["gait"].update(edit)
-    path.write_text(json.dumps(doc))
-    if manifest_too:
-        manifest = json.loads((folder / "manifest.json").read_text())
-        manifest["files"][name] = hashlib.sha256(path.read_bytes()).hexdigest()
-        (folder / "manifest.json").write_text(json.dumps(manifest))
-
-
-def _a_gait_file(folder: Path, feasible: bool) -> str:
+def _edit_log(folder: Path, kind: str, feasible: bool) -> int:
+    """Make the first ``kind`` event's gait ``feasible`` in ``events.jsonl`` (its SHA-256 in
+    the manifest updated): the event's seq."""
+    path = folder / "events.jsonl"
+    lines = [json.loads(line) for line in path.read_text().splitlines()]
+    event = next(e for e in lines if e["kind"] == kind)
+    event["payload"]["gait"]["feasible"] = feasible
+    path.write_text("".join(json.dumps(e) + "\n" for e in lines))
     manifest = json.loads((folder / "manifest.json").read_text())
-    for name in manifest["made_gaits"].values():
-        if json.loads((folder / name).read_text())["gait"]["feasible"] == feasible:
-            return str(name)
-    raise AssertionError("no such gait in the export")
-
-
-def test_a_tampered_gait_file_is_refused_naming_it(tmp_path: Path) -> None:
-    _, folder = _exported(tmp_path, CONFIG)
-    name = _a_gait_file(folder, feasible=True)
-    _rewrite(folder, name, {"cot": 0.0}, manifest_too=False)
-    url = f"sqlite:///{tmp_path / 'b' / 'lab.db'}"
-    with pytest.raises(ExportError, match=rf"{name} does not match its SHA-256"):
-        import_session(url, folder)
-    assert not (tmp_path / "b" / "lab.db.gaits").exists()
-
-
-def test_a_gait_file_whose_verdict_is_not_the_logs_is_refused(tmp_path: Path) -> None:
-    _, folder = _exported(tmp_path, CONFIG)
-    name = _a_gait_file(folder, feasible=False)  # made feasible, its hash made to match
-    _rewrite(folder, name, {"feasible": True}, manifest_too=True)
-    with pytest.raises(ExportError, match=rf"{name}: the log says the gait .* is infeasible"):
-        import_session(f"sqlite:///{tmp_path / 'b' / 'lab.db'}", folder)
-
-
-def test_a_gait_file_under_another_key_is_refused(tmp_path: Path) -> None:
-    _, folder = _exported(tmp_path, CONFIG)
-    manifest = json.loads((folder / "manifest.json").read_text())
-    (first, name), (second, _) = list(manifest["made_gaits"].items())[:2]
-    doc = json.loads((folder / name).read_text())
-    doc["parameters"] = json.loads((folder / manifest["made_gaits"][second]).read_text())[
-        "parameters"
-    ]  # another gait's parameters under this key
-    (folder / name).write_text(json.dumps(doc))
-    manifest["files"][name] = hashlib.sha256((folder / name).read_bytes()).hexdigest()
+    manifest["files"]["events.jsonl"] = hashlib.sha256(path.read_bytes()).hexdigest()
     (folder / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(ExportError, match=rf"{name}: its generator, .* do not hash to its key"):
+    return int(event["seq"])
+
+
+def test_a_gait_edited_in_the_export_is_refused_naming_its_event(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _, folder = _exported(tmp_path, CONFIG)
+    seq = _edit_log(folder, "gait_infeasible", feasible=True)
+    monkeypatch.setattr(FakeSteps, "make", _never)
+    with pytest.raises(ReplayError, match=rf"event {seq} \(gait_infeasible\): the logged gait"):
         import_session(f"sqlite:///{tmp_path / 'b' / 'lab.db'}", folder)
-    assert first in name
+    assert not (tmp_path / "b" / "lab.db").exists()  # refused before the database is opened
 
 
-def test_an_export_without_its_gaits_is_imported_by_making_them_again(tmp_path: Path) -> None:
-    """A version-1 log (its events carry no gait) exported as before gaits were carried."""
+def _with_gait_files(folder: Path, cache: Path, keys: set[str]) -> None:
+    """Add the gait files and manifest entries an export of branch h-gaits13 carried (never
+    released): ``gaits/<key>.json`` as the cache keeps it, listed with its SHA-256 under
+    ``files`` and under ``made_gaits``."""
+    manifest = json.loads((folder / "manifest.json").read_text())
+    (folder / "gaits").mkdir()
+    manifest["made_gaits"] = {}
+    for key in sorted(keys):
+        name = f"gaits/{key}.json"
+        shutil.copyfile(cache / f"{key}.json", folder / name)
+        manifest["files"][name] = hashlib.sha256((folder / name).read_bytes()).hexdigest()
+        manifest["made_gaits"][key] = name
+    (folder / "manifest.json").write_text(json.dumps(manifest))
+
+
+@pytest.mark.parametrize("files", [False, True], ids=["log-only", "with-gait-files"])
+def test_a_version_1_export_is_imported_by_making_its_gaits_again(
+    tmp_path: Path, files: bool
+) -> None:
     s, _ = _exported(tmp_path, CONFIG)
     old = Session.open(s.storage, logged_as_version_1(s.storage, s.id))
     folder = export_session(old, tmp_path / "old", "json").parent
-    manifest = json.loads((folder / "manifest.json").read_text())
-    for name in manifest.pop("made_gaits").values():  # as exports were written before
-        del manifest["files"][name]
-        (folder / name).unlink()
-    (folder / "manifest.json").write_text(json.dumps(manifest))
+    if files:
+        keys = {e.payload["key"] for e in s.events() if e.kind in GAIT_EVENTS}
+        _with_gait_files(folder, tmp_path / "a" / "lab.db.gaits", keys)
     made = len(FakeSteps.calls)
     imported = import_session(f"sqlite:///{tmp_path / 'b' / 'lab.db'}", folder)
-    assert imported.pending == s.pending
-    assert len(FakeSteps.calls) > made  # made again
+    assert (imported.pending, imported.trials()) == (s.pending, s.trials())
+    assert imported.infeasible_gaits() == s.infeasible_gaits()
+    assert len(FakeSteps.calls) == 3 * made  # each gait made again by both replays

@@ -9,9 +9,8 @@ says why); without a folder (in-memory or server databases) it lives in memory o
 The cache is derived data: a session's log carries each gait it made (``gait_made`` version 2,
 the ``gait`` part below: :func:`gait_document`, read back by :func:`read_gait`) and replay takes
 it from there; for a log written before (version 1), an entry that is missing, unreadable or of
-another format is made again (and rewritten), never trusted.  A session's export carries the
-files of its gaits (``gaitpref.sessions.export_gaits``); :func:`read_entry` reads one, naming
-what is wrong with it.
+another format is made again (and rewritten), never trusted; :func:`read_entry` reads one,
+naming what is wrong with it.
 Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",

@@ -30,7 +30,6 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -89,16 +88,6 @@ class OnDemandGaits:
     def made(self) -> list[MadeGait]:
         """Every gait this session has made or looked up, in order."""
         return list(self._by_id.values())
-
-    def entries(self) -> list[tuple[CachedGait, dict[str, Any]]]:
-        """Each distinct gait of :attr:`made` (one per key, in order) with its document (what
-        the cache stores beside it: generator, settings, parameters)."""
-        out: dict[str, tuple[CachedGait, dict[str, Any]]] = {}
-        for m in self._by_id.values():
-            if m.key not in out:
-                entry = CachedGait(m.key, m.gait, m.warm_start)
-                out[m.key] = (entry, self.generator.document(m.vector))
-        return list(out.values())
 
     def gait_id(self, vector: FloatArray) -> str:
         """The id shown and logged for ``vector``'s gait."""

@@ -8,8 +8,6 @@ An export folder is readable without gaitpref:
   names, at the same relative path, when there is one);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
   ``version`` (the payload's schema version), ``payload``);
-- ``gaits/``: with gaits made on demand, every gait the log names, one file per gait as the gait
-  cache keeps it (``export_gaits.py``; the manifest's ``made_gaits`` maps keys to files);
 - tables as CSV (``--format csv``) or JSON (``--format json``), every gait named as the terminal
   and the console name it (``gait``: the library's id, or ``G<action>``): ``trials`` (with
   ``unsafe`` flags and their reasons), ``comparisons`` (with
@@ -25,9 +23,9 @@ An export folder is readable without gaitpref:
 
 :func:`import_session` needs only the manifest, the config and the events: it replays them in
 memory first (checking every step and the exported posterior summary) and only then writes the
-session into the target database, under a new id, in one transaction.  The made gaits, when the
-export carries them, are checked against the log and used in both replays (and put into the
-target database's gait cache), so that no gait is made again.
+session into the target database, under a new id, in one transaction.  With gaits made on
+demand, ``events.jsonl`` carries them (``gait_made`` version 2): both replays take them from the
+log and none is made again; the target database's gait cache gets them as replay puts them.
 """
 
 from __future__ import annotations
@@ -44,9 +42,7 @@ import numpy as np
 
 from gaitpref.errors import ExportError, ReplayError
 from gaitpref.feedback import kind_for_event
-from gaitpref.sessions.export_gaits import Entry, filled, read_made_gaits, write_made_gaits
 from gaitpref.sessions.session import Session
-from gaitpref.sessions.stored_config import GAIT_CACHE_SUFFIX
 from gaitpref.storage import (
     MemoryStorage,
     NewEvent,
@@ -105,13 +101,9 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     library = _copy_library(session, out)
     if library is not None:
         written[library[0]] = library[1]
-    gait_files, made_gaits = write_made_gaits(session, out)
-    written.update(gait_files)
     manifest = _manifest(session, written)
     if library is not None:
         manifest["gait_library"] = {"file": library[0], "sha256": library[1]}
-    if made_gaits:
-        manifest["made_gaits"] = made_gaits
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
     return out / "manifest.json"
 
@@ -362,10 +354,9 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
         )
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         raise ExportError(f"manifest.json: bad session entry ({exc})") from None
-    gaits = read_made_gaits(folder, manifest, events)
     # rebuild in memory first: nothing reaches the database unless replay is exact
     scratch = MemoryStorage()
-    trial = _replayed(scratch, scratch.create_session(spec, events, status), gaits, owns=False)
+    trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
     _check_summary(trial, manifest.get("posterior", {}))
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
@@ -373,26 +364,12 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
         if not as_new:
             _check_not_imported(storage, spec, info)
         record = storage.create_session(spec, events, status)
-        session = _replayed(storage, record, gaits, owns=owns)
+        session = Session.open(storage, record.id)
     except BaseException:
         if owns:
             storage.close()
         raise
-    return session
-
-
-def _replayed(
-    storage: Storage, record: SessionRecord, gaits: Sequence[Entry], *, owns: bool
-) -> Session:
-    """The session of ``record``, replayed with the exported made ``gaits`` in its gait cache
-    (written to the database's cache folder, where it has one)."""
-    cache = None
-    if gaits:
-        from gaitpref.gaits.gait_cache import GaitCache
-
-        cache = filled(GaitCache(storage.folder_beside(GAIT_CACHE_SUFFIX)), gaits)
-    session = Session(storage, record, owns_storage=owns, gait_cache=cache)
-    session._catch_up()
+    session._owns = owns  # closing the session closes the database it opened
     return session
 
 

@@ -28,7 +28,7 @@ import contextlib
 import threading
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import Any, TypeVar
 
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import ReplayError, SessionStateError
@@ -81,9 +81,6 @@ from gaitpref.storage import (
 )
 from gaitpref.storage.base import check_subject
 
-if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only for a config with a generator
-    from gaitpref.gaits.gait_cache import GaitCache
-
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -91,23 +88,13 @@ R = TypeVar("R")
 class Session:
     """One subject's session.  Make one with :meth:`create` or :meth:`open`."""
 
-    def __init__(
-        self,
-        storage: Storage,
-        record: SessionRecord,
-        owns_storage: bool,
-        gait_cache: GaitCache | None = None,
-    ) -> None:
-        """(Internal: use :meth:`create` or :meth:`open`.)  ``gait_cache``: the gaits made on
-        demand to use instead of the database's cache (an import fills one from its export)."""
+    def __init__(self, storage: Storage, record: SessionRecord, owns_storage: bool) -> None:
         self.storage = storage
         self._record = record
         self._owns = owns_storage
         self._lock = threading.RLock()
         self.config = config_of(record)
-        self._gait_cache = (
-            gait_cache if gait_cache is not None else gait_cache_of(storage, self.config)
-        )
+        self._gait_cache = gait_cache_of(storage, self.config)
         self._state = self._fresh_state()
         self._broken = False
         self._in_turn = False
