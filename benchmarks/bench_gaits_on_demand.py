@@ -253,7 +253,8 @@ def main() -> None:
         "",
         f"- resume (`Session.open`, replaying {sess['trials']} trials): "
         f"{sess['resume_with_cache_s']:.2f} s with the gait cache, "
-        f"{sess['resume_without_cache_s']:.2f} s without it (every gait made again)",
+        f"{sess['resume_without_cache_s']:.2f} s without it (the gaits from the log; "
+        "`bench_gaits_log.py` compares a log without them)",
         "",
     ]
     RESULTS.mkdir(exist_ok=True)

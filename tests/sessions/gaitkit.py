@@ -3,8 +3,9 @@
 ``FakeSteps`` makes a "gait" over a ``step_length`` feature (and any labels) at once: feasible
 when the step length is at least ``FakeSteps.below`` (a class setting a test may change), and it
 records every call with the step length of its warm start, so tests can see what was made and
-from where.  :func:`logged_as_version_1` copies a session as gaitpref wrote it before the log
-carried the gaits; :func:`copied` copies one with its events edited.
+from where (and :func:`never_made`, patched in, that nothing is).  :func:`logged_as_version_1`
+copies a session as gaitpref wrote it before the log carried the gaits; :func:`copied` copies
+one with its events edited.
 """
 
 from __future__ import annotations
@@ -64,6 +65,11 @@ class FakeSteps(GaitGenerator):
 
 
 register_generator(NAME, FakeSteps)
+
+
+def never_made(self: object, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+    """A generator's ``make`` for a test that no gait is made (monkeypatch it in)."""
+    raise AssertionError(f"the gait of {vector} was made again")
 
 
 def prefer_short_steps(s: Session, queries: int) -> None:

@@ -17,15 +17,14 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
-from gaitpref.gaits import Gait
 from gaitpref.sessions.export import export_session, import_session
-from gaitpref.space import FloatArray
 from tests.sessions.gaitkit import (
     CONFIG,
     CONTINUOUS,
     GAIT_EVENTS,
     FakeSteps,
     logged_as_version_1,
+    never_made,
     prefer_short_steps,
 )
 
@@ -35,10 +34,6 @@ def _fresh_generator() -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = 0.3, []
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
-
-
-def _never(self: FakeSteps, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
-    raise AssertionError(f"the import made the gait of {vector} again")
 
 
 def _exported(tmp_path: Path, text: str) -> tuple[Session, Path]:
@@ -61,7 +56,7 @@ def test_an_import_opens_without_making_a_gait_again(
     keys = {e.payload["key"] for e in s.events() if e.kind in GAIT_EVENTS}
     manifest = json.loads((folder / "manifest.json").read_text())
     assert "made_gaits" not in manifest and not (folder / "gaits").exists()  # the log has them
-    monkeypatch.setattr(FakeSteps, "make", _never)
+    monkeypatch.setattr(FakeSteps, "make", never_made)
     url = f"sqlite:///{tmp_path / 'b' / 'lab.db'}"  # a fresh database directory
     imported = import_session(url, folder)
     assert imported.pending == s.pending and imported.next_query() == s.next_query()
@@ -92,7 +87,7 @@ def test_a_gait_edited_in_the_export_is_refused_naming_its_event(
 ) -> None:
     _, folder = _exported(tmp_path, CONFIG)
     seq = _edit_log(folder, "gait_infeasible", feasible=True)
-    monkeypatch.setattr(FakeSteps, "make", _never)
+    monkeypatch.setattr(FakeSteps, "make", never_made)
     with pytest.raises(ReplayError, match=rf"event {seq} \(gait_infeasible\): the logged gait"):
         import_session(f"sqlite:///{tmp_path / 'b' / 'lab.db'}", folder)
     assert not (tmp_path / "b" / "lab.db").exists()  # refused before the database is opened

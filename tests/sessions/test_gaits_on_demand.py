@@ -14,15 +14,15 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
-from gaitpref.gaits import CompassHZD, Gait, make_generator
+from gaitpref.gaits import CompassHZD, make_generator
 from gaitpref.loop.safety import near
-from gaitpref.space import FloatArray
 from tests.sessions.gaitkit import (
     COMPASS,
     CONFIG,
     CONTINUOUS,
     FakeSteps,
     logged_as_version_1,
+    never_made,
     prefer_short_steps,
 )
 
@@ -32,10 +32,6 @@ def _fresh_generator() -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = 0.3, []
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
-
-
-def _never(self: object, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
-    raise AssertionError(f"the gait of {vector} was made again")
 
 
 def _run(url: str, queries: int) -> Session:
@@ -204,7 +200,7 @@ def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(
     shutil.rmtree(tmp_path / "lab.db.gaits")
     old = logged_as_version_1(s.storage, s.id)
     with monkeypatch.context() as m:
-        m.setattr(CompassHZD, "make", _never)
+        m.setattr(CompassHZD, "make", never_made)
         again = Session.open(url, s.id)  # every gait from the log
     assert again.infeasible_gaits() == [bad] and again.trials() == s.trials()
     shutil.rmtree(tmp_path / "lab.db.gaits")

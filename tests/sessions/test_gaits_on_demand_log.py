@@ -16,9 +16,7 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
-from gaitpref.gaits import Gait
 from gaitpref.sessions import events as log
-from gaitpref.space import FloatArray
 from gaitpref.storage import EventRecord, NewEvent, Storage
 from tests.sessions.gaitkit import (
     CONFIG,
@@ -26,6 +24,7 @@ from tests.sessions.gaitkit import (
     FakeSteps,
     copied,
     logged_as_version_1,
+    never_made,
     prefer_short_steps,
 )
 
@@ -35,10 +34,6 @@ def _fresh_generator() -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = 0.5, []  # half the steps have no gait
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
-
-
-def _never(self: FakeSteps, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
-    raise AssertionError(f"the gait of {vector} was made again")
 
 
 def _sqlite(tmp_path: Path) -> str:
@@ -82,7 +77,7 @@ def test_a_session_opens_from_its_log_alone_on_every_backend(
     folder = s.storage.folder_beside(".gaits")
     if folder is not None:
         shutil.rmtree(folder)
-    monkeypatch.setattr(FakeSteps, "make", _never)
+    monkeypatch.setattr(FakeSteps, "make", never_made)
     again = Session.open(open_db(), s.id)
     assert _state(again) == before
     assert np.array_equal(np.asarray(again.posterior().mean), mean)
@@ -158,7 +153,7 @@ def test_a_logged_gait_under_another_key_is_refused_naming_the_event(
     s = _recorded(_sqlite(tmp_path))
     other = _first(s.storage, s.id, "gait_infeasible").payload["key"]
     bad, seq = _edited(s, "gait_made", lambda p: p.update(key=other))
-    monkeypatch.setattr(FakeSteps, "make", _never)
+    monkeypatch.setattr(FakeSteps, "make", never_made)
     with pytest.raises(ReplayError, match=rf"event {seq} \(gait_made\): key: the log has {other}"):
         Session.open(s.storage, bad)
 
@@ -182,7 +177,7 @@ def test_a_logged_gait_that_does_not_fit_its_event_is_refused(
 ) -> None:
     s = _recorded(_sqlite(tmp_path))
     bad, seq = _edited(s, kind, lambda p: change(p["gait"]))
-    monkeypatch.setattr(FakeSteps, "make", _never)
+    monkeypatch.setattr(FakeSteps, "make", never_made)
     with pytest.raises(ReplayError, match=rf"event {seq} \({kind}\).*{says}"):
         Session.open(s.storage, bad)
 

@@ -36,7 +36,8 @@ if TYPE_CHECKING:
 
 class RecordedGaits:
     """The gaits a logged query batch carries, handed out in the log's order: the ``k``-th gait
-    new to the session during the replay of the batch is the batch's ``k``-th gait event.
+    event the replay derives for the batch is the batch's ``k``-th (each is a gait new to the
+    session, but for an infeasible one proposed again, which :meth:`skip` passes over).
 
     Called with the key derived for the proposed point: the logged gait, checked (key,
     document, verdict; a :class:`ReplayError` names the event), or None for an event that
@@ -45,6 +46,10 @@ class RecordedGaits:
 
     def __init__(self, records: Sequence[EventRecord]) -> None:
         self._next = deque(r for r in records if log.is_query_part(r.kind))
+
+    def skip(self) -> None:
+        if self._next:
+            self._next.popleft()
 
     def __call__(self, key: str) -> CachedGait | None:
         if not self._next:
@@ -97,6 +102,8 @@ def propose_with_gaits(
                     events.append(log.new_event(_made(action, made, space.values_of(action))))
                 continue
             bad.append(action)
+            if not new and recorded is not None:
+                recorded.skip()  # logged again without being looked up: keep the log's order
             events.append(log.new_event(_infeasible(action, made, space.values_of(action), radius)))
         if not bad:
             return events, query
