@@ -368,7 +368,8 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     Finished,
 )
 _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
-#: earlier payload versions still read (events are never rewritten): (kind, version) -> class
+#: earlier payload versions still read, because events of them exist and are never rewritten
+#: (new events are written in the newest): (kind, version) -> class
 OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
     (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1)
 }

@@ -96,7 +96,8 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
 
 
 def _replay_query(state: SessionState, group: Sequence[EventRecord]) -> None:
-    """A query's batch: the gaits made on demand for it (if any), then its ``query_issued``."""
+    """A query's batch: the gaits made on demand for it (if any), then its ``query_issued``; the
+    gaits themselves are taken from the log where it carries them (``gaits.py``)."""
     first, last = group[0], group[-1]
     if last.kind != log.QUERY:
         raise ReplayError(
