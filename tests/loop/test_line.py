@@ -248,3 +248,21 @@ def test_an_avoided_point_and_its_neighbourhood_leave_every_later_line() -> None
         for p in q.points:
             assert np.linalg.norm(np.array(p) / np.array([1.0, 2.0]) - centre) > 0.2
         loop.tell(q, [(a, b, "first") for a in q.actions for b in q.buffer if a != b])
+
+
+def test_all_the_points_of_a_proposal_are_avoided_at_once() -> None:
+    """Two points of one proposal that cannot be made: avoiding the first withdraws the proposal
+    and frees its rows, so both are named before that and both neighbourhoods stay out."""
+    domain = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 2.0)])
+    loop = LineCoSpar(domain, SquaredExponential(0.3, 1.0, 1e-6), 0.05, n=2, buffer=0, seed=6)
+    q = loop.ask()
+    assert len(set(q.actions)) == 2 and min(q.actions) >= 0  # two new rows of an empty table
+    centres = [loop.space.points[a] / np.array([1.0, 2.0]) for a in q.actions]
+    assert loop.avoid_all(q.actions, 0.1)
+    assert loop.pending is None and len(loop.space) == 0  # both rows left the table
+    for _ in range(6):
+        q = loop.ask()
+        for p in q.points:
+            for centre in centres:
+                assert np.linalg.norm(np.array(p) / np.array([1.0, 2.0]) - centre) > 0.1
+        loop.tell(q, [(q.actions[0], q.actions[1], "first")] if len(set(q.actions)) == 2 else [])

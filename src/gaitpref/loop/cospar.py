@@ -25,7 +25,7 @@ does for a trial spoiled by a device fault or a stumble.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Collection, Hashable, Iterable, Iterator, Mapping
+from collections.abc import Callable, Collection, Hashable, Iterable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -306,6 +306,14 @@ class CoSpar:
             banned |= self._avoided_mask
         self._avoided_mask = banned
         return self._withdraw_if(lambda: banned)
+
+    def avoid_all(self, actions: Sequence[int], radius: float) -> bool:
+        """:meth:`avoid` each of ``actions`` (actions of the pending query, say: all named
+        before any is withdrawn); returns whether the pending query was withdrawn."""
+        withdrawn = False
+        for action in actions:
+            withdrawn |= self.avoid(action, radius)
+        return withdrawn
 
     def _withdraw_if(self, banned_now: Callable[[], NDArray[np.bool_]]) -> bool:
         """Withdraw the pending query if it proposes an action ``banned_now()`` bans."""

@@ -22,7 +22,7 @@ direction, points), which a session logs and checks on replay.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Hashable, Iterable, Iterator
+from collections.abc import Hashable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -189,11 +189,18 @@ class LineCoSpar(CoSpar):
         """As :meth:`CoSpar.avoid` (never propose ``action`` nor the points within ``radius``,
         a fraction of each feature's range); on the line path the neighbourhood, kept by its
         point (a withdrawn query's points leave the table), is taken out of every later line."""
+        return self.avoid_all([action], radius)
+
+    def avoid_all(self, actions: Sequence[int], radius: float) -> bool:
+        """As :meth:`avoid` for each of ``actions``, all read in the table as it is now: the
+        withdrawal that the first would cause takes the pending query's rows out of the table,
+        so one at a time the next row would name another point, or none."""
         if not (np.isfinite(radius) and 0 <= radius <= 1):
             raise ValueError(f"radius must be in [0, 1], got {radius!r}")
-        index = self.space.check_index(action)
-        self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
-        self._avoided_points.append((self.space.points[index].copy(), float(radius)))
+        indices = [self.space.check_index(a) for a in actions]
+        for index in indices:
+            self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
+            self._avoided_points.append((self.space.points[index].copy(), float(radius)))
         withdrawn = self._withdraw_if(lambda: self._avoided_on(self.space))
         if withdrawn:
             self._use_table(self._table_before_pending)

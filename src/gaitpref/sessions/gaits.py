@@ -107,8 +107,7 @@ def propose_with_gaits(
             events.append(log.new_event(_infeasible(action, made, space.values_of(action), radius)))
         if not bad:
             return events, query
-        for action in bad:
-            loop.avoid(action, radius)
+        loop.avoid_all(bad, radius)  # all at once: on the line path withdrawal frees their rows
 
 
 def _made(action: int, made: MadeGait, values: dict[str, float]) -> log.GaitMade:

@@ -114,7 +114,8 @@ class SessionState:
     gait_cache: GaitCache | None = field(default=None, repr=False)  # gaits made on demand
     on_demand: OnDemandGaits | None = field(init=False, default=None)
     infeasible: list[InfeasibleGait] = field(default_factory=list)
-    walkable: list[int] = field(default_factory=list)  # actions with a feasible gait, in order
+    made_rows: list[int] = field(default_factory=list)  # each gait_made's action, as logged
+    made_ids: set[str] = field(default_factory=set)  # each gait_made's gait id
 
     def __post_init__(self) -> None:
         self.loop = self.config.make_loop(seed=self.seed)
@@ -135,6 +136,20 @@ class SessionState:
         """``(trial number, action)`` of the trials in force, in order."""
         return [
             (t, a) for k in self.told for t, a in zip(k.query.trials, k.query.actions, strict=True)
+        ]
+
+    @property
+    def walkable(self) -> list[int]:
+        """The actions whose gait this session made (feasible), in the order first logged: each
+        ``gait_made`` event's action while it still names that gait.  On the line path a
+        withdrawn proposal's rows go to the points proposed next (``loop/line.py``), so a row
+        logged with a made gait may later name an unmade point (a coactive suggestion's) or no
+        point yet; such a row is left out until a made gait is its point again."""
+        size = len(self.loop.space)
+        return [
+            a
+            for a in dict.fromkeys(self.made_rows)
+            if a < size and self.gait_id(a) in self.made_ids
         ]
 
     @property
@@ -479,7 +494,8 @@ class SessionState:
             assert current is not None
             current.result = unblind(current.plan, current.roles, current.values, p["ranking"])
         elif r.kind == log.GAIT_MADE:
-            self.walkable.append(p["action"])  # a gait the subject may walk (validation)
+            self.made_rows.append(p["action"])  # a gait the subject may walk (validation)
+            self.made_ids.add(p["gait_id"])
         elif r.kind == log.GAIT_INFEASIBLE:  # the loop avoids it since derive_query
             bad = InfeasibleGait(r.seq, p["action"], p["gait_id"], p["reason"], dict(p["values"]))
             self.infeasible.append(bad)

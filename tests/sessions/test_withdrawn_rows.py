@@ -1,0 +1,92 @@
+"""Gaits on demand on the line path with two gaits per query: a proposal withdrawn because one of
+its gaits cannot be made frees its rows of the point table for the points proposed next, so a row
+logged with a made gait may later name another point (a coactive suggestion's, never made) or
+none.  Blind validation, the trials and the export must still show only gaits that were made,
+each with its own values and gait id."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from gaitpref import Session
+from gaitpref.config import parse_config
+from gaitpref.sessions.validation import validation_actions
+from gaitpref.storage import MemoryStorage
+from tests.sessions.gaitkit import CONTINUOUS, FakeSteps
+
+
+@pytest.fixture(autouse=True)
+def _fresh_generator() -> Iterator[None]:
+    FakeSteps.below, FakeSteps.calls = 0.3, []
+    yield
+    FakeSteps.below, FakeSteps.calls = 0.3, []
+
+
+def _run(storage: MemoryStorage, seed: int, queries: int, suggest: bool) -> Session:
+    """n = 2 on the line path; a subject who prefers the shorter step (and, with ``suggest``,
+    asks for a shorter one still) drives the proposals into the steps that have no gait."""
+    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2")
+    s = Session.create(storage, parse_config(text), subject="S01")
+    for _ in range(queries):
+        q = s.next_query()
+        a, b = q.actions
+        shorter = "first" if q.points[0][0] < q.points[1][0] else "second"
+        suggestions = [(a, "step_length", "-small")] if suggest else []
+        s.answer(q.id, [] if a == b else [(a, b, shorter)], suggestions)
+    return s
+
+
+def _made(s: Session) -> list[dict[str, Any]]:
+    return [e.payload for e in s.events() if e.kind == "gait_made"]
+
+
+def _shown(s: Session, action: int) -> tuple[str | None, dict[str, float]]:
+    return s.gait_id(action), s.space.values_of(action)
+
+
+def _check_validation_shows_made_gaits(s: Session) -> None:
+    made = {p["gait_id"]: p["values"] for p in _made(s)}
+    plan = s.start_validation()
+    for g in plan.gaits:
+        gait_id, values = _shown(s, g.action)
+        assert gait_id in made, f"gait {g.label} ({s.describe(g.action)}) was never made"
+        assert values == made[gait_id]
+    again = Session.open(s.storage, s.id)  # replay derives the same plan
+    assert again.validation_plan == plan
+
+
+@pytest.mark.parametrize("seed", [14, 20])
+def test_validation_never_shows_a_withdrawn_row_that_now_names_an_unmade_point(seed: int) -> None:
+    s = _run(MemoryStorage(), seed, 4, suggest=True)
+    made = _made(s)
+    # the case: a row logged with a made gait now names a point whose gait was never made
+    ids = {p["gait_id"] for p in made}
+    moved = [
+        p["action"]
+        for p in made
+        if p["action"] < len(s.space) and s.gait_id(p["action"]) not in ids
+    ]
+    assert moved, "a withdrawn proposal's made gait lost its row to an unmade point"
+    # picking among the rows as logged would show such a gait
+    logged = sorted({p["action"] for p in made})
+    assert set(validation_actions(s.posterior().mean, logged)) & set(moved)
+    _check_validation_shows_made_gaits(s)
+    # the walked trials keep their rows: trials, export and console show what was walked
+    walked = [e.payload for e in s.events() if e.kind == "trial_executed"]
+    assert [(t["gait_id"], t["values"]) for t in walked] == [
+        _shown(s, t.action) for t in s.trials()
+    ]
+    # a refused point is looked up by its values and id, not by its row (which moved on)
+    bad = s.infeasible_gaits()
+    assert bad and any(s.gait_id(b.action) != b.gait_id for b in bad if b.action < len(s.space))
+
+
+@pytest.mark.parametrize("seed", [15, 33])
+def test_validation_starts_when_a_withdrawn_made_gait_has_no_row_yet(seed: int) -> None:
+    s = _run(MemoryStorage(), seed, 4, suggest=False)
+    made = _made(s)
+    assert any(p["action"] >= len(s.space) for p in made), "a made gait's row left the table"
+    _check_validation_shows_made_gaits(s)
