@@ -2,17 +2,21 @@
 its gaits cannot be made frees its rows of the point table for the points proposed next, so a row
 logged with a made gait may later name another point (a coactive suggestion's, never made) or
 none.  Blind validation, the trials and the export must still show only gaits that were made,
-each with its own values and gait id."""
+each with its own values and gait id; and an undone answer's query withdrawn by an unsafe flag
+frees its rows too, so the export takes a trial's gait from its ``trial_executed`` event."""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from gaitpref import Session
 from gaitpref.config import parse_config
+from gaitpref.sessions.export import export_session
 from gaitpref.sessions.validation import validation_actions
 from gaitpref.storage import MemoryStorage
 from tests.sessions.gaitkit import CONTINUOUS, FakeSteps
@@ -90,3 +94,23 @@ def test_validation_starts_when_a_withdrawn_made_gait_has_no_row_yet(seed: int) 
     made = _made(s)
     assert any(p["action"] >= len(s.space) for p in made), "a made gait's row left the table"
     _check_validation_shows_made_gaits(s)
+
+
+def test_the_export_shows_an_undone_trial_as_walked_after_its_rows_moved_on(
+    tmp_path: Path,
+) -> None:
+    s = _run(MemoryStorage(), 38, 4, suggest=False)
+    q = s.undo()  # its query is pending again, on its rows of the table
+    near = min(s.trials(), key=lambda t: abs(s.space.points[t.action][0] - q.points[0][0]))
+    s.flag_unsafe(near.number, "knee pain")
+    assert s.pending is None  # the flag withdrew the pending query: its rows left the table
+    s.next_query()  # and went to the points proposed next
+    walked = {e.seq: e.payload for e in s.events() if e.kind == "trial_executed"}
+    undone = [t for t in s.trials(include_undone=True) if t.undone]
+    assert any(s.gait_id(t.action) != walked[t.seq]["gait_id"] for t in undone)
+    folder = export_session(s, tmp_path / "export", "json").parent
+    rows = json.loads((folder / "trials.json").read_text())
+    assert [r["undone"] for r in rows] == [t.undone for t in s.trials(include_undone=True)]
+    for r, t in zip(rows, s.trials(include_undone=True), strict=True):
+        assert (r["gait_id"], r["gait"]) == (walked[t.seq]["gait_id"], walked[t.seq]["gait_id"])
+        assert {k: r[k] for k in walked[t.seq]["values"]} == walked[t.seq]["values"]

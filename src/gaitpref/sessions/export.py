@@ -10,9 +10,10 @@ An export folder is readable without gaitpref:
   ``version`` (the payload's schema version), ``payload``);
 - tables as CSV (``--format csv``) or JSON (``--format json``), every gait named as the terminal
   and the console name it (``gait``: the library's id, or ``G<action>``): ``trials`` (with
-  ``unsafe`` flags and their reasons), ``comparisons`` (with
-  ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``, ``posterior`` (mean and standard
-  deviation of every action), ``validation`` and ``confidence`` (after every answer, undo and
+  ``unsafe`` flags and their reasons; values and gait id as the trial's event logged them),
+  ``comparisons`` (with ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``,
+  ``posterior`` (mean and standard deviation of every action), ``validation`` and ``confidence``
+  (after every answer, undo and
   exclusion: ``seq`` of its last event, ``answers`` and ``trials`` in force, the recommended
   ``action`` and ``gait``, the ``probability`` that it is within ``tolerance`` of the range of
   the best, the expected shortfall ``regret`` in utility units and ``relative_regret`` as a
@@ -42,6 +43,7 @@ import numpy as np
 
 from gaitpref.errors import ExportError, ReplayError
 from gaitpref.feedback import kind_for_event
+from gaitpref.sessions import events as log
 from gaitpref.sessions.session import Session
 from gaitpref.storage import (
     MemoryStorage,
@@ -67,7 +69,8 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
     events = session.events()
-    tables = _tables(session, {e.seq: e.at.isoformat() for e in events})
+    walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
+    tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked)
     out.mkdir(parents=True, exist_ok=True)
     written: dict[str, str] = {}
 
@@ -169,7 +172,12 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     }
 
 
-def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
+def _tables(
+    session: Session, at: dict[int, str], walked: dict[int, dict[str, Any]]
+) -> dict[str, list[dict[str, Any]]]:
+    """The tables; a trial's values and gait id are its ``trial_executed`` event's (``walked``,
+    by seq): on the line path an undone answer's rows can go to other points later (its query,
+    pending again, withdrawn by an unsafe flag)."""
     space = session.space
     unsafe = session.unsafe_flags()
     trials = [
@@ -177,9 +185,9 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
             "trial": t.number,
             "query": t.query,
             "action": t.action,
-            **space.values_of(t.action),
-            "gait_id": session.gait_id(t.action),
-            "gait": session.gait_name(t.action),
+            **walked[t.seq]["values"],
+            "gait_id": _walked_gait(session, t.action, walked[t.seq]),
+            "gait": _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}",
             "unsafe": t.number in unsafe,
             "unsafe_reason": unsafe.get(t.number, (0, ""))[1],
             "excluded": t.excluded is not None,
@@ -269,6 +277,12 @@ def _tables(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, An
         "confidence": confidence,
         **_other_feedback(session, at),
     }
+
+
+def _walked_gait(session: Session, action: int, walked: dict[str, Any]) -> str | None:
+    """The gait id a trial was logged with (logs of 0.1.0 have none: the library's then)."""
+    logged: str | None = walked.get("gait_id")
+    return logged if logged is not None else session.gait_id(action)
 
 
 def _other_feedback(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:

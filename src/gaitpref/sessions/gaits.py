@@ -5,10 +5,12 @@ the query is logged (``gaitpref.gaits.on_demand``: this session's gait, else the
 a new one warm-started from the nearest feasible gait made so far, within ``[gaits]
 max_iterations`` solver iterations, so that no gait costs more than that).  A gait that cannot be
 made is logged as ``gait_infeasible`` with the solver's reason; the loop then never proposes it,
-nor the actions within ``[gaits].avoid_radius`` of it (:meth:`~gaitpref.loop.CoSpar.avoid`, the
-unsafe-flag neighbourhood of ``loop/safety.py``), and proposes again with the same random state
-(:meth:`~gaitpref.loop.CoSpar.avoid` withdraws the proposal).  Each gait new to the session is
-logged as ``gait_made``; both events carry the gait itself (payload version 2).
+nor the actions within ``[gaits].avoid_radius`` of it (:meth:`~gaitpref.loop.CoSpar.avoid_all`,
+the unsafe-flag neighbourhood of ``loop/safety.py``, for every such action of the proposal at
+once), and proposes again with the same random state (the avoidance withdraws the proposal; on the
+line path that frees its rows, so they are all named before).  Each gait new to the session is
+logged as ``gait_made`` (even when the proposal is then withdrawn: its gait is made); both events
+carry the gait itself (payload version 2).
 
 Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
 carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
