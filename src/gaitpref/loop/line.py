@@ -10,13 +10,17 @@ the current line while a query is chosen.  Since the Laplace fit depends only on
 points, the posterior over the table and the line is the same Gaussian as the full model's
 restricted to those points (``tests/loop/test_line.py`` checks it against the full grid).  The
 query strategy (self-sparring, EUBO, gated EUBO, information gain) runs unchanged on that
-posterior with ``allowed`` set to the line's points, so it chooses along the line.
+posterior with ``allowed`` set to the line's points, so it chooses along the line.  When no
+point of the line may be proposed (every one avoided, near a gait flagged unsafe, or in the
+region of avoidance) the ask draws another line, up to ``LINE_DRAWS`` (``loop/lines.py``), and
+raises :class:`~gaitpref.errors.NoSafeGaitError` only when none of them has such a point.
 
 Actions are rows of the table: they keep their index for the whole session, and a point seen
 twice (a line through a visited point, a coactive suggestion landing on one) is one action.
 A coactive suggestion adds the point it names to the table before the answer is fitted.  Every
-line takes a seed from the loop's generator; the query carries its line (seed, origin,
-direction, points), which a session logs and checks on replay.
+line takes a seed from the loop's generator; the query carries the line it was chosen along
+(seed, origin, direction, points), which a session logs and checks on replay (the lines drawn
+before it follow from the same generator).
 """
 
 from __future__ import annotations
@@ -32,7 +36,14 @@ from numpy.typing import NDArray
 from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
 from gaitpref.loop.cospar import Answer, CoSpar, Query
-from gaitpref.loop.lines import LineSettings, draw_line, normalised
+from gaitpref.loop.lines import (
+    LINE_DRAWS,
+    Line,
+    LineSettings,
+    draw_line,
+    normalised,
+    redraw_rule,
+)
 from gaitpref.loop.safety import Safety
 from gaitpref.loop.warm import WarmStart
 from gaitpref.model.engines import PointEngine
@@ -111,28 +122,34 @@ class LineCoSpar(CoSpar):
 
     # -- ask / tell --------------------------------------------------------------------------
     def ask(self) -> Query:
-        """The next query, chosen along a fresh line through the current best point."""
+        """The next query, chosen along a fresh line through the current best point; while every
+        point of the lines drawn is excluded (avoided, near a gait flagged unsafe, in the region
+        of avoidance), along another, at most :data:`~gaitpref.loop.lines.LINE_DRAWS` in all
+        (:func:`~gaitpref.loop.lines.redraw_rule`), each from its own seed of the generator."""
         if self.pending is not None:
             return self.pending
         state = self.rng.bit_generator.state
-        seed = int(self.rng.integers(2**63 - 1))
-        line = draw_line(self.domain, self.line_settings, seed, self.best_point(), self._towards())
-        space, line_ids = self.space.extended(line.points)
+        origin, towards = self.best_point(), self._towards()
         with one_blas_thread():
-            posterior = on_points(self.posterior, space)
-            allowed = np.zeros(len(space), dtype=bool)
-            allowed[line_ids] = True
-            if self._avoided_points:
-                allowed &= ~self._avoided_on(space)
-            safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe, allowed)
-            if safe is not None:
-                allowed &= safe
-            if not allowed.any():
+            for draw in range(LINE_DRAWS):
+                seed = int(self.rng.integers(2**63 - 1))
+                rule, through_best = redraw_rule(self.line_settings, draw)
+                start = origin if through_best else None  # None: a random point of the seed's
+                line = draw_line(self.domain, rule, seed, start, towards if draw == 0 else None)
+                space, allowed = self._on_line(line)
+                if allowed.any():
+                    break
+            else:  # nothing drawn, nothing logged: the generator goes back as it was
                 self.rng.bit_generator.state = state
+                through = "random points" if origin is None else "the best point, then random ones"
                 raise NoSafeGaitError(
-                    "no gait on this line may be proposed: every point is in the region of "
-                    f"avoidance or near a gait flagged unsafe ({len(self.unsafe)} flagged)"
+                    f"no gait may be proposed on any of the {LINE_DRAWS} lines tried (through "
+                    f"{through}): every point of each is in the region of avoidance, near a gait "
+                    f"flagged unsafe ({len(self.unsafe)} flagged) or avoided "
+                    f"({len(self._avoided_points)}, e.g. gaits that cannot be made); nothing was "
+                    "proposed"
                 )
+            posterior = on_points(self.posterior, space)
             context = AskContext(
                 posterior, self.n, self._buffer, len(self.executed), self.rng, allowed
             )
@@ -147,6 +164,20 @@ class LineCoSpar(CoSpar):
         self.pending = query
         self._next_id += 1
         return query
+
+    def _on_line(self, line: Line) -> tuple[PointSet, NDArray[np.bool_]]:
+        """The table extended by ``line``'s points, and which of them may be proposed: on the
+        line, not avoided, and allowed by the safety rules (``loop/safety.py``)."""
+        space, line_ids = self.space.extended(line.points)
+        allowed = np.zeros(len(space), dtype=bool)
+        allowed[line_ids] = True
+        if self._avoided_points:
+            allowed &= ~self._avoided_on(space)
+        posterior = on_points(self.posterior, space)
+        safe = self.safety.allowed(posterior, self.gp.ordinal, self.unsafe, allowed)
+        if safe is not None:
+            allowed &= safe
+        return space, allowed
 
     @contextmanager
     def _all_or_nothing(self) -> Iterator[None]:

@@ -14,7 +14,10 @@ Directions: ``"random"`` (uniform on the sphere), ``"coordinate"`` (one feature 
 random) or ``"coactive"`` (from the last executed point towards the point the user's coactive
 suggestions point to, else random).
 
-Every line takes its own seed, drawn from the loop's generator, so the log can name it.
+Every line takes its own seed, drawn from the loop's generator, so the log can name it.  When
+every point of a line is excluded (avoided, near a gait flagged unsafe, in the region of
+avoidance) the loop draws another, at most :data:`LINE_DRAWS` lines per query in all
+(:func:`redraw_rule`, ``loop/line.py``).
 """
 
 from __future__ import annotations
@@ -28,6 +31,14 @@ from gaitpref.space import FloatArray, Space
 
 Direction = Literal["random", "coordinate", "coactive"]
 DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
+
+#: the most lines one query draws (:func:`redraw_rule`): while every point of the lines drawn is
+#: excluded, four with the configured rule through the best point (the first with the coactive
+#: direction, the others without it, which would give the same line again), four random
+#: directions through it (a coordinate rule has one line per feature; from a best point on the
+#: box's boundary a line covers only the half of its directions that enter the box), then four
+#: random directions through random points (the best point may sit where every line is excluded)
+LINE_DRAWS = 12
 
 
 @dataclass(frozen=True)
@@ -140,6 +151,14 @@ def draw_line(
     return Line(seed, tuple(start.tolist()), tuple(v.tolist()), points)
 
 
+def redraw_rule(settings: LineSettings, draw: int) -> tuple[LineSettings, bool]:
+    """The rule of a query's ``draw``-th line (0: the first, the configured one; see
+    :data:`LINE_DRAWS`), and whether it passes through the best point (else a random point)."""
+    if draw < LINE_DRAWS // 3:
+        return settings, True
+    return LineSettings(settings.points, "random"), draw < 2 * LINE_DRAWS // 3
+
+
 def normalised(space: Space, delta: FloatArray) -> FloatArray:
     """A difference of points in normalised coordinates (per feature's range)."""
     _, span = _spans(space)
@@ -149,6 +168,7 @@ def normalised(space: Space, delta: FloatArray) -> FloatArray:
 
 __all__ = [
     "DIRECTIONS",
+    "LINE_DRAWS",
     "Direction",
     "Line",
     "LineSettings",
@@ -157,4 +177,5 @@ __all__ = [
     "line_points",
     "normalised",
     "random_point",
+    "redraw_rule",
 ]
