@@ -142,9 +142,10 @@ class LineCoSpar(CoSpar):
             else:  # nothing drawn, nothing logged: the generator goes back as it was
                 self.rng.bit_generator.state = state
                 through = "random points" if origin is None else "the best point, then random ones"
+                tried = f"{LINE_DRAWS} line" + ("s" if LINE_DRAWS != 1 else "")
                 raise NoSafeGaitError(
-                    f"no gait may be proposed on any of the {LINE_DRAWS} lines tried (through "
-                    f"{through}): every point of each is in the region of avoidance, near a gait "
+                    f"no gait may be proposed on any of the {tried} tried (through {through}): "
+                    "every point of each is in the region of avoidance, near a gait "
                     f"flagged unsafe ({len(self.unsafe)} flagged) or avoided "
                     f"({len(self._avoided_points)}, e.g. gaits that cannot be made); nothing was "
                     "proposed"

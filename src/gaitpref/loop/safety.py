@@ -48,7 +48,8 @@ config does not fix them), the ones its Laplace fit used.  Besides, a trial the 
 flagged "unsafe" removes its gait and every gait within ``unsafe_radius`` of it (Euclidean, each
 feature scaled to ``[0, 1]`` by its range) from every future query.  No strategy proposes
 outside :meth:`Safety.allowed`; when it is empty the loop raises
-:class:`~gaitpref.errors.NoSafeGaitError` and proposes nothing.
+:class:`~gaitpref.errors.NoSafeGaitError` and proposes nothing (on the line path, when it is
+empty on every line the ask draws, ``loop/line.py``).
 """
 
 from __future__ import annotations
