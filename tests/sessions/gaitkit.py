@@ -85,6 +85,26 @@ def prefer_short_steps(s: Session, queries: int) -> None:
         s.answer(q.id, [(a, b, "first" if shorter else "second")])
 
 
+def paired_line_session(storage: Storage, seed: int) -> Session:
+    """A session of :data:`CONTINUOUS` (the line path) with ``seed`` and two gaits per query."""
+    from gaitpref.config import parse_config
+
+    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2")
+    return Session.create(storage, parse_config(text), subject="S01")
+
+
+def prefer_shorter_pairs(s: Session, queries: int, suggest: bool) -> None:
+    """Answer ``queries`` two-gait queries as a subject who prefers the shorter step (and, with
+    ``suggest``, asks for a shorter one still): drives the proposals into the steps that have
+    no gait."""
+    for _ in range(queries):
+        q = s.next_query()
+        a, b = q.actions
+        shorter = "first" if q.points[0][0] < q.points[1][0] else "second"
+        suggestions = [(a, "step_length", "-small")] if suggest else []
+        s.answer(q.id, [] if a == b else [(a, b, shorter)], suggestions)
+
+
 GAIT_EVENTS = ("gait_made", "gait_infeasible")
 
 

@@ -13,10 +13,9 @@ import pytest
 
 import gaitpref.loop.line as line_module
 from gaitpref import Session
-from gaitpref.config import parse_config
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.storage import MemoryStorage
-from tests.sessions.gaitkit import CONTINUOUS, FakeSteps
+from tests.sessions.gaitkit import FakeSteps, paired_line_session, prefer_shorter_pairs
 
 #: (seed, suggest): sessions whose query stopped with NoSafeGaitError when one line was drawn
 STOPPED = [(26, False), (6, True)]
@@ -29,22 +28,6 @@ def _fresh_generator() -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = 0.3, []
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
-
-
-def _drive(s: Session, queries: int, suggest: bool) -> None:
-    """n = 2; a subject who prefers the shorter step (and, with ``suggest``, asks for a shorter
-    one still) drives the proposals into the steps that have no gait."""
-    for _ in range(queries):
-        q = s.next_query()
-        a, b = q.actions
-        shorter = "first" if q.points[0][0] < q.points[1][0] else "second"
-        suggestions = [(a, "step_length", "-small")] if suggest else []
-        s.answer(q.id, [] if a == b else [(a, b, shorter)], suggestions)
-
-
-def _session(storage: MemoryStorage, seed: int) -> Session:
-    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2")
-    return Session.create(storage, parse_config(text), subject="S01")
 
 
 def _infeasible(events: list[Any]) -> list[tuple[np.ndarray, float]]:
@@ -72,9 +55,9 @@ def test_one_line_per_query_stopped_the_session_with_most_of_the_space_free(
     """The defect as it was: one line per query, so a query whose line the refused gaits'
     neighbourhoods cover stops the session."""
     monkeypatch.setattr(line_module, "LINE_DRAWS", 1)
-    s = _session(MemoryStorage(), seed)
+    s = paired_line_session(MemoryStorage(), seed)
     with pytest.raises(NoSafeGaitError, match="any of the 1 line tried"):
-        _drive(s, QUERIES, suggest)
+        prefer_shorter_pairs(s, QUERIES, suggest)
     assert _free_share(list(s.events())) > 0.5  # while most of the space is free
 
 
@@ -93,8 +76,8 @@ def test_a_covered_line_is_drawn_again_and_the_session_goes_on(
 
     monkeypatch.setattr(line_module.LineCoSpar, "_on_line", watched)
     storage = MemoryStorage()
-    s = _session(storage, seed)
-    _drive(s, QUERIES, suggest)
+    s = paired_line_session(storage, seed)
+    prefer_shorter_pairs(s, QUERIES, suggest)
     events = list(s.events())
     assert covered, "no line was covered: the case is not exercised"
     issued = [e for e in events if e.kind == "query_issued"]

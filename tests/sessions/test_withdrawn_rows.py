@@ -15,11 +15,10 @@ from typing import Any
 import pytest
 
 from gaitpref import Session
-from gaitpref.config import parse_config
 from gaitpref.sessions.export import export_session
 from gaitpref.sessions.validation import validation_actions
 from gaitpref.storage import MemoryStorage
-from tests.sessions.gaitkit import CONTINUOUS, FakeSteps
+from tests.sessions.gaitkit import FakeSteps, paired_line_session, prefer_shorter_pairs
 
 
 @pytest.fixture(autouse=True)
@@ -32,14 +31,8 @@ def _fresh_generator() -> Iterator[None]:
 def _run(storage: MemoryStorage, seed: int, queries: int, suggest: bool) -> Session:
     """n = 2 on the line path; a subject who prefers the shorter step (and, with ``suggest``,
     asks for a shorter one still) drives the proposals into the steps that have no gait."""
-    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2")
-    s = Session.create(storage, parse_config(text), subject="S01")
-    for _ in range(queries):
-        q = s.next_query()
-        a, b = q.actions
-        shorter = "first" if q.points[0][0] < q.points[1][0] else "second"
-        suggestions = [(a, "step_length", "-small")] if suggest else []
-        s.answer(q.id, [] if a == b else [(a, b, shorter)], suggestions)
+    s = paired_line_session(storage, seed)
+    prefer_shorter_pairs(s, queries, suggest)
     return s
 
 
