@@ -97,6 +97,11 @@ def main() -> None:
         "--relearn-every", type=int, default=RELEARN_EVERY,
         help="re-learn the new subject's share every so many answers (0: rho held)",
     )  # fmt: skip
+    parser.add_argument(
+        "--share", choices=("average", "map"), default=None,
+        help="the warm start's share: a mixture over hypotheses, or one MAP value (default: "
+        "the config's, [model] share)",
+    )  # fmt: skip
     parser.add_argument("--report", action="store_true", help="summarise results.json only")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
@@ -128,6 +133,9 @@ def main() -> None:
 
 def run_part(part: str, args: argparse.Namespace) -> dict[str, dict]:
     config = load_config("synthetic-2d")
+    if args.share is not None:
+        learning = dataclasses.replace(config.learning, share=args.share)
+        config = dataclasses.replace(config, learning=learning)
     loop = config.make_loop(seed=0)
     noise = float(loop.gp.noise)
     out: dict[str, dict] = {}

@@ -21,6 +21,7 @@ lengthscale = 0.03
 signal_variance = 0.005
 noise = 0.02
 """
+SHARE = 'share = "average"\n'  # [model]'s share, given (its default changed in 0.6)
 
 
 def test_a_config_with_only_space_and_model_asks_comparisons() -> None:
@@ -50,9 +51,9 @@ def test_the_0_1_defaults_give_the_old_loop() -> None:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.5"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.6"}
     assert config_of(stored_record(BARE, library_meta(bare))).buffer == 1
-    explicit = parse_config(BARE + "[cospar]\nbuffer = 1\n")
+    explicit = parse_config(BARE + SHARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 
 
@@ -60,7 +61,9 @@ def test_a_session_recorded_by_0_1_replays_with_0_1_defaults() -> None:
     assert config_of(stored_record(BARE, {})).buffer == 0
 
 
-RATED = BARE + '[cospar]\nbuffer = 1\n[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+RATED = (
+    BARE + SHARE + '[cospar]\nbuffer = 1\n[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+)
 AVOID = '[safety]\navoid = ["very bad"]\n'
 
 
@@ -68,7 +71,7 @@ def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
     cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3,
     assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
     assert cfg.safety.cautious == 0.6
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.5"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.6"}
     assert config_of(stored_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
     for explicit in (
         "lambda = 1.0\n",
@@ -95,3 +98,18 @@ def test_a_region_recorded_with_the_0_3_defaults_replays_without_the_cautious_le
     # stored no version: it replays with 0.1's defaults, also without the cautious level
     given = config_of(stored_record(RATED + AVOID + "risk = 0.5\n", {})).safety
     assert given.risk == 0.5 and given.cautious is None
+
+
+def test_a_warm_starts_share_is_a_mixture_since_0_6_and_map_before() -> None:
+    assert parse_config(BARE).learning.share == "average"
+    assert "model.share" in parse_config(BARE).defaulted
+    for version in ("0.1", "0.2", "0.3", "0.4", "0.5"):
+        assert parse_config(BARE, defaults=version).learning.share == "map"
+        assert parse_config(BARE + SHARE, defaults=version).learning.share == "average"
+    assert config_of(stored_record(BARE, {"config_defaults": "0.5"})).learning.share == "map"
+    assert config_of(stored_record(BARE, {})).learning.share == "map"  # recorded by 0.1
+    assert (
+        config_of(stored_record(BARE, library_meta(parse_config(BARE)))).learning.share == "average"
+    )
+    with pytest.raises(ConfigError, match="share"):
+        parse_config(BARE + 'share = "mean"\n')

@@ -1,14 +1,19 @@
 """Re-learning the new subject's share as they answer (``loop/warm.py``): a subject unlike the
-others stays alone (the cold loop, exactly), one like them comes to share, and undo restores it."""
+others stays alone (the cold loop, exactly), one like them comes to share, and undo restores it;
+the same with the share averaged over hypotheses (``share = "average"``)."""
 
 from __future__ import annotations
 
 import dataclasses
 
 import numpy as np
+import pytest
 
 from gaitpref.loop.cospar import CoSpar
+from gaitpref.loop.learning import Learning
+from gaitpref.loop.stopping import confidence
 from gaitpref.loop.warm import WarmStart, warm_data
+from gaitpref.model.share_mix import ALONE_PRIOR, SHARE_FACTORS
 from gaitpref.simulate.users import SimulatedUser
 from tests.loop.test_warm import KERNEL, SPACE, UTILITY, _drive, _earlier
 
@@ -55,3 +60,55 @@ def test_a_subject_like_the_others_comes_to_share_and_undo_restores_the_share() 
     _drive(held, 3)
     assert all(a.share_refit is None for a in held.answers)
     assert held.warm is not None and held.warm.share is None
+
+
+def _averaging(seed: int = 4) -> CoSpar:
+    loop = CoSpar(SPACE, KERNEL, 0.1, n=2, seed=seed, learning=Learning(share="average"))
+    loop.warm_start(_warm())
+    return loop
+
+
+def test_averaged_shares_move_off_alone_for_a_like_subject_and_undo_restores_them() -> None:
+    loop = _averaging()
+    user = SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
+    for _ in range(6):
+        q = loop.ask()
+        loop.tell(q, user.answer(q))
+    hypotheses = loop.share_hypotheses
+    assert [h.share for h in hypotheses] == pytest.approx([c * 0.8 for c in SHARE_FACTORS])
+    assert sum(h.weight for h in hypotheses) == pytest.approx(1.0)
+    assert hypotheses[0].weight < ALONE_PRIOR  # the answers agree with the others
+    assert hypotheses[-1].weight > hypotheses[-1].prior
+    mean_share = sum(h.weight * h.share for h in hypotheses)
+    assert loop.warm is not None and loop.warm.share == pytest.approx(mean_share)
+    last = loop.answers[-1].share_refit
+    assert last is not None and last.after == loop.warm.share and last.hypotheses == hypotheses
+    mixture = loop.share_mixture()
+    assert mixture is not None and len(mixture.components) == len(hypotheses)
+    assert np.allclose(mixture.mean, loop.mixture_mean())
+    alone = mixture.components[0][1]  # the subject alone: the others' data cannot reach it
+    assert not np.allclose(alone.mean, loop.posterior.mean)
+    before = last.before
+    loop.undo()
+    assert loop.warm.share == before
+    assert loop.share_hypotheses == loop.answers[-1].share_refit.hypotheses  # type: ignore[union-attr]
+
+
+def test_one_share_hypothesis_runs_as_the_share_held_there(monkeypatch: pytest.MonkeyPatch) -> None:
+    import gaitpref.model.share_fit as share_fit
+
+    monkeypatch.setattr(share_fit, "share_prior", lambda rho: ((rho, 1.0),))
+    one = _averaging()
+    held = CoSpar(SPACE, KERNEL, 0.1, n=2, seed=4)  # today's posterior with the share at rho
+    held.warm_start(dataclasses.replace(_warm(), share=0.8, relearn_every=0))
+    one.warm_start(dataclasses.replace(_warm(), share=0.8))  # from the same start
+    _drive(one, 4)
+    _drive(held, 4)
+    assert one.executed == held.executed
+    assert np.array_equal(one.posterior.mean, held.posterior.mean)
+    assert [h.weight for h in one.share_hypotheses] == [1.0]
+    mixture = one.share_mixture()
+    assert mixture is not None
+    a = confidence(held.posterior, np.random.default_rng(2), samples=300)
+    b = confidence(one.posterior, np.random.default_rng(2), samples=300, draws=mixture)
+    assert a == b

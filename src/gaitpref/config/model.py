@@ -13,19 +13,30 @@ from __future__ import annotations
 
 from typing import Any, cast
 
-from gaitpref.config.schema import MAX_SIGNAL_TO_NOISE, MODEL, PRIOR, Key, check_table
+from gaitpref.config.schema import (
+    DEFAULTS_VERSION,
+    MAX_SIGNAL_TO_NOISE,
+    MODEL,
+    PRIOR,
+    Key,
+    check_table,
+    defaults_for,
+)
 from gaitpref.config.specs import SCALE, LogNormalPair, fail
-from gaitpref.loop.learning import FitMode, HyperMode, Learning, TiesMode
+from gaitpref.loop.learning import FitMode, HyperMode, Learning, ShareMode, TiesMode
 from gaitpref.model.engines import resolve_sampler
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Space
 
 
-def check_model(raw: object) -> dict[str, Any]:
-    """``[model]`` with every key checked and defaults filled in."""
-    model, _ = check_table(raw, "model", MODEL)
-    return model
+def check_model(
+    raw: object, defaults: str = DEFAULTS_VERSION
+) -> tuple[dict[str, Any], frozenset[str]]:
+    """``[model]`` with every key checked and the defaults of version ``defaults`` filled in,
+    and the keys that defaulted (``model.share``: ``"map"`` before 0.5)."""
+    model, defaulted = check_table(raw, "model", MODEL, defaults_for(defaults, "model"))
+    return model, frozenset(f"model.{k}" for k in defaulted)
 
 
 def check_scales(model: dict[str, Any], coactive_weight: float) -> None:
@@ -128,6 +139,7 @@ def make_learning(model: dict[str, Any], space: Space) -> Learning:
             HyperPrior(tuple(scales), variance, band_prior),
             cast(HyperMode, model["hyper"]),
             tuple(model["hypotheses"]),
+            cast(ShareMode, model["share"]),
         )
     except ValueError as exc:
         fail("model", None, str(exc))

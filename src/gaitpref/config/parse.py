@@ -20,6 +20,7 @@
     refit_every = 20               # optional: answers between hyperparameter refits
     hyper = "map"                  # optional: "average" weighs lengthscale hypotheses
     hypotheses = [0.5, 0.71, 1, 1.41, 2]  # optional: their factors of the fitted lengthscales
+    share = "average"              # optional: a warm start's share, a mixture, or "map"
 
     [model.prior]                  # optional: log-normal priors as [median, sd of the log]
     lengthscale = { step_length = [0.025, 0.7] }
@@ -189,7 +190,7 @@ def parse_config(
         cospar_raw = top["cospar"]
         grid = isinstance(cospar_raw, dict) and cospar_raw.get("subspace") == "grid"
         space = parse_space(top["space"], max_actions, grid)
-    model = check_model(top["model"])
+    model, model_defaulted = check_model(top["model"], defaults)
     cospar, defaulted = _cospar(top["cospar"], space, defaults, max_actions)
     on_line = cospar["subspace"] == "line"
     check_scales(model, cospar["coactive_weight"])
@@ -223,7 +224,8 @@ def parse_config(
         stop=stop,
         defaulted=frozenset(f"cospar.{k}" for k in defaulted)
         | frozenset(f"gaits.{k}" for k in gaits_defaulted if generator is not None)
-        | relied,
+        | relied
+        | model_defaulted,
         defaults_version=defaults,
     )
 

@@ -39,7 +39,7 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
-from gaitpref.loop.learning import FIT_MODES, HYPER_MODES, HYPOTHESES, TIES_MODES
+from gaitpref.loop.learning import FIT_MODES, HYPER_MODES, HYPOTHESES, SHARE_MODES, TIES_MODES
 from gaitpref.loop.lines import DIRECTIONS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
@@ -152,6 +152,7 @@ MODEL: Final[dict[str, Key]] = {
     "refit_every": Key(Integer(1, 1_000_000), 20),
     "hyper": Key(Choice(HYPER_MODES), "map"),  # "average": over lengthscale hypotheses
     "hypotheses": Key(Numbers(Number(0.01, 100.0, open_lo=True), 1, 15), HYPOTHESES),
+    "share": Key(Choice(SHARE_MODES), "average"),  # a warm start's share: a mixture, or "map"
     "prior": Key(Table("log-normal priors [median, sd]"), {}),
 }
 PRIOR: Final[dict[str, Key]] = {
@@ -205,21 +206,29 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.5"
+DEFAULTS_VERSION: Final = "0.6"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
-#: made on demand had no iteration budget, ``[gaits] max_iterations = None``).
+#: made on demand had no iteration budget, ``[gaits] max_iterations = None``; 0.1 to 0.5: a warm
+#: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``).
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
+_MAP_SHARE: Final[dict[str, Any]] = {"share": "map"}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
         "cospar": {"buffer": 0},
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
+        "model": _MAP_SHARE,
     },
-    "0.2": {"safety": {"risk": None, "cautious": 0.0}, "gaits": _UNBOUNDED_GAITS},
-    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS},
-    "0.4": {"gaits": _UNBOUNDED_GAITS},
+    "0.2": {
+        "safety": {"risk": None, "cautious": 0.0},
+        "gaits": _UNBOUNDED_GAITS,
+        "model": _MAP_SHARE,
+    },
+    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MAP_SHARE},
+    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MAP_SHARE},
+    "0.5": {"model": _MAP_SHARE},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

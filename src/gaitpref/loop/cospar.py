@@ -59,6 +59,7 @@ from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLik
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.share_fit import ShareFit
+from gaitpref.model.share_mix import PosteriorMixture, ShareHypothesis
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.pointset import PointSet
@@ -196,6 +197,8 @@ class CoSpar:
         self._stale_before: set[int] = set()  # answers whose posterior_before predates an exclude
         self.warm: WarmStart | None = None  # earlier subjects' answers (warm_start)
         self._gps: dict[Hyperparameters, PreferenceGP] = {}  # the hypotheses' (hyper="average")
+        # the posteriors under the share hypotheses (share = "average"), for one posterior
+        self._shared: tuple[Posterior | None, dict[float, Posterior]] = (None, {})
 
     # -- state -------------------------------------------------------------------------------
     @property
@@ -239,12 +242,45 @@ class CoSpar:
         refits = self.refits
         return refits[-1].hypotheses if refits else ()
 
+    @property
+    def share_hypotheses(self) -> tuple[ShareHypothesis, ...]:
+        """The warm start's share hypotheses and weights after the last answer that weighed
+        them (``share = "average"``; empty otherwise or before the first answer)."""
+        fits = [a.share_refit for a in self.answers if a.share_refit is not None]
+        return fits[-1].hypotheses if fits else ()
+
+    def share_mixture(self) -> PosteriorMixture | None:
+        """The mixture of the posteriors under the share hypotheses of positive weight (the
+        heaviest one's is the loop's own posterior); None without share hypotheses."""
+        hypotheses = [h for h in self.share_hypotheses if h.weight > 0]
+        if not hypotheses:
+            return None
+        with one_blas_thread():
+            parts = tuple((h.weight, self._posterior_sharing(h.share)) for h in hypotheses)
+        total = sum(w for w, _ in parts)
+        return PosteriorMixture(tuple((w / total, p) for w, p in parts))
+
+    def _posterior_sharing(self, share: float) -> Posterior:
+        """The posterior with the new subject's share ``share`` (the loop's own at its share)."""
+        warm = self.warm
+        if warm is None or warm.share == share:
+            return self.posterior
+        key, cache = self._shared
+        if key is not self.posterior:
+            cache = {}
+            self._shared = (self.posterior, cache)
+        if share not in cache:
+            cache[share] = self._fit(self.answers, warm=dataclasses.replace(warm, share=share))
+        return cache[share]
+
     def mixture_mean(self) -> NDArray[np.float64]:
         """The posterior mean at every action, averaged over the hypotheses by weight (the
         posterior's own mean without hypotheses); its argmax is the recommendation."""
         hypotheses = self.hypotheses
         if not hypotheses:
-            return np.asarray(self.posterior.mean, dtype=np.float64)
+            mixture = self.share_mixture()
+            mean = self.posterior.mean if mixture is None else mixture.mean
+            return np.asarray(mean, dtype=np.float64)
         with one_blas_thread():
             means = [h.weight * self._posterior_under(h).mean for h in hypotheses if h.weight > 0]
         return np.asarray(np.sum(means, axis=0), dtype=np.float64)
@@ -262,12 +298,18 @@ class CoSpar:
 
     def _ask_posterior(self) -> Posterior:
         """The posterior a query is proposed under: with hypotheses, one drawn by weight from
-        the loop's generator (the first step of a Thompson draw from the mixture)."""
+        the loop's generator (the first step of a Thompson draw from the mixture); the
+        lengthscale hypotheses if any, else the warm start's share hypotheses."""
         hypotheses = self.hypotheses
-        if len(hypotheses) < 2:
+        if len(hypotheses) >= 2:
+            k = int(self.rng.choice(len(hypotheses), p=[h.weight for h in hypotheses]))
+            return self._posterior_under(hypotheses[k])
+        shares = self.share_hypotheses
+        if len(shares) < 2:
             return self.posterior
-        k = int(self.rng.choice(len(hypotheses), p=[h.weight for h in hypotheses]))
-        return self._posterior_under(hypotheses[k])
+        k = int(self.rng.choice(len(shares), p=[h.weight for h in shares]))
+        with one_blas_thread():
+            return self._posterior_sharing(shares[k].share)
 
     @property
     def buffer(self) -> tuple[int, ...]:
@@ -713,7 +755,10 @@ class CoSpar:
             return None
         single, single_likelihood = self._singles(answers, hyper.thresholds)
         own = self._data(answers)
-        return relearn_share(self.warm, self.space, hyper, own, single, single_likelihood)
+        return relearn_share(
+            self.warm, self.space, hyper, own, single, single_likelihood,
+            average=self.learning.share == "average",
+        )  # fmt: skip
 
     def _fit(
         self,

@@ -18,6 +18,13 @@
   Laplace evidence x prior at every refit (``model/hypermix.py``): each ask draws a hypothesis
   by weight from the loop's generator and proposes under its posterior, and the recommendation
   is the argmax of the weighted mean.
+- ``share``: how a warm start that re-learns the new subject's shared fraction
+  (``loop/warm.py``) holds it: ``"map"`` one value chosen by the evidence after every answer
+  (``model/share_fit.py``); ``"average"`` a mixture over share hypotheses weighted by evidence
+  x prior (``model/share_mix.py``): each ask draws a hypothesis by weight (when the lengthscales
+  are not averaged too), the confidence's samples come from the mixture, and the posterior
+  in force is the heaviest hypothesis'.  Without a warm start it changes nothing.  The dataclass
+  default is ``"map"``; a config's default is ``"average"`` since defaults version 0.5.
 
 :func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
 """
@@ -40,6 +47,8 @@ TIES_MODES: tuple[TiesMode, ...] = ("drop", "model")
 FIT_MODES: tuple[FitMode, ...] = ("fixed", "evidence")
 HyperMode = Literal["map", "average"]
 HYPER_MODES: tuple[HyperMode, ...] = ("map", "average")
+ShareMode = Literal["map", "average"]
+SHARE_MODES: tuple[ShareMode, ...] = ("map", "average")
 #: The default lengthscale hypotheses of ``hyper = "average"``: factors of the fitted ones.
 HYPOTHESES: tuple[float, ...] = (0.5, 0.71, 1.0, 1.41, 2.0)
 
@@ -55,6 +64,7 @@ class Learning:
     prior: HyperPrior | None = None  # None: model.hyperfit.default_prior
     hyper: HyperMode = "map"
     hypotheses: tuple[float, ...] = HYPOTHESES
+    share: ShareMode = "map"
 
     def __post_init__(self) -> None:
         if self.ties not in TIES_MODES:
@@ -82,6 +92,8 @@ class Learning:
             raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
         if len(set(self.hypotheses)) != len(self.hypotheses):
             raise ValueError(f"hypotheses must differ, got {self.hypotheses!r}")
+        if self.share not in SHARE_MODES:
+            raise ValueError(f"share must be one of {', '.join(SHARE_MODES)}; got {self.share!r}")
 
     @property
     def learns_band(self) -> bool:

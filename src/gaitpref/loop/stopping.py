@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.share_mix import PosteriorMixture
 
 #: At most this many sampled values (``block x A``) are held at once: 32 MiB.
 BLOCK_ELEMENTS = 1 << 22
@@ -78,12 +79,15 @@ def confidence(
     samples: int = 2000,
     allowed: NDArray[np.bool_] | None = None,
     block: int | None = None,
+    draws: PosteriorMixture | None = None,
 ) -> Confidence:
     """The :class:`Confidence` of ``posterior`` from ``samples`` joint draws with ``rng``.
 
     ``allowed`` restricts both the recommendation and "the best" to the gaits that may be
     proposed (a region of avoidance, unsafe flags); None: all.  ``block`` samples are held at
     a time (default: as many as fit in :data:`BLOCK_ELEMENTS` values, at most 256).
+    ``draws``: a mixture the samples come from instead (a warm start's share hypotheses,
+    ``model/share_mix.py``); the recommendation is still ``posterior``'s.
     """
     tolerance = check_tolerance(tolerance)
     if block is None:
@@ -101,7 +105,7 @@ def confidence(
     done = 0
     while done < samples:
         size = min(block, samples - done)
-        f = posterior.sample(rng, size, nugget=False)
+        f = (posterior if draws is None else draws).sample(rng, size, nugget=False)
         if allowed is not None:
             f = f[:, allowed]
             at = int(np.count_nonzero(allowed[:rec]))

@@ -41,7 +41,7 @@ from gaitpref.model.likelihood import ActionLikelihood, StackedActionLikelihood
 from gaitpref.model.population import PopulationModel, check_rho
 from gaitpref.model.population_fit import LogitNormal, fit_population
 from gaitpref.model.posterior import Posterior
-from gaitpref.model.share_fit import ShareFit, fit_share
+from gaitpref.model.share_fit import ShareFit, fit_share, share_mixture_fit
 from gaitpref.model.singles import SingleData
 from gaitpref.space import IntArray, Space
 
@@ -247,15 +247,20 @@ def relearn_share(
     own: PairData,
     single: IntArray | None = None,
     single_likelihood: ActionLikelihood | None = None,
+    *,
+    average: bool = False,
 ) -> ShareFit:
     """The new subject's share refitted by the evidence of all the data (theirs and the earlier
-    subjects'), from the current one (``model/share_fit.py``)."""
+    subjects'), from the current one (``model/share_fit.py``); with ``average``, the share
+    hypotheses weighed instead (``model/share_mix.py``), the heaviest one's share kept."""
     data, single, single_likelihood = _joined(warm, own, single, single_likelihood)
     singles = None
     if single is not None and single_likelihood is not None:
         parts = tuple((n, _held(p)) for n, p in _parts(single.shape[0], single_likelihood))
         singles = SingleData(single, StackedActionLikelihood(parts))
     start = warm.rho if warm.share is None else warm.share
+    if average:
+        return share_mixture_fit(space, hyper, warm.rho, start, data, singles)
     prior = warm.prior_of_share
     return fit_share(space, hyper, warm.rho, start, data, prior, singles, gate=warm.gate)
 

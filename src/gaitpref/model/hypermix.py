@@ -18,6 +18,7 @@ by weight before each Thompson draw and recommends the argmax of the mixture's m
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -64,6 +65,17 @@ def log_lengthscale_prior(hyper: Hyperparameters, prior: HyperPrior) -> float:
     return out
 
 
+def normalised(objectives: Sequence[float | None], fallback: int) -> list[float]:
+    """``exp(objective)`` normalised over the hypotheses (None: weight 0); when every one is
+    None, weight 1 at index ``fallback``."""
+    finite = [o for o in objectives if o is not None]
+    if not finite:
+        return [1.0 if k == fallback else 0.0 for k in range(len(objectives))]
+    top = max(finite)
+    raw = np.array([0.0 if o is None else math.exp(o - top) for o in objectives])
+    return [float(w) for w in raw / raw.sum()]
+
+
 def weigh_hypotheses(
     space: Space,
     centre: Hyperparameters,
@@ -91,15 +103,8 @@ def weigh_hypotheses(
             continue
         mode = ev.fit.mode
         objectives.append(ev.value + log_lengthscale_prior(hyper, prior))
-    finite = [o for o in objectives if o is not None]
-    if finite:
-        top = max(finite)
-        raw = np.array([0.0 if o is None else math.exp(o - top) for o in objectives])
-    else:
-        raw = np.zeros(len(factors))
-        raw[factors.index(1.0) if 1.0 in factors else 0] = 1.0
-    weights = raw / raw.sum()
+    weights = normalised(objectives, factors.index(1.0) if 1.0 in factors else 0)
     return tuple(
-        Hypothesis(c, h, o, float(w))
+        Hypothesis(c, h, o, w)
         for c, h, o, w in zip(factors, hypers, objectives, weights, strict=True)
     )

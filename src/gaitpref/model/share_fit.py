@@ -12,6 +12,7 @@ the objective keeps the starting value and says so (:class:`ShareFit`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,7 @@ from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.population import check_rho, logit, population_evidence
 from gaitpref.model.population_fit import LogitNormal
+from gaitpref.model.share_mix import ShareHypothesis, heaviest, share_prior, weigh_shares
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Space
@@ -39,7 +41,8 @@ _EDGE = 1e-6
 @dataclass(frozen=True)
 class ShareFit:
     """One fit of the new subject's shared fraction: before and after (equal unless
-    ``accepted``), with the objective (log evidence plus log prior) at both."""
+    ``accepted``), with the objective (log evidence plus log prior) at both; or one weighing of
+    share hypotheses (``hypotheses``; :func:`share_mixture_fit`)."""
 
     before: float
     after: float
@@ -48,6 +51,9 @@ class ShareFit:
     evaluations: int
     objective_before: float
     objective_after: float
+    #: with the share averaged (``share_mix.py``): the weighted hypotheses, ``after`` the
+    #: heaviest one's share; empty for a MAP fit
+    hypotheses: tuple[ShareHypothesis, ...] = ()
 
 
 def _sigmoid(x: float) -> float:
@@ -149,4 +155,40 @@ def _gated(
     return ShareFit(share, 0.0, True, message, evaluations + 2, alone.value, shared.value)
 
 
-__all__ = ["ShareFit", "fit_share", "share_objective"]
+def share_mixture_fit(
+    space: Space,
+    hyper: Hyperparameters,
+    rho: float,
+    share: float,
+    data: PairData,
+    singles: SingleData | None = None,
+    hypotheses: Sequence[tuple[float, float]] | None = None,
+) -> ShareFit:
+    """The share ``hypotheses`` (``(share, prior mass)``; default ``share_mix.share_prior(rho)``)
+    weighted by the evidence of the population data, as a :class:`ShareFit` from ``share`` to
+    the mixture's mean share (the posterior in force is the one under it).  Its objectives: the
+    alone hypothesis' log evidence plus log prior mass (before; NaN without one) and the log of
+    their sum over the hypotheses, the mixture's (after)."""
+    rho, share = check_rho(rho), check_rho(share)
+    given = share_prior(rho) if hypotheses is None else tuple(hypotheses)
+    with one_blas_thread():
+        weighed = weigh_shares(space, hyper, rho, given, data, singles)
+    mean = min(sum(h.weight * h.share for h in weighed), 1.0)
+    top = heaviest(weighed)
+    alone = next((h.objective for h in weighed if h.share == 0.0), None)
+    finite = np.array([h.objective for h in weighed if h.objective is not None])
+    total = (
+        float(finite.max() + np.log(np.exp(finite - finite.max()).sum())) if finite.size else np.nan
+    )
+    weight0 = sum(h.weight for h in weighed if h.share == 0.0)
+    message = (
+        f"mixture: mean share {mean:.3g}, weight {weight0:.3g} alone, heaviest {top.share:.3g} "
+        f"({top.weight:.3g})"
+    )
+    return ShareFit(
+        share, mean, True, message, len(weighed), np.nan if alone is None else alone, total,
+        weighed,
+    )  # fmt: skip
+
+
+__all__ = ["ShareFit", "fit_share", "share_mixture_fit", "share_objective"]

@@ -36,6 +36,7 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
         tolerance=rule.tolerance,
         samples=rule.samples,
         allowed=loop.allowed(),
+        draws=loop.share_mixture(),
     )
 
 

@@ -247,9 +247,22 @@ class HyperparametersRefit(EventPayload):
         return _without_none(handler(self), "hypotheses")
 
 
+class ShareValues(BaseModel):
+    """One share hypothesis of a ``share_refit`` with ``[model].share = "average"``
+    (``model/share_mix.py``): its share, prior mass, log evidence plus log prior mass (None: its
+    Laplace fit failed) and weight."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    share: float
+    prior: float
+    objective: float | None
+    weight: float
+
+
 class ShareRefit(EventPayload):
     """``share_refit``: the new subject's shared fraction refitted by the evidence after this
-    answer (a warm start that re-learns it; ``model/share_fit.py``)."""
+    answer (a warm start that re-learns it; ``model/share_fit.py``); with ``[model].share =
+    "average"`` the share hypotheses weighed (``hypotheses``; ``after`` their mean share)."""
 
     kind: ClassVar[str] = "share_refit"
     query: int
@@ -260,6 +273,13 @@ class ShareRefit(EventPayload):
     evaluations: Annotated[int, Recorded]
     objective_before: Annotated[float | None, Recorded]
     objective_after: Annotated[float | None, Recorded]
+    #: only with ``share = "average"``; absent otherwise (as every earlier share refit was
+    #: written: the payload of those is unchanged, version 1)
+    hypotheses: list[ShareValues] | None = None
+
+    @model_serializer(mode="wrap")
+    def _without_hypotheses(self, handler: SerializerFunctionWrapHandler) -> Any:
+        return _without_none(handler(self), "hypotheses")
 
 
 class Undo(EventPayload):

@@ -48,6 +48,7 @@ class Walked:
     right: list[bool]
     rho: float | None = None
     share: float | None = None  # the new subject's share at the end (warm, re-learned)
+    alone: float | None = None  # the weight on share 0 at the end (warm, share = "average")
 
 
 def _walk(
@@ -83,12 +84,16 @@ def _walk(
         query = loop.ask()
         loop.tell(query, user.answer(query))
         executed.extend(query.actions)
-        sure = confidence(loop.posterior, sure_rng, tolerance=tolerance, samples=samples)
+        sure = confidence(
+            loop.posterior, sure_rng, tolerance=tolerance, samples=samples,
+            draws=loop.share_mixture(),
+        )  # fmt: skip
         stated.append(sure.probability)
         right.append(bool(truth.max() - truth[sure.recommended] <= tolerance * span))
     scores = user.normalized(np.asarray(executed[:trials], dtype=np.intp)).tolist()
     share = None if loop.warm is None else loop.warm.share
-    return Walked(scores, list(loop.preferences), stated, right, rho, share)
+    alone = next((h.weight for h in loop.share_hypotheses if h.share == 0.0), None)
+    return Walked(scores, list(loop.preferences), stated, right, rho, share, alone)
 
 
 def _bin_of(p: FloatArray, bins: int) -> NDArray[np.intp]:
@@ -222,6 +227,7 @@ def population_bench(
                 "warm": w.scores,
                 "rho": w.rho,
                 "share": w.share,
+                "alone": w.alone,
                 "stated": {"cold": c.stated, "warm": w.stated},
                 "right": {"cold": c.right, "warm": w.right},
             }
@@ -233,6 +239,7 @@ def population_bench(
         "seed": seed,
         "user_noise": user_noise,
         "relearn_every": relearn_every,
+        "share": config.learning.share,
     }
 
 
