@@ -115,11 +115,12 @@ def test_a_mixtures_samples_come_from_its_components_by_weight(
 ) -> None:
     rng = np.random.default_rng(6)
     w, l_, who = _population_data(rng, small_space, 3, 8)
+    first, second = node_codes(small_space, w, who), node_codes(small_space, l_, who)
+    likelihood = Probit(np.full(w.size, SIGMA))
     posts = [
         PopulationModel(small_space, small_kernel, RHO, SIGMA, share=s).posterior(
-            node_codes(small_space, w, who), node_codes(small_space, l_, who),
-            Probit(np.full(w.size, SIGMA)), 0,
-        )  # fmt: skip
+            first, second, likelihood, 0
+        )
         for s in (0.0, RHO)
     ]
     mixture = PosteriorMixture(((0.25, posts[0]), (0.75, posts[1])))

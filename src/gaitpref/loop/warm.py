@@ -20,8 +20,13 @@ record): every ``k`` of the new subject's answers, the new subject's own shared 
 is refitted by the evidence of all the data, the others' ``rho`` and the kernel held
 (:func:`relearn_share`, ``model/share_fit.py``), under a logit-normal prior centred on ``rho``:
 the others' data set where it starts, the new subject's answers move it, and a subject unlike
-the others is let go of them.  ``relearn_every = 0`` (warm starts recorded before) holds
-``share = rho`` for the whole session, as they were run.
+the others is let go of them.  With ``average`` (the loop's ``[model] share = "average"``) the
+share is not one value but a mixture over share hypotheses weighted by evidence x prior
+(``model/share_mix.py``, :func:`~gaitpref.model.share_fit.share_mixture_fit`): ``share`` is
+then the mixture's mean share, and the hypotheses ride on the
+:class:`~gaitpref.model.share_fit.ShareFit`.
+``relearn_every = 0`` (warm starts recorded before) holds ``share = rho`` for the whole session,
+as they were run.
 """
 
 from __future__ import annotations
