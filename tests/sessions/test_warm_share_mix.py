@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sqlite3
 from pathlib import Path
 
 import numpy as np
@@ -92,3 +93,34 @@ def test_a_warm_session_recorded_by_0_4_replays_as_it_was_run(tmp_path: Path) ->
         assert sure["recommended"] == recorded["confidence"]["recommended"]
         assert sure["probability"] == pytest.approx(recorded["confidence"]["probability"])
     assert _snapshot(url, [1, 2, 3]) == before  # the earlier sessions read, never written
+
+
+def test_share_hypotheses_rounded_elsewhere_are_taken_from_the_log(tmp_path: Path) -> None:
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    space = load_config(CONFIG).space
+    with Session.create(url, CONFIG, "S04", seed=5, prior_from=ids) as warm:
+        _run(warm, SimulatedSubject(space, bump_utility(space), seed=5), 4)
+        wid = warm.id
+    with sqlite3.connect(path) as raw:  # another machine's last bits in the last share refit
+        raw.execute("DROP TRIGGER IF EXISTS events_no_update")
+        seq, text = raw.execute(
+            "SELECT seq, payload FROM events WHERE session_id = ? AND kind = 'share_refit' "
+            "ORDER BY seq DESC LIMIT 1",
+            (wid,),
+        ).fetchone()
+        payload = json.loads(text)
+        payload["after"] *= 1 + 4e-16
+        for h in payload["hypotheses"]:
+            h["weight"] *= 1 + 4e-16
+        raw.execute(
+            "UPDATE events SET payload = ? WHERE session_id = ? AND seq = ?",
+            (json.dumps(payload), wid, seq),
+        )
+    with Session.open(url, wid) as again:
+        loop = again._state.loop
+        assert loop.warm is not None and loop.warm.share == payload["after"]
+        assert [h.weight for h in loop.share_hypotheses] == [
+            h["weight"] for h in payload["hypotheses"]
+        ]

@@ -563,13 +563,16 @@ class CoSpar:
         return answer
 
     def adopt_recorded(
-        self, refit: Mapping[str, Any] | None = None, share: float | None = None
+        self,
+        refit: Mapping[str, Any] | None = None,
+        share: float | None = None,
+        share_hypotheses: Sequence[Mapping[str, Any]] | None = None,
     ) -> Answer:
         """Replay on another machine: take the last answer's refitted values as the log has them.
 
         ``refit`` is a logged ``hyperparameters_refit`` payload (its ``after`` values and, with
         ``hyper = "average"``, its ``hypotheses``), ``share`` a logged ``share_refit``'s
-        ``after``.  The session's replay calls this only after checking that they equal what
+        ``after`` (and ``share_hypotheses`` its ``hypotheses``, with ``share = "average"``).  The session's replay calls this only after checking that they equal what
         this machine derived up to rounding (``sessions/events.py``, :func:`same_value`):
         everything after is then derived from the log's numbers, and the replay cannot drift
         from the recording one rounding at a time.  Returns the answer with those values.
@@ -596,7 +599,18 @@ class CoSpar:
             fit = dataclasses.replace(fit, after=after, hypotheses=hypotheses)
             self.hyper, self.gp = after, self._gp(after)
         if share is not None and share_fit is not None and self.warm is not None:
-            share_fit = dataclasses.replace(share_fit, after=float(share))
+            shares = share_fit.hypotheses
+            if share_hypotheses:
+                shares = tuple(
+                    ShareHypothesis(
+                        float(h["share"]),
+                        float(h["prior"]),
+                        None if h["objective"] is None else float(h["objective"]),
+                        float(h["weight"]),
+                    )
+                    for h in share_hypotheses
+                )
+            share_fit = dataclasses.replace(share_fit, after=float(share), hypotheses=shares)
             self.warm = dataclasses.replace(self.warm, share=float(share))
         self.answers[-1] = dataclasses.replace(answer, refit=fit, share_refit=share_fit)
         with one_blas_thread():

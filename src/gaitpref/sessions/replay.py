@@ -167,6 +167,7 @@ def _adopt_recorded(
     within it): what follows is then derived from the log's numbers (``CoSpar.adopt_recorded``)."""
     refit: dict[str, Any] | None = None
     share: float | None = None
+    shares: list[dict[str, Any]] | None = None
     for r, d in zip(group, derived, strict=True):
         if r.payload == d.payload:  # bit for bit, as on the machine that recorded it
             continue
@@ -174,6 +175,7 @@ def _adopt_recorded(
             refit = r.payload
         elif r.kind == log.SHARE_REFIT:
             share = float(r.payload["after"])
+            shares = r.payload.get("hypotheses")
     if refit is None and share is None:
         return answer
-    return state.loop.adopt_recorded(refit, share)
+    return state.loop.adopt_recorded(refit, share, shares)
