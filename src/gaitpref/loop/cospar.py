@@ -572,8 +572,9 @@ class CoSpar:
 
         ``refit`` is a logged ``hyperparameters_refit`` payload (its ``after`` values and, with
         ``hyper = "average"``, its ``hypotheses``), ``share`` a logged ``share_refit``'s
-        ``after`` (and ``share_hypotheses`` its ``hypotheses``, with ``share = "average"``).  The session's replay calls this only after checking that they equal what
-        this machine derived up to rounding (``sessions/events.py``, :func:`same_value`):
+        ``after`` (and ``share_hypotheses`` its ``hypotheses``, with ``share = "average"``).
+        The session's replay calls this only after checking that they equal what this machine
+        derived up to rounding (``sessions/events.py``, :func:`same_value`):
         everything after is then derived from the log's numbers, and the replay cannot drift
         from the recording one rounding at a time.  Returns the answer with those values.
         """
