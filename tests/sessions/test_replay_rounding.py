@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -48,23 +50,37 @@ def test_numbers_agree_within_rounding_and_nothing_else_does(
     assert same_value(logged, derived) is same
 
 
-def _nudge(db: Path, session_id: int, factor: float) -> list[float]:
-    """Multiply the first lengthscale of the session's first logged refit by ``factor`` (as
-    another machine's rounding would leave it); the nudged ``after`` values."""
+def rewrite_logged(
+    db: Path, session_id: int, kind: str, change: Callable[[dict[str, Any]], None], last: bool
+) -> dict[str, Any]:
+    """Change the payload of the session's first (or ``last``) logged event of ``kind`` in the
+    database file, as another machine's rounding would have left it; the changed payload."""
     with sqlite3.connect(db) as raw:
         raw.execute("DROP TRIGGER IF EXISTS events_no_update")
         seq, text = raw.execute(
-            "SELECT seq, payload FROM events WHERE session_id = ? AND kind = "
-            "'hyperparameters_refit' ORDER BY seq LIMIT 1",
-            (session_id,),
+            "SELECT seq, payload FROM events WHERE session_id = ? AND kind = ? "
+            f"ORDER BY seq {'DESC' if last else 'ASC'} LIMIT 1",
+            (session_id, kind),
         ).fetchone()
-        payload = json.loads(text)
-        payload["after"]["lengthscale"][0] *= factor
+        payload: dict[str, Any] = json.loads(text)
+        change(payload)
         raw.execute(
             "UPDATE events SET payload = ? WHERE session_id = ? AND seq = ?",
             (json.dumps(payload), session_id, seq),
         )
-    after: list[float] = payload["after"]["lengthscale"]
+    return payload
+
+
+def _nudge(db: Path, session_id: int, factor: float) -> list[float]:
+    """Multiply the first lengthscale of the session's first logged refit by ``factor``; the
+    nudged ``after`` values."""
+
+    def change(payload: dict[str, Any]) -> None:
+        payload["after"]["lengthscale"][0] *= factor
+
+    after: list[float] = rewrite_logged(db, session_id, "hyperparameters_refit", change, False)[
+        "after"
+    ]["lengthscale"]
     return after
 
 

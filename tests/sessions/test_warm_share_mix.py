@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import json
 import shutil
-import sqlite3
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -20,6 +20,7 @@ from gaitpref.sessions.confidence import session_confidence
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, state_of
+from tests.sessions.test_replay_rounding import rewrite_logged
 from tests.sessions.test_warm_start import _earlier, _run, _snapshot
 
 FIXTURES = Path(__file__).resolve().parent.parent / "fixtures"
@@ -103,21 +104,13 @@ def test_share_hypotheses_rounded_elsewhere_are_taken_from_the_log(tmp_path: Pat
     with Session.create(url, CONFIG, "S04", seed=5, prior_from=ids) as warm:
         _run(warm, SimulatedSubject(space, bump_utility(space), seed=5), 4)
         wid = warm.id
-    with sqlite3.connect(path) as raw:  # another machine's last bits in the last share refit
-        raw.execute("DROP TRIGGER IF EXISTS events_no_update")
-        seq, text = raw.execute(
-            "SELECT seq, payload FROM events WHERE session_id = ? AND kind = 'share_refit' "
-            "ORDER BY seq DESC LIMIT 1",
-            (wid,),
-        ).fetchone()
-        payload = json.loads(text)
+
+    def nudge(payload: dict[str, Any]) -> None:  # another machine's last bits
         payload["after"] *= 1 + 4e-16
         for h in payload["hypotheses"]:
             h["weight"] *= 1 + 4e-16
-        raw.execute(
-            "UPDATE events SET payload = ? WHERE session_id = ? AND seq = ?",
-            (json.dumps(payload), wid, seq),
-        )
+
+    payload = rewrite_logged(path, wid, "share_refit", nudge, last=True)
     with Session.open(url, wid) as again:
         loop = again._state.loop
         assert loop.warm is not None and loop.warm.share == payload["after"]

@@ -23,6 +23,7 @@ A warm-started loop keeps as its own posterior the one under the mixture's mean 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -64,12 +65,7 @@ class ShareHypothesis:
     weight: float
 
     def to_json(self) -> dict[str, object]:
-        return {
-            "share": self.share,
-            "prior": self.prior,
-            "objective": self.objective,
-            "weight": self.weight,
-        }
+        return dataclasses.asdict(self)
 
 
 def share_prior(

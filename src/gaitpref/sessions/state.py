@@ -247,12 +247,8 @@ class SessionState:
                 message=share.message, evaluations=share.evaluations,
                 objective_before=finite(share.objective_before),
                 objective_after=finite(share.objective_after),
-                hypotheses=[
-                    log.ShareValues(
-                        share=h.share, prior=h.prior, objective=h.objective, weight=h.weight
-                    )
-                    for h in share.hypotheses
-                ] or None,
+                hypotheses=[log.ShareValues.model_validate(h.to_json()) for h in share.hypotheses]
+                or None,
             )  # fmt: skip
             events.append(log.new_event(payload))
         return events
