@@ -198,7 +198,13 @@ def _warm_cold_table(results: dict) -> list[str]:
         row = [rho, str(len(subjects)), f"{np.mean([s['rho'] for s in subjects]):.2f}"]
         shares = [s["share"] for s in subjects if s.get("share") is not None]
         alone = sum(1 for x in shares if x == 0.0)
-        row.append(f"{np.mean(shares):.2f} ({alone} of {len(shares)} at 0)" if shares else "rho")
+        weights = [s["alone"] for s in subjects if s.get("alone") is not None]
+        if weights:  # a mixture over share hypotheses: its mean share, and the weight alone
+            row.append(f"{np.mean(shares):.2f} (weight alone {np.mean(weights):.2f})")
+        else:
+            row.append(
+                f"{np.mean(shares):.2f} ({alone} of {len(shares)} at 0)" if shares else "rho"
+            )
         gains = []
         for stop in (10, trials):
             cold, cold_se = _mean(subjects, "cold", stop)
@@ -326,6 +332,7 @@ def summary(results: dict, hand: str) -> str:
         subjects = sum(len(o["subjects"]) for o in p.values())
         trials = ", ".join(sorted({str(o["trials"]) for o in p.values()}))
         noise = ", ".join(sorted({f"{o['user_noise']:g}" for o in p.values()}))
+        share = ", ".join(sorted({str(o.get("share", "map")) for o in p.values()}))
         bins = calibration_bins(p)
         lines += [
             "",
@@ -334,7 +341,7 @@ def summary(results: dict, hand: str) -> str:
             f"rho {rhos}; {subjects} subjects, {trials} trials each, cold and warm; the "
             f"subjects' probit noise {noise} (utility units"
             + ("; the model's the same" if part == "gp_draws" else "")
-            + ").",
+            + f"); the warm start's share: {share} ([model] share).",
             "",
             *_calibration_table(bins),
             "",
