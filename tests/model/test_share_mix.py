@@ -79,7 +79,9 @@ def test_without_answers_of_the_new_subject_the_weights_are_the_prior() -> None:
 def test_the_prior_puts_its_mass_on_alone_and_checks_its_factors() -> None:
     prior = share_prior(0.8)
     assert [s for s, _ in prior] == pytest.approx([c * 0.8 for c in SHARE_FACTORS])
-    assert prior[0] == (0.0, ALONE_PRIOR) and ALONE_PRIOR >= 0.25
+    assert prior[0] == (0.0, ALONE_PRIOR) and ALONE_PRIOR >= 0.2
+    assert share_prior(0.8, alone=0.6)[0] == (0.0, 0.6)
+    assert share_prior(0.8, alone=0.6)[1] == pytest.approx((0.2, 0.1))
     assert sum(p for _, p in prior) == pytest.approx(1.0)
     assert share_prior(0.5, (1.0,)) == ((0.5, 1.0),)
     for bad in ((), (0.5, 0.5), (1.5,), (-0.1, 0.5)):
