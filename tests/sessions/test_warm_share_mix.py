@@ -1,4 +1,4 @@
-"""Warm starts under defaults 0.5 (the share a mixture of hypotheses) and before (one MAP share):
+"""Warm starts under defaults 0.6 (the share a mixture of hypotheses) and before (one MAP share):
 each records what it did, and replays exactly; a session recorded by the 0.4 release replays as
 it was run."""
 
@@ -47,10 +47,10 @@ def _replays_exactly(db: MemoryStorage, warm: Session) -> None:
         assert session_confidence(again._state, StopRule()) == sure
 
 
-def test_a_warm_start_under_0_5_records_the_share_hypotheses_and_replays() -> None:
+def test_a_warm_start_under_0_6_records_the_share_hypotheses_and_replays() -> None:
     db = MemoryStorage()
     warm = _warm(db, None)
-    assert warm.record.meta["config_defaults"] == "0.5"
+    assert warm.record.meta["config_defaults"] == "0.6"
     loop = warm._state.loop
     assert loop.learning.share == "average"
     refits = [e.payload for e in warm.events() if e.kind == "share_refit"]
@@ -67,10 +67,11 @@ def test_a_warm_start_under_0_5_records_the_share_hypotheses_and_replays() -> No
     _replays_exactly(db, warm)
 
 
-def test_a_warm_start_under_0_4_keeps_one_map_share_and_replays() -> None:
+@pytest.mark.parametrize("defaults", ["0.4", "0.5"])
+def test_a_warm_start_under_earlier_defaults_keeps_one_map_share_and_replays(defaults: str) -> None:
     db = MemoryStorage()
-    warm = _warm(db, "0.4")
-    assert warm.record.meta["config_defaults"] == "0.4"
+    warm = _warm(db, defaults)
+    assert warm.record.meta["config_defaults"] == defaults
     loop = warm._state.loop
     assert loop.learning.share == "map" and loop.share_mixture() is None
     refits = [e.payload for e in warm.events() if e.kind == "share_refit"]

@@ -34,7 +34,7 @@ def check_model(
     raw: object, defaults: str = DEFAULTS_VERSION
 ) -> tuple[dict[str, Any], frozenset[str]]:
     """``[model]`` with every key checked and the defaults of version ``defaults`` filled in,
-    and the keys that defaulted (``model.share``: ``"map"`` before 0.5)."""
+    and the keys that defaulted (``model.share``: ``"map"`` before 0.6)."""
     model, defaulted = check_table(raw, "model", MODEL, defaults_for(defaults, "model"))
     return model, frozenset(f"model.{k}" for k in defaulted)
 

@@ -24,7 +24,7 @@
   x prior (``model/share_mix.py``): each ask draws a hypothesis by weight (when the lengthscales
   are not averaged too), the confidence's samples come from the mixture, and the posterior
   in force is the heaviest hypothesis'.  Without a warm start it changes nothing.  The dataclass
-  default is ``"map"``; a config's default is ``"average"`` since defaults version 0.5.
+  default is ``"map"``; a config's default is ``"average"`` since defaults version 0.6.
 
 :func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
 """
