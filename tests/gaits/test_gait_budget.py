@@ -11,7 +11,7 @@ import pytest
 from tests.config.records import stored_record
 from tests.sessions.gaitkit import COMPASS
 
-from gaitpref.config import parse_config
+from gaitpref.config import DEFAULTS_VERSION, parse_config
 from gaitpref.gaits import GaitRequest, make_generator, optimize_gait
 from gaitpref.gaits import optimize as optimize_module
 from gaitpref.sessions.stored_config import config_of, library_meta
@@ -95,10 +95,11 @@ def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
     cfg = parse_config(CONFIG)
     assert cfg.generator is not None and cfg.generator.settings["max_iterations"] == 60
     assert cfg.relies_on_changed_defaults
-    assert library_meta(cfg) == {"config_defaults": "0.5"}
+    assert library_meta(cfg) == {"config_defaults": DEFAULTS_VERSION}  # 0.5 or later
     again = config_of(stored_record(CONFIG, library_meta(cfg)))
     assert again.generator == cfg.generator
-    explicit = parse_config(CONFIG.replace("speed = 0.2", "speed = 0.2\nmax_iterations = 40"))
+    given = CONFIG.replace("speed = 0.2", "speed = 0.2\nmax_iterations = 40")
+    explicit = parse_config(given.replace("[model]\n", '[model]\nshare = "average"\n'))
     assert explicit.generator is not None and explicit.generator.settings["max_iterations"] == 40
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from gaitpref import ReplayError, Session
-from gaitpref.config import parse_config
+from gaitpref.config import DEFAULTS_VERSION, parse_config
 from gaitpref.gaits import CompassHZD, make_generator
 from gaitpref.loop.safety import near
 from tests.sessions.gaitkit import (
@@ -217,7 +217,7 @@ def test_a_session_recorded_before_the_iteration_budget_keeps_its_rule(tmp_path:
     old = Session.create(url, parse_config(COMPASS, defaults="0.4"), subject="S01")
     new = Session.create(url, parse_config(COMPASS), subject="S02")
     assert old.record.meta["config_defaults"] == "0.4"
-    assert new.record.meta["config_defaults"] == "0.5"
+    assert new.record.meta["config_defaults"] == DEFAULTS_VERSION
     for s in (old, new):
         q = s.next_query()
         s.answer(q.id, [])
