@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from gaitpref import Session, load_config
-from gaitpref.config import parse_config
+from gaitpref.config import DEFAULTS_VERSION, parse_config
 from gaitpref.loop.stopping import StopRule
 from gaitpref.model.share_mix import ALONE_PRIOR
 from gaitpref.sessions.confidence import session_confidence
@@ -50,7 +50,7 @@ def _replays_exactly(db: MemoryStorage, warm: Session) -> None:
 def test_a_warm_start_under_0_6_records_the_share_hypotheses_and_replays() -> None:
     db = MemoryStorage()
     warm = _warm(db, None)
-    assert warm.record.meta["config_defaults"] == "0.6"
+    assert warm.record.meta["config_defaults"] == DEFAULTS_VERSION  # 0.6 or later
     loop = warm._state.loop
     assert loop.learning.share == "average"
     refits = [e.payload for e in warm.events() if e.kind == "share_refit"]

@@ -29,13 +29,21 @@ from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.space import Space
 
+#: ``[model] jitter`` left out (defaults 0.7 on): this fraction of ``signal_variance``.  Without a
+#: nugget the prior covariance of many close visited points (the line path's clusters near a
+#: boundary) is not positive definite in floating point, and the session stops mid-run.
+RELATIVE_JITTER = 1e-6
+
 
 def check_model(
     raw: object, defaults: str = DEFAULTS_VERSION
 ) -> tuple[dict[str, Any], frozenset[str]]:
     """``[model]`` with every key checked and the defaults of version ``defaults`` filled in,
-    and the keys that defaulted (``model.share``: ``"map"`` before 0.6)."""
+    and the keys that defaulted (``model.share``: ``"map"`` before 0.6; ``model.jitter``:
+    :data:`RELATIVE_JITTER` times ``signal_variance`` since 0.7, 0 before)."""
     model, defaulted = check_table(raw, "model", MODEL, defaults_for(defaults, "model"))
+    if model["jitter"] is None:  # the default since 0.7: a nugget relative to the signal
+        model["jitter"] = RELATIVE_JITTER * model["signal_variance"]
     return model, frozenset(f"model.{k}" for k in defaulted)
 
 

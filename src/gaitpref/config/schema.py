@@ -144,7 +144,7 @@ MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),
     "signal_variance": Key(SCALE),
     "noise": Key(SCALE),
-    "jitter": Key(Number(0.0, MAX_MAGNITUDE), 0.0),
+    "jitter": Key(Number(0.0, MAX_MAGNITUDE), None),  # None: RELATIVE_JITTER x signal_variance
     "sampler": Key(Choice(SAMPLERS), "auto"),
     "ties": Key(Choice(TIES_MODES), "drop"),
     "tie_band": Key(ScaleOrFit(), None),  # None: "fit" with fit = "evidence", else required
@@ -206,29 +206,31 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.6"
+DEFAULTS_VERSION: Final = "0.7"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
 #: made on demand had no iteration budget, ``[gaits] max_iterations = None``; 0.1 to 0.5: a warm
-#: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``).
+#: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``; 0.1 to
+#: 0.6: a config without ``[model] jitter`` had none, ``jitter = 0``).
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
-_MAP_SHARE: Final[dict[str, Any]] = {"share": "map"}
+_MODEL_BEFORE_0_6: Final[dict[str, Any]] = {"share": "map", "jitter": 0.0}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
         "cospar": {"buffer": 0},
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
-        "model": _MAP_SHARE,
+        "model": _MODEL_BEFORE_0_6,
     },
     "0.2": {
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
-        "model": _MAP_SHARE,
+        "model": _MODEL_BEFORE_0_6,
     },
-    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MAP_SHARE},
-    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MAP_SHARE},
-    "0.5": {"model": _MAP_SHARE},
+    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
+    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
+    "0.5": {"model": _MODEL_BEFORE_0_6},
+    "0.6": {"model": {"jitter": 0.0}},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).
