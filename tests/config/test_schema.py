@@ -8,6 +8,7 @@ import pytest
 
 from gaitpref import ConfigError
 from gaitpref.config import DEFAULT_BUFFER, DEFAULTS, LIMITS, parse_config
+from gaitpref.config.model import RELATIVE_JITTER
 from gaitpref.config.schema import STRATEGY_TABLES, TABLES
 from gaitpref.strategies import STRATEGY_CLASSES, STRATEGY_SETTINGS
 
@@ -154,7 +155,8 @@ def test_the_defaults_table_is_what_a_bare_config_gets() -> None:
         cospar["strategy"],
     )
     assert DEFAULT_BUFFER == 1 == cfg.buffer  # the paper's b = 1: a bare config compares
-    assert cfg.kernel.jitter == DEFAULTS["model"]["jitter"] == 0.0
+    assert DEFAULTS["model"]["jitter"] is None  # a nugget relative to the signal (0.7 on)
+    assert cfg.kernel.jitter == RELATIVE_JITTER * cfg.kernel.variance
     assert cfg.learning.fit == DEFAULTS["model"]["fit"] and cfg.sampler == "auto"
     assert cfg.space.features[0].coactive == DEFAULTS["space.<feature>"]["coactive"]
     assert cfg.strategy_settings == {}

@@ -152,6 +152,7 @@ avoid_radius = 0.1
 lengthscale = 0.2
 signal_variance = 0.005
 noise = 0.02
+jitter = 0.0
 fit = "fixed"
 [cospar]
 seed = 4
@@ -179,6 +180,7 @@ avoid_radius = 0.0
 lengthscale = 0.03
 signal_variance = 1e-4
 noise = 0.01
+jitter = 0.0
 fit = "fixed"
 [cospar]
 strategy = "self-sparring"

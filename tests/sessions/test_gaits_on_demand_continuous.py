@@ -41,6 +41,7 @@ avoid_radius = 0.05
 lengthscale = { step_length = 0.03, step_duration = 0.15, step_width = 0.08 }
 signal_variance = 1e-4
 noise = 0.01
+jitter = 0.0
 fit = "fixed"
 [cospar]
 strategy = "self-sparring"

@@ -23,6 +23,7 @@ num = 15
 lengthscale = 0.03
 signal_variance = 0.005
 noise = 0.02
+jitter = 0.0
 fit = "fixed"
 [cospar]
 seed = 1
