@@ -52,7 +52,13 @@ from gaitpref.loop.safety import Safety, near
 from gaitpref.loop.warm import WarmStart, relearn_share, warm_posterior
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
-from gaitpref.model.hyperfit import HyperFit, HyperPrior, default_prior, fit_hyperparameters
+from gaitpref.model.hyperfit import (
+    HyperFit,
+    HyperPrior,
+    default_prior,
+    fit_hyperparameters,
+    hyper_from_json,
+)
 from gaitpref.model.hypermix import Hypothesis, weigh_hypotheses
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
@@ -583,34 +589,16 @@ class CoSpar:
         answer = self.answers[-1]
         fit, share_fit = answer.refit, answer.share_refit
         if refit is not None and fit is not None:
-            after = _hyper_from_json(refit["after"], fit.after)
+            after = hyper_from_json(refit["after"], fit.after)
             hypotheses = fit.hypotheses
             if refit.get("hypotheses"):
-                hypotheses = tuple(
-                    Hypothesis(
-                        float(h["factor"]),
-                        dataclasses.replace(
-                            after, lengthscale=tuple(float(v) for v in h["lengthscale"])
-                        ),
-                        None if h["objective"] is None else float(h["objective"]),
-                        float(h["weight"]),
-                    )
-                    for h in refit["hypotheses"]
-                )
+                hypotheses = tuple(Hypothesis.from_json(h, after) for h in refit["hypotheses"])
             fit = dataclasses.replace(fit, after=after, hypotheses=hypotheses)
             self.hyper, self.gp = after, self._gp(after)
         if share is not None and share_fit is not None and self.warm is not None:
             shares = share_fit.hypotheses
             if share_hypotheses:
-                shares = tuple(
-                    ShareHypothesis(
-                        float(h["share"]),
-                        float(h["prior"]),
-                        None if h["objective"] is None else float(h["objective"]),
-                        float(h["weight"]),
-                    )
-                    for h in share_hypotheses
-                )
+                shares = tuple(ShareHypothesis.from_json(h) for h in share_hypotheses)
             share_fit = dataclasses.replace(share_fit, after=float(share), hypotheses=shares)
             self.warm = dataclasses.replace(self.warm, share=float(share))
         self.answers[-1] = dataclasses.replace(answer, refit=fit, share_refit=share_fit)
@@ -890,20 +878,6 @@ def _merged(
             raise IndexError(f"query {qid} has {size} {field}; cannot exclude index {bad[0]}")
         new[qid] = new.get(qid, frozenset()) | frozenset(chosen)
     return new
-
-
-def _hyper_from_json(values: Mapping[str, Any], like: Hyperparameters) -> Hyperparameters:
-    """Hyperparameters as a refit logged them (``HyperFit.to_json``); a value the log leaves
-    out (``tie_band`` None, ``thresholds`` absent: not fitted) stays as in ``like``."""
-    band = values.get("tie_band")
-    thresholds = values.get("thresholds")
-    return Hyperparameters(
-        tuple(float(v) for v in values["lengthscale"]),
-        float(values["signal_variance"]),
-        float(values["jitter"]),
-        like.band if band is None else float(band),
-        like.thresholds if thresholds is None else tuple(float(t) for t in thresholds),
-    )
 
 
 __all__ = ["Answer", "CoSpar", "FeedbackError", "Query", "QueryError"]

@@ -34,7 +34,9 @@ which the free ones are optimised.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -357,3 +359,18 @@ def _fit(
         start, objective.hyper(best_x), True, bool(res.success) and not failed, message, evals,
         failed, before, after, size,
     )  # fmt: skip
+
+
+def hyper_from_json(values: Mapping[str, Any], like: Hyperparameters) -> Hyperparameters:
+    """Hyperparameters as :meth:`HyperFit.to_json` logged them (its ``before`` or ``after``); a
+    value the log leaves out (``tie_band`` None, ``thresholds`` absent: not fitted) stays as in
+    ``like``."""
+    band = values.get("tie_band")
+    thresholds = values.get("thresholds")
+    return Hyperparameters(
+        tuple(float(v) for v in values["lengthscale"]),
+        float(values["signal_variance"]),
+        float(values["jitter"]),
+        like.band if band is None else float(band),
+        like.thresholds if thresholds is None else tuple(float(t) for t in thresholds),
+    )

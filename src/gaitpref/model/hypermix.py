@@ -18,9 +18,9 @@ by weight before each Thompson draw and recommends the argmax of the mixture's m
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.linalg import LinAlgError
@@ -53,6 +53,17 @@ class Hypothesis:
             "objective": self.objective,
             "weight": self.weight,
         }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any], centre: Hyperparameters) -> Hypothesis:
+        """The hypothesis as :meth:`to_json` wrote it (its lengthscales on ``centre``)."""
+        objective = data["objective"]
+        return cls(
+            float(data["factor"]),
+            replace(centre, lengthscale=tuple(float(v) for v in data["lengthscale"])),
+            None if objective is None else float(objective),
+            float(data["weight"]),
+        )
 
 
 def log_lengthscale_prior(hyper: Hyperparameters, prior: HyperPrior) -> float:

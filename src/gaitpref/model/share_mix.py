@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from scipy.linalg import LinAlgError
@@ -67,6 +68,17 @@ class ShareHypothesis:
 
     def to_json(self) -> dict[str, object]:
         return dataclasses.asdict(self)
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> ShareHypothesis:
+        """The hypothesis as :meth:`to_json` wrote it."""
+        objective = data["objective"]
+        return cls(
+            float(data["share"]),
+            float(data["prior"]),
+            None if objective is None else float(objective),
+            float(data["weight"]),
+        )
 
 
 def share_prior(
