@@ -13,6 +13,7 @@ from fastapi.testclient import TestClient
 
 from gaitpref.console import create_app
 from tests.console.live import HOW_TO_ENABLE, chromium_path, launch_chromium, serve
+from tests.sessions.gaitkit import fresh_fake_steps
 
 
 @pytest.fixture
@@ -72,3 +73,9 @@ def csrf_of(html: str) -> str:
     m = re.search(r'name="csrf_token" value="([^"]+)"', html)
     assert m, "the page carries no CSRF token"
     return m.group(1)
+
+
+@pytest.fixture(autouse=True)
+def _fresh_fake_steps() -> Iterator[None]:
+    """Every test starts with the fake gait generator as :mod:`tests.sessions.gaitkit` makes it."""
+    yield from fresh_fake_steps()

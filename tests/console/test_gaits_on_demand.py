@@ -3,20 +3,10 @@ gaits that could not be made listed on the trial page, never offered as a trial.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
-import pytest
 from fastapi.testclient import TestClient
 
 from tests.console.conftest import new_session
 from tests.sessions.gaitkit import CONFIG, FakeSteps
-
-
-@pytest.fixture(autouse=True)
-def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.3, []
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
 
 
 def test_the_console_runs_a_session_with_gaits_made_on_demand(client: TestClient) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -9,6 +10,7 @@ import pytest
 from gaitpref import Session, load_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage, Storage
+from tests.sessions.gaitkit import fresh_fake_steps
 from tests.sessions.sessionkit import CONFIG, Drive
 
 
@@ -42,3 +44,9 @@ def drive(subject: SimulatedSubject) -> Drive:
             session.answer(q.id, comparisons, suggestions)
 
     return run
+
+
+@pytest.fixture(autouse=True)
+def _fresh_fake_steps() -> Iterator[None]:
+    """Every test starts with the fake gait generator as :mod:`tests.sessions.gaitkit` makes it."""
+    yield from fresh_fake_steps()

@@ -10,7 +10,7 @@ one with its events edited.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -186,3 +186,11 @@ fit = "fixed"
 strategy = "self-sparring"
 seed = 3
 """
+
+
+def fresh_fake_steps(below: float = 0.3) -> Iterator[None]:
+    """The body of an autouse fixture: :class:`FakeSteps` refusing steps under ``below``, with no
+    calls recorded, during a test, and back to its defaults after it."""
+    FakeSteps.below, FakeSteps.calls = below, []
+    yield
+    FakeSteps.below, FakeSteps.calls = 0.3, []

@@ -9,7 +9,6 @@ from __future__ import annotations
 import hashlib
 import json
 import shutil
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -27,13 +26,6 @@ from tests.sessions.gaitkit import (
     never_made,
     prefer_short_steps,
 )
-
-
-@pytest.fixture(autouse=True)
-def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.3, []
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
 
 
 def _exported(tmp_path: Path, text: str) -> tuple[Session, Path]:

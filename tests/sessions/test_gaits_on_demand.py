@@ -6,7 +6,6 @@ again; ``test_gaits_on_demand_log.py``)."""
 from __future__ import annotations
 
 import shutil
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -25,13 +24,6 @@ from tests.sessions.gaitkit import (
     never_made,
     prefer_short_steps,
 )
-
-
-@pytest.fixture(autouse=True)
-def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.3, []
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
 
 
 def _run(url: str, queries: int) -> Session:

@@ -23,6 +23,7 @@ from tests.sessions.gaitkit import (
     GAIT_EVENTS,
     FakeSteps,
     copied,
+    fresh_fake_steps,
     logged_as_version_1,
     never_made,
     prefer_short_steps,
@@ -31,9 +32,7 @@ from tests.sessions.gaitkit import (
 
 @pytest.fixture(autouse=True)
 def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.5, []  # half the steps have no gait
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
+    yield from fresh_fake_steps(0.5)  # half the steps have no gait
 
 
 def _sqlite(tmp_path: Path) -> str:

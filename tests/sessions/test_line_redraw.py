@@ -5,7 +5,6 @@ line instead of stopping the session, while most of the space may still be propo
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -21,13 +20,6 @@ from tests.sessions.gaitkit import FakeSteps, paired_line_session, prefer_shorte
 STOPPED = [(26, False), (6, True)]
 QUERIES = 8
 SPANS = np.array([1.0, 0.1])  # step_length 0..1, step_width 0.2..0.3
-
-
-@pytest.fixture(autouse=True)
-def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.3, []
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
 
 
 def _infeasible(events: list[Any]) -> list[tuple[np.ndarray, float]]:

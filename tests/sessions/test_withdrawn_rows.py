@@ -8,7 +8,6 @@ frees its rows too, so the export takes a trial's gait from its ``trial_executed
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -18,14 +17,7 @@ from gaitpref import Session
 from gaitpref.sessions.export import export_session
 from gaitpref.sessions.validation import validation_actions
 from gaitpref.storage import MemoryStorage
-from tests.sessions.gaitkit import FakeSteps, paired_line_session, prefer_shorter_pairs
-
-
-@pytest.fixture(autouse=True)
-def _fresh_generator() -> Iterator[None]:
-    FakeSteps.below, FakeSteps.calls = 0.3, []
-    yield
-    FakeSteps.below, FakeSteps.calls = 0.3, []
+from tests.sessions.gaitkit import paired_line_session, prefer_shorter_pairs
 
 
 def _run(storage: MemoryStorage, seed: int, queries: int, suggest: bool) -> Session:
