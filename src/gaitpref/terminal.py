@@ -322,8 +322,8 @@ class Terminal:
             "subject nothing about them.",
             markup=False,
         )
-        for g in plan.gaits:
-            self.console.print(f"  Gait {g.label}: {self._gait(g.action)}", markup=False)
+        for g in s.validation_gaits(plan.round):
+            self.console.print(f"  Gait {g.label}: {g.gait} ({g.text})", markup=False)
         while True:
             if ranking is None:
                 self.console.print(

@@ -318,19 +318,10 @@ def _validation_page(request: Request, session: Session) -> Response:
     gaits = (
         []
         if plan is None
-        else [
-            (g.label, views.gait_view(space, g.action, gait_id=session.gait_name(g.action)))
-            for g in plan.gaits
-        ]
+        else [(g.label, views.shown_view(space, g)) for g in session.validation_gaits()]
     )
     results = [
-        (
-            r,
-            {
-                lbl: views.gait_view(space, a, gait_id=session.gait_name(a))
-                for lbl, a in r.actions.items()
-            },
-        )
+        (r, {g.label: views.shown_view(space, g) for g in session.validation_gaits(r.round)})
         for r in session.validations()
     ]
     return render(

@@ -18,6 +18,7 @@ from gaitpref.console.schemas import (
     ValidationGaitOut,
     ValidationOut,
 )
+from gaitpref.sessions.records import ShownGait
 from gaitpref.sessions.session import Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord
@@ -162,20 +163,32 @@ def trials_out(session: Session) -> list[TrialOut]:
     ]
 
 
+def shown_out(session: Session, shown: ShownGait) -> GaitOut:
+    """A blind validation gait as its round showed it (not looked up by its row)."""
+    return GaitOut(
+        index=shown.action,
+        gait_id=shown.gait,
+        values=dict(shown.values),
+        units={f.name: f.unit for f in session.space.features},
+    )
+
+
 def plan_out(session: Session, plan: ValidationPlan) -> ValidationOut:
     return ValidationOut(
         round=plan.round,
         gaits=[
-            ValidationGaitOut(label=g.label, gait=gait_out(session, g.action)) for g in plan.gaits
+            ValidationGaitOut(label=g.label, gait=shown_out(session, g))
+            for g in session.validation_gaits(plan.round)
         ],
     )
 
 
 def result_out(session: Session, result: ValidationResult) -> ValidationOut:
+    shown = {g.label: g for g in session.validation_gaits(result.round)}
     return ValidationOut(
         round=result.round,
         gaits=[
-            ValidationGaitOut(label=label, gait=gait_out(session, result.actions[label]))
+            ValidationGaitOut(label=label, gait=shown_out(session, shown[label]))
             for label in sorted(result.actions)
         ],
         ranking=list(result.ranking),

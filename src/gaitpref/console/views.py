@@ -21,12 +21,12 @@ comparison is answered the digits ``1..K`` rate the gait; suggestions per featur
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gaitpref.console.answers import is_rating_field
 from gaitpref.console.errors import InputError
-from gaitpref.sessions.records import SessionQuery
+from gaitpref.sessions.records import SessionQuery, ShownGait
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
@@ -78,12 +78,23 @@ class GaitView:
 def gait_view(
     space: Space, index: int, *, trial: int | None = None, gait_id: str | None = None
 ) -> GaitView:
-    point = space.point(index)
+    return _view(space, index, space.point(index), trial, gait_id or f"G{int(index)}")
+
+
+def shown_view(space: Space, shown: ShownGait) -> GaitView:
+    """A blind validation gait as its round showed it (not looked up by its row)."""
+    point = [shown.values[f.name] for f in space.features]
+    return _view(space, shown.action, point, None, shown.gait)
+
+
+def _view(
+    space: Space, index: int, point: Iterable[float], trial: int | None, gait_id: str
+) -> GaitView:
     values = tuple(
         FeatureValue(f.name, pretty(f.name), float(x), fmt_value(float(x)), f.unit)
         for f, x in zip(space.features, point, strict=True)
     )
-    return GaitView(int(index), gait_id or f"G{int(index)}", trial, values)
+    return GaitView(int(index), gait_id, trial, values)
 
 
 def move_words(feature: Feature) -> dict[str, str]:

@@ -6,7 +6,7 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 
 - :class:`Session` (``session.py``): create, open, next query, answer, undo, exclude, validate.
 - records (``records.py``): :class:`SessionQuery`, :class:`Trial`, :class:`ComparisonRecord`,
-  :class:`SuggestionRecord`, :class:`Answered`.
+  :class:`SuggestionRecord`, :class:`Answered`, :class:`ShownGait` (a validation gait as shown).
 - warm starts from earlier sessions (``warm.py``; :func:`read_prior_from` reads typed ids
   and subject codes), the confidence after every answer (``confidence.py``);
 - blind validation (``validation.py``), export and import (``export.py``), the stored config
@@ -23,6 +23,7 @@ from gaitpref.sessions.records import (
     InfeasibleGait,
     Reason,
     SessionQuery,
+    ShownGait,
     SuggestionRecord,
     Trial,
 )
@@ -45,6 +46,7 @@ __all__ = [
     "SessionError",
     "SessionQuery",
     "SessionStateError",
+    "ShownGait",
     "SuggestionRecord",
     "Trial",
     "ValidationPlan",

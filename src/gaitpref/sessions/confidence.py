@@ -55,8 +55,9 @@ def confidence_history(
     """Replay ``events`` into the fresh ``state`` and, after every step whose posterior differs
     from the one before, the confidence then (the same numbers the terminal and the console
     showed): one row per step with ``seq`` (its last event), ``answers`` and ``trials`` in
-    force, the recommended ``action``, ``probability``, ``regret``, ``relative_regret``,
-    ``tolerance`` and ``samples``."""
+    force, the recommended ``action``, its ``gait`` name and feature ``values`` then (on the
+    line path a row may name another point later), ``probability``, ``regret``,
+    ``relative_regret``, ``tolerance`` and ``samples``."""
     rows: list[dict[str, Any]] = []
     seen = [state.loop.posterior]
 
@@ -71,6 +72,8 @@ def confidence_history(
                 "answers": len(st.loop.answers),
                 "trials": len(st.loop.executed),
                 "action": sure.recommended,
+                "gait": st.gait_id(sure.recommended) or f"G{sure.recommended}",
+                "values": st.loop.space.values_of(sure.recommended),
                 "probability": sure.probability,
                 "regret": sure.regret,
                 "relative_regret": sure.relative_regret,

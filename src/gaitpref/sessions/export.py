@@ -44,6 +44,7 @@ import numpy as np
 from gaitpref.errors import ExportError, ReplayError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions import events as log
+from gaitpref.sessions.records import Trial
 from gaitpref.sessions.session import Session
 from gaitpref.storage import (
     MemoryStorage,
@@ -177,9 +178,24 @@ def _tables(
 ) -> dict[str, list[dict[str, Any]]]:
     """The tables; a trial's values and gait id are its ``trial_executed`` event's (``walked``,
     by seq): on the line path an undone answer's rows can go to other points later (its query,
-    pending again, withdrawn by an unsafe flag)."""
+    pending again, withdrawn by an unsafe flag).  Comparisons and suggestions name their trials'
+    gaits the same way; validation gaits are as their round showed them."""
     space = session.space
     unsafe = session.unsafe_flags()
+    by_number: dict[int, list[Trial]] = {}
+    for t in session.trials(include_undone=True):
+        by_number.setdefault(t.number, []).append(t)
+
+    def named(number: int, seq: int) -> str:
+        """The gait trial ``number`` walked when the answer logged at ``seq`` named it: the
+        latest such trial logged before (numbers are reused after an undo, and an undone
+        answer's rows may name other points later)."""
+        walked_then = [t for t in by_number.get(number, []) if t.seq < seq]
+        if not walked_then:
+            raise ExportError(f"event {seq} names trial {number}, which no earlier event ran")
+        t = max(walked_then, key=lambda t: t.seq)
+        return _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}"
+
     trials = [
         {
             "trial": t.number,
@@ -207,8 +223,8 @@ def _tables(
             "second_trial": c.second_trial,
             "first_action": c.first,
             "second_action": c.second,
-            "first_gait": session.gait_name(c.first),
-            "second_gait": session.gait_name(c.second),
+            "first_gait": named(c.first_trial, c.seq),
+            "second_gait": named(c.second_trial, c.seq),
             "outcome": c.outcome,
             "preferred_trial": None
             if c.tie
@@ -226,7 +242,7 @@ def _tables(
             "query": s.query,
             "trial": s.trial,
             "action": s.action,
-            "gait": session.gait_name(s.action),
+            "gait": named(s.trial, s.seq),
             "feature": s.feature,
             "move": s.move,
             "target_action": s.target,
@@ -254,6 +270,8 @@ def _tables(
             "round": r.round,
             "label": label,
             "action": r.actions[label],
+            "gait": shown[label].gait,
+            **shown[label].values,
             "role": r.roles[label],
             "posterior_mean": r.posterior_mean[label],
             "subject_rank": r.ranking.index(label) + 1,
@@ -262,10 +280,15 @@ def _tables(
             "kendall_tau": r.kendall_tau,
         }
         for r in session.validations()
+        for shown in [{g.label: g for g in session.validation_gaits(r.round)}]
         for label in sorted(r.actions)
     ]
     confidence = [
-        {**row, "gait": session.gait_name(row["action"]), "at": at.get(row["seq"])}
+        {
+            **{k: v for k, v in row.items() if k != "values"},
+            **row["values"],
+            "at": at.get(row["seq"]),
+        }
         for row in session.confidence_history()
     ]
     return {

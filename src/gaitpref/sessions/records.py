@@ -58,6 +58,24 @@ class InfeasibleGait:
 
 
 @dataclass(frozen=True)
+class ShownGait:
+    """A blind validation gait as its round showed it: ``label`` (``A``, ``B``, ``C``), the row
+    ``action`` it had when the round started, its name ``gait`` (library or generator id, or
+    ``G<action>``), its feature values and their text (``Space.describe``).
+
+    A round keeps what it showed: on the line path an unsafe flag that withdraws the pending
+    query gives that query's rows to the points proposed next, so a round's row may later name
+    another point, or none (``loop/line.py``).  (On a grid a row is a grid point: both agree.)
+    """
+
+    label: str
+    action: int
+    gait: str
+    values: dict[str, float]
+    text: str
+
+
+@dataclass(frozen=True)
 class Trial:
     """An executed trial.  ``undone``: its answer was taken back (the number is reused)."""
 

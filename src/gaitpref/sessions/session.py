@@ -43,6 +43,7 @@ from gaitpref.sessions.records import (
     FeedbackEntry,
     InfeasibleGait,
     SessionQuery,
+    ShownGait,
     SuggestionRecord,
     Trial,
 )
@@ -517,6 +518,26 @@ class Session:
     def validations(self) -> list[ValidationResult]:
         """The answered validation rounds, unblinded."""
         return [r.result for r in self._state.rounds if r.result is not None]
+
+    def validation_gaits(self, round_: int | None = None) -> list[ShownGait]:
+        """The gaits of validation round ``round_`` (None: the open one) in the order they are
+        presented, as the round showed them: name, feature values and their text when the round
+        started.  Show a round's gaits from here rather than by looking up their rows
+        (``ShownGait``: on the line path a row may name another point later)."""
+        rounds = self._state.rounds
+        if round_ is None:
+            current = self._state.open_round
+            if current is None:
+                raise SessionStateError("no blind validation round is open")
+        elif 1 <= round_ <= len(rounds):
+            current = rounds[round_ - 1]
+        else:
+            raise SessionStateError(
+                f"validation round {round_!r} does not exist (rounds: 1..{len(rounds)})"
+                if rounds
+                else f"validation round {round_!r} does not exist (no round was started)"
+            )
+        return [current.shown[g.label] for g in current.plan.gaits]
 
     # -- reading -------------------------------------------------------------------------------
     def posterior(self) -> Posterior:

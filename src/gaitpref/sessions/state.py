@@ -46,6 +46,7 @@ from gaitpref.sessions.records import (
     InfeasibleGait,
     Reason,
     SessionQuery,
+    ShownGait,
     SuggestionRecord,
     Trial,
 )
@@ -88,6 +89,7 @@ class _Round:
     roles: dict[str, str]
     values: dict[str, float]
     seq: int
+    shown: dict[str, ShownGait]  # label -> the gait as the round showed it (rows move on)
     result: ValidationResult | None = None
 
 
@@ -489,6 +491,7 @@ class SessionState:
                     {g["label"]: g["role"] for g in gaits},
                     {g["label"]: g["posterior_mean"] for g in gaits},
                     r.seq,
+                    {g["label"]: self.shown_gait(g["label"], g["action"]) for g in gaits},
                 )
             )
         elif r.kind == log.VALIDATION_ANSWERED:
@@ -556,6 +559,12 @@ class SessionState:
                 self.trials_log[k] = replace(t, excluded=reason, exclusion_detail=detail)
 
     # -- other ----------------------------------------------------------------------------------
+    def shown_gait(self, label: str, action: int) -> ShownGait:
+        """``action`` as shown now, under ``label`` (a validation round keeps it)."""
+        space = self.loop.space
+        name = self.gait_id(action) or f"G{int(action)}"
+        return ShownGait(label, int(action), name, space.values_of(action), space.describe(action))
+
     def gait_id(self, action: int) -> str | None:
         if self.on_demand is not None:
             return self.on_demand.gait_id(self.loop.space.point(action))
