@@ -94,6 +94,18 @@ def main() -> None:
     )  # fmt: skip
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument(
+        "--shared-objective", type=int, default=0,
+        help="the paper's objective that is the subjects' shared part (noiseless, model_noise)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--first-objective", type=int, default=1,
+        help="subject s's own part is the paper's objective first + s (noiseless, model_noise)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--seed", type=int, default=0,
+        help="the runs' seed (gaitpref bench population's); the prior draws' clinic too",
+    )  # fmt: skip
+    parser.add_argument(
         "--relearn-every", type=int, default=RELEARN_EVERY,
         help="re-learn the new subject's share every so many answers (0: rho held)",
     )  # fmt: skip
@@ -142,18 +154,20 @@ def run_part(part: str, args: argparse.Namespace) -> dict[str, dict]:
     if part == "noiseless":
         rhos = [float(r) for r in args.rho.split(",")]
         for rho, subjects in zip(rhos, _per_rho(args.subjects, rhos, "--subjects"), strict=True):
-            clinic = synthetic_population(paper_objectives(), rho, subjects)
+            clinic = _clinic(args, rho, subjects)
             out[str(rho)] = population_bench(
-                config, clinic, args.trials, jobs=args.jobs, relearn_every=args.relearn_every
-            )
+                config, clinic, args.trials, seed=args.seed, jobs=args.jobs,
+                relearn_every=args.relearn_every,
+            )  # fmt: skip
     elif part == "model_noise":
         rhos = [float(r) for r in args.calibration_rho.split(",")]
         counts = _per_rho(args.calibration_subjects, rhos, "--calibration-subjects")
         scaled = noise / float(np.sqrt(loop.gp.kernel.variance))  # objectives' sd is 1
         for rho, subjects in zip(rhos, counts, strict=True):
-            clinic = synthetic_population(paper_objectives(), rho, subjects)
+            clinic = _clinic(args, rho, subjects)
             out[str(rho)] = population_bench(
-                config, clinic, args.calibration_trials, jobs=args.jobs, user_noise=scaled,
+                config, clinic, args.calibration_trials, seed=args.seed, jobs=args.jobs,
+                user_noise=scaled,
                 relearn_every=args.relearn_every,
             )  # fmt: skip
     else:
@@ -162,12 +176,26 @@ def run_part(part: str, args: argparse.Namespace) -> dict[str, dict]:
         rhos = [float(r) for r in args.gp_rho.split(",")]
         counts = _per_rho(args.gp_subjects, rhos, "--gp-subjects")
         for i, (rho, subjects) in enumerate(zip(rhos, counts, strict=True)):
-            draws, smooth = gp_population(config, rho, subjects, np.random.default_rng([14, i]))
+            key = [14, i] if args.seed == 0 else [14, i, args.seed]  # 0: the first study's
+            draws, smooth = gp_population(config, rho, subjects, np.random.default_rng(key))
             out[str(rho)] = population_bench(
-                config, draws, args.gp_trials, jobs=args.jobs, user_noise=noise,
+                config, draws, args.gp_trials, seed=args.seed, jobs=args.jobs, user_noise=noise,
                 relearn_every=args.relearn_every, truths=smooth,
             )  # fmt: skip
     return out
+
+
+def _clinic(args: argparse.Namespace, rho: float, subjects: int) -> np.ndarray:
+    """The synthetic clinic of the paper's objectives that the flags name."""
+    own = range(args.first_objective, args.first_objective + subjects)
+    if args.shared_objective in own:
+        raise SystemExit(
+            f"--shared-objective {args.shared_objective} is one of the subjects' own objectives "
+            f"({own.start}-{own.stop - 1})"
+        )
+    return synthetic_population(
+        paper_objectives(), rho, subjects, shared=args.shared_objective, first=args.first_objective
+    )
 
 
 def _hand_written(text: str) -> str:

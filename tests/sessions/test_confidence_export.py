@@ -45,7 +45,9 @@ def test_the_confidence_table_repeats_what_was_stated_after_every_step(
     export_session(s, tmp_path / "csv", "csv")
     with open(tmp_path / "csv" / "confidence.csv", newline="") as f:
         table = list(csv.DictReader(f))
-    assert set(table[0]) == COLUMNS and len(table) == len(rows)
+    features = {f.name for f in s.space.features}  # the recommended gait's values then
+    assert set(table[0]) == COLUMNS | features and len(table) == len(rows)
+    assert {k: float(table[0][k]) for k in features} == s.space.values_of(rows[0]["action"])
     assert [float(r["probability"]) for r in table] == [r["probability"] for r in rows]
     assert table[0]["gait"] == s.gait_name(rows[0]["action"]) and table[0]["at"]
     export_session(s, tmp_path / "json", "json")
