@@ -10,8 +10,9 @@ standard error over seeds) and appends the runs to ``--out`` (JSON lines).
 
 A variant is ``key=value`` pairs joined by ``,``: ``strategy`` (a strategy's name),
 ``direction`` (random, coordinate; ``descent``: along the posterior mean's gradient at the
-best point, ``descent:0.5``: half of the lines random instead; screen only, the library has no
-such rule), ``points`` (per line), ``scale`` (``study``: the study's kernel; a number: that
+best point, ``descent:0.5``: half of the lines random instead; ``thompson``: towards the
+argmax of one posterior sample over 1,000 uniform points, ``thompson:M`` over ``M``; screen
+only, the library has no such rules), ``points`` (per line), ``scale`` (``study``: the study's kernel; a number: that
 fraction of the range for every feature), ``fit`` (fixed, evidence), ``noise`` (the model's
 probit noise), ``span`` (below 1: each line cut to the segment ``|t| <= span`` around the best
 point, in range-normalised units, a trust region; the screen patches
@@ -99,6 +100,25 @@ def _spanned(span: float) -> None:
     _lines.line_points = cut if span < 1 else original
 
 
+class ThompsonLines(LineCoSpar):
+    """Screen only: lines from the best point towards the argmax of one posterior sample over
+    ``candidates`` points drawn uniformly in the box (and the table's points), a Thompson draw
+    of where the optimum lies; the candidates and the sample come from the loop's generator."""
+
+    candidates: int = 1000
+
+    def _towards(self) -> FloatArray | None:
+        best = self.best_point()
+        if best is None:
+            return None
+        cloud = np.array([_lines.random_point(self.domain, self.rng) for _ in range(self.candidates)])
+        space, _ = self.space.extended(cloud)
+        post = on_points(self.posterior, space)
+        target = space.points[int(post.argmax_samples(self.rng, 1)[0])]
+        move = _lines.normalised(self.domain, target - best)
+        return None if not np.any(move) else move
+
+
 class DescentLines(LineCoSpar):
     """Screen only: lines along the posterior mean's gradient at the best point (LineBO's
     DescentLineBO, Kirschner et al. 2019), by central differences in normalised units; with
@@ -143,8 +163,10 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
     _spanned(float(variant["span"]))
     loop_seed, user_seed = np.random.SeedSequence(seed).spawn(2)
     descent = variant["direction"].startswith("descent")
-    direction = "coactive" if descent else variant["direction"]
-    loop = (DescentLines if descent else LineCoSpar)(
+    thompson = variant["direction"].startswith("thompson")
+    direction = "coactive" if descent or thompson else variant["direction"]
+    cls = DescentLines if descent else ThompsonLines if thompson else LineCoSpar
+    loop = cls(
         domain,
         SquaredExponential(scale, 1.0, 1e-6),
         float(variant["noise"]),
@@ -157,6 +179,8 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
     )
     if descent and ":" in variant["direction"]:
         loop.mix = float(variant["direction"].split(":")[1])  # type: ignore[attr-defined]
+    if thompson and ":" in variant["direction"]:
+        loop.candidates = int(variant["direction"].split(":")[1])  # type: ignore[attr-defined]
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(fn, domain, seed=seed) if coactive else None
     res = run_points(loop, fn, user, TRIALS, helper, checkpoints=(TRIALS,))
