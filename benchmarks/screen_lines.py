@@ -12,10 +12,11 @@ A variant is ``key=value`` pairs joined by ``,``: ``strategy`` (a strategy's nam
 ``direction`` (random, coordinate; ``descent``: along the posterior mean's gradient at the
 best point, ``descent:0.5``: half of the lines random instead; ``thompson``: towards the
 argmax of one posterior sample over 1,000 uniform points, ``thompson:M`` over ``M``; screen
-only, the library has no such rules), ``points`` (per line), ``scale`` (``study``: the study's kernel; a number: that
-fraction of the range for every feature), ``fit`` (fixed, evidence), ``noise`` (the model's
-probit noise), ``span`` (below 1: each line cut to the segment ``|t| <= span`` around the best
-point, in range-normalised units, a trust region; the screen patches
+only, the library has no such rules), ``points`` (per line), ``scale`` (``study``: the
+study's kernel; a number: that fraction of the range for every feature), ``fit`` (fixed,
+evidence), ``noise`` (the model's probit noise), ``span`` (below 1: each line cut to the
+segment ``|t| <= span`` around the best point, in range-normalised units, a trust region; the
+screen patches
 ``gaitpref.loop.lines.line_points`` for it, the library has no such setting).
 Results: ``docs/results/continuous/notes.md``.
 """
@@ -111,7 +112,8 @@ class ThompsonLines(LineCoSpar):
         best = self.best_point()
         if best is None:
             return None
-        cloud = np.array([_lines.random_point(self.domain, self.rng) for _ in range(self.candidates)])
+        draws = [_lines.random_point(self.domain, self.rng) for _ in range(self.candidates)]
+        cloud = np.array(draws)
         space, _ = self.space.extended(cloud)
         post = on_points(self.posterior, space)
         target = space.points[int(post.argmax_samples(self.rng, 1)[0])]

@@ -21,8 +21,8 @@ lengthscale = 0.03
 signal_variance = 0.005
 noise = 0.02
 """
-# [model]'s share and jitter, given (their defaults changed in 0.6 and 0.7)
-SHARE = 'share = "average"\njitter = 0.0\n'
+# [model]'s share, jitter and warm_first, given (their defaults changed in 0.6, 0.7 and 0.8)
+SHARE = 'share = "average"\njitter = 0.0\nwarm_first = "recommended"\n'
 
 
 def test_a_config_with_only_space_and_model_asks_comparisons() -> None:
@@ -52,7 +52,7 @@ def test_the_0_1_defaults_give_the_old_loop() -> None:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.7"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.8"}
     assert config_of(stored_record(BARE, library_meta(bare))).buffer == 1
     explicit = parse_config(BARE + SHARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
@@ -72,7 +72,7 @@ def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
     cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3,
     assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
     assert cfg.safety.cautious == 0.6
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.7"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.8"}
     assert config_of(stored_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
     for explicit in (
         "lambda = 1.0\n",
@@ -123,3 +123,19 @@ def test_a_config_without_jitter_gets_a_relative_nugget_since_0_7() -> None:
     assert parse_config(BARE, defaults="0.6").kernel.jitter == 0.0  # as those sessions ran
     assert parse_config(BARE + "jitter = 0.0\n").kernel.jitter == 0.0  # given: kept
     assert config_of(stored_record(BARE, {"config_defaults": "0.6"})).kernel.jitter == 0.0
+
+
+def test_a_warm_starts_first_trial_is_the_recommendation_since_0_8_the_strategys_before() -> None:
+    assert parse_config(BARE).learning.warm_first == "recommended"
+    assert "model.warm_first" in parse_config(BARE).defaulted
+    for version in ("0.1", "0.4", "0.6", "0.7"):
+        assert parse_config(BARE, defaults=version).learning.warm_first == "strategy"
+        assert parse_config(BARE + SHARE, defaults=version).learning.warm_first == "recommended"
+    assert config_of(stored_record(BARE, {"config_defaults": "0.7"})).learning.warm_first == (
+        "strategy"
+    )
+    assert config_of(stored_record(BARE, {})).learning.warm_first == "strategy"  # by 0.1
+    given = parse_config(BARE + 'warm_first = "strategy"\n')
+    assert given.learning.warm_first == "strategy" and "model.warm_first" not in given.defaulted
+    with pytest.raises(ConfigError, match=r"model.*warm_first.*'first'"):
+        parse_config(BARE + 'warm_first = "first"\n')

@@ -99,8 +99,9 @@ def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
     again = config_of(stored_record(CONFIG, library_meta(cfg)))
     assert again.generator == cfg.generator
     given = CONFIG.replace("speed = 0.2", "speed = 0.2\nmax_iterations = 40")
-    assert "jitter = 0.0" in given  # COMPASS gives its jitter; the share is the other default
-    explicit = parse_config(given.replace("[model]\n", '[model]\nshare = "average"\n'))
+    assert "jitter = 0.0" in given  # COMPASS gives its jitter; share, warm_first: the others
+    model = '[model]\nshare = "average"\nwarm_first = "recommended"\n'
+    explicit = parse_config(given.replace("[model]\n", model))
     assert explicit.generator is not None and explicit.generator.settings["max_iterations"] == 40
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 

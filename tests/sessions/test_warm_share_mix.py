@@ -118,3 +118,27 @@ def test_share_hypotheses_rounded_elsewhere_are_taken_from_the_log(tmp_path: Pat
         assert [h.weight for h in loop.share_hypotheses] == [
             h["weight"] for h in payload["hypotheses"]
         ]
+
+
+@pytest.mark.parametrize(("defaults", "first"), [(None, "recommended"), ("0.7", "strategy")])
+def test_a_warm_sessions_first_trial_follows_its_defaults_and_replays(
+    defaults: str | None, first: str
+) -> None:
+    db = MemoryStorage()
+    ids = _earlier(db)
+    config = load_config(CONFIG)
+    if defaults is not None:
+        config = parse_config(config.text, default_name=config.name, defaults=defaults)
+    warm = Session.create(db, config, "S04", seed=5, prior_from=ids)
+    loop = warm._state.loop
+    assert loop.learning.warm_first == first
+    recommended = loop._warm_first(loop.allowed())
+    q = warm.next_query()
+    if first == "recommended":  # the earlier subjects' best guess, not the strategy's draw
+        assert recommended and q.actions == recommended
+    else:
+        assert recommended == ()  # "strategy": the loop leaves the first trial to the strategy
+    _run(warm, SimulatedSubject(config.space, bump_utility(config.space), seed=5), 3)
+    with Session.open(db, warm.id) as again:
+        assert again._state.loop.executed == loop.executed
+        assert again._state.loop.executed[0] == q.actions[0]

@@ -23,7 +23,7 @@ from gaitpref.config.schema import (
     defaults_for,
 )
 from gaitpref.config.specs import SCALE, LogNormalPair, fail
-from gaitpref.loop.learning import FitMode, HyperMode, Learning, ShareMode, TiesMode
+from gaitpref.loop.learning import FitMode, HyperMode, Learning, ShareMode, TiesMode, WarmFirst
 from gaitpref.model.engines import resolve_sampler
 from gaitpref.model.hyperfit import HyperPrior, LogNormal, default_prior
 from gaitpref.model.kernels import SquaredExponential
@@ -148,6 +148,7 @@ def make_learning(model: dict[str, Any], space: Space) -> Learning:
             cast(HyperMode, model["hyper"]),
             tuple(model["hypotheses"]),
             cast(ShareMode, model["share"]),
+            cast(WarmFirst, model["warm_first"]),
         )
     except ValueError as exc:
         fail("model", None, str(exc))

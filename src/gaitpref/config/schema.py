@@ -39,7 +39,14 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
-from gaitpref.loop.learning import FIT_MODES, HYPER_MODES, HYPOTHESES, SHARE_MODES, TIES_MODES
+from gaitpref.loop.learning import (
+    FIT_MODES,
+    HYPER_MODES,
+    HYPOTHESES,
+    SHARE_MODES,
+    TIES_MODES,
+    WARM_FIRST,
+)
 from gaitpref.loop.lines import DIRECTIONS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
@@ -153,6 +160,8 @@ MODEL: Final[dict[str, Key]] = {
     "hyper": Key(Choice(HYPER_MODES), "map"),  # "average": over lengthscale hypotheses
     "hypotheses": Key(Numbers(Number(0.01, 100.0, open_lo=True), 1, 15), HYPOTHESES),
     "share": Key(Choice(SHARE_MODES), "average"),  # a warm start's share: a mixture, or "map"
+    # a warm start's first trial: the earlier subjects' recommendation, or the strategy's pick
+    "warm_first": Key(Choice(WARM_FIRST), "recommended"),
     "prior": Key(Table("log-normal priors [median, sd]"), {}),
 }
 PRIOR: Final[dict[str, Key]] = {
@@ -206,15 +215,20 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.7"
+DEFAULTS_VERSION: Final = "0.8"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
 #: made on demand had no iteration budget, ``[gaits] max_iterations = None``; 0.1 to 0.5: a warm
 #: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``; 0.1 to
-#: 0.6: a config without ``[model] jitter`` had none, ``jitter = 0``).
+#: 0.6: a config without ``[model] jitter`` had none, ``jitter = 0``; 0.1 to 0.7: a warm start's
+#: first trial was the strategy's, ``[model] warm_first = "strategy"``).
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
-_MODEL_BEFORE_0_6: Final[dict[str, Any]] = {"share": "map", "jitter": 0.0}
+_MODEL_BEFORE_0_6: Final[dict[str, Any]] = {
+    "share": "map",
+    "jitter": 0.0,
+    "warm_first": "strategy",
+}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
         "cospar": {"buffer": 0},
@@ -230,7 +244,8 @@ EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
     "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
     "0.5": {"model": _MODEL_BEFORE_0_6},
-    "0.6": {"model": {"jitter": 0.0}},
+    "0.6": {"model": {"jitter": 0.0, "warm_first": "strategy"}},
+    "0.7": {"model": {"warm_first": "strategy"}},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

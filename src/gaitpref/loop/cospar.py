@@ -430,11 +430,30 @@ class CoSpar:
         query, comparing with them as with the buffer."""
         start = self.safety.start
         executed = self.executed
+        if not start and not executed:
+            return self._warm_first(allowed)
         if len(executed) >= len(start):
             return ()
         done = set(executed)
         todo = [a for a in start if a not in done and (allowed is None or allowed[a])]
         return tuple(todo[: self.n])
+
+    def _warm_first(self, allowed: NDArray[np.bool_] | None) -> tuple[int, ...]:
+        """A warm start's first trial (``learning.warm_first = "recommended"``): the earlier
+        subjects' recommendation, the argmax among the allowed gaits of the new subject's
+        posterior mean with their share at ``rho``; none (the strategy chooses) without a warm
+        start, with ``"strategy"``, or when that mean is flat (``rho = 0``, no data)."""
+        warm = self.warm
+        if warm is None or self.learning.warm_first != "recommended" or warm.rho <= 0.0:
+            return ()
+        with one_blas_thread():
+            mean = np.asarray(self._posterior_sharing(warm.rho).mean, dtype=np.float64)
+        if allowed is not None:
+            mean = np.where(allowed, mean, -np.inf)
+        finite = mean[np.isfinite(mean)]
+        if finite.size == 0 or np.ptp(finite) <= 0.0:
+            return ()
+        return (int(np.argmax(mean)),)
 
     def tell(
         self,

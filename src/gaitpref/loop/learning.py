@@ -25,6 +25,14 @@
   are not averaged too), the confidence's samples come from the mixture, and the posterior
   in force is the heaviest hypothesis'.  Without a warm start it changes nothing.  The dataclass
   default is ``"map"``; a config's default is ``"average"`` since defaults version 0.6.
+- ``warm_first``: a warm-started loop's first trial.  ``"strategy"`` lets the strategy choose
+  it, as every trial (the new subject starts alone, so nothing the earlier subjects said
+  reaches it); ``"recommended"`` walks the earlier subjects' recommendation first: the argmax,
+  among the gaits the loop may propose, of the new subject's posterior mean with their share
+  at the population's ``rho`` (``loop/cospar.py``), when that mean is not flat (``rho = 0`` or
+  no data: the strategy chooses).  Without a warm start, or with ``[safety] start`` gaits,
+  it changes nothing.  The dataclass default is ``"strategy"``; a config's default is
+  ``"recommended"`` since defaults version 0.8.
 
 :func:`pair_data` turns a loop's preferences and ties into the arrays the model takes.
 """
@@ -49,6 +57,8 @@ HyperMode = Literal["map", "average"]
 HYPER_MODES: tuple[HyperMode, ...] = ("map", "average")
 ShareMode = Literal["map", "average"]
 SHARE_MODES: tuple[ShareMode, ...] = ("map", "average")
+WarmFirst = Literal["strategy", "recommended"]
+WARM_FIRST: tuple[WarmFirst, ...] = ("strategy", "recommended")
 #: The default lengthscale hypotheses of ``hyper = "average"``: factors of the fitted ones.
 HYPOTHESES: tuple[float, ...] = (0.5, 0.71, 1.0, 1.41, 2.0)
 
@@ -65,6 +75,7 @@ class Learning:
     hyper: HyperMode = "map"
     hypotheses: tuple[float, ...] = HYPOTHESES
     share: ShareMode = "map"
+    warm_first: WarmFirst = "strategy"
 
     def __post_init__(self) -> None:
         if self.ties not in TIES_MODES:
@@ -94,6 +105,10 @@ class Learning:
             raise ValueError(f"hypotheses must differ, got {self.hypotheses!r}")
         if self.share not in SHARE_MODES:
             raise ValueError(f"share must be one of {', '.join(SHARE_MODES)}; got {self.share!r}")
+        if self.warm_first not in WARM_FIRST:
+            raise ValueError(
+                f"warm_first must be one of {', '.join(WARM_FIRST)}; got {self.warm_first!r}"
+            )
 
     @property
     def learns_band(self) -> bool:

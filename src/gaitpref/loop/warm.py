@@ -27,6 +27,11 @@ then the mixture's mean share, and the hypotheses ride on the
 :class:`~gaitpref.model.share_fit.ShareFit`.
 ``relearn_every = 0`` (warm starts recorded before) holds ``share = rho`` for the whole session,
 as they were run.
+
+A new subject who starts alone would walk a blind first trial; with ``Learning.warm_first =
+"recommended"`` (configs' default since defaults version 0.8) the loop walks the population's
+recommendation first, the argmax of the new subject's posterior mean at ``share = rho``
+(``CoSpar._warm_first``).
 """
 
 from __future__ import annotations
