@@ -27,7 +27,8 @@ grid, lengthscale 0.15, the default strategy: gated-eubo, lengthscales fitted ev
         [--jobs 1] [--out FILE.json]
     python benchmarks/study_clinic_safety.py --report FILE.json [--markdown OUT.md]
 
-Results and what they show: ``docs/results/ordinal/clinic.md``.
+Results and what they show: ``docs/results/ordinal/clinic/summary.md`` (``results.json`` and
+the runs under earlier defaults beside it).
 """
 
 from __future__ import annotations
