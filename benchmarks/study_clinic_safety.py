@@ -19,12 +19,16 @@ objectives):
   ``rho`` learned from the earlier subjects, the new subject's share a mixture re-learned after
   every answer).
 
+An arm ``ARM:map`` is ``ARM`` with ``[model] share = "map"`` (one MAP share, gated, instead of
+the mixture), ``ARM::strategy`` with ``warm_first = "strategy"`` and ``ARM:map:strategy`` with
+both, for the diagnosis in the summary.
+
 Subjects: the ordinal study's ``noiseless`` subject (exact preferences, exact ratings at the
 quartiles of their own utility).  The config is the ordinal study's 2-D one (the paper's 30 x 30
 grid, lengthscale 0.15, the default strategy: gated-eubo, lengthscales fitted every 20 answers).
 
     python benchmarks/study_clinic_safety.py --rho 0,0.5,0.8 --earlier 8 --new 16 --trials 60 \
-        [--jobs 1] [--out FILE.json]
+        [--arms rated,warm-rated,warm-rated:map] [--jobs 1] [--out FILE.json]
     python benchmarks/study_clinic_safety.py --report FILE.json [--markdown OUT.md]
 
 Results and what they show: ``docs/results/ordinal/clinic/summary.md`` (``results.json`` and
@@ -42,7 +46,7 @@ from pathlib import Path
 import numpy as np
 from joblib import Parallel, delayed
 
-from gaitpref.config import ExperimentConfig
+from gaitpref.config import ExperimentConfig, parse_config
 from gaitpref.data import paper_objectives
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.loop.cospar import CoSpar
@@ -65,8 +69,12 @@ RATED = Arm("rated")
 CAUTIOUS = Arm("cautious", risk=True, cautious=0.6)
 
 
-def _config(region: bool) -> ExperimentConfig:
-    return (CAUTIOUS if region else RATED).config("2d")
+def _config(region: bool, share: str = "", first: str = "") -> ExperimentConfig:
+    text = (CAUTIOUS if region else RATED).text("2d")
+    given = "".join(
+        f'{key} = "{value}"\n' for key, value in (("share", share), ("warm_first", first)) if value
+    )  # [model] share / warm_first given (default: the defaults version's)
+    return parse_config(text.replace("noise = 0.01\n", "noise = 0.01\n" + given, 1))
 
 
 def _category(cfg: ExperimentConfig, utility: np.ndarray) -> np.ndarray:
@@ -123,12 +131,23 @@ def _new_run(
     arm: str, utility: np.ndarray, trials: int, seeds: list[int], earlier: list[Earlier]
 ) -> dict[str, object]:
     prior = earlier if arm.startswith("warm") else None
-    _, row = _walk(_config(arm.endswith("cautious")), utility, trials, seeds, prior)
+    # "warm-rated:map": that arm with [model] share = "map"; "warm-rated:map:strategy" also
+    # with warm_first = "strategy"; "warm-rated::strategy" the latter alone
+    base, *given = arm.split(":")
+    share, first = [*given, "", ""][:2]
+    cfg = _config(base.endswith("cautious"), share, first)
+    _, row = _walk(cfg, utility, trials, seeds, prior)
     return row
 
 
 def run(
-    rhos: list[float], n_earlier: int, n_new: int, trials: int, earlier_trials: int, jobs: int
+    rhos: list[float],
+    n_earlier: int,
+    n_new: int,
+    trials: int,
+    earlier_trials: int,
+    jobs: int,
+    arms: tuple[str, ...] = ARMS,
 ) -> dict[str, object]:
     objectives = paper_objectives()
     out: dict[str, object] = {
@@ -149,12 +168,12 @@ def run(
                 for e in range(n_earlier)
             )
         )
-        calls = [(arm, k) for k in range(n_new) for arm in ARMS]
+        calls = [(arm, k) for k in range(n_new) for arm in arms]
         rows = parallel(
             delayed(_new_run)(arm, clinic[n_earlier + k], trials, [SEED, 2, k], earlier)
             for arm, k in calls
         )
-        runs: dict[str, list[dict[str, object]]] = {arm: [] for arm in ARMS}
+        runs: dict[str, list[dict[str, object]]] = {arm: [] for arm in arms}
         for (arm, _), row in zip(calls, rows, strict=True):
             runs[arm].append(row)
         out["parts"].append({"rho": rho, "runs": runs})  # type: ignore[attr-defined]
@@ -212,8 +231,7 @@ def report(results: dict[str, object]) -> str:
     rng = np.random.default_rng(0)
     for part in results["parts"]:  # type: ignore[attr-defined]
         rho, runs = part["rho"], part["runs"]
-        for arm in ARMS:
-            rows = runs[arm]
+        for arm, rows in runs.items():
             learnt = [r["rho"] for r in rows if r["rho"] is not None]
             lines.append(
                 f"| {rho} | {arm} | {np.mean(learnt) if learnt else float('nan'):.2f} | "
@@ -221,7 +239,10 @@ def report(results: dict[str, object]) -> str:
                 f"{_worst(rows, 0, trials).mean():.2f} ± {_se(_worst(rows, 0, trials)):.2f} | "
                 f"{_score(rows, 0, 20).mean():.3f} | {_score(rows, 0, trials).mean():.3f} |"
             )
-        for a, b, what in pairs:
+        extra = [(a, a.partition(":")[0], "[model] keys given") for a in runs if ":" in a]
+        for a, b, what in pairs + extra:
+            if a not in runs or b not in runs:
+                continue
             d60 = _score(runs[a], 0, trials) - _score(runs[b], 0, trials)
             d20 = _score(runs[a], 0, 20) - _score(runs[b], 0, 20)
             red = _reduction(_worst(runs[a], 0, trials), _worst(runs[b], 0, trials), rng)
@@ -240,6 +261,11 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=60)
     parser.add_argument("--earlier-trials", type=int, default=30)
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument(
+        "--arms",
+        default=",".join(ARMS),
+        help='arms to run; "ARM:SHARE:FIRST" gives [model] share and warm_first',
+    )
     parser.add_argument("--out", type=Path, default=Path("out/clinic-safety.json"))
     parser.add_argument("--report", type=Path, default=None, help="a results file to summarise")
     parser.add_argument("--markdown", type=Path, default=None)
@@ -248,7 +274,10 @@ def main() -> None:
         text = report(json.loads(args.report.read_text()))
     else:
         rhos = [float(r) for r in args.rho.split(",")]
-        results = run(rhos, args.earlier, args.new, args.trials, args.earlier_trials, args.jobs)
+        arms = tuple(a for a in args.arms.split(",") if a)
+        results = run(
+            rhos, args.earlier, args.new, args.trials, args.earlier_trials, args.jobs, arms
+        )
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(json.dumps(results))
         text = report(results)
