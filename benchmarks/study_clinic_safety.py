@@ -234,7 +234,7 @@ def report(results: dict[str, object]) -> str:
         for arm, rows in runs.items():
             learnt = [r["rho"] for r in rows if r["rho"] is not None]
             lines.append(
-                f"| {rho} | {arm} | {np.mean(learnt) if learnt else float('nan'):.2f} | "
+                f"| {rho} | {arm} | {f'{np.mean(learnt):.2f}' if learnt else '-'} | "
                 f"{_worst(rows, 0, 5).mean():.2f} | {_worst(rows, 5, trials).mean():.2f} | "
                 f"{_worst(rows, 0, trials).mean():.2f} ± {_se(_worst(rows, 0, trials)):.2f} | "
                 f"{_score(rows, 0, 20).mean():.3f} | {_score(rows, 0, trials).mean():.3f} |"
