@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -87,21 +88,31 @@ def report(rows: list[dict]) -> None:
             )
 
 
+def add_rows_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--out`` (write the rows as JSON) and ``--rows`` (report rows written before)."""
+    parser.add_argument("--out", type=Path, default=None, help="write the rows as JSON")
+    parser.add_argument("--rows", type=Path, default=None, help="report rows written before")
+
+
+def rows_of(args: argparse.Namespace, make: Callable[[], list[dict]]) -> list[dict]:
+    """The rows of ``--rows``, else ``make()``'s, written to ``--out`` when given."""
+    if args.rows is not None:
+        rows: list[dict] = json.loads(args.rows.read_text(encoding="utf-8"))
+        return rows
+    rows = make()
+    if args.out is not None:
+        args.out.write_text(json.dumps(rows), encoding="utf-8")
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--config", default="synthetic-2d")
     parser.add_argument("--subjects", type=int, default=24)
     parser.add_argument("--trials", type=int, default=60)
-    parser.add_argument("--out", type=Path, default=None, help="write the rows as JSON")
-    parser.add_argument("--rows", type=Path, default=None, help="report rows written before")
+    add_rows_arguments(parser)
     args = parser.parse_args()
-    if args.rows is not None:
-        rows = json.loads(args.rows.read_text(encoding="utf-8"))
-    else:
-        rows = run(args.config, args.subjects, args.trials)
-        if args.out is not None:
-            args.out.write_text(json.dumps(rows), encoding="utf-8")
-    report(rows)
+    report(rows_of(args, lambda: run(args.config, args.subjects, args.trials)))
 
 
 if __name__ == "__main__":
