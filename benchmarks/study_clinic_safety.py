@@ -21,7 +21,9 @@ objectives):
 
 An arm ``ARM:map`` is ``ARM`` with ``[model] share = "map"`` (one MAP share, gated, instead of
 the mixture), ``ARM::strategy`` with ``warm_first = "strategy"`` and ``ARM:map:strategy`` with
-both, for the diagnosis in the summary.
+both, for the diagnosis in the summary; ``ARM:::0.5`` gives the share mixture's prior mass on
+alone (0.2 in the library; the screen patches ``share_fit.share_prior``, the library has no
+such setting).
 
 Subjects: the ordinal study's ``noiseless`` subject (exact preferences, exact ratings at the
 quartiles of their own utility).  The config is the ordinal study's 2-D one (the paper's 30 x 30
@@ -39,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import json
 import time
 from pathlib import Path
@@ -46,6 +49,7 @@ from pathlib import Path
 import numpy as np
 from joblib import Parallel, delayed
 
+import gaitpref.model.share_fit as _share_fit
 from gaitpref.config import ExperimentConfig, parse_config
 from gaitpref.data import paper_objectives
 from gaitpref.errors import NoSafeGaitError
@@ -132,12 +136,19 @@ def _new_run(
 ) -> dict[str, object]:
     prior = earlier if arm.startswith("warm") else None
     # "warm-rated:map": that arm with [model] share = "map"; "warm-rated:map:strategy" also
-    # with warm_first = "strategy"; "warm-rated::strategy" the latter alone
+    # with warm_first = "strategy"; "warm-rated::strategy" the latter alone; a fourth field,
+    # "warm-rated:::0.5", the share mixture's prior mass on alone (screen only: patched)
     base, *given = arm.split(":")
-    share, first = [*given, "", ""][:2]
+    share, first, alone = [*given, "", "", ""][:3]
     cfg = _config(base.endswith("cautious"), share, first)
-    _, row = _walk(cfg, utility, trials, seeds, prior)
-    return row
+    if not alone:
+        return _walk(cfg, utility, trials, seeds, prior)[1]
+    original = _share_fit.share_prior
+    _share_fit.share_prior = functools.partial(original, alone=float(alone))
+    try:
+        return _walk(cfg, utility, trials, seeds, prior)[1]
+    finally:
+        _share_fit.share_prior = original
 
 
 def run(
