@@ -7,7 +7,8 @@ independent term per gait).  On subjects drawn from the model's own prior it is 
 (``check_confidence_prior.py``); on the paper's objectives it states less than it achieves
 (``docs/results/population/fresh/``).  This script runs cold sessions of ``synthetic-2d`` (its
 loop, self-sparring, n = 1, b = 1) on the fresh clinic's subjects (rho 0.5: objective 99 shared,
-25.. individual, standardised), answering with the model's probit noise on their scale, and
+25.. individual, standardised), answering with the model's probit noise on their scale
+(``--noise``: a multiple of it; 0 for noiseless subjects), and
 after every answer states the confidence twice from the same answers:
 
 - ``as_is``: the product's, from the loop's posterior;
@@ -17,7 +18,8 @@ after every answer states the confidence twice from the same answers:
 Both are judged on the subject's objective (within 5% of its range of the best).  The standard
 errors resample whole subjects (``cluster_bootstrap``).
 
-    python benchmarks/check_confidence_jitter.py --subjects 32 --trials 60 [--out rows.json]
+    python benchmarks/check_confidence_jitter.py --subjects 32 --trials 60 [--noise 1] \
+        [--out rows.json]
 
 Results: ``docs/results/population/fresh/summary.md`` (the calibration section).
 """
@@ -44,7 +46,7 @@ except ImportError:  # run as a module
 TOLERANCE = 0.05
 
 
-def run(subjects: int, trials: int, samples: int) -> list[dict[str, object]]:
+def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[dict[str, object]]:
     config = load_config("synthetic-2d")
     utilities = synthetic_population(paper_objectives(), 0.5, subjects, shared=99, first=25)
     rows: list[dict[str, object]] = []
@@ -58,8 +60,8 @@ def run(subjects: int, trials: int, samples: int) -> list[dict[str, object]]:
             loop.gp.noise,
         )
         truth = objective_on_grid(config.space, utilities[s])
-        noise = loop.gp.noise / float(np.sqrt(kernel.variance))  # the objectives' sd is 1
-        user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=noise)
+        scaled = noise * loop.gp.noise / float(np.sqrt(kernel.variance))  # objectives' sd: 1
+        user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=scaled)
         span = float(truth.max() - truth.min())
         for t in range(trials):
             query = loop.ask()
@@ -108,9 +110,13 @@ def main() -> None:
     parser.add_argument("--subjects", type=int, default=32)
     parser.add_argument("--trials", type=int, default=60)
     parser.add_argument("--samples", type=int, default=300)
+    parser.add_argument(
+        "--noise", type=float, default=1.0, help="the subjects' noise, times the model's (0: none)"
+    )
     add_rows_arguments(parser)
     args = parser.parse_args()
-    print(report(rows_of(args, lambda: run(args.subjects, args.trials, args.samples))))
+    rows = rows_of(args, lambda: run(args.subjects, args.trials, args.samples, args.noise))
+    print(report(rows))
 
 
 if __name__ == "__main__":
