@@ -184,6 +184,12 @@ def warm_start(
     return WarmStart(data, rho, len(earlier), singles)
 
 
+def relearning(warm: WarmStart, every: int = RELEARN_EVERY) -> WarmStart:
+    """``warm`` as warm starts are made now: the new subject starts alone (``share = 0``) and
+    their share is re-learned every ``every`` answers, gated by :data:`SHARE_GATE` nats."""
+    return dataclasses.replace(warm, share=0.0, relearn_every=every, gate=SHARE_GATE)
+
+
 def _parts(size: int, likelihood: ActionLikelihood) -> tuple[tuple[int, ActionLikelihood], ...]:
     """A likelihood's blocks, a stacked one's flattened (the evidence needs flat parts)."""
     if isinstance(likelihood, StackedActionLikelihood):
@@ -280,6 +286,7 @@ __all__ = [
     "Earlier",
     "WarmStart",
     "relearn_share",
+    "relearning",
     "warm_data",
     "warm_posterior",
     "warm_start",

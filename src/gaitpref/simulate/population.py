@@ -20,7 +20,6 @@ over standardised objectives ``z`` (the paper's, ``gaitpref.data``).
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -31,7 +30,7 @@ from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import confidence
-from gaitpref.loop.warm import RELEARN_EVERY, SHARE_GATE, warm_start
+from gaitpref.loop.warm import RELEARN_EVERY, relearning, warm_start
 from gaitpref.simulate.sweep import resolve_jobs
 from gaitpref.simulate.users import SimulatedUser, objective_on_grid
 from gaitpref.space import FloatArray
@@ -69,9 +68,7 @@ def _walk(
     if others is not None:
         warm = warm_start(config.space, loop.hyper, loop.prior, others)
         if relearn_every:  # start alone, share as the evidence says (as sessions made now)
-            warm = dataclasses.replace(
-                warm, share=0.0, relearn_every=relearn_every, gate=SHARE_GATE
-            )
+            warm = relearning(warm, relearn_every)
         loop.warm_start(warm)
         rho = warm.rho
     user = SimulatedUser(config.space, objective, np.random.default_rng(user_ss), noise=user_noise)
