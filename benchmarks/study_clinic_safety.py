@@ -40,7 +40,6 @@ the runs under earlier defaults beside it).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import functools
 import json
 import time
@@ -54,7 +53,7 @@ from gaitpref.config import ExperimentConfig, parse_config
 from gaitpref.data import paper_objectives
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.loop.cospar import CoSpar
-from gaitpref.loop.warm import RELEARN_EVERY, SHARE_GATE, Earlier, warm_start
+from gaitpref.loop.warm import Earlier, relearning, warm_start
 from gaitpref.simulate.population import synthetic_population
 from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.simulate.run import run_simulation
@@ -62,10 +61,10 @@ from gaitpref.simulate.users import SimulatedUser
 
 try:
     from _machine import machine_description
-    from study_ordinal import QUARTILES, Arm
+    from study_ordinal import QUARTILES, Arm, _reduction, _se, true_category
 except ImportError:  # run as a module
     from benchmarks._machine import machine_description
-    from benchmarks.study_ordinal import QUARTILES, Arm
+    from benchmarks.study_ordinal import QUARTILES, Arm, _reduction, _se, true_category
 
 SEED = 20261203
 ARMS = ("rated", "cautious", "warm-rated", "warm-cautious")
@@ -79,11 +78,6 @@ def _config(region: bool, share: str = "", first: str = "") -> ExperimentConfig:
         f'{key} = "{value}"\n' for key, value in (("share", share), ("warm_first", first)) if value
     )  # [model] share / warm_first given (default: the defaults version's)
     return parse_config(text.replace("noise = 0.01\n", "noise = 0.01\n" + given, 1))
-
-
-def _category(cfg: ExperimentConfig, utility: np.ndarray) -> np.ndarray:
-    truth = OrdinalRater(cfg.space, utility, QUARTILES, np.random.default_rng(0))
-    return 1 + np.searchsorted(truth.boundaries, truth.utility, side="right")
 
 
 def _walk(
@@ -101,12 +95,11 @@ def _walk(
             cfg.space, loop.hyper, loop.prior, earlier,
             context=loop.context(), model_ties=loop.learning.ties == "model",
         )  # fmt: skip
-        warm = dataclasses.replace(warm, share=0.0, relearn_every=RELEARN_EVERY, gate=SHARE_GATE)
-        loop.warm_start(warm)
+        loop.warm_start(relearning(warm))
         rho = warm.rho
     user = SimulatedUser(cfg.space, utility, np.random.default_rng(user_ss))
     rater = OrdinalRater(cfg.space, utility, QUARTILES, np.random.default_rng(rater_ss))
-    category = _category(cfg, utility)
+    category = true_category(cfg.space, utility)
     start = time.perf_counter()
     stopped = 0
     try:
@@ -201,21 +194,6 @@ def _score(rows: list[dict[str, object]], lo: int, hi: int) -> np.ndarray:
     return np.array([np.mean(r["scores"][lo:hi]) for r in rows])
 
 
-def _se(x: np.ndarray) -> float:
-    return float(np.std(x, ddof=1) / np.sqrt(len(x))) if len(x) > 1 else float("nan")
-
-
-def _reduction(arm: np.ndarray, base: np.ndarray, rng: np.random.Generator) -> str:
-    if base.sum() == 0:
-        return "-"
-    boot = []
-    for _ in range(2000):
-        i = rng.integers(0, len(arm), len(arm))
-        if base[i].sum() > 0:
-            boot.append(1 - arm[i].sum() / base[i].sum())
-    return f"{1 - arm.sum() / base.sum():.0%} ± {np.std(boot):.0%}"
-
-
 def report(results: dict[str, object]) -> str:
     trials = int(results["trials"])  # type: ignore[arg-type]
     lines = [
@@ -239,7 +217,6 @@ def report(results: dict[str, object]) -> str:
         "| 1-20 |",
         "|---|---|---|---|---|",
     ]
-    rng = np.random.default_rng(0)
     for part in results["parts"]:  # type: ignore[attr-defined]
         rho, runs = part["rho"], part["runs"]
         for arm, rows in runs.items():
@@ -256,7 +233,7 @@ def report(results: dict[str, object]) -> str:
                 continue
             d60 = _score(runs[a], 0, trials) - _score(runs[b], 0, trials)
             d20 = _score(runs[a], 0, 20) - _score(runs[b], 0, 20)
-            red = _reduction(_worst(runs[a], 0, trials), _worst(runs[b], 0, trials), rng)
+            red = _reduction(_worst(runs[a], 0, trials), _worst(runs[b], 0, trials))
             diff.append(
                 f"| {rho} | {a} - {b} ({what}) | {red} | {d60.mean():+.3f} ± {_se(d60):.3f} | "
                 f"{d20.mean():+.3f} ± {_se(d20):.3f} |"

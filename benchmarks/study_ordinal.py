@@ -77,6 +77,7 @@ from gaitpref.simulate.noisy import IndifferentUser
 from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.simulate.run import run_simulation
 from gaitpref.simulate.users import SimulatedUser
+from gaitpref.space import Space
 from gaitpref.strategies import STRATEGIES, AskContext
 
 try:
@@ -317,12 +318,17 @@ def _loop(arm: Arm, cfg: ExperimentConfig, rng: np.random.Generator) -> CoSpar:
     )
 
 
+def true_category(space: Space, utility: np.ndarray) -> np.ndarray:
+    """Every gait's true category (1 = "very bad"): ``utility`` cut at its quartiles."""
+    truth = OrdinalRater(space, utility, QUARTILES, np.random.default_rng(0))
+    out: np.ndarray = 1 + np.searchsorted(truth.boundaries, truth.utility, side="right")
+    return out
+
+
 def run_one(arm: Arm, grid: str, scenario: str, k: int) -> dict[str, object]:
     """One 60-trial run of ``arm`` on objective ``k`` of ``grid`` against ``scenario``."""
     obj = objective(grid, k)
-    space = Arm("").config(grid).space
-    truth = OrdinalRater(space, obj, QUARTILES, np.random.default_rng(0))
-    category = 1 + np.searchsorted(truth.boundaries, truth.utility, side="right")
+    category = true_category(Arm("").config(grid).space, obj)
     cfg = arm.config(grid, start_gait(grid, category, k) if arm.start else None)
     loop_ss, user_ss, rater_ss = np.random.SeedSequence([STUDY_SEED, k]).spawn(3)
     loop = _loop(arm, cfg, np.random.default_rng(loop_ss))
