@@ -39,9 +39,9 @@ from gaitpref.simulate.population import cluster_bootstrap, synthetic_population
 from gaitpref.simulate.users import SimulatedUser, objective_on_grid
 
 try:
-    from check_confidence_prior import add_rows_arguments, rows_of
+    from check_confidence_prior import add_rows_arguments, rows_of, within
 except ImportError:  # run as a module
-    from benchmarks.check_confidence_prior import add_rows_arguments, rows_of
+    from benchmarks.check_confidence_prior import add_rows_arguments, rows_of, within
 
 TOLERANCE = 0.05
 
@@ -62,7 +62,6 @@ def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[di
         truth = objective_on_grid(config.space, utilities[s])
         scaled = noise * loop.gp.noise / float(np.sqrt(kernel.variance))  # objectives' sd: 1
         user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=scaled)
-        span = float(truth.max() - truth.min())
         for t in range(trials):
             query = loop.ask()
             loop.tell(query, user.answer(query))
@@ -76,7 +75,7 @@ def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[di
                     post, np.random.default_rng([s, t, 3]), tolerance=TOLERANCE, samples=samples
                 )
                 row[name] = sure.probability
-                row[f"{name}_ok"] = bool(truth.max() - truth[sure.recommended] <= TOLERANCE * span)
+                row[f"{name}_ok"] = within(truth, sure.recommended, TOLERANCE)
             rows.append(row)
         print(f"subject {s} done", flush=True)
     return rows
