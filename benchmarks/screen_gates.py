@@ -1,0 +1,215 @@
+"""Issue 16 screen: gates and challengers for both phases, on the learning study's runs.
+
+The learning study's setting (``study_learning.py``: the paper's 100 objectives on the 30 x 30
+grid, ``n = 1, b = 1``, coactive feedback from the gradient user, 150 trials, its seeds), with
+screen-only strategies that the library does not ship, to find what moves trials 1-20, 31-150,
+121-150 and the final argmax before building anything.  Each variant is ``key=value`` pairs
+joined by ``,``:
+
+- ``strategy``: ``gated`` (the library's ``gated-eubo``), ``sparring`` (``self-sparring``) or
+  ``beat`` (below);
+- ``halve``: a factor ``c`` (below 1): the EUBO challenger is chosen on the posterior refitted
+  with every lengthscale times ``c`` (the gate, the recommendation and the data stay the
+  configured model's); ``halve_until``: only while fewer trials than this were run;
+- ``kappa`` (``beat`` only): with ``r`` the posterior mean's argmax, run ``r`` again unless some
+  gait ``x`` has ``P(f_x > f_r) >= kappa`` (from the posterior's mean and covariance); else the
+  EUBO challenger (of the buffered gait) among those gaits; ``eps``: with this probability a
+  locked loop (no such gait) challenges among the gaits with at least half the largest
+  ``P(f_x > f_r)`` instead of repeating;
+- ``noise``: the model's probit noise (the study's config: 0.01, signal sd 0.01);
+  ``ls``: the configured lengthscale (the study's "right" one: 0.15);
+  ``fit=variance``: the signal variance fitted by the evidence every 20 answers (prior median
+  1e-4, log-sd 3), the lengthscales fixed;
+- ``subject``: ``noiseless`` or ``noisy`` (the study's indifferent subject).
+
+    python benchmarks/screen_gates.py --objectives 100 "strategy=beat,kappa=0.08,noise=0.003"
+
+Prints each variant's means (standard errors over objectives) and appends its runs to ``--out``
+(JSON lines).  Results: ``docs/learning.md`` ("Gates that exploit a sharp posterior").
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from joblib import Parallel, delayed
+from scipy.stats import norm
+from study_learning import BAND, NOISE, STUDY_SEED, TRIALS, config_text
+
+from gaitpref.config import parse_config
+from gaitpref.data import paper_objectives
+from gaitpref.loop.cospar import CoSpar
+from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.simulate.noisy import IndifferentUser
+from gaitpref.simulate.users import GradientCoactive, SimulatedUser
+from gaitpref.strategies.acquire import eubo_fill
+from gaitpref.strategies.base import AskContext, SelfSparring
+from gaitpref.strategies.eubo import covariance_with, eubo_against
+from gaitpref.strategies.hybrid import GatedEubo
+
+VARIANCE_FIT = 'fit = "evidence"\nrefit_every = 20\n[model.prior]\nsignal_variance = [1e-4, 3.0]'
+
+
+def parse_variant(text: str) -> dict[str, str]:
+    out = dict(kv.split("=", 1) for kv in text.split(",") if kv)
+    unknown = set(out) - {
+        "strategy", "halve", "halve_until", "kappa", "eps", "noise", "ls", "fit", "subject",
+    }  # fmt: skip
+    if unknown:
+        raise SystemExit(f"unknown keys {sorted(unknown)} in {text!r}")
+    return out
+
+
+class Challenger:
+    """EUBO against the buffered gait, on the posterior with lengthscales times ``halve``."""
+
+    def __init__(self, loop: CoSpar, halve: float, until: int) -> None:
+        self.loop, self.halve, self.until = loop, halve, until
+
+    def posterior(self, context: AskContext) -> Posterior:
+        if self.halve == 1.0 or context.trial >= self.until:
+            return context.posterior
+        loop = self.loop
+        scale = tuple(ell * self.halve for ell in loop.hyper.lengthscale)
+        hyper = dataclasses.replace(loop.hyper, lengthscale=scale)
+        return loop._fit(loop.answers, gp=loop._gp(hyper), hyper=hyper)
+
+    def values(self, context: AskContext) -> np.ndarray:
+        return eubo_against(self.posterior(context), context.buffer[0])
+
+
+class Gated:
+    """``gated-eubo`` whose EUBO challenger comes from :class:`Challenger`."""
+
+    name = "screen-gated"
+
+    def __init__(self, challenger: Challenger) -> None:
+        self.challenger = challenger
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        if not context.buffer or self.challenger.halve == 1.0:
+            return GatedEubo().propose(context)
+        pick = int(context.posterior.argmax_samples(context.rng, 1, context.allowed)[0])
+        if pick in context.buffer:
+            return (pick,)
+        view = dataclasses.replace(context, posterior=self.challenger.posterior(context))
+        return eubo_fill(view, [], None)
+
+
+class Beat:
+    """Run the recommendation again unless a gait may beat it (``kappa``; module docstring)."""
+
+    name = "screen-beat"
+
+    def __init__(self, challenger: Challenger, kappa: float, eps: float) -> None:
+        self.challenger, self.kappa, self.eps = challenger, kappa, eps
+
+    def propose(self, context: AskContext) -> tuple[int, ...]:
+        post, rng = context.posterior, context.rng
+        if not context.buffer:
+            return (int(post.argmax_samples(rng, 1, context.allowed)[0]),)
+        mu, var = np.asarray(post.mean), np.asarray(post.variance)
+        r, b = int(np.argmax(mu)), context.buffer[0]
+        sd = np.sqrt(np.maximum(var + var[r] - 2.0 * covariance_with(post, r), 1e-300))
+        beats = norm.cdf((mu - mu[r]) / sd)
+        beats[r] = 0.0
+        ok = beats >= self.kappa
+        if not ok.any() and rng.random() < self.eps:
+            ok = beats >= beats.max() / 2
+        if not ok.any():
+            return (r,)
+        values = np.where(ok, self.challenger.values(context), -np.inf)
+        if b != r:
+            values[b] = -np.inf
+        if not np.isfinite(values).any():
+            return (r,)
+        return (random_argmax(values, rng),)
+
+
+def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
+    fit = VARIANCE_FIT if variant.get("fit") == "variance" else 'fit = "fixed"'
+    model = 'ties = "drop"\n' + fit
+    text = config_text("gated-eubo", model, float(variant.get("ls", 0.15)))
+    text = text.replace("noise = 0.01", f"noise = {float(variant.get('noise', 0.01))}")
+    cfg = parse_config(text)
+    objective = paper_objectives()[k]
+    loop_seed, user_seed = np.random.SeedSequence([STUDY_SEED, k]).spawn(2)
+    loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
+    challenger = Challenger(
+        loop, float(variant.get("halve", 1.0)), int(variant.get("halve_until", 10**9))
+    )
+    strategy = variant.get("strategy", "gated")
+    if strategy == "beat":
+        kappa, eps = float(variant.get("kappa", 0.08)), float(variant.get("eps", 0.0))
+        loop.strategy = Beat(challenger, kappa, eps)
+    elif strategy == "sparring":
+        loop.strategy = SelfSparring()
+    elif strategy == "gated":
+        loop.strategy = Gated(challenger)
+    else:
+        raise SystemExit(f"unknown strategy {strategy!r}")
+    rng = np.random.default_rng(user_seed)
+    user: SimulatedUser
+    if variant.get("subject", "noiseless") == "noisy":
+        user = IndifferentUser(cfg.space, objective, rng, noise=NOISE, band=BAND)
+    else:
+        user = SimulatedUser(cfg.space, objective, rng)
+    coactive = GradientCoactive(cfg.space, objective)
+    executed: list[int] = []
+    repeats = 0
+    start = time.perf_counter()
+    while len(executed) < TRIALS:
+        query = loop.ask()
+        repeats += sum(1 for a in query.actions if a in query.buffer)
+        loop.tell(query, list(user.answer(query)), coactive.suggest_all(query.actions))
+        executed.extend(query.actions)
+    scores = user.normalized(np.asarray(executed[:TRIALS], dtype=np.intp))
+    return {
+        "objective": k,
+        "scores": [float(s) for s in scores],
+        "argmax": float(user.normalized([int(loop.posterior.argmax)])[0]),
+        "repeats": repeats,
+        "seconds": time.perf_counter() - start,
+    }
+
+
+def summary(runs: list[dict[str, Any]]) -> str:
+    scores = np.array([r["scores"] for r in runs])
+    cells = {
+        "1-20": scores[:, :20].mean(1),
+        "31-150": scores[:, 30:].mean(1),
+        "121-150": scores[:, 120:].mean(1),
+        "argmax": np.array([r["argmax"] for r in runs]),
+    }
+    se = np.sqrt(len(runs))
+    parts = [f"{k} {v.mean():.3f} ({v.std(ddof=1) / se:.3f})" for k, v in cells.items()]
+    repeats = np.mean([r["repeats"] for r in runs]) / TRIALS
+    return " | ".join(parts) + f" | repeats {repeats:.2f}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("variants", nargs="+")
+    parser.add_argument("--objectives", type=int, default=100)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--out", type=Path, default=Path("out/screen-gates.jsonl"))
+    args = parser.parse_args()
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    for text in args.variants:
+        variant = parse_variant(text)
+        runs = Parallel(n_jobs=args.jobs)(
+            delayed(one_run)(variant, k) for k in range(args.objectives)
+        )
+        print(f"{text}: {summary(runs)}", flush=True)
+        with args.out.open("a") as fh:
+            fh.write(json.dumps({"variant": text, "runs": runs}) + "\n")
+
+
+if __name__ == "__main__":
+    main()
