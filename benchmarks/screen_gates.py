@@ -20,7 +20,8 @@ joined by ``,``:
   ``ls``: the configured lengthscale (the study's "right" one: 0.15);
   ``fit=variance``: the signal variance fitted by the evidence every 20 answers (prior median
   1e-4, log-sd 3), the lengthscales fixed;
-- ``subject``: ``noiseless`` or ``noisy`` (the study's indifferent subject).
+- ``subject``: ``noiseless`` or ``noisy`` (the study's indifferent subject);
+  ``cw``: the coactive weight (suggestions enter with noise ``noise / cw``; the study's: 1).
 
     python benchmarks/screen_gates.py --objectives 100 "strategy=beat,kappa=0.08,noise=0.003"
 
@@ -59,7 +60,7 @@ VARIANCE_FIT = 'fit = "evidence"\nrefit_every = 20\n[model.prior]\nsignal_varian
 def parse_variant(text: str) -> dict[str, str]:
     out = dict(kv.split("=", 1) for kv in text.split(",") if kv)
     unknown = set(out) - {
-        "strategy", "halve", "halve_until", "kappa", "eps", "noise", "ls", "fit", "subject",
+        "strategy", "halve", "halve_until", "kappa", "eps", "noise", "ls", "fit", "subject", "cw",
     }  # fmt: skip
     if unknown:
         raise SystemExit(f"unknown keys {sorted(unknown)} in {text!r}")
@@ -137,7 +138,8 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
     model = 'ties = "drop"\n' + fit
     text = config_text("gated-eubo", model, float(variant.get("ls", 0.15)))
     text = text.replace("noise = 0.01", f"noise = {float(variant.get('noise', 0.01))}")
-    cfg = parse_config(text)
+    weight = float(variant.get("cw", 1.0))
+    cfg = parse_config(text.replace("coactive_weight = 1.0", f"coactive_weight = {weight}"))
     objective = paper_objectives()[k]
     loop_seed, user_seed = np.random.SeedSequence([STUDY_SEED, k]).spawn(2)
     loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
