@@ -100,6 +100,7 @@ FIT10 = 'ties = "drop"\nfit = "evidence"\nrefit_every = 10'
 FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
 AVG = FIT + '\nhyper = "average"'  # issue 16 item 2: lengthscale hypotheses averaged
 G3 = "gates = 3"  # [cospar.strategy_settings] of plausible-eubo with 3 gates
+LOCAL = "early_scale = 0.5\nearly_trials = 20"  # gated-eubo's challenger on half the lengthscale
 
 
 def _fit_centred(lengthscale: float) -> str:
@@ -173,6 +174,28 @@ ARMS = [
     Arm("gated+avg", "gated-eubo", AVG, note="5 lengthscale hypotheses averaged"),
     Arm("gated+avg@2x", "gated-eubo", AVG, 0.30, "averaged, starting 2x wrong"),
     Arm("gated+avg@0.5x", "gated-eubo", AVG, 0.075, "averaged, starting 0.5x wrong"),
+    Arm(
+        "gated+local",
+        "gated-eubo",
+        PAPER,
+        note="EUBO on half the lengthscale, trials 1-20",
+        settings=LOCAL,
+    ),
+    Arm(
+        "gated+local@2x", "gated-eubo", PAPER, 0.30, "local challenger early, lengthscale 2x", LOCAL
+    ),
+    Arm("gated+local@0.5x", "gated-eubo", PAPER, 0.075, "local challenger early, 0.5x", LOCAL),
+    Arm(
+        "gated+fit+local",
+        "gated-eubo",
+        FIT,
+        note="the default + a local challenger early",
+        settings=LOCAL,
+    ),
+    Arm("gated+fit+local@2x", "gated-eubo", FIT, 0.30, "default + local early, starting 2x", LOCAL),
+    Arm(
+        "gated+fit+local@0.5x", "gated-eubo", FIT, 0.075, "default + local early, from 0.5x", LOCAL
+    ),
 ]
 SCENARIOS = ("noiseless", "noisy")
 DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)

@@ -36,6 +36,11 @@ strategy = "{name}"
         ("confident-eubo", "beta = 3", ConfidentEubo(beta=3.0)),
         ("eubo", "candidates = 16", Eubo(candidates=16)),
         ("gated-eubo", "", GatedEubo()),
+        (
+            "gated-eubo",
+            "early_scale = 0.5\nearly_trials = 12",
+            GatedEubo(early_scale=0.5, early_trials=12),
+        ),
     ],
 )
 def test_settings_reach_the_strategy(name: str, settings: str, expected: object) -> None:
@@ -58,7 +63,7 @@ def test_a_plain_strategy_name_still_works() -> None:
             "gate = 2",
             None,
             "[cospar.strategy_settings]: unknown key 'gate' for "
-            "strategy 'gated-eubo' (allowed: gates)",
+            "strategy 'gated-eubo' (allowed: gates, early_scale, early_trials)",
         ),
         (
             "self-sparring",
@@ -80,6 +85,18 @@ def test_a_plain_strategy_name_still_works() -> None:
             "[cospar.strategy_settings].beta: must be a finite number >= 0",
         ),
         ("confident-eubo", "beta = inf", "beta", "[cospar.strategy_settings].beta: must be"),
+        (
+            "gated-eubo",
+            "early_scale = 0.0",
+            "early_scale",
+            "[cospar.strategy_settings].early_scale: must be a finite number >= 0.01 and <= 100",
+        ),
+        (
+            "gated-eubo",
+            "early_trials = -3",
+            "early_trials",
+            "[cospar.strategy_settings].early_trials: must be an integer >= 0",
+        ),
         (
             "eubo-then-sparring",
             "trials = 2.5",

@@ -189,6 +189,8 @@ _SETTING_SPECS: Final[dict[str, Spec]] = {
     "beta": Number(0.0, 100.0),
     "candidates": Integer(2, 4096),
     "samples": Integer(1, 4096),
+    "early_scale": Number(0.01, 100.0),
+    "early_trials": Integer(0, 1_000_000),
 }
 
 

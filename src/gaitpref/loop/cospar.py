@@ -415,6 +415,7 @@ class CoSpar:
                 len(self.executed),
                 self.rng,
                 allowed,
+                self._rescaled,
             )
             with one_blas_thread():
                 actions += tuple(int(a) for a in self.strategy.propose(context))
@@ -736,6 +737,17 @@ class CoSpar:
         if isinstance(query, Query) and query != self.pending:
             raise QueryError(f"query {qid} does not match the pending query {self.pending}")
         return self.pending
+
+    def _rescaled(self, factor: float) -> Posterior:
+        """The posterior of the answers so far with every lengthscale times ``factor`` (a
+        strategy's view, ``AskContext.rescaled``; the loop's own posterior is unchanged)."""
+        if not (np.isfinite(factor) and factor > 0):
+            raise ValueError(f"a lengthscale factor must be positive, got {factor!r}")
+        if factor == 1.0:
+            return self.posterior
+        scaled = tuple(ell * factor for ell in self.hyper.lengthscale)
+        hyper = dataclasses.replace(self.hyper, lengthscale=scaled)
+        return self._fit(self.answers, gp=self._gp(hyper), hyper=hyper)
 
     def _gp(self, hyper: Hyperparameters) -> PreferenceGP:
         return PreferenceGP(

@@ -12,6 +12,7 @@ Notation: ``A`` actions; ``n`` new actions per query; ``b`` buffered (previously
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -31,6 +32,10 @@ class AskContext:
     trial: int  # actions executed before this query
     rng: np.random.Generator
     allowed: NDArray[np.bool_] | None = None  # None: every action may be proposed
+    #: The same answers refitted with every lengthscale times the factor given (the loop's data,
+    #: model and warm start otherwise unchanged); None where the loop offers none (the line
+    #: path).  A strategy may choose with it; the loop's own posterior stays the configured one.
+    rescaled: Callable[[float], Posterior] | None = None
 
     def __post_init__(self) -> None:
         # Every proposal loop runs at most ``n`` rounds: bound it by the grid, so that no query

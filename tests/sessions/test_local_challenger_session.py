@@ -1,0 +1,52 @@
+"""A session whose strategy chooses on a rescaled posterior early (gated-eubo's
+``early_scale``) replays exactly, undo included, and differs from the plain strategy's."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from gaitpref import Session, load_config
+from gaitpref.config import ExperimentConfig, parse_config
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from gaitpref.storage import MemoryStorage
+from tests.sessions.sessionkit import CONFIG, state_of
+from tests.sessions.test_warm_start import _run
+
+LOCAL = "\n[cospar.strategy_settings]\nearly_scale = 0.5\nearly_trials = 20\n"
+
+
+def _config(local: bool) -> ExperimentConfig:
+    base = load_config(CONFIG)
+    text = base.text.replace('strategy = "self-sparring"', 'strategy = "gated-eubo"')
+    return parse_config(text + (LOCAL if local else ""), default_name=base.name)
+
+
+def _queries(session: Session) -> list[tuple[int, ...]]:
+    return [tuple(e.payload["actions"]) for e in session.events() if e.kind == "query_issued"]
+
+
+def test_a_local_challenger_session_replays_exactly_and_undoes() -> None:
+    db = MemoryStorage()
+    config = _config(True)
+    assert config.strategy_settings == {"early_scale": 0.5, "early_trials": 20}
+    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=7)
+    with Session.create(db, config, "S01", seed=7) as s:
+        _run(s, subject, 8)
+        mean, var, query, rng = state_of(s)
+        sid = s.id
+        local_queries = _queries(s)
+    with Session.open(db, sid) as again:
+        mean2, var2, query2, rng2 = state_of(again)
+        assert np.array_equal(mean, mean2) and np.array_equal(var, var2)
+        assert (query, rng) == (query2, rng2)
+        again.undo()
+        q = again.next_query()
+        comparisons, suggestions = subject.respond(q)
+        again.answer(q.id, comparisons, suggestions)
+    with Session.open(db, sid) as third:
+        assert third._state.loop.strategy == again._state.loop.strategy
+
+    plain = MemoryStorage()
+    with Session.create(plain, _config(False), "S01", seed=7) as p:
+        _run(p, SimulatedSubject(config.space, bump_utility(config.space), seed=7), 8)
+        assert _queries(p) != local_queries
