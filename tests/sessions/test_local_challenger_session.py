@@ -10,7 +10,7 @@ from gaitpref.config import ExperimentConfig, parse_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, state_of
-from tests.sessions.test_warm_start import _run
+from tests.sessions.test_warm_start import _earlier, _run
 
 LOCAL = "\n[cospar.strategy_settings]\nearly_scale = 0.5\nearly_trials = 20\n"
 
@@ -50,3 +50,17 @@ def test_a_local_challenger_session_replays_exactly_and_undoes() -> None:
     with Session.create(plain, _config(False), "S01", seed=7) as p:
         _run(p, SimulatedSubject(config.space, bump_utility(config.space), seed=7), 8)
         assert _queries(p) != local_queries
+
+
+def test_a_warm_started_local_challenger_session_replays() -> None:
+    db = MemoryStorage()
+    ids = _earlier(db)
+    config = _config(True)
+    with Session.create(db, config, "S04", seed=5, prior_from=ids) as warm:
+        _run(warm, SimulatedSubject(config.space, bump_utility(config.space), seed=5), 5)
+        mean, var, query, rng = state_of(warm)
+        sid = warm.id
+    with Session.open(db, sid) as again:
+        mean2, var2, query2, rng2 = state_of(again)
+        assert np.array_equal(mean, mean2) and np.array_equal(var, var2)
+        assert (query, rng) == (query2, rng2)
