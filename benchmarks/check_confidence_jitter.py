@@ -13,13 +13,16 @@ after every answer states the confidence twice from the same answers:
 
 - ``as_is``: the product's, from the loop's posterior;
 - ``no_jitter``: from the posterior refitted with the jitter at ``1e-6`` of the prior variance
-  (the kernel otherwise the same).
+  (the kernel otherwise the same);
+- with ``--sharpen F``, also ``sharp``: from the posterior refitted with the probit noise times
+  ``F`` (a model that credits every answer with more than the config does; the evidence puts
+  noiseless subjects' noise at 0.2-0.3 of the config's, ``docs/learning.md``).
 
 Both are judged on the subject's objective (within 5% of its range of the best).  The standard
 errors resample whole subjects (``cluster_bootstrap``).
 
     python benchmarks/check_confidence_jitter.py --subjects 32 --trials 60 [--noise 1] \
-        [--out rows.json]
+        [--sharpen 0.3] [--out rows.json]
 
 Results: ``docs/results/population/fresh/summary.md`` (the calibration section).
 """
@@ -46,7 +49,9 @@ except ImportError:  # run as a module
 TOLERANCE = 0.05
 
 
-def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[dict[str, object]]:
+def run(
+    subjects: int, trials: int, samples: int, noise: float = 1.0, sharpen: float | None = None
+) -> list[dict[str, object]]:
     config = load_config("synthetic-2d")
     utilities = synthetic_population(paper_objectives(), 0.5, subjects, shared=99, first=25)
     rows: list[dict[str, object]] = []
@@ -59,6 +64,9 @@ def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[di
             dataclasses.replace(kernel, jitter=1e-6 * kernel.variance),
             loop.gp.noise,
         )
+        sharp = None
+        if sharpen is not None:
+            sharp = PreferenceGP(config.space, kernel, sharpen * loop.gp.noise)
         truth = objective_on_grid(config.space, utilities[s])
         scaled = noise * loop.gp.noise / float(np.sqrt(kernel.variance))  # objectives' sd: 1
         user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=scaled)
@@ -70,7 +78,11 @@ def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[di
                 [p.winner for p in prefs], [p.loser for p in prefs], [p.noise for p in prefs]
             )
             row: dict[str, object] = {"s": s, "t": t}
-            for name, post in (("as_is", loop.posterior), ("no_jitter", refit)):
+            views = [("as_is", loop.posterior), ("no_jitter", refit)]
+            if sharp is not None:
+                winners, losers = [p.winner for p in prefs], [p.loser for p in prefs]
+                views.append(("sharp", sharp.posterior(winners, losers)))
+            for name, post in views:
                 sure = confidence(
                     post, np.random.default_rng([s, t, 3]), tolerance=TOLERANCE, samples=samples
                 )
@@ -83,7 +95,9 @@ def run(subjects: int, trials: int, samples: int, noise: float = 1.0) -> list[di
 
 def report(rows: list[dict[str, object]]) -> str:
     lines = []
-    for name in ("as_is", "no_jitter"):
+    for name in ("as_is", "no_jitter", "sharp"):
+        if name not in rows[0]:
+            continue
         runs = []
         for s in sorted({int(r["s"]) for r in rows}):  # type: ignore[call-overload]
             mine = [r for r in rows if r["s"] == s]
@@ -112,9 +126,14 @@ def main() -> None:
     parser.add_argument(
         "--noise", type=float, default=1.0, help="the subjects' noise, times the model's (0: none)"
     )
+    parser.add_argument(
+        "--sharpen", type=float, default=None, help="also state it with the noise times this"
+    )
     add_rows_arguments(parser)
     args = parser.parse_args()
-    rows = rows_of(args, lambda: run(args.subjects, args.trials, args.samples, args.noise))
+    rows = rows_of(
+        args, lambda: run(args.subjects, args.trials, args.samples, args.noise, args.sharpen)
+    )
     print(report(rows))
 
 
