@@ -9,8 +9,9 @@ joined by ``,``:
 - ``strategy``: ``gated`` (the library's ``gated-eubo``), ``sparring`` (``self-sparring``) or
   ``beat`` (below);
 - ``halve``: a factor ``c`` (below 1): the EUBO challenger is chosen on the posterior refitted
-  with every lengthscale times ``c`` (the gate, the recommendation and the data stay the
-  configured model's); ``halve_until``: only while fewer trials than this were run;
+  with every lengthscale times ``c`` (the loop's ``AskContext.rescaled``; for ``gated`` the
+  library's ``early_scale``; the gate, the recommendation and the data stay the configured
+  model's); ``halve_until``: only while fewer trials than this were run (``early_trials``);
 - ``kappa`` (``beat`` only): with ``r`` the posterior mean's argmax, run ``r`` again unless some
   gait ``x`` has ``P(f_x > f_r) >= kappa`` (from the posterior's mean and covariance); else the
   EUBO challenger (of the buffered gait) among those gaits; ``eps``: with this probability a
@@ -32,7 +33,6 @@ Prints each variant's means (standard errors over objectives) and appends its ru
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import time
 from pathlib import Path
@@ -45,11 +45,9 @@ from study_learning import BAND, NOISE, STUDY_SEED, TRIALS, config_text
 
 from gaitpref.config import parse_config
 from gaitpref.data import paper_objectives
-from gaitpref.loop.cospar import CoSpar
-from gaitpref.model.posterior import Posterior, random_argmax
+from gaitpref.model.posterior import random_argmax
 from gaitpref.simulate.noisy import IndifferentUser
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
-from gaitpref.strategies.acquire import eubo_fill
 from gaitpref.strategies.base import AskContext, SelfSparring
 from gaitpref.strategies.eubo import covariance_with, eubo_against
 from gaitpref.strategies.hybrid import GatedEubo
@@ -67,49 +65,13 @@ def parse_variant(text: str) -> dict[str, str]:
     return out
 
 
-class Challenger:
-    """EUBO against the buffered gait, on the posterior with lengthscales times ``halve``."""
-
-    def __init__(self, loop: CoSpar, halve: float, until: int) -> None:
-        self.loop, self.halve, self.until = loop, halve, until
-
-    def posterior(self, context: AskContext) -> Posterior:
-        if self.halve == 1.0 or context.trial >= self.until:
-            return context.posterior
-        loop = self.loop
-        scale = tuple(ell * self.halve for ell in loop.hyper.lengthscale)
-        hyper = dataclasses.replace(loop.hyper, lengthscale=scale)
-        return loop._fit(loop.answers, gp=loop._gp(hyper), hyper=hyper)
-
-    def values(self, context: AskContext) -> np.ndarray:
-        return eubo_against(self.posterior(context), context.buffer[0])
-
-
-class Gated:
-    """``gated-eubo`` whose EUBO challenger comes from :class:`Challenger`."""
-
-    name = "screen-gated"
-
-    def __init__(self, challenger: Challenger) -> None:
-        self.challenger = challenger
-
-    def propose(self, context: AskContext) -> tuple[int, ...]:
-        if not context.buffer or self.challenger.halve == 1.0:
-            return GatedEubo().propose(context)
-        pick = int(context.posterior.argmax_samples(context.rng, 1, context.allowed)[0])
-        if pick in context.buffer:
-            return (pick,)
-        view = dataclasses.replace(context, posterior=self.challenger.posterior(context))
-        return eubo_fill(view, [], None)
-
-
 class Beat:
     """Run the recommendation again unless a gait may beat it (``kappa``; module docstring)."""
 
     name = "screen-beat"
 
-    def __init__(self, challenger: Challenger, kappa: float, eps: float) -> None:
-        self.challenger, self.kappa, self.eps = challenger, kappa, eps
+    def __init__(self, kappa: float, eps: float, halve: float, until: int) -> None:
+        self.kappa, self.eps, self.halve, self.until = kappa, eps, halve, until
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post, rng = context.posterior, context.rng
@@ -125,7 +87,10 @@ class Beat:
             ok = beats >= beats.max() / 2
         if not ok.any():
             return (r,)
-        values = np.where(ok, self.challenger.values(context), -np.inf)
+        chooser = post
+        if self.halve != 1.0 and context.trial < self.until and context.rescaled is not None:
+            chooser = context.rescaled(self.halve)  # the loop's refit, as gated-eubo's early_scale
+        values = np.where(ok, eubo_against(chooser, b), -np.inf)
         if b != r:
             values[b] = -np.inf
         if not np.isfinite(values).any():
@@ -143,17 +108,16 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
     objective = paper_objectives()[k]
     loop_seed, user_seed = np.random.SeedSequence([STUDY_SEED, k]).spawn(2)
     loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
-    challenger = Challenger(
-        loop, float(variant.get("halve", 1.0)), int(variant.get("halve_until", 10**9))
-    )
+    halve = float(variant.get("halve", 1.0))
+    until = int(variant.get("halve_until", 10**6))
     strategy = variant.get("strategy", "gated")
     if strategy == "beat":
         kappa, eps = float(variant.get("kappa", 0.08)), float(variant.get("eps", 0.0))
-        loop.strategy = Beat(challenger, kappa, eps)
+        loop.strategy = Beat(kappa, eps, halve, until)
     elif strategy == "sparring":
         loop.strategy = SelfSparring()
-    elif strategy == "gated":
-        loop.strategy = Gated(challenger)
+    elif strategy == "gated":  # the library's, with its local challenger early
+        loop.strategy = GatedEubo(early_scale=halve, early_trials=until)
     else:
         raise SystemExit(f"unknown strategy {strategy!r}")
     rng = np.random.default_rng(user_seed)
