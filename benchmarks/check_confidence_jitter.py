@@ -34,8 +34,9 @@ import dataclasses
 
 import numpy as np
 
-from gaitpref.config import load_config
+from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.data import paper_objectives
+from gaitpref.loop import CoSpar
 from gaitpref.loop.stopping import confidence
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.simulate.population import cluster_bootstrap, synthetic_population
@@ -49,6 +50,19 @@ except ImportError:  # run as a module
 TOLERANCE = 0.05
 
 
+def subject_session(
+    config: ExperimentConfig, utility: np.ndarray, s: int, noise: float
+) -> tuple[CoSpar, SimulatedUser, np.ndarray]:
+    """Subject ``s``'s cold loop, simulated user (``noise`` times the model's probit noise, on
+    the standardised objective's scale) and objective on the grid, seeded by ``s``."""
+    seeds = np.random.SeedSequence([14, s]).spawn(3)
+    loop = config.make_loop(seed=np.random.default_rng(seeds[0]))
+    truth = objective_on_grid(config.space, utility)
+    scaled = noise * loop.gp.noise / float(np.sqrt(loop.gp.kernel.variance))  # objectives' sd: 1
+    user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=scaled)
+    return loop, user, truth
+
+
 def run(
     subjects: int, trials: int, samples: int, noise: float = 1.0, sharpen: float | None = None
 ) -> list[dict[str, object]]:
@@ -56,8 +70,7 @@ def run(
     utilities = synthetic_population(paper_objectives(), 0.5, subjects, shared=99, first=25)
     rows: list[dict[str, object]] = []
     for s in range(subjects):
-        seeds = np.random.SeedSequence([14, s]).spawn(3)
-        loop = config.make_loop(seed=np.random.default_rng(seeds[0]))
+        loop, user, truth = subject_session(config, utilities[s], s, noise)
         kernel = loop.gp.kernel
         smooth = PreferenceGP(
             config.space,
@@ -67,9 +80,6 @@ def run(
         sharp = None
         if sharpen is not None:
             sharp = PreferenceGP(config.space, kernel, sharpen * loop.gp.noise)
-        truth = objective_on_grid(config.space, utilities[s])
-        scaled = noise * loop.gp.noise / float(np.sqrt(kernel.variance))  # objectives' sd: 1
-        user = SimulatedUser(config.space, truth, np.random.default_rng(seeds[1]), noise=scaled)
         for t in range(trials):
             query = loop.ask()
             loop.tell(query, user.answer(query))
@@ -93,9 +103,11 @@ def run(
     return rows
 
 
-def report(rows: list[dict[str, object]]) -> str:
+def report(
+    rows: list[dict[str, object]], names: tuple[str, ...] = ("as_is", "no_jitter", "sharp")
+) -> str:
     lines = []
-    for name in ("as_is", "no_jitter", "sharp"):
+    for name in names:
         if name not in rows[0]:
             continue
         runs = []
