@@ -16,7 +16,9 @@ joined by ``,``:
   gait ``x`` has ``P(f_x > f_r) >= kappa`` (from the posterior's mean and covariance); else the
   EUBO challenger (of the buffered gait) among those gaits; ``eps``: with this probability a
   locked loop (no such gait) challenges among the gaits with at least half the largest
-  ``P(f_x > f_r)`` instead of repeating;
+  ``P(f_x > f_r)`` instead of repeating; ``delta``: the gate asks for ``P(f_x > f_r + delta
+  s) >= kappa`` instead, ``s`` the signal sd of the model then (fitted with ``fit=variance``);
+  ``probe``: after this many repeats in a row, challenge as ``eps`` does, once;
 - ``noise``: the model's probit noise (the study's config: 0.01, signal sd 0.01);
   ``ls``: the configured lengthscale (the study's "right" one: 0.15);
   ``fit=variance``: the signal variance fitted by the evidence every 20 answers (prior median
@@ -59,6 +61,7 @@ def parse_variant(text: str) -> dict[str, str]:
     out = dict(kv.split("=", 1) for kv in text.split(",") if kv)
     unknown = set(out) - {
         "strategy", "halve", "halve_until", "kappa", "eps", "noise", "ls", "fit", "subject", "cw",
+        "delta", "probe",
     }  # fmt: skip
     if unknown:
         raise SystemExit(f"unknown keys {sorted(unknown)} in {text!r}")
@@ -70,8 +73,12 @@ class Beat:
 
     name = "screen-beat"
 
-    def __init__(self, kappa: float, eps: float, halve: float, until: int) -> None:
+    def __init__(
+        self, kappa: float, eps: float, halve: float, until: int, delta: float = 0.0,
+        probe: int = 0,
+    ) -> None:  # fmt: skip
         self.kappa, self.eps, self.halve, self.until = kappa, eps, halve, until
+        self.delta, self.probe, self.locked = delta, probe, 0
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post, rng = context.posterior, context.rng
@@ -80,13 +87,17 @@ class Beat:
         mu, var = np.asarray(post.mean), np.asarray(post.variance)
         r, b = int(np.argmax(mu)), context.buffer[0]
         sd = np.sqrt(np.maximum(var + var[r] - 2.0 * covariance_with(post, r), 1e-300))
-        beats = norm.cdf((mu - mu[r]) / sd)
+        margin = self.delta * float(np.sqrt(post.kernel.variance))
+        beats = norm.cdf((mu - mu[r] - margin) / sd)
         beats[r] = 0.0
         ok = beats >= self.kappa
-        if not ok.any() and rng.random() < self.eps:
+        probing = self.probe > 0 and self.locked >= self.probe
+        if not ok.any() and (probing or rng.random() < self.eps):
             ok = beats >= beats.max() / 2
         if not ok.any():
+            self.locked += 1
             return (r,)
+        self.locked = 0
         chooser = post
         if self.halve != 1.0 and context.trial < self.until and context.rescaled is not None:
             chooser = context.rescaled(self.halve)  # the loop's refit, as gated-eubo's early_scale
@@ -113,7 +124,8 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
     strategy = variant.get("strategy", "gated")
     if strategy == "beat":
         kappa, eps = float(variant.get("kappa", 0.08)), float(variant.get("eps", 0.0))
-        loop.strategy = Beat(kappa, eps, halve, until)
+        delta, probe = float(variant.get("delta", 0.0)), int(variant.get("probe", 0))
+        loop.strategy = Beat(kappa, eps, halve, until, delta, probe)
     elif strategy == "sparring":
         loop.strategy = SelfSparring()
     elif strategy == "gated":  # the library's, with its local challenger early
