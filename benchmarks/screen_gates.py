@@ -24,7 +24,10 @@ joined by ``,``:
   ``fit=variance``: the signal variance fitted by the evidence every 20 answers (prior median
   1e-4, log-sd 3), the lengthscales fixed;
 - ``subject``: ``noiseless`` or ``noisy`` (the study's indifferent subject);
-  ``cw``: the coactive weight (suggestions enter with noise ``noise / cw``; the study's: 1).
+  ``cw``: the coactive weight (suggestions enter with noise ``noise / cw``; the study's: 1);
+- ``exact=1``: also the final argmax of the *exact* posterior mean of the same model and answers
+  (``check_confidence_exact.py``'s sampler, 1000 draws), to tell the Laplace approximation's
+  error from the model's.
 
     python benchmarks/screen_gates.py --objectives 100 "strategy=beat,kappa=0.08,noise=0.003"
 
@@ -41,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from check_confidence_exact import slice_sample_visited, smooth_given_visited
 from joblib import Parallel, delayed
 from scipy.stats import norm
 from study_learning import BAND, NOISE, STUDY_SEED, TRIALS, config_text
@@ -61,7 +65,7 @@ def parse_variant(text: str) -> dict[str, str]:
     out = dict(kv.split("=", 1) for kv in text.split(",") if kv)
     unknown = set(out) - {
         "strategy", "halve", "halve_until", "kappa", "eps", "noise", "ls", "fit", "subject", "cw",
-        "delta", "probe",
+        "delta", "probe", "exact",
     }  # fmt: skip
     if unknown:
         raise SystemExit(f"unknown keys {sorted(unknown)} in {text!r}")
@@ -148,13 +152,28 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
         loop.tell(query, list(user.answer(query)), coactive.suggest_all(query.actions))
         executed.extend(query.actions)
     scores = user.normalized(np.asarray(executed[:TRIALS], dtype=np.intp))
-    return {
+    out = {
         "objective": k,
         "scores": [float(s) for s in scores],
         "argmax": float(user.normalized([int(loop.posterior.argmax)])[0]),
         "repeats": repeats,
         "seconds": time.perf_counter() - start,
     }
+    if variant.get("exact") == "1":
+        out["exact_argmax"] = exact_argmax(loop, user, k)
+    return out
+
+
+def exact_argmax(loop: Any, user: SimulatedUser, k: int) -> float:
+    """The normalised objective at the exact posterior mean's argmax (module docstring)."""
+    post, prefs = loop.posterior, loop.preferences
+    winners = np.array([p.winner for p in prefs], dtype=np.intp)
+    losers = np.array([p.loser for p in prefs], dtype=np.intp)
+    sigma = np.array([loop.gp.noise if p.noise is None else p.noise for p in prefs])
+    rng = np.random.default_rng([k, 5])
+    f_v = slice_sample_visited(post, winners, losers, sigma, rng, size=1000, burn=300)
+    g = smooth_given_visited(post, f_v, rng)
+    return float(user.normalized([int(np.argmax(g.mean(axis=0)))])[0])
 
 
 def summary(runs: list[dict[str, Any]]) -> str:
@@ -167,6 +186,13 @@ def summary(runs: list[dict[str, Any]]) -> str:
     }
     se = np.sqrt(len(runs))
     parts = [f"{k} {v.mean():.3f} ({v.std(ddof=1) / se:.3f})" for k, v in cells.items()]
+    if "exact_argmax" in runs[0]:
+        exact = np.array([r["exact_argmax"] for r in runs])
+        diff = exact - cells["argmax"]
+        parts.append(
+            f"exact argmax {exact.mean():.3f} ({exact.std(ddof=1) / se:.3f}; "
+            f"- argmax {diff.mean():+.4f} ± {diff.std(ddof=1) / se:.4f})"
+        )
     repeats = np.mean([r["repeats"] for r in runs]) / TRIALS
     return " | ".join(parts) + f" | repeats {repeats:.2f}"
 
