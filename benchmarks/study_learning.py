@@ -23,7 +23,10 @@ parts); ``report`` writes ``docs/results/learning/``: ``runs.csv`` (one row per 
 ``curves.csv`` (mean and standard error per trial), ``summary.md`` and ``learning.png``; the
 summary ends with issue 16's targets for the default arm.  Issue 16 ran only its own arms
 (``plausible*``) beside the first study's cached ``paper`` and ``gated+fit`` runs, and its item
-2 the ``gated+avg`` arms (lengthscale hypotheses averaged, ``[model] hyper = "average"``); the
+2 the ``gated+avg`` arms (lengthscale hypotheses averaged, ``[model] hyper = "average"``), then
+the ``gated+local*`` and ``gated+fit+local*`` arms (``early_scale = 0.5``) with their bases
+``gated``, ``gated@2x`` and ``gated@0.5x`` (2026-12-03: every arm in the summary re-run
+together, the earlier arms' runs identical to those committed but for their timings); the
 first study's results are kept in ``docs/results/learning/issue8/``.  ``run`` keeps a cached
 prefix of an arm's runs (a screen on fewer objectives) and runs only the rest.
 Workers use one BLAS thread each (``joblib``, ``n_jobs`` = ``--jobs``).
@@ -229,9 +232,15 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("hypotheses averaged instead of one MAP fit", "gated+avg", "gated+fit"),
     ("... averaged, kernel 2x too long", "gated+avg@2x", "gated+fit@2x"),
     ("... averaged, kernel 2x too short", "gated+avg@0.5x", "gated+fit@0.5x"),
+    ("a local challenger early (early_scale 0.5)", "gated+local", "gated"),
+    ("... kernel 2x too long", "gated+local@2x", "gated@2x"),
+    ("... kernel 2x too short", "gated+local@0.5x", "gated@0.5x"),
+    ("a local challenger early, with the default's fit", "gated+fit+local", "gated+fit"),
+    ("... fitted, kernel 2x too long", "gated+fit+local@2x", "gated+fit@2x"),
+    ("... fitted, kernel 2x too short", "gated+fit+local@0.5x", "gated+fit@0.5x"),
 ]
 #: Issue 16's candidates for the default (their targets are reported beside the default's).
-CANDIDATES = ("plausible-g3+fit", "plausible-g3", "gated+avg")
+CANDIDATES = ("plausible-g3+fit", "plausible-g3", "gated+avg", "gated+local", "gated+fit+local")
 #: Issue 16's targets for the default, noiseless subject (the noisy subject: 0.01 below each).
 TARGETS = {"early": 0.77, "late": 0.93, "end": 0.97, "argmax": 0.99}
 PHASES = {"early": "trials 1-20", "late": "trials 31-150", "end": "trials 121-150"}
@@ -480,7 +489,7 @@ def _figure(data: dict[tuple[str, str], list[dict[str, object]]]) -> None:
     import matplotlib.pyplot as plt
 
     shown = ["paper", "gated", "gated+fit", "plausible", "plausible-g3", "plausible-g3+fit"]
-    shown.append("gated+avg")  # issue 16 item 2
+    shown += ["gated+avg", "gated+local"]  # issue 16 item 2; the local challenger early
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), sharey=True)
     for ax, scenario in zip(axes, SCENARIOS, strict=True):
         for name in shown:
