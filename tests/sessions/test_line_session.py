@@ -56,9 +56,13 @@ def _drive(session: Session, n: int) -> None:
         session.answer(q.id, comps, suggestions)
 
 
-def test_a_continuous_session_replays_exactly(tmp_path: Path) -> None:
+LOCAL = "[cospar.strategy_settings]\nearly_scale = 0.5\n"  # a local challenger early
+
+
+@pytest.mark.parametrize("extra", ["", LOCAL], ids=["plain", "local-challenger"])
+def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> None:
     url = f"sqlite:///{tmp_path / 's.db'}"
-    cfg = parse_config(TEXT)
+    cfg = parse_config(TEXT + extra)
     assert cfg.subspace == "line" and cfg.space.continuous
     s = Session.create(url, cfg, "S01", seed=11)
     _drive(s, 6)

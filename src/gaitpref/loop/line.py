@@ -151,8 +151,12 @@ class LineCoSpar(CoSpar):
                     "proposed"
                 )
             posterior = on_points(self.posterior, space)
+
+            def rescaled(factor: float) -> Posterior:  # the answers refitted, read on the line
+                return on_points(self._rescaled(factor), space)
+
             context = AskContext(
-                posterior, self.n, self._buffer, len(self.executed), self.rng, allowed
+                posterior, self.n, self._buffer, len(self.executed), self.rng, allowed, rescaled
             )
             chosen = [int(a) for a in self.strategy.propose(context)]
         self._rng_before_pending = state

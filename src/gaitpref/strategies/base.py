@@ -33,8 +33,9 @@ class AskContext:
     rng: np.random.Generator
     allowed: NDArray[np.bool_] | None = None  # None: every action may be proposed
     #: The same answers refitted with every lengthscale times the factor given (the loop's data,
-    #: model and warm start otherwise unchanged); None where the loop offers none (the line
-    #: path).  A strategy may choose with it; the loop's own posterior stays the configured one.
+    #: model and warm start otherwise unchanged), read over the same actions as ``posterior``
+    #: (on the line path: the table and the query's line); None where the loop offers none.  A
+    #: strategy may choose with it; the loop's own posterior stays the configured one.
     rescaled: Callable[[float], Posterior] | None = None
 
     def __post_init__(self) -> None:
