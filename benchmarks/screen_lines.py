@@ -17,7 +17,8 @@ study's kernel; a number: that fraction of the range for every feature), ``fit``
 evidence), ``noise`` (the model's probit noise), ``span`` (below 1: each line cut to the
 segment ``|t| <= span`` around the best point, in range-normalised units, a trust region; the
 screen patches
-``gaitpref.loop.lines.line_points`` for it, the library has no such setting).
+``gaitpref.loop.lines.line_points`` for it, the library has no such setting), ``early``
+(gated-eubo's ``early_scale``: a local challenger during the first 20 trials; 1: off).
 Results: ``docs/results/continuous/notes.md``.
 """
 
@@ -64,8 +65,14 @@ BASE = {
     "fit": "fixed",
     "noise": "0.05",
     "span": "1",
+    "early": "1",
 }
 _OPTIMA: dict[tuple[str, int, int], tuple[float, float]] = {}
+
+
+def _early(value: str) -> dict[str, float]:
+    """gated-eubo's ``early_scale`` (``early=0.5``; ``1``: the strategy's own settings)."""
+    return {} if float(value) == 1.0 else {"early_scale": float(value)}
 
 
 def parse(spec: str) -> dict[str, str]:
@@ -175,7 +182,7 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
         n=1,
         buffer=1,
         seed=np.random.default_rng(loop_seed),
-        strategy=make_strategy(variant["strategy"]),
+        strategy=make_strategy(variant["strategy"], **_early(variant["early"])),
         learning=Learning(fit=variant["fit"]),  # type: ignore[arg-type]
         line=LineSettings(int(variant["points"]), direction),  # type: ignore[arg-type]
     )
