@@ -5,7 +5,9 @@ The ordinal study's setting (``study_ordinal.py``: default strategy, 60 trials, 
 quartiles, its seeds), the ``rated`` arm (no region) against region settings given as
 ``key=value`` pairs joined by ``,``: ``cautious`` (``[safety] cautious``, default 0.6), ``reach``
 (``[safety] reach``, default none) and ``rnoise`` (``[feedback.rating] noise``; default: the
-model's noise, 0.01).  Prints per variant the "very bad" gaits per run over trials 1-60 (and
+model's noise, 0.01), ``early`` (the default strategy's ``early_scale``, a local challenger
+during the first 20 trials; default: off) and ``region=0`` (no region of avoidance: the
+strategy alone).  Prints per variant the "very bad" gaits per run over trials 1-60 (and
 1-5), the mean objective over trials 1-60, the reduction against ``rated`` and the paired
 objective difference.  Results: ``docs/results/ordinal/notes.md``.
 
@@ -25,9 +27,12 @@ from study_ordinal import LABELS, Arm, run_one
 @dataclasses.dataclass(frozen=True)
 class RatedArm(Arm):
     rating_noise: float | None = None
+    early_scale: float | None = None
 
     def text(self, grid: str, start: int | None = None) -> str:
         out = super().text(grid, start)
+        if self.early_scale is not None:  # the default strategy's local challenger early
+            out += f"\n[cospar.strategy_settings]\nearly_scale = {self.early_scale}\n"
         if self.rating_noise is None:
             return out
         table = f"[feedback.rating]\nlabels = {LABELS}\n"
@@ -49,9 +54,10 @@ def main() -> None:
     for spec in sys.argv[4:]:
         kw = dict(kv.split("=") for kv in spec.split(","))
         arm = RatedArm(
-            spec, risk=True, cautious=float(kw.get("cautious", 0.6)),
+            spec, risk=kw.get("region", "1") == "1", cautious=float(kw.get("cautious", 0.6)),
             reach=float(kw["reach"]) if "reach" in kw else None,
             rating_noise=float(kw["rnoise"]) if "rnoise" in kw else None,
+            early_scale=float(kw["early"]) if "early" in kw else None,
         )  # fmt: skip
         w, f, o = measure(arm, grid, scenario, n)
         d = o - base_o
