@@ -40,6 +40,7 @@ from scipy.special import log_ndtr
 
 from gaitpref.config import load_config
 from gaitpref.data import paper_objectives
+from gaitpref.loop import CoSpar
 from gaitpref.loop.stopping import confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.simulate.population import synthetic_population
@@ -136,6 +137,15 @@ def smooth_given_visited(post: Posterior, f_visited: Array, rng: np.random.Gener
     return out
 
 
+def answers_of(loop: CoSpar) -> tuple[NDArray[np.intp], NDArray[np.intp], Array]:
+    """The loop's preferences in force: winners, losers and each one's probit noise."""
+    prefs = loop.preferences
+    winners = np.array([p.winner for p in prefs], dtype=np.intp)
+    losers = np.array([p.loser for p in prefs], dtype=np.intp)
+    sigma = np.array([loop.gp.noise if p.noise is None else p.noise for p in prefs])
+    return winners, losers, sigma
+
+
 def stated(samples: Array, rec: int, tolerance: float = TOLERANCE) -> float:
     best, worst = samples.max(axis=1), samples.min(axis=1)
     return float(np.mean(best - samples[:, rec] <= tolerance * (best - worst)))
@@ -185,10 +195,7 @@ def run(
             if (t + 1) % every:
                 continue
             post = loop.posterior
-            prefs = loop.preferences
-            winners = np.array([p.winner for p in prefs], dtype=np.intp)
-            losers = np.array([p.loser for p in prefs], dtype=np.intp)
-            sigma = np.array([loop.gp.noise if p.noise is None else p.noise for p in prefs])
+            winners, losers, sigma = answers_of(loop)
             sure = confidence(
                 post, np.random.default_rng([s, t, 3]), tolerance=TOLERANCE, samples=samples
             )

@@ -44,7 +44,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from check_confidence_exact import slice_sample_visited, smooth_given_visited
+from check_confidence_exact import answers_of, slice_sample_visited, smooth_given_visited
 from joblib import Parallel, delayed
 from scipy.stats import norm
 from study_learning import BAND, NOISE, STUDY_SEED, TRIALS, config_text
@@ -166,10 +166,8 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
 
 def exact_argmax(loop: Any, user: SimulatedUser, k: int) -> float:
     """The normalised objective at the exact posterior mean's argmax (module docstring)."""
-    post, prefs = loop.posterior, loop.preferences
-    winners = np.array([p.winner for p in prefs], dtype=np.intp)
-    losers = np.array([p.loser for p in prefs], dtype=np.intp)
-    sigma = np.array([loop.gp.noise if p.noise is None else p.noise for p in prefs])
+    post = loop.posterior
+    winners, losers, sigma = answers_of(loop)
     rng = np.random.default_rng([k, 5])
     f_v = slice_sample_visited(post, winners, losers, sigma, rng, size=1000, burn=300)
     g = smooth_given_visited(post, f_v, rng)
