@@ -104,6 +104,11 @@ FIT_S2 = FIT + "\n[model.prior]\nsignal_variance = [1e-4, 1.0]"
 AVG = FIT + '\nhyper = "average"'  # issue 16 item 2: lengthscale hypotheses averaged
 G3 = "gates = 3"  # [cospar.strategy_settings] of plausible-eubo with 3 gates
 LOCAL = "early_scale = 0.5\nearly_trials = 20"  # gated-eubo's challenger on half the lengthscale
+#: gated-eubo's settings whose config defaults are on since defaults 0.9: an arm that does not
+#: set them runs them off, as every arm did before (the study's arms name what they add)
+GATED_OFF = {"early_scale": 1.0, "sparring_from": 0, "sparring_until": 0}
+# and, after those 20 trials, self-sparring up to trial 45 (an exploration burst)
+BURST = LOCAL + "\nsparring_from = 20\nsparring_until = 45"
 
 
 def _fit_centred(lengthscale: float) -> str:
@@ -129,8 +134,13 @@ class Arm:
 
     def config(self) -> ExperimentConfig:
         text = config_text(self.strategy, self.model, self.lengthscale)
-        if self.settings:
-            text += f"\n[cospar.strategy_settings]\n{self.settings}\n"
+        settings = self.settings
+        if self.strategy == "gated-eubo":  # what the arm does not set stays off (the class's)
+            given = {line.split("=")[0].strip() for line in settings.splitlines()}
+            off = [f"{k} = {v}" for k, v in GATED_OFF.items() if k not in given]
+            settings = "\n".join([*off, *([settings] if settings else [])])
+        if settings:
+            text += f"\n[cospar.strategy_settings]\n{settings}\n"
         return parse_config(text)
 
 
@@ -199,9 +209,25 @@ ARMS = [
     Arm(
         "gated+fit+local@0.5x", "gated-eubo", FIT, 0.075, "default + local early, from 0.5x", LOCAL
     ),
+    Arm(
+        "gated+burst", "gated-eubo", PAPER, note="local early, self-sparring 21-45", settings=BURST
+    ),
+    Arm("gated+burst@2x", "gated-eubo", PAPER, 0.30, "local early + burst, lengthscale 2x", BURST),
+    Arm("gated+burst@0.5x", "gated-eubo", PAPER, 0.075, "local early + burst, 0.5x", BURST),
+    Arm(
+        "gated+fit+burst",
+        "gated-eubo",
+        FIT,
+        note="the default + local early + burst",
+        settings=BURST,
+    ),
+    Arm("gated+fit+burst@2x", "gated-eubo", FIT, 0.30, "default + local + burst, from 2x", BURST),
+    Arm("gated+fit+burst@0.5x", "gated-eubo", FIT, 0.075, "default + local + burst, 0.5x", BURST),
 ]
 SCENARIOS = ("noiseless", "noisy")
-DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)
+#: what a config that omits the learning keys runs (docs/learning.md): defaults 0.9's; defaults
+#: 0.8's was "gated+fit"
+DEFAULT_ARM = "gated+fit+burst"
 ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("gated-eubo instead of self-sparring", "gated", "paper"),
     ("EUBO instead of self-sparring", "eubo", "paper"),
@@ -238,19 +264,48 @@ ADDITIONS = [  # (what is added, arm with it, arm without it)
     ("a local challenger early, with the default's fit", "gated+fit+local", "gated+fit"),
     ("... fitted, kernel 2x too long", "gated+fit+local@2x", "gated+fit@2x"),
     ("... fitted, kernel 2x too short", "gated+fit+local@0.5x", "gated+fit@0.5x"),
+    ("self-sparring for trials 21-45 (after the local challenger)", "gated+burst", "gated+local"),
+    ("... kernel 2x too long", "gated+burst@2x", "gated+local@2x"),
+    ("... kernel 2x too short", "gated+burst@0.5x", "gated+local@0.5x"),
+    ("the burst, with the default's fit", "gated+fit+burst", "gated+fit+local"),
+    ("... fitted, kernel 2x too long", "gated+fit+burst@2x", "gated+fit+local@2x"),
+    ("... fitted, kernel 2x too short", "gated+fit+burst@0.5x", "gated+fit+local@0.5x"),
+    ("local early + burst instead of the old default", "gated+fit+burst", "gated+fit"),
+    ("local early + burst instead of self-sparring", "gated+fit+burst", "paper"),
 ]
 #: Issue 16's candidates for the default (their targets are reported beside the default's).
-CANDIDATES = ("plausible-g3+fit", "plausible-g3", "gated+avg", "gated+local", "gated+fit+local")
+CANDIDATES = (
+    "gated+fit",
+    "plausible-g3+fit",
+    "plausible-g3",
+    "gated+avg",
+    "gated+local",
+    "gated+fit+local",
+    "gated+burst",
+)
+
+
+def check_default_arm() -> None:
+    """The default arm runs what a config without learning keys gets, or the study says so."""
+    bare = parse_config(config_text("gated-eubo", "")).make_loop()
+    arm = next(a for a in ARMS if a.name == DEFAULT_ARM).config().make_loop()
+    if (bare.strategy, bare.learning) != (arm.strategy, arm.learning):
+        raise SystemExit(f"arm {DEFAULT_ARM!r} is not what a bare config runs: {bare.strategy}")
+
+
 #: Issue 16's targets for the default, noiseless subject (the noisy subject: 0.01 below each).
 TARGETS = {"early": 0.77, "late": 0.93, "end": 0.97, "argmax": 0.99}
 PHASES = {"early": "trials 1-20", "late": "trials 31-150", "end": "trials 121-150"}
 PHASES["argmax"] = "argmax"
 
 
-def run_one(arm: Arm, scenario: str, k: int) -> dict[str, object]:
-    """One 150-trial run of ``arm`` on objective ``k`` against the ``scenario`` subject."""
+def run_one(
+    arm: Arm, scenario: str, k: int, objective: np.ndarray | None = None
+) -> dict[str, object]:
+    """One 150-trial run of ``arm`` on objective ``k`` (the paper's, unless ``objective`` is
+    given: run ``k``'s seeds on another one) against the ``scenario`` subject."""
     cfg = arm.config()
-    objective = paper_objectives()[k]
+    objective = paper_objectives()[k] if objective is None else objective
     loop_seed, user_seed = np.random.SeedSequence([STUDY_SEED, k]).spawn(2)
     loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
     rng = np.random.default_rng(user_seed)
@@ -329,6 +384,7 @@ def _se(x: np.ndarray) -> float:
 
 
 def report() -> None:
+    check_default_arm()
     data = _load()
     if not data:
         raise SystemExit(f"no cached runs under {CACHE}: run the study first")

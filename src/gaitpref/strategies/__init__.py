@@ -31,7 +31,7 @@ STRATEGIES: tuple[str, ...] = tuple(STRATEGY_CLASSES)
 STRATEGY_SETTINGS: dict[str, tuple[str, ...]] = {
     "self-sparring": (),
     "eubo": ("candidates",),
-    "gated-eubo": ("gates", "early_scale", "early_trials"),
+    "gated-eubo": ("gates", "early_scale", "early_trials", "sparring_from", "sparring_until"),
     "eubo-then-sparring": ("trials",),
     "confident-eubo": ("beta", "candidates"),
     "information-gain": ("candidates",),

@@ -18,6 +18,13 @@ an exploratory one, so late in a session half the executed gaits are exploratory
   chosen on the same answers refitted with the lengthscales times ``early_scale``; with 0.5 and
   coactive feedback the challenger stays nearer the gaits the answers favour, and trials 1-20 of
   the paper's benchmark gain 0.039 (``docs/learning.md``, "A local challenger early").
+  ``sparring_from`` and ``sparring_until`` (off unless ``sparring_until`` is the larger): the
+  trials after the first ``sparring_from`` up to trial ``sparring_until`` run self-sparring
+  instead (each new action a posterior sample's argmax over the whole space, the paper's rule): a
+  burst of global exploration once EUBO has found a good region, so that the gate and EUBO
+  exploit afterwards on a posterior that has looked everywhere (``docs/learning.md``, "An
+  exploration burst").  A config gets 0.5, 20 and 45 by default since defaults 0.9; the class's
+  own defaults are off.
 - :class:`Switch` (``"eubo-then-sparring"``): one strategy for the first ``trials`` trials
   (EUBO), another after (self-sparring).
 
@@ -41,6 +48,8 @@ class GatedEubo:
     gates: int = 1
     early_scale: float = 1.0
     early_trials: int = 20
+    sparring_from: int = 0
+    sparring_until: int = 0
     name: str = "gated-eubo"
 
     def __post_init__(self) -> None:
@@ -50,11 +59,14 @@ class GatedEubo:
         number = isinstance(scale, int | float) and not isinstance(scale, bool)
         if not number or not 0.01 <= scale <= 100:
             raise ValueError(f"early_scale must be a number in [0.01, 100], got {scale!r}")
-        trials = self.early_trials
-        if isinstance(trials, bool) or not isinstance(trials, int) or trials < 0:
-            raise ValueError(f"early_trials must be an integer >= 0, got {trials!r}")
+        for setting in ("early_trials", "sparring_from", "sparring_until"):
+            trials = getattr(self, setting)
+            if isinstance(trials, bool) or not isinstance(trials, int) or trials < 0:
+                raise ValueError(f"{setting} must be an integer >= 0, got {trials!r}")
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
+        if self.sparring_from <= context.trial < self.sparring_until:
+            return SelfSparring().propose(context)
         picks = [
             int(a)
             for a in context.posterior.argmax_samples(context.rng, self.gates, context.allowed)
