@@ -18,7 +18,9 @@ evidence), ``noise`` (the model's probit noise), ``span`` (below 1: each line cu
 segment ``|t| <= span`` around the best point, in range-normalised units, a trust region; the
 screen patches
 ``gaitpref.loop.lines.line_points`` for it, the library has no such setting), ``early``
-(gated-eubo's ``early_scale``: a local challenger during the first 20 trials; 1: off).
+(gated-eubo's ``early_scale``: a local challenger during the first 20 trials; 1: off),
+``burst`` (gated-eubo's exploration burst, ``FROM-UNTIL``: self-sparring for the trials after
+the first ``FROM`` up to trial ``UNTIL``, defaults 0.9's ``20-45``; ``0``: off).
 Results: ``docs/results/continuous/notes.md``.
 """
 
@@ -66,13 +68,19 @@ BASE = {
     "noise": "0.05",
     "span": "1",
     "early": "1",
+    "burst": "0",
 }
 _OPTIMA: dict[tuple[str, int, int], tuple[float, float]] = {}
 
 
-def _early(value: str) -> dict[str, float]:
-    """gated-eubo's ``early_scale`` (``early=0.5``; ``1``: the strategy's own settings)."""
-    return {} if float(value) == 1.0 else {"early_scale": float(value)}
+def _early(value: str, burst: str = "0") -> dict[str, float]:
+    """gated-eubo's ``early_scale`` (``early=0.5``; ``1``: the strategy's own settings) and
+    exploration burst (``burst=20-45``; ``0``: off)."""
+    out: dict[str, float] = {} if float(value) == 1.0 else {"early_scale": float(value)}
+    if burst != "0":
+        start, end = (int(v) for v in burst.split("-"))
+        out |= {"sparring_from": start, "sparring_until": end}
+    return out
 
 
 def parse(spec: str) -> dict[str, str]:
@@ -182,7 +190,7 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
         n=1,
         buffer=1,
         seed=np.random.default_rng(loop_seed),
-        strategy=make_strategy(variant["strategy"], **_early(variant["early"])),
+        strategy=make_strategy(variant["strategy"], **_early(variant["early"], variant["burst"])),
         learning=Learning(fit=variant["fit"]),  # type: ignore[arg-type]
         line=LineSettings(int(variant["points"]), direction),  # type: ignore[arg-type]
     )

@@ -61,17 +61,10 @@ from gaitpref.simulate.users import SimulatedUser
 
 try:
     from _machine import machine_description
-    from study_ordinal import QUARTILES, STUDY_DEFAULTS, Arm, _reduction, _se, true_category
+    from study_ordinal import QUARTILES, Arm, _reduction, _se, true_category
 except ImportError:  # run as a module
     from benchmarks._machine import machine_description
-    from benchmarks.study_ordinal import (
-        QUARTILES,
-        STUDY_DEFAULTS,
-        Arm,
-        _reduction,
-        _se,
-        true_category,
-    )
+    from benchmarks.study_ordinal import QUARTILES, Arm, _reduction, _se, true_category
 
 SEED = 20261203
 ARMS = ("rated", "cautious", "warm-rated", "warm-cautious")
@@ -84,9 +77,7 @@ def _config(region: bool, share: str = "", first: str = "") -> ExperimentConfig:
     given = "".join(
         f'{key} = "{value}"\n' for key, value in (("share", share), ("warm_first", first)) if value
     )  # [model] share / warm_first given (default: the defaults version's)
-    return parse_config(
-        text.replace("noise = 0.01\n", "noise = 0.01\n" + given, 1), defaults=STUDY_DEFAULTS
-    )
+    return parse_config(text.replace("noise = 0.01\n", "noise = 0.01\n" + given, 1))
 
 
 def _walk(

@@ -1,8 +1,7 @@
 """The ordinal study (issue 12): ratings, the region of avoidance and information-gain queries.
 
-Every arm is the default strategy of a config that omits the learning keys under defaults 0.8
-(``STUDY_DEFAULTS``: plain ``gated-eubo``, lengthscales fitted by the evidence every 20 answers;
-``n = 1``, ``b = 1``; defaults 0.9's local challenger and burst came later), with no coactive
+Every arm is the default strategy of a config that omits the learning keys (``gated-eubo``,
+lengthscales fitted by the evidence every 20 answers; ``n = 1``, ``b = 1``), with no coactive
 feedback, for 60 trials.  Two grids:
 
 - ``2d``: the paper's synthetic benchmark (30 x 30 grid on [0, 1]^2, the authors' 100 objectives,
@@ -115,10 +114,6 @@ jitter = 1e-5
 noise = 0.01
 """
 
-#: The defaults version the study ran with (its committed results): 0.9 made gated-eubo's
-#: local challenger and exploration burst the default (issue 16), after this study was run.
-STUDY_DEFAULTS = "0.8"
-
 
 @dataclass(frozen=True)
 class Arm:
@@ -160,7 +155,7 @@ class Arm:
         return out
 
     def config(self, grid: str, start: int | None = None) -> ExperimentConfig:
-        return parse_config(self.text(grid, start), defaults=STUDY_DEFAULTS)
+        return parse_config(self.text(grid, start))
 
 
 @dataclass(frozen=True)

@@ -23,9 +23,6 @@ noise = 0.02
 """
 # [model]'s share, jitter and warm_first, given (their defaults changed in 0.6, 0.7 and 0.8)
 SHARE = 'share = "average"\njitter = 0.0\nwarm_first = "recommended"\n'
-# [cospar] with gated-eubo's settings given (their defaults changed in 0.9)
-COSPAR = "[cospar]\nbuffer = 1\n[cospar.strategy_settings]\nearly_scale = 0.5\n"
-COSPAR += "sparring_from = 20\nsparring_until = 45\n"
 
 
 def test_a_config_with_only_space_and_model_asks_comparisons() -> None:
@@ -55,9 +52,9 @@ def test_the_0_1_defaults_give_the_old_loop() -> None:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.9"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.8"}
     assert config_of(stored_record(BARE, library_meta(bare))).buffer == 1
-    explicit = parse_config(BARE + SHARE + COSPAR)
+    explicit = parse_config(BARE + SHARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
 
 
@@ -65,7 +62,9 @@ def test_a_session_recorded_by_0_1_replays_with_0_1_defaults() -> None:
     assert config_of(stored_record(BARE, {})).buffer == 0
 
 
-RATED = BARE + SHARE + COSPAR + '[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+RATED = (
+    BARE + SHARE + '[cospar]\nbuffer = 1\n[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+)
 AVOID = '[safety]\navoid = ["very bad"]\n'
 
 
@@ -73,7 +72,7 @@ def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
     cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3,
     assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
     assert cfg.safety.cautious == 0.6
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.9"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.8"}
     assert config_of(stored_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
     for explicit in (
         "lambda = 1.0\n",
@@ -140,18 +139,3 @@ def test_a_warm_starts_first_trial_is_the_recommendation_since_0_8_the_strategys
     assert given.learning.warm_first == "strategy" and "model.warm_first" not in given.defaulted
     with pytest.raises(ConfigError, match=r"model.*warm_first.*'first'"):
         parse_config(BARE + 'warm_first = "first"\n')
-
-
-def test_gated_eubos_burst_is_the_default_since_0_9_and_sessions_before_replay_without() -> None:
-    from gaitpref.strategies import GatedEubo
-
-    new = parse_config(BARE).make_loop().strategy
-    assert new == GatedEubo(early_scale=0.5, sparring_from=20, sparring_until=45)
-    # a session recorded by 0.8 that relied on a changed default stored "0.8"; one that
-    # relied on none stored nothing and replays with 0.1's: both get the class's settings
-    for meta in ({"config_defaults": "0.8"}, {"config_defaults": "0.7"}, {}):
-        assert config_of(stored_record(BARE, meta)).make_loop().strategy == GatedEubo()
-    # a session recorded now stores 0.9 and replays with the burst
-    assert (
-        config_of(stored_record(BARE, library_meta(parse_config(BARE)))).make_loop().strategy == new
-    )

@@ -9,12 +9,7 @@ import pytest
 from gaitpref import ConfigError
 from gaitpref.config import DEFAULT_BUFFER, DEFAULTS, LIMITS, parse_config
 from gaitpref.config.model import RELATIVE_JITTER
-from gaitpref.config.schema import (
-    CONFIG_SETTING_DEFAULTS,
-    STRATEGY_TABLES,
-    TABLES,
-    defaults_for,
-)
+from gaitpref.config.schema import STRATEGY_TABLES, TABLES
 from gaitpref.strategies import STRATEGY_CLASSES, STRATEGY_SETTINGS
 
 SPACE = "[space.x]\nmin = 0.0\nmax = 1.0\nnum = 11\n"
@@ -164,22 +159,16 @@ def test_the_defaults_table_is_what_a_bare_config_gets() -> None:
     assert cfg.kernel.jitter == RELATIVE_JITTER * cfg.kernel.variance
     assert cfg.learning.fit == DEFAULTS["model"]["fit"] and cfg.sampler == "auto"
     assert cfg.space.features[0].coactive == DEFAULTS["space.<feature>"]["coactive"]
-    # gated-eubo's config defaults since 0.9: the local challenger, then the exploration burst
-    assert cfg.strategy_settings == CONFIG_SETTING_DEFAULTS["gated-eubo"]
-    assert cfg.strategy_settings == {"early_scale": 0.5, "sparring_from": 20, "sparring_until": 45}
+    assert cfg.strategy_settings == {}
     assert cfg.defaulted >= {"cospar.buffer", "cospar.n", "cospar.strategy"}
     assert set(TABLES) >= {"", "model", "model.prior", "cospar", "gaits", "space.<feature>"}
     assert LIMITS["actions"] == 1_000_000
 
 
-def test_strategy_defaults_are_the_classes_own_but_where_a_config_default_differs() -> None:
+def test_strategy_defaults_are_the_classes_own() -> None:
     for name, table in STRATEGY_TABLES.items():
         assert tuple(table) == STRATEGY_SETTINGS[name]
         made = STRATEGY_CLASSES[name]()
-        differs = CONFIG_SETTING_DEFAULTS.get(name, {})
         for setting, key in table.items():
-            assert key.default == differs.get(setting, getattr(made, setting))
-        # a config of the defaults before 0.9 gets the class's own
-        for setting, value in defaults_for("0.8", f"cospar.strategy_settings ({name})").items():
-            assert getattr(made, setting) == value
+            assert getattr(made, setting) == key.default
         assert {f.name for f in dataclasses.fields(made)} >= set(table)

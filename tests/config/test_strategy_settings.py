@@ -27,44 +27,30 @@ strategy = "{name}"
 """
 
 
-#: gated-eubo's config defaults since 0.9 (the class's own are off)
-BURST = {"early_scale": 0.5, "sparring_from": 20, "sparring_until": 45}
-
-
 @pytest.mark.parametrize(
     ("name", "settings", "expected"),
     [
-        ("gated-eubo", "gates = 4", GatedEubo(gates=4, **BURST)),
+        ("gated-eubo", "gates = 4", GatedEubo(gates=4)),
         ("eubo-then-sparring", "trials = 7", Switch(trials=7)),
         ("confident-eubo", "beta = 2.5\ncandidates = 8", ConfidentEubo(beta=2.5, candidates=8)),
         ("confident-eubo", "beta = 3", ConfidentEubo(beta=3.0)),
         ("eubo", "candidates = 16", Eubo(candidates=16)),
-        ("gated-eubo", "", GatedEubo(**BURST)),
+        ("gated-eubo", "", GatedEubo()),
         (
             "gated-eubo",
             "early_scale = 0.5\nearly_trials = 12",
-            GatedEubo(early_scale=0.5, early_trials=12, sparring_from=20, sparring_until=45),
+            GatedEubo(early_scale=0.5, early_trials=12),
         ),
-        (  # the burst off, the local challenger kept
+        (
             "gated-eubo",
-            "sparring_until = 0",
-            GatedEubo(early_scale=0.5, sparring_from=20, sparring_until=0),
+            "sparring_from = 20\nsparring_until = 45",
+            GatedEubo(sparring_from=20, sparring_until=45),
         ),
-        ("gated-eubo", "early_scale = 1.0\nsparring_until = 0", GatedEubo(sparring_from=20)),
     ],
 )
 def test_settings_reach_the_strategy(name: str, settings: str, expected: object) -> None:
     cfg = parse_config(BASE.format(name=name, settings=settings))
     assert cfg.make_loop().strategy == expected
-
-
-def test_before_defaults_0_9_gated_eubo_gets_the_classs_own_settings() -> None:
-    text = BASE.format(name="gated-eubo", settings="gates = 2")
-    for version in ("0.1", "0.5", "0.8"):
-        assert parse_config(text, defaults=version).make_loop().strategy == GatedEubo(gates=2)
-    cfg = parse_config(text)
-    assert "cospar.strategy_settings (gated-eubo).sparring_from" in cfg.defaulted
-    assert cfg.relies_on_changed_defaults
 
 
 def test_a_plain_strategy_name_still_works() -> None:

@@ -13,8 +13,7 @@ from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, state_of
 from tests.sessions.test_warm_start import _earlier, _run
 
-LOCAL = "\n[cospar.strategy_settings]\nearly_scale = 0.5\nearly_trials = 20\nsparring_until = 0\n"
-PLAIN = "\n[cospar.strategy_settings]\nearly_scale = 1.0\nsparring_until = 0\n"  # both off
+LOCAL = "\n[cospar.strategy_settings]\nearly_scale = 0.5\nearly_trials = 20\n"
 BURST = "\n[cospar.strategy_settings]\nearly_scale = 0.5\nearly_trials = 2\n"
 BURST += "sparring_from = 2\nsparring_until = 6\n"
 
@@ -22,7 +21,7 @@ BURST += "sparring_from = 2\nsparring_until = 6\n"
 def _config(local: bool, settings: str = LOCAL) -> ExperimentConfig:
     base = load_config(CONFIG)
     text = base.text.replace('strategy = "self-sparring"', 'strategy = "gated-eubo"')
-    return parse_config(text + (settings if local else PLAIN), default_name=base.name)
+    return parse_config(text + (settings if local else ""), default_name=base.name)
 
 
 def _queries(session: Session) -> list[tuple[int, ...]]:
@@ -32,8 +31,7 @@ def _queries(session: Session) -> list[tuple[int, ...]]:
 def test_a_local_challenger_session_replays_exactly_and_undoes() -> None:
     db = MemoryStorage()
     config = _config(True)
-    settings = {"early_scale": 0.5, "early_trials": 20, "sparring_from": 20, "sparring_until": 0}
-    assert config.strategy_settings == settings  # sparring_from: the defaults' (0.9)
+    assert config.strategy_settings == {"early_scale": 0.5, "early_trials": 20}
     subject = SimulatedSubject(config.space, bump_utility(config.space), seed=7)
     with Session.create(db, config, "S01", seed=7) as s:
         _run(s, subject, 8)
@@ -96,7 +94,7 @@ def test_a_session_with_an_exploration_burst_replays_exactly_and_undoes_inside_i
         assert (query, rng) == (query2, rng2)
         assert _queries(third) == queries
     # without the window the same answers' first trials agree and the window's do not
-    local, _, other = _burst_session(BURST.split("sparring_from")[0] + "sparring_until = 0\n")
+    local, _, other = _burst_session(BURST.split("sparring_from")[0])
     other.close()
     assert local[:2] == queries[:2]
     assert local != queries

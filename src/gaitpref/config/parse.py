@@ -102,9 +102,7 @@ from gaitpref.config.schema import (
     STRATEGY_TABLES,
     TOP,
     check_table,
-    class_setting_defaults,
     defaults_for,
-    settings_table,
 )
 from gaitpref.config.specs import fail
 from gaitpref.config.stop import parse_stop
@@ -196,7 +194,7 @@ def parse_config(
     cospar, defaulted = _cospar(top["cospar"], space, defaults, max_actions)
     on_line = cospar["subspace"] == "line"
     check_scales(model, cospar["coactive_weight"])
-    settings, settings_defaulted = _strategy_settings(cospar, defaults)
+    settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
     grid = None if on_line else space
     safety, relied = parse_safety(top["safety"], ordinal, defaults, grid, library)
@@ -227,8 +225,7 @@ def parse_config(
         defaulted=frozenset(f"cospar.{k}" for k in defaulted)
         | frozenset(f"gaits.{k}" for k in gaits_defaulted if generator is not None)
         | relied
-        | model_defaulted
-        | settings_defaulted,
+        | model_defaulted,
         defaults_version=defaults,
     )
 
@@ -252,25 +249,16 @@ def _cospar(
     return cospar, defaulted
 
 
-def _strategy_settings(
-    cospar: dict[str, Any], defaults: str
-) -> tuple[dict[str, Any], frozenset[str]]:
-    """The settings the strategy gets: those given, and those whose default (of ``defaults``)
-    differs from the strategy class's own; and the ``table.key`` names left to the defaults."""
+def _strategy_settings(cospar: dict[str, Any]) -> dict[str, Any]:
+    """The settings given for the strategy (the strategy keeps its defaults for the rest)."""
     name = cospar["strategy"]
     given = cospar["strategy_settings"]
-    table_name = settings_table(name)
-    table, defaulted = check_table(
-        given,
-        "cospar.strategy_settings",
-        STRATEGY_TABLES[name],
-        defaults_for(defaults, table_name),
-        for_what=f" for strategy {name!r}",
+    table, _ = check_table(
+        given, "cospar.strategy_settings", STRATEGY_TABLES[name], for_what=f" for strategy {name!r}"
     )
-    own = class_setting_defaults(name)
-    settings = {k: v for k, v in table.items() if k in given or v != own[k]}
+    settings = {k: table[k] for k in given}
     try:  # what one key cannot say alone (plausible-eubo: gates <= samples)
         make_strategy(name, **table)
     except ValueError as exc:
         fail("cospar.strategy_settings", None, f"{exc} (strategy {name!r})")
-    return settings, frozenset(f"{table_name}.{k}" for k in defaulted)
+    return settings

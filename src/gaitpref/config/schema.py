@@ -196,28 +196,9 @@ _SETTING_SPECS: Final[dict[str, Spec]] = {
 }
 
 
-#: Where a config's default differs from the strategy class's own (defaults 0.9, issue 16:
-#: gated-eubo's local challenger for the first 20 trials, then self-sparring up to trial 45;
-#: ``docs/learning.md``, "An exploration burst").  Earlier defaults: the classes' (off).
-CONFIG_SETTING_DEFAULTS: Final[dict[str, dict[str, Any]]] = {
-    "gated-eubo": {"early_scale": 0.5, "sparring_from": 20, "sparring_until": 45},
-}
-
-
-def class_setting_defaults(name: str) -> dict[str, Any]:
-    """The strategy class's own defaults of its config settings."""
-    by_field = {f.name: f.default for f in fields(STRATEGY_CLASSES[name])}
-    return {s: by_field[s] for s in STRATEGY_SETTINGS[name]}
-
-
 def _strategy_table(name: str) -> dict[str, Key]:
-    own = {**class_setting_defaults(name), **CONFIG_SETTING_DEFAULTS.get(name, {})}
-    return {s: Key(_SETTING_SPECS[s], own[s]) for s in STRATEGY_SETTINGS[name]}
-
-
-def settings_table(name: str) -> str:
-    """The table name of strategy ``name``'s settings (in errors, docs and defaults)."""
-    return f"cospar.strategy_settings ({name})"
+    by_field = {f.name: f.default for f in fields(STRATEGY_CLASSES[name])}
+    return {s: Key(_SETTING_SPECS[s], by_field[s]) for s in STRATEGY_SETTINGS[name]}
 
 
 STRATEGY_TABLES: Final[dict[str, dict[str, Key]]] = {s: _strategy_table(s) for s in STRATEGIES}
@@ -233,29 +214,24 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
     "feedback.rating": RATING,
     "safety": SAFETY,
     "stop": STOP,
-    **{settings_table(s): t for s, t in STRATEGY_TABLES.items()},
+    **{f"cospar.strategy_settings ({s})": t for s, t in STRATEGY_TABLES.items()},
 }
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.9"
+DEFAULTS_VERSION: Final = "0.8"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
 #: made on demand had no iteration budget, ``[gaits] max_iterations = None``; 0.1 to 0.5: a warm
 #: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``; 0.1 to
 #: 0.6: a config without ``[model] jitter`` had none, ``jitter = 0``; 0.1 to 0.7: a warm start's
-#: first trial was the strategy's, ``[model] warm_first = "strategy"``; 0.1 to 0.8: gated-eubo's
-#: settings were the class's, no local challenger and no exploration burst).
+#: first trial was the strategy's, ``[model] warm_first = "strategy"``).
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
 _MODEL_BEFORE_0_6: Final[dict[str, Any]] = {
     "share": "map",
     "jitter": 0.0,
     "warm_first": "strategy",
-}
-_CLASS_SETTINGS: Final[dict[str, dict[str, Any]]] = {
-    settings_table(name): {k: class_setting_defaults(name)[k] for k in changed}
-    for name, changed in CONFIG_SETTING_DEFAULTS.items()
 }
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
@@ -263,25 +239,17 @@ EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
         "model": _MODEL_BEFORE_0_6,
-        **_CLASS_SETTINGS,
     },
     "0.2": {
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
         "model": _MODEL_BEFORE_0_6,
-        **_CLASS_SETTINGS,
     },
-    "0.3": {
-        "safety": {"cautious": 0.0},
-        "gaits": _UNBOUNDED_GAITS,
-        "model": _MODEL_BEFORE_0_6,
-        **_CLASS_SETTINGS,
-    },
-    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6, **_CLASS_SETTINGS},
-    "0.5": {"model": _MODEL_BEFORE_0_6, **_CLASS_SETTINGS},
-    "0.6": {"model": {"jitter": 0.0, "warm_first": "strategy"}, **_CLASS_SETTINGS},
-    "0.7": {"model": {"warm_first": "strategy"}, **_CLASS_SETTINGS},
-    "0.8": dict(_CLASS_SETTINGS),
+    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
+    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
+    "0.5": {"model": _MODEL_BEFORE_0_6},
+    "0.6": {"model": {"jitter": 0.0, "warm_first": "strategy"}},
+    "0.7": {"model": {"warm_first": "strategy"}},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).
