@@ -28,7 +28,11 @@ the ``gated+local*`` and ``gated+fit+local*`` arms (``early_scale = 0.5``) with 
 ``gated``, ``gated@2x`` and ``gated@0.5x`` (2026-12-03: every arm in the summary re-run
 together, the earlier arms' runs identical to those committed but for their timings); the
 first study's results are kept in ``docs/results/learning/issue8/``.  ``run`` keeps a cached
-prefix of an arm's runs (a screen on fewer objectives) and runs only the rest.
+prefix of an arm's runs (a screen on fewer objectives) and runs only the rest.  Later still the
+``gated+burst*`` and ``gated+fit+burst*`` arms (the local challenger, then self-sparring for
+trials 21-45), with every arm re-run; the summary's "Every trial counted" table scores the
+windows the targets leave out, and ``check_burst_heldout.py`` runs the same arms on fresh
+objectives.
 Workers use one BLAS thread each (``joblib``, ``n_jobs`` = ``--jobs``).
 """
 

@@ -24,7 +24,8 @@ an exploratory one, so late in a session half the executed gaits are exploratory
   instead (each new action a posterior sample's argmax over the whole space, the paper's rule): a
   burst of global exploration once EUBO has found a good region, so that the gate and EUBO
   exploit afterwards on a posterior that has looked everywhere (``docs/learning.md``, "An
-  exploration burst"): it lifts the later trials and hides its cost in trials 21-45.
+  exploration burst"): it lifts the later trials at the cost of the burst's own, and is level
+  over a whole 150-trial session.
 - :class:`Switch` (``"eubo-then-sparring"``): one strategy for the first ``trials`` trials
   (EUBO), another after (self-sparring).
 
