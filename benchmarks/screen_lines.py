@@ -73,10 +73,10 @@ BASE = {
 _OPTIMA: dict[tuple[str, int, int], tuple[float, float]] = {}
 
 
-def _early(value: str, burst: str = "0") -> dict[str, float]:
+def _gated_settings(early: str, burst: str = "0") -> dict[str, float]:
     """gated-eubo's ``early_scale`` (``early=0.5``; ``1``: the strategy's own settings) and
     exploration burst (``burst=20-45``; ``0``: off)."""
-    out: dict[str, float] = {} if float(value) == 1.0 else {"early_scale": float(value)}
+    out: dict[str, float] = {} if float(early) == 1.0 else {"early_scale": float(early)}
     if burst != "0":
         start, end = (int(v) for v in burst.split("-"))
         out |= {"sparring_from": start, "sparring_until": end}
@@ -190,7 +190,9 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
         n=1,
         buffer=1,
         seed=np.random.default_rng(loop_seed),
-        strategy=make_strategy(variant["strategy"], **_early(variant["early"], variant["burst"])),
+        strategy=make_strategy(
+            variant["strategy"], **_gated_settings(variant["early"], variant["burst"])
+        ),
         learning=Learning(fit=variant["fit"]),  # type: ignore[arg-type]
         line=LineSettings(int(variant["points"]), direction),  # type: ignore[arg-type]
     )

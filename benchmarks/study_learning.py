@@ -140,6 +140,16 @@ class Arm:
         return parse_config(text)
 
 
+def _kernels(name: str, model: str, note: str, settings: str) -> list[Arm]:
+    """A ``gated-eubo`` arm with the lengthscale right, 2x too long (``@2x``) and 2x too short
+    (``@0.5x``)."""
+    return [
+        Arm(name, "gated-eubo", model, 0.15, note, settings),
+        Arm(f"{name}@2x", "gated-eubo", model, 0.30, f"{note}; lengthscale 2x", settings),
+        Arm(f"{name}@0.5x", "gated-eubo", model, 0.075, f"{note}; lengthscale 0.5x", settings),
+    ]
+
+
 ARMS = [
     Arm("paper", "self-sparring", PAPER, note="the paper: self-sparring, ties dropped, fixed"),
     Arm("eubo", "eubo", PAPER, note="EUBO against the buffered action"),
@@ -183,42 +193,10 @@ ARMS = [
     Arm("gated+avg", "gated-eubo", AVG, note="5 lengthscale hypotheses averaged"),
     Arm("gated+avg@2x", "gated-eubo", AVG, 0.30, "averaged, starting 2x wrong"),
     Arm("gated+avg@0.5x", "gated-eubo", AVG, 0.075, "averaged, starting 0.5x wrong"),
-    Arm(
-        "gated+local",
-        "gated-eubo",
-        PAPER,
-        note="EUBO on half the lengthscale, trials 1-20",
-        settings=LOCAL,
-    ),
-    Arm(
-        "gated+local@2x", "gated-eubo", PAPER, 0.30, "local challenger early, lengthscale 2x", LOCAL
-    ),
-    Arm("gated+local@0.5x", "gated-eubo", PAPER, 0.075, "local challenger early, 0.5x", LOCAL),
-    Arm(
-        "gated+fit+local",
-        "gated-eubo",
-        FIT,
-        note="the default + a local challenger early",
-        settings=LOCAL,
-    ),
-    Arm("gated+fit+local@2x", "gated-eubo", FIT, 0.30, "default + local early, starting 2x", LOCAL),
-    Arm(
-        "gated+fit+local@0.5x", "gated-eubo", FIT, 0.075, "default + local early, from 0.5x", LOCAL
-    ),
-    Arm(
-        "gated+burst", "gated-eubo", PAPER, note="local early, self-sparring 21-45", settings=BURST
-    ),
-    Arm("gated+burst@2x", "gated-eubo", PAPER, 0.30, "local early + burst, lengthscale 2x", BURST),
-    Arm("gated+burst@0.5x", "gated-eubo", PAPER, 0.075, "local early + burst, 0.5x", BURST),
-    Arm(
-        "gated+fit+burst",
-        "gated-eubo",
-        FIT,
-        note="the default + local early + burst",
-        settings=BURST,
-    ),
-    Arm("gated+fit+burst@2x", "gated-eubo", FIT, 0.30, "default + local + burst, from 2x", BURST),
-    Arm("gated+fit+burst@0.5x", "gated-eubo", FIT, 0.075, "default + local + burst, 0.5x", BURST),
+    *_kernels("gated+local", PAPER, "EUBO on half the lengthscale, trials 1-20", LOCAL),
+    *_kernels("gated+fit+local", FIT, "the default + a local challenger early", LOCAL),
+    *_kernels("gated+burst", PAPER, "local early, self-sparring 21-45", BURST),
+    *_kernels("gated+fit+burst", FIT, "the default + local early + burst", BURST),
 ]
 SCENARIOS = ("noiseless", "noisy")
 DEFAULT_ARM = "gated+fit"  # what a config that omits the learning keys runs (docs/learning.md)
