@@ -20,7 +20,10 @@ screen patches
 ``gaitpref.loop.lines.line_points`` for it, the library has no such setting), ``early``
 (gated-eubo's ``early_scale``: a local challenger during the first 20 trials; 1: off),
 ``burst`` (gated-eubo's exploration burst, ``FROM-UNTIL``: self-sparring for the trials after
-the first ``FROM`` up to trial ``UNTIL``, defaults 0.9's ``20-45``; ``0``: off).
+the first ``FROM`` up to trial ``UNTIL``, defaults 0.9's ``20-45``; ``0``: off), ``star``
+(``LineSettings.lines``, ``[cospar] line_count``: lines per query, all through the best point,
+the strategy choosing among all their points; the key's ``1`` is LineCoSpar's one line, a
+config's default since defaults 0.10 is 4).
 Results: ``docs/results/continuous/notes.md``.
 """
 
@@ -69,6 +72,7 @@ BASE = {
     "span": "1",
     "early": "1",
     "burst": "0",
+    "star": "1",
 }
 _OPTIMA: dict[tuple[str, int, int], tuple[float, float]] = {}
 
@@ -194,7 +198,7 @@ def one(variant: dict[str, str], cell: tuple[str, int, bool, float], seed: int) 
             variant["strategy"], **_gated_settings(variant["early"], variant["burst"])
         ),
         learning=Learning(fit=variant["fit"]),  # type: ignore[arg-type]
-        line=LineSettings(int(variant["points"]), direction),  # type: ignore[arg-type]
+        line=LineSettings(int(variant["points"]), direction, int(variant["star"])),  # type: ignore[arg-type]
     )
     if descent and ":" in variant["direction"]:
         loop.mix = float(variant["direction"].split(":")[1])  # type: ignore[attr-defined]

@@ -4,9 +4,11 @@ Hartmann-6 and random-GP objectives (``gaitpref.simulate.continuous``) in 6, 8 a
 dimensions, 150 trials, ``n = 1, b = 1``, with and without coactive feedback, noiseless and noisy
 subjects; against random selection, and in 6-D against the full 57,750-gait grid (11 x 10 x 7 x
 5 x 5 x 3 values over the same box) with the line path run on that same grid (lines snapped to
-it) and on the continuous box.  The line path's strategy and fit are ``--line-strategy`` and
-``--line-fit``; the full grid runs twice, with self-sparring (``grid``) and with the project's
-default for grids, gated EUBO (``grid-gated``).  One process, seeds 0..S-1.
+it) and on the continuous box.  The line path's strategy, fit and lines per query are
+``--line-strategy``, ``--line-fit`` and ``--line-count`` (1, LineCoSpar's one line, unless
+given; a line config's default since defaults 0.10 is 4); the full grid runs twice, with
+self-sparring (``grid``) and with the project's default for grids, gated EUBO
+(``grid-gated``).  One process, seeds 0..S-1.
 
     python benchmarks/study_continuous.py --seeds 6 [--subset] [--paths grid-gated --merge]
     python benchmarks/study_continuous.py --report
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -41,6 +44,8 @@ NOISY = 0.2  # the noisy subject's probit noise (utility units; both objectives 
 PREF_NOISE = 0.05  # the model's probit noise
 PATHS = ("line", "grid", "grid-gated", "line-on-grid")
 GRID_STRATEGY = {"grid": "self-sparring", "grid-gated": "gated-eubo"}
+#: what made a results.json that names no commands (the study's first runs)
+DEFAULT_COMMAND = "python benchmarks/study_continuous.py --seeds 6"
 
 
 def box(d: int) -> Space:
@@ -58,7 +63,7 @@ def kernel(objective: str, d: int) -> SquaredExponential:
 
 def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, seed: int,
             optimum: float | None, line_strategy: str = "self-sparring",
-            line_fit: str = "fixed") -> dict[str, Any]:  # fmt: skip
+            line_fit: str = "fixed", line_count: int = 1) -> dict[str, Any]:  # fmt: skip
     domain = box(d) if path == "line" else grid6()
     fn = builtin(objective, domain, seed)
     if optimum is None:  # the objective's best over the domain
@@ -73,7 +78,8 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
     else:
         strategy = make_strategy(line_strategy)
         learning = Learning(fit="evidence" if line_fit == "evidence" else "fixed")
-        loop = LineCoSpar(domain, k, PREF_NOISE, line=LineSettings(50), strategy=strategy,
+        line = LineSettings(50, "random", line_count)
+        loop = LineCoSpar(domain, k, PREF_NOISE, line=line, strategy=strategy,
                           learning=learning, **settings)  # fmt: skip
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(fn, domain, seed=seed) if coactive else None
@@ -84,6 +90,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
         "path": path, "objective": objective, "d": d, "coactive": coactive, "noise": noise,
         "seed": seed, "seconds": time.perf_counter() - start, "optimum": optimum,
         "strategy": strategy.name, "fit": loop.learning.fit,
+        **({"lines": line_count} if path not in GRID_STRATEGY and line_count != 1 else {}),
         "random_mean": float(rand.mean()), "worst": float(fn(domain.points).min())
         if path != "line" else float(rand.min()),
         "curve": res.curve.tolist(), "best_at": {str(k): v for k, v in res.best_at.items()},
@@ -117,6 +124,7 @@ def main() -> None:
     parser.add_argument("--merge", action="store_true", help="replace only these paths' runs")
     parser.add_argument("--line-strategy", default="self-sparring")
     parser.add_argument("--line-fit", choices=("fixed", "evidence"), default="fixed")
+    parser.add_argument("--line-count", type=int, default=1, help="lines per query")
     args = parser.parse_args()
     if args.report:
         report(args.out / "results.json", args.out)
@@ -128,8 +136,9 @@ def main() -> None:
         for seed in range(args.first_seed, args.first_seed + args.seeds):
             known = HARTMANN6_MAX if objective == "hartmann6" and path == "line" else None
             r = one_run(
-                path, objective, d, coactive, noise, seed, known, args.line_strategy, args.line_fit
-            )
+                path, objective, d, coactive, noise, seed, known,
+                args.line_strategy, args.line_fit, args.line_count,
+            )  # fmt: skip
             runs.append(r)
             print(
                 f"{path:12s} {objective:9s} d={d:2d} co={int(coactive)} noise={noise} "
@@ -139,10 +148,12 @@ def main() -> None:
             )
     args.out.mkdir(parents=True, exist_ok=True)
     name = "results-subset.json" if args.subset else "results.json"
+    commands = ["python benchmarks/study_continuous.py " + " ".join(sys.argv[1:])]
     if args.merge and (args.out / name).exists():
-        old = json.loads((args.out / name).read_text())["runs"]
-        runs = [r for r in old if r["path"] not in args.paths] + runs
-    (args.out / name).write_text(json.dumps({"trials": TRIALS, "runs": runs}))
+        old = json.loads((args.out / name).read_text())
+        runs = [r for r in old["runs"] if r["path"] not in args.paths] + runs
+        commands = [*old.get("commands", [DEFAULT_COMMAND]), *commands]
+    (args.out / name).write_text(json.dumps({"trials": TRIALS, "commands": commands, "runs": runs}))
 
 
 # -- the report: docs/results/continuous/summary.md and curves.png ----------------------------
@@ -207,18 +218,22 @@ def report(results: Path, out: Path) -> None:
     used: dict[str, set[str]] = {}
     for r in runs:  # runs from before the strategy was recorded were self-sparring, fixed
         setting = f"{r.get('strategy', 'self-sparring')}, {r.get('fit', 'fixed')} kernel"
+        if r.get("lines", 1) != 1:
+            setting += f", {r['lines']} lines per query"
         used.setdefault(r["path"], set()).add(setting)
     how = "; ".join(f"{p}: {' / '.join(sorted(used[p]))}" for p in PATHS if p in used)
     lines = [
         "# The line path on continuous spaces (issue 13)",
         "",
-        "`python benchmarks/study_continuous.py --seeds 6` then `--report`.",
+        *[f"`{c}`" for c in data.get("commands", [DEFAULT_COMMAND])],
+        "then `--report` (with the same `--out`).",
         f"{TRIALS} trials, n = 1, b = 1; strategy and kernel per path: {how}.",
-        "50 points per line, random line directions; kernel (the starting one where it is",
-        "evidence-fitted): lengthscale 0.25 of the range for Hartmann-6, the objective's own for",
-        "the random GP; signal variance 1, jitter 1e-6; model probit noise 0.05; noisy subjects",
-        f"answer with probit noise {NOISY}.  {seeds} seeds per cell (fewer than a full study: a",
-        "shared 2-core machine); mean ± standard error over seeds.",
+        "50 points per line (one line per query unless said), random line directions; kernel",
+        "(the starting one where it is evidence-fitted): lengthscale 0.25 of the range for",
+        "Hartmann-6, the objective's own for the random GP; signal variance 1, jitter 1e-6;",
+        f"model probit noise 0.05; noisy subjects answer with probit noise {NOISY}.  Up to",
+        f"{seeds} seeds per cell (fewer than a full study: a shared 2-core machine); mean ±",
+        "standard error over seeds.",
         "Random GP: a fresh draw per seed (`random-gp:SEED`, lengthscale 0.1 sqrt(d) of the",
         "range); its optimum is estimated (random search + L-BFGS-B). Hartmann-6 acts on the",
         "first six features; in 8-D and 12-D the others are irrelevant.",
@@ -297,7 +312,8 @@ def report(results: Path, out: Path) -> None:
     fig.tight_layout()
     fig.savefig(out / "curves.png", dpi=110)
     lines += ["", "![learning curves](curves.png)", ""]
-    lines += ["Observations and what was not met: [notes.md](notes.md)."]
+    notes = "notes.md" if (out / "notes.md").exists() else "../notes.md"
+    lines += [f"Observations and what was not met: [notes.md]({notes})."]
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 

@@ -136,6 +136,51 @@ def test_lines_span_the_box_and_pass_through_the_origin() -> None:
     )
 
 
+def test_a_star_is_its_first_line_and_random_lines_through_the_same_origin() -> None:
+    domain = Space([Feature.interval(f"x{k}", -1.0, 3.0) for k in range(5)])
+    origin = np.array([0.0, 1.0, 2.0, 0.5, -0.5])
+    one = draw_line(domain, LineSettings(30, "coordinate"), 7, origin)
+    star = draw_line(domain, LineSettings(30, "coordinate", 4), 7, origin)
+    assert star.direction == one.direction and star.origin == one.origin
+    assert np.array_equal(star.points[: len(one.points)], one.points)  # the first line first
+    assert len(star.others) == 3 and len(np.unique(star.points, axis=0)) == len(star.points)
+    assert sum(np.array_equal(p, origin) for p in star.points) == 1  # the origin once
+    for v in star.others:
+        assert np.isclose(np.linalg.norm(v), 1.0)
+        w = np.array(v) * 4.0  # in the features' units (every range is 4)
+        rest = star.points[len(one.points) :] - origin
+        on = np.abs(rest[:, :, None] * w[None, None, :] - rest[:, None, :] * w[None, :, None])
+        assert (on.max(axis=(1, 2)) < 1e-9).sum() >= 29  # this line's points, but the origin
+    assert star.to_json()["others"] == [list(v) for v in star.others]
+    assert "others" not in one.to_json()
+    for bad in (0, 65, True, 2.0):
+        with pytest.raises(ValueError, match="lines per query must be an integer from 1 to 64"):
+            LineSettings(30, "random", bad)  # type: ignore[arg-type]
+
+
+def test_a_star_query_may_be_chosen_on_any_of_its_lines() -> None:
+    domain = Space([Feature.interval(f"x{k}", 0.0, 1.0) for k in range(6)])
+    loop = LineCoSpar(
+        domain,
+        SquaredExponential(0.3, 1.0, 1e-6),
+        0.05,
+        seed=3,
+        strategy=make_strategy("eubo"),
+        line=LineSettings(20, "random", 4),
+    )
+    off_first = 0
+    for _ in range(12):
+        q = loop.ask()
+        assert q.line is not None and len(q.line.others) == 3
+        on_star = {tuple(p) for p in q.line.points.tolist()}
+        origin, v = np.array(q.line.origin), np.array(q.line.direction)
+        first = {tuple(p) for p in line_points(domain, origin, v, 20).tolist()}
+        assert all(p in on_star for p in q.points)
+        off_first += any(p not in first for p in q.points)
+        loop.tell(q, [(q.actions[0], b, "first") for b in q.buffer if b != q.actions[0]])
+    assert off_first > 0  # the star is used: some queries leave the first line
+
+
 @pytest.mark.parametrize("strategy", STRATEGIES)
 def test_every_strategy_chooses_along_the_line(strategy: str) -> None:
     domain = Space([Feature.interval(f"x{k}", 0.0, 1.0) for k in range(4)])

@@ -57,12 +57,19 @@ def _drive(session: Session, n: int) -> None:
 
 
 LOCAL = "[cospar.strategy_settings]\nearly_scale = 0.5\n"  # a local challenger early
+ONE_LINE = "line_count = 1\n"  # LineCoSpar's one line per query (the default is a star of 4)
 
 
-@pytest.mark.parametrize("extra", ["", LOCAL], ids=["plain", "local-challenger"])
+@pytest.mark.parametrize(
+    "extra", ["", ONE_LINE, LOCAL], ids=["star", "one-line", "local-challenger"]
+)
 def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> None:
     url = f"sqlite:///{tmp_path / 's.db'}"
-    cfg = parse_config(TEXT + extra)
+    cfg = parse_config(
+        TEXT.replace("[cospar]\n", "[cospar]\n" + ONE_LINE) if extra == ONE_LINE else TEXT + extra
+    )
+    lines = 1 if extra == ONE_LINE else 4
+    assert cfg.line.lines == lines
     assert cfg.subspace == "line" and cfg.space.continuous
     s = Session.create(url, cfg, "S01", seed=11)
     _drive(s, 6)
@@ -81,7 +88,14 @@ def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> Non
     assert reopened.next_query() == s.next_query()
     events = [e for e in s.events() if e.kind == "query_issued"]
     line = events[-1].payload["line"]
-    assert set(line) == {"seed", "origin", "direction", "points"}
+    if lines == 1:  # what every line-path query stored before stars
+        assert set(line) == {"seed", "origin", "direction", "points"}
+    else:
+        assert set(line) == {"seed", "origin", "direction", "points", "others"}
+        directions = np.array([line["direction"], *line["others"]])
+        assert directions.shape == (lines, 3)
+        np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0)
+        assert len(line["points"]) > 31  # more than one line's 30 points and the origin
     assert events[-1].payload["points"][0] in line["points"]
     reopened.close()
     s.close()

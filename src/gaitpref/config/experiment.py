@@ -57,7 +57,8 @@ class ExperimentConfig:
     safety: Safety = field(default_factory=Safety)  # [safety]
     stop: StopRule = field(default_factory=StopRule)  # [stop]
     subspace: str = "grid"  # [cospar] subspace, resolved: "grid" or "line" (issue 13)
-    line: LineSettings = field(default_factory=LineSettings)  # line_points, line_direction
+    # line_points, line_direction, line_count
+    line: LineSettings = field(default_factory=LineSettings)
 
     @property
     def sha256(self) -> str:

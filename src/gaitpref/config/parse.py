@@ -80,7 +80,7 @@ from __future__ import annotations
 import tomllib
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.feedback import parse_rating, parse_safety
@@ -214,7 +214,7 @@ def parse_config(
         learning=make_learning(model, space),
         sampler=check_sampler(model, 0 if on_line else len(space)),
         subspace="line" if on_line else "grid",
-        line=LineSettings(cospar["line_points"], cospar["line_direction"]),
+        line=LineSettings(cospar["line_points"], cospar["line_direction"], cospar["line_count"]),
         library=library,
         library_path=library_path,
         generator=generator,
@@ -222,12 +222,16 @@ def parse_config(
         ordinal=ordinal,
         safety=safety,
         stop=stop,
-        defaulted=frozenset(f"cospar.{k}" for k in defaulted)
+        defaulted=frozenset(f"cospar.{k}" for k in defaulted if on_line or k not in LINE_KEYS)
         | frozenset(f"gaits.{k}" for k in gaits_defaulted if generator is not None)
         | relied
         | model_defaulted,
         defaults_version=defaults,
     )
+
+
+#: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
+LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count"})
 
 
 def _cospar(

@@ -47,7 +47,7 @@ from gaitpref.loop.learning import (
     TIES_MODES,
     WARM_FIRST,
 )
-from gaitpref.loop.lines import DIRECTIONS
+from gaitpref.loop.lines import DIRECTIONS, MAX_LINES
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
 
@@ -180,6 +180,8 @@ COSPAR: Final[dict[str, Key]] = {
     "subspace": Key(Choice(SUBSPACES), "auto"),
     "line_points": Key(Integer(2, 4096), 50),
     "line_direction": Key(Choice(DIRECTIONS), "random"),
+    # lines per query, all through the best point (a star; 1: LineCoSpar's one line)
+    "line_count": Key(Integer(1, MAX_LINES), 4),
 }
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.
@@ -219,37 +221,48 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.8"
+DEFAULTS_VERSION: Final = "0.10"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
 #: made on demand had no iteration budget, ``[gaits] max_iterations = None``; 0.1 to 0.5: a warm
 #: start re-learned the new subject's share as one MAP value, ``[model] share = "map"``; 0.1 to
 #: 0.6: a config without ``[model] jitter`` had none, ``jitter = 0``; 0.1 to 0.7: a warm start's
-#: first trial was the strategy's, ``[model] warm_first = "strategy"``).
+#: first trial was the strategy's, ``[model] warm_first = "strategy"``; 0.1 to 0.8: the line path
+#: drew one line per query, ``[cospar] line_count = 1``).  "0.9" is not a version: a commit
+#: named it for a default that was withdrawn before release, and it stays unknown, so that a
+#: database written in between fails to open instead of replaying with other defaults.
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
 _MODEL_BEFORE_0_6: Final[dict[str, Any]] = {
     "share": "map",
     "jitter": 0.0,
     "warm_first": "strategy",
 }
+_ONE_LINE: Final[dict[str, Any]] = {"line_count": 1}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
-        "cospar": {"buffer": 0},
+        "cospar": {"buffer": 0, **_ONE_LINE},
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
         "model": _MODEL_BEFORE_0_6,
     },
     "0.2": {
+        "cospar": _ONE_LINE,
         "safety": {"risk": None, "cautious": 0.0},
         "gaits": _UNBOUNDED_GAITS,
         "model": _MODEL_BEFORE_0_6,
     },
-    "0.3": {"safety": {"cautious": 0.0}, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
-    "0.4": {"gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
-    "0.5": {"model": _MODEL_BEFORE_0_6},
-    "0.6": {"model": {"jitter": 0.0, "warm_first": "strategy"}},
-    "0.7": {"model": {"warm_first": "strategy"}},
+    "0.3": {
+        "cospar": _ONE_LINE,
+        "safety": {"cautious": 0.0},
+        "gaits": _UNBOUNDED_GAITS,
+        "model": _MODEL_BEFORE_0_6,
+    },
+    "0.4": {"cospar": _ONE_LINE, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
+    "0.5": {"cospar": _ONE_LINE, "model": _MODEL_BEFORE_0_6},
+    "0.6": {"cospar": _ONE_LINE, "model": {"jitter": 0.0, "warm_first": "strategy"}},
+    "0.7": {"cospar": _ONE_LINE, "model": {"warm_first": "strategy"}},
+    "0.8": {"cospar": _ONE_LINE},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

@@ -14,6 +14,11 @@ Directions: ``"random"`` (uniform on the sphere), ``"coordinate"`` (one feature 
 random) or ``"coactive"`` (from the last executed point towards the point the user's coactive
 suggestions point to, else random).
 
+``lines`` > 1 draws a *star* of lines through the same origin: the first with the direction
+rule, the others random directions, the query chosen among all their points (a union of
+one-dimensional subspaces, as LineBO's Algorithm 1 allows any low-dimensional subspace; the
+posterior on it is the same restriction of the full model).  One line is LineCoSpar's rule.
+
 Every line takes its own seed, drawn from the loop's generator, so the log can name it.  When
 every point of a line is excluded (avoided, near a gait flagged unsafe, in the region of
 avoidance) the loop draws another, at most :data:`LINE_DRAWS` lines per query in all
@@ -39,6 +44,9 @@ DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
 #: box's boundary a line covers only the half of its directions that enter the box), then four
 #: random directions through random points (the best point may sit where every line is excluded)
 LINE_DRAWS = 12
+#: the most lines one query's star holds (``LineSettings.lines``): with ``points`` up to 4096
+#: per line, at most 64 x 4097 candidate points a query
+MAX_LINES = 64
 
 
 @dataclass(frozen=True)
@@ -47,10 +55,19 @@ class LineSettings:
 
     points: int = 50
     direction: Direction = "random"
+    lines: int = 1
 
     def __post_init__(self) -> None:
         if isinstance(self.points, bool) or not isinstance(self.points, int) or self.points < 2:
             raise ValueError(f"a line needs at least 2 points, got points = {self.points!r}")
+        if (
+            isinstance(self.lines, bool)
+            or not isinstance(self.lines, int)
+            or not 1 <= self.lines <= MAX_LINES
+        ):
+            raise ValueError(
+                f"lines per query must be an integer from 1 to {MAX_LINES}, got {self.lines!r}"
+            )
         if self.direction not in DIRECTIONS:
             raise ValueError(
                 f"line direction must be one of {', '.join(DIRECTIONS)}; got {self.direction!r}"
@@ -60,20 +77,26 @@ class LineSettings:
 @dataclass(frozen=True)
 class Line:
     """One drawn subspace: its seed, origin and unit direction (normalised coordinates) and
-    its points in the features' units (``k x d``, distinct, in order of ``t``)."""
+    its points in the features' units (``k x d``, distinct; in order of ``t``, line by line).
+    A star of lines (``LineSettings.lines`` > 1) has the other lines' directions in
+    ``others``, its points those of every line, the first line's first."""
 
     seed: int
     origin: tuple[float, ...]
     direction: tuple[float, ...]
     points: FloatArray = field(repr=False)
+    others: tuple[tuple[float, ...], ...] = ()
 
     def to_json(self) -> dict[str, object]:
-        return {
+        out: dict[str, object] = {
             "seed": self.seed,
             "origin": list(self.origin),
             "direction": list(self.direction),
             "points": self.points.tolist(),
         }
+        if self.others:
+            out["others"] = [list(v) for v in self.others]
+        return out
 
 
 def _spans(space: Space) -> tuple[FloatArray, FloatArray]:
@@ -142,13 +165,26 @@ def draw_line(
     origin: FloatArray | None,
     towards: FloatArray | None = None,
 ) -> Line:
-    """The line of seed ``seed`` through ``origin`` (a random point when None)."""
+    """The line of seed ``seed`` through ``origin`` (a random point when None); with
+    ``settings.lines`` > 1, the star of that many lines through it (the others random
+    directions, drawn after the first from the same seed)."""
     rng = np.random.default_rng(seed)
     start = random_point(space, rng) if origin is None else np.asarray(origin, dtype=np.float64)
     v = direction(space, settings.direction, rng, towards)
     points = line_points(space, start, v, settings.points)
+    others = [direction(space, "random", rng) for _ in range(settings.lines - 1)]
+    if others:
+        star = np.vstack([points, *(line_points(space, start, w, settings.points) for w in others)])
+        _, first = np.unique(star, axis=0, return_index=True)
+        points = star[np.sort(first)]
     points.setflags(write=False)
-    return Line(seed, tuple(start.tolist()), tuple(v.tolist()), points)
+    return Line(
+        seed,
+        tuple(start.tolist()),
+        tuple(v.tolist()),
+        points,
+        tuple(tuple(w.tolist()) for w in others),
+    )
 
 
 def redraw_rule(settings: LineSettings, draw: int) -> tuple[LineSettings, bool]:
@@ -156,7 +192,7 @@ def redraw_rule(settings: LineSettings, draw: int) -> tuple[LineSettings, bool]:
     :data:`LINE_DRAWS`), and whether it passes through the best point (else a random point)."""
     if draw < LINE_DRAWS // 3:
         return settings, True
-    return LineSettings(settings.points, "random"), draw < 2 * LINE_DRAWS // 3
+    return LineSettings(settings.points, "random", settings.lines), draw < 2 * LINE_DRAWS // 3
 
 
 def normalised(space: Space, delta: FloatArray) -> FloatArray:
@@ -169,6 +205,7 @@ def normalised(space: Space, delta: FloatArray) -> FloatArray:
 __all__ = [
     "DIRECTIONS",
     "LINE_DRAWS",
+    "MAX_LINES",
     "Direction",
     "Line",
     "LineSettings",

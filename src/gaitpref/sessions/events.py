@@ -89,13 +89,24 @@ class Created(EventPayload):
 
 class LineDrawn(BaseModel):
     """The line a line-path query was chosen along (``loop/lines.py``): its seed, origin,
-    unit direction (range-normalised) and points (the features' units)."""
+    unit direction (range-normalised) and points (the features' units); for a star of lines
+    (``[cospar] line_count`` > 1; absent for one line, as every query stored before) the other
+    lines' directions, ``others``, the points being every line's."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
     seed: int
     origin: list[float]
     direction: list[float]
     points: list[list[float]]
+    others: list[list[float]] | None = None
+
+    @model_serializer(mode="wrap")
+    def _one_line(self, handler: SerializerFunctionWrapHandler) -> Any:
+        """One line stores what every line-path query stored before stars."""
+        out = handler(self)
+        if isinstance(out, dict) and out.get("others") is None:
+            out.pop("others", None)
+        return out
 
 
 class QueryIssued(EventPayload):

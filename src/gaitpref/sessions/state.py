@@ -605,6 +605,7 @@ def _line_fields(query: Query) -> dict[str, Any]:
             origin=list(line.origin),
             direction=list(line.direction),
             points=line.points.tolist(),
+            others=[list(v) for v in line.others] if line.others else None,
         ),
     }
 
