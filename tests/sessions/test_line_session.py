@@ -137,3 +137,23 @@ def test_session_show_draws_a_continuous_session(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     assert json.loads(result.output)["trials"] == 5
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and figure.stat().st_size > 10_000
+
+
+def test_a_session_recorded_under_defaults_0_8_replays_with_one_line(tmp_path: Path) -> None:
+    """A line session recorded before the star (defaults 0.8: one line per query) reopens and
+    goes on with one line, its queries stored as before (no ``others``)."""
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    old = parse_config(TEXT, defaults="0.8")
+    assert old.line.lines == 1
+    s = Session.create(url, old, "S01", seed=4)
+    _drive(s, 5)
+    s.close()
+    reopened = Session.open(url, 1)
+    _drive(reopened, 2)
+    lines = [e.payload["line"] for e in reopened.events() if e.kind == "query_issued"]
+    assert len(lines) == 7 and all("others" not in line for line in lines)
+    q = reopened.next_query()
+    reopened.close()
+    again = Session.open(url, 1)  # replays again, exactly, the pending query included
+    assert again.next_query() == q
+    again.close()
