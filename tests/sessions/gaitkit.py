@@ -88,10 +88,11 @@ def prefer_short_steps(s: Session, queries: int) -> None:
 def paired_line_session(storage: Storage, seed: int, jitter: float | None = None) -> Session:
     """A session of :data:`CONTINUOUS` (the line path) with ``seed`` and two gaits per query;
     ``jitter``: the model's (None: the config's 0, under which some seeds' visited points stop
-    being positive definite, as before defaults 0.7)."""
+    being positive definite, as before defaults 0.7).  One line per query (``line_count = 1``,
+    the default before defaults 0.10): the seeds the tests name reach their cases with it."""
     from gaitpref.config import parse_config
 
-    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2")
+    text = CONTINUOUS.replace("seed = 4", f"seed = {seed}\nn = 2\nline_count = 1")
     if jitter is not None:
         text = text.replace("jitter = 0.0", f"jitter = {jitter!r}")
     return Session.create(storage, parse_config(text), subject="S01")
