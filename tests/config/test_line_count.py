@@ -7,6 +7,7 @@ import pytest
 
 from gaitpref import ConfigError
 from gaitpref.config import parse_config
+from gaitpref.loop import LineSettings
 from gaitpref.sessions.stored_config import config_of, library_meta
 from tests.config.records import stored_record
 
@@ -61,3 +62,11 @@ def test_0_9_is_not_a_defaults_version() -> None:
 def test_a_bad_line_count_names_the_key(bad: str) -> None:
     with pytest.raises(ConfigError, match=r"cospar.*line_count"):
         parse_config(LINE + f"[cospar]\nline_count = {bad}\n")
+
+
+def test_a_star_past_the_points_limit_names_the_key_and_what_to_lower() -> None:
+    with pytest.raises(ConfigError, match=r"cospar.*line_count.*4 lines of line_points = 2000"):
+        parse_config(LINE + "[cospar]\nline_points = 2000\n")  # the default 4 lines
+    assert parse_config(LINE + "[cospar]\nline_points = 2000\nline_count = 2\n").line.lines == 2
+    with pytest.raises(ValueError, match="8 lines of 1000 points are 8000 points a query"):
+        LineSettings(1000, "random", 8)

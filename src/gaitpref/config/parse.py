@@ -108,7 +108,7 @@ from gaitpref.config.specs import fail
 from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
-from gaitpref.loop.lines import LineSettings
+from gaitpref.loop.lines import MAX_STAR_POINTS, LineSettings
 from gaitpref.space import Space
 from gaitpref.strategies import make_strategy
 
@@ -245,6 +245,15 @@ def _cospar(
     if cospar["subspace"] == "auto":
         cospar["subspace"] = "grid" if why is None else "line"
     if cospar["subspace"] == "line":
+        star = cospar["line_count"] * cospar["line_points"]
+        if star > MAX_STAR_POINTS:
+            fail(
+                "cospar",
+                "line_count",
+                f"is {cospar['line_count']} lines of line_points = {cospar['line_points']}, "
+                f"{star} points a query, more than {MAX_STAR_POINTS}: lower line_count "
+                "(1: one line, as before defaults 0.10) or line_points",
+            )
         return cospar, defaulted
     size = len(space)
     for key in ("n", "buffer"):

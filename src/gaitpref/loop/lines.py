@@ -44,9 +44,11 @@ DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
 #: box's boundary a line covers only the half of its directions that enter the box), then four
 #: random directions through random points (the best point may sit where every line is excluded)
 LINE_DRAWS = 12
-#: the most lines one query's star holds (``LineSettings.lines``): with ``points`` up to 4096
-#: per line, at most 64 x 4097 candidate points a query
+#: the most lines one query's star holds (``LineSettings.lines``)
 MAX_LINES = 64
+#: the most points a query's lines hold together (``lines x points``): the posterior over the
+#: table and the star is a dense matrix over them (one line of 4096 points, as before stars)
+MAX_STAR_POINTS = 4096
 
 
 @dataclass(frozen=True)
@@ -67,6 +69,11 @@ class LineSettings:
         ):
             raise ValueError(
                 f"lines per query must be an integer from 1 to {MAX_LINES}, got {self.lines!r}"
+            )
+        if self.lines * self.points > MAX_STAR_POINTS:
+            raise ValueError(
+                f"{self.lines} lines of {self.points} points are {self.lines * self.points} "
+                f"points a query, more than {MAX_STAR_POINTS}: fewer lines or fewer points"
             )
         if self.direction not in DIRECTIONS:
             raise ValueError(
@@ -206,6 +213,7 @@ __all__ = [
     "DIRECTIONS",
     "LINE_DRAWS",
     "MAX_LINES",
+    "MAX_STAR_POINTS",
     "Direction",
     "Line",
     "LineSettings",
