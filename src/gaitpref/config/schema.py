@@ -47,7 +47,7 @@ from gaitpref.loop.learning import (
     TIES_MODES,
     WARM_FIRST,
 )
-from gaitpref.loop.lines import DIRECTIONS, MAX_LINES
+from gaitpref.loop.lines import DIRECTIONS, MAX_LINES, MAX_STAR_POINTS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
 
@@ -75,6 +75,7 @@ LIMITS: Final[dict[str, float]] = {
     "magnitude": MAX_MAGNITUDE,
     "smallest scale": MIN_SCALE,
     "signal to noise": MAX_SIGNAL_TO_NOISE,
+    "line points a query": MAX_STAR_POINTS,
 }
 
 
