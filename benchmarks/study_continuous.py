@@ -63,7 +63,8 @@ def kernel(objective: str, d: int) -> SquaredExponential:
 
 def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, seed: int,
             optimum: float | None, line_strategy: str = "self-sparring",
-            line_fit: str = "fixed", line_count: int = 1) -> dict[str, Any]:  # fmt: skip
+            line_fit: str = "fixed", line_count: int = 1,
+            line_points: int = 50) -> dict[str, Any]:  # fmt: skip
     domain = box(d) if path == "line" else grid6()
     fn = builtin(objective, domain, seed)
     if optimum is None:  # the objective's best over the domain
@@ -78,7 +79,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
     else:
         strategy = make_strategy(line_strategy)
         learning = Learning(fit="evidence" if line_fit == "evidence" else "fixed")
-        line = LineSettings(50, "random", line_count)
+        line = LineSettings(line_points, "random", line_count)
         loop = LineCoSpar(domain, k, PREF_NOISE, line=line, strategy=strategy,
                           learning=learning, **settings)  # fmt: skip
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
@@ -91,6 +92,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
         "seed": seed, "seconds": time.perf_counter() - start, "optimum": optimum,
         "strategy": strategy.name, "fit": loop.learning.fit,
         **({"lines": line_count} if path not in GRID_STRATEGY and line_count != 1 else {}),
+        **({"points": line_points} if path not in GRID_STRATEGY and line_points != 50 else {}),
         "random_mean": float(rand.mean()), "worst": float(fn(domain.points).min())
         if path != "line" else float(rand.min()),
         "curve": res.curve.tolist(), "best_at": {str(k): v for k, v in res.best_at.items()},
@@ -125,6 +127,7 @@ def main() -> None:
     parser.add_argument("--line-strategy", default="self-sparring")
     parser.add_argument("--line-fit", choices=("fixed", "evidence"), default="fixed")
     parser.add_argument("--line-count", type=int, default=1, help="lines per query")
+    parser.add_argument("--line-points", type=int, default=50, help="points per line")
     args = parser.parse_args()
     if args.report:
         report(args.out / "results.json", args.out)
@@ -137,7 +140,7 @@ def main() -> None:
             known = HARTMANN6_MAX if objective == "hartmann6" and path == "line" else None
             r = one_run(
                 path, objective, d, coactive, noise, seed, known,
-                args.line_strategy, args.line_fit, args.line_count,
+                args.line_strategy, args.line_fit, args.line_count, args.line_points,
             )  # fmt: skip
             runs.append(r)
             print(
@@ -220,6 +223,8 @@ def report(results: Path, out: Path) -> None:
         setting = f"{r.get('strategy', 'self-sparring')}, {r.get('fit', 'fixed')} kernel"
         if r.get("lines", 1) != 1:
             setting += f", {r['lines']} lines per query"
+        if r.get("points", 50) != 50:
+            setting += f" of {r['points']} points"
         used.setdefault(r["path"], set()).add(setting)
     how = "; ".join(f"{p}: {' / '.join(sorted(used[p]))}" for p in PATHS if p in used)
     lines = [
@@ -228,7 +233,7 @@ def report(results: Path, out: Path) -> None:
         *[f"`{c}`" for c in data.get("commands", [DEFAULT_COMMAND])],
         "then `--report` (with the same `--out`).",
         f"{TRIALS} trials, n = 1, b = 1; strategy and kernel per path: {how}.",
-        "50 points per line (one line per query unless said), random line directions; kernel",
+        "50 points per line, one line per query (unless said), random line directions; kernel",
         "(the starting one where it is evidence-fitted): lengthscale 0.25 of the range for",
         "Hartmann-6, the objective's own for the random GP; signal variance 1, jitter 1e-6;",
         f"model probit noise 0.05; noisy subjects answer with probit noise {NOISY}.  Up to",
