@@ -51,6 +51,9 @@ def test_sessions_recorded_before_0_10_replay_with_one_line() -> None:
 def test_a_grid_config_does_not_rely_on_the_line_keys() -> None:
     cfg = parse_config(GRID + EXPLICIT + "[cospar]\nbuffer = 1\n")
     assert cfg.subspace == "grid" and not cfg.relies_on_changed_defaults
+    # a grid draws no lines: its line keys are read, and no star is built or checked
+    wide = parse_config(GRID + "[cospar]\nline_points = 2000\n")
+    assert wide.subspace == "grid" and wide.line.points == 2000 and wide.line.lines == 1
 
 
 def test_0_9_is_not_a_defaults_version() -> None:

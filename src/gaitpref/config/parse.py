@@ -214,7 +214,7 @@ def parse_config(
         learning=make_learning(model, space),
         sampler=check_sampler(model, 0 if on_line else len(space)),
         subspace="line" if on_line else "grid",
-        line=LineSettings(cospar["line_points"], cospar["line_direction"], cospar["line_count"]),
+        line=cospar["line"],
         library=library,
         library_path=library_path,
         generator=generator,
@@ -237,7 +237,8 @@ LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count"})
 def _cospar(
     raw: object, space: Space, defaults: str, max_actions: int
 ) -> tuple[dict[str, Any], frozenset[str]]:
-    """``[cospar]`` checked; ``subspace`` resolved to ``"grid"`` or ``"line"``."""
+    """``[cospar]`` checked; ``subspace`` resolved to ``"grid"`` or ``"line"``; ``line`` the
+    line path's settings (a grid draws no lines: one line of ``line_points``, unchecked)."""
     cospar, defaulted = check_table(raw, "cospar", COSPAR, defaults_for(defaults, "cospar"))
     why = grid_too_large(space, max_actions)
     if cospar["subspace"] == "grid" and why is not None:
@@ -254,7 +255,10 @@ def _cospar(
                 f"{star} points a query, more than {MAX_STAR_POINTS}: lower line_count "
                 "(1: one line, as before defaults 0.10) or line_points",
             )
+        lines = cospar["line_count"]
+        cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"], lines)
         return cospar, defaulted
+    cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"])
     size = len(space)
     for key in ("n", "buffer"):
         if cospar[key] > size:
