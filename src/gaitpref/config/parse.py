@@ -118,6 +118,8 @@ DEFAULT_FIT: FitMode = DEFAULTS["model"]["fit"]
 DEFAULT_REFIT_EVERY: int = DEFAULTS["model"]["refit_every"]
 DEFAULT_STRATEGY: str = DEFAULTS["cospar"]["strategy"]
 DEFAULT_BUFFER: int = DEFAULTS["cospar"]["buffer"]
+#: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
+LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count"})
 
 
 def shipped_configs() -> list[str]:
@@ -228,10 +230,6 @@ def parse_config(
         | model_defaulted,
         defaults_version=defaults,
     )
-
-
-#: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
-LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count"})
 
 
 def _cospar(

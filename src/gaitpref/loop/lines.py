@@ -160,8 +160,13 @@ def line_points(space: Space, origin: FloatArray, v: FloatArray, count: int) -> 
         [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
     )
     snapped[ts == 0.0] = origin  # exactly the best point, not a rounding of it
-    _, first = np.unique(snapped, axis=0, return_index=True)
-    out: FloatArray = snapped[np.sort(first)]
+    return _distinct(snapped)
+
+
+def _distinct(rows: FloatArray) -> FloatArray:
+    """``rows`` without repeats, each kept where it first appears."""
+    _, first = np.unique(rows, axis=0, return_index=True)
+    out: FloatArray = rows[np.sort(first)]
     return out
 
 
@@ -181,9 +186,8 @@ def draw_line(
     points = line_points(space, start, v, settings.points)
     others = [direction(space, "random", rng) for _ in range(settings.lines - 1)]
     if others:
-        star = np.vstack([points, *(line_points(space, start, w, settings.points) for w in others)])
-        _, first = np.unique(star, axis=0, return_index=True)
-        points = star[np.sort(first)]
+        rest = (line_points(space, start, w, settings.points) for w in others)
+        points = _distinct(np.vstack([points, *rest]))
     points.setflags(write=False)
     return Line(
         seed,
