@@ -156,3 +156,53 @@ def test_the_token_redirect_never_leaves_the_console(path: str, expected: str) -
 def test_the_token_redirect_over_http(guarded: TestClient) -> None:
     r = guarded.get("/sessions/3", params={"token": TOKEN, "page": "2"})
     assert r.status_code == 303 and r.headers["location"] == "/sessions/3?page=2"
+
+
+BODYLESS = ["undo", "validation", "trials/1/unsafe/withdraw"]
+
+
+@pytest.mark.parametrize("action", BODYLESS)
+@pytest.mark.parametrize(
+    "headers",
+    [
+        {"origin": "http://evil.example", "content-type": "text/plain"},
+        {"origin": "http://testserver:8001"},  # another console or app on the same host
+        {"origin": "null"},  # a sandboxed frame or a file:// page
+        {"sec-fetch-site": "cross-site"},
+    ],
+)
+def test_a_change_a_browser_says_is_cross_origin_is_refused(
+    client: TestClient, action: str, headers: dict[str, str]
+) -> None:
+    """The body-less API posts are "simple" requests a foreign page could send without a CORS
+    preflight: a foreign Origin (or Sec-Fetch-Site) refuses them before anything runs."""
+    from tests.console.conftest import answer_once, event_count, new_session
+
+    sid = new_session(client)
+    answer_once(client, sid)
+    client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "pain"})
+    before = event_count(client, sid)
+    r = client.post(f"/api/sessions/{sid}/{action}", content=b"", headers=headers)
+    assert r.status_code == 403 and "cross-origin request refused" in r.json()["detail"]
+    assert event_count(client, sid) == before
+    assert client.get(f"/api/sessions/{sid}", headers=headers).status_code == 200  # reads are fine
+
+
+@pytest.mark.parametrize(
+    "headers",
+    [
+        {},  # scripts and command-line clients send no Origin
+        {"origin": "http://testserver"},
+        {"origin": "http://TestServer:80", "sec-fetch-site": "same-origin"},
+        {"origin": "https://console.lab.example", "x-forwarded-host": "console.lab.example"},
+    ],
+)
+def test_the_consoles_own_origin_and_clients_without_one_may_change(
+    client: TestClient, headers: dict[str, str]
+) -> None:
+    from tests.console.conftest import answer_once, new_session
+
+    sid = new_session(client)
+    answer_once(client, sid)
+    r = client.post(f"/api/sessions/{sid}/undo", headers=headers)
+    assert r.status_code == 200, r.text

@@ -11,6 +11,12 @@
   so a page from another origin can neither read nor forge it.  The JSON API needs no CSRF token:
   it only accepts ``application/json`` bodies, which a cross-origin page cannot send without a
   CORS preflight that this console never grants.
+- **Origin.**  A request that can change something (any method but GET, HEAD and OPTIONS) is
+  refused with 403 when a browser says it comes from another origin: an ``Origin`` header that
+  names another host and port than the request's ``Host`` (or ``X-Forwarded-Host``), ``Origin:
+  null``, or ``Sec-Fetch-Site: cross-site``.  So a foreign page cannot post the API's body-less
+  actions (undo, withdraw a flag, open a validation round) as a "simple" request, which needs no
+  preflight; scripts and command-line clients send no ``Origin`` and are unaffected.
 - **Host.**  Optionally only listed ``Host`` headers are served (DNS-rebinding protection for a
   console on the loopback interface).
 """
@@ -24,7 +30,7 @@ import secrets
 from collections.abc import Iterable
 from http.cookies import SimpleCookie
 from typing import TYPE_CHECKING
-from urllib.parse import parse_qsl, quote, urlencode
+from urllib.parse import parse_qsl, quote, urlencode, urlsplit
 
 if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlette
     from starlette.types import ASGIApp, Receive, Scope, Send
@@ -80,8 +86,39 @@ def local_path(path: str) -> str:
     return "/" + quote(path.lstrip("/\\"), safe="/:@!$&'()*+,;=-._~")
 
 
+SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+_DEFAULT_PORTS = {"http": "80", "https": "443"}
+
+
+def _authority(netloc: str, scheme: str) -> str:
+    """``host[:port]`` lowercased, without the scheme's default port."""
+    netloc = netloc.strip().lower()
+    default = _DEFAULT_PORTS.get(scheme)
+    if default and netloc.endswith(f":{default}"):
+        return netloc[: -len(default) - 1]
+    return netloc
+
+
+def foreign_origin(headers: dict[str, str], scheme: str) -> str | None:
+    """Why a request comes from another origin, as a browser says (None: it does not say so)."""
+    if headers.get("sec-fetch-site", "").strip().lower() == "cross-site":
+        return "Sec-Fetch-Site: cross-site"
+    origin = headers.get("origin")
+    if origin is None:
+        return None
+    parts = urlsplit(origin.strip())
+    if not parts.scheme or not parts.netloc:
+        return f"Origin {origin[:100]!r}"
+    served = headers.get("x-forwarded-host") or headers.get("host", "")
+    here = {_authority(h, s) for h in served.split(",")[:1] for s in (scheme, parts.scheme)}
+    if _authority(parts.netloc, parts.scheme) not in here:
+        return f"Origin {origin[:100]!r} is not this console ({served[:100]!r})"
+    return None
+
+
 class AccessMiddleware:
-    """Refuse requests without the access token (if one is set) or with a foreign Host header."""
+    """Refuse requests without the access token (if one is set), with a foreign Host header, or
+    changes a browser says come from another origin."""
 
     def __init__(
         self, app: ASGIApp, token: str | None, allowed_hosts: Iterable[str] | None = None
@@ -106,6 +143,18 @@ class AccessMiddleware:
             host = _hostname(headers.get("host", ""))
             if host not in self.allowed_hosts:
                 await _send_plain(send, 400, {"detail": f"host {host!r} is not served here"})
+                return
+        if scope["method"] not in SAFE_METHODS:
+            foreign = foreign_origin(headers, scope.get("scheme", "http"))
+            if foreign is not None:
+                await _send_plain(
+                    send,
+                    403,
+                    {
+                        "detail": f"cross-origin request refused ({foreign}): this console takes "
+                        "changes only from its own pages and from clients that send no Origin"
+                    },
+                )
                 return
         if self.token is None:
             await self.app(scope, receive, send)
