@@ -188,6 +188,16 @@ class Terminal:
         except SessionStateError as exc:
             self.console.print(f"  cannot undo: {exc}", markup=False)
             return
+        except NoSafeGaitError as exc:
+            self.console.print(f"No gait to propose: {exc}", markup=False)
+            raise _QuitError from None
+        if pending is None or (answered and pending.id != answered[-1].query):
+            self.console.print(
+                "Undone; its query proposed a gait flagged unsafe since and was withdrawn: "
+                "a new query is proposed in its place.",
+                markup=False,
+            )
+            return
         trials = ", ".join(map(str, pending.trials))
         self.console.print(f"Undone: the answer to trial {trials} is asked again.", markup=False)
 

@@ -295,6 +295,8 @@ def test_undo_makes_the_answered_query_pending_again(client: TestClient) -> None
         "pending_query_id": first["query_id"],
         "trials": [1],
         "discarded_query_id": q2["query_id"],
+        "undone_query_id": first["query_id"],
+        "withdrawn": False,
     }
     again = client.get(f"/api/sessions/{sid}/query").json()
     assert again["query_id"] == first["query_id"]

@@ -241,3 +241,31 @@ def test_the_posterior_figure_draws_with_flags(client: TestClient) -> None:
     client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "fell"})
     png = client.get(f"/sessions/{sid}/posterior.png")
     assert png.status_code == 200 and png.content[:4] == b"\x89PNG"
+
+
+def test_an_undo_whose_query_proposes_a_gait_flagged_since_proposes_anew(
+    client: TestClient,
+) -> None:
+    from tests.sessions.test_unsafe import CONFIG  # seed 1 runs gaits 6, then 8 near it
+
+    sid = new_session(client, CONFIG)
+    answer(client, sid, [])
+    answer(client, sid, [])
+    first, second = (t["gait"]["index"] for t in client.get(f"/api/sessions/{sid}/trials").json())
+    banned = near(parse_config(CONFIG).space, [first], 0.15)
+    assert banned[second]
+    pending = query(client, sid)
+    assert client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "hip"}).is_success
+    undone = client.post(f"/api/sessions/{sid}/undo", json={})
+    assert undone.status_code == 200, undone.text
+    body = undone.json()
+    assert body["withdrawn"] is True and body["trials"] == [2]
+    assert body["pending_query_id"] != body["undone_query_id"]
+    q = query(client, sid)
+    assert q["query_id"] == body["pending_query_id"] and q["query_id"] != pending["query_id"]
+    assert not any(banned[g["index"]] for g in q["actions"])
+    again = client.post(
+        f"/api/sessions/{sid}/answers",
+        json={"query_id": body["undone_query_id"], "comparisons": []},
+    )
+    assert again.status_code == 409  # the withdrawn query takes no answer

@@ -124,3 +124,94 @@ def test_exports_name_gaits_and_mark_unsafe_trials(tmp_path: Path) -> None:
     with (tmp_path / "out" / "comparisons.csv").open() as f:
         first = next(csv.DictReader(f))
     assert first["first_gait"] == f"G{first['first_action']}"
+
+
+def _flag_then_undo(url: str, pause: bool) -> tuple[Session, int]:
+    """Seed 1 runs gaits 6 then 8 (within the flag's radius of 6); flag trial 1, then undo
+    trial 2's answer (optionally paused first)."""
+    s = Session.create(url, parse_config(CONFIG), "S01")
+    _answer(s, 0)
+    _answer(s, 1)
+    first, second = (t.action for t in s.trials())
+    assert near(s.config.space, {first}, 0.15)[second]  # the case under test
+    s.next_query()
+    s.flag_unsafe(1, "ankle pain")
+    if pause:
+        s.pause()
+    return s, first
+
+
+def test_an_undo_withdraws_its_query_when_it_proposes_a_gait_flagged_since(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    s, first = _flag_then_undo(url, pause=False)
+    undone = s.undo()
+    assert undone is not None and s.pending == undone and undone.trials == (2,)
+    banned = near(s.config.space, {first}, 0.15)
+    assert not any(banned[a] for a in undone.actions)
+    mean = np.asarray(s.posterior().mean).copy()
+    s.close()
+    with Session.open(url, s.id) as again:  # the replay derives the same withdrawal
+        assert again.pending == undone
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+        again.answer(undone.id, [])
+        assert [t.action for t in again.trials()][1] == undone.actions[0]
+
+
+def test_an_undo_while_paused_proposes_nothing_until_resumed(tmp_path: Path) -> None:
+    s, first = _flag_then_undo(f"sqlite:///{tmp_path / 'u.db'}", pause=True)
+    with s:
+        assert s.undo() is None and s.pending is None
+        s.resume()
+        q = s.next_query()
+        assert not near(s.config.space, {first}, 0.15)[q.actions[0]]
+
+
+def _flag_near_the_best(s: Session) -> tuple[np.ndarray, tuple[int, int, int]]:
+    """Six answers, then flag the trial nearest the posterior's max: what every gait's rule
+    would show (max, mean, min) and the gaits the flag bans."""
+    from gaitpref.sessions.validation import validation_actions
+
+    for k in range(6):
+        _answer(s, k)
+    shown = validation_actions(np.asarray(s.posterior().mean))
+    trial = min(s.trials(), key=lambda t: abs(t.action - shown[0]))
+    banned = near(s.config.space, {trial.action}, 0.15)
+    assert banned[shown[0]]  # the case under test: the max is within the flag's radius
+    s.flag_unsafe(trial.number, "hip pain")
+    return banned, shown
+
+
+def test_blind_validation_never_shows_a_gait_near_an_unsafe_flag(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    with Session.create(url, parse_config(CONFIG), "S01") as s:
+        banned, _ = _flag_near_the_best(s)
+        plan = s.start_validation()
+        assert not any(banned[g.action] for g in plan.gaits)
+        mean = np.asarray(s.posterior().mean)
+        allowed = np.flatnonzero(~banned)
+        assert {g.action for g in plan.gaits} >= {int(allowed[np.argmax(mean[allowed])])}
+        sid = s.id
+    with Session.open(url, sid) as again:
+        assert again.validation_plan == plan
+
+
+def test_a_round_logged_as_version_1_replays_by_its_own_rule(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Rounds logged before payload version 2 chose among every gait; they replay so."""
+    from gaitpref.sessions import events
+
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    with Session.create(url, parse_config(CONFIG), "S01") as s:
+        banned, shown = _flag_near_the_best(s)
+        monkeypatch.setattr(events.ValidationStarted, "version", 1)
+        plan = s.start_validation()
+        monkeypatch.undo()
+        assert sorted(g.action for g in plan.gaits) == sorted(shown)
+        assert any(banned[g.action] for g in plan.gaits)  # as version 1 chose
+        sid = s.id
+    with Session.open(url, sid) as again:
+        assert again.validation_plan == plan
+        assert [e.version for e in again.events() if e.kind == "validation_started"] == [1]

@@ -262,8 +262,16 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
         if session.status == "finished":
             fail(f"session {session_id} is finished: nothing can be undone")
         _confirm(f"Undo the last answer of session {session_id}?", yes)
+        done = session.trials()
+        last = done[-1].query if done else None
         pending = guard(session.undo)
-        console.print(f"undone: the answer to trial {', '.join(map(str, pending.trials))}")
+        trials = ", ".join(str(t.number) for t in done if t.query == last)
+        console.print(f"undone: the answer to trial {trials}")
+        if pending is None or pending.id != last:
+            console.print(
+                "its query proposed a gait flagged unsafe since and was withdrawn: "
+                "a new query is proposed in its place"
+            )
 
 
 @session_app.command("exclude")

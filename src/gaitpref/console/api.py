@@ -152,15 +152,17 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
 def undo(
     request: Request, session_id: SessionId, body: Annotated[UndoIn | None, Body()] = None
 ) -> UndoneOut:
-    """Take back the last answer; its query is pending again.  With ``query_id``, refused (409)
-    unless that query is the pending one (so two clients cannot undo twice)."""
-    service = service_of(request)
-    before = service.get(session_id).pending
-    query = service.undo(session_id, None if body is None else body.query_id)
+    """Take back the last answer; its query is pending again (or, where it proposed a gait
+    flagged unsafe since, a new query in its place: ``withdrawn``).  With ``query_id``, refused
+    (409) unless that query is the pending one (so two clients cannot undo twice)."""
+    done = service_of(request).undo(session_id, None if body is None else body.query_id)
+    pending = done.pending
     return UndoneOut(
-        pending_query_id=query.id,
-        trials=list(query.trials),
-        discarded_query_id=None if before is None else before.id,
+        pending_query_id=None if pending is None else pending.id,
+        trials=list(done.trials if pending is None else pending.trials),
+        discarded_query_id=done.discarded_query,
+        undone_query_id=done.undone_query,
+        withdrawn=done.withdrawn,
     )
 
 

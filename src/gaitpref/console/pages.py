@@ -166,6 +166,7 @@ async def trial_page(
     undone: Annotated[str | None, Query(max_length=200)] = None,
     flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
+    replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
 ) -> Response:
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
@@ -173,6 +174,11 @@ async def trial_page(
     flash = ""
     if answered:
         flash = f"Saved: trial {answered}."
+    elif undone and replaced:
+        flash = (
+            f"Undone: the answer to trial {undone} was taken back; its query proposed a gait "
+            "flagged unsafe since, so a new query is proposed in its place."
+        )
     elif undone:
         flash = f"Undone: the answer to trial {undone} was taken back; run it again."
     elif flagged:
@@ -251,8 +257,9 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
             note="",
             action=f"/sessions/{session_id}/undo",
         )
-    query = await run_in_threadpool(service.undo, session_id, query_id)
-    return see_other(f"/sessions/{session_id}?undone={','.join(map(str, query.trials))}")
+    done = await run_in_threadpool(service.undo, session_id, query_id)
+    flag = "&replaced=1" if done.withdrawn else ""
+    return see_other(f"/sessions/{session_id}?undone={','.join(map(str, done.trials))}{flag}")
 
 
 @router.post("/sessions/{session_id}/note")

@@ -142,12 +142,19 @@ class UndoIn(_Request):
 
 
 class UndoneOut(BaseModel):
-    pending_query_id: int = Field(
-        description="the query whose answer was taken back, pending again"
+    pending_query_id: int | None = Field(
+        description="the query pending now: the one whose answer was taken back, or, when it "
+        "proposed a gait flagged unsafe since, a new one in its place (null while the session is "
+        "paused or a validation round is open: GET /query proposes it)"
     )
     trials: list[int] = Field(description="its trial numbers (they will be given again)")
     discarded_query_id: int | None = Field(
         description="the query that was pending before the undo (withdrawn)"
+    )
+    undone_query_id: int = Field(description="the query whose answer was taken back")
+    withdrawn: bool = Field(
+        description="the undone query proposed a gait flagged unsafe after it was asked, so it "
+        "was withdrawn rather than asked again"
     )
 
 

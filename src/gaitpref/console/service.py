@@ -49,6 +49,23 @@ class Pending:
     detail: str = ""  # why, in words (the NoSafeGaitError's message)
 
 
+@dataclass(frozen=True)
+class Undone:
+    """An undo, read under the session's lock: the query whose answer was taken back (its
+    ``trials``), the query pending now (the same one, or a new one where it was withdrawn for
+    proposing a gait flagged unsafe since; None while none may be proposed yet), and the query
+    that was pending before the undo."""
+
+    undone_query: int
+    trials: tuple[int, ...]
+    pending: SessionQuery | None
+    discarded_query: int | None
+
+    @property
+    def withdrawn(self) -> bool:
+        return self.pending is None or self.pending.id != self.undone_query
+
+
 class SessionService:
     """Sessions of one database, opened once and shared by all requests (thread-safe)."""
 
@@ -163,7 +180,7 @@ class SessionService:
                 session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
             return answered
 
-    def undo(self, session_id: int, expected_query: int | None = None) -> SessionQuery:
+    def undo(self, session_id: int, expected_query: int | None = None) -> Undone:
         """Take back the last answer; with ``expected_query``, only if that query is pending."""
         with self.locked(session_id) as session:
             if expected_query is not None:
@@ -174,7 +191,17 @@ class SessionService:
                         f"the undo was asked while query {expected_query} was pending, but now "
                         f"{now} pending (another tab answered or undid first); nothing was undone"
                     )
-            return session.undo()
+            before = session.pending
+            done = session.trials()
+            undone = done[-1].query if done else None
+            pending = session.undo()
+            assert undone is not None  # an undo with no answer in force raised above
+            return Undone(
+                undone_query=undone,
+                trials=tuple(t.number for t in done if t.query == undone),
+                pending=pending,
+                discarded_query=None if before is None else before.id,
+            )
 
     def acknowledge(self, session_id: int, query_id: int) -> bool:
         """A device controller loaded the gaits of ``query_id``: logged once as a note.

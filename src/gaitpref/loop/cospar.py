@@ -562,7 +562,38 @@ class CoSpar:
         return out
 
     def undo(self) -> Answer:
-        """Take back the last answer: its query is pending again, as it was before the answer."""
+        """Take back the last answer: its query is pending again, as it was before the answer;
+        unless it proposes a gait flagged unsafe or avoided since it was asked, when it is
+        withdrawn as by :meth:`flag_unsafe` (``pending`` is None and the next :meth:`ask`
+        proposes under the flags).  Refused while one of its own actions is flagged unsafe:
+        take the flag back first (:meth:`unflag_unsafe`), as a session asks."""
+        flagged = sorted(set(self.answers[-1].query.actions) & self.unsafe) if self.answers else []
+        if flagged:
+            raise QueryError(
+                f"the last answer executed action {flagged[0]}, flagged unsafe: take the flag "
+                "back before undoing the answer"
+            )
+        answer = self._take_back()
+        self._withdraw_if(self._hard_banned)
+        return answer
+
+    def proposable(self) -> NDArray[np.bool_]:
+        """The actions a query could propose now: none near a gait flagged unsafe, avoided, or
+        in the region of avoidance (what blind validation may show)."""
+        with one_blas_thread():
+            allowed = self.allowed()
+        banned = self._hard_banned()
+        return ~banned if allowed is None else allowed & ~banned
+
+    def _hard_banned(self) -> NDArray[np.bool_]:
+        """The actions an unsafe flag (with its radius) or :meth:`avoid` bans now."""
+        banned = near(self.space, self.unsafe, self.safety.unsafe_radius)
+        if self._avoided_mask is not None:
+            banned |= self._avoided_mask
+        return banned
+
+    def _take_back(self) -> Answer:
+        """:meth:`undo` up to the check of the restored query against the flags."""
         if not self.answers:
             raise QueryError("nothing to undo: no query has been answered")
         if self.pending is not None and self._rng_before_pending is not None:

@@ -26,7 +26,7 @@ before it follow from the same generator).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Hashable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Hashable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -91,6 +91,7 @@ class LineCoSpar(CoSpar):
         self.line_settings = LineSettings() if line is None else line
         self._tables: dict[int, PointSet] = {}  # query id -> the table right after its ask
         self._table_before_pending: PointSet = self.space
+        self._tables_before: dict[int, PointSet] = {}  # query id -> the table before its ask
         self._avoided_points: list[tuple[FloatArray, float]] = []  # (point, radius): avoid
 
     # -- the table ---------------------------------------------------------------------------
@@ -166,6 +167,7 @@ class LineCoSpar(CoSpar):
         points = tuple(tuple(row) for row in table.points[actions].tolist())
         query = Query(self._next_id, tuple(int(a) for a in actions), self._buffer, points, line)
         self._tables[query.id] = table
+        self._tables_before[query.id] = self._table_before_pending
         self.pending = query
         self._next_id += 1
         return query
@@ -209,14 +211,23 @@ class LineCoSpar(CoSpar):
             self._use_table(self.space.extended(np.array(found))[0])
         return records
 
-    def undo(self) -> Answer:
-        """As :meth:`CoSpar.undo`; the table goes back to right after the query's ask."""
-        answer = super().undo()
+    def _take_back(self) -> Answer:
+        """As :meth:`CoSpar.undo`; the table goes back to right after the query's ask (and to
+        before it, should the query be withdrawn)."""
+        answer = super()._take_back()
         self._use_table(self._tables[answer.query.id])
+        self._table_before_pending = self._tables_before[answer.query.id]
         return answer
 
-    def flag_unsafe(self, action: int) -> bool:
-        withdrawn = super().flag_unsafe(action)
+    def _hard_banned(self) -> NDArray[np.bool_]:
+        banned = super()._hard_banned()
+        if self._avoided_points:
+            banned |= self._avoided_on(self.space)
+        return banned
+
+    def _withdraw_if(self, banned_now: Callable[[], NDArray[np.bool_]]) -> bool:
+        """As :meth:`CoSpar._withdraw_if`; a withdrawn query's points leave the table."""
+        withdrawn = super()._withdraw_if(banned_now)
         if withdrawn:
             self._use_table(self._table_before_pending)
         return withdrawn
@@ -237,10 +248,7 @@ class LineCoSpar(CoSpar):
         for index in indices:
             self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
             self._avoided_points.append((self.space.points[index].copy(), float(radius)))
-        withdrawn = self._withdraw_if(lambda: self._avoided_on(self.space))
-        if withdrawn:
-            self._use_table(self._table_before_pending)
-        return withdrawn
+        return self._withdraw_if(lambda: self._avoided_on(self.space))
 
     def _avoided_on(self, space: PointSet) -> NDArray[np.bool_]:
         """The points of ``space`` within an avoided point's radius (features scaled by their

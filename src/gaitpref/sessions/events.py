@@ -341,12 +341,22 @@ class BlindGaitShown(BaseModel):
     posterior_mean: float
 
 
-class ValidationStarted(EventPayload):
-    """``validation_started``: the paper's blind validation (``validation.py``)."""
+class ValidationStartedV1(EventPayload):
+    """``validation_started`` as first written (payload version 1): its three gaits chosen among
+    every gait (every made gait, with gaits made on demand)."""
 
     kind: ClassVar[str] = "validation_started"
     round: int
     gaits: list[BlindGaitShown]
+
+
+class ValidationStarted(ValidationStartedV1):
+    """``validation_started``: the paper's blind validation (``validation.py``).  Version 2
+    chooses its three gaits among the gaits a query could propose when the round starts: none
+    near a gait flagged unsafe, avoided, or in the region of avoidance (a subject never walks a
+    gait the operator stopped); the payload is unchanged."""
+
+    version: ClassVar[int] = 2
 
 
 class ValidationAnswered(EventPayload):
@@ -402,7 +412,7 @@ _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
 #: earlier payload versions still read, because events of them exist and are never rewritten
 #: (new events are written in the newest): (kind, version) -> class
 OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
-    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1)
+    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1, ValidationStartedV1)
 }
 
 CREATED = Created.kind

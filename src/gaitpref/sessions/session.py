@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from gaitpref.config import ExperimentConfig, load_config
-from gaitpref.errors import ReplayError, SessionStateError
+from gaitpref.errors import NoSafeGaitError, ReplayError, SessionStateError
 from gaitpref.loop.cospar import QueryError
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
@@ -350,15 +350,33 @@ class Session:
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
         return Answered(query.id, query.trials, tuple(r.seq for r in records), kept, singles)
 
-    def undo(self) -> SessionQuery:
-        """Take back the last answer: its query is pending again, the model as it was before."""
+    def undo(self) -> SessionQuery | None:
+        """Take back the last answer: its query is pending again, the model as it was before.
 
-        def run() -> SessionQuery:
+        When that query proposes a gait flagged unsafe (or within the flag's radius) after it
+        was asked, it is withdrawn, as a flag withdraws the pending query, and a new query is
+        proposed and logged in its place; None when none may be proposed yet (the session is
+        paused, or a blind validation round is open: the next :meth:`next_query` proposes).
+        Should no gait be left to propose at all, the undo stands and
+        :class:`~gaitpref.errors.NoSafeGaitError` says so.
+        """
+
+        def run() -> SessionQuery | None:
             st = self._state
             st.check_open("undo")
             self._append([st.undo_event()])
-            assert self._state.pending is not None
-            return self._state.pending
+            st = self._state
+            if st.pending is not None:
+                return st.pending
+            if st.status == "paused" or st.open_round is not None:
+                return None
+            try:
+                return self._next_query()
+            except NoSafeGaitError as e:
+                raise NoSafeGaitError(
+                    "the answer was undone, but its query proposed a gait flagged unsafe since "
+                    f"and was withdrawn; {e}"
+                ) from e
 
         return self._locked(run)
 

@@ -356,13 +356,21 @@ class SessionState:
                 self._flag_exclusions(told)
 
     # -- derive: validation --------------------------------------------------------------------
-    def validation_event(self) -> NewEvent:
+    def validation_event(self, version: int | None = None) -> NewEvent:
+        """The next blind round, its gaits chosen as payload ``version`` (default: the newest)
+        chose them (1: among every gait or made gait; 2: among those a query could propose)."""
+        version = log.ValidationStarted.version if version is None else version
         round_ = len(self.rounds) + 1
         rng = np.random.default_rng(
             np.random.SeedSequence(self.seed, spawn_key=(_VALIDATION_STREAM, round_))
         )
         mean = np.asarray(self.loop.posterior.mean)
         shown = None if self.on_demand is None else sorted(set(self.walkable))
+        if version >= 2:
+            proposable = self.loop.proposable()
+            if not proposable.all():
+                among = np.flatnonzero(proposable) if shown is None else shown
+                shown = [int(a) for a in among if proposable[a]]
         try:
             plan, roles = blind_plan(round_, mean, rng, shown)
         except ValueError as exc:
@@ -469,7 +477,8 @@ class SessionState:
                 records: list[Any] = getattr(self, name)
                 for k in rows:
                     records[k] = replace(records[k], undone=True)
-            self.pending = told.query
+            # withdrawn when it proposes a gait flagged unsafe since it was asked
+            self.pending = told.query if self.loop.pending is not None else None
         elif r.kind == log.EXCLUDED:
             pass  # applied to the model before it was written (apply_exclusion)
         elif r.kind == log.UNSAFE:

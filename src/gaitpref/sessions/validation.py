@@ -69,13 +69,15 @@ def validation_actions(
     mean: ArrayLike, candidates: Sequence[int] | None = None
 ) -> tuple[int, int, int]:
     """The actions at the maximum, the mean and the minimum of the posterior mean (among
-    ``candidates`` when given: the gaits made on demand that can be walked)."""
+    ``candidates`` when given: the gaits that may be shown, i.e. made if made on demand and
+    none near a gait flagged unsafe or in the region of avoidance)."""
     mu = np.asarray(mean, dtype=np.float64).ravel()
     if candidates is not None:
         among = np.asarray(candidates, dtype=np.intp)
         if among.size < 3:
             raise ValueError(
-                f"blind validation needs at least 3 gaits; {among.size} have been made so far"
+                f"blind validation needs at least 3 gaits; {among.size} may be shown (made so "
+                "far, and none near a gait flagged unsafe or in the region of avoidance)"
             )
         best, middle, worst = validation_actions(mu[among])
         return int(among[best]), int(among[middle]), int(among[worst])

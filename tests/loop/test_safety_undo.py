@@ -1,0 +1,107 @@
+"""An undo brings its query back only while that query proposes no gait flagged unsafe (or
+avoided) after it was asked: otherwise the query is withdrawn, the generator goes back to before
+it was drawn, and the next ask proposes under the flags, on the grid and on the line path."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from gaitpref import CoSpar, Feature, Space, SquaredExponential
+from gaitpref.errors import NoSafeGaitError, QueryError
+from gaitpref.feedback import Comparison
+from gaitpref.loop import Safety
+from gaitpref.loop.line import LineCoSpar
+from gaitpref.loop.safety import near
+
+GRID = Space([Feature.linspace("x", 0.0, 1.0, 21), Feature.linspace("y", 0.0, 1.0, 5)])
+UNIT = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 1.0)])
+KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
+RADIUS = 0.3
+
+
+def _loop(line: bool, seed: int) -> CoSpar:
+    safety = Safety(unsafe_radius=RADIUS)
+    if line:
+        return LineCoSpar(UNIT, KERNEL, 0.05, n=1, buffer=1, seed=seed, safety=safety)
+    return CoSpar(GRID, KERNEL, 0.05, n=1, buffer=1, seed=seed, safety=safety)
+
+
+def _tell(loop: CoSpar) -> None:
+    q = loop.ask()
+    a, b = q.actions[0], (q.buffer or (None,))[0]
+    loop.tell(q, [] if b is None or b == a else [Comparison(a, b, "first")])
+
+
+def _banned(loop: CoSpar) -> np.ndarray:
+    banned = near(loop.space, loop.unsafe, RADIUS)
+    for action, radius in loop.avoided.items():
+        banned |= near(loop.space, [action], radius)
+    return banned
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    line=st.booleans(),
+    seed=st.integers(0, 10_000),
+    ops=st.lists(st.sampled_from(["tell", "flag", "avoid", "undo", "unflag"]), max_size=14),
+)
+def test_no_pending_query_ever_proposes_a_flagged_gait(
+    line: bool, seed: int, ops: list[str]
+) -> None:
+    loop = _loop(line, seed)
+    rng = np.random.default_rng(seed)
+    for op in ["tell", "tell", *ops]:
+        try:
+            if op == "tell":
+                _tell(loop)
+            elif op == "flag" and loop.executed:
+                loop.flag_unsafe(int(rng.choice(loop.executed)))
+            elif op == "avoid" and loop.executed and not line:
+                loop.avoid(int(rng.choice(loop.executed)), 0.1)
+            elif op == "unflag" and loop.unsafe:
+                loop.unflag_unsafe(min(loop.unsafe))
+            elif op == "undo" and loop.answers:
+                loop.ask()  # a query is pending when the undo comes, as in a session
+                loop.undo()
+        except (NoSafeGaitError, QueryError):
+            return  # every gait banned, or nothing left to undo: nothing to check further
+        if loop.pending is not None:
+            banned = _banned(loop)
+            assert not any(banned[a] for a in loop.pending.actions), (op, loop.pending)
+
+
+def test_an_undone_query_near_a_later_flag_is_withdrawn_and_proposed_anew() -> None:
+    for line in (False, True):
+        for seed in range(40):
+            loop = _loop(line, seed)
+            _tell(loop)
+            _tell(loop)
+            first, second = loop.answers[0].query.actions[0], loop.answers[1].query.actions[0]
+            if near(loop.space, [first], RADIUS)[second] and first != second:
+                break
+        else:
+            raise AssertionError("no seed puts the second gait near the first")
+        state = loop.rng.bit_generator.state
+        loop.flag_unsafe(first)
+        undone = loop.undo()
+        assert loop.pending is None, "the restored query proposes a gait near the flag"
+        assert loop.rng.bit_generator.state != state  # back to before the second query
+        again = loop.ask()
+        assert again.points != undone.query.points
+        assert not near(loop.space, loop.unsafe, RADIUS)[list(again.actions)].any()
+        loop.unflag_unsafe(first)
+        loop.tell(again, [])
+
+
+def test_an_undone_query_far_from_every_flag_is_pending_again() -> None:
+    loop = _loop(False, 3)
+    _tell(loop)
+    _tell(loop)
+    q = loop.answers[1].query
+    far = int(np.argmax(np.sum((GRID.points - GRID.points[q.actions[0]]) ** 2, axis=1)))
+    loop.flag_unsafe(far)
+    assert not near(GRID, [far], RADIUS)[q.actions[0]]
+    loop.undo()
+    assert loop.pending == q
