@@ -10,7 +10,7 @@ from scipy.linalg import LinAlgError
 
 from gaitpref import ConfigError, ConvergenceError, Feature, Space, SquaredExponential
 from gaitpref.config import parse_config
-from gaitpref.config.schema import MAX_ACTIONS, MAX_SIGNAL_TO_NOISE
+from gaitpref.config.schema import MAX_ACTIONS, MAX_FEATURE_VALUES, MAX_SIGNAL_TO_NOISE
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import Probit
@@ -67,6 +67,21 @@ def test_a_server_can_lower_the_limit() -> None:
         parse_config(_feature("x", 101) + MODEL + GRID, max_actions=100)
     # without subspace = "grid", a num past the limit is a continuous feature (issue 13)
     assert parse_config(_feature("x", 101) + MODEL, max_actions=100).subspace == "line"
+
+
+def test_a_feature_with_more_values_than_a_kernel_factor_holds_is_refused_by_name() -> None:
+    """A 1-D grid of 240,000 values is within the actions limit, but its kernel factor would be
+    240,000 x 240,000 (429 GiB): the full grid refuses it at the feature's key, before anything
+    is built; without subspace = "grid" it runs on the line path."""
+    error, peak = _peak_of(_feature("x", 2) + _feature("y", 240_000) + MODEL + GRID)
+    assert (error.table, error.key) == ("space.y", "num")
+    assert f"at most {MAX_FEATURE_VALUES} a feature" in str(error)
+    assert peak < 1_000_000
+    assert parse_config(_feature("x", MAX_FEATURE_VALUES) + MODEL + GRID).subspace == "grid"
+    assert parse_config(_feature("x", MAX_FEATURE_VALUES + 1) + MODEL).subspace == "line"
+    wide = Space([Feature.linspace("step", 0.0, 1.0, MAX_FEATURE_VALUES + 1)])
+    with pytest.raises(ValueError, match=r"feature 'step' has 1,001 values.*LineCoSpar"):
+        CoSpar(wide, SquaredExponential(0.3, 1.0), 0.05)
 
 
 @pytest.mark.parametrize("key", ["n", "buffer"])

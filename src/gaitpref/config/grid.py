@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from gaitpref.config.schema import FEATURE, MAX_FEATURES, check_table
+from gaitpref.config.schema import FEATURE, MAX_FEATURE_VALUES, MAX_FEATURES, check_table
 from gaitpref.config.specs import fail
 from gaitpref.space import Feature, Space
 
@@ -94,7 +94,8 @@ def parse_space(raw: object, max_actions: int, grid: bool = False) -> Space:
 
 
 def _check_size(specs: dict[str, dict[str, Any]], max_actions: int) -> None:
-    """Fail at the first key whose feature takes the grid past ``max_actions`` actions."""
+    """Fail at the first key whose feature takes the grid past ``max_actions`` actions, or has
+    more than :data:`MAX_FEATURE_VALUES` values itself."""
     actions = 1
     for name, spec in specs.items():
         given = spec["values"] is not None
@@ -111,6 +112,14 @@ def _check_size(specs: dict[str, dict[str, Any]], max_actions: int) -> None:
                 f"feature's size); at most {max_actions} are allowed on the full grid "
                 "(subspace = 'line' runs without one)",
             )
+        if count > MAX_FEATURE_VALUES:
+            fail(
+                f"space.{name}",
+                key,
+                f"gives {count} values; the full grid takes at most {MAX_FEATURE_VALUES} a "
+                "feature (its kernel factor is n x n, built at every fit): use fewer, or "
+                "subspace = 'line'",
+            )
 
 
 def grid_too_large(space: Space, max_actions: int) -> str | None:
@@ -118,6 +127,12 @@ def grid_too_large(space: Space, max_actions: int) -> str | None:
     if space.continuous:
         names = ", ".join(f.name for f in space.features if f.continuous)
         return f"the features {names} are continuous (min and max, no num)"
+    wide = [f for f in space.features if len(f.values) > MAX_FEATURE_VALUES]
+    if wide:
+        return (
+            f"the feature {wide[0].name} has {len(wide[0].values):,} values and at most "
+            f"{MAX_FEATURE_VALUES:,} a feature fit the full-grid path (its kernel factor is n x n)"
+        )
     size = space.grid_size
     assert size is not None
     if size > max_actions:

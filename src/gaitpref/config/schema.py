@@ -39,6 +39,7 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
+from gaitpref.loop.cospar import GRID_LIMIT_VALUES
 from gaitpref.loop.learning import (
     FIT_MODES,
     HYPER_MODES,
@@ -53,6 +54,8 @@ from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
 
 #: A grid (the product of every feature's ``num`` or ``values``) has at most this many actions.
 MAX_ACTIONS: Final = 1_000_000
+#: A feature on the full-grid path has at most this many values (its kernel factor is n x n).
+MAX_FEATURE_VALUES: Final = GRID_LIMIT_VALUES
 #: ``[cospar] subspace``: the full grid, the line path, or the line path when no grid fits.
 SUBSPACES: Final = ("auto", "grid", "line")
 #: At most this many features (``[space.<feature>]`` tables).
@@ -70,6 +73,7 @@ MAX_GAIT_ITERATIONS: Final = 10_000
 
 LIMITS: Final[dict[str, float]] = {
     "actions": MAX_ACTIONS,
+    "values a feature (full grid)": MAX_FEATURE_VALUES,
     "features": MAX_FEATURES,
     "n, buffer": MAX_QUERY,
     "magnitude": MAX_MAGNITUDE,

@@ -889,6 +889,9 @@ class CoSpar:
 #: The full-grid path refuses grids past this many actions (its posterior reads every one);
 #: :class:`~gaitpref.loop.line.LineCoSpar` runs on any space.
 GRID_LIMIT_ACTIONS = 10_000_000
+#: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
+#: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
+GRID_LIMIT_VALUES = 1_000
 
 
 def _check_grid(space: Space) -> None:
@@ -901,6 +904,16 @@ def _check_grid(space: Space) -> None:
             f"CoSpar runs on a grid, and {names} are continuous: use gaitpref.loop.line."
             "LineCoSpar (the line path; [cospar] subspace = 'line' in a config)"
         )
+    for f in space.features:
+        n = len(f.values)
+        if n > GRID_LIMIT_VALUES:
+            raise ValueError(
+                f"feature {f.name!r} has {n:,} values; the full-grid path holds at most "
+                f"{GRID_LIMIT_VALUES:,} a feature (its kernel factor is {n:,} x {n:,}, "
+                f"{n * n * 8 / 2**30:,.2f} GiB, built at every fit): use fewer values, or "
+                "gaitpref.loop.line.LineCoSpar (the line path; [cospar] subspace = 'line' in a "
+                "config)"
+            )
     size = space.grid_size
     if size is not None and size > GRID_LIMIT_ACTIONS:
         raise ValueError(
