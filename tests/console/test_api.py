@@ -478,3 +478,21 @@ def test_a_busy_session_is_409_for_posts_and_never_for_reads(
     other.close()
     assert client.get(f"/api/sessions/{sid}/query").json() == q
     assert client.post(f"/api/sessions/{sid}/notes", json={"text": "hello"}).status_code == 200
+
+
+@pytest.mark.parametrize("config", ["exo-1d-step-length", "compass-continuous-3d"])
+def test_a_fresh_session_reads_and_draws_before_any_answer(client: TestClient, config: str) -> None:
+    """Nothing learnt yet (on the line path not even a point): every read is 200, never a
+    refused-input 422 from an empty array."""
+    sid = new_session(client, config)
+    for path in ("figure.png", "posterior.png"):
+        r = client.get(f"/sessions/{sid}/{path}")
+        assert r.status_code == 200 and r.headers["content-type"] == "image/png", path
+    post = client.get(f"/api/sessions/{sid}/posterior")
+    assert post.status_code == 200, post.text
+    body = post.json()
+    assert body["confidence"] is None
+    assert (body["argmax"] is None) == (body["mean"] == [])
+    assert (body["mean"] == []) == (config == "compass-continuous-3d")  # the line path: no point
+    export = client.get(f"/api/sessions/{sid}/export")
+    assert export.status_code == 200, export.text

@@ -124,3 +124,15 @@ def test_unsafe_flag_and_withdrawal_from_the_cli(tmp_path: Path, drive: Drive) -
     assert "withdrawn" in _ok("session", "unsafe", "1", "2", "--withdraw", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags() == {}
+
+
+def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:
+    """Before its first query a line-path session's posterior has no point: show says so."""
+    db = str(tmp_path / "lab.db")
+    _ok("session", "new", "--config", "compass-continuous-3d", "--subject", "S01", "--db", db)
+    info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
+    assert info["posterior"]["argmax"] is None and info["trials"] == 0
+    assert "best so far: none yet" in _ok("session", "show", "1", "--no-figure", "--db", db)
+    figure = tmp_path / "fig.png"
+    _ok("session", "show", "1", "--figure", str(figure), "--db", db)
+    assert figure.stat().st_size > 1_000

@@ -238,13 +238,17 @@ def show(
             typer.echo(json.dumps(info))
             return
         best = summary["argmax"]
+        so_far = (
+            "best so far: none yet (the line path's posterior lives on the points walked)"
+            if best is None
+            else f"best so far: action {best} ({session.describe(best)}), posterior mean "
+            f"{summary['mean_at_argmax']:.4g} ± {summary['sd_at_argmax']:.2g}"
+        )
         console.print(
             f"session {session.id}: subject {session.subject}, {session.config.name}, "
             f"seed {session.seed}, {session.status}\n"
             f"{len(trials)} trials ({len(info['excluded'])} excluded), "  # type: ignore[arg-type]
-            f"{info['comparisons']} comparisons\n"
-            f"best so far: action {best} ({session.describe(best)}), posterior mean "
-            f"{summary['mean_at_argmax']:.4g} ± {summary['sd_at_argmax']:.2g}"
+            f"{info['comparisons']} comparisons\n{so_far}"
         )
         for v in session.validations():
             console.print(

@@ -116,7 +116,7 @@ def posterior_out(session: Session) -> PosteriorOut:
     sd = np.asarray(post.std, dtype=float)
     space = session.space
     confidence = None
-    if mean.max() > mean.min():  # something learnt (the trial page shows it then too)
+    if mean.size and mean.max() > mean.min():  # something learnt (the trial page shows it too)
         sure = session.confidence()
         confidence = ConfidenceOut(
             sentence=sure.sentence(session.gait_name(sure.recommended)),
@@ -132,7 +132,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         shape=None if space.continuous else list(space.shape),
         mean=mean.tolist(),
         sd=sd.tolist(),
-        argmax=gait_out(session, int(np.argmax(mean))),
+        argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,
         trials=[t.action for t in session.trials()],
         confidence=confidence,
     )

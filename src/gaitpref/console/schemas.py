@@ -189,7 +189,10 @@ class PosteriorOut(BaseModel):
     )
     mean: list[float]
     sd: list[float]
-    argmax: GaitOut
+    argmax: GaitOut | None = Field(
+        description="the gait of the highest posterior mean (None while there is no point: the "
+        "line path before its first query)"
+    )
     trials: list[int] = Field(description="executed actions in trial order")
     confidence: ConfidenceOut | None = Field(
         default=None, description="how sure the model is of argmax (None before any answer)"

@@ -33,7 +33,7 @@ class TrialsPicture:
 
     mean: FloatArray  # at the trials' points, in trial order
     std: FloatArray
-    best_mean: float
+    best_mean: float | None  # None while there is no point (the line path before a query)
     best: str  # the best point's feature values, as words
     why: str  # why no grid is drawn
     title: str
@@ -51,17 +51,21 @@ def trials_picture(
     space = posterior.space
     idx = np.asarray(trials, dtype=np.intp)
     mean = np.asarray(posterior.mean)
-    best = int(np.argmax(mean))
     why = (
         "continuous features: no grid to draw"
         if space.continuous
         else f"{space.ndim} features: no 1-D or 2-D grid to draw"
     )
-    words = ", ".join(f"{n} {v:.3f}" for n, v in space.values_of(best).items())
+    best = int(np.argmax(mean)) if mean.size else None
+    words = (
+        "none yet"
+        if best is None
+        else ", ".join(f"{n} {v:.3f}" for n, v in space.values_of(best).items())
+    )
     return TrialsPicture(
         mean=mean[idx].copy(),
         std=np.sqrt(posterior.variance_at(idx)) if idx.size else np.zeros(0),
-        best_mean=float(mean[best]),
+        best_mean=None if best is None else float(mean[best]),
         best=words,
         why=why,
         title=title,
@@ -76,11 +80,13 @@ def render_trials(pic: TrialsPicture) -> Figure:
     if x.size:
         ax.errorbar(x, pic.mean, yerr=BAND_SD * pic.std, fmt="o", ms=4, label=BAND_LABEL)
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.axhline(pic.best_mean, color="k", lw=1, ls="--", label="best posterior mean")
+    if pic.best_mean is not None:
+        ax.axhline(pic.best_mean, color="k", lw=1, ls="--", label="best posterior mean")
     ax.set_xlabel(f"trial ({pic.why}; the posterior at each trial's point)")
     ax.set_ylabel("utility")
     ax.set_title(f"best: {pic.best}", fontsize=9)
-    ax.legend(loc="best", fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="best", fontsize=8)
     if pic.title:
         fig.suptitle(pic.title)
     fig.tight_layout()

@@ -156,16 +156,18 @@ def _manifest(session: Session, files: dict[str, str]) -> dict[str, Any]:
 
 
 def posterior_summary(session: Session) -> dict[str, Any]:
-    """The posterior's best action, its value, and the pending query (JSON-ready)."""
+    """The posterior's best action, its value, and the pending query (JSON-ready); the
+    ``argmax`` fields are None while the posterior has no point (the line path before a query:
+    it lives on the points present)."""
     post = session.posterior()
-    best = post.argmax
     pending = session.pending
+    best: int | None = post.argmax if len(session.space) else None
     return {
         "argmax": best,
-        "argmax_values": session.space.values_of(best),
-        "argmax_gait_id": session.gait_id(best),
-        "mean_at_argmax": float(post.mean[best]),
-        "sd_at_argmax": float(post.std[best]),
+        "argmax_values": None if best is None else session.space.values_of(best),
+        "argmax_gait_id": None if best is None else session.gait_id(best),
+        "mean_at_argmax": None if best is None else float(post.mean[best]),
+        "sd_at_argmax": None if best is None else float(post.std[best]),
         "trials_in_force": len(session.trials()),
         "pending_query": None
         if pending is None

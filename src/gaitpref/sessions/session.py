@@ -587,6 +587,8 @@ class Session:
 
         def run() -> list[tuple[SessionQuery, Posterior]]:
             told = self._state.told
+            if not told:
+                return []
             after = [k.answer.posterior_before for k in told[1:]] + [self._state.loop.posterior]
             return [(k.query, p) for k, p in zip(told, after, strict=True)]
 
