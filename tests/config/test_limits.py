@@ -84,6 +84,20 @@ def test_a_feature_with_more_values_than_a_kernel_factor_holds_is_refused_by_nam
         CoSpar(wide, SquaredExponential(0.3, 1.0), 0.05)
 
 
+@pytest.mark.parametrize(
+    ("text", "why"),
+    [
+        ("b = " + "[" * 500 + "]" * 500, "nested too deeply"),  # a RecursionError in tomllib
+        ("b = " + "9" * 5000, "4300 digits"),  # a ValueError in tomllib
+        (_feature("x", "9" * 5000) + MODEL, "4300 digits"),
+    ],
+)
+def test_toml_that_python_cannot_read_is_a_config_error(text: str, why: str) -> None:
+    with pytest.raises(ConfigError, match=f"config is not valid TOML: .*{why}") as info:
+        parse_config(text)
+    assert "set_int_max_str_digits" not in str(info.value)
+
+
 @pytest.mark.parametrize("key", ["n", "buffer"])
 def test_n_and_buffer_cannot_exceed_the_grid(key: str) -> None:  # item 2
     with pytest.raises(ConfigError, match=rf"\[cospar\].{key}: must be at most the grid's 5 "):

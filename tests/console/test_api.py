@@ -88,6 +88,20 @@ def test_create_refuses_a_config_the_model_cannot_use(client: TestClient) -> Non
     assert "n" in r.json()["detail"][0]["msg"]
 
 
+@pytest.mark.parametrize(
+    "config", ["b = " + "[" * 500 + "]" * 500, SMALL_TOML.replace("n = 2", "n = " + "2" * 5000)]
+)
+def test_toml_python_cannot_read_is_a_422_naming_the_config(
+    client: TestClient, config: str
+) -> None:
+    """Nesting past the recursion limit and integers past 4300 digits: tomllib raises
+    RecursionError and ValueError, not TOMLDecodeError (a 500 and a 422 without a field)."""
+    r = client.post("/api/sessions", json={"config": config, "subject": "S1"})
+    assert r.status_code == 422 and loc_of(r) == ["body", "config"], r.text
+    assert "config is not valid TOML" in r.json()["detail"][0]["msg"]
+    assert client.get("/api/sessions").json() == []
+
+
 def test_a_non_json_body_is_refused(client: TestClient) -> None:
     r = client.post(
         "/api/sessions",

@@ -15,6 +15,7 @@ from gaitpref.config.parse import (
     DEFAULT_TIES,
     load_config,
     parse_config,
+    read_toml,
     shipped_configs,
 )
 from gaitpref.config.schema import DEFAULTS, DEFAULTS_VERSION, LIMITS
@@ -33,5 +34,6 @@ __all__ = [
     "ExperimentConfig",
     "load_config",
     "parse_config",
+    "read_toml",
     "shipped_configs",
 ]

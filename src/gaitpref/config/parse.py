@@ -140,6 +140,21 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
     raise ConfigError(f"config {name!r}: no such file{hint}")
 
 
+def read_toml(text: str) -> dict[str, Any]:
+    """``text`` as TOML, or a :class:`ConfigError`: besides a syntax error, a number past
+    Python's integer digits limit (a ValueError from tomllib) and arrays or tables nested past
+    the interpreter's recursion limit (a RecursionError, not a crash of the server)."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"config is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError("config is not valid TOML: arrays or tables nested too deeply") from None
+    except ValueError as exc:  # an integer of more than 4300 digits
+        why = str(exc).split(";")[0]  # not the advice to raise the interpreter's limit
+        raise ConfigError(f"config is not valid TOML: {why}") from None
+
+
 def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> ExperimentConfig:
     """Load a config file, or a shipped config by name."""
     text, stem, folder = _read(source)
@@ -160,10 +175,7 @@ def parse_config(
     ``defaults`` picks the version of the defaults (``"0.1"`` for sessions recorded with 0.1's);
     ``max_actions`` lowers the limit on the grid's size (a server's own limit).
     """
-    try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"config is not valid TOML: {exc}") from None
+    raw = read_toml(text)
     top, _ = check_table(raw, "", TOP)
     library, library_path, generator = None, None, None
     gaits, gaits_defaulted = (

@@ -17,13 +17,19 @@ import contextlib
 import hashlib
 import re
 import tempfile
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from gaitpref.config import ExperimentConfig, load_config, parse_config, shipped_configs
+from gaitpref.config import (
+    ConfigError,
+    ExperimentConfig,
+    load_config,
+    parse_config,
+    read_toml,
+    shipped_configs,
+)
 from gaitpref.console.errors import InputError
 from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
@@ -93,8 +99,8 @@ def store_library(
 
 def _named_library(text: str) -> str | None:
     try:
-        raw = tomllib.loads(text)
-    except tomllib.TOMLDecodeError:
+        raw = read_toml(text)
+    except ConfigError:
         return None  # parse_config reports it
     gaits = raw.get("gaits")
     if isinstance(gaits, dict) and isinstance(gaits.get("library"), str):

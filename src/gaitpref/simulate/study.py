@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -35,7 +34,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gaitpref.config import ExperimentConfig
+from gaitpref.config import ExperimentConfig, read_toml
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.loop.cospar import CoSpar
@@ -61,9 +60,9 @@ def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal |
     ``where`` (the setting) and the table and key.
     """
     try:
-        top = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{where}: config text is not TOML: {exc}") from None
+        top = read_toml(text)
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
     extra = sorted(set(top) - set(_CONFIG_TABLES))
     if extra:
         raise ConfigError(
