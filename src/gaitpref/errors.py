@@ -62,6 +62,11 @@ class FeedbackError(GaitprefError, ValueError):
     """An answer that cannot be taken; nothing was changed."""
 
 
+class PriorFromError(GaitprefError, ValueError):
+    """A warm start's ``prior_from`` names a session or subject that is not there, or one run
+    on another grid; nothing was created."""
+
+
 class QueryError(GaitprefError, ValueError):
     """A ``tell`` for a query that is unknown, stale or already answered; nothing was changed."""
 

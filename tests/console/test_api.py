@@ -510,3 +510,32 @@ def test_a_fresh_session_reads_and_draws_before_any_answer(client: TestClient, c
     assert (body["mean"] == []) == (config == "compass-continuous-3d")  # the line path: no point
     export = client.get(f"/api/sessions/{sid}/export")
     assert export.status_code == 200, export.text
+
+
+def test_a_422_keeps_its_field_when_the_input_is_not_json(client: TestClient) -> None:
+    """FastAPI echoes the refused ``input``; an infinite number or a lone surrogate cannot be
+    written as JSON, and the 422 lost its field (``loc`` was ``["body"]``)."""
+    sid = new_session(client)
+    headers = {"content-type": "application/json"}
+    r = client.post(
+        "/api/sessions",
+        content='{"config": "exo-1d-step-length", "subject": "S01", "seed": 1e400}',
+        headers=headers,
+    )
+    assert r.status_code == 422 and loc_of(r) == ["body", "seed"], r.text
+    assert "input" not in r.json()["detail"][0]
+    r = client.post(f"/api/sessions/{sid}/notes", content='{"text": "\\ud800"}', headers=headers)
+    assert r.status_code == 422 and loc_of(r) == ["body", "text"], r.text
+    blank = client.post(f"/api/sessions/{sid}/notes", json={"text": "   "})
+    assert blank.status_code == 422 and loc_of(blank) == ["body", "text"]
+    assert "empty" in blank.json()["detail"][0]["msg"]
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 0
+    assert [e["kind"] for e in client.get(f"/api/sessions/{sid}/events").json()] == ["created"]
+
+
+def test_a_triple_of_the_wrong_length_is_422_not_413(client: TestClient) -> None:
+    sid = new_session(client)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    body = {"query_id": q["query_id"], "comparisons": [[0, 1, "first", "extra"]]}
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 422 and loc_of(r) == ["body", "comparisons", 0], r.text

@@ -131,6 +131,12 @@ def test_notes_exclusion_pause_resume_finish_from_the_page(client: TestClient) -
     assert (
         post(client, f"/sessions/{sid}/note", {"csrf_token": csrf, "text": " "}).status_code == 422
     )
+    long = post(  # refused as the API refuses it, never cut short
+        client,
+        f"/sessions/{sid}/trials/1/exclude",
+        {"csrf_token": csrf, "reason": "device_fault", "detail": "m" * 501},
+    )
+    assert long.status_code == 422 and "at most 500 characters" in long.text
     r = post(
         client,
         f"/sessions/{sid}/trials/1/exclude",

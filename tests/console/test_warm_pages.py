@@ -93,3 +93,32 @@ def test_the_api_takes_prior_from(client: TestClient) -> None:
         json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": ["no name"]},
     )
     assert r.status_code == 422
+
+
+def test_a_prior_from_naming_nothing_usable_is_422_at_prior_from(client: TestClient) -> None:
+    """An unknown session id (a 404 before), an unknown subject and a session on another grid
+    are the body's ``prior_from`` that is wrong, not the session asked for."""
+    earlier = _earlier(client, answers=1)
+    other = new_session(client, "exo-2d-length-duration")
+    cases = [
+        ([earlier + 99], "there is no session"),
+        (["S77"], "has no sessions"),
+        ([other], "another grid"),
+    ]
+    for prior_from, why in cases:
+        r = client.post(
+            "/api/sessions",
+            json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": prior_from},
+        )
+        assert r.status_code == 422, r.text
+        detail = r.json()["detail"][0]
+        assert detail["loc"] == ["body", "prior_from"] and why in detail["msg"]
+    code, text = _create(client, "S02", str(earlier + 99))
+    assert code == 422 and "<code>prior_from</code>" in text and "there is no session" in text
+    too_many = list(range(1, 258))
+    r = client.post(
+        "/api/sessions",
+        json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": too_many},
+    )
+    assert r.status_code == 413 and "prior_from: at most 256 items" in r.json()["detail"]
+    assert len(client.get("/api/sessions").json()) == 2

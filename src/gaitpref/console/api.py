@@ -130,9 +130,9 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
     """Answer the pending query: ``comparisons`` ``[i, j, first|second|none]`` and
     ``suggestions`` ``[action, feature, move]``, as for ``CoSpar.tell``, and ``feedback`` items
     of any registered kind, e.g. ``{"kind": "rating", "action": 7, "label": "okay"}``."""
-    service = service_of(request)
+    service = service_of(request)  # the answer and what is pending after it, under one lock
     records = feedback_records([(f.kind, f.fields()) for f in body.feedback])
-    answered = service.answer(
+    answered, pending = service.answer(
         session_id,
         body.query_id,
         [list(c) for c in body.comparisons],
@@ -140,12 +140,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         body.note,
         records,
     )
-    pending = service.get(session_id).pending
-    return AnsweredOut(
-        query_id=answered.query,
-        trials=list(answered.trials),
-        next_query_id=None if pending is None else pending.id,
-    )
+    return AnsweredOut(query_id=answered.query, trials=list(answered.trials), next_query_id=pending)
 
 
 @router.post("/sessions/{session_id}/undo", response_model=UndoneOut)

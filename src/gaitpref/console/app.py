@@ -14,7 +14,6 @@ from pathlib import Path
 
 import pydantic
 from fastapi import FastAPI, Request
-from fastapi.exception_handlers import request_validation_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from fastapi.staticfiles import StaticFiles
@@ -30,6 +29,19 @@ from gaitpref.console.templating import page_error
 from gaitpref.storage import Storage
 
 HERE = Path(__file__).parent
+
+
+def _plain(error: dict[str, object]) -> dict[str, object]:
+    """A validation error as the API reports it: ``loc``, ``msg`` and ``type`` (FastAPI's
+    shape) without the echoed ``input`` and ``ctx``, which need not be JSON (an infinite
+    number, a lone surrogate) and would lose the field."""
+    loc = error.get("loc", ())
+    msg = str(error.get("msg", "invalid"))
+    return {
+        "loc": list(loc) if isinstance(loc, tuple | list) else [],
+        "msg": msg.encode("utf-8", "backslashreplace").decode("utf-8"),
+        "type": str(error.get("type", "value_error")),
+    }
 
 
 def create_app(
@@ -95,15 +107,19 @@ def create_app(
         assert isinstance(exc, RequestValidationError)
         errors = exc.errors()
         if request.url.path.startswith("/api/"):
-            long = [e for e in errors if e.get("type") == "too_long"]
-            if long:  # a list past its documented maximum: 413, as for a body past its size
+            long = [
+                e
+                for e in errors
+                if e.get("type") == "too_long"
+                and e.get("ctx", {}).get("max_length", MAX_LIST) >= MAX_LIST
+            ]
+            if long:  # a list past the documented maximum: 413, as for a body past its size
                 where = ".".join(str(p) for p in long[0]["loc"][1:])
-                most = long[0].get("ctx", {}).get("max_length", MAX_LIST)
                 return JSONResponse(
-                    {"detail": f"{where}: at most {most} items (see docs/console.md)"},
+                    {"detail": f"{where}: at most {MAX_LIST} items (see docs/console.md)"},
                     status_code=413,
                 )
-            return await request_validation_exception_handler(request, exc)
+            return JSONResponse({"detail": [_plain(e) for e in errors]}, status_code=422)
         field = ".".join(str(p) for p in errors[0]["loc"][1:]) if errors else ""
         return page_error(
             request, refusal(ValueError(f"{field}: {errors[0]['msg']}" if errors else "bad input"))

@@ -14,6 +14,7 @@ error                                       status  meaning
 ``NoSafeGaitError``                         409     no gait may be proposed (all avoided or
                                                     near an unsafe flag): nothing proposed
 ``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
+``PriorFromError``                          422     a warm start's prior_from names no session
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
 ``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is
@@ -34,6 +35,7 @@ from gaitpref.errors import (
     ConvergenceError,
     FeedbackError,
     NoSafeGaitError,
+    PriorFromError,
     PriorNotPositiveDefiniteError,
     ReplayError,
     SessionStateError,
@@ -77,6 +79,7 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (FeedbackError, 422, "refused answer"),
     (ConfigError, 422, "refused config"),
     (PriorNotPositiveDefiniteError, 422, "refused config"),
+    (PriorFromError, 422, "refused warm start"),
     (InputError, 422, "refused input"),
     (ConvergenceError, 422, "model did not converge"),
     (StorageError, 422, "refused by storage"),
@@ -115,6 +118,8 @@ def _field_of(exc: BaseException) -> str | None:
         return "feedback"  # a rating or another registered kind
     if isinstance(exc, ConfigError | PriorNotPositiveDefiniteError):
         return "config"
+    if isinstance(exc, PriorFromError):
+        return "prior_from"
     if isinstance(exc, QueryError):
         return "query_id"
     return None

@@ -223,7 +223,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             note=note,
             action=f"/sessions/{session_id}/answer",
         )
-    answered = await run_in_threadpool(
+    answered, _ = await run_in_threadpool(
         service.answer, session_id, query_id, comparisons, suggestions, note, ratings
     )
     trials = ",".join(map(str, answered.trials))
@@ -282,7 +282,9 @@ async def post_exclude(
     reason = fields.get("reason", "")
     if reason not in REASONS:
         raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {reason!r}")
-    detail = fields.get("detail", "").strip()[:500]
+    detail = fields.get("detail", "").strip()
+    if len(detail) > 500:
+        raise InputError("detail", f"at most 500 characters, got {len(detail)}")
     await run_in_threadpool(service_of(request).exclude, session_id, trial, reason, detail)
     return see_other(f"/sessions/{session_id}")
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr
+from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr, field_validator
 
 from gaitpref.console.limits import MAX_LIST
 from gaitpref.feedback import Outcome
@@ -52,7 +52,7 @@ class CreateSessionIn(_Request):
         | Annotated[StrictStr, Field(pattern=SUBJECT_PATTERN)]
     ] = Field(
         default_factory=list,
-        max_length=1000,
+        max_length=MAX_LIST,
         description="warm start from these earlier sessions (ids) or subjects' sessions (codes)",
         examples=[[3, "S02"]],
     )
@@ -160,6 +160,13 @@ class UndoneOut(BaseModel):
 
 class NoteIn(_Request):
     text: Annotated[StrictStr, Field(min_length=1, max_length=2000)]
+
+    @field_validator("text")
+    @classmethod
+    def _not_blank(cls, text: str) -> str:
+        if not text.strip():
+            raise ValueError("the note is empty (only white space)")
+        return text
 
 
 class ExcludeIn(_Request):

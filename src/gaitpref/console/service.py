@@ -168,9 +168,10 @@ class SessionService:
         suggestions: Sequence[object],
         note: str | None = None,
         feedback: Sequence[object] = (),
-    ) -> Answered:
+    ) -> tuple[Answered, int | None]:
         """Answer ``query_id`` (``feedback``: records of other kinds, such as ratings); a
-        non-empty ``note`` is logged right after the answer."""
+        non-empty ``note`` is logged right after the answer.  Returns the answer and the id of
+        the query pending after it (read under the lock: None when none is yet)."""
         text = (note or "").strip()
         if len(text) > 2000:
             raise InputError("note", "a note has at most 2000 characters")
@@ -178,7 +179,8 @@ class SessionService:
             answered = session.answer(query_id, [*comparisons, *feedback], suggestions)
             if text:
                 session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
-            return answered
+            pending = session.pending
+            return answered, None if pending is None else pending.id
 
     def undo(self, session_id: int, expected_query: int | None = None) -> Undone:
         """Take back the last answer; with ``expected_query``, only if that query is pending."""

@@ -30,7 +30,7 @@ from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
-from gaitpref.errors import ReplayError
+from gaitpref.errors import PriorFromError, ReplayError
 from gaitpref.loop.warm import (
     RELEARN_EVERY,
     SHARE_GATE,
@@ -44,7 +44,13 @@ from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.sessions.stored_config import config_of, gait_cache_of
-from gaitpref.storage import EventRecord, SessionRecord, Storage, StorageError
+from gaitpref.storage import (
+    EventRecord,
+    SessionNotFoundError,
+    SessionRecord,
+    Storage,
+    StorageError,
+)
 from gaitpref.storage.base import check_subject
 
 if TYPE_CHECKING:
@@ -83,21 +89,25 @@ def read_prior_from(items: Iterable[str]) -> list[int | str]:
 def resolve_prior(
     storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str]
 ) -> list[SessionRecord]:
-    """The earlier sessions named by ids or subject codes, by id, each once; ValueError names
-    an unknown one or one whose grid differs from ``config``'s."""
+    """The earlier sessions named by ids or subject codes, by id, each once;
+    :class:`~gaitpref.errors.PriorFromError` (a ValueError) names an unknown one or one whose
+    grid differs from ``config``'s."""
     found: dict[int, SessionRecord] = {}
     for item in prior_from:
         if isinstance(item, bool) or not isinstance(item, int | str):
-            raise ValueError(f"prior_from: expected session ids or subject codes, got {item!r}")
+            raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
         if isinstance(item, int):
-            records = [storage.get_session(item)]
+            try:
+                records = [storage.get_session(item)]
+            except SessionNotFoundError:
+                raise PriorFromError(f"prior_from: there is no session {item}") from None
         else:
             records = storage.list_sessions(item)
             if not records:
-                raise ValueError(f"prior_from: subject {item!r} has no sessions")
+                raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
         for record in records:
             if config_of(record).space != config.space:
-                raise ValueError(
+                raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
                     f"another grid (config {record.config_name!r}); a warm start needs the same"
                 )
