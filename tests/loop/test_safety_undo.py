@@ -105,3 +105,35 @@ def test_an_undone_query_far_from_every_flag_is_pending_again() -> None:
     assert not near(GRID, [far], RADIUS)[q.actions[0]]
     loop.undo()
     assert loop.pending == q
+
+
+def test_on_the_grid_an_undo_whose_own_gait_is_flagged_withdraws_its_query() -> None:
+    """A session flags trials, the loop gaits: the same gait walked in an earlier trial and
+    flagged there is the last answer's too; the undo must not fail after its event is written."""
+    loop = _loop(False, 3)
+    _tell(loop)
+    _tell(loop)
+    own = loop.answers[1].query.actions[0]
+    loop.flag_unsafe(own)
+    loop.undo()
+    assert loop.pending is None
+    assert own not in loop.ask().actions
+
+
+def test_on_the_line_path_a_flag_on_a_point_the_undone_query_added_is_refused() -> None:
+    loop = _loop(True, 3)
+    _tell(loop)
+    _tell(loop)
+    added = loop.answers[1].query.actions[0]
+    loop.flag_unsafe(added)
+    state = (loop.pending, len(loop.answers), loop.space)
+    try:
+        loop.undo()
+    except QueryError as e:
+        assert "take the flag back" in str(e)
+    else:
+        raise AssertionError("the undo took a flagged point out of the table")
+    assert (loop.pending, len(loop.answers), loop.space) == state  # nothing moved
+    loop.unflag_unsafe(added)
+    loop.undo()
+    assert loop.pending is not None

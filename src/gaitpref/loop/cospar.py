@@ -565,14 +565,7 @@ class CoSpar:
         """Take back the last answer: its query is pending again, as it was before the answer;
         unless it proposes a gait flagged unsafe or avoided since it was asked, when it is
         withdrawn as by :meth:`flag_unsafe` (``pending`` is None and the next :meth:`ask`
-        proposes under the flags).  Refused while one of its own actions is flagged unsafe:
-        take the flag back first (:meth:`unflag_unsafe`), as a session asks."""
-        flagged = sorted(set(self.answers[-1].query.actions) & self.unsafe) if self.answers else []
-        if flagged:
-            raise QueryError(
-                f"the last answer executed action {flagged[0]}, flagged unsafe: take the flag "
-                "back before undoing the answer"
-            )
+        proposes under the flags)."""
         answer = self._take_back()
         self._withdraw_if(self._hard_banned)
         return answer

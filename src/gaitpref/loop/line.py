@@ -213,7 +213,16 @@ class LineCoSpar(CoSpar):
 
     def _take_back(self) -> Answer:
         """As :meth:`CoSpar.undo`; the table goes back to right after the query's ask (and to
-        before it, should the query be withdrawn)."""
+        before it, should the query be withdrawn).  Refused while an unsafe flag names a point
+        that the query's ask added (the flag would outlive its point): take it back first."""
+        if self.answers:
+            before = len(self._tables_before[self.answers[-1].query.id])
+            leaving = sorted(a for a in self.unsafe if a >= before)
+            if leaving:
+                raise QueryError(
+                    f"point {leaving[0]}, flagged unsafe, was added by the last answer's query: "
+                    "take the flag back before undoing the answer"
+                )
         answer = super()._take_back()
         self._use_table(self._tables[answer.query.id])
         self._table_before_pending = self._tables_before[answer.query.id]
