@@ -139,3 +139,36 @@ def test_undo_in_the_terminal_asks_first(tmp_path: Path) -> None:
     child.close()
     with Session.open(url, 1) as s:
         assert [x.undone for x in s.suggestions()] == [False] and len(s.trials()) == 1
+
+
+def test_an_undo_whose_query_a_flag_withdrew_says_so(tmp_path: Path) -> None:
+    """Seed 1 of the unsafe tests walks gait 6 then 8, near it; trial 1 is flagged, then the
+    operator undoes trial 2: its query is withdrawn and a new trial 2 proposed away from 6."""
+    from gaitpref.config import parse_config
+    from gaitpref.loop.safety import near
+    from tests.sessions.test_unsafe import CONFIG as UNSAFE
+    from tests.sessions.test_unsafe import _answer as answer
+
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with Session.create(url, parse_config(UNSAFE), "S01") as s:
+        answer(s, 0)
+        answer(s, 1)
+        first = s.trials()[0].action
+        s.flag_unsafe(1, "hip pain")
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 3: run")
+    child.expect(r"Trial 3 against trial 2")
+    child.sendline("u")
+    child.expect(r"Undo the last answer \(trial 2\)\?  y yes, n no")
+    child.sendline("y")
+    child.expect("Undone; its query proposed a gait flagged unsafe since and was withdrawn")
+    child.expect(r"Trial 2: run")
+    child.expect(r"Trial 2 against trial 1")
+    child.sendline("q")
+    child.expect("Paused")
+    child.expect(pexpect.EOF)
+    child.close()
+    with Session.open(url, 1) as s:
+        pending = s.pending
+        assert pending is not None and pending.trials == (2,)
+        assert not near(s.config.space, {first}, 0.15)[pending.actions[0]]
