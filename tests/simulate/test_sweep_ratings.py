@@ -122,7 +122,7 @@ def test_the_safety_table_reaches_the_loop() -> None:
         ({"rating_quantiles": (0.5, 0.2), "config": RATING}, ValueError, "must increase"),
         ({"rating_noise": 0.1}, ValueError, "rating_noise needs rating_quantiles"),
         ({"config": "[model]\nnoise = 1\n"}, ConfigError, "only [feedback.rating] and [safety]"),
-        ({"config": "[safety\n"}, ConfigError, "not TOML"),
+        ({"config": "[safety\n"}, ConfigError, "config is not valid TOML"),
         ({"config": '[safety]\navoid = ["very bad"]\n'}, ConfigError, "[safety].avoid"),
         ({"config": RATING.replace("labels", "lables")}, ConfigError, "[feedback.rating]"),
     ],
