@@ -38,6 +38,7 @@ from gaitpref.sessions.records import (
     SessionQuery,
 )
 from gaitpref.sessions.session import Session
+from gaitpref.sessions.validation import LABELS, check_ranking
 from gaitpref.space import Feature
 
 Reader = Callable[[str], str]
@@ -179,7 +180,12 @@ class Terminal:
     def _undo(self) -> None:
         answered = self.session.trials()
         last = f" (trial {answered[-1].number})" if answered else ""
-        key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
+        while True:
+            try:
+                key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
+                break
+            except _UndoError:  # u again: the question stands
+                self.console.print("  undo is being asked: y yes, n no", markup=False)
         if key == "n":
             self.console.print("  not undone", markup=False)
             return
@@ -232,20 +238,32 @@ class Terminal:
                 line = sure.sentence(gait_name(s, sure.recommended))
                 self.console.print(f"  {line}", markup=False)
             if reason:
+                redrawn = False
                 for t in dict.fromkeys(q.trials):
-                    s.flag_unsafe(t, reason)
+                    redrawn |= s.flag_unsafe(t, reason)
                 self.console.print(
                     f"flagged unsafe: trial {', '.join(map(str, q.trials))} ({reason}); "
                     "its gait and its neighbours will not be proposed again",
                     markup=False,
                 )
+                if redrawn:
+                    self.console.print(
+                        "  the blind validation round showed a gait near the flag: it is drawn "
+                        "again among the gaits still allowed",
+                        markup=False,
+                    )
             return
 
     def _reason(self) -> str:
-        """Why the trial is unsafe (asked until given)."""
+        """Why the trial is unsafe (asked until given; ``q`` pauses and ``u`` undoes, as at
+        every prompt, so neither is ever taken for the reason)."""
         while True:
-            self.console.print("Why is it unsafe? (a few words)", markup=False)
+            self.console.print("Why is it unsafe? (a few words; q pause, u undo)", markup=False)
             text = self.read().strip()
+            if text.lower() == "q":
+                raise _QuitError
+            if text.lower() == "u":
+                raise _UndoError
             if text:
                 return text[:2000]
 
@@ -326,6 +344,11 @@ class Terminal:
     def validate(self, ranking: str | None = None) -> None:
         """Run (or resume) a blind validation round and report the unblinded result."""
         s = self.session
+        if ranking is not None:  # refused before a round is logged
+            try:
+                check_ranking(ranking, LABELS)
+            except ValueError as exc:
+                raise SessionStateError(str(exc)) from None
         plan = s.start_validation()
         self.console.print(
             f"Blind validation, round {plan.round}: run these gaits in this order and tell the "
@@ -343,7 +366,15 @@ class Terminal:
                 given = self.read().strip()
                 if given.lower() == "q":
                     raise _QuitError
-                key = self.ask(f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""})
+                try:
+                    key = self.ask(
+                        f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""}
+                    )
+                except _UndoError:  # no answer to undo inside a round: ask the ranking again
+                    self.console.print(
+                        "  a validation round is open: record its ranking first", markup=False
+                    )
+                    continue
                 if key == "n":
                     continue
             else:

@@ -136,3 +136,15 @@ def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:
     figure = tmp_path / "fig.png"
     _ok("session", "show", "1", "--figure", str(figure), "--db", db)
     assert figure.stat().st_size > 1_000
+
+
+def test_validate_with_a_bad_ranking_writes_no_round(tmp_path: Path, drive: Drive) -> None:
+    db = str(tmp_path / "lab.db")
+    with Session.create(db, CONFIG, "S01", seed=4) as s:
+        drive(s, 4)
+        before = len(s.events())
+    assert "a ranking names each of A, B, C" in _fails(
+        "session", "validate", "1", "--ranking", "ZZZ", "--yes", "--db", db
+    )
+    with Session.open(db, 1) as s:
+        assert len(s.events()) == before and s.validation_plan is None

@@ -172,3 +172,33 @@ def test_an_undo_whose_query_a_flag_withdrew_says_so(tmp_path: Path) -> None:
         pending = s.pending
         assert pending is not None and pending.trials == (2,)
         assert not near(s.config.space, {first}, 0.15)[pending.actions[0]]
+
+
+def test_u_and_q_keep_their_meaning_at_the_undo_question_and_the_unsafe_reason(
+    tmp_path: Path,
+) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, CONFIG, "S01", seed=5).close()
+    child = _spawn("session", "run", "1", "--db", url)
+    _answer(child, None, "1")
+    child.expect("saved: trial 1")
+    child.expect(r"Trial 2 against trial 1")
+    child.sendline("u")
+    child.expect(r"Undo the last answer \(trial 1\)\?  y yes, n no")
+    child.sendline("u")  # a traceback before
+    child.expect("undo is being asked: y yes, n no")
+    child.sendline("n")
+    child.expect("not undone")
+    child.expect(r"Trial 2 against trial 1")
+    child.sendline("1")
+    child.expect("Suggestion for step_length")
+    child.sendline("0")
+    child.expect(r"Write: .*x write and flag trial 2 unsafe")
+    child.sendline("x")
+    child.expect(r"Why is it unsafe\?")
+    child.sendline("q")  # pauses; it was taken for the reason before
+    child.expect("Paused")
+    child.expect(pexpect.EOF)
+    child.close()
+    with Session.open(url, 1) as s:
+        assert s.unsafe_flags() == {} and len(s.trials()) == 1 and s.status == "paused"

@@ -214,3 +214,28 @@ def test_a_round_logged_as_version_1_replays_by_its_own_rule(
     with Session.open(url, sid) as again:
         assert again.validation_plan == plan
         assert [e.version for e in again.events() if e.kind == "validation_started"] == [1]
+
+
+def test_a_flag_on_a_gait_the_open_round_shows_draws_the_round_again(tmp_path: Path) -> None:
+    """The stop rule opens a round right after an answer, before the operator can flag that
+    trial (the terminal's "write and flag unsafe"): the flag withdraws the round, and it is
+    drawn again among the gaits still allowed, in replay too."""
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    with Session.create(url, parse_config(CONFIG + "[stop]\nmax_trials = 6\n"), "S01") as s:
+        for k in range(6):
+            _answer(s, k)
+        first = s.validation_plan
+        assert first is not None  # opened by the stop rule
+        shown = {g.action for g in first.gaits}
+        space = s.config.space
+        trial = next(t for t in s.trials() if near(space, {t.action}, 0.15)[list(shown)].any())
+        assert s.flag_unsafe(trial.number, "knee") is True
+        again = s.validation_plan
+        banned = near(s.config.space, {trial.action}, 0.15)
+        assert again is not None and again.round == first.round
+        assert not any(banned[g.action] for g in again.gaits)
+        kinds = [e.kind for e in s.events()][-3:]
+        assert kinds == ["validation_started", "trial_flagged_unsafe", "validation_started"]
+        plan, sid = s.validation_plan, s.id
+    with Session.open(url, sid) as reopened:
+        assert reopened.validation_plan == plan

@@ -399,17 +399,27 @@ class Session:
 
         return self._locked(run)
 
-    def flag_unsafe(self, trial: int, reason: str) -> None:
+    def flag_unsafe(self, trial: int, reason: str) -> bool:
         """The operator's hard stop: the trial's gait, and the gaits within
         ``[safety].unsafe_radius`` of it, are never proposed again.  A pending query that
-        proposes one of them is withdrawn (the next query is proposed under the flag)."""
+        proposes one of them is withdrawn (the next query is proposed under the flag); so is an
+        open blind validation round that shows one, and the round is drawn again at once among
+        the gaits still allowed (none is open after it when fewer than three are).  Returns
+        whether a round was withdrawn."""
 
-        def run() -> None:
+        def run() -> bool:
             st = self._state
             st.check_open("unsafe flags")
+            before = st.open_round
             self._append([st.unsafe_event(trial, reason)])
+            st = self._state
+            if before is None or st.open_round is not None:
+                return False
+            with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
+                self._append([st.validation_event()])
+            return True
 
-        self._locked(run)
+        return self._locked(run)
 
     def withdraw_unsafe(self, trial: int) -> None:
         """Take back the unsafe flag of ``trial`` (its undo)."""
@@ -496,7 +506,8 @@ class Session:
         st = self._state
         if st.rounds or st.pending is not None or stop_reason(st, self.config.stop) is None:
             return
-        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
+        # another writer moved on: it decides; fewer than 3 gaits to show: the operator does
+        with contextlib.suppress(ConflictError, SessionStateError):
             self._append([st.validation_event()])
 
     # -- blind validation ----------------------------------------------------------------------

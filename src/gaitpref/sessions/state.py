@@ -91,6 +91,7 @@ class _Round:
     seq: int
     shown: dict[str, ShownGait]  # label -> the gait as the round showed it (rows move on)
     result: ValidationResult | None = None
+    version: int = 1  # its validation_started payload's: 2 chose among proposable gaits
 
 
 @dataclass
@@ -485,6 +486,11 @@ class SessionState:
             self.unsafe[p["trial"]] = (p["action"], p["reason"])
             if self.loop.flag_unsafe(p["action"]):
                 self.pending = None  # the pending query proposed a gait it now avoids
+            current = self.open_round
+            if current is not None and current.version >= 2:
+                allowed = self.loop.proposable()
+                if not all(allowed[g.action] for g in current.plan.gaits):
+                    self.rounds.pop()  # an open round showing a gait near the flag: withdrawn
         elif r.kind == log.UNSAFE_WITHDRAWN:
             action = self.unsafe.pop(p["trial"])[0]
             if all(a != action for a, _ in self.unsafe.values()):
@@ -501,6 +507,7 @@ class SessionState:
                     {g["label"]: g["posterior_mean"] for g in gaits},
                     r.seq,
                     {g["label"]: self.shown_gait(g["label"], g["action"]) for g in gaits},
+                    version=r.version,
                 )
             )
         elif r.kind == log.VALIDATION_ANSWERED:
