@@ -158,3 +158,52 @@ def test_gait_library_ids_are_shown() -> None:
     s.answer(q.id, [], [])
     assert s.events()[-1].payload["gait_id"] == f"gait-{q.actions[0]:02d}"
     assert Session.open(s.storage, s.id).gait_ids == ids
+
+
+def test_text_a_database_cannot_store_is_refused_by_name(tmp_path: Path, drive: Drive) -> None:
+    """A terminal's undecodable bytes arrive as lone surrogates (surrogateescape): refused
+    before anything is written, never accepted and then failing in an export."""
+    with Session.create(f"sqlite:///{tmp_path / 'a.db'}", CONFIG, "S01") as s:
+        drive(s, 2)
+        before = len(s.events())
+        bad = "bad \udcff byte"
+        with pytest.raises(ValueError, match="the note is not valid text"):
+            s.note(bad)
+        with pytest.raises(ValueError, match="the exclusion's detail is not valid text"):
+            s.exclude(1, "other", bad)
+        with pytest.raises(ValueError, match="the unsafe flag's reason is not valid text"):
+            s.flag_unsafe(1, bad)
+        assert len(s.events()) == before
+
+
+def test_an_export_that_fails_leaves_no_folder_and_can_run_again(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.sessions import export, export_session
+
+    with Session.create(f"sqlite:///{tmp_path / 'a.db'}", CONFIG, "S01") as s:
+        drive(s, 2)
+        out = tmp_path / "export"
+
+        def disk_full(rows: object) -> str:
+            raise OSError(28, "No space left on device")
+
+        with monkeypatch.context() as m:
+            m.setattr(export, "_csv", disk_full)
+            with pytest.raises(OSError, match="No space left"):
+                export_session(s, out)
+        left = [p.name for p in tmp_path.iterdir() if not p.name.startswith("a.db")]
+        assert left == []  # nothing half-written, not even the hidden folder
+        manifest = export_session(s, out)
+        assert manifest == out / "manifest.json" and manifest.is_file()
+        (tmp_path / "empty").mkdir()
+        assert export_session(s, tmp_path / "empty").is_file()  # an empty folder is fine
+
+
+def test_a_config_file_that_is_not_utf8_is_a_config_error(tmp_path: Path) -> None:
+    from gaitpref.config import load_config
+
+    path = tmp_path / "bad.toml"
+    path.write_bytes(b'name = "caf\xff"\n')
+    with pytest.raises(ConfigError, match=r"bad.toml' is not UTF-8 text \(byte 11"):
+        load_config(path)

@@ -131,7 +131,12 @@ def shipped_configs() -> list[str]:
 def _read(source: str | Path) -> tuple[str, str, Path | None]:
     path = Path(source)
     if path.is_file():
-        return path.read_text(encoding="utf-8"), path.stem, path.resolve().parent
+        try:
+            return path.read_text(encoding="utf-8"), path.stem, path.resolve().parent
+        except UnicodeDecodeError as exc:
+            raise ConfigError(
+                f"config {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})"
+            ) from None
     name = str(source)
     if path.suffix == "" and "/" not in name and name in shipped_configs():
         text = (resources.files("gaitpref.config") / "shipped" / f"{name}.toml").read_text("utf-8")

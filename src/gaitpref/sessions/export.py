@@ -34,6 +34,8 @@ from __future__ import annotations
 import csv
 import hashlib
 import json
+import shutil
+import tempfile
 from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
@@ -64,15 +66,33 @@ TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "co
 
 # -- export ------------------------------------------------------------------------------------
 def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
-    """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path."""
+    """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path.
+
+    The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
+    written: an export that fails (a full disk, text that cannot be written) leaves no
+    half-written folder behind, and may be run again.
+    """
     if fmt not in ("csv", "json"):
         raise ExportError(f"format must be csv or json, got {fmt!r}")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    partial = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    try:
+        _write_export(session, partial, fmt)
+        if out.exists():
+            out.rmdir()  # empty, checked above
+        partial.rename(out)
+    except BaseException:
+        shutil.rmtree(partial, ignore_errors=True)
+        raise
+    return out / "manifest.json"
+
+
+def _write_export(session: Session, out: Path, fmt: Format) -> None:
     events = session.events()
     walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
     tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked)
-    out.mkdir(parents=True, exist_ok=True)
     written: dict[str, str] = {}
 
     def put(name: str, text: str) -> None:
@@ -109,7 +129,6 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     if library is not None:
         manifest["gait_library"] = {"file": library[0], "sha256": library[1]}
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
-    return out / "manifest.json"
 
 
 def _copy_library(session: Session, out: Path) -> tuple[str, str] | None:

@@ -144,3 +144,16 @@ class Answered:
     seqs: tuple[int, ...]
     preferences: int  # how many pair terms (preferences) entered the model
     singles: int = 0  # how many single-action terms entered it
+
+
+def check_storable(text: str, what: str) -> str:
+    """``text`` unless it holds a lone surrogate (what a terminal's undecodable bytes become),
+    which no database or export can write as UTF-8: a ValueError naming ``what``."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise ValueError(
+            f"{what} is not valid text: character {exc.start} is not Unicode (an undecodable "
+            "byte?); nothing was written"
+        ) from None
+    return text

@@ -46,6 +46,7 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    check_storable,
 )
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -443,6 +444,7 @@ class Session:
         """Log a free-text note (anything the operator saw); returns its sequence number."""
         if not isinstance(text, str) or not text.strip() or len(text) > 10_000:
             raise ValueError("a note is a non-empty text of at most 10000 characters")
+        check_storable(text, "the note")
 
         def run() -> int:
             if self._state.status == "finished":

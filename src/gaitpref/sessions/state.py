@@ -49,6 +49,7 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    check_storable,
 )
 from gaitpref.sessions.validation import (
     BlindGait,
@@ -283,6 +284,7 @@ class SessionState:
         """Flag an answered trial unsafe (``reason``: what happened, 1..2000 characters)."""
         if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
             raise ValueError("an unsafe flag needs a reason: a text of 1 to 2000 characters")
+        check_storable(reason, "the unsafe flag's reason")
         told, action = self._trial(trial)
         if trial in self.unsafe:
             raise SessionStateError(f"trial {trial} is already flagged unsafe")
@@ -313,6 +315,7 @@ class SessionState:
             raise ValueError(f"reason must be one of {', '.join(REASONS)}; got {reason!r}")
         if not isinstance(detail, str) or len(detail) > 2000:
             raise ValueError("detail must be a string of at most 2000 characters")
+        check_storable(detail, "the exclusion's detail")
         found = [(k, t) for k in self.told for t in k.query.trials if t == trial]
         if isinstance(trial, bool) or not isinstance(trial, int) or not found:
             done = self.trial_actions
