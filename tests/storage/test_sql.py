@@ -13,6 +13,7 @@ from sqlalchemy import create_engine, text
 from gaitpref.storage import (
     NewEvent,
     SchemaError,
+    SessionNotFoundError,
     SessionSpec,
     SQLStorage,
     StorageConnectError,
@@ -117,6 +118,16 @@ def test_a_foreign_database_is_refused(tmp_path: Path) -> None:
     with sqlite3.connect(path) as raw:
         tables = {r[0] for r in raw.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     assert tables == {"patients"}
+    with sqlite3.connect(path) as raw:  # nor its journal: it was not switched to WAL
+        assert raw.execute("PRAGMA journal_mode").fetchone()[0] == "delete"
+    assert path.read_bytes()[18:20] == b"\x01\x01"  # the header's legacy journal bytes
+
+
+def test_a_session_id_past_sql_integers_is_no_such_session(tmp_path: Path) -> None:
+    storage = SQLStorage(_sqlite(tmp_path))
+    for sid in (2**63, 10**30, -(2**70)):
+        with pytest.raises(SessionNotFoundError, match=f"no session {sid}"):
+            storage.get_session(sid)
 
 
 @pytest.mark.parametrize(

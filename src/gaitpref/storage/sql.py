@@ -398,7 +398,14 @@ def _engine(url: URL) -> Engine:
         cursor.execute("PRAGMA foreign_keys = ON")
         cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         if not memory:
-            cursor.execute("PRAGMA journal_mode = WAL")
+            # WAL only in a new file or a gaitpref database: a connection that is about to find
+            # another program's file is not a gaitpref database must leave its journal alone
+            tables = {
+                row[0]
+                for row in cursor.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
+            }
+            if not tables or "alembic_version" in tables:
+                cursor.execute("PRAGMA journal_mode = WAL")
             cursor.execute("PRAGMA synchronous = FULL")
         cursor.close()
 
@@ -413,6 +420,8 @@ def _engine(url: URL) -> Engine:
 def _sid(session_id: object) -> int:
     if isinstance(session_id, bool) or not isinstance(session_id, int):
         raise SessionNotFoundError(f"session ids are integers, got {session_id!r}")
+    if not 0 <= session_id < 2**63:  # past SQL's INTEGER: no such session (an OverflowError)
+        raise SessionNotFoundError(f"no session {session_id}: ids are 1 to {2**63 - 1}")
     return session_id
 
 
