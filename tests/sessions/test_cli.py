@@ -148,3 +148,8 @@ def test_validate_with_a_bad_ranking_writes_no_round(tmp_path: Path, drive: Driv
     )
     with Session.open(db, 1) as s:
         assert len(s.events()) == before and s.validation_plan is None
+
+
+def test_a_negative_simulation_seed_is_refused_by_its_option() -> None:
+    out = _fails("simulate", "exo-1d-step-length", "--objective", "x.npy", "--seed", "-1")
+    assert "--seed" in out and "greater than or equal to 0" in out

@@ -147,6 +147,39 @@ def test_a_manifest_naming_a_file_outside_the_export_is_refused(
         import_session(MemoryStorage(), out)
 
 
+@pytest.mark.parametrize(
+    ("where", "key"),
+    [("session", "software_version"), ("session", "subject"), (None, "config_name")],
+)
+def test_a_manifest_text_that_is_null_is_refused_by_name(
+    tmp_path: Path, sqlite_url: str, drive: Drive, where: str | None, key: str
+) -> None:
+    s = _session(sqlite_url, drive)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    manifest = json.loads((out / "manifest.json").read_text())
+    (manifest if where is None else manifest[where])[key] = None
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    target = MemoryStorage()
+    name = key if where is None else f"{where}.{key}"
+    with pytest.raises(ExportError, match=rf"manifest.json: {name} must be a non-empty text"):
+        import_session(target, out)
+    assert target.list_sessions() == []
+
+
+def test_a_session_figure_without_a_suffix_is_a_png_and_a_folder_is_refused(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    from gaitpref.plots.session import save_session_figure
+
+    s = _session(sqlite_url, drive)
+    assert save_session_figure(s, tmp_path / "fig") == tmp_path / "fig.png"
+    assert (tmp_path / "fig.png").is_file() and not (tmp_path / "fig").exists()
+    with pytest.raises(ValueError, match="is a folder"):
+        save_session_figure(s, tmp_path)
+    assert not (tmp_path.parent / f"{tmp_path.name}.png").exists()
+
+
 def test_importing_the_same_export_twice_needs_as_new(
     tmp_path: Path, sqlite_url: str, drive: Drive
 ) -> None:

@@ -193,7 +193,7 @@ def simulate(
     ],
     minimize: Annotated[bool, typer.Option(help="Lower objective values are better.")] = False,
     trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
-    seed: Annotated[int | None, typer.Option(help="Seed (default: the config's).")] = None,
+    seed: Annotated[int | None, typer.Option(min=0, help="Seed (default: the config's).")] = None,
     coactive: Annotated[bool, typer.Option(help="Simulate coactive suggestions.")] = False,
     rating_quantiles: Annotated[
         str | None,

@@ -85,7 +85,7 @@ def paper_2d(
     backend: Backend = "joblib",
     address: Address = None,
     jobs: Jobs = -1,
-    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/paper-2d"),
     table: TableFormat = "csv",
     notes: Annotated[
@@ -138,7 +138,7 @@ def compass_gait(
     backend: Backend = "joblib",
     address: Address = None,
     jobs: Jobs = -1,
-    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/compass-gait"),
     table: TableFormat = "csv",
 ) -> None:
@@ -201,7 +201,7 @@ def population(
     trials: Annotated[int, typer.Option(min=1, help="executed trials per subject")] = 20,
     config: Annotated[str, typer.Option(help="config file or shipped name")] = "synthetic-2d",
     jobs: Jobs = 1,
-    seed: Annotated[int, typer.Option(help="study seed")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
     tolerance: Annotated[float, typer.Option(help="'within' as a fraction of the range")] = 0.05,
     user_noise: Annotated[
         float,

@@ -190,11 +190,17 @@ def render_session(pic: SessionPicture) -> Figure:
 
 
 def save_session_figure(session: Session, path: str | Path) -> Path:
-    """Draw ``session`` to ``path`` (PNG or anything matplotlib writes); returns the path.
+    """Draw ``session`` to ``path`` (PNG or anything matplotlib writes); returns the path
+    written: ``path`` itself, or with ``.png`` added when it has no suffix (a folder is
+    refused, never written beside).
 
     A space the paper's figures cannot draw (continuous, or more than two features) gets the
     posterior at the trials' points instead (``plots/trials.py``), as in the console."""
     out = Path(path)
+    if out.is_dir():
+        raise ValueError(f"figure {str(out)!r} is a folder: give a file name, e.g. fig.png")
+    if not out.suffix:
+        out = out.with_name(out.name + ".png")
     out.parent.mkdir(parents=True, exist_ok=True)
     post = session.posterior()
     if on_a_grid(post.space):

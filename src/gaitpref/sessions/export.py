@@ -390,6 +390,14 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     meta = dict(info.get("meta", {})) if isinstance(info.get("meta"), dict) else {}
     _find_library(folder, manifest, meta)
     _refuse_warm_start(info, meta)
+    texts = {
+        "session.subject": info.get("subject"),
+        "session.software_version": info.get("software_version"),
+        "config_name": manifest.get("config_name"),
+    }
+    for key, value in texts.items():
+        if not isinstance(value, str) or not value:
+            raise ExportError(f"manifest.json: {key} must be a non-empty text, got {value!r}")
     try:
         status = check_status(info["status"])
         spec = SessionSpec(
