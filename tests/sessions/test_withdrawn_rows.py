@@ -176,26 +176,29 @@ def test_the_export_names_an_undone_answers_gaits_as_walked(tmp_path: Path) -> N
 
 
 def _round_shows_a_withdrawn_row(seed: int) -> Session | None:
-    """An open round that shows a gait of the pending query, whose rows an unsafe flag then
-    takes out of the table."""
+    """An open round that shows a gait of the pending query, then an unsafe flag on that
+    gait: the flag takes the query's rows out of the table and draws the round again (before,
+    the round kept showing the flagged gait)."""
     s = _run(MemoryStorage(), seed, 4, suggest=False)
     q = s.next_query()
     s.start_validation()
     if not any(g.action in q.actions for g in s.validation_gaits()):
         return None
     near = min(s.trials(), key=lambda t: abs(s.space.points[t.action][0] - q.points[0][0]))
-    s.flag_unsafe(near.number, "knee pain")
-    gone = s.pending is None and any(g.action >= len(s.space) for g in s.validation_gaits())
-    return s if gone else None
+    redrawn = s.flag_unsafe(near.number, "knee pain")
+    return s if redrawn and s.pending is None and s.validation_plan is not None else None
 
 
-def test_an_open_round_keeps_its_gaits_when_a_flag_withdraws_their_rows(tmp_path: Path) -> None:
+def test_a_round_drawn_again_after_a_flag_withdrew_rows_keeps_its_gaits(tmp_path: Path) -> None:
     from gaitpref.console import present
 
     for seed, s in _cases(_round_shows_a_withdrawn_row):
         plan = s.validation_plan
         assert plan is not None
         shown = s.validation_gaits()
+        assert all(g.action < len(s.space) for g in shown)  # drawn among the rows left
+        flagged = {a for a, _ in s.unsafe_flags().values()}
+        assert not flagged & {g.action for g in shown}
         made = {p["gait_id"]: p["values"] for p in _made(s)}
         assert [g.label for g in shown] == list(plan.labels)
         assert all(made[g.gait] == g.values for g in shown)  # the gaits made, as made

@@ -490,10 +490,8 @@ class SessionState:
             if self.loop.flag_unsafe(p["action"]):
                 self.pending = None  # the pending query proposed a gait it now avoids
             current = self.open_round
-            if current is not None and current.version >= 2:
-                allowed = self.loop.proposable()
-                if not all(allowed[g.action] for g in current.plan.gaits):
-                    self.rounds.pop()  # an open round showing a gait near the flag: withdrawn
+            if current is not None and current.version >= 2 and self._shows_banned(current):
+                self.rounds.pop()  # an open round showing a gait near the flag: withdrawn
         elif r.kind == log.UNSAFE_WITHDRAWN:
             action = self.unsafe.pop(p["trial"])[0]
             if all(a != action for a, _ in self.unsafe.values()):
@@ -588,6 +586,28 @@ class SessionState:
         if self.on_demand is not None:
             return self.on_demand.gait_id(self.loop.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]
+
+    def _shows_banned(self, current: _Round) -> bool:
+        """Whether ``current`` shows a gait no query may propose now.  On the line path a flag
+        may have withdrawn the pending query, whose rows the round can show: those are judged
+        by the values the round showed, against the flags' radius."""
+        allowed = self.loop.proposable()
+        space = self.loop.space
+        lo = np.array([f.values[0] for f in space.features], dtype=np.float64)
+        span = np.array([f.span for f in space.features], dtype=np.float64)
+        span = np.where(span > 0, span, 1.0)
+        flagged = (space.points[sorted(self.loop.unsafe)] - lo) / span
+        radius = self.loop.safety.unsafe_radius
+        for g in current.plan.gaits:
+            if g.action < len(allowed):
+                if not allowed[g.action]:
+                    return True
+                continue
+            shown = current.shown[g.label].values
+            x = (np.array([shown[f.name] for f in space.features]) - lo) / span
+            if np.any(np.sum((flagged - x) ** 2, axis=1) <= radius**2 * (1 + 1e-12)):
+                return True
+        return False
 
     def check_open(self, what: str) -> None:
         """Refuse ``what`` in a finished session."""
