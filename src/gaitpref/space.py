@@ -21,6 +21,7 @@ Notation: ``A`` actions, ``d`` features, feature ``f`` has ``n_f`` values; ``poi
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -129,7 +130,13 @@ class Feature:
         clipped = min(max(float(value), self.values[0]), self.values[-1])
         if self.continuous:
             return clipped
-        return self.values[int(np.argmin(np.abs(self.array - clipped)))]
+        # the values increase: bisect (O(log n)), the lower value on a tie
+        k = bisect.bisect_left(self.values, clipped)
+        if k == len(self.values):
+            return self.values[-1]
+        if k > 0 and clipped - self.values[k - 1] <= self.values[k] - clipped:
+            return self.values[k - 1]
+        return self.values[k]
 
     def move_value(self, value: float, move: Move) -> float | None:
         """The value after a coactive move from ``value`` (a fraction of the range, clipped and

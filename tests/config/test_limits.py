@@ -177,3 +177,67 @@ def test_a_hessian_that_cannot_be_factorised_is_a_convergence_error() -> None:
     ):
         fit_laplace(k_vv, np.array([0, 1]), first, second, Probit(np.array([1e-12])))
     assert not isinstance(info.value, LinAlgError)
+
+
+RATED = (
+    _feature("x", 10)
+    + "[model]\nlengthscale = 0.2\nsignal_variance = 1.0\nnoise = 0.1\n"
+    + '[feedback.rating]\nlabels = ["very bad", "bad", "good"]\n'
+)
+
+
+@pytest.mark.parametrize(
+    ("text", "table", "key", "why"),
+    [
+        (RATED + '[safety]\navoid = ["very bad"]\nrisk = 1\n', "safety", "risk", "< 1"),
+        (
+            _feature("x", 10)
+            + MODEL
+            + "[feedback.rating]\nlabels = ["
+            + ", ".join(f'"c{k}"' for k in range(10))
+            + "]\n[safety]\navoid = ["
+            + ", ".join(f'"c{k}"' for k in range(9))
+            + "]\n",
+            "safety",
+            "avoid",
+            "not below 1",
+        ),
+        (RATED.replace('"good"]', '"good"]\nnoise = 1e-12'), "feedback.rating", "noise", r"1e\+24"),
+        (
+            "[space.x]\nvalues = [0.0, 0.5, 1.0]\n"
+            + MODEL
+            + '[cospar]\nsubspace = "line"\nn = 4\n',
+            "cospar",
+            "n",
+            "at most 3",
+        ),
+        (
+            "[space.x]\nmin = 0.0\nmax = 1.0\n" + MODEL + "[cospar]\nn = 8\nline_points = 2\n",
+            "cospar",
+            "n",
+            "at most 2",
+        ),
+        (
+            "[space.a]\nvalues = [3.0]\n" + MODEL + '[cospar]\nsubspace = "line"\n',
+            "cospar",
+            "subspace",
+            "no line to draw",
+        ),
+    ],
+)
+def test_settings_that_failed_at_the_first_ask_are_config_errors(
+    text: str, table: str, key: str, why: str
+) -> None:
+    with pytest.raises(ConfigError, match=why) as info:
+        parse_config(text)
+    assert (info.value.table, info.value.key) == (table, key)
+
+
+def test_snapping_to_a_million_values_is_a_bisection() -> None:
+    """The line path snaps every point of a query to each feature's values: an array rebuilt
+    per call made a 1,000,000-value feature cost seconds a query."""
+    feature = Feature.linspace("x", 0.0, 1.0, 1_000_001)
+    values = feature.array
+    for v in np.random.default_rng(0).uniform(-0.1, 1.1, 200):
+        assert feature.snap(v) == values[np.argmin(np.abs(values - np.clip(v, 0.0, 1.0)))]
+    assert feature.snap(-1.0) == 0.0 and feature.snap(2.0) == 1.0

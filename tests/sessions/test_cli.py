@@ -153,3 +153,12 @@ def test_validate_with_a_bad_ranking_writes_no_round(tmp_path: Path, drive: Driv
 def test_a_negative_simulation_seed_is_refused_by_its_option() -> None:
     out = _fails("simulate", "exo-1d-step-length", "--objective", "x.npy", "--seed", "-1")
     assert "--seed" in out and "greater than or equal to 0" in out
+
+
+def test_a_negative_or_nan_simulated_noise_is_refused() -> None:
+    for noise in ("-1", "nan"):
+        out = _fails(
+            "simulate", "exo-1d-step-length", "--objective", "random-gp", "--trials", "3",
+            "--noise", noise,
+        )  # fmt: skip
+        assert "noise must be a finite number >= 0" in out

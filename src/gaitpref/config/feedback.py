@@ -207,7 +207,15 @@ def _risk(
     if risk is None or not avoid or ordinal is None:
         return None
     if risk == "auto":
-        return default_risk(avoid, ordinal.size)
+        auto = default_risk(avoid, ordinal.size)
+        if auto >= 1:
+            fail(
+                "safety",
+                "avoid",
+                f"avoids {avoid} of {ordinal.size} categories: the default risk (avoid / K + "
+                f"0.1 = {auto:g}) is not below 1; give [safety] risk, or avoid fewer",
+            )
+        return auto
     prior = avoid / ordinal.size
     if ordinal.thresholds is None and float(risk) <= prior:
         fail(

@@ -99,6 +99,7 @@ from gaitpref.config.schema import (
     DEFAULTS_VERSION,
     GAITS,
     MAX_ACTIONS,
+    MAX_SIGNAL_TO_NOISE,
     STRATEGY_TABLES,
     TOP,
     check_table,
@@ -215,6 +216,16 @@ def parse_config(
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
+    if ordinal is not None:
+        ratio = model["signal_variance"] / ordinal.noise**2
+        if ratio > MAX_SIGNAL_TO_NOISE:
+            fail(
+                "feedback.rating",
+                "noise",
+                f"[model] signal_variance / noise**2 is {ratio:.3g}, more than "
+                f"{MAX_SIGNAL_TO_NOISE:g}: ratings this nearly deterministic cannot be fitted "
+                "(as for [model] noise); use a larger rating noise",
+            )
     grid = None if on_line else space
     safety, relied = parse_safety(top["safety"], ordinal, defaults, grid, library)
     stop = parse_stop(top["stop"])
@@ -269,6 +280,23 @@ def _cospar(
                 f"is {cospar['line_count']} lines of line_points = {cospar['line_points']}, "
                 f"{star} points a query, more than {MAX_STAR_POINTS}: lower line_count "
                 "(1: one line, as before defaults 0.10) or line_points",
+            )
+        if all(f.span == 0 for f in space.features):
+            fail(
+                "cospar",
+                "subspace",
+                "is 'line' but every feature has a single value: there is no line to draw "
+                "(give a feature a range, or use the grid)",
+            )
+        most = min(cospar["line_points"], space.grid_size or cospar["line_points"])
+        if cospar["n"] > most:
+            fail(
+                "cospar",
+                "n",
+                f"must be at most {most}, the distinct points a line of the query may hold "
+                f"(line_points = {cospar['line_points']}"
+                + (f", a grid of {space.grid_size}" if space.grid_size is not None else "")
+                + f"), got {cospar['n']}",
             )
         lines = cospar["line_count"]
         cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"], lines)

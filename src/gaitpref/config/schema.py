@@ -121,7 +121,8 @@ RATING: Final[dict[str, Key]] = {
 SAFETY: Final[dict[str, Key]] = {
     "avoid": Key(Labels(1, 9), ()),  # the worst categories, e.g. ["very bad"]
     "lambda": Key(Number(0.0, 100.0), 1.0),  # given: ROIAL's upper-bound rule, this confidence
-    "risk": Key(Number(0.0, 1.0, open_lo=True), "auto"),  # "auto": avoid / K + 0.1 (safety.py)
+    # "auto": avoid / K + 0.1 (safety.py)
+    "risk": Key(Number(0.0, 1.0, open_lo=True, open_hi=True), "auto"),
     "cautious": Key(Number(0.0, 1.0), 0.6),  # the risk rule's cautious level (safety.py); 0: off
     "explore": Key(Number(0.0, 100.0), 1.0),  # with cautious: mu + explore sd beats known-safe
     "unsafe_radius": Key(Number(0.0, 1.0), 0.0),  # around a flagged gait, fraction of ranges

@@ -73,16 +73,18 @@ class Integer:
 
 @dataclass(frozen=True)
 class Number:
-    """A finite number in ``[lo, hi]`` (``(lo, hi]`` with ``open_lo``)."""
+    """A finite number in ``[lo, hi]`` (an open end with ``open_lo`` or ``open_hi``)."""
 
     lo: float = -MAX_MAGNITUDE
     hi: float = MAX_MAGNITUDE
     open_lo: bool = False
+    open_hi: bool = False
 
     @property
     def allowed(self) -> str:
         low = f"> {self.lo:g}" if self.open_lo else f">= {self.lo:g}"
-        return f"a finite number {low} and <= {self.hi:g}"
+        high = f"< {self.hi:g}" if self.open_hi else f"<= {self.hi:g}"
+        return f"a finite number {low} and {high}"
 
     def check(self, value: object, table: str, key: str) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -91,7 +93,7 @@ class Number:
             number = float(value)
         except OverflowError:  # an integer beyond float range
             _bad(self, value, table, key)
-        if not math.isfinite(number) or number > self.hi:
+        if not math.isfinite(number) or number > self.hi or (self.open_hi and number == self.hi):
             _bad(self, value, table, key)
         if number < self.lo or (self.open_lo and number == self.lo):
             _bad(self, value, table, key)

@@ -34,6 +34,10 @@ class PointUser:
     rng: np.random.Generator
     noise: float = 0.0
 
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.noise) and self.noise >= 0):
+            raise ValueError(f"noise must be a finite number >= 0, got {self.noise!r}")
+
     def answer(self, query: Query, space: Space) -> list[Comparison]:
         """Every executed action against every other member of the query, each pair once."""
         members = list(dict.fromkeys(query.members))
