@@ -34,6 +34,8 @@ def test_bad_studies_are_refused(small_study: Study) -> None:
         dataclasses.replace(small_study, settings=small_study.settings[:1] * 2)
     with pytest.raises(ValueError, match="K x 900"):
         dataclasses.replace(small_study, objectives=np.zeros((3, 10)))
+    with pytest.raises(ValueError, match="K x 900, got none"):  # a reshape error before
+        dataclasses.replace(small_study, objectives=np.zeros((0, 900)))
     with pytest.raises(ValueError, match="distinct ids"):
         dataclasses.replace(small_study, objective_ids=(0, 0, 1))
     with pytest.raises(ValueError, match="seeds"):

@@ -264,6 +264,8 @@ class Study:
             raise ValueError(f"study {self.name!r}: setting names repeat: {names}")
         A = len(self.space)
         obj = np.asarray(self.objectives, dtype=np.float64)
+        if obj.size == 0:
+            raise ValueError(f"study {self.name!r}: objectives must be K x {A}, got none")
         obj = obj.reshape(obj.shape[0], -1) if obj.ndim > 1 else obj.reshape(1, -1)
         if obj.shape[1] != A or obj.shape[0] == 0:
             raise ValueError(f"study {self.name!r}: objectives must be K x {A}, got {obj.shape}")
