@@ -271,10 +271,7 @@ def near(space: Space, centres: Collection[int], radius: float) -> BoolArray:
     The scale is the features' declared ranges, not the spread of the points present: on a point
     set (a line and the visited points) the radius means the same as on the full grid.
     """
-    points = space.points
-    lo = np.array([f.values[0] for f in space.features], dtype=np.float64)
-    span = np.array([f.span for f in space.features], dtype=np.float64)
-    scaled = (points - lo) / np.where(span > 0, span, 1.0)
+    scaled = _scaled(space, space.points)
     out = np.zeros(len(space), dtype=bool)
     for c in centres:
         d2 = np.sum((scaled - scaled[int(c)]) ** 2, axis=1)
@@ -283,4 +280,25 @@ def near(space: Space, centres: Collection[int], radius: float) -> BoolArray:
     return out
 
 
-__all__ = ["BoolArray", "Safety", "default_risk", "near"]
+def near_point(
+    space: Space, centres: Collection[int], point: NDArray[np.float64], radius: float
+) -> bool:
+    """Whether ``point`` (feature values, maybe no longer a row of ``space``) lies within
+    ``radius`` of one of ``centres``, scaled as by :func:`near`."""
+    if not centres:
+        return False
+    d2 = np.sum(
+        (_scaled(space, space.points[sorted(centres)]) - _scaled(space, point)) ** 2, axis=-1
+    )
+    return bool(np.any(d2 <= radius**2 * (1 + 1e-12)))
+
+
+def _scaled(space: Space, points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``points`` with each feature scaled to ``[0, 1]`` by its declared range."""
+    lo = np.array([f.values[0] for f in space.features], dtype=np.float64)
+    span = np.array([f.span for f in space.features], dtype=np.float64)
+    out: NDArray[np.float64] = (points - lo) / np.where(span > 0, span, 1.0)
+    return out
+
+
+__all__ = ["BoolArray", "Safety", "default_risk", "near", "near_point"]

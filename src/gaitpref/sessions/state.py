@@ -37,6 +37,7 @@ from gaitpref.feedback import (
     kind_of,
 )
 from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
+from gaitpref.loop.safety import near_point
 from gaitpref.sessions import events as log
 from gaitpref.sessions.gaits import RecordedGaits, propose_with_gaits
 from gaitpref.sessions.records import (
@@ -592,20 +593,15 @@ class SessionState:
         may have withdrawn the pending query, whose rows the round can show: those are judged
         by the values the round showed, against the flags' radius."""
         allowed = self.loop.proposable()
-        space = self.loop.space
-        lo = np.array([f.values[0] for f in space.features], dtype=np.float64)
-        span = np.array([f.span for f in space.features], dtype=np.float64)
-        span = np.where(span > 0, span, 1.0)
-        flagged = (space.points[sorted(self.loop.unsafe)] - lo) / span
-        radius = self.loop.safety.unsafe_radius
+        space, radius = self.loop.space, self.loop.safety.unsafe_radius
         for g in current.plan.gaits:
             if g.action < len(allowed):
                 if not allowed[g.action]:
                     return True
                 continue
             shown = current.shown[g.label].values
-            x = (np.array([shown[f.name] for f in space.features]) - lo) / span
-            if np.any(np.sum((flagged - x) ** 2, axis=1) <= radius**2 * (1 + 1e-12)):
+            point = np.array([shown[f.name] for f in space.features], dtype=np.float64)
+            if near_point(space, self.loop.unsafe, point, radius):
                 return True
         return False
 
