@@ -121,7 +121,8 @@ def test_ctrl_c_and_a_closed_terminal_pause_the_session(tmp_path: Path) -> None:
         assert [e.kind for e in s.events()][-2:] == ["resumed", "paused"]
 
 
-def test_undo_in_the_terminal_asks_first(tmp_path: Path) -> None:
+def _one_trial_then_undo_asked(tmp_path: Path) -> tuple[str, pexpect.spawn]:
+    """Seed 5: trial 1 answered in the terminal, then ``u`` at trial 2: the undo question."""
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     Session.create(url, CONFIG, "S01", seed=5).close()
     child = _spawn("session", "run", "1", "--db", url)
@@ -130,6 +131,11 @@ def test_undo_in_the_terminal_asks_first(tmp_path: Path) -> None:
     child.expect(r"Trial 2 against trial 1")
     child.sendline("u")
     child.expect(r"Undo the last answer \(trial 1\)\?  y yes, n no")
+    return url, child
+
+
+def test_undo_in_the_terminal_asks_first(tmp_path: Path) -> None:
+    url, child = _one_trial_then_undo_asked(tmp_path)
     child.sendline("n")
     child.expect("not undone")
     child.expect(r"Trial 2 against trial 1")  # asked again, nothing changed
@@ -177,14 +183,7 @@ def test_an_undo_whose_query_a_flag_withdrew_says_so(tmp_path: Path) -> None:
 def test_u_and_q_keep_their_meaning_at_the_undo_question_and_the_unsafe_reason(
     tmp_path: Path,
 ) -> None:
-    url = f"sqlite:///{tmp_path / 'lab.db'}"
-    Session.create(url, CONFIG, "S01", seed=5).close()
-    child = _spawn("session", "run", "1", "--db", url)
-    _answer(child, None, "1")
-    child.expect("saved: trial 1")
-    child.expect(r"Trial 2 against trial 1")
-    child.sendline("u")
-    child.expect(r"Undo the last answer \(trial 1\)\?  y yes, n no")
+    url, child = _one_trial_then_undo_asked(tmp_path)
     child.sendline("u")  # a traceback before
     child.expect("undo is being asked: y yes, n no")
     child.sendline("n")
