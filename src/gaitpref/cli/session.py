@@ -285,7 +285,7 @@ def exclude(
     reason: Annotated[
         str,
         typer.Option(
-            help="Why (gaitpref.sessions.REASONS, e.g. device-fault; a wrong one lists them all)."
+            help="Why (gaitpref.sessions.REASONS, e.g. device_fault; a wrong one lists them all)."
         ),
     ],
     detail: Annotated[str, typer.Option(help="What happened.")] = "",
