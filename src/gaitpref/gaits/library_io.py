@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -102,12 +103,34 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
 
 
 def save_library(lib: GaitLibrary, path: str | Path) -> None:
-    """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename)."""
+    """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename; a write that
+    fails leaves neither a partial library nor the temporary file)."""
     target = Path(path)
-    tmp = target.with_name(target.name + ".tmp")
     text = json.dumps(to_document(lib), indent=1, allow_nan=False)
-    tmp.write_text(text + "\n", encoding="utf-8")
-    os.replace(tmp, target)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as out:
+            out.write(text + "\n")
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_json(file: Path) -> Any:
+    """The JSON document in ``file``, or :class:`GaitLibraryError` naming it: besides a file
+    that cannot be read, a syntax error or bytes that are not UTF-8, a number past Python's
+    integer digits limit (a ValueError) and arrays nested past the recursion limit (a
+    RecursionError)."""
+    try:
+        return json.loads(file.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise GaitLibraryError(f"{file}: cannot be read ({exc.strerror or exc})") from None
+    except RecursionError:
+        raise GaitLibraryError(f"{file}: not valid JSON (nested too deeply)") from None
+    except (UnicodeDecodeError, ValueError) as exc:  # json.JSONDecodeError is a ValueError
+        why = str(exc).split(";")[0]  # not the advice to raise the interpreter's limit
+        raise GaitLibraryError(f"{file}: not valid JSON ({why})") from None
 
 
 class Reader:
@@ -249,8 +272,4 @@ def load_library(path: str | Path, *, allow_infeasible: bool = False) -> GaitLib
     file = Path(path)
     if not file.is_file():
         raise GaitLibraryError(f"{file}: no such gait library file")
-    try:
-        data = json.loads(file.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise GaitLibraryError(f"{file}: not valid JSON ({exc})") from None
-    return from_document(data, str(file), allow_infeasible)
+    return from_document(read_json(file), str(file), allow_infeasible)
