@@ -137,6 +137,42 @@ def test_a_cache_folder_that_cannot_be_written_keeps_its_gaits_in_memory(tmp_pat
     assert blocked.read_text() == "not a folder"
 
 
+@pytest.mark.parametrize(
+    ("features", "settings", "vector", "why"),
+    [
+        (["step_length"], {"speed": 0.2}, [2.5], "step_length 2.5 m is not in (0, 2) m"),
+        (["step_length"], {"speed": 0.2}, [0.0], "step_length 0 m is not in (0, 2) m"),
+        (["step_length", "step_duration"], {}, [0.12, -0.5], "step_duration -0.5 s is not"),
+    ],
+)
+def test_a_point_no_optimisation_can_pose_is_an_infeasible_gait_naming_why(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    features: list[str],
+    settings: dict[str, float],
+    vector: list[float],
+    why: str,
+) -> None:
+    """A config's [space] may reach such points (step_length min = 0, a typo max = 2.5): the
+    session's ask failed with a ValueError or GaitGeneratorError, at that point every time."""
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("optimized a gait that cannot be posed")
+
+    monkeypatch.setattr("gaitpref.gaits.generator.optimize_gait", never)
+    g = make_generator("compass-hzd", features, settings)
+    made, new = OnDemandGaits(g, GaitCache(tmp_path), [0.1] * len(features)).get(np.array(vector))
+    assert new and not made.feasible
+    assert made.gait.message.startswith("infeasible: no gait can be posed: " + why)
+    cached = GaitCache(tmp_path).get(made.key)  # written and read back (nulls for its numbers)
+    assert cached is not None and cached.gait.message == made.gait.message
+
+
+def test_a_step_too_brief_to_square_is_infeasible_not_an_overflow() -> None:
+    gait = optimize_gait(GaitRequest(0.1, step_duration=1e-200), max_iterations=5)
+    assert not gait.feasible and gait.message.startswith("infeasible: ")  # an OverflowError
+
+
 def test_an_infeasible_gait_is_cached_with_its_reason(tmp_path: Path) -> None:
     g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
     made, _ = OnDemandGaits(g, GaitCache(tmp_path), [0.1]).get(np.array([0.02]))
