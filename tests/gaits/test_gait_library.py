@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -173,6 +174,32 @@ def test_json_past_the_parsers_limits_is_a_library_error(
     bad.write_text(text)
     with pytest.raises(GaitLibraryError, match=f"bad.json: not valid JSON.*{why}"):
         load_library(bad)
+
+
+@pytest.mark.parametrize(
+    ("field", "where"),
+    [
+        ('"cot": ', "gaits[0].cot"),
+        ('"speed": ', "speed"),
+        ('"alpha": [[', "gaits[0].alpha"),
+        ('"values": [', "axes[0].values"),
+        ('"leg_mass": ', "model.parameters"),
+        ('"clearance": ', "formulation"),
+    ],
+)
+def test_an_integer_past_a_floats_range_is_a_library_error(
+    speed_library: GaitLibrary, tmp_path: Path, field: str, where: str
+) -> None:
+    """An OverflowError traceback before (gaits show, a config's library)."""
+    path = tmp_path / "lib.json"
+    speed_library.save(path)
+    text = json.dumps(json.loads(path.read_text()))  # one line: '"alpha": [[-0.1, ...'
+    huge = "1" + "0" * 400
+    start = text.index(field) + len(field)
+    end = min(text.index(c, start) for c in ",]" if c in text[start:])
+    path.write_text(text[:start] + huge + text[end:])
+    with pytest.raises(GaitLibraryError, match=f"lib.json: {re.escape(where)}"):
+        load_library(path)
 
 
 def test_a_failed_save_leaves_no_file_behind(duration_library: GaitLibrary, tmp_path: Path) -> None:

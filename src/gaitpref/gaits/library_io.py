@@ -153,12 +153,15 @@ class Reader:
             return math.nan
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(f"{where}{key}", f"expected a number, got {value!r}")
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:  # an integer past a float's range
+            raise self.fail(f"{where}{key}", "expected a number, got one too large") from None
 
     def matrix(self, value: Any, shape: tuple[int, ...], field: str) -> np.ndarray[Any, Any]:
         try:
             arr = np.array(value, dtype=np.float64)  # null -> nan
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self.fail(field, f"expected numbers of shape {shape}") from None
         if arr.shape != shape:
             raise self.fail(field, f"expected shape {shape}, got {arr.shape}")
@@ -180,13 +183,13 @@ def from_document(
     model = r.get(data, "model", "")
     try:
         params = CompassGaitParams.from_dict(r.get(model, "parameters", "model."))
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         raise r.fail("model.parameters", str(exc)) from None
     formulation = r.get(data, "formulation", "")
     fields = HZDSettings.__dataclass_fields__
     try:
         settings = HZDSettings(**{k: r.get(formulation, k, "formulation.") for k in fields})
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise r.fail("formulation", str(exc)) from None
     speed_raw = r.get(data, "speed", "")
     speed = None if speed_raw is None else r.number(data, "speed", "")
