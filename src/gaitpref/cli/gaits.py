@@ -109,6 +109,7 @@ def build(
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Parallel processes.")] = 1,
 ) -> None:
     """Optimize one gait per grid point and write the library; exit 1 if any is infeasible."""
+    from joblib import cpu_count
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -124,8 +125,9 @@ def build(
         raise typer.BadParameter("give exactly one of --step-duration and --speed")
     if speed is not None and not (math.isfinite(speed) and speed > 0):
         raise typer.BadParameter(f"must be a positive number, got {speed}", param_hint="--speed")
-    if jobs < 1:
-        raise typer.BadParameter("must be >= 1", param_hint="--jobs")
+    cpus = cpu_count()
+    if not 1 <= jobs <= cpus:  # joblib starts every worker asked for, busy or not
+        raise typer.BadParameter(f"must be in 1..{cpus} (the CPUs here)", param_hint="--jobs")
     lengths = parse_range(step_length, "--step-length")
     durations = None if step_duration is None else parse_range(step_duration, "--step-duration")
     widths = None if step_width is None else parse_range(step_width, "--step-width")

@@ -96,8 +96,8 @@ def build_library(
     if n_jobs == 1 or len(chains) == 1:
         for chain in chains:
             base.update(_run_chain(chain, p, s, progress))
-    else:  # one process a chain at most: joblib starts all n_jobs workers, busy or not
-        runner = Parallel(n_jobs=min(n_jobs, len(chains)), return_as="generator_unordered")
+    else:
+        runner = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
         for done in runner(delayed(_run_chain)(chain, p, s) for chain in chains):
             base.update(done)
             if progress is not None:
