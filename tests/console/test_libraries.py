@@ -126,6 +126,18 @@ def test_refused_libraries_and_paths(
     assert console.get("/api/sessions").json() == []
 
 
+def test_an_upload_past_the_json_parsers_limits_is_refused(
+    console: TestClient, library_bytes: tuple[bytes, GaitLibrary]
+) -> None:
+    deep = b"[" * 100_000 + b"]" * 100_000
+    r = upload(console, NAMED, ("lib.json", deep))  # a RecursionError: a 500 before
+    assert r.status_code == 422 and "nested too deeply" in r.text
+    assert b'"speed": null' in library_bytes[0]
+    huge = library_bytes[0].replace(b'"speed": null', b'"speed": 1' + b"0" * 400)
+    r = upload(console, NAMED, ("lib.json", huge))  # an OverflowError: a 500 before
+    assert r.status_code == 422 and "speed: expected a number, got one too large" in r.text
+
+
 def _files_under(folder: Path) -> list[Path]:
     return sorted(p for p in folder.rglob("*")) if folder.exists() else []
 

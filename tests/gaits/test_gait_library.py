@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -159,6 +160,57 @@ def test_missing_and_corrupt_files(tmp_path: Path) -> None:
         load_library(bad)
 
 
+@pytest.mark.parametrize(
+    ("text", "why"),
+    [
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),  # a RecursionError before
+        ('{"format": ' + "1" * 5000 + "}", "4300 digits"),  # a bare ValueError before
+    ],
+)
+def test_json_past_the_parsers_limits_is_a_library_error(
+    tmp_path: Path, text: str, why: str
+) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text(text)
+    with pytest.raises(GaitLibraryError, match=f"bad.json: not valid JSON.*{why}"):
+        load_library(bad)
+
+
+@pytest.mark.parametrize(
+    ("field", "where"),
+    [
+        ('"cot": ', "gaits[0].cot"),
+        ('"speed": ', "speed"),
+        ('"alpha": [[', "gaits[0].alpha"),
+        ('"values": [', "axes[0].values"),
+        ('"leg_mass": ', "model.parameters"),
+        ('"clearance": ', "formulation"),
+    ],
+)
+def test_an_integer_past_a_floats_range_is_a_library_error(
+    speed_library: GaitLibrary, tmp_path: Path, field: str, where: str
+) -> None:
+    """An OverflowError traceback before (gaits show, a config's library)."""
+    path = tmp_path / "lib.json"
+    speed_library.save(path)
+    text = json.dumps(json.loads(path.read_text()))  # one line: '"alpha": [[-0.1, ...'
+    huge = "1" + "0" * 400
+    start = text.index(field) + len(field)
+    end = min(text.index(c, start) for c in ",]" if c in text[start:])
+    path.write_text(text[:start] + huge + text[end:])
+    with pytest.raises(GaitLibraryError, match=f"lib.json: {re.escape(where)}"):
+        load_library(path)
+
+
+def test_a_failed_save_leaves_no_file_behind(duration_library: GaitLibrary, tmp_path: Path) -> None:
+    target = tmp_path / "lib.json"
+    target.mkdir()  # the rename onto it fails
+    with pytest.raises(OSError):
+        duration_library.save(target)
+    assert [p.name for p in tmp_path.iterdir()] == ["lib.json"] and target.is_dir()
+    assert not list(target.iterdir())
+
+
 def test_library_checks_its_grid(duration_library: GaitLibrary) -> None:
     lib = duration_library
     with pytest.raises(GaitLibraryError, match="6 points but the library has 5"):
@@ -175,6 +227,24 @@ def test_build_rejects_a_bad_grid_before_optimizing() -> None:
         build_library([0.12, 0.10], speed=0.2)
     with pytest.raises(ValueError, match="exactly one"):
         build_library([0.12], speed=0.2, step_durations=[1.0])
+
+
+@pytest.mark.parametrize(
+    ("lengths", "problem"),
+    [
+        ([0.12, 2.5], "step length must be in"),  # optimized up to 2.5, then a ValueError
+        ([0.12, 0.1201, 0.1202], "too close to give distinct gait ids"),  # after every gait
+    ],
+)
+def test_build_refuses_what_no_library_holds_before_optimizing(
+    monkeypatch: pytest.MonkeyPatch, lengths: list[float], problem: str
+) -> None:
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("optimized a gait of a grid that is refused")
+
+    monkeypatch.setattr("gaitpref.gaits.build.optimize_gait", never)
+    with pytest.raises(ValueError, match=problem):
+        build_library(lengths, speed=0.2)
 
 
 def test_gaits_are_read_only(duration_library: GaitLibrary) -> None:

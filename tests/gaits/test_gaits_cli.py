@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import pytest
+from joblib import cpu_count
 from typer.testing import CliRunner
 
 from gaitpref.cli.gaits import app, parse_range
@@ -39,7 +40,8 @@ def test_build_writes_a_loadable_library(built: Path) -> None:
 def test_build_with_durations_and_width_label(tmp_path: Path) -> None:
     out = tmp_path / "grid.json"
     args = ["build", "--step-length", "0.12", "--step-duration", "0.9:1.0:2",
-            "--step-width", "0.25:0.30:2", "--jobs", "2", "--out", str(out)]  # fmt: skip
+            "--step-width", "0.25:0.30:2", "--jobs", str(min(2, cpu_count())),
+            "--out", str(out)]  # fmt: skip
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output
     lib = GaitLibrary.load(out)
@@ -87,3 +89,66 @@ def test_usage_errors(tmp_path: Path) -> None:
 def test_parse_range() -> None:
     assert parse_range("0.08:0.18:3", "--x") == pytest.approx((0.08, 0.13, 0.18))
     assert parse_range("0.2", "--x") == (0.2,)
+
+
+@pytest.mark.parametrize(
+    ("args", "problem"),
+    [
+        (["--speed", "inf"], "--speed: must be a positive number"),  # a traceback after a build
+        (["--speed", "0.2", "--step-length", "0.1:2.5:3"], "step length must be in (0, 2.0)"),
+        (["--speed", "0.2", "--step-length", "0.12:0.1201:3"], "distinct gait ids"),
+        (["--speed", "0.2", "--step-length", "0.1:0.2:100000000000"], "at most 1000000 values"),
+        (["--step-length", "0.1:0.2:1000", "--step-duration", "0.5:1:1001"], "1001000 gaits"),
+        (["--speed", "0.2", "--out", "{tmp}/absent/lib.json"], "no folder"),
+        (["--speed", "0.2", "--out", "{tmp}"], "is a folder"),
+    ],
+)
+def test_build_refuses_before_optimizing_and_writes_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, args: list[str], problem: str
+) -> None:
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("optimized a gait of a build that is refused")
+
+    monkeypatch.setattr("gaitpref.gaits.build.optimize_gait", never)
+    out = ["--out", str(tmp_path / "lib.json")] if "--out" not in args else []
+    argv = ["build", *(a.replace("{tmp}", str(tmp_path)) for a in args), *out]
+    result = runner.invoke(app, argv)
+    assert result.exit_code == 2, result.output
+    assert problem in _text(result.output) and "Traceback" not in result.output
+    assert not list(tmp_path.iterdir())
+
+
+def test_build_refuses_more_jobs_than_cpus(tmp_path: Path) -> None:
+    """--jobs 10000 started 10000 worker processes (joblib starts every one asked for)."""
+    args = ["build", "--step-length", "0.12", "--speed", "0.2", "--jobs", "10000"]
+    result = runner.invoke(app, [*args, "--out", str(tmp_path / "lib.json")])
+    assert result.exit_code == 2 and "--jobs: must be in 1.." in _text(result.output)
+    assert not list(tmp_path.iterdir())
+
+
+def test_plot_refuses_steps_and_formats_before_simulating(built: Path, tmp_path: Path) -> None:
+    steps = runner.invoke(app, ["plot", str(built), "--steps", "0"])  # a ValueError traceback
+    assert steps.exit_code == 2 and "--steps: must be in 1..100" in _text(steps.output)
+    forever = runner.invoke(app, ["plot", str(built), "--steps", "1000000000"])
+    assert forever.exit_code == 2 and "must be in 1..100" in _text(forever.output)
+    text = runner.invoke(app, ["plot", str(built), "--out", str(tmp_path / "fig.txt")])
+    assert text.exit_code == 2 and "does not write '.txt' files" in _text(text.output)
+    folder = runner.invoke(app, ["plot", str(built), "--out", str(tmp_path)])
+    assert folder.exit_code == 2 and "is a folder" in _text(folder.output)
+    assert not list(tmp_path.iterdir())
+
+
+def test_plot_without_a_suffix_reports_the_png_it_writes(built: Path, tmp_path: Path) -> None:
+    target = tmp_path / "sub" / "fig"
+    args = ["plot", str(built), "--id", "L0.120-V0.200", "--steps", "1", "--out", str(target)]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    written = tmp_path / "sub" / "fig.png"
+    assert written.is_file() and f"wrote {written}" in result.output  # it said 'wrote .../fig'
+
+
+def test_show_refuses_json_nested_past_the_recursion_limit(tmp_path: Path) -> None:
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000 + "]" * 100_000)
+    result = runner.invoke(app, ["show", str(deep)])
+    assert result.exit_code == 2 and "nested too deeply" in _text(result.output)

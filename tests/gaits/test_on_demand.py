@@ -3,7 +3,9 @@ and the warm start from the nearest gait already made."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -13,6 +15,7 @@ from gaitpref.config import parse_config
 from gaitpref.gaits import (
     CachedGait,
     GaitCache,
+    GaitCacheWarning,
     GaitGeneratorError,
     GaitRequest,
     OnDemandGaits,
@@ -90,6 +93,84 @@ def test_an_unreadable_cache_entry_is_made_again(tmp_path: Path) -> None:
     again, _ = OnDemandGaits(g, cache, [0.1]).get(np.array([0.12]))
     assert not again.from_cache and _same_gait(again.gait, made.gait)
     assert GaitCache(tmp_path).get(made.key) is not None  # rewritten whole
+
+
+def _edited(doc: dict[str, Any], how: str) -> str:
+    if how == "nested":
+        return "[" * 100_000 + "]" * 100_000  # a RecursionError escaped before
+    if how == "nan coefficients":
+        doc["gait"]["alpha"] = [[None] * 7]  # feasible, and trusted as it was
+    elif how == "another step length":
+        doc["gait"]["step_length"] = 0.15
+    elif how == "another request":
+        doc["parameters"] = {"step_length": 0.15}
+        doc["gait"]["step_length"] = 0.15
+    return json.dumps(doc)
+
+
+@pytest.mark.parametrize(
+    "how", ["nested", "nan coefficients", "another step length", "another request"]
+)
+def test_a_cache_entry_that_is_not_the_keys_gait_is_made_again(tmp_path: Path, how: str) -> None:
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    made, _ = OnDemandGaits(g, GaitCache(tmp_path), [0.1]).get(np.array([0.12]))
+    path = tmp_path / f"{made.key}.json"
+    path.write_text(_edited(json.loads(path.read_text()), how))
+    cache = GaitCache(tmp_path)
+    assert cache.get(made.key) is None and cache.misses == 1
+    again, _ = OnDemandGaits(g, cache, [0.1]).get(np.array([0.12]))
+    assert not again.from_cache and _same_gait(again.gait, made.gait)
+    found = GaitCache(tmp_path).get(made.key)  # rewritten whole
+    assert found is not None and _same_gait(found.gait, made.gait)
+
+
+def test_a_cache_folder_that_cannot_be_written_keeps_its_gaits_in_memory(tmp_path: Path) -> None:
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    blocked = tmp_path / "gaits"
+    blocked.write_text("not a folder")  # mkdir fails, as in a read-only folder
+    cache = GaitCache(blocked)
+    gaits = OnDemandGaits(g, cache, [0.1])
+    with pytest.warns(GaitCacheWarning, match=f"gait cache {blocked}: cannot write"):
+        made, new = gaits.get(np.array([0.12]))  # an OSError before, the gait lost
+    assert new and made.feasible and cache.unwritable is not None
+    assert cache.get(made.key) is not None  # in memory
+    assert blocked.read_text() == "not a folder"
+
+
+@pytest.mark.parametrize(
+    ("features", "settings", "vector", "why"),
+    [
+        (["step_length"], {"speed": 0.2}, [2.5], "step_length 2.5 m is not in (0, 2) m"),
+        (["step_length"], {"speed": 0.2}, [0.0], "step_length 0 m is not in (0, 2) m"),
+        (["step_length", "step_duration"], {}, [0.12, -0.5], "step_duration -0.5 s is not"),
+    ],
+)
+def test_a_point_no_optimisation_can_pose_is_an_infeasible_gait_naming_why(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    features: list[str],
+    settings: dict[str, float],
+    vector: list[float],
+    why: str,
+) -> None:
+    """A config's [space] may reach such points (step_length min = 0, a typo max = 2.5): the
+    session's ask failed with a ValueError or GaitGeneratorError, at that point every time."""
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("optimized a gait that cannot be posed")
+
+    monkeypatch.setattr("gaitpref.gaits.generator.optimize_gait", never)
+    g = make_generator("compass-hzd", features, settings)
+    made, new = OnDemandGaits(g, GaitCache(tmp_path), [0.1] * len(features)).get(np.array(vector))
+    assert new and not made.feasible
+    assert made.gait.message.startswith("infeasible: no gait can be posed: " + why)
+    cached = GaitCache(tmp_path).get(made.key)  # written and read back (nulls for its numbers)
+    assert cached is not None and cached.gait.message == made.gait.message
+
+
+def test_a_step_too_brief_to_square_is_infeasible_not_an_overflow() -> None:
+    gait = optimize_gait(GaitRequest(0.1, step_duration=1e-200), max_iterations=5)
+    assert not gait.feasible and gait.message.startswith("infeasible: ")  # an OverflowError
 
 
 def test_an_infeasible_gait_is_cached_with_its_reason(tmp_path: Path) -> None:

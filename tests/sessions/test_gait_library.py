@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gaitpref import GaitLibrary, ReplayError, Session, load_config
+from gaitpref.config import parse_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
 
@@ -89,3 +90,24 @@ def test_a_changed_or_missing_library_stops_replay(
     np.testing.assert_array_equal(imported.posterior().mean, s.posterior().mean)
     assert imported.gait_ids == [library.gait_id(a) for a in range(len(library))]
     imported.close()
+
+
+SPACE = """
+[space.step_length]
+{grid}
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+"""
+
+
+def test_a_library_given_for_another_grid_is_refused(library: GaitLibrary) -> None:
+    """A library of 0.10..0.16 m given to a config of 0.30 and 0.50 m named its actions with
+    the library's first two ids (L0.100, L0.120): the operator would walk other gaits."""
+    other = parse_config(SPACE.format(grid="values = [0.30, 0.50]"))
+    with pytest.raises(ValueError, match=r"grid \(step_length 0.1..0.16 \(4 values\)\) is not"):
+        Session.create("sqlite://", other, "S01", library=library)
+    same = parse_config(SPACE.format(grid="min = 0.10\nmax = 0.16\nnum = 4"))
+    s = Session.create("sqlite://", same, "S01", library=library)
+    assert s.gait_ids == [library.gait_id(a) for a in range(4)]

@@ -16,6 +16,7 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
+from gaitpref.gaits import GaitCacheWarning
 from gaitpref.sessions import events as log
 from gaitpref.storage import EventRecord, NewEvent, Storage
 from tests.sessions.gaitkit import (
@@ -84,6 +85,28 @@ def test_a_session_opens_from_its_log_alone_on_every_backend(
     if folder is not None:  # the log's gaits went back into the cache
         keys = {e.payload["key"] for e in before[3] if e.kind in GAIT_EVENTS}
         assert {p.stem for p in folder.glob("*.json")} == keys
+
+
+def test_a_database_whose_gait_cache_cannot_be_written_opens_and_goes_on(tmp_path: Path) -> None:
+    """The cache folder removed and a file in its place (as a read-only folder): opening the
+    session (replay puts the log's gaits into the cache) and making new gaits failed with
+    OSError; now a GaitCacheWarning names the folder and the session opens and goes on."""
+    s = _recorded(_sqlite(tmp_path))
+    before = _state(s)
+    folder = s.storage.folder_beside(".gaits")
+    assert folder is not None
+    shutil.rmtree(folder)
+    folder.write_text("not a folder")
+    with pytest.warns(GaitCacheWarning, match="cannot write"):
+        again = Session.open(_sqlite(tmp_path), s.id)
+    assert _state(again) == before
+    made = len(FakeSteps.calls)
+    prefer_short_steps(again, 3)
+    assert len(FakeSteps.calls) > made  # new gaits were made (and logged)
+    with pytest.warns(GaitCacheWarning, match="cannot write"):
+        reopened = Session.open(_sqlite(tmp_path), s.id)
+    assert _state(reopened) == _state(again)
+    assert folder.read_text() == "not a folder"
 
 
 def test_a_version_1_log_replays_from_the_cache_or_by_making_its_gaits_again(

@@ -132,6 +132,23 @@ def test_bad_library_files_are_refused(tmp_path: Path) -> None:
         library_objective(read_cot_curve(tmp_path / "f.csv"), compass_objective().space)
 
 
+def test_unreadable_exports_are_refused_naming_the_file(tmp_path: Path) -> None:
+    """A truncated .npz was a zipfile.BadZipFile traceback from bench compass-gait --library;
+    object arrays and a .csv that is not UTF-8 were ValueErrors that did not name the file."""
+    np.savez(tmp_path / "ok.npz", step_length=[0.1, 0.12], cot=[1.0, 2.0])
+    whole = (tmp_path / "ok.npz").read_bytes()
+    (tmp_path / "cut.npz").write_bytes(whole[: len(whole) // 2])
+    np.save(tmp_path / "pickled.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    (tmp_path / "pickled.npy").rename(tmp_path / "pickled.npz")
+    (tmp_path / "latin.csv").write_bytes(b"step_length,cot\n0.1,\xff\n")
+    for name in ("cut.npz", "pickled.npz", "latin.csv"):
+        with pytest.raises(ValueError, match=f"{name}: cannot be read as"):
+            read_cot_curve(tmp_path / name)
+    (tmp_path / "empty.csv").write_text("")
+    with pytest.raises(ValueError, match=r"empty.csv: empty file$"):
+        read_cot_curve(tmp_path / "empty.csv")
+
+
 def test_a_library_file_written_by_the_gait_library_branch() -> None:
     """``data/gait-library-6.json``: ``build_library(linspace(0.08, 0.18, 6), speed=0.2)`` saved
     by ``gaitpref.gaits`` (its ``cot_over_step_length`` gave these values when it was built)."""

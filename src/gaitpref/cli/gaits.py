@@ -13,11 +13,17 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from gaitpref.cli.output import console, err_console
+from gaitpref.cli.output import console, err_console, reported
+from gaitpref.config.schema import MAX_ACTIONS
 from gaitpref.errors import GaitLibraryError, SimulationError
 
 if TYPE_CHECKING:
     from gaitpref.gaits.library import GaitLibrary
+
+#: A library holds at most as many gaits as a config's grid may have actions.
+MAX_GAITS = MAX_ACTIONS
+#: ``plot --steps``: each simulated step takes about 0.15 s a gait.
+MAX_PLOT_STEPS = 100
 
 app = typer.Typer(
     help="Compass-gait HZD gaits and gait libraries.", no_args_is_help=True, add_completion=False
@@ -36,6 +42,12 @@ def parse_range(text: str, option: str) -> tuple[float, ...]:
             lo, hi, num = float(parts[0]), float(parts[1]), int(parts[2])
             if num < 1 or (num > 1 and not hi > lo):
                 raise ValueError
+            if num > MAX_GAITS:
+                raise typer.BadParameter(
+                    f"{text!r}: at most {MAX_GAITS} values (a config takes at most "
+                    f"{MAX_GAITS} gaits)",
+                    param_hint=option,
+                )
             values = np.linspace(lo, hi, num)
         else:
             raise ValueError
@@ -51,6 +63,24 @@ def parse_range(text: str, option: str) -> tuple[float, ...]:
 
 def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
+
+
+def _check_writable(out: Path) -> None:
+    """Refuse an ``--out`` that could not be written, before the gaits are optimized."""
+    import tempfile
+
+    if out.is_dir():
+        raise typer.BadParameter(f"{out} is a folder: give a file name", param_hint="--out")
+    folder = out.parent
+    if not folder.is_dir():
+        raise typer.BadParameter(f"no folder {folder} to write {out.name} in", param_hint="--out")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise typer.BadParameter(
+            f"cannot write in {folder} ({exc.strerror or exc})", param_hint="--out"
+        ) from None
 
 
 def _load(path: Path) -> GaitLibrary:
@@ -79,6 +109,7 @@ def build(
     jobs: Annotated[int, typer.Option("--jobs", "-j", help="Parallel processes.")] = 1,
 ) -> None:
     """Optimize one gait per grid point and write the library; exit 1 if any is infeasible."""
+    from joblib import cpu_count
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -92,17 +123,25 @@ def build(
 
     if (step_duration is None) == (speed is None):
         raise typer.BadParameter("give exactly one of --step-duration and --speed")
-    if speed is not None and not speed > 0:
-        raise typer.BadParameter("must be positive", param_hint="--speed")
-    if jobs < 1:
-        raise typer.BadParameter("must be >= 1", param_hint="--jobs")
+    if speed is not None and not (math.isfinite(speed) and speed > 0):
+        raise typer.BadParameter(f"must be a positive number, got {speed}", param_hint="--speed")
+    cpus = cpu_count()
+    if not 1 <= jobs <= cpus:  # joblib starts every worker asked for, busy or not
+        raise typer.BadParameter(f"must be in 1..{cpus} (the CPUs here)", param_hint="--jobs")
     lengths = parse_range(step_length, "--step-length")
     durations = None if step_duration is None else parse_range(step_duration, "--step-duration")
     widths = None if step_width is None else parse_range(step_width, "--step-width")
+    size = len(lengths) * len(durations or (0,)) * len(widths or (0,))
+    if size > MAX_GAITS:
+        raise typer.BadParameter(
+            f"the grid has {size} gaits; a config takes at most {MAX_GAITS}",
+            param_hint="--step-length/--step-duration/--step-width",
+        )
     try:
         settings = HZDSettings(degree=degree)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--degree") from None
+    _check_writable(out)
     total = len(lengths) * (len(durations) if durations else 1)
     columns = (
         TextColumn("optimizing gaits"),
@@ -110,9 +149,9 @@ def build(
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns, console=err_console) as bar:
+    with reported(), Progress(*columns, console=err_console) as bar:
         task = bar.add_task("gaits", total=total)
-        lib = build_library(
+        lib = build_library(  # checks the grid (ids, step lengths) before optimizing
             lengths,
             step_durations=durations,
             speed=speed,
@@ -121,7 +160,8 @@ def build(
             n_jobs=jobs,
             progress=lambda k: bar.advance(task, k),
         )
-    lib.save(out)
+    with reported():
+        lib.save(out)
     bad = lib.infeasible()
     err_console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
     if bad:
@@ -190,8 +230,16 @@ def plot(
 ) -> None:
     """COT over the grid and joint phase diagrams from full-model simulations (as the paper's
     Fig. 7)."""
+    if not 1 <= steps <= MAX_PLOT_STEPS:
+        raise typer.BadParameter(
+            f"must be in 1..{MAX_PLOT_STEPS}, got {steps}", param_hint="--steps"
+        )
     lib = _load(file)
-    from gaitpref.gaits.figures import default_ids, render_library_figure  # matplotlib: lazily
+    from gaitpref.gaits.figures import (  # matplotlib: lazily
+        default_ids,
+        figure_target,
+        render_library_figure,
+    )
 
     chosen = list(ids) if ids else default_ids(lib)
     for gait_id in chosen:
@@ -201,10 +249,14 @@ def plot(
             raise typer.BadParameter(str(exc), param_hint="--id") from None
         if not lib.gaits[index].feasible:
             raise typer.BadParameter(f"gait {gait_id} is infeasible", param_hint="--id")
-    target = out if out is not None else file.with_suffix(".png")
     try:
-        render_library_figure(lib, chosen, target, steps=steps)
-    except SimulationError as exc:
-        typer.echo(f"simulation failed: {exc}", err=True)
-        raise typer.Exit(code=1) from None
-    typer.echo(f"wrote {target}")
+        target = figure_target(out if out is not None else file.with_suffix(".png"))
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--out") from None
+    with reported():
+        try:
+            written = render_library_figure(lib, chosen, target, steps=steps)
+        except SimulationError as exc:
+            typer.echo(f"simulation failed: {exc}", err=True)
+            raise typer.Exit(code=1) from None
+    typer.echo(f"wrote {written}")

@@ -11,7 +11,7 @@ step length), :mod:`figures` and :mod:`cli` (pictures and commands).  See ``docs
 from gaitpref.errors import GaitGeneratorError, GaitLibraryError, SimulationError
 from gaitpref.gaits.build import build_library
 from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
-from gaitpref.gaits.gait_cache import CachedGait, GaitCache
+from gaitpref.gaits.gait_cache import CachedGait, GaitCache, GaitCacheWarning
 from gaitpref.gaits.generator import (
     CompassHZD,
     GaitGenerator,
@@ -40,6 +40,7 @@ __all__ = [
     "CotCurve",
     "Gait",
     "GaitCache",
+    "GaitCacheWarning",
     "GaitGenerator",
     "GaitGeneratorError",
     "GaitLibrary",

@@ -19,6 +19,7 @@ from gaitpref.gaits.gait import Gait, GaitRequest, HZDSettings
 from gaitpref.gaits.library import GaitLibrary, check_axes
 from gaitpref.gaits.optimize import optimize_gait
 from gaitpref.gaits.params import CompassGaitParams
+from gaitpref.gaits.zero_dynamics import guard_angle
 
 Progress = Callable[[int], None]
 _Chain = list[tuple[int, GaitRequest]]
@@ -88,6 +89,8 @@ def build_library(
     if widths is not None:
         axes.append(("step_width", tuple(widths)))
     check_axes(tuple(axes), speed)  # fail before any optimization
+    for length in lengths:
+        guard_angle(p, length)  # a step the legs reach: 0 < L < 2 l
     chains = _chains(lengths, durations, speed, n_jobs)
     base: dict[int, Gait] = {}
     if n_jobs == 1 or len(chains) == 1:

@@ -67,10 +67,31 @@ def _cot_panel(ax: Axes, library: GaitLibrary, marks: list[int]) -> None:
         ax.set_title(f"COT at {library.speed:g} m/s")
 
 
+def figure_target(path: str | Path) -> Path:
+    """Where a figure asked for at ``path`` is written: ``path`` itself, or with ``.png`` added
+    when it has no suffix; a folder or a format matplotlib does not write is refused (a
+    ValueError), before anything is simulated."""
+    out = Path(path)
+    if out.is_dir():
+        raise ValueError(f"figure {str(out)!r} is a folder: give a file name, e.g. fig.png")
+    if not out.suffix:
+        out = out.with_name(out.name + ".png")
+    formats = Figure().canvas.get_supported_filetypes()
+    if out.suffix[1:].lower() not in formats:
+        raise ValueError(
+            f"figure {str(out)!r}: matplotlib does not write {out.suffix!r} files "
+            f"(it writes {', '.join(sorted(formats))})"
+        )
+    return out
+
+
 def render_library_figure(
     library: GaitLibrary, ids: list[str], path: str | Path, steps: int = 6
 ) -> Path:
-    """COT over the grid, then phase diagrams (leg and hip) of the gaits ``ids``; saves a PNG."""
+    """COT over the grid, then phase diagrams (leg and hip) of the gaits ``ids``; saves the
+    figure (:func:`figure_target`: a PNG unless ``path`` names another format) and returns
+    the path written."""
+    out = figure_target(path)
     indices = [library.index_of_id(i) for i in ids]
     fig = Figure(figsize=(13.5, 4.0), layout="constrained")
     ax_cot, ax_leg, ax_hip = fig.subplots(1, 3)
@@ -88,6 +109,6 @@ def render_library_figure(
     ax_hip.set_title("hip phase diagram")
     if indices:
         ax_hip.legend(fontsize=8)
-    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=120)
     return out

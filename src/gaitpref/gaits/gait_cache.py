@@ -10,7 +10,9 @@ The cache is derived data: a session's log carries each gait it made (``gait_mad
 the ``gait`` part below: :func:`gait_document`, read back by :func:`read_gait`) and replay takes
 it from there; for a log written before (version 1), an entry that is missing, unreadable or of
 another format is made again (and rewritten), never trusted; :func:`read_entry` reads one,
-naming what is wrong with it.
+naming what is wrong with it (besides its format: a document that does not hash to its key, a
+gait of another step length, a feasible gait with non-finite numbers).  A folder that cannot be
+written keeps the gaits in memory, with a :class:`GaitCacheWarning`.
 Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",
@@ -22,16 +24,23 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait
+from gaitpref.gaits.generator import content_key
+from gaitpref.gaits.library import feasible_gait_problem
 from gaitpref.gaits.library_io import Reader, gait_entry, read_gait_entry
 
 FORMAT = "gaitpref-gait"
 SCHEMA_VERSION = 1
+
+
+class GaitCacheWarning(UserWarning):
+    """The cache's folder could not be written: gaits stay in memory (and in the log)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -51,6 +60,7 @@ class GaitCache:
         self._memory: dict[str, CachedGait] = {}
         self.hits = 0
         self.misses = 0
+        self.unwritable: str | None = None  # why the last write to the folder failed
 
     def path(self, key: str) -> Path | None:
         return None if self.folder is None else self.folder / f"{key}.json"
@@ -66,11 +76,30 @@ class GaitCache:
         return found
 
     def put(self, entry: CachedGait, document: dict[str, Any]) -> None:
-        """Keep ``entry``; ``document`` (generator, settings, parameters) goes into its file."""
+        """Keep ``entry``; ``document`` (generator, settings, parameters) goes into its file.
+
+        A folder that cannot be written (read-only, or a file in its place) keeps the entry in
+        memory only, with a :class:`GaitCacheWarning` naming it (once per cache): the cache is
+        derived data, the session's log carries the gait, so reading or continuing a session
+        never fails for it."""
         self._memory[entry.key] = entry
         target = self.path(entry.key)
         if target is None:
             return
+        try:
+            self._write(target, entry, document)
+        except OSError as exc:
+            if not self.unwritable:
+                warnings.warn(
+                    f"gait cache {self.folder}: cannot write {target.name} "
+                    f"({exc.strerror or exc}); gaits are kept in memory and in the session's "
+                    "log, and other sessions will make them again",
+                    GaitCacheWarning,
+                    stacklevel=2,
+                )
+            self.unwritable = str(exc)
+
+    def _write(self, target: Path, entry: CachedGait, document: dict[str, Any]) -> None:
         doc = {
             "format": FORMAT,
             "schema_version": SCHEMA_VERSION,
@@ -131,7 +160,9 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
     r = Reader(str(path))
     try:
         doc = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+    except RecursionError:
+        raise r.fail("file", "cannot be read as JSON (nested too deeply)") from None
+    except (OSError, ValueError) as exc:  # a JSONDecodeError, bad UTF-8, too many digits
         raise r.fail("file", f"cannot be read as JSON ({exc})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise r.fail("format", f"not a cached gait (expected format {FORMAT!r})")
@@ -140,7 +171,20 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
     if doc.get("key") != key:
         raise r.fail("key", f"{doc.get('key')!r}, expected {key}")
     document = {name: r.get(doc, name, "") for name in ("generator", "settings", "parameters")}
+    try:
+        address = content_key(document)
+    except (TypeError, ValueError):  # not JSON numbers and text (NaN, say)
+        address = None
+    if address != key:
+        raise r.fail("parameters", "the generator, settings and parameters are not the key's")
     gait = _read_gait(r, r.get(doc, "gait", ""), "gait.")
+    params = document["parameters"]
+    length = params.get("step_length") if isinstance(params, dict) else None
+    if length is not None and length != gait.step_length:
+        raise r.fail("gait.step_length", f"{gait.step_length}, the parameters ask {length}")
+    problem = feasible_gait_problem(gait) if gait.feasible else None
+    if problem is not None:
+        raise r.fail("gait", problem)
     warm = doc.get("warm_start")
     return CachedGait(key, gait, warm if isinstance(warm, str) else None), document
 
@@ -150,6 +194,7 @@ __all__ = [
     "SCHEMA_VERSION",
     "CachedGait",
     "GaitCache",
+    "GaitCacheWarning",
     "gait_document",
     "read_entry",
     "read_gait",

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar
@@ -159,10 +160,15 @@ class CompassHZD(GaitGenerator):
 
     def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
         p = self.parameters(vector)
+        length, duration = p["step_length"], p.get("step_duration")
+        reach = 2.0 * self.params.leg_length  # the guard asin(L / 2l) needs 0 < L < 2l
+        if not 0.0 < length < reach:
+            why = f"step_length {length:g} m is not in (0, {reach:g}) m (twice the leg length)"
+            return unposed(length, self.hzd, why)
+        if duration is not None and not duration > 0.0:
+            return unposed(length, self.hzd, f"step_duration {duration:g} s is not positive")
         try:
-            request = GaitRequest(
-                p["step_length"], step_duration=p.get("step_duration"), speed=self.speed
-            )
+            request = GaitRequest(length, step_duration=duration, speed=self.speed)
         except ValueError as exc:
             raise GaitGeneratorError(f"{self.name}: {exc}") from None
         return optimize_gait(
@@ -172,6 +178,27 @@ class CompassHZD(GaitGenerator):
             warm_start=warm_start,
             max_iterations=self.max_iterations,
         )
+
+
+def unposed(step_length: float, hzd: HZDSettings, why: str) -> Gait:
+    """The infeasible gait of a request no optimisation can pose (``why``): nothing solved,
+    every number but the step length not a number, ``status`` -1."""
+    nan = math.nan
+    return Gait(
+        step_length=step_length,
+        step_duration=nan,
+        alpha=np.full((1, hzd.degree + 1), nan),
+        phase_start=nan,
+        phase_end=nan,
+        orbit_state=np.full(4, nan),
+        cot=nan,
+        delta_squared=nan,
+        feasible=False,
+        status=-1,
+        message=f"infeasible: no gait can be posed: {why}",
+        min_normal_force=nan,
+        max_friction_ratio=nan,
+    )
 
 
 GeneratorFactory = Callable[[Sequence[str], Mapping[str, Any]], GaitGenerator]

@@ -66,6 +66,21 @@ def check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | N
             raise GaitLibraryError(f"axis {name}: values must be positive and finite, got {values}")
         if np.any(np.diff(arr) <= 0):
             raise GaitLibraryError(f"axis {name}: values must be strictly increasing")
+        if len({f"{v:.3f}" for v in arr}) != arr.size:  # an id shows each value so
+            raise GaitLibraryError(
+                f"axis {name}: values too close to give distinct gait ids (ids show 3 decimals)"
+            )
+
+
+def feasible_gait_problem(gait: Gait) -> str | None:
+    """What makes a gait flagged feasible unusable (non-finite numbers, ``delta^2`` outside
+    ``(0, 1)``), or None: a library, and a gait cache, refuse such a gait."""
+    numbers = [gait.step_duration, gait.cot, gait.delta_squared, gait.phase_start, gait.phase_end]
+    if not (np.all(np.isfinite(gait.alpha)) and np.all(np.isfinite(gait.orbit_state))):
+        return "feasible gait with non-finite coefficients or orbit"
+    if not all(math.isfinite(v) for v in numbers) or not 0 < gait.delta_squared < 1:
+        return "feasible gait with bad cot/delta^2/duration/phase"
+    return None
 
 
 def gait_id_of(values: Mapping[str, float], speed: float | None) -> str:
@@ -124,17 +139,9 @@ class GaitLibrary:
             )
         if not gait.feasible:
             return
-        numbers = [
-            gait.step_duration,
-            gait.cot,
-            gait.delta_squared,
-            gait.phase_start,
-            gait.phase_end,
-        ]
-        if not (np.all(np.isfinite(gait.alpha)) and np.all(np.isfinite(gait.orbit_state))):
-            raise GaitLibraryError(f"{where}: feasible gait with non-finite coefficients or orbit")
-        if not all(math.isfinite(v) for v in numbers) or not 0 < gait.delta_squared < 1:
-            raise GaitLibraryError(f"{where}: feasible gait with bad cot/delta^2/duration/phase")
+        problem = feasible_gait_problem(gait)
+        if problem is not None:
+            raise GaitLibraryError(f"{where}: {problem}")
         target = point.get("step_duration", point["step_length"] / (self.speed or math.nan))
         if not math.isclose(gait.step_duration, target, rel_tol=DURATION_RTOL):
             raise GaitLibraryError(

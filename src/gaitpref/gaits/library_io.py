@@ -28,6 +28,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -102,12 +103,34 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
 
 
 def save_library(lib: GaitLibrary, path: str | Path) -> None:
-    """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename)."""
+    """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename; a write that
+    fails leaves neither a partial library nor the temporary file)."""
     target = Path(path)
-    tmp = target.with_name(target.name + ".tmp")
     text = json.dumps(to_document(lib), indent=1, allow_nan=False)
-    tmp.write_text(text + "\n", encoding="utf-8")
-    os.replace(tmp, target)
+    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as out:
+            out.write(text + "\n")
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_json(file: Path) -> Any:
+    """The JSON document in ``file``, or :class:`GaitLibraryError` naming it: besides a file
+    that cannot be read, a syntax error or bytes that are not UTF-8, a number past Python's
+    integer digits limit (a ValueError) and arrays nested past the recursion limit (a
+    RecursionError)."""
+    try:
+        return json.loads(file.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise GaitLibraryError(f"{file}: cannot be read ({exc.strerror or exc})") from None
+    except RecursionError:
+        raise GaitLibraryError(f"{file}: not valid JSON (nested too deeply)") from None
+    except (UnicodeDecodeError, ValueError) as exc:  # json.JSONDecodeError is a ValueError
+        why = str(exc).split(";")[0]  # not the advice to raise the interpreter's limit
+        raise GaitLibraryError(f"{file}: not valid JSON ({why})") from None
 
 
 class Reader:
@@ -130,12 +153,15 @@ class Reader:
             return math.nan
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(f"{where}{key}", f"expected a number, got {value!r}")
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:  # an integer past a float's range
+            raise self.fail(f"{where}{key}", "expected a number, got one too large") from None
 
     def matrix(self, value: Any, shape: tuple[int, ...], field: str) -> np.ndarray[Any, Any]:
         try:
             arr = np.array(value, dtype=np.float64)  # null -> nan
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise self.fail(field, f"expected numbers of shape {shape}") from None
         if arr.shape != shape:
             raise self.fail(field, f"expected shape {shape}, got {arr.shape}")
@@ -157,13 +183,13 @@ def from_document(
     model = r.get(data, "model", "")
     try:
         params = CompassGaitParams.from_dict(r.get(model, "parameters", "model."))
-    except ValueError as exc:
+    except (ValueError, OverflowError) as exc:
         raise r.fail("model.parameters", str(exc)) from None
     formulation = r.get(data, "formulation", "")
     fields = HZDSettings.__dataclass_fields__
     try:
         settings = HZDSettings(**{k: r.get(formulation, k, "formulation.") for k in fields})
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise r.fail("formulation", str(exc)) from None
     speed_raw = r.get(data, "speed", "")
     speed = None if speed_raw is None else r.number(data, "speed", "")
@@ -249,8 +275,4 @@ def load_library(path: str | Path, *, allow_infeasible: bool = False) -> GaitLib
     file = Path(path)
     if not file.is_file():
         raise GaitLibraryError(f"{file}: no such gait library file")
-    try:
-        data = json.loads(file.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise GaitLibraryError(f"{file}: not valid JSON ({exc})") from None
-    return from_document(data, str(file), allow_infeasible)
+    return from_document(read_json(file), str(file), allow_infeasible)

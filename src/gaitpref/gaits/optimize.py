@@ -47,6 +47,9 @@ class _Problem:
         self.scale = self.geo.span  # 2 theta_0
         self.weight = self.p.total_mass * self.p.gravity
         self.mean_rate = self.geo.span / self.duration
+        # a Python float's ** raises OverflowError (past ~1e154: a step of ~1e-155 s) where
+        # NumPy's gives inf; such a request is infeasible, not an exception
+        self.mean_rate_sq = self.mean_rate**2 if self.mean_rate < 1e154 else math.inf
         n, nc = self.s.n_points, self.s.n_constraint_points
         self.nodes = np.unique(np.linspace(0, n - 1, nc).round().astype(int))
         tau = self.nodes / (n - 1)
@@ -86,7 +89,7 @@ class _Problem:
         pr, s, i = self.profile(x), self.s, self.nodes
         fn, ft = pr.force[i, 1] / self.weight, pr.force[i, 0] / self.weight
         imp = pr.impact_impulse / (self.p.total_mass * self.p.leg_length)
-        rate_sq = 2.0 * pr.zeta[i] / pr.inertia[i] ** 2 / self.mean_rate**2
+        rate_sq = 2.0 * pr.zeta[i] / pr.inertia[i] ** 2 / self.mean_rate_sq
         mu = s.friction_coefficient
         return {
             "delta^2": np.array([s.max_delta_squared - pr.delta**2, pr.delta]),

@@ -136,7 +136,7 @@ class Session:
             library = cfg.library
         if library is not None and cfg.subspace == "line":
             raise ValueError("a gait library names the gaits of a grid; this config runs on lines")
-        gait_ids = None if library is None else gait_ids_of(library, len(cfg.space))
+        gait_ids = None if library is None else gait_ids_of(library, cfg.space)
         if gait_ids is not None:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop

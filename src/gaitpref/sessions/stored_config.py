@@ -14,8 +14,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
+import numpy as np
+
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ReplayError
+from gaitpref.space import Space
 from gaitpref.storage import SessionRecord, Storage
 
 if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a library is used
@@ -107,9 +110,13 @@ def check_same_config(record: SessionRecord, config: str | Path | ExperimentConf
     raise ReplayError(f"session {record.id} was run with another config:\n{diff}")
 
 
-def gait_ids_of(library: GaitLibraryLike | None, size: int) -> list[str] | None:
+def gait_ids_of(library: GaitLibraryLike | None, space: Space) -> list[str] | None:
+    """The gait id of each action of ``space`` (None: no library).  A library with a grid of
+    its own (:class:`~gaitpref.gaits.GaitLibrary`) must have ``space``'s: its ids would name
+    other gaits."""
     if library is None:
         return None
+    size = len(space)
     ids: list[Any]
     if isinstance(library, Mapping):
         missing = [a for a in range(size) if a not in library]
@@ -121,12 +128,36 @@ def gait_ids_of(library: GaitLibraryLike | None, size: int) -> list[str] | None:
             raise ValueError(f"the gait library has {len(library)} gaits; the grid has {size}")
         ids = list(library)
     elif hasattr(library, "gait_id"):
+        if hasattr(library, "space"):
+            _same_grid(library.space(), space)
         ids = [library.gait_id(a) for a in range(size)]
     else:
         raise TypeError("library must map each action to a gait id (or have gait_id(action))")
     if not all(isinstance(g, str) and g for g in ids):
         raise ValueError("gait ids must be non-empty strings")
     return [str(g) for g in ids]
+
+
+def _same_grid(grid: Space, space: Space) -> None:
+    """Refuse a library whose grid (features, values within 1e-9) is not the config's."""
+
+    def words(s: Space) -> str:
+        return "; ".join(
+            f"{f.name} {f.values[0]:g}..{f.values[-1]:g} ({len(f.values)} values)"
+            for f in s.features
+        )
+
+    same = grid.names == space.names and all(
+        not f.continuous
+        and len(f.values) == len(g.values)
+        and np.allclose(f.values, g.values, rtol=1e-9, atol=0.0)
+        for f, g in zip(space.features, grid.features, strict=True)
+    )
+    if not same:
+        raise ValueError(
+            f"the gait library's grid ({words(grid)}) is not the config's ({words(space)}): "
+            "its gait ids would name other gaits"
+        )
 
 
 #: the folder beside a SQLite database that caches gaits made on demand: ``lab.db.gaits/``

@@ -22,6 +22,7 @@ Notation: ``n`` step lengths (m); COT dimensionless; ``feasible`` boolean, all `
 from __future__ import annotations
 
 import csv
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -68,11 +69,14 @@ def read_cot_curve(path: str | Path) -> CotCurveArrays:
             "cot": curve.cot,
             "feasible": curve.feasible,
         }
-    elif path.suffix == ".csv":
-        raw = _from_csv(path)
-    elif path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            raw = {k: z[k].tolist() for k in z.files}
+    elif path.suffix in (".csv", ".npz"):
+        try:
+            raw = _from_csv(path) if path.suffix == ".csv" else _from_npz(path)
+        except (OSError, ValueError, EOFError, csv.Error, zipfile.BadZipFile) as exc:
+            # a truncated or foreign .npz, object arrays, bytes that are not UTF-8
+            if str(exc).startswith(f"{path}: "):
+                raise
+            raise ValueError(f"{path}: cannot be read as {path.suffix[1:]} ({exc})") from None
     else:
         raise ValueError(f"{path}: a gait library must be .json (or a .csv/.npz export)")
     return _curve(raw, path)
@@ -144,6 +148,11 @@ def _flag(value: object, path: Path) -> bool:
     if text in _FALSE:
         return False
     raise ValueError(f"{path}: feasible must be true/false, got {value!r}")
+
+
+def _from_npz(path: Path) -> dict[str, Any]:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k].tolist() for k in z.files}
 
 
 def _from_csv(path: Path) -> dict[str, list[str]]:
