@@ -70,11 +70,12 @@ def fail(message: str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
-def report(exc: BaseException) -> NoReturn:
-    """Print ``exc`` as :func:`exit_for` says and exit with its status."""
+def report(exc: BaseException, where: str = "") -> NoReturn:
+    """Print ``exc`` as :func:`exit_for` says (after ``where``, e.g. which run) and exit with
+    its status."""
     line, code = exit_for(exc)
     label, _, message = line.partition(": ")
-    _print_error(label, message)
+    _print_error(label, f"{where}: {message}" if where else message)
     raise typer.Exit(code)
 
 

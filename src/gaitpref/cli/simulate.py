@@ -260,7 +260,6 @@ def continuous(
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""
-    import functools
     import json
 
     import numpy as np
@@ -273,10 +272,13 @@ def continuous(
     for seed in range(runs):
         spec = f"random-gp:{seed}" if objective == "random-gp" else objective
         fn = load_point_objective(spec, cfg)
-        run = functools.partial(
-            simulate_points, cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise
-        )
-        results.append(guard(run))
+        try:
+            results.append(
+                simulate_points(cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise)
+            )
+        except HANDLED as exc:  # which run failed, and that the runs before it are not printed
+            before = f"; the runs of seeds 0-{seed - 1} finished, not reported" if seed else ""
+            report(exc, f"the run of seed {seed} (of 0-{runs - 1}){before}")
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
     out = {
