@@ -199,7 +199,14 @@ def _run_ray(
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=None)
             for ref in done:
-                yield position[ref], ray.get(ref)
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:  # the run's own error, as joblib
+                    cause = getattr(exc, "cause", None)  # raises it (not the remote traceback)
+                    if isinstance(cause, Exception):
+                        raise cause from None
+                    raise
+                yield position[ref], result
     finally:
         if started:
             ray.shutdown()
