@@ -163,3 +163,19 @@ def test_studies_refuse_non_integer_counts_and_an_n_past_the_grid(small_study: S
         dataclasses.replace(small_study, settings=(Setting("wide", 901, 0),))
     same = dataclasses.replace(small_study, seeds=np.arange(2), objective_ids=np.array([0, 5, 7]))
     assert same.seeds == (0, 1) and same.objective_ids == (0, 5, 7)
+
+
+def test_no_more_workers_than_runs() -> None:
+    """jobs = 8 for two runs started eight worker processes (a thousand for --jobs 1000)."""
+    from gaitpref.data import paper_objectives
+
+    study = Study.from_config(
+        load_config("synthetic-2d"),
+        [Setting.random()],
+        np.asarray(paper_objectives()[[0]]).reshape(1, -1),
+        seeds=(0, 1),
+        trials=3,
+    )
+    wide = run_study(study, jobs=8)
+    assert wide.jobs == 2
+    assert wide.table.equals(run_study(study, jobs=1).table)

@@ -102,8 +102,10 @@ def run_study(
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
-    n_jobs = resolve_jobs(jobs)
     tasks = study.tasks()
+    # no more workers than runs: each loky worker is a process that loads NumPy and SciPy, and
+    # a mistyped --jobs 1000 started a thousand of them for a handful of runs
+    n_jobs = min(resolve_jobs(jobs), len(tasks))
     results: list[RunResult | None] = [None] * len(tasks)
     start = time.perf_counter()
     with _progress(console) if progress else _NoProgress() as bar:
