@@ -179,3 +179,18 @@ def test_no_more_workers_than_runs() -> None:
     wide = run_study(study, jobs=8)
     assert wide.jobs == 2
     assert wide.table.equals(run_study(study, jobs=1).table)
+
+
+def test_a_study_holds_at_most_max_runs(small_study: Study) -> None:
+    """bench compass-gait --runs 100000000 filled the memory (a MemoryError traceback under a
+    limit) before its first run."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli.main import app
+    from gaitpref.simulate.study import MAX_RUNS
+
+    with pytest.raises(ValueError, match=f"is more than {MAX_RUNS}; split it"):
+        dataclasses.replace(small_study, seeds=range(MAX_RUNS))
+    result = CliRunner().invoke(app, ["bench", "compass-gait", "--runs", "100000000"])
+    assert result.exit_code == 2 and f"runs must be 1 to {MAX_RUNS}" in result.output
+    assert dataclasses.replace(small_study, seeds=iter((0, 1))).seeds == (0, 1)

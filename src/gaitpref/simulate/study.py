@@ -52,6 +52,10 @@ Strategy = Literal["cospar", "random"]
 
 _CONFIG_TABLES = ("feedback", "safety")
 
+#: The most runs a study holds (settings x objectives x seeds): its tasks and results are kept
+#: in memory (``bench compass-gait --runs 100000000`` filled the memory before its first run).
+MAX_RUNS = 100_000
+
 
 def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal | None, Safety]:
     """The rating scale and safety settings of a setting's ``config`` text.
@@ -307,6 +311,14 @@ class Study:
         obj = obj.copy()
         obj.setflags(write=False)
         where = f"study {self.name!r}"
+        if not isinstance(self.seeds, Sequence | np.ndarray):  # an iterator: counted once
+            object.__setattr__(self, "seeds", tuple(self.seeds))
+        runs = len(settings) * obj.shape[0] * len(self.seeds)
+        if runs > MAX_RUNS:
+            raise ValueError(
+                f"{where}: {runs} runs (settings x objectives x seeds) is more than {MAX_RUNS}; "
+                "split it into several studies"
+            )
         ids = tuple(_integer(i, f"{where}: objective_ids") for i in self.objective_ids)
         ids = ids or tuple(range(obj.shape[0]))
         if len(ids) != obj.shape[0] or len(set(ids)) != len(ids) or min(ids) < 0:
