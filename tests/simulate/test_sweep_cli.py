@@ -134,3 +134,17 @@ def test_compass_gait_refuses_bad_options(
 ) -> None:
     code, out = invoke("compass-gait", *args, "--out", str(tmp_path))
     assert code == 2 and message in " ".join(out.split())
+
+
+def test_an_out_that_is_a_file_and_unreadable_notes_are_refused_by_option(tmp_path: Path) -> None:
+    """A FileExistsError traceback for --out naming a file; notes that are not UTF-8 gave the
+    codec's message without the file."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    for command in ("paper-2d", "compass-gait"):
+        code, out = invoke(command, "--runs", "1", "--trials", "2", "--out", str(afile))
+        assert code == 2 and f"--out '{afile}' is a file, not a folder" in " ".join(out.split())
+    notes = tmp_path / "notes.md"
+    notes.write_bytes(b"\xff\xfe")
+    code, out = invoke("paper-2d", "--runs", "1", "--notes", str(notes), "--out", str(tmp_path))
+    assert code == 2 and f"--notes '{notes}' is not UTF-8 text" in " ".join(out.split())

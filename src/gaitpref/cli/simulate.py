@@ -67,6 +67,28 @@ def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyRes
         fail(str(exc))
 
 
+def _folder(out: Path) -> None:
+    """Make the output folder before any run, or fail naming ``--out`` (a traceback before)."""
+    if out.exists() and not out.is_dir():
+        fail(f"--out {str(out)!r} is a file, not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail(f"--out {str(out)!r}: cannot make the output folder ({exc.strerror or exc})")
+
+
+def _notes(notes: Path | None) -> str:
+    """The ``--notes`` file's text, or fail naming it."""
+    if notes is None:
+        return ""
+    try:
+        return notes.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        fail(f"--notes {str(notes)!r} is not UTF-8 text")
+    except OSError as exc:
+        fail(f"--notes {str(notes)!r} cannot be read ({exc.strerror or exc})")
+
+
 def _table_path(out: Path, fmt: str) -> Path:
     if fmt not in ("csv", "csv.gz", "parquet"):
         fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
@@ -98,9 +120,9 @@ def paper_2d(
     from gaitpref.simulate.tables import write_curves, write_table
 
     study = guard(lambda: paper_2d_study(runs, trials, _split(settings), baseline, seed))
-    note_text = guard(lambda: notes.read_text(encoding="utf-8") if notes is not None else "")
+    note_text = _notes(notes)
     table_path = _table_path(out, table)
-    out.mkdir(parents=True, exist_ok=True)
+    _folder(out)
     load_before = load_average()
     result = _run(study, backend, jobs, address)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
@@ -157,7 +179,7 @@ def compass_gait(
             raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
         build = objective == "hzd" and library is None
         if build:
-            out.mkdir(parents=True, exist_ok=True)
+            _folder(out)
             _console.print("building HZD gaits at 0.2 m/s on the 24 step lengths ...")
         obj = compass_objective(
             objective,  # type: ignore[arg-type]
@@ -172,7 +194,7 @@ def compass_gait(
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {obj.note}")
     table_path = _table_path(out, table)
-    out.mkdir(parents=True, exist_ok=True)
+    _folder(out)
     result = _run(study, backend, jobs, address)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
