@@ -148,3 +148,34 @@ def test_an_out_that_is_a_file_and_unreadable_notes_are_refused_by_option(tmp_pa
     notes.write_bytes(b"\xff\xfe")
     code, out = invoke("paper-2d", "--runs", "1", "--notes", str(notes), "--out", str(tmp_path))
     assert code == 2 and f"--notes '{notes}' is not UTF-8 text" in " ".join(out.split())
+
+
+def test_array_files_that_are_not_one_array_are_refused_naming_the_file(tmp_path: Path) -> None:
+    """A file that looks like a zip but is not one raised BadZipFile (a traceback) in simulate,
+    bench population and compass-gait --library; an .npz archive given for one array was
+    iterated as its names ('could not convert string to float')."""
+    import numpy as np
+
+    from gaitpref.cli.main import app as root
+
+    notzip = tmp_path / "notzip.npy"
+    notzip.write_bytes(b"PK\x03\x04garbage")
+    archive = tmp_path / "archive.npy"
+    with archive.open("wb") as fh:
+        np.savez(fh, a=np.zeros(3))
+    for path, message in (
+        (notzip, "is not a readable .npy array"),
+        (archive, "is an .npz archive"),
+    ):
+        for args in (
+            ["simulate", "synthetic-2d", "--objective", str(path), "--trials", "2"],
+            ["bench", "population", "--objectives", str(path), "--trials", "2"],
+        ):
+            result = runner.invoke(root, args)
+            assert result.exit_code == 2, result.output
+            assert f"'{path}' {message}" in " ".join(result.output.split())
+    library = tmp_path / "lib.npz"
+    library.write_bytes(b"PK\x03\x04garbage")
+    code, out = invoke("compass-gait", "--objective", "hzd", "--library", str(library),
+                       "--runs", "1", "--trials", "2", "--out", str(tmp_path / "o"))  # fmt: skip
+    assert code == 2 and "not a readable .npz export" in out

@@ -19,7 +19,7 @@ import typer
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
 from gaitpref.cli.gaits import app as gaits_app
-from gaitpref.cli.output import console, err_console, fail, guard
+from gaitpref.cli.output import console, err_console, fail, guard, read_array
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 
@@ -74,14 +74,7 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
 
 
 def _load_objective(path: Path) -> np.ndarray:
-    import numpy as np
-
-    if not path.is_file():
-        fail(f"objective file {str(path)!r} does not exist")
-    try:
-        arr: np.ndarray = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        fail(f"objective file {str(path)!r} is not a readable .npy array: {exc}")
+    arr: np.ndarray = read_array(path, "objective file")
     return arr
 
 

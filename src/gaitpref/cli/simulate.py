@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from gaitpref.cli.output import HANDLED, fail, guard, report
+from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 
 if TYPE_CHECKING:
@@ -242,10 +242,9 @@ def population(
     from gaitpref.config import load_config
     from gaitpref.simulate.population import population_bench
 
+    arr = read_array(objectives, "objectives file")
+
     def run() -> dict[str, object]:
-        if not objectives.is_file():
-            raise ValueError(f"objectives file {str(objectives)!r} does not exist")
-        arr = np.load(objectives, allow_pickle=False)
         cfg = load_config(config)
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise

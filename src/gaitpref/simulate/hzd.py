@@ -22,6 +22,7 @@ Notation: ``n`` step lengths (m); COT dimensionless; ``feasible`` boolean, all `
 from __future__ import annotations
 
 import csv
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -71,8 +72,14 @@ def read_cot_curve(path: str | Path) -> CotCurveArrays:
     elif path.suffix == ".csv":
         raw = _from_csv(path)
     elif path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            raw = {k: z[k].tolist() for k in z.files}
+        try:
+            z = np.load(path, allow_pickle=False)
+            if not isinstance(z, np.lib.npyio.NpzFile):
+                raise ValueError("one array, not an archive of step_length, cot, ...")
+            with z:
+                raw = {k: z[k].tolist() for k in z.files}
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise ValueError(f"{path}: not a readable .npz export ({exc})") from None
     else:
         raise ValueError(f"{path}: a gait library must be .json (or a .csv/.npz export)")
     return _curve(raw, path)
