@@ -179,3 +179,17 @@ def test_array_files_that_are_not_one_array_are_refused_naming_the_file(tmp_path
     code, out = invoke("compass-gait", "--objective", "hzd", "--library", str(library),
                        "--runs", "1", "--trials", "2", "--out", str(tmp_path / "o"))  # fmt: skip
     assert code == 2 and "not a readable .npz export" in out
+
+
+def test_parquet_without_pyarrow_is_refused_before_the_study_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """It ran the whole study, then failed with a RuntimeError traceback, writing nothing."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # import pyarrow: ImportError
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    code, out = invoke("paper-2d", "--runs", "1", "--trials", "2", "--settings", "n1_b1",
+                       "--table", "parquet", "--out", str(tmp_path))  # fmt: skip
+    assert code == 2 and "--table parquet: writing Parquet needs pyarrow" in " ".join(out.split())
+    assert "runs in" not in out and list(tmp_path.iterdir()) == []

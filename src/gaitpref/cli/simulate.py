@@ -90,9 +90,16 @@ def _notes(notes: Path | None) -> str:
 
 
 def _table_path(out: Path, fmt: str) -> Path:
+    from gaitpref.simulate.tables import check_table_path
+
     if fmt not in ("csv", "csv.gz", "parquet"):
         fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
-    return out / f"runs.{fmt}"
+    path = out / f"runs.{fmt}"
+    try:  # before the study runs: Parquet without pyarrow failed after it, writing nothing
+        check_table_path(path)
+    except RuntimeError as exc:
+        fail(f"--table {fmt}: {exc}")
+    return path
 
 
 @bench_app.command("paper-2d")
