@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 import os
+import socket
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -179,6 +180,8 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     }
     if address is None:
         options["num_cpus"] = resolve_jobs(jobs)
+    else:
+        _probe(address)
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
     try:
         ray.init(address=address, **options)
@@ -186,6 +189,22 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
         where = f"the Ray cluster at {address!r}" if address else "a local Ray runtime"
         raise RuntimeError(f"could not start or reach {where}: {exc}") from None
     return True
+
+
+def _probe(address: str, timeout: float = 5.0) -> None:
+    """Refuse a ``HOST:PORT`` address where nothing listens (Ray retried it for minutes, its
+    warnings the only output); ``auto`` and ``ray://`` addresses Ray itself answers at once."""
+    host, sep, port = address.rpartition(":")
+    if "://" in address or not sep or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise RuntimeError(
+            f"could not reach the Ray cluster at {address!r}: nothing answers there "
+            f"({exc.strerror or exc}); start one (ray start --head) or give its address"
+        ) from None
 
 
 def _run_ray(
