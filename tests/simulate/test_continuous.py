@@ -203,3 +203,16 @@ def test_a_users_objective_that_fails_is_an_error_naming_it_and_the_run(tmp_path
     result = CliRunner().invoke(app, ["bench", "continuous", str(cfg), "--objective",
                                       f"{obj}:raises", "--runs", "2", "--trials", "3"])  # fmt: skip
     assert "the run of seed 0 (of 0-1): objective" in " ".join(result.output.split())
+
+
+def test_runs_over_points_report_their_progress(tmp_path: Path) -> None:
+    """simulate and bench continuous said nothing until a run (all runs) ended: now a bar,
+    fed by simulate_points' progress (trials done after every query)."""
+    from gaitpref.cli.points import simulate_points
+    from gaitpref.config import parse_config
+
+    cfg = parse_config(CONFIG)
+    done: list[int] = []
+    simulate_points(cfg, builtin("random-gp", cfg.space, 1), trials=5, seed=0,
+                    progress=done.append)  # fmt: skip
+    assert done == sorted(done) and done[-1] == 5

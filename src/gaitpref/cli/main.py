@@ -47,8 +47,8 @@ app.add_typer(bench_app, name="bench")
 app.add_typer(gaits_app, name="gaits")
 
 
-def progress_bar(transient: bool = False) -> Progress:
-    """The Rich progress bar used by long commands."""
+def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
+    """The Rich progress bar used by long commands (on stderr; ``shown=False``: none)."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -64,6 +64,7 @@ def progress_bar(transient: bool = False) -> Progress:
         TimeRemainingColumn(),
         console=err_console,
         transient=transient,
+        disable=not shown,
     )
 
 

@@ -21,6 +21,7 @@ from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 
 if TYPE_CHECKING:
+    from gaitpref.simulate.points import PointsResult
     from gaitpref.simulate.study import Study
     from gaitpref.simulate.sweep import StudyResult
 
@@ -292,21 +293,35 @@ def continuous(
 
     import numpy as np
 
+    from gaitpref.cli.main import progress_bar
     from gaitpref.cli.points import load_point_objective, simulate_points
     from gaitpref.config import load_config
 
     cfg = guard(lambda: load_config(config))
-    results = []
-    for seed in range(runs):
-        spec = f"random-gp:{seed}" if objective == "random-gp" else objective
-        fn = load_point_objective(spec, cfg)
-        try:
-            results.append(
-                simulate_points(cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise)
-            )
-        except HANDLED as exc:  # which run failed, and that the runs before it are not printed
-            before = f"; the runs of seeds 0-{seed - 1} finished, not reported" if seed else ""
-            report(exc, f"the run of seed {seed} (of 0-{runs - 1}){before}")
+    results: list[PointsResult] = []
+    failed: tuple[int, BaseException] | None = None
+    with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
+        task = bar.add_task(f"{runs} runs", total=runs * trials)
+        for seed in range(runs):
+            spec = f"random-gp:{seed}" if objective == "random-gp" else objective
+            fn = load_point_objective(spec, cfg)
+
+            def progress(done: int, before: int = seed * trials) -> None:
+                bar.update(task, completed=before + done)
+
+            try:
+                run = simulate_points(
+                    cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise,
+                    progress=progress,
+                )  # fmt: skip
+            except HANDLED as caught:
+                failed = seed, caught
+                break
+            results.append(run)
+    if failed is not None:  # which run failed; the runs before it are not printed
+        at, problem = failed
+        before = f"; the runs of seeds 0-{at - 1} finished, not reported" if at else ""
+        report(problem, f"the run of seed {at} (of 0-{runs - 1}){before}")
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
     out = {
