@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 from collections.abc import Callable, Iterator
 from types import FrameType
 
@@ -114,8 +115,8 @@ class Terminal:
         A line that is not valid text (bytes the terminal's encoding cannot decode, where its
         errors are strict) is said so and read again."""
         while True:
-            if self._signalled:
-                raise _QuitError
+            if self._signalled or (self._read is input and sys.stdin is None):
+                raise _QuitError  # a signal came, or no input at all (started with stdin closed)
             self._reading = True
             try:
                 return self._read("> ")

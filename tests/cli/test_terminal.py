@@ -6,6 +6,7 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 
 from __future__ import annotations
 
+import pytest
 from rich.console import Console
 
 from gaitpref import Session, load_config
@@ -170,3 +171,15 @@ def test_the_stop_rules_round_is_recorded_then_the_session_pauses() -> None:
     assert "Unblinded" in text and "The session is paused: resuming it goes on" in text
     assert "'gaitpref session finish 1' ends it" in text
     assert session.status == "paused" and len(session.validations()) == 1
+
+
+def test_a_closed_stdin_pauses_the_session(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Started with stdin closed (a service, ``<&-``): input() raised 'lost sys.stdin', a
+    traceback that left the session active."""
+    import sys
+
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    monkeypatch.setattr(sys, "stdin", None)
+    console = Console(record=True, width=200, highlight=False)
+    Terminal(session, console).run()
+    assert session.status == "paused" and "Paused." in console.export_text()
