@@ -13,7 +13,10 @@ One iteration (n = 1, b = 1, the paper's protocol)::
 
 Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
 is asked again), ``q`` pauses the session and quits (``gaitpref session run ID [--db URL]``
-resumes it); so do Ctrl-C, a closed terminal (SIGHUP) and the end of input.  A signal that comes
+resumes it); so do Ctrl-C, a closed terminal (SIGHUP) and the end of input.  A line that is
+not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
+The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
+pauses.  A signal that comes
 while an answer is being written lets the write finish first.  Nothing is written before the
 operator confirms (answers, undo and a validation ranking alike), and the answer is committed
 before the next trial is shown.  Gaits are named by their gait library id, or ``G<action>`` (as
@@ -25,6 +28,7 @@ from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 from collections.abc import Callable, Iterator
 from types import FrameType
 
@@ -36,6 +40,7 @@ from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.records import (
     InfeasibleGait,
     SessionQuery,
+    check_unsafe_reason,
 )
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import LABELS, check_ranking
@@ -105,16 +110,25 @@ class Terminal:
                 signal.signal(sig, handler)
 
     def read(self) -> str:
-        """One line of input; a pause signal or the end of input quits (the session pauses)."""
-        if self._signalled:
-            raise _QuitError
-        self._reading = True
-        try:
-            return self._read("> ")
-        except (EOFError, KeyboardInterrupt):
-            raise _QuitError from None
-        finally:
-            self._reading = False
+        """One line of input; a pause signal or the end of input quits (the session pauses).
+
+        A line that is not valid text (bytes the terminal's encoding cannot decode, where its
+        errors are strict) is said so and read again."""
+        while True:
+            if self._signalled or (self._read is input and sys.stdin is None):
+                raise _QuitError  # a signal came, or no input at all (started with stdin closed)
+            self._reading = True
+            try:
+                return self._read("> ")
+            except (EOFError, KeyboardInterrupt):
+                raise _QuitError from None
+            except UnicodeDecodeError:
+                pass
+            finally:
+                self._reading = False
+            self.console.print(
+                "  that line held bytes that are not text; type it again", markup=False
+            )
 
     def ask(self, prompt: str, allowed: dict[str, str], default: str | None = None) -> str:
         """Ask until one of ``allowed`` keys (or u/q) is given; returns the key."""
@@ -147,7 +161,13 @@ class Terminal:
                 while True:
                     if s.validation_plan is not None:
                         self.validate()
-                        return
+                        self.console.print(
+                            "The validation round is recorded.  The session is paused: resuming "
+                            "it goes on with more trials; 'gaitpref session finish "
+                            f"{s.id}' ends it.",
+                            markup=False,
+                        )
+                        raise _QuitError
                     try:
                         skipped = len(s.infeasible_gaits())
                         query = s.next_query()
@@ -256,7 +276,8 @@ class Terminal:
 
     def _reason(self) -> str:
         """Why the trial is unsafe (asked until given; ``q`` pauses and ``u`` undoes, as at
-        every prompt, so neither is ever taken for the reason)."""
+        every prompt, so neither is ever taken for the reason).  A reason the flag would refuse
+        (too long, undecodable bytes) is refused here, before the answer is written."""
         while True:
             self.console.print("Why is it unsafe? (a few words; q pause, u undo)", markup=False)
             text = self.read().strip()
@@ -264,8 +285,12 @@ class Terminal:
                 raise _QuitError
             if text.lower() == "u":
                 raise _UndoError
-            if text:
-                return text[:2000]
+            if not text:
+                continue
+            try:
+                return check_unsafe_reason(text)
+            except ValueError as exc:
+                self.console.print(f"  {exc}; type it again", markup=False)
 
     def _ratings(self, q: SessionQuery) -> tuple[list[object], list[str]]:
         """A rating per executed trial when the config asks for them (Enter skips)."""
@@ -366,6 +391,16 @@ class Terminal:
                 given = self.read().strip()
                 if given.lower() == "q":
                     raise _QuitError
+                if given.lower() == "u":  # no answer to undo inside a round
+                    self.console.print(
+                        "  a validation round is open: record its ranking first", markup=False
+                    )
+                    continue
+                try:  # refused before the confirmation is asked
+                    check_ranking(given, plan.labels)
+                except ValueError as exc:
+                    self.console.print(f"  {exc}", markup=False)
+                    continue
                 try:
                     key = self.ask(
                         f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""}

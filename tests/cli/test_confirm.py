@@ -72,3 +72,13 @@ def test_a_ranking_given_on_the_command_line_is_confirmed(db: str) -> None:
     code, out = _invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, answer="y\n")
     assert code == 0 and "Unblinded" in out
     assert len(Session.open(db, 1).validations()) == 1
+
+
+def test_quitting_the_ranking_prompt_says_the_round_stays_open(db: str) -> None:
+    """It ended silently with status 0, the round left open."""
+    code, out = _invoke("session", "validate", "1", "--db", db, answer="q\n")
+    assert code == 0 and "The subject's ranking, best first" in out
+    assert "No ranking recorded; the round stays open" in out
+    assert f"Record it with: gaitpref session validate 1 --db {db}" in " ".join(out.split())
+    with Session.open(db, 1) as s:
+        assert s.validations() == [] and s.validation_plan is not None

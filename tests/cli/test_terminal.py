@@ -6,6 +6,7 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 
 from __future__ import annotations
 
+import pytest
 from rich.console import Console
 
 from gaitpref import Session, load_config
@@ -14,14 +15,18 @@ from gaitpref.terminal import Terminal, gait_name
 from tests.sessions.sessionkit import CONFIG
 
 
-def _terminal(session: Session, *lines: str) -> tuple[Terminal, Console]:
+def _terminal(session: Session, *lines: str | BaseException) -> tuple[Terminal, Console]:
+    """A terminal reading ``lines`` (an exception is raised by its read), then the end of input."""
     keys = iter(lines)
 
     def read(prompt: str) -> str:
         try:
-            return next(keys)
+            line = next(keys)
         except StopIteration:
             raise EOFError from None
+        if isinstance(line, BaseException):
+            raise line
+        return line
 
     console = Console(record=True, width=200, highlight=False)
     return Terminal(session, console, read), console
@@ -104,3 +109,77 @@ def test_x_writes_the_answer_and_flags_the_trial_unsafe() -> None:
     assert "flagged unsafe: trial 1 (knee buckled)" in console.export_text()
     action = session.trials()[0].action
     assert session.unsafe_flags() == {1: (action, "knee buckled")}
+
+
+def test_a_line_that_is_not_text_is_read_again() -> None:
+    """A terminal whose encoding is strict (LANG=en_US.UTF-8) raises on undecodable bytes: the
+    runner ended with 'error: utf-8 codec can't decode' before."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    bad = UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte")
+    terminal, console = _terminal(session, bad, "0", "y")
+    terminal.run()
+    assert "that line held bytes that are not text; type it again" in console.export_text()
+    assert len(session.trials()) == 1 and session.status == "paused"
+
+
+def test_a_reason_the_flag_refuses_is_asked_again_before_the_answer_is_written() -> None:
+    """Undecodable bytes in the reason: the answer was written, then the flag refused and the
+    runner ended (the flag lost, the session left active); a long one was cut at 2000 silently."""
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    terminal, console = _terminal(session, "", "0", "x", "knee \udcff", "k" * 2001)
+    terminal.run()  # the input ends at the reason: nothing is written, the session pauses
+    text = console.export_text()
+    assert "the unsafe flag's reason is not valid text" in text
+    assert "a text of 1 to 2000 characters; type it again" in text
+    assert session.trials() == [] and session.status == "paused"
+
+    terminal, console = _terminal(session, "", "0", "x", "knee \udcff", "knee buckled")
+    terminal.run()
+    assert session.unsafe_flags() == {1: (session.trials()[0].action, "knee buckled")}
+
+
+def _answered(n: int) -> Session:
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    for _ in range(n):
+        q = session.next_query()
+        session.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+    return session
+
+
+def test_a_ranking_is_checked_before_its_confirmation_and_u_does_not_become_one() -> None:
+    session = _answered(3)
+    terminal, console = _terminal(session, "", "u", "ABD", "bac", "y")
+    terminal.validate()
+    text = console.export_text()
+    assert "got nothing" in text and "got ABD" in text
+    assert "a validation round is open: record its ranking first" in text
+    assert text.count("Write the ranking") == 1  # 'Write the ranking u?' and the others before
+    assert ["".join(v.ranking) for v in session.validations()] == ["BAC"]
+
+
+def test_the_stop_rules_round_is_recorded_then_the_session_pauses() -> None:
+    """The runner ended after the unblinding with the session left active, saying nothing."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED + "\n[stop]\nmax_trials = 1\n")
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    terminal, console = _terminal(session, "4", "0", "y", "ABC", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Unblinded" in text and "The session is paused: resuming it goes on" in text
+    assert "'gaitpref session finish 1' ends it" in text
+    assert session.status == "paused" and len(session.validations()) == 1
+
+
+def test_a_closed_stdin_pauses_the_session(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Started with stdin closed (a service, ``<&-``): input() raised 'lost sys.stdin', a
+    traceback that left the session active."""
+    import sys
+
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    monkeypatch.setattr(sys, "stdin", None)
+    console = Console(record=True, width=200, highlight=False)
+    Terminal(session, console).run()
+    assert session.status == "paused" and "Paused." in console.export_text()

@@ -166,3 +166,53 @@ def test_bench_continuous_sweeps_seeds_with_a_function(tmp_path: Path) -> None:
     best = [r["best_objective"] for r in out["runs"]]
     assert out["best_objective_mean"] == pytest.approx(np.mean(best))
     assert out["best_objective_se"] == pytest.approx(np.std(best, ddof=1) / np.sqrt(2))
+
+
+def test_a_users_objective_that_fails_is_an_error_naming_it_and_the_run(tmp_path: Path) -> None:
+    """A file that does not import, a function that raises, returns NaN or the wrong count:
+    a traceback, or a NaN utility taken silently ('objective nan'), before."""
+    cfg = tmp_path / "cont.toml"
+    cfg.write_text(CONFIG)
+    obj = tmp_path / "obj.py"
+    obj.write_text(
+        "import numpy as np\n"
+        "def raises(x):\n"
+        "    if x.shape[0] != 2:\n"
+        "        raise RuntimeError('sensor model blew up')\n"
+        "    return -x[:, 0]\n"
+        "def nan(x):\n"
+        "    return np.where(x[:, 0] > -1, np.nan, 0.0) if x.shape[0] != 2 else -x[:, 0]\n"
+        "def count(x):\n"
+        "    return np.zeros(x.shape[0] + 1) if x.shape[0] != 2 else -x[:, 0]\n"
+    )
+    (tmp_path / "broken.py").write_text("def f(x) return 1\n")
+    cases = {
+        f"{obj}:raises": "failed on 1 point(s): RuntimeError: sensor model blew up",
+        f"{obj}:nan": "must return 1 finite utilities, got values that are not finite",
+        f"{obj}:count": "must return 1 finite utilities, got shape (2,)",
+        f"{tmp_path / 'broken.py'}:f": "cannot be imported: SyntaxError",
+        "random-gp:x": "the seed after ':' must be an integer >= 0",
+    }
+    for spec, message in cases.items():
+        for args in (["simulate"], ["bench", "continuous"]):
+            result = CliRunner().invoke(
+                app, [*args, str(cfg), "--objective", spec, "--trials", "3"]
+            )
+            assert result.exit_code == 2, result.output  # 1 with a traceback
+            assert message in " ".join(result.output.split()), (args, spec, result.output)
+    result = CliRunner().invoke(app, ["bench", "continuous", str(cfg), "--objective",
+                                      f"{obj}:raises", "--runs", "2", "--trials", "3"])  # fmt: skip
+    assert "the run of seed 0 (of 0-1): objective" in " ".join(result.output.split())
+
+
+def test_runs_over_points_report_their_progress(tmp_path: Path) -> None:
+    """simulate and bench continuous said nothing until a run (all runs) ended: now a bar,
+    fed by simulate_points' progress (trials done after every query)."""
+    from gaitpref.cli.points import simulate_points
+    from gaitpref.config import parse_config
+
+    cfg = parse_config(CONFIG)
+    done: list[int] = []
+    simulate_points(cfg, builtin("random-gp", cfg.space, 1), trials=5, seed=0,
+                    progress=done.append)  # fmt: skip
+    assert done == sorted(done) and done[-1] == 5

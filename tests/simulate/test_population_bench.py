@@ -110,3 +110,22 @@ def test_the_bench_judges_the_recommendation_on_the_truths_given(tmp_path: Path)
         )
     with pytest.raises(ValueError, match="truths"):
         population_bench(config, objectives, 2, truths=objectives[:1])
+
+
+def test_no_more_workers_than_subjects(monkeypatch: pytest.MonkeyPatch) -> None:
+    """jobs = 8 for three subjects started eight loky processes (a thousand for --jobs 1000)."""
+    import joblib
+
+    asked: list[int] = []
+    real = joblib.Parallel
+
+    def parallel(n_jobs: int, **kwargs: object) -> joblib.Parallel:
+        asked.append(n_jobs)
+        return real(n_jobs=n_jobs, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(joblib, "Parallel", parallel)
+    A = len(load_config(CONFIG).space)
+    x = np.linspace(0, 1, A)
+    grids = np.array([-((x - p) ** 2) for p in (0.6, 0.65, 0.7)])
+    population_bench(load_config(CONFIG), grids, 2, jobs=8)
+    assert asked == [3, 3]  # cold, then warm

@@ -134,3 +134,62 @@ def test_compass_gait_refuses_bad_options(
 ) -> None:
     code, out = invoke("compass-gait", *args, "--out", str(tmp_path))
     assert code == 2 and message in " ".join(out.split())
+
+
+def test_an_out_that_is_a_file_and_unreadable_notes_are_refused_by_option(tmp_path: Path) -> None:
+    """A FileExistsError traceback for --out naming a file; notes that are not UTF-8 gave the
+    codec's message without the file."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    for command in ("paper-2d", "compass-gait"):
+        code, out = invoke(command, "--runs", "1", "--trials", "2", "--out", str(afile))
+        assert code == 2 and f"--out '{afile}' is a file, not a folder" in " ".join(out.split())
+    notes = tmp_path / "notes.md"
+    notes.write_bytes(b"\xff\xfe")
+    code, out = invoke("paper-2d", "--runs", "1", "--notes", str(notes), "--out", str(tmp_path))
+    assert code == 2 and f"--notes '{notes}' is not UTF-8 text" in " ".join(out.split())
+
+
+def test_array_files_that_are_not_one_array_are_refused_naming_the_file(tmp_path: Path) -> None:
+    """A file that looks like a zip but is not one raised BadZipFile (a traceback) in simulate,
+    bench population and compass-gait --library; an .npz archive given for one array was
+    iterated as its names ('could not convert string to float')."""
+    import numpy as np
+
+    from gaitpref.cli.main import app as root
+
+    notzip = tmp_path / "notzip.npy"
+    notzip.write_bytes(b"PK\x03\x04garbage")
+    archive = tmp_path / "archive.npy"
+    with archive.open("wb") as fh:
+        np.savez(fh, a=np.zeros(3))
+    for path, message in (
+        (notzip, "is not a readable .npy array"),
+        (archive, "is an .npz archive"),
+    ):
+        for args in (
+            ["simulate", "synthetic-2d", "--objective", str(path), "--trials", "2"],
+            ["bench", "population", "--objectives", str(path), "--trials", "2"],
+        ):
+            result = runner.invoke(root, args)
+            assert result.exit_code == 2, result.output
+            assert f"'{path}' {message}" in " ".join(result.output.split())
+    library = tmp_path / "lib.npz"
+    library.write_bytes(b"PK\x03\x04garbage")
+    code, out = invoke("compass-gait", "--objective", "hzd", "--library", str(library),
+                       "--runs", "1", "--trials", "2", "--out", str(tmp_path / "o"))  # fmt: skip
+    assert code == 2 and "not a readable .npz export" in out
+
+
+def test_parquet_without_pyarrow_is_refused_before_the_study_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """It ran the whole study, then failed with a RuntimeError traceback, writing nothing."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pyarrow", None)  # import pyarrow: ImportError
+    monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
+    code, out = invoke("paper-2d", "--runs", "1", "--trials", "2", "--settings", "n1_b1",
+                       "--table", "parquet", "--out", str(tmp_path))  # fmt: skip
+    assert code == 2 and "--table parquet: writing Parquet needs pyarrow" in " ".join(out.split())
+    assert "runs in" not in out and list(tmp_path.iterdir()) == []

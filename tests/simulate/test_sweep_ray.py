@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 import ray
 
 from gaitpref.simulate.study import Study
@@ -15,3 +16,38 @@ def test_ray_and_joblib_give_identical_tables(ray_runtime: None, small_study: St
     assert on_ray.backend == "ray"
     assert on_ray.table.equals(on_joblib.table)
     assert len(on_ray.table) == len(small_study) * small_study.trials
+
+
+def test_a_failed_run_raises_its_own_error_as_on_joblib(ray_runtime: None) -> None:
+    """Ray wrapped it in a RayTaskError whose text is the remote traceback (ANSI colours and
+    file lines in the CLI's 'model error: ...')."""
+    from gaitpref.errors import NoSafeGaitError
+    from gaitpref.simulate.study import Setting
+    from tests.simulate.test_sweep_ratings import QUARTILES, STRICT, _study
+
+    study = _study(Setting("strict", 1, 1, rating_quantiles=QUARTILES, config=STRICT), trials=40)
+    with pytest.raises(NoSafeGaitError) as info:
+        run_study(study, backend="ray", jobs=2)
+    assert type(info.value) is NoSafeGaitError
+    assert str(info.value).startswith("setting 'strict', objective 3, seed 0: no gait")
+
+
+def test_an_address_where_nothing_listens_is_refused_at_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """ray.init retried HOST:PORT with no cluster for minutes, Ray's warnings the only output."""
+    import socket
+
+    from gaitpref.simulate.sweep import start_ray
+
+    with socket.socket() as free:  # a port nothing listens on once closed
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+
+    def init(*args: object, **kwargs: object) -> None:
+        raise AssertionError("ray.init was called: it retries for minutes")
+
+    monkeypatch.setattr(ray, "is_initialized", lambda: False)
+    monkeypatch.setattr(ray, "init", init)
+    with pytest.raises(RuntimeError, match="nothing answers there"):
+        start_ray(f"127.0.0.1:{port}")

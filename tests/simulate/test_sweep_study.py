@@ -130,3 +130,67 @@ def test_bad_backend_is_refused(small_study: Study) -> None:
         run_study(small_study, backend="dask")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="Ray"):
         run_study(small_study, backend="joblib", address="auto")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"n": 1.5, "buffer": 1}, "n must be an integer, got 1.5"),  # CoSpar's, in a worker
+        ({"n": True, "buffer": True}, "n must be an integer, got True"),  # ran as n = b = 1
+        ({"n": 2, "buffer": "1"}, "buffer must be an integer, got '1'"),  # a TypeError
+        ({"n": 2, "coactive": "no"}, "coactive must be true or false"),  # ran coactive
+        ({"n": 2, "coactive_weight": float("inf")}, "coactive_weight must be a finite number"),
+        ({"n": 2, "rating_quantiles": ("a",)}, "rating_quantiles must be numbers"),
+    ],
+)
+def test_settings_of_the_wrong_type_are_refused_by_key(
+    kwargs: dict[str, object], message: str
+) -> None:
+    with pytest.raises(ValueError, match=f"setting 's': {message}"):
+        Setting("s", **kwargs)  # type: ignore[arg-type]
+
+
+def test_studies_refuse_non_integer_counts_and_an_n_past_the_grid(small_study: Study) -> None:
+    """Seeds 0.5 and 1.5 were cut to 0 and 1 silently; trials 2.5 failed in a worker; an n past
+    the grid failed in a worker naming no setting."""
+    with pytest.raises(ValueError, match=r"seeds must be an integer, got 0\.5"):
+        dataclasses.replace(small_study, seeds=(0.5, 1.5))
+    with pytest.raises(ValueError, match=r"trials must be an integer, got 2\.5"):
+        dataclasses.replace(small_study, trials=2.5)
+    with pytest.raises(ValueError, match="objective_ids must be an integer"):
+        dataclasses.replace(small_study, objective_ids=(0.0, 5, 7))
+    with pytest.raises(ValueError, match="setting 'wide': n = 901 is more actions than the grid"):
+        dataclasses.replace(small_study, settings=(Setting("wide", 901, 0),))
+    same = dataclasses.replace(small_study, seeds=np.arange(2), objective_ids=np.array([0, 5, 7]))
+    assert same.seeds == (0, 1) and same.objective_ids == (0, 5, 7)
+
+
+def test_no_more_workers_than_runs() -> None:
+    """jobs = 8 for two runs started eight worker processes (a thousand for --jobs 1000)."""
+    from gaitpref.data import paper_objectives
+
+    study = Study.from_config(
+        load_config("synthetic-2d"),
+        [Setting.random()],
+        np.asarray(paper_objectives()[[0]]).reshape(1, -1),
+        seeds=(0, 1),
+        trials=3,
+    )
+    wide = run_study(study, jobs=8)
+    assert wide.jobs == 2
+    assert wide.table.equals(run_study(study, jobs=1).table)
+
+
+def test_a_study_holds_at_most_max_runs(small_study: Study) -> None:
+    """bench compass-gait --runs 100000000 filled the memory (a MemoryError traceback under a
+    limit) before its first run."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli.main import app
+    from gaitpref.simulate.study import MAX_RUNS
+
+    with pytest.raises(ValueError, match=f"is more than {MAX_RUNS}; split it"):
+        dataclasses.replace(small_study, seeds=range(MAX_RUNS))
+    result = CliRunner().invoke(app, ["bench", "compass-gait", "--runs", "100000000"])
+    assert result.exit_code == 2 and f"runs must be 1 to {MAX_RUNS}" in result.output
+    assert dataclasses.replace(small_study, seeds=iter((0, 1))).seeds == (0, 1)

@@ -19,7 +19,7 @@ import typer
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
 from gaitpref.cli.gaits import app as gaits_app
-from gaitpref.cli.output import console, err_console, fail, guard
+from gaitpref.cli.output import console, err_console, fail, guard, read_array
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 
@@ -47,8 +47,8 @@ app.add_typer(bench_app, name="bench")
 app.add_typer(gaits_app, name="gaits")
 
 
-def progress_bar(transient: bool = False) -> Progress:
-    """The Rich progress bar used by long commands."""
+def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
+    """The Rich progress bar used by long commands (on stderr; ``shown=False``: none)."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -64,6 +64,7 @@ def progress_bar(transient: bool = False) -> Progress:
         TimeRemainingColumn(),
         console=err_console,
         transient=transient,
+        disable=not shown,
     )
 
 
@@ -74,14 +75,7 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
 
 
 def _load_objective(path: Path) -> np.ndarray:
-    import numpy as np
-
-    if not path.is_file():
-        fail(f"objective file {str(path)!r} does not exist")
-    try:
-        arr: np.ndarray = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        fail(f"objective file {str(path)!r} is not a readable .npy array: {exc}")
+    arr: np.ndarray = read_array(path, "objective file")
     return arr
 
 

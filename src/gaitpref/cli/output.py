@@ -26,7 +26,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import NoReturn, TypeVar
+from pathlib import Path
+from typing import Any, NoReturn, TypeVar
 
 import typer
 from rich.console import Console
@@ -70,11 +71,12 @@ def fail(message: str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
-def report(exc: BaseException) -> NoReturn:
-    """Print ``exc`` as :func:`exit_for` says and exit with its status."""
+def report(exc: BaseException, where: str = "") -> NoReturn:
+    """Print ``exc`` as :func:`exit_for` says (after ``where``, e.g. which run) and exit with
+    its status."""
     line, code = exit_for(exc)
     label, _, message = line.partition(": ")
-    _print_error(label, message)
+    _print_error(label, f"{where}: {message}" if where else message)
     raise typer.Exit(code)
 
 
@@ -89,6 +91,27 @@ def guard(fn: Callable[[], T]) -> T:
         return fn()
     except HANDLED as exc:
         report(exc)
+
+
+def read_array(path: Path, what: str) -> Any:
+    """The one NumPy array (``.npy``) at ``path``, or :func:`fail` naming ``what`` and the file:
+    missing, not an array file (a zip that is not one raised ``BadZipFile``), an ``.npz``
+    archive of several (iterated as its names before), or an array of objects."""
+    import zipfile
+
+    import numpy as np
+
+    where = f"{what} {str(path)!r}"
+    if not path.is_file():
+        fail(f"{where} does not exist")
+    try:
+        arr = np.load(path, allow_pickle=False)
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        fail(f"{where} is not a readable .npy array: {exc}")
+    if not isinstance(arr, np.ndarray):  # an .npz archive
+        arr.close()
+        fail(f"{where} is an .npz archive; give one .npy array (numpy.save)")
+    return arr
 
 
 @contextmanager

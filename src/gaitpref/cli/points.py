@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from gaitpref.cli.output import console, guard
@@ -40,8 +41,10 @@ def simulate_points(
     seed: int,
     coactive: bool = False,
     noise: float = 0.0,
+    progress: Callable[[int], None] | None = None,
 ) -> PointsResult:
-    """One simulated run on ``cfg``'s loop (grid or line path), seeded by ``seed``."""
+    """One simulated run on ``cfg``'s loop (grid or line path), seeded by ``seed``;
+    ``progress`` is called with the trials done after every query."""
     import numpy as np
 
     from gaitpref.simulate.points import PointCoactive, PointUser, run_points
@@ -50,7 +53,7 @@ def simulate_points(
     loop = cfg.make_loop(seed=np.random.default_rng(loop_seed))
     user = PointUser(objective, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(objective, cfg.space, seed=seed) if coactive else None
-    return run_points(loop, objective, user, trials, helper)
+    return run_points(loop, objective, user, trials, helper, progress=progress)
 
 
 def report(cfg: ExperimentConfig, result: PointsResult, seed: int, elapsed: float,
@@ -80,13 +83,23 @@ def report(cfg: ExperimentConfig, result: PointsResult, seed: int, elapsed: floa
 def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coactive: bool,
                 noise: float, as_json: bool) -> None:  # fmt: skip
     """``gaitpref simulate`` with a point objective."""
+    from gaitpref.cli.main import progress_bar
+
     objective = load_point_objective(spec, cfg)
     start = time.perf_counter()
-    result = guard(
-        lambda: simulate_points(
-            cfg, objective, trials=trials, seed=seed, coactive=coactive, noise=noise
+    with progress_bar(transient=True, shown=not as_json) as bar:  # trials: it said nothing
+        task = bar.add_task("trials", total=trials)
+        result = guard(
+            lambda: simulate_points(
+                cfg,
+                objective,
+                trials=trials,
+                seed=seed,
+                coactive=coactive,
+                noise=noise,
+                progress=lambda done: bar.update(task, completed=done),
+            )
         )
-    )
     report(cfg, result, seed, time.perf_counter() - start, as_json)
 
 

@@ -151,7 +151,13 @@ def validate(
     with _opened(db, session_id) as session:
         if ranking is not None:
             _confirm(f"Record the ranking {ranking} for session {session_id}?", yes)
-        guard(lambda: run_validation(session, ranking, console))
+        if not guard(lambda: run_validation(session, ranking, console)):
+            again = f"gaitpref session validate {session_id}" + (f" --db {db}" if db else "")
+            console.print(
+                "No ranking recorded; the round stays open (no trials are proposed until it is "
+                f"answered).  Record it with: {again}",
+                markup=False,
+            )
 
 
 @session_app.command("list")

@@ -17,10 +17,11 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from gaitpref.cli.output import HANDLED, fail, guard, report
+from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 
 if TYPE_CHECKING:
+    from gaitpref.simulate.points import PointsResult
     from gaitpref.simulate.study import Study
     from gaitpref.simulate.sweep import StudyResult
 
@@ -67,10 +68,39 @@ def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyRes
         fail(str(exc))
 
 
+def _folder(out: Path) -> None:
+    """Make the output folder before any run, or fail naming ``--out`` (a traceback before)."""
+    if out.exists() and not out.is_dir():
+        fail(f"--out {str(out)!r} is a file, not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        fail(f"--out {str(out)!r}: cannot make the output folder ({exc.strerror or exc})")
+
+
+def _notes(notes: Path | None) -> str:
+    """The ``--notes`` file's text, or fail naming it."""
+    if notes is None:
+        return ""
+    try:
+        return notes.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        fail(f"--notes {str(notes)!r} is not UTF-8 text")
+    except OSError as exc:
+        fail(f"--notes {str(notes)!r} cannot be read ({exc.strerror or exc})")
+
+
 def _table_path(out: Path, fmt: str) -> Path:
+    from gaitpref.simulate.tables import check_table_path
+
     if fmt not in ("csv", "csv.gz", "parquet"):
         fail(f"--table must be csv, csv.gz or parquet, got {fmt!r}")
-    return out / f"runs.{fmt}"
+    path = out / f"runs.{fmt}"
+    try:  # before the study runs: Parquet without pyarrow failed after it, writing nothing
+        check_table_path(path)
+    except RuntimeError as exc:
+        fail(f"--table {fmt}: {exc}")
+    return path
 
 
 @bench_app.command("paper-2d")
@@ -98,9 +128,9 @@ def paper_2d(
     from gaitpref.simulate.tables import write_curves, write_table
 
     study = guard(lambda: paper_2d_study(runs, trials, _split(settings), baseline, seed))
-    note_text = guard(lambda: notes.read_text(encoding="utf-8") if notes is not None else "")
+    note_text = _notes(notes)
     table_path = _table_path(out, table)
-    out.mkdir(parents=True, exist_ok=True)
+    _folder(out)
     load_before = load_average()
     result = _run(study, backend, jobs, address)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
@@ -157,7 +187,7 @@ def compass_gait(
             raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
         build = objective == "hzd" and library is None
         if build:
-            out.mkdir(parents=True, exist_ok=True)
+            _folder(out)
             _console.print("building HZD gaits at 0.2 m/s on the 24 step lengths ...")
         obj = compass_objective(
             objective,  # type: ignore[arg-type]
@@ -172,7 +202,7 @@ def compass_gait(
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {obj.note}")
     table_path = _table_path(out, table)
-    out.mkdir(parents=True, exist_ok=True)
+    _folder(out)
     result = _run(study, backend, jobs, address)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
@@ -220,10 +250,9 @@ def population(
     from gaitpref.config import load_config
     from gaitpref.simulate.population import population_bench
 
+    arr = read_array(objectives, "objectives file")
+
     def run() -> dict[str, object]:
-        if not objectives.is_file():
-            raise ValueError(f"objectives file {str(objectives)!r} does not exist")
-        arr = np.load(objectives, allow_pickle=False)
         cfg = load_config(config)
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise
@@ -260,23 +289,39 @@ def continuous(
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""
-    import functools
     import json
 
     import numpy as np
 
+    from gaitpref.cli.main import progress_bar
     from gaitpref.cli.points import load_point_objective, simulate_points
     from gaitpref.config import load_config
 
     cfg = guard(lambda: load_config(config))
-    results = []
-    for seed in range(runs):
-        spec = f"random-gp:{seed}" if objective == "random-gp" else objective
-        fn = load_point_objective(spec, cfg)
-        run = functools.partial(
-            simulate_points, cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise
-        )
-        results.append(guard(run))
+    results: list[PointsResult] = []
+    failed: tuple[int, BaseException] | None = None
+    with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
+        task = bar.add_task(f"{runs} runs", total=runs * trials)
+        for seed in range(runs):
+            spec = f"random-gp:{seed}" if objective == "random-gp" else objective
+            fn = load_point_objective(spec, cfg)
+
+            def progress(done: int, before: int = seed * trials) -> None:
+                bar.update(task, completed=before + done)
+
+            try:
+                run = simulate_points(
+                    cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise,
+                    progress=progress,
+                )  # fmt: skip
+            except HANDLED as caught:
+                failed = seed, caught
+                break
+            results.append(run)
+    if failed is not None:  # which run failed; the runs before it are not printed
+        at, problem = failed
+        before = f"; the runs of seeds 0-{at - 1} finished, not reported" if at else ""
+        report(problem, f"the run of seed {at} (of 0-{runs - 1}){before}")
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
     out = {

@@ -157,3 +157,17 @@ def check_storable(text: str, what: str) -> str:
             "byte?); nothing was written"
         ) from None
     return text
+
+
+#: the longest reason an unsafe flag takes (the terminal, the CLI and the API alike)
+MAX_UNSAFE_REASON = 2000
+
+
+def check_unsafe_reason(reason: str) -> str:
+    """``reason`` if an unsafe flag may hold it: a text of 1 to :data:`MAX_UNSAFE_REASON`
+    characters that a database can store; a ValueError saying which rule it breaks."""
+    if not isinstance(reason, str) or not reason.strip() or len(reason) > MAX_UNSAFE_REASON:
+        raise ValueError(
+            f"an unsafe flag needs a reason: a text of 1 to {MAX_UNSAFE_REASON} characters"
+        )
+    return check_storable(reason, "the unsafe flag's reason")

@@ -51,6 +51,7 @@ from gaitpref.sessions.records import (
     SuggestionRecord,
     Trial,
     check_storable,
+    check_unsafe_reason,
 )
 from gaitpref.sessions.validation import (
     BlindGait,
@@ -283,9 +284,7 @@ class SessionState:
 
     def unsafe_event(self, trial: int, reason: str) -> NewEvent:
         """Flag an answered trial unsafe (``reason``: what happened, 1..2000 characters)."""
-        if not isinstance(reason, str) or not reason.strip() or len(reason) > 2000:
-            raise ValueError("an unsafe flag needs a reason: a text of 1 to 2000 characters")
-        check_storable(reason, "the unsafe flag's reason")
+        check_unsafe_reason(reason)
         told, action = self._trial(trial)
         if trial in self.unsafe:
             raise SessionStateError(f"trial {trial} is already flagged unsafe")

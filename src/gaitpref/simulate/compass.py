@@ -27,7 +27,7 @@ from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.simulate.hzd import build_cot_curve, library_objective, read_cot_curve
 from gaitpref.simulate.objectives import cot_polynomial
-from gaitpref.simulate.study import RunTask, Setting, Study, run_seed_sequence
+from gaitpref.simulate.study import MAX_RUNS, RunTask, Setting, Study, run_seed_sequence
 from gaitpref.simulate.users import SimulatedUser
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -95,8 +95,8 @@ def compass_gait_study(
     seed: int = 0,
 ) -> Study:
     """``runs`` seeded CoSpar runs (and random selection) minimising the COT."""
-    if runs < 1:
-        raise ValueError(f"runs must be >= 1, got {runs}")
+    if not 1 <= runs <= MAX_RUNS:
+        raise ValueError(f"runs must be 1 to {MAX_RUNS}, got {runs}")
     config = _config()
     settings = [COMPASS_SETTING, *([Setting.random()] if baseline else [])]
     return Study(

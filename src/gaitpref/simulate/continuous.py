@@ -127,7 +127,12 @@ def load_function(spec: str) -> PointObjective:
     if module_spec is None or module_spec.loader is None:
         raise ValueError(f"objective file {path_text!r} cannot be imported")
     module = importlib.util.module_from_spec(module_spec)
-    module_spec.loader.exec_module(module)
+    try:
+        module_spec.loader.exec_module(module)
+    except Exception as exc:  # the user's file: a syntax error, a failed import, ...
+        raise ValueError(
+            f"objective file {path_text!r} cannot be imported: {type(exc).__name__}: {exc}"
+        ) from exc
     fn = getattr(module, name, None)
     if not callable(fn):
         raise ValueError(f"objective {spec!r}: {path_text} defines no function {name!r}")
@@ -140,9 +145,11 @@ def objective_from(spec: str, space: Space, seed: int = 0) -> PointObjective:
     points of ``space`` (``m`` finite utilities for ``m`` points)."""
     head, _, tail = spec.partition(":")
     if head in BUILTINS:
+        if tail and not (tail.isascii() and tail.isdigit()):
+            raise ValueError(f"objective {spec!r}: the seed after ':' must be an integer >= 0")
         fn = builtin(head, space, int(tail) if tail else seed)
     else:
-        fn = load_function(spec)
+        fn = checked_objective(load_function(spec), spec, space.ndim)
     lo = np.array([[f.values[0] for f in space.features]])
     probe = np.concatenate([lo, np.array([[f.values[-1] for f in space.features]])])
     values = np.asarray(fn(probe), dtype=np.float64)
@@ -152,6 +159,31 @@ def objective_from(spec: str, space: Space, seed: int = 0) -> PointObjective:
             f"finite utilities, got shape {values.shape}"
         )
     return fn
+
+
+def checked_objective(fn: PointObjective, spec: str, ndim: int) -> PointObjective:
+    """``fn`` (the user's function), checked at every call: an error it raises, or a result
+    that is not ``m`` finite numbers for ``m`` points, is a ValueError naming ``spec`` (a
+    traceback, or a NaN utility taken silently, before).  The values pass through unchanged."""
+
+    def objective(points: FloatArray) -> FloatArray:
+        m = int(np.shape(points)[0])
+        try:
+            values = fn(points)
+            got = np.asarray(values, dtype=np.float64)
+        except Exception as exc:
+            raise ValueError(
+                f"objective {spec!r} failed on {m} point(s): {type(exc).__name__}: {exc}"
+            ) from exc
+        if got.shape != (m,) or not np.all(np.isfinite(got)):
+            what = f"shape {got.shape}" if got.shape != (m,) else "values that are not finite"
+            raise ValueError(
+                f"objective {spec!r}: for a {m} x {ndim} array of points it must return {m} "
+                f"finite utilities, got {what}"
+            )
+        return values
+
+    return objective
 
 
 def estimate_optimum(
@@ -184,6 +216,7 @@ __all__ = [
     "PointObjective",
     "RandomGP",
     "builtin",
+    "checked_objective",
     "estimate_optimum",
     "hartmann6",
     "load_function",

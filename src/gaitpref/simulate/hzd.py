@@ -151,7 +151,10 @@ def _flag(value: object, path: Path) -> bool:
 
 
 def _from_npz(path: Path) -> dict[str, Any]:
-    with np.load(path, allow_pickle=False) as z:
+    z = np.load(path, allow_pickle=False)
+    if not isinstance(z, np.lib.npyio.NpzFile):
+        raise ValueError("one array, not an archive of step_length, cot, ...")
+    with z:
         return {k: z[k].tolist() for k in z.files}
 
 

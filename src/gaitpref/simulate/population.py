@@ -208,7 +208,8 @@ def population_bench(
             return [_walk(*a) for a in args]
         from joblib import Parallel, delayed
 
-        parallel = Parallel(n_jobs=n_jobs, backend="loky", inner_max_num_threads=1)
+        workers = min(n_jobs, len(args))  # a process per run at most (as run_study)
+        parallel = Parallel(n_jobs=workers, backend="loky", inner_max_num_threads=1)
         return list(parallel(delayed(_walk)(*a) for a in args))
 
     cold = run([(k, None) for k in range(len(grids))])

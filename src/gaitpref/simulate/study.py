@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -50,6 +51,10 @@ Strategy = Literal["cospar", "random"]
 
 
 _CONFIG_TABLES = ("feedback", "safety")
+
+#: The most runs a study holds (settings x objectives x seeds): its tasks and results are kept
+#: in memory (``bench compass-gait --runs 100000000`` filled the memory before its first run).
+MAX_RUNS = 100_000
 
 
 def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal | None, Safety]:
@@ -98,7 +103,22 @@ class Setting:
     config: str = ""
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "rating_quantiles", tuple(float(q) for q in self.rating_quantiles))
+        where = f"setting {self.name!r}"
+        for key in ("n", "buffer"):
+            object.__setattr__(self, key, _integer(getattr(self, key), f"{where}: {key}"))
+        if not isinstance(self.coactive, bool | np.bool_):
+            raise ValueError(f"{where}: coactive must be true or false, got {self.coactive!r}")
+        if not _real(self.coactive_weight) or not 0 < self.coactive_weight < np.inf:
+            weight = self.coactive_weight
+            raise ValueError(
+                f"{where}: coactive_weight must be a finite number > 0, got {weight!r}"
+            )
+        if not _real(self.rating_noise):
+            raise ValueError(f"{where}: rating_noise must be a number, got {self.rating_noise!r}")
+        quantiles = tuple(self.rating_quantiles)
+        if not all(_real(q) for q in quantiles):
+            raise ValueError(f"{where}: rating_quantiles must be numbers, got {quantiles!r}")
+        object.__setattr__(self, "rating_quantiles", tuple(float(q) for q in quantiles))
         self._check_ratings()
         if not self.name or any(c in self.name for c in ",\n\"'"):
             raise ValueError(f"setting name must be non-empty without commas/quotes: {self.name!r}")
@@ -106,14 +126,13 @@ class Setting:
             raise ValueError(f"setting {self.name!r}: strategy must be 'cospar' or 'random'")
         if self.strategy == "random" and self.coactive:
             raise ValueError(f"setting {self.name!r}: random selection takes no coactive feedback")
-        if self.strategy == "cospar":
-            if self.n < 1 or self.buffer < 0 or (self.n == 1 and self.buffer == 0):
-                raise ValueError(
-                    f"setting {self.name!r}: needs n >= 1, b >= 0 and not n = 1 with b = 0, "
-                    f"got n = {self.n}, b = {self.buffer}"
-                )
-            if not self.coactive_weight > 0:
-                raise ValueError(f"setting {self.name!r}: coactive_weight must be > 0")
+        if self.strategy == "cospar" and (
+            self.n < 1 or self.buffer < 0 or (self.n == 1 and self.buffer == 0)
+        ):
+            raise ValueError(
+                f"setting {self.name!r}: needs n >= 1, b >= 0 and not n = 1 with b = 0, "
+                f"got n = {self.n}, b = {self.buffer}"
+            )
 
     def _check_ratings(self) -> None:
         where = f"setting {self.name!r}"
@@ -166,6 +185,24 @@ class RunResult:
     actions: IntArray  # (T,)
     normalized: FloatArray  # (T,)
     ratings: IntArray | None = None  # (T,) when the setting rates: 1 (worst) to K
+
+
+def _integer(value: object, what: str) -> int:
+    """``value`` as an ``int`` if it is an integer (NumPy's too, not a bool or a float): a
+    ValueError naming ``what`` otherwise (``int()`` cut 1.5 to 1 silently)."""
+    if isinstance(value, bool | np.bool_):
+        raise ValueError(f"{what} must be an integer, got {value!r}")
+    try:
+        return operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise ValueError(f"{what} must be an integer, got {value!r}") from None
+
+
+def _real(value: object) -> bool:
+    """Whether ``value`` is a real number (not a bool, a text or None)."""
+    return isinstance(value, int | float | np.integer | np.floating) and not isinstance(
+        value, bool | np.bool_
+    )
 
 
 def _name_key(name: str) -> tuple[int, ...]:
@@ -273,18 +310,39 @@ class Study:
             raise ValueError(f"study {self.name!r}: objectives must be finite")
         obj = obj.copy()
         obj.setflags(write=False)
-        ids = tuple(int(i) for i in self.objective_ids) or tuple(range(obj.shape[0]))
+        where = f"study {self.name!r}"
+        if not isinstance(self.seeds, Sequence | np.ndarray):  # an iterator: counted once
+            object.__setattr__(self, "seeds", tuple(self.seeds))
+        runs = len(settings) * obj.shape[0] * len(self.seeds)
+        if runs > MAX_RUNS:
+            raise ValueError(
+                f"{where}: {runs} runs (settings x objectives x seeds) is more than {MAX_RUNS}; "
+                "split it into several studies"
+            )
+        ids = tuple(_integer(i, f"{where}: objective_ids") for i in self.objective_ids)
+        ids = ids or tuple(range(obj.shape[0]))
         if len(ids) != obj.shape[0] or len(set(ids)) != len(ids) or min(ids) < 0:
             raise ValueError(f"study {self.name!r}: need {obj.shape[0]} distinct ids >= 0")
-        seeds = tuple(int(s) for s in self.seeds)
+        seeds = tuple(_integer(s, f"{where}: seeds") for s in self.seeds)
         if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
             raise ValueError(f"study {self.name!r}: seeds must be distinct integers >= 0")
-        if self.trials < 1 or self.seed < 0:
+        trials, seed = (
+            _integer(self.trials, f"{where}: trials"),
+            _integer(self.seed, f"{where}: seed"),
+        )
+        if trials < 1 or seed < 0:
             raise ValueError(f"study {self.name!r}: trials must be >= 1 and seed >= 0")
+        for s in settings:  # refused here, not by a worker after other runs (naming no setting)
+            if s.strategy == "cospar" and s.n > A:
+                raise ValueError(
+                    f"{where}: setting {s.name!r}: n = {s.n} is more actions than the grid's {A}"
+                )
         object.__setattr__(self, "settings", settings)
         object.__setattr__(self, "objectives", obj)
         object.__setattr__(self, "objective_ids", ids)
         object.__setattr__(self, "seeds", seeds)
+        object.__setattr__(self, "trials", trials)
+        object.__setattr__(self, "seed", seed)
 
     @classmethod
     def from_config(

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import logging
 import os
+import socket
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -102,8 +103,10 @@ def run_study(
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
-    n_jobs = resolve_jobs(jobs)
     tasks = study.tasks()
+    # no more workers than runs: each loky worker is a process that loads NumPy and SciPy, and
+    # a mistyped --jobs 1000 started a thousand of them for a handful of runs
+    n_jobs = min(resolve_jobs(jobs), len(tasks))
     results: list[RunResult | None] = [None] * len(tasks)
     start = time.perf_counter()
     with _progress(console) if progress else _NoProgress() as bar:
@@ -177,6 +180,8 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     }
     if address is None:
         options["num_cpus"] = resolve_jobs(jobs)
+    else:
+        _probe(address)
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
     try:
         ray.init(address=address, **options)
@@ -184,6 +189,22 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
         where = f"the Ray cluster at {address!r}" if address else "a local Ray runtime"
         raise RuntimeError(f"could not start or reach {where}: {exc}") from None
     return True
+
+
+def _probe(address: str, timeout: float = 5.0) -> None:
+    """Refuse a ``HOST:PORT`` address where nothing listens (Ray retried it for minutes, its
+    warnings the only output); ``auto`` and ``ray://`` addresses Ray itself answers at once."""
+    host, sep, port = address.rpartition(":")
+    if "://" in address or not sep or not port.isdigit():
+        return
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise RuntimeError(
+            f"could not reach the Ray cluster at {address!r}: nothing answers there "
+            f"({exc.strerror or exc}); start one (ray start --head) or give its address"
+        ) from None
 
 
 def _run_ray(
@@ -199,7 +220,14 @@ def _run_ray(
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=None)
             for ref in done:
-                yield position[ref], ray.get(ref)
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:  # the run's own error, as joblib
+                    cause = getattr(exc, "cause", None)  # raises it (not the remote traceback)
+                    if isinstance(cause, Exception):
+                        raise cause from None
+                    raise
+                yield position[ref], result
     finally:
         if started:
             ray.shutdown()

@@ -213,6 +213,13 @@ def _pyarrow() -> Any:
     return pa, pq
 
 
+def check_table_path(path: str | Path) -> None:
+    """Refuse, before a study runs, a table file :func:`write_table` could not write: another
+    suffix (``ValueError``), or Parquet without pyarrow (``RuntimeError``)."""
+    if _is_parquet(Path(path)):
+        _pyarrow()
+
+
 def write_table(table: RunTable, path: str | Path) -> Path:
     """Write the run table as CSV (``.csv``/``.csv.gz``) or Parquet (``.parquet``)."""
     path = Path(path)
