@@ -178,7 +178,7 @@ def test_array_files_that_are_not_one_array_are_refused_naming_the_file(tmp_path
     library.write_bytes(b"PK\x03\x04garbage")
     code, out = invoke("compass-gait", "--objective", "hzd", "--library", str(library),
                        "--runs", "1", "--trials", "2", "--out", str(tmp_path / "o"))  # fmt: skip
-    assert code == 2 and "not a readable .npz export" in out
+    assert code == 2 and "lib.npz: cannot be read as npz" in out
 
 
 def test_parquet_without_pyarrow_is_refused_before_the_study_runs(

@@ -14,14 +14,20 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from gaitpref.cli.output import console, err_console, reported
-from gaitpref.config.schema import MAX_ACTIONS
 from gaitpref.errors import GaitLibraryError, SimulationError
 
 if TYPE_CHECKING:
     from gaitpref.gaits.library import GaitLibrary
 
-#: A library holds at most as many gaits as a config's grid may have actions.
-MAX_GAITS = MAX_ACTIONS
+
+def max_gaits() -> int:
+    """A library holds at most as many gaits as a config's grid may have actions (read when a
+    command runs: the config schema loads the model, which `gaitpref --help` must not)."""
+    from gaitpref.config.schema import MAX_ACTIONS
+
+    return MAX_ACTIONS
+
+
 #: ``plot --steps``: each simulated step takes about 0.15 s a gait.
 MAX_PLOT_STEPS = 100
 
@@ -42,10 +48,9 @@ def parse_range(text: str, option: str) -> tuple[float, ...]:
             lo, hi, num = float(parts[0]), float(parts[1]), int(parts[2])
             if num < 1 or (num > 1 and not hi > lo):
                 raise ValueError
-            if num > MAX_GAITS:
+            if num > (limit := max_gaits()):
                 raise typer.BadParameter(
-                    f"{text!r}: at most {MAX_GAITS} values (a config takes at most "
-                    f"{MAX_GAITS} gaits)",
+                    f"{text!r}: at most {limit} values (a config takes at most {limit} gaits)",
                     param_hint=option,
                 )
             values = np.linspace(lo, hi, num)
@@ -132,9 +137,9 @@ def build(
     durations = None if step_duration is None else parse_range(step_duration, "--step-duration")
     widths = None if step_width is None else parse_range(step_width, "--step-width")
     size = len(lengths) * len(durations or (0,)) * len(widths or (0,))
-    if size > MAX_GAITS:
+    if size > max_gaits():
         raise typer.BadParameter(
-            f"the grid has {size} gaits; a config takes at most {MAX_GAITS}",
+            f"the grid has {size} gaits; a config takes at most {max_gaits()}",
             param_hint="--step-length/--step-duration/--step-width",
         )
     try:
