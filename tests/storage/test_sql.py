@@ -196,3 +196,24 @@ def test_a_damaged_payload_names_the_session_and_the_event(
     assert problem in str(info.value)
     assert [e.payload for e in store.events(sid, after=3)] == []
     store.close()
+
+
+@pytest.mark.parametrize("how", ["deleted", "moved", "replaced"])
+def test_a_write_to_a_file_deleted_while_open_is_refused(tmp_path: Path, how: str) -> None:
+    """The pool's open connection would commit into the unlinked file (and report success)."""
+    store = SQLStorage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.append(sid, 0, [NewEvent("note", {"text": "kept"})])
+    path = tmp_path / "g.db"
+    if how == "deleted":
+        path.unlink()
+    elif how == "moved":
+        path.rename(tmp_path / "elsewhere.db")
+    else:  # a copy restored over it by a rename, as a backup tool does
+        (tmp_path / "copy.db").write_bytes(path.read_bytes())
+        (tmp_path / "copy.db").replace(path)
+    with pytest.raises(StorageError, match="was deleted, moved or replaced since it was opened"):
+        store.append(sid, 1, [NewEvent("note", {"text": "lost before"})])
+    with pytest.raises(StorageError, match="was deleted, moved or replaced"):
+        store.create_session(SPEC)
+    store.close()

@@ -117,9 +117,12 @@ class SQLStorage(Storage):
             self._file = path
             self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
         self.engine = _engine(parsed)
+        self._identity: tuple[int, int] | None = None  # the file's (device, inode) once open
         try:
             with self._write() as conn:
                 migrate.check_schema(conn, self.url, create)
+            if self._file is not None:
+                self._identity = _identity(self._file)
         except StorageError:
             self.engine.dispose()
             raise
@@ -273,11 +276,28 @@ class SQLStorage(Storage):
     # -- transactions ------------------------------------------------------------------------
     @contextmanager
     def _write(self) -> Iterator[Connection]:
-        """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving."""
+        """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving, and rolled
+        back if the SQLite file was deleted or replaced since it was opened: the open connection
+        would commit into the unlinked file, and the write would be lost."""
         with self._errors(), self.engine.connect() as conn:
             conn.execution_options(gaitpref_write=True)
             with conn.begin():
                 yield conn
+                self._check_same_file()
+
+    def _check_same_file(self) -> None:
+        if self._file is None or self._identity is None:
+            return
+        try:
+            same = _identity(self._file) == self._identity
+        except OSError:
+            same = False
+        if not same:
+            raise StorageError(
+                f"{self.url}: the database file {str(self._file)!r} was deleted, moved or "
+                "replaced since it was opened; nothing was written (a write now would be lost "
+                "with the old file): open the database again"
+            )
 
     @contextmanager
     def _read(self) -> Iterator[Connection]:
@@ -370,6 +390,12 @@ def _has_tables(url: URL) -> bool:
 
 
 # -- helpers -----------------------------------------------------------------------------------
+def _identity(path: Path) -> tuple[int, int]:
+    """The file's (device, inode): another file at the same path has another."""
+    stat = path.stat()
+    return stat.st_dev, stat.st_ino
+
+
 def _sqlite_memory(url: URL) -> bool:
     return url.database in (None, "", ":memory:")
 
