@@ -23,6 +23,7 @@ from gaitpref.storage import (
 )
 from gaitpref.storage.migrate import head_revision, known_revisions
 from gaitpref.storage.schema import metadata
+from gaitpref.storage.sql import upgrade_database
 
 SPEC = SessionSpec("S01", "c", "text", "0" * 64, 0, "0.1.0")
 
@@ -137,11 +138,38 @@ def test_a_session_id_past_sql_integers_is_no_such_session(tmp_path: Path) -> No
         ("postgresql+psycopg://nobody@127.0.0.1:1/none", "cannot connect"),
         ("mysql://x@localhost/db", "SQLite or PostgreSQL"),
         ("not a url ://", "not a database URL"),
+        ("postgresql://u@localhost:notaport/db", "not a database URL: invalid literal"),
+        ("postgresql+nosuchdriver://u@localhost/db", "driver 'postgresql\\+nosuchdriver' cannot"),
+        ("sqlite+nosuchdriver:///g.db", "driver 'sqlite\\+nosuchdriver' cannot be loaded"),
     ],
 )
 def test_urls_that_do_not_connect_give_clear_errors(url: str, message: str) -> None:
     with pytest.raises(StorageConnectError, match=message):
         open_storage(url)
+    with pytest.raises(StorageConnectError, match=message.replace("connect", "open")):
+        upgrade_database(url)  # 'cannot open' for a server that does not answer
+
+
+def test_a_folder_is_not_a_database_file(tmp_path: Path) -> None:
+    for call in (open_storage, upgrade_database):
+        with pytest.raises(StorageConnectError, match="is a folder, not a database file"):
+            call(f"sqlite:///{tmp_path}")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_database_in_a_read_only_folder_is_named_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """SQLite cannot make the -wal and -shm files there ('unable to open database file'); a
+    read-only mount is needed to see it happen, so the folder's check is what is tested here."""
+    import gaitpref.storage.sql as sql
+
+    SQLStorage(_sqlite(tmp_path)).close()
+    refused = sqlite3.OperationalError("unable to open database file")
+    monkeypatch.setattr(sql.os, "access", lambda path, mode: False)
+    assert "is read-only" in sql._hint(tmp_path / "g.db", refused)
+    assert sql._hint(tmp_path / "missing.db", refused) == ""
+    assert sql._hint(tmp_path / "g.db", sqlite3.OperationalError("disk I/O error")) == ""
 
 
 def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:

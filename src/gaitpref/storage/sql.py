@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -73,10 +74,11 @@ def parse_url(url: str) -> URL:
     """``url`` as a SQLAlchemy URL; ``postgresql://`` means the psycopg 3 driver."""
     try:
         parsed = make_url(url)
-    except ArgumentError:
+    except (ArgumentError, ValueError) as exc:  # ValueError: a port that is not a number
+        why = "" if isinstance(exc, ArgumentError) else f": {exc}"
         raise StorageConnectError(
-            f"{url!r} is not a database URL (expected e.g. sqlite:///gaitpref.db or "
-            "postgresql+psycopg://user@host/dbname)"
+            f"{url!r} is not a database URL{why} (expected e.g. sqlite:///gaitpref.db or "
+            "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
     if parsed.drivername in ("postgresql", "postgres"):
         parsed = parsed.set(drivername="postgresql+psycopg")
@@ -110,6 +112,7 @@ class SQLStorage(Storage):
                 raise StorageConnectError(
                     f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
                 )
+            _refuse_folder(path, self.url)
         self._turns: FileTurns | None = None
         self._file: Path | None = None
         if self._sqlite and not _sqlite_memory(parsed):
@@ -313,7 +316,7 @@ class SQLStorage(Storage):
         except DBAPIError as exc:
             if exc.connection_invalidated or "connect" in str(exc.orig).lower():
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
-            raise StorageError(f"{self.url}: {_reason(exc)}") from None
+            raise StorageError(f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}") from None
 
 
 def upgrade_database(url: str) -> str:
@@ -325,6 +328,7 @@ def upgrade_database(url: str) -> str:
             raise StorageConnectError(
                 f"cannot open {_masked(parsed)}: the folder {str(folder)!r} does not exist"
             )
+        _refuse_folder(Path(parsed.database or ""), _masked(parsed))
     engine = _engine(parsed)
     try:
         with engine.connect() as conn:
@@ -332,7 +336,9 @@ def upgrade_database(url: str) -> str:
             with conn.begin():
                 migrate.upgrade(conn)
     except (DBAPIError, SQLAlchemyError, OSError, ImportError) as exc:
-        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}") from None
+        file = None if _sqlite_memory(parsed) else Path(parsed.database or "")
+        hint = _hint(file, exc) if parsed.get_backend_name() == "sqlite" else ""
+        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}{hint}") from None
     finally:
         engine.dispose()
     SQLStorage(url).close()  # opens it the way every command will
@@ -390,6 +396,27 @@ def _has_tables(url: URL) -> bool:
 
 
 # -- helpers -----------------------------------------------------------------------------------
+def _hint(file: Path | None, exc: BaseException) -> str:
+    """Why SQLite could not open an existing file: its folder is read-only."""
+    if file is None or "unable to open database file" not in _reason(exc):
+        return ""
+    folder = file.resolve().parent
+    if file.is_file() and not os.access(folder, os.W_OK):
+        return (
+            f" (the folder {str(folder)!r} is read-only: SQLite creates the database's -wal "
+            "and -shm files beside it even to read; copy the database to a writable folder)"
+        )
+    return ""
+
+
+def _refuse_folder(path: Path, where: str) -> None:
+    if path.is_dir():
+        raise StorageConnectError(
+            f"cannot open {where}: {str(path)!r} is a folder, not a database file; name a file "
+            "in it (e.g. sqlite:///lab/gaitpref.db)"
+        )
+
+
 def _identity(path: Path) -> tuple[int, int]:
     """The file's (device, inode): another file at the same path has another."""
     stat = path.stat()
@@ -402,20 +429,26 @@ def _sqlite_memory(url: URL) -> bool:
 
 def _engine(url: URL) -> Engine:
     serializer = functools.partial(json.dumps, allow_nan=False)
-    if url.get_backend_name() == "postgresql":
-        return create_engine(
+    try:
+        if url.get_backend_name() == "postgresql":
+            return create_engine(
+                url,
+                json_serializer=serializer,
+                connect_args={"connect_timeout": 10},
+                pool_pre_ping=True,
+            )
+        memory = _sqlite_memory(url)
+        engine = create_engine(
             url,
             json_serializer=serializer,
-            connect_args={"connect_timeout": 10},
-            pool_pre_ping=True,
+            connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
+            **({"poolclass": StaticPool} if memory else {}),
         )
-    memory = _sqlite_memory(url)
-    engine = create_engine(
-        url,
-        json_serializer=serializer,
-        connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
-        **({"poolclass": StaticPool} if memory else {}),
-    )
+    except (ImportError, ArgumentError) as exc:  # a driver not installed, or unknown
+        raise StorageConnectError(
+            f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
+            f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+        ) from None
 
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: object) -> None:
