@@ -245,3 +245,26 @@ def test_a_write_to_a_file_deleted_while_open_is_refused(tmp_path: Path, how: st
     with pytest.raises(StorageError, match="was deleted, moved or replaced"):
         store.create_session(SPEC)
     store.close()
+
+
+def test_a_database_another_program_is_writing_opens_to_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Opening checks the schema in a read transaction: `session list`, `show` and `export` do
+    not wait behind (and time out on) another program's write lock, as WAL lets them read."""
+    import gaitpref.storage.sql as sql
+
+    store = SQLStorage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.close()
+    monkeypatch.setattr(sql, "BUSY_TIMEOUT_S", 0.2)  # a failure here is quick, not 30 s
+    with sqlite3.connect(tmp_path / "g.db", isolation_level=None) as other:
+        other.execute("BEGIN IMMEDIATE")  # another program's write, not yet committed
+        other.execute("INSERT INTO subjects VALUES ('S99', '2026-01-01 00:00:00')")
+        reader = SQLStorage(_sqlite(tmp_path), create=False)
+        assert [r.id for r in reader.list_sessions()] == [sid]
+        with pytest.raises(StorageError, match="database is locked"):
+            reader.append(sid, 0, [NewEvent("note", {"text": "waits its turn"})])
+        other.execute("ROLLBACK")
+    reader.append(sid, 0, [NewEvent("note", {"text": "after"})])
+    reader.close()

@@ -11,8 +11,9 @@
 - Both: the append is a compare-and-set on ``sessions.last_seq`` and ``(session_id, seq)`` is the
   events' primary key, so two writers can never both append the same sequence number.
 
-Opening checks the connection and the schema (``migrate.check_schema``) and raises
-:class:`StorageConnectError` / :class:`SchemaError` with the URL (password masked).
+Opening checks the connection and the schema (``migrate.check_schema``, in a read transaction
+unless it creates the schema) and raises :class:`StorageConnectError` / :class:`SchemaError` with
+the URL (password masked).
 """
 
 from __future__ import annotations
@@ -122,7 +123,11 @@ class SQLStorage(Storage):
         self.engine = _engine(parsed)
         self._identity: tuple[int, int] | None = None  # the file's (device, inode) once open
         try:
-            with self._write() as conn:
+            # a read transaction unless the schema is to be made: opening a database to read it
+            # does not wait for (or on SQLite, time out behind) another process's write lock
+            with self._read() as conn:
+                empty = migrate.current_revision(conn) is None
+            with self._write() if empty and create else self._read() as conn:
                 migrate.check_schema(conn, self.url, create)
             if self._file is not None:
                 self._identity = _identity(self._file)
