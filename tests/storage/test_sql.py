@@ -268,3 +268,28 @@ def test_a_database_another_program_is_writing_opens_to_read(
         other.execute("ROLLBACK")
     reader.append(sid, 0, [NewEvent("note", {"text": "after"})])
     reader.close()
+
+
+@pytest.mark.parametrize(
+    ("change", "problem"),
+    [
+        ("meta = '[1]'", "session 1 in .*: the stored meta is a JSON list, not an object"),
+        ("meta = '{bad'", "a stored value cannot be read"),
+        ("seed = 'abc'", "session 1 in .*: the stored seed 'abc' is not an integer"),
+        ("status = 'zzz'", "session 1 in .*: the stored status 'zzz' is none of active"),
+        ("created_at = 'yesterday'", "a stored value cannot be read .*'yesterday'"),
+    ],
+)
+def test_a_damaged_session_row_is_named(tmp_path: Path, change: str, problem: str) -> None:
+    """Before: an AttributeError traceback (meta), or a bare int()/isoformat message."""
+    url = _sqlite(tmp_path)
+    SQLStorage(url).create_session(SPEC)
+    with sqlite3.connect(tmp_path / "g.db") as raw:  # damage done outside gaitpref
+        raw.execute("PRAGMA ignore_check_constraints = ON")
+        raw.execute(f"UPDATE sessions SET {change}")
+    store = SQLStorage(url)
+    for read in (store.list_sessions, lambda: store.get_session(1)):
+        with pytest.raises(StorageError, match=problem) as info:
+            read()
+        assert "altered or damaged outside gaitpref" in str(info.value)
+    store.close()

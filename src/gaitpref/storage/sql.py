@@ -173,7 +173,7 @@ class SQLStorage(Storage):
             if checked:
                 conn.execute(insert(events_t), _rows(sid, 0, checked, stamp))
             row = conn.execute(select(sessions_t).where(sessions_t.c.id == sid)).one()
-        return _session(row._mapping)
+        return _session(row._mapping, self.url)
 
     def get_session(self, session_id: int) -> SessionRecord:
         with self._read() as conn:
@@ -182,14 +182,14 @@ class SQLStorage(Storage):
             ).first()
         if row is None:
             raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
-        return _session(row._mapping)
+        return _session(row._mapping, self.url)
 
     def list_sessions(self, subject: str | None = None) -> list[SessionRecord]:
         query = select(sessions_t).order_by(sessions_t.c.id)
         if subject is not None:
             query = query.where(sessions_t.c.subject == subject)
         with self._read() as conn:
-            return [_session(r._mapping) for r in conn.execute(query)]
+            return [_session(r._mapping, self.url) for r in conn.execute(query)]
 
     def list_subjects(self) -> list[SubjectRecord]:
         with self._read() as conn:
@@ -318,6 +318,11 @@ class SQLStorage(Storage):
             yield
         except IntegrityError:
             raise
+        except ValueError as exc:  # a stored value its column's type cannot read back
+            raise StorageError(
+                f"{self.url}: a stored value cannot be read ({exc}); the database was altered or "
+                "damaged outside gaitpref: restore it from a backup"
+            ) from None
         except DBAPIError as exc:
             if exc.connection_invalidated or "connect" in str(exc.orig).lower():
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
@@ -524,14 +529,29 @@ def _payload(row: Any, where: str) -> dict[str, Any]:
     return value
 
 
-def _session(row: Any) -> SessionRecord:
+def _session(row: Any, where: str) -> SessionRecord:
+    """A session's row as a record, or an error naming the session and the damaged column."""
+
+    def damaged(what: str) -> StorageError:
+        return StorageError(
+            f"session {row['id']} in {where}: the stored {what}; the database was altered or "
+            "damaged outside gaitpref: restore it from a backup"
+        )
+
+    if not isinstance(row["meta"], dict):
+        raise damaged(f"meta is a JSON {type(row['meta']).__name__}, not an object")
+    seed = row["seed"]
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise damaged(f"seed {seed!r} is not an integer")
+    if row["status"] not in base.STATUSES:
+        raise damaged(f"status {row['status']!r} is none of {', '.join(base.STATUSES)}")
     return SessionRecord(
         id=row["id"],
         subject=row["subject"],
         config_name=row["config_name"],
         config_text=row["config_text"],
         config_sha256=row["config_sha256"],
-        seed=int(row["seed"]),
+        seed=seed,
         software_version=row["software_version"],
         status=row["status"],
         created_at=as_utc(row["created_at"]),
