@@ -44,13 +44,17 @@ class CachedGait:
 
 
 class GaitCache:
-    """Gaits by key, in ``folder`` (created when first written) or, without one, in memory."""
+    """Gaits by key, in ``folder`` (created when first written) or, without one, in memory; an
+    entry whose file cannot be written (:attr:`write_error`) is kept in memory."""
 
     def __init__(self, folder: str | Path | None = None) -> None:
         self.folder = None if folder is None else Path(folder)
         self._memory: dict[str, CachedGait] = {}
         self.hits = 0
         self.misses = 0
+        #: why the last file could not be written (a read-only folder, a full disk), if one
+        #: could not: the cache is derived data, so its entry is kept in memory and nothing fails
+        self.write_error: str | None = None
 
     def path(self, key: str) -> Path | None:
         return None if self.folder is None else self.folder / f"{key}.json"
@@ -80,15 +84,21 @@ class GaitCache:
             "gait": gait_document(entry.gait),
         }
         text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
-        target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{entry.key[:16]}.")
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{entry.key[:16]}.")
+        except OSError as exc:  # a folder that cannot be written: the gait stays in memory
+            self.write_error = f"{target.parent}: {exc.strerror or exc}"
+            return
         try:
             with os.fdopen(fd, "w", encoding="utf-8") as out:
                 out.write(text)
             os.replace(tmp, target)
-        except BaseException:
+        except BaseException as exc:
             Path(tmp).unlink(missing_ok=True)
-            raise
+            if not isinstance(exc, OSError):
+                raise
+            self.write_error = f"{target}: {exc.strerror or exc}"  # a full disk, as above
 
     def _read(self, key: str) -> CachedGait | None:
         path = self.path(key)
