@@ -77,7 +77,8 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
 
     The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
     written: an export that fails (a full disk, text that cannot be written) leaves no
-    half-written folder behind, and may be run again.
+    half-written folder behind, and may be run again.  The session is brought up to date first
+    and every file is of the same event, however other writers move it on meanwhile.
     """
     if fmt not in ("csv", "json"):
         raise ExportError(f"format must be csv or json, got {fmt!r}")
@@ -86,7 +87,9 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
-        _write_export(session, partial, fmt)
+        # one consistent view: the log, tables and manifest of the same event, however other
+        # writers move the session on meanwhile
+        session.read(lambda s: _write_export(s, partial, fmt))
         if out.exists():
             out.rmdir()  # empty, checked above
         partial.rename(out)
@@ -97,7 +100,7 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
 
 
 def _write_export(session: Session, out: Path, fmt: Format) -> None:
-    events = session.events()
+    events = [e for e in session.events() if e.seq <= session.last_seq]  # as the state holds
     walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
     tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked)
     written: dict[str, str] = {}

@@ -636,6 +636,12 @@ class Session:
         """Bring this object up to date with events other writers appended (full replay)."""
         self._locked(self._rebuild)
 
+    def read(self, fn: Callable[[Session], T]) -> T:
+        """``fn(self)``, the session brought up to date first and held still throughout (this
+        object's lock and the writer turn: its own calls inside do not catch up midway): a
+        consistent view of several things, as an export needs."""
+        return self._locked(lambda: fn(self))
+
     def sync(self) -> bool:
         """Replay only the events other writers appended since this object last looked.
 
