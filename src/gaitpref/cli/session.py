@@ -273,7 +273,7 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
             done = s.trials()
             return done, done[-1].query if done else None, s.undo()
 
-        done, last, pending = guard(lambda: session.read(undo_last))
+        done, last, pending = guard(lambda: session.read(undo_last, turn=True))
         trials = ", ".join(str(t.number) for t in done if t.query == last)
         console.print(f"undone: the answer to trial {trials}")
         if pending is None or pending.id != last:
