@@ -142,6 +142,10 @@ MANIFEST_EDITS: dict[str, tuple[Callable[[dict[str, Any]], object], str]] = {
         lambda m: m["posterior"].__setitem__("mean_at_argmax", "high"),
         r"manifest.json: posterior.mean_at_argmax must be a number, got 'high'",
     ),
+    "a library path that is not a text": (
+        lambda m: m["session"]["meta"].__setitem__("library_path", 5),
+        r"manifest.json: session.meta.library_path must be a text, got 5",
+    ),
     "format version 0": (
         lambda m: m.__setitem__("format_version", 0),
         r"format_version must be an integer from 1 to 1, got 0",

@@ -509,13 +509,17 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
             raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
         if not path.is_file():
             raise ExportError(f"the export lacks {name}, which manifest.json lists")
-        with path.open("rb") as f:  # a block at a time: a huge file costs no memory
-            digest = hashlib.file_digest(f, "sha256").hexdigest()
-        if digest != expected:
+        if _sha256(path) != expected:
             raise ExportError(
                 f"{name} does not match its SHA-256 in manifest.json (was it edited?); "
                 "nothing was written"
             )
+
+
+def _sha256(path: Path) -> str:
+    """The file's SHA-256, read a block at a time: a huge file costs no memory."""
+    with path.open("rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
@@ -523,8 +527,12 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
     original, sha = meta.get("library_path"), meta.get("library_sha256")
     if not original:
         return
+    if not isinstance(original, str):
+        raise ExportError(
+            f"manifest.json: session.meta.library_path must be a text, got {original!r}"
+        )
     path = Path(original)
-    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == sha:
+    if path.is_file() and _sha256(path) == sha:
         return
     copy = manifest.get("gait_library")
     if not isinstance(copy, dict) or not (folder / str(copy.get("file"))).is_file():
@@ -532,8 +540,7 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
             f"the session's gait library {original} is missing or changed, and the export "
             "holds no copy of it"
         )
-    data = (folder / copy["file"]).read_bytes()
-    if hashlib.sha256(data).hexdigest() != sha:
+    if _sha256(folder / copy["file"]) != sha:
         raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
     meta["config_dir"] = str(folder.resolve())
     meta["library_path"] = str((folder / copy["file"]).resolve())
