@@ -244,6 +244,8 @@ def test_a_write_to_a_file_deleted_while_open_is_refused(tmp_path: Path, how: st
         store.append(sid, 1, [NewEvent("note", {"text": "lost before"})])
     with pytest.raises(StorageError, match="was deleted, moved or replaced"):
         store.create_session(SPEC)
+    with pytest.raises(StorageError, match="was deleted, moved or replaced"):
+        store.events(sid)  # a pooled connection would read the old file, a new one the new
     store.close()
 
 

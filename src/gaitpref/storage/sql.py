@@ -309,7 +309,10 @@ class SQLStorage(Storage):
 
     @contextmanager
     def _read(self) -> Iterator[Connection]:
+        """A read transaction; refused, as a write is, once the SQLite file was deleted or
+        replaced (a pooled connection reads the old file, a new one the file there now)."""
         with self._errors(), self.engine.connect() as conn, conn.begin():
+            self._check_same_file()
             yield conn
 
     @contextmanager
