@@ -667,7 +667,8 @@ def _check_session_entry(manifest: dict[str, Any], events: int) -> None:
     if last is not None and last != events:
         raise ExportError(
             f"events.jsonl holds {events} events but manifest.json's session.last_seq is "
-            f"{last!r}: the log was cut short or added to; nothing was written"
+            f"{last!r}: the log was cut short or added to (or an earlier gaitpref exported it "
+            "while another writer went on); nothing was written"
         )
 
 
