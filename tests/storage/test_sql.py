@@ -110,6 +110,31 @@ def test_a_newer_schema_is_refused_and_left_alone(
     engine.dispose()
 
 
+def test_a_newer_gaitpref_database_keeps_its_journal_and_bytes(tmp_path: Path) -> None:
+    """A newer gaitpref may run its files in another journal mode; every command refuses the
+    file without writing a byte (before, opening it switched it to WAL)."""
+    from gaitpref.storage.sql import database_status, upgrade_database
+
+    path = tmp_path / "g.db"
+    with SQLStorage(_sqlite(tmp_path)) as store:
+        store.create_session(SPEC)
+    raw = sqlite3.connect(path, isolation_level=None)  # as a newer gaitpref might leave it
+    raw.execute("UPDATE alembic_version SET version_num = '9999_future'")
+    assert raw.execute("PRAGMA journal_mode = DELETE").fetchone()[0] == "delete"
+    raw.close()
+    before = path.read_bytes()
+    for call in (
+        lambda: SQLStorage(_sqlite(tmp_path), create=False),
+        lambda: SQLStorage(_sqlite(tmp_path)),
+        lambda: upgrade_database(_sqlite(tmp_path)),
+    ):
+        with pytest.raises(SchemaError, match="newer gaitpref"):
+            call()
+    assert "newer gaitpref" in database_status(_sqlite(tmp_path))
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.db"]
+
+
 def test_a_foreign_database_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "other.db"
     with sqlite3.connect(path) as raw:

@@ -470,13 +470,18 @@ def _engine(url: URL) -> Engine:
         cursor.execute("PRAGMA foreign_keys = ON")
         cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         if not memory:
-            # WAL only in a new file or a gaitpref database: a connection that is about to find
-            # another program's file is not a gaitpref database must leave its journal alone
+            # WAL only in a new file or a gaitpref database of a revision this gaitpref knows: a
+            # connection about to find another program's file is not a gaitpref database, or
+            # that a newer gaitpref wrote it, must leave its journal alone
             tables = {
                 row[0]
                 for row in cursor.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
             }
-            if not tables or "alembic_version" in tables:
+            if not tables or (
+                "alembic_version" in tables
+                and {r[0] for r in cursor.execute("SELECT version_num FROM alembic_version")}
+                <= set(migrate.known_revisions())
+            ):
                 cursor.execute("PRAGMA journal_mode = WAL")
             cursor.execute("PRAGMA synchronous = FULL")
         cursor.close()
