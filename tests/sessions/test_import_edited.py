@@ -194,3 +194,32 @@ def test_a_fresh_line_session_imports(tmp_path: Path) -> None:
     export_session(s, tmp_path / "fresh", "csv")  # with its pending query
     again = import_session(MemoryStorage(), tmp_path / "fresh")
     assert again.pending == s.pending
+
+
+@pytest.mark.parametrize(
+    ("where", "key", "value"),
+    [(None, "seed", 5), ("session", "subject", "S99"), (None, "config_name", "renamed")],
+)
+def test_a_manifest_that_disagrees_with_the_created_event_is_refused(
+    tmp_path: Path, where: str | None, key: str, value: object
+) -> None:
+    """Before: a session with no answer yet imported with the manifest's seed (its next queries
+    not the original's) or subject, its row disagreeing with its own log's created event."""
+    s = Session.create(MemoryStorage(), CONFIG, "S07", seed=3)
+    out = tmp_path / "fresh"
+    export_session(s, out, "csv")
+    _edit_manifest(out, lambda m: (m if where is None else m[where]).__setitem__(key, value))
+    name = key if where is None else f"{where}.{key}"
+    _refused(out, tmp_path, rf"manifest.json's {name} is {value!r}, but the session's created")
+
+
+def test_a_warm_start_dropped_from_the_manifest_is_refused(exported: Path, tmp_path: Path) -> None:
+    """The created event still records it: the import must not rebuild the session cold."""
+
+    def warm(lines: Lines) -> Lines:
+        row = json.loads(lines[0])
+        row["payload"]["prior_from"] = [{"session": 1, "subject": "S01", "last_seq": 3}]
+        return [json.dumps(row) + "\n", *lines[1:]]
+
+    _edit_events(exported, warm)
+    _refused(exported, tmp_path, "records a warm start that manifest.json's session.meta lacks")

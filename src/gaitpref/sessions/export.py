@@ -431,6 +431,7 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
         )
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         raise ExportError(f"manifest.json: bad session entry ({exc})") from None
+    _check_created(events[0], spec)
     # rebuild in memory first: nothing reaches the database unless replay is exact
     scratch = MemoryStorage()
     trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
@@ -466,6 +467,33 @@ def _refuse_warm_start(info: dict[str, Any], meta: dict[str, Any]) -> None:
         "rebuilt from their logs, which an export does not carry, so it cannot be imported "
         "(nothing was written); its answers are all in the export's tables"
     )
+
+
+def _check_created(first: NewEvent, spec: SessionSpec) -> None:
+    """The log's ``created`` event says what the manifest says the session was made of (replay
+    reads them from the session's row): an edited seed, subject or config would make a session
+    whose row disagrees with its own log, and whose next queries are not the original's."""
+    if first.kind != log.CREATED:
+        raise ExportError(f"events.jsonl line 1: a {first.kind!r} event, not 'created'")
+    made = first.payload
+    manifest = {
+        "subject": ("session.subject", spec.subject),
+        "config_name": ("config_name", spec.config_name),
+        "config_sha256": ("config_sha256", spec.config_sha256),
+        "seed": ("seed", spec.seed),
+        "software_version": ("session.software_version", spec.software_version),
+    }
+    for key, (name, value) in manifest.items():
+        if made.get(key) != value or type(made.get(key)) is not type(value):
+            raise ExportError(
+                f"manifest.json's {name} is {value!r}, but the session's created event "
+                f"(events.jsonl line 1) says {made.get(key)!r}; nothing was written"
+            )
+    if made.get("prior_from") and not spec.meta.get("prior_from"):
+        raise ExportError(
+            "the session's created event (events.jsonl line 1) records a warm start that "
+            "manifest.json's session.meta lacks; nothing was written"
+        )
 
 
 def origin_of(record: SessionRecord) -> str | None:
