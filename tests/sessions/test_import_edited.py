@@ -146,6 +146,10 @@ MANIFEST_EDITS: dict[str, tuple[Callable[[dict[str, Any]], object], str]] = {
         lambda m: m["session"]["meta"].__setitem__("library_path", 5),
         r"manifest.json: session.meta.library_path must be a text, got 5",
     ),
+    "a status the log does not end in": (
+        lambda m: m["session"].__setitem__("status", "finished"),
+        r"manifest.json's session.status is 'finished', but the log leaves the session active",
+    ),
     "format version 0": (
         lambda m: m.__setitem__("format_version", 0),
         r"format_version must be an integer from 1 to 1, got 0",

@@ -435,6 +435,11 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     # rebuild in memory first: nothing reaches the database unless replay is exact
     scratch = MemoryStorage()
     trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
+    if trial.status != status:  # the row's status must be the one its log ends in
+        raise ExportError(
+            f"manifest.json's session.status is {status!r}, but the log leaves the session "
+            f"{trial.status}; nothing was written"
+        )
     _check_summary(trial, manifest.get("posterior") or {})
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
