@@ -227,3 +227,18 @@ def test_a_warm_start_dropped_from_the_manifest_is_refused(exported: Path, tmp_p
 
     _edit_events(exported, warm)
     _refused(exported, tmp_path, "records a warm start that manifest.json's session.meta lacks")
+
+
+def test_gait_ids_that_disagree_with_the_log_are_refused(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """Before: the session was imported naming the gaits it walked by the edited ids (the log
+    says g7, the imported session X7), or with no library at all."""
+    s = Session.create(sqlite_url, CONFIG, "S07", seed=3, library=[f"g{k}" for k in range(15)])
+    drive(s, 3)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    _edit_manifest(out, lambda m: m["session"]["meta"].__setitem__("gait_ids", ["X"] * 15))
+    _refused(out, tmp_path, r"events.jsonl line 3: trial 1 walked gait 'g\d+' \(action \d+\), but")
+    _edit_manifest(out, lambda m: m["session"]["meta"].pop("gait_ids"))
+    _refused(out, tmp_path, "names no gait library .*, but the session's created event")

@@ -432,6 +432,7 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         raise ExportError(f"manifest.json: bad session entry ({exc})") from None
     _check_created(events[0], spec)
+    _check_gait_ids(events, spec.meta)
     # rebuild in memory first: nothing reaches the database unless replay is exact
     scratch = MemoryStorage()
     trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
@@ -499,6 +500,35 @@ def _check_created(first: NewEvent, spec: SessionSpec) -> None:
             "the session's created event (events.jsonl line 1) records a warm start that "
             "manifest.json's session.meta lacks; nothing was written"
         )
+    ids = spec.meta.get("gait_ids")
+    if bool(made.get("gait_library")) != (ids is not None):
+        have = "names no gait library" if ids is None else "names a gait library"
+        raise ExportError(
+            f"manifest.json's session.meta {have} (gait_ids), but the session's created event "
+            f"(events.jsonl line 1) says gait_library = {made.get('gait_library')!r}; nothing "
+            "was written"
+        )
+
+
+def _check_gait_ids(events: Sequence[NewEvent], meta: dict[str, Any]) -> None:
+    """Each trial walked a gait of the manifest's library, by the id its event logged (replay
+    names gaits by the library in the session's meta)."""
+    ids = meta.get("gait_ids")
+    if ids is None:
+        return
+    if not isinstance(ids, list) or not all(isinstance(g, str) for g in ids):
+        raise ExportError("manifest.json: session.meta.gait_ids must be a list of texts")
+    for k, event in enumerate(events, start=1):
+        logged, action = event.payload.get("gait_id"), event.payload.get("action")
+        if event.kind != log.TRIAL or logged is None or not isinstance(action, int):
+            continue
+        named = ids[action] if 0 <= action < len(ids) else None
+        if named != logged:
+            raise ExportError(
+                f"events.jsonl line {k}: trial {event.payload.get('trial')} walked gait "
+                f"{logged!r} (action {action}), but manifest.json's session.meta.gait_ids names "
+                f"it {named!r}; nothing was written"
+            )
 
 
 def origin_of(record: SessionRecord) -> str | None:
