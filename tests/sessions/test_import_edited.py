@@ -176,6 +176,8 @@ def test_a_log_past_the_import_limit_is_refused_before_it_is_read(
     _refused(exported, tmp_path, rf"events.jsonl holds {size:,} bytes, more than the {size - 1:,}")
     monkeypatch.setattr(export_module, "MAX_EVENTS_BYTES", size)
     import_session(MemoryStorage(), exported).close()
+    monkeypatch.setattr(export_module, "MAX_EVENTS", 3)
+    _refused(exported, tmp_path, r"events.jsonl holds more than 3 events, the most an import")
 
 
 def test_a_log_with_windows_line_ends_is_the_same_log(exported: Path) -> None:

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import json
 import shutil
 import tempfile
@@ -66,6 +67,7 @@ TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "co
 #: the gaits a generator made), and ``manifest.json`` and ``config.toml`` each; other listed files
 #: are only hashed, a block at a time
 MAX_EVENTS_BYTES = 256 * 2**20
+MAX_EVENTS = 1_000_000  # and events (about 600 in a 150-trial log)
 MAX_TEXT_BYTES = 64 * 2**20
 #: the keys of an ``events.jsonl`` line (``version`` is absent from 0.1.0's exports: 1)
 EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
@@ -361,8 +363,6 @@ def _other_feedback(session: Session, at: dict[int, str]) -> dict[str, list[dict
 
 
 def _csv(rows: Sequence[dict[str, Any]]) -> str:
-    import io
-
     buf = io.StringIO()
     if rows:
         writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
@@ -668,12 +668,15 @@ def _is_int(value: object) -> bool:
 def _read_events(text: str) -> list[NewEvent]:
     """The events of ``events.jsonl``: one object a line with exactly the keys an export writes,
     numbered 1, 2, 3, ... in order."""
-    lines = text.split("\n")
-    if lines[-1] == "":
-        lines.pop()  # the newline that ends the last line
+    lines = io.StringIO(text, newline="\n")  # one at a time, split at "\n" only
     out = []
     for k, line in enumerate(lines, start=1):
         where = f"events.jsonl line {k}"
+        if k > MAX_EVENTS:
+            raise ExportError(
+                f"events.jsonl holds more than {MAX_EVENTS:,} events, the most an import reads; "
+                "nothing was written"
+            )
         try:
             row = json.loads(line)
         except (ValueError, RecursionError) as exc:
