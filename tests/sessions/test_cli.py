@@ -7,6 +7,7 @@ import sqlite3
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from gaitpref import Session
@@ -162,3 +163,23 @@ def test_a_negative_or_nan_simulated_noise_is_refused() -> None:
             "--noise", noise,
         )  # fmt: skip
         assert "noise must be a finite number >= 0" in out
+
+
+def test_undo_names_the_answer_it_undid_when_another_writer_answered_meanwhile(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Before: the trials were read when the command opened the session, so an answer recorded
+    by another writer during the confirmation was undone and an earlier trial named."""
+    import typer
+
+    db = str(tmp_path / "lab.db")
+    drive(Session.create(db, CONFIG, "S01", seed=4), 5)
+    other = Session.open(db, 1)
+
+    def answered_meanwhile(*args: object, **kwargs: object) -> bool:
+        drive(other, 1)  # trial 6, while the operator reads the question
+        return True
+
+    monkeypatch.setattr(typer, "confirm", answered_meanwhile)
+    assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
+    assert [t.number for t in Session.open(db, 1).trials()] == [1, 2, 3, 4, 5]

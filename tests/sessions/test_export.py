@@ -225,3 +225,53 @@ def test_session_list_marks_imported_sessions(
     assert listing.output.count(f"imported from session {s.id}") == 2
     plain = runner.invoke(app, ["session", "list", "--db", sqlite_url], env={"COLUMNS": "200"})
     assert "imported" not in plain.output
+
+
+def _consistent(out: Path) -> None:
+    """Every file of the export is of the same event."""
+    manifest = json.loads((out / "manifest.json").read_text())
+    events = [json.loads(x) for x in (out / "events.jsonl").read_text().splitlines()]
+    with open(out / "trials.csv", newline="") as f:
+        trials = list(csv.DictReader(f))
+    assert manifest["session"]["last_seq"] == len(events)
+    assert len(trials) == sum(e["kind"] == "trial_executed" for e in events)
+
+
+def test_an_export_is_of_one_event_while_another_writer_goes_on(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """Before: the tables were of the session as opened and the log and the posterior of the
+    database as it was later (trials.csv lacked the trials another writer had added)."""
+    Session.create(sqlite_url, CONFIG, "S07", seed=17).close()
+    exporter, writer = Session.open(sqlite_url, 1), Session.open(sqlite_url, 1)
+    drive(writer, 2)  # after the exporter opened it
+    export_session(exporter, tmp_path / "after", "csv")
+    _consistent(tmp_path / "after")
+
+
+@pytest.mark.parametrize("when", ["events", "_tables"])
+@pytest.mark.parametrize("backend", ["memory", "sqlite"])
+def test_an_export_is_of_one_event_while_another_writer_writes_meanwhile(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch, when: str, backend: str
+) -> None:
+    """Another writer appends while the export reads the log, or builds its tables (whose
+    posterior caught up midway before); it is not held up (an export holds no writer turn)."""
+    import gaitpref.sessions.export as export_module
+
+    store = MemoryStorage() if backend == "memory" else f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(store, CONFIG, "S07", seed=17).close()
+    exporter, writer = Session.open(store, 1), Session.open(store, 1)
+    drive(exporter, 2)
+    owner = exporter if when == "events" else export_module
+    original = getattr(owner, when)
+
+    def meanwhile(*args: object) -> object:
+        drive(writer, 1)
+        return original(*args)
+
+    monkeypatch.setattr(owner, when, meanwhile)
+    export_session(exporter, tmp_path / "during", "csv")
+    assert writer.last_seq > exporter.last_seq
+    _consistent(tmp_path / "during")
+    manifest = json.loads((tmp_path / "during" / "manifest.json").read_text())
+    assert manifest["session"]["last_seq"] == exporter.last_seq

@@ -16,6 +16,7 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.config import parse_config
+from gaitpref.gaits import GaitCacheWarning
 from gaitpref.sessions.export import export_session, import_session
 from tests.sessions.gaitkit import (
     CONFIG,
@@ -115,3 +116,32 @@ def test_a_version_1_export_is_imported_by_making_its_gaits_again(
     assert (imported.pending, imported.trials()) == (s.pending, s.trials())
     assert imported.infeasible_gaits() == s.infeasible_gaits()
     assert len(FakeSteps.calls) == 3 * made  # each gait made again by both replays
+
+
+@pytest.mark.parametrize("how", ["folder cannot be made", "disk full"])
+def test_a_gait_cache_that_cannot_be_written_does_not_stop_a_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, how: str
+) -> None:
+    """The cache is derived data (the log carries every gait): before, an import wrote the
+    session and then failed with an OSError, and the session could not be opened there at all."""
+    s, folder = _exported(tmp_path, CONFIG)
+    url = f"sqlite:///{tmp_path / 'b' / 'lab.db'}"
+    if how == "folder cannot be made":
+        (tmp_path / "b" / "lab.db.gaits").write_text("a file where the folder goes")
+    else:
+        import gaitpref.gaits.gait_cache as gait_cache
+
+        def full(*args: object, **kwargs: object) -> None:
+            raise OSError(28, "No space left on device")
+
+        monkeypatch.setattr(gait_cache.os, "replace", full)
+    with pytest.warns(GaitCacheWarning, match="gaits are kept in memory"):
+        imported = import_session(url, folder)
+    assert imported.pending == s.pending and imported.next_query() == s.next_query()
+    assert imported._gait_cache is not None and imported._gait_cache.unwritable
+    with pytest.warns(GaitCacheWarning):
+        again = Session.open(url, imported.id)
+        prefer_short_steps(again, 2)  # new gaits are made and logged, the cache still unwritable
+    with pytest.warns(GaitCacheWarning):
+        assert Session.open(url, imported.id).last_seq == again.last_seq
+    assert not list((tmp_path / "b").glob("lab.db.gaits/.*"))  # no temporary file left

@@ -23,6 +23,7 @@ from gaitpref.storage import (
 )
 from gaitpref.storage.migrate import head_revision, known_revisions
 from gaitpref.storage.schema import metadata
+from gaitpref.storage.sql import upgrade_database
 
 SPEC = SessionSpec("S01", "c", "text", "0" * 64, 0, "0.1.0")
 
@@ -109,6 +110,31 @@ def test_a_newer_schema_is_refused_and_left_alone(
     engine.dispose()
 
 
+def test_a_newer_gaitpref_database_keeps_its_journal_and_bytes(tmp_path: Path) -> None:
+    """A newer gaitpref may run its files in another journal mode; every command refuses the
+    file without writing a byte (before, opening it switched it to WAL)."""
+    from gaitpref.storage.sql import database_status, upgrade_database
+
+    path = tmp_path / "g.db"
+    with SQLStorage(_sqlite(tmp_path)) as store:
+        store.create_session(SPEC)
+    raw = sqlite3.connect(path, isolation_level=None)  # as a newer gaitpref might leave it
+    raw.execute("UPDATE alembic_version SET version_num = '9999_future'")
+    assert raw.execute("PRAGMA journal_mode = DELETE").fetchone()[0] == "delete"
+    raw.close()
+    before = path.read_bytes()
+    for call in (
+        lambda: SQLStorage(_sqlite(tmp_path), create=False),
+        lambda: SQLStorage(_sqlite(tmp_path)),
+        lambda: upgrade_database(_sqlite(tmp_path)),
+    ):
+        with pytest.raises(SchemaError, match="newer gaitpref"):
+            call()
+    assert "newer gaitpref" in database_status(_sqlite(tmp_path))
+    assert path.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.db"]
+
+
 def test_a_foreign_database_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "other.db"
     with sqlite3.connect(path) as raw:
@@ -137,11 +163,38 @@ def test_a_session_id_past_sql_integers_is_no_such_session(tmp_path: Path) -> No
         ("postgresql+psycopg://nobody@127.0.0.1:1/none", "cannot connect"),
         ("mysql://x@localhost/db", "SQLite or PostgreSQL"),
         ("not a url ://", "not a database URL"),
+        ("postgresql://u@localhost:notaport/db", "not a database URL: invalid literal"),
+        ("postgresql+nosuchdriver://u@localhost/db", "driver 'postgresql\\+nosuchdriver' cannot"),
+        ("sqlite+nosuchdriver:///g.db", "driver 'sqlite\\+nosuchdriver' cannot be loaded"),
     ],
 )
 def test_urls_that_do_not_connect_give_clear_errors(url: str, message: str) -> None:
     with pytest.raises(StorageConnectError, match=message):
         open_storage(url)
+    with pytest.raises(StorageConnectError, match=message.replace("connect", "open")):
+        upgrade_database(url)  # 'cannot open' for a server that does not answer
+
+
+def test_a_folder_is_not_a_database_file(tmp_path: Path) -> None:
+    for call in (open_storage, upgrade_database):
+        with pytest.raises(StorageConnectError, match="is a folder, not a database file"):
+            call(f"sqlite:///{tmp_path}")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_database_in_a_read_only_folder_is_named_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """SQLite cannot make the -wal and -shm files there ('unable to open database file'); a
+    read-only mount is needed to see it happen, so the folder's check is what is tested here."""
+    import gaitpref.storage.sql as sql
+
+    SQLStorage(_sqlite(tmp_path)).close()
+    refused = sqlite3.OperationalError("unable to open database file")
+    monkeypatch.setattr(sql.os, "access", lambda path, mode: False)
+    assert "is read-only" in sql._hint(tmp_path / "g.db", refused)
+    assert sql._hint(tmp_path / "missing.db", refused) == ""
+    assert sql._hint(tmp_path / "g.db", sqlite3.OperationalError("disk I/O error")) == ""
 
 
 def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:
@@ -195,4 +248,75 @@ def test_a_damaged_payload_names_the_session_and_the_event(
         store.events(sid)
     assert problem in str(info.value)
     assert [e.payload for e in store.events(sid, after=3)] == []
+    store.close()
+
+
+@pytest.mark.parametrize("how", ["deleted", "moved", "replaced"])
+def test_a_write_to_a_file_deleted_while_open_is_refused(tmp_path: Path, how: str) -> None:
+    """The pool's open connection would commit into the unlinked file (and report success)."""
+    store = SQLStorage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.append(sid, 0, [NewEvent("note", {"text": "kept"})])
+    path = tmp_path / "g.db"
+    if how == "deleted":
+        path.unlink()
+    elif how == "moved":
+        path.rename(tmp_path / "elsewhere.db")
+    else:  # a copy restored over it by a rename, as a backup tool does
+        (tmp_path / "copy.db").write_bytes(path.read_bytes())
+        (tmp_path / "copy.db").replace(path)
+    with pytest.raises(StorageError, match="was deleted, moved or replaced since it was opened"):
+        store.append(sid, 1, [NewEvent("note", {"text": "lost before"})])
+    with pytest.raises(StorageError, match="was deleted, moved or replaced"):
+        store.create_session(SPEC)
+    with pytest.raises(StorageError, match="was deleted, moved or replaced"):
+        store.events(sid)  # a pooled connection would read the old file, a new one the new
+    store.close()
+
+
+def test_a_database_another_program_is_writing_opens_to_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Opening checks the schema in a read transaction: `session list`, `show` and `export` do
+    not wait behind (and time out on) another program's write lock, as WAL lets them read."""
+    import gaitpref.storage.sql as sql
+
+    store = SQLStorage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.close()
+    monkeypatch.setattr(sql, "BUSY_TIMEOUT_S", 0.2)  # a failure here is quick, not 30 s
+    with sqlite3.connect(tmp_path / "g.db", isolation_level=None) as other:
+        other.execute("BEGIN IMMEDIATE")  # another program's write, not yet committed
+        other.execute("INSERT INTO subjects VALUES ('S99', '2026-01-01 00:00:00')")
+        reader = SQLStorage(_sqlite(tmp_path), create=False)
+        assert [r.id for r in reader.list_sessions()] == [sid]
+        with pytest.raises(StorageError, match="database is locked"):
+            reader.append(sid, 0, [NewEvent("note", {"text": "waits its turn"})])
+        other.execute("ROLLBACK")
+    reader.append(sid, 0, [NewEvent("note", {"text": "after"})])
+    reader.close()
+
+
+@pytest.mark.parametrize(
+    ("change", "problem"),
+    [
+        ("meta = '[1]'", "session 1 in .*: the stored meta is a JSON list, not an object"),
+        ("meta = '{bad'", "a stored value cannot be read"),
+        ("seed = 'abc'", "session 1 in .*: the stored seed 'abc' is not an integer"),
+        ("status = 'zzz'", "session 1 in .*: the stored status 'zzz' is none of active"),
+        ("created_at = 'yesterday'", "a stored value cannot be read .*'yesterday'"),
+    ],
+)
+def test_a_damaged_session_row_is_named(tmp_path: Path, change: str, problem: str) -> None:
+    """Before: an AttributeError traceback (meta), or a bare int()/isoformat message."""
+    url = _sqlite(tmp_path)
+    SQLStorage(url).create_session(SPEC)
+    with sqlite3.connect(tmp_path / "g.db") as raw:  # damage done outside gaitpref
+        raw.execute("PRAGMA ignore_check_constraints = ON")
+        raw.execute(f"UPDATE sessions SET {change}")
+    store = SQLStorage(url)
+    for read in (store.list_sessions, lambda: store.get_session(1)):
+        with pytest.raises(StorageError, match=problem) as info:
+            read()
+        assert "altered or damaged outside gaitpref" in str(info.value)
     store.close()

@@ -19,6 +19,7 @@ from gaitpref.cli.output import console, fail, guard
 
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
+    from gaitpref.sessions.records import SessionQuery, Trial
 
 session_app = typer.Typer(
     name="session", help="Experiment sessions with real subjects.", no_args_is_help=True
@@ -272,9 +273,13 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
         if session.status == "finished":
             fail(f"session {session_id} is finished: nothing can be undone")
         _confirm(f"Undo the last answer of session {session_id}?", yes)
-        done = session.trials()
-        last = done[-1].query if done else None
-        pending = guard(session.undo)
+
+        def undo_last(s: Session) -> tuple[list[Trial], int | None, SessionQuery | None]:
+            # the last answer as of the undo: another writer may have answered during the prompt
+            done = s.trials()
+            return done, done[-1].query if done else None, s.undo()
+
+        done, last, pending = guard(lambda: session.read(undo_last, turn=True))
         trials = ", ".join(str(t.number) for t in done if t.query == last)
         console.print(f"undone: the answer to trial {trials}")
         if pending is None or pending.id != last:

@@ -53,7 +53,8 @@ class CachedGait:
 
 
 class GaitCache:
-    """Gaits by key, in ``folder`` (created when first written) or, without one, in memory."""
+    """Gaits by key, in ``folder`` (created when first written) or, without one, in memory; an
+    entry whose file cannot be written (:attr:`unwritable`) is kept in memory."""
 
     def __init__(self, folder: str | Path | None = None) -> None:
         self.folder = None if folder is None else Path(folder)
@@ -115,7 +116,7 @@ class GaitCache:
             with os.fdopen(fd, "w", encoding="utf-8") as out:
                 out.write(text)
             os.replace(tmp, target)
-        except BaseException:
+        except BaseException:  # a full disk: no partial file is left
             Path(tmp).unlink(missing_ok=True)
             raise
 

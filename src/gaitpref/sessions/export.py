@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import io
 import json
 import shutil
 import tempfile
@@ -43,7 +44,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from gaitpref.errors import ExportError, ReplayError
+from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import Trial
@@ -56,12 +57,20 @@ from gaitpref.storage import (
     Storage,
     open_storage,
 )
-from gaitpref.storage.base import check_status
+from gaitpref.storage.base import check_event, check_status
 
 FORMAT = "gaitpref-session-export"
 FORMAT_VERSION = 1
 Format = Literal["csv", "json"]
 TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "confidence")
+#: the most an import reads into memory: ``events.jsonl`` (a 150-trial log is about 75 kB, with
+#: the gaits a generator made), and ``manifest.json`` and ``config.toml`` each; other listed files
+#: are only hashed, a block at a time
+MAX_EVENTS_BYTES = 256 * 2**20
+MAX_EVENTS = 1_000_000  # and events (about 600 in a 150-trial log)
+MAX_TEXT_BYTES = 64 * 2**20
+#: the keys of an ``events.jsonl`` line (``version`` is absent from 0.1.0's exports: 1)
+EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 
 
 # -- export ------------------------------------------------------------------------------------
@@ -70,7 +79,8 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
 
     The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
     written: an export that fails (a full disk, text that cannot be written) leaves no
-    half-written folder behind, and may be run again.
+    half-written folder behind, and may be run again.  The session is brought up to date first
+    and every file is of the same event, however other writers move it on meanwhile.
     """
     if fmt not in ("csv", "json"):
         raise ExportError(f"format must be csv or json, got {fmt!r}")
@@ -79,7 +89,9 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
-        _write_export(session, partial, fmt)
+        # one consistent view: the log, tables and manifest of the same event, however other
+        # writers move the session on meanwhile
+        session.read(lambda s: _write_export(s, partial, fmt))
         if out.exists():
             out.rmdir()  # empty, checked above
         partial.rename(out)
@@ -90,7 +102,7 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
 
 
 def _write_export(session: Session, out: Path, fmt: Format) -> None:
-    events = session.events()
+    events = [e for e in session.events() if e.seq <= session.last_seq]  # as the state holds
     walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
     tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked)
     written: dict[str, str] = {}
@@ -351,8 +363,6 @@ def _other_feedback(session: Session, at: dict[int, str]) -> dict[str, list[dict
 
 
 def _csv(rows: Sequence[dict[str, Any]]) -> str:
-    import io
-
     buf = io.StringIO()
     if rows:
         writer = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
@@ -382,12 +392,13 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     """
     manifest = _read_manifest(folder)
     _check_files(folder, manifest)
-    config_text = _read_checked(folder, "config.toml", manifest)
+    config_text = _read_checked(folder, "config.toml", manifest, MAX_TEXT_BYTES)
     if hashlib.sha256(config_text.encode()).hexdigest() != manifest.get("config_sha256"):
         raise ExportError("config.toml does not match the manifest's config_sha256")
-    events = _read_events(_read_checked(folder, "events.jsonl", manifest))
+    events = _read_events(_read_checked(folder, "events.jsonl", manifest, MAX_EVENTS_BYTES))
     info = manifest["session"]
-    meta = dict(info.get("meta", {})) if isinstance(info.get("meta"), dict) else {}
+    _check_session_entry(manifest, len(events))
+    meta = dict(info.get("meta", {}))
     _find_library(folder, manifest, meta)
     _refuse_warm_start(info, meta)
     texts = {
@@ -420,10 +431,17 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
         )
     except (KeyError, TypeError, ValueError, RuntimeError) as exc:
         raise ExportError(f"manifest.json: bad session entry ({exc})") from None
+    _check_created(events[0], spec)
+    _check_gait_ids(events, spec.meta)
     # rebuild in memory first: nothing reaches the database unless replay is exact
     scratch = MemoryStorage()
     trial = Session.open(scratch, scratch.create_session(spec, events, status).id)
-    _check_summary(trial, manifest.get("posterior", {}))
+    if trial.status != status:  # the row's status must be the one its log ends in
+        raise ExportError(
+            f"manifest.json's session.status is {status!r}, but the log leaves the session "
+            f"{trial.status}; nothing was written"
+        )
+    _check_summary(trial, manifest.get("posterior") or {})
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
     try:
@@ -455,6 +473,62 @@ def _refuse_warm_start(info: dict[str, Any], meta: dict[str, Any]) -> None:
         "rebuilt from their logs, which an export does not carry, so it cannot be imported "
         "(nothing was written); its answers are all in the export's tables"
     )
+
+
+def _check_created(first: NewEvent, spec: SessionSpec) -> None:
+    """The log's ``created`` event says what the manifest says the session was made of (replay
+    reads them from the session's row): an edited seed, subject or config would make a session
+    whose row disagrees with its own log, and whose next queries are not the original's."""
+    if first.kind != log.CREATED:
+        raise ExportError(f"events.jsonl line 1: a {first.kind!r} event, not 'created'")
+    made = first.payload
+    manifest = {
+        "subject": ("session.subject", spec.subject),
+        "config_name": ("config_name", spec.config_name),
+        "config_sha256": ("config_sha256", spec.config_sha256),
+        "seed": ("seed", spec.seed),
+        "software_version": ("session.software_version", spec.software_version),
+    }
+    for key, (name, value) in manifest.items():
+        if made.get(key) != value or type(made.get(key)) is not type(value):
+            raise ExportError(
+                f"manifest.json's {name} is {value!r}, but the session's created event "
+                f"(events.jsonl line 1) says {made.get(key)!r}; nothing was written"
+            )
+    if made.get("prior_from") and not spec.meta.get("prior_from"):
+        raise ExportError(
+            "the session's created event (events.jsonl line 1) records a warm start that "
+            "manifest.json's session.meta lacks; nothing was written"
+        )
+    ids = spec.meta.get("gait_ids")
+    if bool(made.get("gait_library")) != (ids is not None):
+        have = "names no gait library" if ids is None else "names a gait library"
+        raise ExportError(
+            f"manifest.json's session.meta {have} (gait_ids), but the session's created event "
+            f"(events.jsonl line 1) says gait_library = {made.get('gait_library')!r}; nothing "
+            "was written"
+        )
+
+
+def _check_gait_ids(events: Sequence[NewEvent], meta: dict[str, Any]) -> None:
+    """Each trial walked a gait of the manifest's library, by the id its event logged (replay
+    names gaits by the library in the session's meta)."""
+    ids = meta.get("gait_ids")
+    if ids is None:
+        return
+    if not isinstance(ids, list) or not all(isinstance(g, str) for g in ids):
+        raise ExportError("manifest.json: session.meta.gait_ids must be a list of texts")
+    for k, event in enumerate(events, start=1):
+        logged, action = event.payload.get("gait_id"), event.payload.get("action")
+        if event.kind != log.TRIAL or logged is None or not isinstance(action, int):
+            continue
+        named = ids[action] if 0 <= action < len(ids) else None
+        if named != logged:
+            raise ExportError(
+                f"events.jsonl line {k}: trial {event.payload.get('trial')} walked gait "
+                f"{logged!r} (action {action}), but manifest.json's session.meta.gait_ids names "
+                f"it {named!r}; nothing was written"
+            )
 
 
 def origin_of(record: SessionRecord) -> str | None:
@@ -498,11 +572,17 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
             raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
         if not path.is_file():
             raise ExportError(f"the export lacks {name}, which manifest.json lists")
-        if hashlib.sha256(path.read_bytes()).hexdigest() != expected:
+        if _sha256(path) != expected:
             raise ExportError(
                 f"{name} does not match its SHA-256 in manifest.json (was it edited?); "
                 "nothing was written"
             )
+
+
+def _sha256(path: Path) -> str:
+    """The file's SHA-256, read a block at a time: a huge file costs no memory."""
+    with path.open("rb") as f:
+        return hashlib.file_digest(f, "sha256").hexdigest()
 
 
 def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
@@ -510,8 +590,12 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
     original, sha = meta.get("library_path"), meta.get("library_sha256")
     if not original:
         return
+    if not isinstance(original, str):
+        raise ExportError(
+            f"manifest.json: session.meta.library_path must be a text, got {original!r}"
+        )
     path = Path(original)
-    if path.is_file() and hashlib.sha256(path.read_bytes()).hexdigest() == sha:
+    if path.is_file() and _sha256(path) == sha:
         return
     copy = manifest.get("gait_library")
     if not isinstance(copy, dict) or not (folder / str(copy.get("file"))).is_file():
@@ -519,8 +603,7 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
             f"the session's gait library {original} is missing or changed, and the export "
             "holds no copy of it"
         )
-    data = (folder / copy["file"]).read_bytes()
-    if hashlib.sha256(data).hexdigest() != sha:
+    if _sha256(folder / copy["file"]) != sha:
         raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
     meta["config_dir"] = str(folder.resolve())
     meta["library_path"] = str((folder / copy["file"]).resolve())
@@ -530,14 +613,20 @@ def _read_manifest(folder: Path) -> dict[str, Any]:
     path = folder / "manifest.json"
     if not path.is_file():
         raise ExportError(f"{str(folder)!r} is not a gaitpref export (no manifest.json)")
+    _check_size(path, "manifest.json", MAX_TEXT_BYTES)
     try:
         manifest = json.loads(path.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as exc:
+    except (ValueError, RecursionError) as exc:  # UnicodeDecodeError is a ValueError
         raise ExportError(f"manifest.json is not JSON: {exc}") from None
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise ExportError(f"manifest.json is not a {FORMAT} manifest")
     version = manifest.get("format_version")
-    if not isinstance(version, int) or version > FORMAT_VERSION:
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise ExportError(
+            f"manifest.json: format_version must be an integer from 1 to {FORMAT_VERSION}, "
+            f"got {version!r}"
+        )
+    if version > FORMAT_VERSION:
         raise ExportError(
             f"export format version {version!r} is newer than this gaitpref reads "
             f"({FORMAT_VERSION}); use a newer gaitpref"
@@ -547,40 +636,131 @@ def _read_manifest(folder: Path) -> dict[str, Any]:
     return manifest
 
 
-def _read_checked(folder: Path, name: str, manifest: dict[str, Any]) -> str:
+def _read_checked(folder: Path, name: str, manifest: dict[str, Any], limit: int) -> str:
+    """The text of ``name``: at most ``limit`` bytes, matching its SHA-256, UTF-8."""
     path = folder / name
     if not path.is_file():
         raise ExportError(f"the export lacks {name}")
-    text = path.read_text(encoding="utf-8")
+    _check_size(path, name, limit)
+    data = path.read_bytes()
     expected = manifest["files"].get(name)
-    if hashlib.sha256(text.encode()).hexdigest() != expected:
+    if hashlib.sha256(data).hexdigest() != expected:
         raise ExportError(f"{name} does not match its SHA-256 in manifest.json (was it edited?)")
-    return text
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ExportError(f"{name} is not UTF-8 text ({exc})") from None
+
+
+def _check_size(path: Path, name: str, limit: int) -> None:
+    size = path.stat().st_size
+    if size > limit:
+        raise ExportError(
+            f"{name} holds {size:,} bytes, more than the {limit:,} an import reads; "
+            "nothing was written"
+        )
+
+
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
 def _read_events(text: str) -> list[NewEvent]:
+    """The events of ``events.jsonl``: one object a line with exactly the keys an export writes,
+    numbered 1, 2, 3, ... in order."""
+    lines = io.StringIO(text, newline="\n")  # one at a time, split at "\n" only
     out = []
-    for k, line in enumerate(text.splitlines(), start=1):
+    for k, line in enumerate(lines, start=1):
+        where = f"events.jsonl line {k}"
+        if k > MAX_EVENTS:
+            raise ExportError(
+                f"events.jsonl holds more than {MAX_EVENTS:,} events, the most an import reads; "
+                "nothing was written"
+            )
         try:
             row = json.loads(line)
-            if row["seq"] != k:
-                raise ValueError(f"seq {row['seq']} where {k} was expected")
+        except (ValueError, RecursionError) as exc:
+            raise ExportError(f"{where}: not JSON ({exc})") from None
+        if not isinstance(row, dict):
+            raise ExportError(f"{where}: a JSON {type(row).__name__}, not an object")
+        missing, extra = EVENT_KEYS - row.keys(), row.keys() - EVENT_KEYS - {"version"}
+        if missing or extra:
+            raise ExportError(
+                f"{where}: "
+                + "; ".join(
+                    [f"lacks {', '.join(sorted(missing))}"] * bool(missing)
+                    + [f"has keys an export does not write: {', '.join(sorted(extra))}"]
+                    * bool(extra)
+                )
+            )
+        seq = row["seq"]
+        if not _is_int(seq):
+            raise ExportError(f"{where}: seq must be an integer, got {seq!r}")
+        if seq != k:
+            raise ExportError(
+                f"{where}: seq {seq} where {k} was expected (the events are numbered 1, 2, 3, "
+                "... in order, each once)"
+            )
+        if not isinstance(row["at"], str):
+            raise ExportError(f"{where}: at must be an ISO time text, got {row['at']!r}")
+        try:
             at = datetime.fromisoformat(row["at"])
-            out.append(NewEvent(row["kind"], row["payload"], at, row.get("version", 1)))
-        except (ValueError, KeyError, TypeError) as exc:
-            raise ExportError(f"events.jsonl line {k}: {exc}") from None
+        except ValueError as exc:
+            raise ExportError(f"{where}: at: {exc}") from None
+        event = NewEvent(row["kind"], row["payload"], at, row.get("version", 1))
+        try:
+            out.append(check_event(event, where))
+        except StorageError as exc:
+            raise ExportError(str(exc)) from None
     if not out:
         raise ExportError("events.jsonl is empty")
     return out
 
 
-def _check_summary(session: Session, summary: dict[str, Any]) -> None:
+def _check_session_entry(manifest: dict[str, Any], events: int) -> None:
+    """The manifest's seed and session entry have the types an export writes, and the session
+    has as many events as ``events.jsonl`` holds."""
+    info = manifest["session"]
+    if not _is_int(manifest.get("seed")):
+        raise ExportError(f"manifest.json: seed must be an integer, got {manifest.get('seed')!r}")
+    if not _is_int(info.get("id")):
+        raise ExportError(f"manifest.json: session.id must be an integer, got {info.get('id')!r}")
+    if not isinstance(info.get("meta", {}), dict):
+        raise ExportError(
+            f"manifest.json: session.meta must be an object, got {type(info['meta']).__name__}"
+        )
+    last = info.get("last_seq")
+    if last is not None and last != events:
+        raise ExportError(
+            f"events.jsonl holds {events} events but manifest.json's session.last_seq is "
+            f"{last!r}: the log was cut short or added to (or an earlier gaitpref exported it "
+            "while another writer went on); nothing was written"
+        )
+
+
+def _check_summary(session: Session, summary: object) -> None:
+    """The replayed posterior's best action and its mean are the exported summary's."""
     if not summary:
         return
+    if not isinstance(summary, dict):
+        raise ExportError(
+            f"manifest.json: posterior must be an object, got {type(summary).__name__}"
+        )
+    exported, argmax = summary.get("mean_at_argmax"), summary.get("argmax")
+    if not (exported is None or isinstance(exported, int | float)) or isinstance(exported, bool):
+        raise ExportError(
+            f"manifest.json: posterior.mean_at_argmax must be a number, got {exported!r}"
+        )
     post = session.posterior()
+    if not len(session.space):  # the line path before its first query: no point, no argmax
+        if argmax is not None:
+            raise ReplayError(
+                f"the imported session's posterior has no point yet; the export names best "
+                f"action {argmax!r}"
+            )
+        return
     best = post.argmax
-    exported = summary.get("mean_at_argmax")
-    if best != summary.get("argmax") or not np.isclose(
+    if best != argmax or not np.isclose(
         float(post.mean[best]),
         float(exported if exported is not None else np.nan),
         rtol=1e-9,
@@ -588,6 +768,6 @@ def _check_summary(session: Session, summary: dict[str, Any]) -> None:
     ):
         raise ReplayError(
             f"the imported session's posterior differs from the exported summary: best action "
-            f"{best} (mean {float(post.mean[best])!r}) here, {summary.get('argmax')} "
+            f"{best} (mean {float(post.mean[best])!r}) here, {argmax!r} "
             f"(mean {exported!r}) in the export"
         )

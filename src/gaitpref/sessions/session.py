@@ -636,6 +636,24 @@ class Session:
         """Bring this object up to date with events other writers appended (full replay)."""
         self._locked(self._rebuild)
 
+    def read(self, fn: Callable[[Session], T], *, turn: bool = False) -> T:
+        """``fn(self)``, the session brought up to date first and held still throughout: this
+        object's own calls inside do not catch up midway, so what they return is of one event
+        (as an export needs), however other writers go on meanwhile.  Other writers are not held
+        up unless ``turn``: the writer turn is then held throughout, for a write that must
+        follow what ``fn`` read (``session undo`` names the answer it undoes)."""
+        if turn:
+            return self._locked(lambda: fn(self))
+        with self._lock:
+            if self._in_turn:  # inside an operation already
+                return fn(self)
+            self.sync()
+            self._in_turn = True  # calls inside run as parts of this one: no catch-up, no turn
+            try:
+                return fn(self)
+            finally:
+                self._in_turn = False
+
     def sync(self) -> bool:
         """Replay only the events other writers appended since this object last looked.
 

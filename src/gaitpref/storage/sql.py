@@ -11,14 +11,16 @@
 - Both: the append is a compare-and-set on ``sessions.last_seq`` and ``(session_id, seq)`` is the
   events' primary key, so two writers can never both append the same sequence number.
 
-Opening checks the connection and the schema (``migrate.check_schema``) and raises
-:class:`StorageConnectError` / :class:`SchemaError` with the URL (password masked).
+Opening checks the connection and the schema (``migrate.check_schema``, in a read transaction
+unless it creates the schema) and raises :class:`StorageConnectError` / :class:`SchemaError` with
+the URL (password masked).
 """
 
 from __future__ import annotations
 
 import functools
 import json
+import os
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -73,10 +75,11 @@ def parse_url(url: str) -> URL:
     """``url`` as a SQLAlchemy URL; ``postgresql://`` means the psycopg 3 driver."""
     try:
         parsed = make_url(url)
-    except ArgumentError:
+    except (ArgumentError, ValueError) as exc:  # ValueError: a port that is not a number
+        why = "" if isinstance(exc, ArgumentError) else f": {exc}"
         raise StorageConnectError(
-            f"{url!r} is not a database URL (expected e.g. sqlite:///gaitpref.db or "
-            "postgresql+psycopg://user@host/dbname)"
+            f"{url!r} is not a database URL{why} (expected e.g. sqlite:///gaitpref.db or "
+            "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
     if parsed.drivername in ("postgresql", "postgres"):
         parsed = parsed.set(drivername="postgresql+psycopg")
@@ -110,6 +113,7 @@ class SQLStorage(Storage):
                 raise StorageConnectError(
                     f"cannot open {self.url}: the folder {str(path.parent)!r} does not exist"
                 )
+            _refuse_folder(path, self.url)
         self._turns: FileTurns | None = None
         self._file: Path | None = None
         if self._sqlite and not _sqlite_memory(parsed):
@@ -117,9 +121,16 @@ class SQLStorage(Storage):
             self._file = path
             self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
         self.engine = _engine(parsed)
+        self._identity: tuple[int, int] | None = None  # the file's (device, inode) once open
         try:
-            with self._write() as conn:
+            # a read transaction unless the schema is to be made: opening a database to read it
+            # does not wait for (or on SQLite, time out behind) another process's write lock
+            with self._read() as conn:
+                empty = migrate.current_revision(conn) is None
+            with self._write() if empty and create else self._read() as conn:
                 migrate.check_schema(conn, self.url, create)
+            if self._file is not None:
+                self._identity = _identity(self._file)
         except StorageError:
             self.engine.dispose()
             raise
@@ -162,7 +173,7 @@ class SQLStorage(Storage):
             if checked:
                 conn.execute(insert(events_t), _rows(sid, 0, checked, stamp))
             row = conn.execute(select(sessions_t).where(sessions_t.c.id == sid)).one()
-        return _session(row._mapping)
+        return _session(row._mapping, self.url)
 
     def get_session(self, session_id: int) -> SessionRecord:
         with self._read() as conn:
@@ -171,14 +182,14 @@ class SQLStorage(Storage):
             ).first()
         if row is None:
             raise SessionNotFoundError(f"no session {session_id!r} in {self.url}")
-        return _session(row._mapping)
+        return _session(row._mapping, self.url)
 
     def list_sessions(self, subject: str | None = None) -> list[SessionRecord]:
         query = select(sessions_t).order_by(sessions_t.c.id)
         if subject is not None:
             query = query.where(sessions_t.c.subject == subject)
         with self._read() as conn:
-            return [_session(r._mapping) for r in conn.execute(query)]
+            return [_session(r._mapping, self.url) for r in conn.execute(query)]
 
     def list_subjects(self) -> list[SubjectRecord]:
         with self._read() as conn:
@@ -273,15 +284,35 @@ class SQLStorage(Storage):
     # -- transactions ------------------------------------------------------------------------
     @contextmanager
     def _write(self) -> Iterator[Connection]:
-        """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving."""
+        """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving, and rolled
+        back if the SQLite file was deleted or replaced since it was opened: the open connection
+        would commit into the unlinked file, and the write would be lost."""
         with self._errors(), self.engine.connect() as conn:
             conn.execution_options(gaitpref_write=True)
             with conn.begin():
                 yield conn
+                self._check_same_file()
+
+    def _check_same_file(self) -> None:
+        if self._file is None or self._identity is None:
+            return
+        try:
+            same = _identity(self._file) == self._identity
+        except OSError:
+            same = False
+        if not same:
+            raise StorageError(
+                f"{self.url}: the database file {str(self._file)!r} was deleted, moved or "
+                "replaced since it was opened; nothing was written (a write now would be lost "
+                "with the old file): open the database again"
+            )
 
     @contextmanager
     def _read(self) -> Iterator[Connection]:
+        """A read transaction; refused, as a write is, once the SQLite file was deleted or
+        replaced (a pooled connection reads the old file, a new one the file there now)."""
         with self._errors(), self.engine.connect() as conn, conn.begin():
+            self._check_same_file()
             yield conn
 
     @contextmanager
@@ -290,10 +321,15 @@ class SQLStorage(Storage):
             yield
         except IntegrityError:
             raise
+        except ValueError as exc:  # a stored value its column's type cannot read back
+            raise StorageError(
+                f"{self.url}: a stored value cannot be read ({exc}); the database was altered or "
+                "damaged outside gaitpref: restore it from a backup"
+            ) from None
         except DBAPIError as exc:
             if exc.connection_invalidated or "connect" in str(exc.orig).lower():
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
-            raise StorageError(f"{self.url}: {_reason(exc)}") from None
+            raise StorageError(f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}") from None
 
 
 def upgrade_database(url: str) -> str:
@@ -305,6 +341,7 @@ def upgrade_database(url: str) -> str:
             raise StorageConnectError(
                 f"cannot open {_masked(parsed)}: the folder {str(folder)!r} does not exist"
             )
+        _refuse_folder(Path(parsed.database or ""), _masked(parsed))
     engine = _engine(parsed)
     try:
         with engine.connect() as conn:
@@ -312,7 +349,9 @@ def upgrade_database(url: str) -> str:
             with conn.begin():
                 migrate.upgrade(conn)
     except (DBAPIError, SQLAlchemyError, OSError, ImportError) as exc:
-        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}") from None
+        file = None if _sqlite_memory(parsed) else Path(parsed.database or "")
+        hint = _hint(file, exc) if parsed.get_backend_name() == "sqlite" else ""
+        raise StorageConnectError(f"cannot open {_masked(parsed)}: {_reason(exc)}{hint}") from None
     finally:
         engine.dispose()
     SQLStorage(url).close()  # opens it the way every command will
@@ -370,26 +409,59 @@ def _has_tables(url: URL) -> bool:
 
 
 # -- helpers -----------------------------------------------------------------------------------
+def _hint(file: Path | None, exc: BaseException) -> str:
+    """Why SQLite could not open an existing file: its folder is read-only."""
+    if file is None or "unable to open database file" not in _reason(exc):
+        return ""
+    folder = file.resolve().parent
+    if file.is_file() and not os.access(folder, os.W_OK):
+        return (
+            f" (the folder {str(folder)!r} is read-only: SQLite creates the database's -wal "
+            "and -shm files beside it even to read; copy the database to a writable folder)"
+        )
+    return ""
+
+
+def _refuse_folder(path: Path, where: str) -> None:
+    if path.is_dir():
+        raise StorageConnectError(
+            f"cannot open {where}: {str(path)!r} is a folder, not a database file; name a file "
+            "in it (e.g. sqlite:///lab/gaitpref.db)"
+        )
+
+
+def _identity(path: Path) -> tuple[int, int]:
+    """The file's (device, inode): another file at the same path has another."""
+    stat = path.stat()
+    return stat.st_dev, stat.st_ino
+
+
 def _sqlite_memory(url: URL) -> bool:
     return url.database in (None, "", ":memory:")
 
 
 def _engine(url: URL) -> Engine:
     serializer = functools.partial(json.dumps, allow_nan=False)
-    if url.get_backend_name() == "postgresql":
-        return create_engine(
+    try:
+        if url.get_backend_name() == "postgresql":
+            return create_engine(
+                url,
+                json_serializer=serializer,
+                connect_args={"connect_timeout": 10},
+                pool_pre_ping=True,
+            )
+        memory = _sqlite_memory(url)
+        engine = create_engine(
             url,
             json_serializer=serializer,
-            connect_args={"connect_timeout": 10},
-            pool_pre_ping=True,
+            connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
+            **({"poolclass": StaticPool} if memory else {}),
         )
-    memory = _sqlite_memory(url)
-    engine = create_engine(
-        url,
-        json_serializer=serializer,
-        connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
-        **({"poolclass": StaticPool} if memory else {}),
-    )
+    except (ImportError, ArgumentError) as exc:  # a driver not installed, or unknown
+        raise StorageConnectError(
+            f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
+            f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+        ) from None
 
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: object) -> None:
@@ -398,13 +470,18 @@ def _engine(url: URL) -> Engine:
         cursor.execute("PRAGMA foreign_keys = ON")
         cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         if not memory:
-            # WAL only in a new file or a gaitpref database: a connection that is about to find
-            # another program's file is not a gaitpref database must leave its journal alone
+            # WAL only in a new file or a gaitpref database of a revision this gaitpref knows: a
+            # connection about to find another program's file is not a gaitpref database, or
+            # that a newer gaitpref wrote it, must leave its journal alone
             tables = {
                 row[0]
                 for row in cursor.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
             }
-            if not tables or "alembic_version" in tables:
+            if not tables or (
+                "alembic_version" in tables
+                and {r[0] for r in cursor.execute("SELECT version_num FROM alembic_version")}
+                <= set(migrate.known_revisions())
+            ):
                 cursor.execute("PRAGMA journal_mode = WAL")
             cursor.execute("PRAGMA synchronous = FULL")
         cursor.close()
@@ -460,14 +537,29 @@ def _payload(row: Any, where: str) -> dict[str, Any]:
     return value
 
 
-def _session(row: Any) -> SessionRecord:
+def _session(row: Any, where: str) -> SessionRecord:
+    """A session's row as a record, or an error naming the session and the damaged column."""
+
+    def damaged(what: str) -> StorageError:
+        return StorageError(
+            f"session {row['id']} in {where}: the stored {what}; the database was altered or "
+            "damaged outside gaitpref: restore it from a backup"
+        )
+
+    if not isinstance(row["meta"], dict):
+        raise damaged(f"meta is a JSON {type(row['meta']).__name__}, not an object")
+    seed = row["seed"]
+    if isinstance(seed, bool) or not isinstance(seed, int):
+        raise damaged(f"seed {seed!r} is not an integer")
+    if row["status"] not in base.STATUSES:
+        raise damaged(f"status {row['status']!r} is none of {', '.join(base.STATUSES)}")
     return SessionRecord(
         id=row["id"],
         subject=row["subject"],
         config_name=row["config_name"],
         config_text=row["config_text"],
         config_sha256=row["config_sha256"],
-        seed=int(row["seed"]),
+        seed=seed,
         software_version=row["software_version"],
         status=row["status"],
         created_at=as_utc(row["created_at"]),
