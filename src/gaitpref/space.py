@@ -242,6 +242,26 @@ class Space:
             raise IndexError(f"action index {i} is off the grid (0..{len(self) - 1})")
         return i
 
+    def check_indices(self, values: ArrayLike, name: str = "actions") -> IntArray:
+        """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
+        ``TypeError`` for anything but integers (floats and bools included), ``IndexError`` for
+        an index off the grid (negative ones too: they never wrap)."""
+        arr = np.asarray(values)
+        if arr.ndim != 1:
+            raise ValueError(
+                f"{name} must be a 1-D sequence of grid indices, got shape {arr.shape}"
+            )
+        if arr.size and not np.issubdtype(arr.dtype, np.integer):
+            raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
+        idx = arr.astype(np.intp)
+        bad = (idx < 0) | (idx >= len(self))
+        if np.any(bad):
+            raise IndexError(
+                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
+                f"(0..{len(self) - 1})"
+            )
+        return idx
+
     def points_of(self, actions: Sequence[int]) -> FloatArray:
         """Feature values of ``actions`` (``k x d``) without building every grid point."""
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
