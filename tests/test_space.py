@@ -82,6 +82,10 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, np.nan]}, "finite"),
         ({"name": "x y", "values": [0, 1]}, "identifier"),
         ({"name": "x", "values": [0, 1], "coactive": (0.3, 0.1)}, "coactive"),
+        ({"name": "x", "values": "abc"}, "'x': values must be numbers"),
+        ({"name": "x", "values": [0, 1], "coactive": (0.1, 0.2, 0.3)}, "coactive must be two"),
+        ({"name": "x", "values": [0, 1], "coactive": "ab"}, "coactive must be two"),
+        ({"name": "x", "values": [0, 1], "words": "ab"}, "words must be two"),
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:
@@ -96,3 +100,48 @@ def test_duplicate_feature_names_rejected() -> None:
 
 def test_moves_constant() -> None:
     assert MOVES == ("+big", "+small", "-small", "-big")
+
+
+def test_a_point_is_every_feature_once_and_a_number(small_space: Space) -> None:
+    names = small_space.names
+    point = small_space.point(3)
+    # NaN matched the first grid value before
+    with pytest.raises(ValueError, match="= nan is not a value"):
+        small_space.index([np.nan, *point[1:]])
+    # a key the space does not have (a typo beside the right names) was ignored
+    named = dict(zip(names, point.tolist(), strict=True))
+    with pytest.raises(KeyError, match=r"unknown features \['typo'\]"):
+        small_space.index({**named, "typo": 1.0})
+    assert small_space.index(named) == 3
+
+
+def test_feature_moves_take_an_index_in_range() -> None:
+    f = Feature("x", [0.0, 1.0, 2.0, 3.0, 4.0], coactive=(0.25, 0.5))
+    assert f.move(4, "-small") == 3
+    # -1 read the last value before (and moved from it)
+    for bad in (-1, 5, 1.0, True):
+        with pytest.raises(IndexError, match=r"value index must be an integer in 0\.\.4"):
+            f.move(bad, "-small")  # type: ignore[arg-type]
+    assert f.move(np.int64(4), "-small") == 3
+    with pytest.raises(ValueError, match="a value must be a number, got nan"):
+        f.snap(np.nan)  # it gave the first value
+
+
+def test_coactive_move_names_a_bad_feature(small_space: Space) -> None:
+    for bad in (True, 1.5):
+        with pytest.raises(TypeError, match="feature must be a name or a number"):
+            small_space.coactive_move(0, bad, "+big")  # type: ignore[arg-type]
+    with pytest.raises(IndexError, match="feature number -1 out of range"):
+        small_space.coactive_move(0, -1, "+big")
+    assert small_space.coactive_move(0, np.int64(1), "+big") == small_space.coactive_move(
+        0, small_space.names[1], "+big"
+    )
+
+
+def test_space_and_linspace_arguments() -> None:
+    with pytest.raises(TypeError, match=r"features\[0\] must be a Feature"):
+        Space(["a"])  # type: ignore[list-item]
+    for num in (2.5, True):
+        with pytest.raises(ValueError, match="num must be an integer >= 1"):
+            Feature.linspace("x", 0, 1, num)  # type: ignore[arg-type]
+    assert len(Feature.linspace("x", 0, 1, np.int64(3))) == 3

@@ -38,6 +38,8 @@ class PointSet(Space):
         arr = np.array(points, dtype=np.float64).reshape(-1, domain.ndim)
         for j, f in enumerate(domain.features):
             col = arr[:, j]
+            if col.size and not np.all(np.isfinite(col)):
+                raise ValueError(f"{f.name}: points must be numbers, got {col.tolist()}")
             if col.size and (col.min() < f.values[0] or col.max() > f.values[-1]):
                 raise ValueError(
                     f"{f.name}: points must lie in {f.values[0]:g} .. {f.values[-1]:g}"
@@ -77,12 +79,7 @@ class PointSet(Space):
         return self._rows.get(key)  # type: ignore[attr-defined, no-any-return]
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
-        if isinstance(point, dict):
-            coords = np.array([float(point[n]) for n in self.names])
-        else:
-            coords = np.asarray(point, dtype=np.float64)
-        if coords.shape != (self.ndim,):
-            raise ValueError(f"point has {coords.size} coordinates, space has {self.ndim}")
+        coords = np.asarray(self._coords(point))
         dist = np.max(np.abs(self.points - coords), axis=1) if len(self) else np.zeros(0)
         if dist.size == 0 or dist.min() > atol:
             raise ValueError(f"point {coords.tolist()} is not in this point set")
@@ -120,9 +117,7 @@ class PointSet(Space):
         feature's fraction of its range, clipped, snapped on a discrete feature), or None
         when it lands back on the same point."""
         i = self.check_index(index)
-        f = self.feature_index(feature) if isinstance(feature, str) else int(feature)
-        if not 0 <= f < self.ndim:
-            raise IndexError(f"feature number {f} out of range (0..{self.ndim - 1})")
+        f = self.feature_number(feature)
         value = self.features[f].move_value(float(self.points[i, f]), move)
         if value is None:
             return None

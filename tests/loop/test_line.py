@@ -118,6 +118,22 @@ def test_coactive_moves_stay_fractions_of_the_range() -> None:
     assert ids.tolist() == [2, 0] and bigger.coactive_move(0, "x", "+small") == 2
 
 
+def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
+    domain = Space([Feature.interval("x", 0.0, 2.0), Feature.linspace("y", 0.0, 1.0, 6)])
+    # NaN passed the range check and was stored as a point
+    with pytest.raises(ValueError, match="x: points must be numbers"):
+        PointSet(domain, [[np.nan, 0.4]])
+    table = PointSet(domain, [[1.0, 0.4], [1.9, 1.0]])
+    # NaN found row 0 before; an unknown name was ignored
+    with pytest.raises(ValueError, match="x = nan is not a value"):
+        table.index([np.nan, 1.0])
+    with pytest.raises(KeyError, match="unknown features"):
+        table.index({"x": 1.9, "y": 1.0, "z": 0.0})
+    assert table.index({"x": 1.9, "y": 1.0}) == 1
+    with pytest.raises(TypeError, match="feature must be a name or a number"):
+        table.move_target(0, True, "+small")  # type: ignore[arg-type]
+
+
 def test_lines_span_the_box_and_pass_through_the_origin() -> None:
     domain = Space([Feature.interval(f"x{k}", -1.0, 3.0) for k in range(5)])
     for rule in ("random", "coordinate"):
