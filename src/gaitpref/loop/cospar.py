@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.errors import FeedbackError, NoSafeGaitError, QueryError
 from gaitpref.feedback import (
     ActionObservation,
@@ -154,12 +155,21 @@ class CoSpar:
         ordinal: Ordinal | None = None,
         safety: Safety | None = None,
     ) -> None:
-        if not isinstance(n, int) or n < 1:
+        if not is_count(n) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
-        if not isinstance(buffer, int) or buffer < 0:
+        if not is_count(buffer) or buffer < 0:
             raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
-        if not (np.isfinite(coactive_weight) and coactive_weight > 0):
+        if not (
+            is_number(coactive_weight) and np.isfinite(coactive_weight) and coactive_weight > 0
+        ):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        if not isinstance(seed, np.random.Generator) and not (is_count(seed) and seed >= 0):
+            raise ValueError(
+                f"seed must be an integer >= 0 or a numpy.random.Generator, got {seed!r} (every "
+                "random choice comes from it: None would draw from the operating system)"
+            )
+        _check_parts(strategy=strategy, learning=learning, ordinal=ordinal, safety=safety)
+        n, buffer = int(n), int(buffer)
         _check_grid(space)
         self.space = space
         self.gp = PreferenceGP(space, kernel, noise, sampler=sampler, ordinal=ordinal)
@@ -915,6 +925,23 @@ def _check_grid(space: Space) -> None:
             "would not fit in memory): use gaitpref.loop.line.LineCoSpar (the line path; "
             "[cospar] subspace = 'line' in a config)"
         )
+
+
+def _check_parts(**parts: object) -> None:
+    """The loop's parts are what their names say (a strategy from ``make_strategy``, ...):
+    a name or a dict in their place failed at the first ask or tell."""
+    for name, value in parts.items():
+        if value is None:
+            continue
+        if name == "strategy":
+            if not callable(getattr(value, "propose", None)):
+                raise TypeError(
+                    f"strategy must be a Strategy (gaitpref.make_strategy(name)), got {value!r}"
+                )
+            continue
+        kind = {"learning": Learning, "ordinal": Ordinal, "safety": Safety}[name]
+        if not isinstance(value, kind):
+            raise TypeError(f"{name} must be a {kind.__name__} or None, got {value!r}")
 
 
 def _as_comparisons(items: Iterable[object]) -> list[object]:

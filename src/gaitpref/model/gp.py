@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gaitpref.checks import is_number
 from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
@@ -40,7 +41,7 @@ class PreferenceGP:
         sampler: str = "auto",
         ordinal: Ordinal | None = None,
     ) -> None:
-        if not (np.isfinite(noise) and noise > 0):
+        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
             raise ValueError(f"preference noise must be positive, got {noise!r}")
         kernel.lengthscales(space.ndim)  # checks the count
         self.space = space

@@ -1,0 +1,51 @@
+"""CoSpar's constructor names a bad argument (before, some failed at the first ask or deep in
+NumPy, and bools passed as numbers)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gaitpref import CoSpar, Feature, Learning, Space, SquaredExponential
+from gaitpref.loop.line import LineCoSpar
+
+SPACE = Space([Feature.linspace("a", 0, 1, 5), Feature.linspace("b", 0, 1, 4)])
+KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"n": True}, ValueError, "n .actions per query. must be an integer >= 1, got True"),
+        ({"buffer": True}, ValueError, "buffer must be an integer >= 0, got True"),
+        ({"coactive_weight": True}, ValueError, "coactive_weight must be positive"),
+        ({"coactive_weight": "1"}, ValueError, "coactive_weight must be positive"),
+        ({"seed": None}, ValueError, "seed must be an integer >= 0 or a numpy.random.Generator"),
+        ({"seed": -1}, ValueError, "seed must be an integer >= 0"),
+        ({"seed": 1.5}, ValueError, "seed must be an integer >= 0"),
+        ({"seed": True}, ValueError, "seed must be an integer >= 0"),
+        ({"strategy": "eubo"}, TypeError, "strategy must be a Strategy"),
+        ({"learning": "evidence"}, TypeError, "learning must be a Learning or None"),
+        ({"ordinal": 3}, TypeError, "ordinal must be a Ordinal or None"),
+        ({"safety": {"avoid": 1}}, TypeError, "safety must be a Safety or None"),
+    ],
+)
+def test_bad_arguments_are_named(kwargs: dict[str, Any], error: type, message: str) -> None:
+    with pytest.raises(error, match=message):
+        CoSpar(SPACE, KERNEL, 0.1, **kwargs)
+
+
+def test_the_line_path_checks_the_same() -> None:
+    with pytest.raises(ValueError, match="seed must be an integer >= 0"):
+        LineCoSpar(SPACE, KERNEL, 0.1, seed=None)
+
+
+def test_numpy_integers_are_integers() -> None:
+    # np.int64(2) was refused as "must be an integer"
+    loop = CoSpar(SPACE, KERNEL, 0.1, n=np.int64(2), buffer=np.int32(1), seed=np.uint32(3))
+    assert (loop.n, loop.buffer_size) == (2, 1)
+    assert type(loop.n) is int and type(loop.buffer_size) is int
+    same = CoSpar(SPACE, KERNEL, 0.1, n=2, buffer=1, seed=3, learning=Learning())
+    assert loop.ask().actions == same.ask().actions
