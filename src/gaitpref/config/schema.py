@@ -51,6 +51,7 @@ from gaitpref.loop.learning import (
 from gaitpref.loop.lines import DIRECTIONS, MAX_LINES, MAX_STAR_POINTS
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
+from gaitpref.strategies.base import MAX_CANDIDATES, MAX_GATES, MAX_SAMPLES
 
 #: A grid (the product of every feature's ``num`` or ``values``) has at most this many actions.
 MAX_ACTIONS: Final = 1_000_000
@@ -192,11 +193,11 @@ COSPAR: Final[dict[str, Key]] = {
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.
 _SETTING_SPECS: Final[dict[str, Spec]] = {
-    "gates": Integer(1, 1000),
+    "gates": Integer(1, MAX_GATES),
     "trials": Integer(0, 1_000_000),
     "beta": Number(0.0, 100.0),
-    "candidates": Integer(2, 4096),
-    "samples": Integer(1, 4096),
+    "candidates": Integer(2, MAX_CANDIDATES),
+    "samples": Integer(1, MAX_SAMPLES),
     "early_scale": Number(0.01, 100.0),
     "early_trials": Integer(0, 1_000_000),
     "sparring_from": Integer(0, 1_000_000),

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import IntArray
-from gaitpref.strategies.base import AskContext
+from gaitpref.strategies.base import MAX_CANDIDATES, AskContext, check_count
 from gaitpref.strategies.eubo import best_pair, eubo_against
 
 
@@ -92,8 +92,7 @@ def _start(context: AskContext, candidates: int) -> list[int]:
 
 
 def _check_candidates(candidates: object) -> None:
-    if isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 2:
-        raise ValueError(f"candidates must be an integer >= 2, got {candidates!r}")
+    check_count(candidates, "candidates", 2, MAX_CANDIDATES)
 
 
 @dataclass(frozen=True)

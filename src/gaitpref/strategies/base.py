@@ -21,6 +21,19 @@ from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior
 
+#: The most candidates an EUBO search compares (its pairs are a ``c x c`` matrix), the most
+#: joint samples a strategy draws per ask (``samples x A`` values) and the most gates: the
+#: bounds a config's ``[cospar.strategy_settings]`` has (``config/schema.py``).
+MAX_CANDIDATES = 4096
+MAX_SAMPLES = 4096
+MAX_GATES = 1000
+
+
+def check_count(value: object, name: str, low: int, high: int) -> None:
+    """A strategy's count setting: an integer (not a bool) in ``low..high``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ValueError(f"{name} must be an integer >= {low} and <= {high}, got {value!r}")
+
 
 @dataclass(frozen=True)
 class AskContext:
