@@ -49,3 +49,21 @@ def test_numpy_integers_are_integers() -> None:
     assert type(loop.n) is int and type(loop.buffer_size) is int
     same = CoSpar(SPACE, KERNEL, 0.1, n=2, buffer=1, seed=3, learning=Learning())
     assert loop.ask().actions == same.ask().actions
+
+
+def test_flags_and_safety_take_numbers() -> None:
+    from gaitpref.loop.safety import Safety
+
+    loop = CoSpar(SPACE, KERNEL, 0.1)
+    # True avoided everything within radius 1 (the whole grid)
+    for radius in (True, "0.1", np.nan):
+        with pytest.raises(ValueError, match="radius must be in"):
+            loop.avoid(0, radius)  # type: ignore[arg-type]
+    assert not loop.avoided
+    with pytest.raises(TypeError, match="action index must be an integer, got 'x'"):
+        loop.unflag_unsafe("x")  # type: ignore[arg-type]
+    for key in ("unsafe_radius", "explore", "lam"):
+        with pytest.raises(ValueError, match="must be"):
+            Safety(**{key: True})  # type: ignore[arg-type]
+        with pytest.raises(ValueError, match="must be"):
+            Safety(**{key: "0.5"})  # type: ignore[arg-type]

@@ -355,7 +355,7 @@ class CoSpar:
         scaled to ``[0, 1]``, as for unsafe flags): e.g. a gait that cannot be made.  Unlike an
         unsafe flag it is never taken back.  A pending query that proposes such an action is
         withdrawn as by :meth:`flag_unsafe`; returns whether it was."""
-        if not (np.isfinite(radius) and 0 <= radius <= 1):
+        if not (is_number(radius) and np.isfinite(radius) and 0 <= radius <= 1):
             raise ValueError(f"radius must be in [0, 1], got {radius!r}")
         index = self.space.check_index(action)
         self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
@@ -389,6 +389,8 @@ class CoSpar:
 
     def unflag_unsafe(self, action: int) -> None:
         """Take an unsafe flag back (the flag's undo)."""
+        if not is_count(action):
+            raise TypeError(f"action index must be an integer, got {action!r}")
         self.unsafe.discard(int(action))
 
     def warm_start(self, warm: WarmStart) -> None:
@@ -967,6 +969,11 @@ def _merged(
         if qid not in position:
             raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
         size = len(getattr(answers[position[qid]], field))
+        if isinstance(indices, str) or not isinstance(indices, Collection):
+            raise TypeError(f"query {qid}: {field} to exclude must be indices, got {indices!r}")
+        odd = [i for i in indices if not is_count(i)]
+        if odd:
+            raise TypeError(f"query {qid}: {field} to exclude must be integers, got {odd[0]!r}")
         chosen = {int(i) for i in indices}
         bad = sorted(i for i in chosen if not 0 <= i < size)
         if bad:
