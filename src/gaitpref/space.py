@@ -265,8 +265,12 @@ class Space:
             raise TypeError(f"action index must be an integer, got {index!r}")
         i = int(index)
         if not 0 <= i < len(self):
-            raise IndexError(f"action index {i} is off the grid (0..{len(self) - 1})")
+            raise IndexError(f"action index {i} is off the grid ({self._range_words()})")
         return i
+
+    def _range_words(self) -> str:
+        """The valid indices in words: ``0..A-1``, or none (an empty point set)."""
+        return f"0..{len(self) - 1}" if len(self) else "it has no actions yet"
 
     def check_indices(self, values: ArrayLike, name: str = "actions") -> IntArray:
         """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
@@ -284,7 +288,7 @@ class Space:
         if np.any(bad):
             raise IndexError(
                 f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
-                f"(0..{len(self) - 1})"
+                f"({self._range_words()})"
             )
         return idx
 

@@ -67,3 +67,19 @@ def test_flags_and_safety_take_numbers() -> None:
             Safety(**{key: True})  # type: ignore[arg-type]
         with pytest.raises(ValueError, match="must be"):
             Safety(**{key: "0.5"})  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"ties": "model", "tie_band": True}, "tie_band must be positive, got True"),
+        ({"ties": "model", "tie_band": "0.1"}, "tie_band must be positive"),
+        (
+            {"fit": "evidence", "hyper": "average", "hypotheses": (True, 2.0)},
+            "hypotheses must be positive numbers",
+        ),
+    ],
+)
+def test_learning_numbers_are_numbers(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Learning(**kwargs)

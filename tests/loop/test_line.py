@@ -132,6 +132,9 @@ def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
     assert table.index({"x": 1.9, "y": 1.0}) == 1
     with pytest.raises(TypeError, match="feature must be a name or a number"):
         table.move_target(0, True, "+small")  # type: ignore[arg-type]
+    # an empty set's range read "0..-1"
+    with pytest.raises(IndexError, match=r"off the grid \(it has no actions yet\)"):
+        empty_points(domain).check_index(0)
 
 
 def test_lines_span_the_box_and_pass_through_the_origin() -> None:

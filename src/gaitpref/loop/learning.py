@@ -45,6 +45,7 @@ from typing import Literal
 
 import numpy as np
 
+from gaitpref.checks import is_number
 from gaitpref.feedback import Preference, Tie
 from gaitpref.model.evidence import PairData
 from gaitpref.model.hyperfit import HyperPrior
@@ -89,7 +90,7 @@ class Learning:
         if self.tie_band is not None:
             if self.ties == "drop":
                 raise ValueError("tie_band is only used with ties = 'model'")
-            if not (np.isfinite(self.tie_band) and self.tie_band > 0):
+            if not (is_number(self.tie_band) and np.isfinite(self.tie_band) and self.tie_band > 0):
                 raise ValueError(f"tie_band must be positive, got {self.tie_band!r}")
         elif self.ties == "model" and self.fit == "fixed":
             raise ValueError("ties = 'model' with fit = 'fixed' needs a tie_band (a number)")
@@ -98,7 +99,7 @@ class Learning:
         if self.hyper == "average" and self.fit != "evidence":
             raise ValueError("hyper = 'average' needs fit = 'evidence'")
         if not self.hypotheses or not all(
-            isinstance(c, float | int) and np.isfinite(c) and c > 0 for c in self.hypotheses
+            is_number(c) and np.isfinite(c) and c > 0 for c in self.hypotheses
         ):
             raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
         if len(set(self.hypotheses)) != len(self.hypotheses):
