@@ -64,3 +64,15 @@ def test_rating_scale_arguments(kwargs: dict[str, Any], message: str) -> None:
 def test_rating_scale_from_numpy() -> None:
     assert Ordinal(np.int64(3)).categories == ("1", "2", "3")  # it was "not iterable"
     assert Ordinal(2, thresholds=np.array([0.1])).thresholds == (0.1,)
+
+
+def test_rating_likelihood_labels_are_integers() -> None:
+    from gaitpref.model import rating_likelihood
+
+    scale = Ordinal(3)
+    # 1.5 was truncated to label 1, True read as 1
+    for labels in ([1.5], [True], [[1, 2]]):
+        with pytest.raises(ValueError, match=r"rating labels must be a 1-D sequence of integers"):
+            rating_likelihood(scale, 1.0, labels)
+    assert rating_likelihood(scale, 1.0, np.array([3, 1], dtype=np.int8)).labels.tolist() == [3, 1]
+    assert rating_likelihood(scale, 1.0, []).labels.size == 0

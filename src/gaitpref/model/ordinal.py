@@ -242,7 +242,13 @@ def rating_likelihood(
     ordinal: Ordinal, signal_variance: float, labels: ArrayLike
 ) -> OrdinalLikelihood:
     """The likelihood of ratings ``labels`` (``1..K``) under ``ordinal``."""
-    idx = np.asarray(labels, dtype=np.intp)
+    given = np.asarray(labels)
+    if given.ndim != 1 or (given.size and not np.issubdtype(given.dtype, np.integer)):
+        raise ValueError(
+            f"rating labels must be a 1-D sequence of integers 1..{ordinal.size}, got "
+            f"dtype {given.dtype} and shape {given.shape}"
+        )
+    idx = given.astype(np.intp)
     if idx.size and (idx.min() < 1 or idx.max() > ordinal.size):
         raise ValueError(f"rating labels must be in 1..{ordinal.size}")
     t = np.asarray(ordinal.thresholds_for(signal_variance), dtype=np.float64)
