@@ -85,7 +85,7 @@ class PointSet(Space):
             raise ValueError(f"point {coords.tolist()} is not in this point set")
         return int(np.argmin(dist))
 
-    def points_of(self, actions: Sequence[int]) -> FloatArray:
+    def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
         out: FloatArray = self.points[idx].reshape(-1, self.ndim)
         return out

@@ -292,7 +292,7 @@ class Space:
             )
         return idx
 
-    def points_of(self, actions: Sequence[int]) -> FloatArray:
+    def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         """Feature values of ``actions`` (``k x d``) without building every grid point."""
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
         multi = np.unravel_index(idx, self.shape)
@@ -300,8 +300,9 @@ class Space:
         return np.stack(cols, axis=1) if cols else np.zeros((0, 0))
 
     def point(self, index: int) -> FloatArray:
-        """Feature values of the action with flat index ``index``."""
-        out: FloatArray = self.points[self.check_index(index)].copy()
+        """Feature values of the action with flat index ``index`` (from the features' values:
+        not every grid point, which a grid of 10^8 actions holds in gigabytes)."""
+        out: FloatArray = self.points_of([index])[0]
         return out
 
     def values_of(self, index: int) -> dict[str, float]:
