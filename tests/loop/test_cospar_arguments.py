@@ -83,3 +83,24 @@ def test_flags_and_safety_take_numbers() -> None:
 def test_learning_numbers_are_numbers(kwargs: dict[str, Any], message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Learning(**kwargs)
+
+
+def test_the_parts_are_checked_by_type() -> None:
+    from gaitpref.loop.lines import LineSettings
+    from gaitpref.loop.safety import Safety
+
+    with pytest.raises(TypeError, match=r"space must be a gaitpref\.Space"):
+        CoSpar([1], KERNEL, 0.1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"kernel must be a gaitpref\.SquaredExponential"):
+        CoSpar(SPACE, "k", 0.1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"domain must be a gaitpref\.Space"):
+        LineCoSpar([1], KERNEL, 0.1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="line must be a LineSettings or None"):
+        LineCoSpar(SPACE, KERNEL, 0.1, line=10)  # type: ignore[arg-type]
+    assert LineCoSpar(SPACE, KERNEL, 0.1, line=LineSettings(10)).line_settings.points == 10
+    with pytest.raises(IndexError, match=r"safety.start\[1\]: action index 99 is off the grid"):
+        CoSpar(SPACE, KERNEL, 0.1, safety=Safety(start=(3, 99)))
+    # NumPy integers were "not action indices"; a list made the settings unhashable
+    safety = Safety(avoid=np.int64(0), start=[np.int64(3), 5])  # type: ignore[arg-type]
+    assert safety.start == (3, 5) and type(safety.start[0]) is int and hash(safety)
+    assert CoSpar(SPACE, KERNEL, 0.1, safety=safety).ask().actions == (3,)

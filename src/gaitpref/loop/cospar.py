@@ -155,6 +155,8 @@ class CoSpar:
         ordinal: Ordinal | None = None,
         safety: Safety | None = None,
     ) -> None:
+        if not isinstance(space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
         if not is_count(n) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
         if not is_count(buffer) or buffer < 0:
@@ -196,8 +198,11 @@ class CoSpar:
             if ordinal is None:
                 raise ValueError("a region of avoidance needs a rating scale (ordinal=...)")
             self.safety.threshold(ordinal, kernel.variance)  # checks avoid < categories
-        for a in self.safety.start:
-            space.check_index(a)
+        for k, a in enumerate(self.safety.start):
+            try:
+                space.check_index(a)
+            except IndexError as exc:
+                raise IndexError(f"safety.start[{k}]: {exc}") from None
         self.unsafe: set[int] = set()  # actions flagged unsafe (flag_unsafe)
         self.avoided: dict[int, float] = {}  # action -> radius never proposed again (avoid)
         self._avoided_mask: NDArray[np.bool_] | None = None

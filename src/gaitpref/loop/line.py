@@ -83,6 +83,10 @@ class LineCoSpar(CoSpar):
     ) -> None:
         if isinstance(domain, PointSet):
             raise TypeError("the line path takes the features' space, not a point set")
+        if not isinstance(domain, Space):
+            raise TypeError(f"domain must be a gaitpref.Space, got {domain!r}")
+        if line is not None and not isinstance(line, LineSettings):
+            raise TypeError(f"line must be a LineSettings or None, got {line!r}")
         safety = settings.get("safety")
         if isinstance(safety, Safety) and safety.start:
             raise ValueError("the line path takes no start gaits (safety.start): a grid does")

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_count, is_number
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import FloatArray, Space
@@ -89,8 +89,9 @@ class Safety:
     reach: float | None = None
 
     def __post_init__(self) -> None:
-        if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
+        if not is_count(self.avoid) or self.avoid < 0:
             raise ValueError(f"avoid must be a number of categories >= 0, got {self.avoid!r}")
+        object.__setattr__(self, "avoid", int(self.avoid))
         if not (is_number(self.lam) and np.isfinite(self.lam) and self.lam >= 0):
             raise ValueError(f"lambda must be a finite number >= 0, got {self.lam!r}")
         if not (
@@ -112,8 +113,9 @@ class Safety:
                 raise ValueError(f"cautious must be a fraction in (0, 1), got {self.cautious!r}")
         if not (is_number(self.explore) and np.isfinite(self.explore) and self.explore >= 0):
             raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
-        if any(isinstance(a, bool) or not isinstance(a, int) or a < 0 for a in self.start):
+        if isinstance(self.start, str) or any(not is_count(a) or a < 0 for a in self.start):
             raise ValueError(f"start must hold action indices >= 0, got {self.start!r}")
+        object.__setattr__(self, "start", tuple(int(a) for a in self.start))
         if self.reach is not None and not (
             is_number(self.reach) and np.isfinite(self.reach) and self.reach > 0
         ):

@@ -41,6 +41,10 @@ class PreferenceGP:
         sampler: str = "auto",
         ordinal: Ordinal | None = None,
     ) -> None:
+        if not isinstance(space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
+        if not isinstance(kernel, SquaredExponential):
+            raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {kernel!r}")
         if not (is_number(noise) and np.isfinite(noise) and noise > 0):
             raise ValueError(f"preference noise must be positive, got {noise!r}")
         kernel.lengthscales(space.ndim)  # checks the count
