@@ -92,3 +92,16 @@ def test_posterior_names_a_bad_noise_or_rating() -> None:
     with pytest.raises(ValueError, match=r"ratings\[0\]: rating 4 is not a category"):
         gp.posterior([0], [1], ratings=[(2, 4)])
     assert gp.posterior([0], [1], ratings=[(2, 3)]).visited.tolist() == [0, 1, 2]
+
+
+def test_covariance_at_has_the_covariance_limit() -> None:
+    from gaitpref.model.posterior import COVARIANCE_LIMIT_ACTIONS
+
+    big = Space([Feature.linspace("a", 0, 1, 200), Feature.linspace("b", 0, 1, 100)])
+    post = PreferenceGP(big, SquaredExponential(0.3, 1.0, 1e-6), 0.1).posterior([0], [1])
+    # 20,000 actions asked for a 3 GiB matrix (covariance() refuses the same)
+    with pytest.raises(ValueError, match=r"covariance_at would build a 20000 x 20000 matrix"):
+        post.covariance_at(np.arange(len(big)))
+    with pytest.raises(ValueError, match=f"at most {COVARIANCE_LIMIT_ACTIONS} actions"):
+        post.covariance_at(np.zeros(COVARIANCE_LIMIT_ACTIONS + 1, dtype=np.intp))
+    assert post.covariance_at([0, 5, 7]).shape == (3, 3)

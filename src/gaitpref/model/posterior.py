@@ -38,7 +38,8 @@ from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
 
-#: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB.
+#: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB, and
+#: :meth:`Posterior.covariance_at` as many actions.
 COVARIANCE_LIMIT_ACTIONS = 11_585
 
 __all__ = ["KroneckerPriorSampler", "Posterior", "random_argmax"]
@@ -180,8 +181,15 @@ class Posterior:
         return out
 
     def covariance_at(self, actions: ArrayLike) -> FloatArray:
-        """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""
+        """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``); refuses more
+        than :data:`COVARIANCE_LIMIT_ACTIONS` actions, as :meth:`covariance` does."""
         idx = self.space.check_indices(actions)
+        if idx.size > COVARIANCE_LIMIT_ACTIONS:
+            raise ValueError(
+                f"covariance_at would build a {idx.size} x {idx.size} matrix "
+                f"({idx.size**2 * 8 / 2**30:.1f} GiB; at most {COVARIANCE_LIMIT_ACTIONS} actions): "
+                "use variance_at for the variances"
+            )
         out: FloatArray = np.asarray(self.kernel.cross(self.space, idx, rows=idx), dtype=float)
         if self.fit is None:
             return out
