@@ -86,6 +86,7 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, 1], "coactive": (0.1, 0.2, 0.3)}, "coactive must be two"),
         ({"name": "x", "values": [0, 1], "coactive": "ab"}, "coactive must be two"),
         ({"name": "x", "values": [0, 1], "words": "ab"}, "words must be two"),
+        ({"name": "x", "values": [0, 1], "unit": None}, "unit must be a string"),  # was 'None'
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:
@@ -145,6 +146,11 @@ def test_space_and_linspace_arguments() -> None:
         with pytest.raises(ValueError, match="num must be an integer >= 1"):
             Feature.linspace("x", 0, 1, num)  # type: ignore[arg-type]
     assert len(Feature.linspace("x", 0, 1, np.int64(3))) == 3
+    # '2'..'10' compared as text ("max must exceed min"); None a TypeError
+    with pytest.raises(ValueError, match="min and max must be numbers"):
+        Feature.interval("x", "2", "10")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="min and max must be numbers"):
+        Feature.linspace("x", None, 1, 3)  # type: ignore[arg-type]
 
 
 def test_one_point_does_not_build_the_grid() -> None:

@@ -31,6 +31,8 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from gaitpref.checks import is_number
+
 Move = Literal["+big", "+small", "-small", "-big"]
 MOVES: tuple[Move, ...] = get_args(Move)
 
@@ -89,6 +91,8 @@ class Feature:
                 f"feature {name!r}: coactive must be (small, big) with 0 < small <= big <= 1, "
                 f"got {tuple(coactive)!r}"
             )
+        if not isinstance(unit, str):
+            raise ValueError(f"feature {name!r}: unit must be a string, got {unit!r}")
         if (
             isinstance(words, str)
             or len(words) != 2
@@ -105,6 +109,8 @@ class Feature:
     @classmethod
     def interval(cls, name: str, lo: float, hi: float, **kwargs: object) -> Feature:
         """A continuous feature over ``[lo, hi]`` (``values`` holds the two bounds)."""
+        if not (is_number(lo) and is_number(hi)):
+            raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
         if not hi > lo:
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, (lo, hi), continuous=True, **kwargs)  # type: ignore[arg-type]
@@ -112,6 +118,8 @@ class Feature:
     @classmethod
     def linspace(cls, name: str, lo: float, hi: float, num: int, **kwargs: object) -> Feature:
         """A feature with ``num`` equally spaced values from ``lo`` to ``hi`` inclusive."""
+        if not (is_number(lo) and is_number(hi)):
+            raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
         if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
             raise ValueError(f"feature {name!r}: num must be an integer >= 1, got {num!r}")
         if num > 1 and not hi > lo:
