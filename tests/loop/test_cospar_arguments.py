@@ -104,3 +104,14 @@ def test_the_parts_are_checked_by_type() -> None:
     safety = Safety(avoid=np.int64(0), start=[np.int64(3), 5])  # type: ignore[arg-type]
     assert safety.start == (3, 5) and type(safety.start[0]) is int and hash(safety)
     assert CoSpar(SPACE, KERNEL, 0.1, safety=safety).ask().actions == (3,)
+
+
+def test_learning_keeps_its_hypotheses_as_a_tuple_and_checks_its_prior() -> None:
+    # a list made Learning unhashable; 5 was a TypeError; prior="x" an AttributeError in CoSpar
+    learning = Learning(fit="evidence", hyper="average", hypotheses=[0.5, 1])  # type: ignore[arg-type]
+    assert learning.hypotheses == (0.5, 1.0) and hash(learning)
+    assert Learning(hypotheses=np.array([0.5, 2.0])).hypotheses == (0.5, 2.0)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="hypotheses must be positive numbers, got 5"):
+        Learning(hypotheses=5)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="prior must be a HyperPrior or None"):
+        Learning(prior="x")  # type: ignore[arg-type]

@@ -98,10 +98,16 @@ class Learning:
             raise ValueError(f"hyper must be one of {', '.join(HYPER_MODES)}; got {self.hyper!r}")
         if self.hyper == "average" and self.fit != "evidence":
             raise ValueError("hyper = 'average' needs fit = 'evidence'")
-        if not self.hypotheses or not all(
-            is_number(c) and np.isfinite(c) and c > 0 for c in self.hypotheses
+        if (
+            isinstance(self.hypotheses, str)
+            or not isinstance(self.hypotheses, Sequence | np.ndarray)
+            or len(self.hypotheses) == 0
+            or not all(is_number(c) and np.isfinite(c) and c > 0 for c in self.hypotheses)
         ):
             raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
+        object.__setattr__(self, "hypotheses", tuple(float(c) for c in self.hypotheses))
+        if self.prior is not None and not isinstance(self.prior, HyperPrior):
+            raise TypeError(f"prior must be a HyperPrior or None, got {self.prior!r}")
         if len(set(self.hypotheses)) != len(self.hypotheses):
             raise ValueError(f"hypotheses must differ, got {self.hypotheses!r}")
         if self.share not in SHARE_MODES:
