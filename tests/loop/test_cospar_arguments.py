@@ -115,3 +115,16 @@ def test_learning_keeps_its_hypotheses_as_a_tuple_and_checks_its_prior() -> None
         Learning(hypotheses=5)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="prior must be a HyperPrior or None"):
         Learning(prior="x")  # type: ignore[arg-type]
+
+
+def test_avoid_all_checks_every_action_first() -> None:
+    loop = CoSpar(SPACE, KERNEL, 0.1)
+    query = loop.ask()
+    # the first was avoided (and the pending query withdrawn) before -1 raised
+    with pytest.raises(IndexError, match="action index -1 is off the grid"):
+        loop.avoid_all([query.actions[0], -1], 0.1)
+    assert not loop.avoided and loop.pending is query
+    line = LineCoSpar(SPACE, KERNEL, 0.1)
+    line.ask()
+    with pytest.raises(ValueError, match="radius must be in"):
+        line.avoid(0, True)  # type: ignore[arg-type]

@@ -360,8 +360,7 @@ class CoSpar:
         scaled to ``[0, 1]``, as for unsafe flags): e.g. a gait that cannot be made.  Unlike an
         unsafe flag it is never taken back.  A pending query that proposes such an action is
         withdrawn as by :meth:`flag_unsafe`; returns whether it was."""
-        if not (is_number(radius) and np.isfinite(radius) and 0 <= radius <= 1):
-            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        check_radius(radius)
         index = self.space.check_index(action)
         self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
         banned = near(self.space, [index], self.avoided[index])
@@ -373,6 +372,9 @@ class CoSpar:
     def avoid_all(self, actions: Sequence[int], radius: float) -> bool:
         """:meth:`avoid` each of ``actions`` (actions of the pending query, say: all named
         before any is withdrawn); returns whether the pending query was withdrawn."""
+        check_radius(radius)
+        for action in actions:  # all checked before any is avoided: nothing changes on a bad one
+            self.space.check_index(action)
         withdrawn = False
         for action in actions:
             withdrawn |= self.avoid(action, radius)
@@ -902,6 +904,12 @@ GRID_LIMIT_ACTIONS = 10_000_000
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000
+
+
+def check_radius(radius: object) -> None:
+    """An avoided neighbourhood's radius: a number in ``[0, 1]`` (a fraction of the ranges)."""
+    if not (is_number(radius) and np.isfinite(radius) and 0 <= radius <= 1):  # type: ignore[call-overload, operator]
+        raise ValueError(f"radius must be in [0, 1], got {radius!r}")
 
 
 def _check_grid(space: Space) -> None:

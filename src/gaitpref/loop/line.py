@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 
 from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
-from gaitpref.loop.cospar import Answer, CoSpar, Query
+from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius
 from gaitpref.loop.lines import (
     LINE_DRAWS,
     Line,
@@ -255,8 +255,7 @@ class LineCoSpar(CoSpar):
         """As :meth:`avoid` for each of ``actions``, all read in the table as it is now: the
         withdrawal that the first would cause takes the pending query's rows out of the table,
         so one at a time the next row would name another point, or none."""
-        if not (np.isfinite(radius) and 0 <= radius <= 1):
-            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        check_radius(radius)
         indices = [self.space.check_index(a) for a in actions]
         for index in indices:
             self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
