@@ -49,6 +49,7 @@ from gaitpref.loop.learning import (
     WARM_FIRST,
 )
 from gaitpref.loop.lines import DIRECTIONS, MAX_LINES, MAX_STAR_POINTS
+from gaitpref.loop.stopping import MAX_SAMPLES as MAX_CONFIDENCE_SAMPLES
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
 from gaitpref.strategies.base import MAX_CANDIDATES, MAX_GATES, MAX_SAMPLES
@@ -135,7 +136,8 @@ STOP: Final[dict[str, Key]] = {
     "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule
     "max_trials": Key(Integer(1, 1_000_000), None),  # None: no limit
     "tolerance": Key(Number(0.0, 0.5), 0.05),  # "within 5% of the best" (of the utility's range)
-    "samples": Key(Integer(100, 100_000), 2000),  # posterior samples behind the probability
+    # posterior samples behind the probability
+    "samples": Key(Integer(100, MAX_CONFIDENCE_SAMPLES), 2000),
 }
 FEATURE: Final[dict[str, Key]] = {
     "min": Key(Number(), None),
