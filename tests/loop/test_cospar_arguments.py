@@ -128,3 +128,15 @@ def test_avoid_all_checks_every_action_first() -> None:
     line.ask()
     with pytest.raises(ValueError, match="radius must be in"):
         line.avoid(0, True)  # type: ignore[arg-type]
+
+
+def test_numpy_counts_in_line_and_learning_settings() -> None:
+    from gaitpref.loop.lines import LineSettings
+
+    # refused before: "a line needs at least 2 points, got points = np.int64(10)"
+    line = LineSettings(np.int64(10), lines=np.int32(2))  # type: ignore[arg-type]
+    assert (line.points, line.lines) == (10, 2) and type(line.points) is int
+    learning = Learning(refit_every=np.int64(5))  # type: ignore[arg-type]
+    assert learning.refit_every == 5 and type(learning.refit_every) is int
+    with pytest.raises(ValueError, match="a line needs at least 2 points"):
+        LineSettings(True)

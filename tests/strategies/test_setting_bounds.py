@@ -4,6 +4,7 @@ of samples or gates past them allocated without bound at the first ask (10**9 sa
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from gaitpref import make_strategy
@@ -25,3 +26,13 @@ def test_counts_past_the_bound_are_refused(name: str, setting: str, high: int) -
     with pytest.raises(ValueError, match=f"{setting} must be an integer"):
         make_strategy(name, **{setting: 10**12})
     assert getattr(make_strategy(name, **{setting: high}), setting) == high
+
+
+@pytest.mark.parametrize(("name", "setting", "high"), CASES)
+def test_numpy_counts_are_counts(name: str, setting: str, high: int) -> None:
+    # np.int64(5) was refused: "must be an integer >= 1, got np.int64(5)"
+    strategy = make_strategy(name, **{setting: np.int64(5)})
+    value = getattr(strategy, setting)
+    assert value == 5 and type(value) is int
+    with pytest.raises(ValueError, match=f"{setting} must be an integer"):
+        make_strategy(name, **{setting: np.True_})

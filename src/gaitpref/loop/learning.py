@@ -45,7 +45,7 @@ from typing import Literal
 
 import numpy as np
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_count, is_number
 from gaitpref.feedback import Preference, Tie
 from gaitpref.model.evidence import PairData
 from gaitpref.model.hyperfit import HyperPrior
@@ -83,10 +83,9 @@ class Learning:
             raise ValueError(f"ties must be one of {', '.join(TIES_MODES)}; got {self.ties!r}")
         if self.fit not in FIT_MODES:
             raise ValueError(f"fit must be one of {', '.join(FIT_MODES)}; got {self.fit!r}")
-        if isinstance(self.refit_every, bool) or not (
-            isinstance(self.refit_every, int) and self.refit_every >= 1
-        ):
+        if not is_count(self.refit_every) or self.refit_every < 1:
             raise ValueError(f"refit_every must be an integer >= 1, got {self.refit_every!r}")
+        object.__setattr__(self, "refit_every", int(self.refit_every))
         if self.tie_band is not None:
             if self.ties == "drop":
                 raise ValueError("tie_band is only used with ties = 'model'")

@@ -19,6 +19,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count
 from gaitpref.model.posterior import Posterior
 
 #: The most candidates an EUBO search compares (its pairs are a ``c x c`` matrix), the most
@@ -29,10 +30,13 @@ MAX_SAMPLES = 4096
 MAX_GATES = 1000
 
 
-def check_count(value: object, name: str, low: int, high: int) -> None:
-    """A strategy's count setting: an integer (not a bool) in ``low..high``."""
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+def check_count(settings: object, name: str, low: int, high: int) -> None:
+    """The count setting ``name`` of a (frozen) strategy: an integer (not a bool; a NumPy one is
+    kept as an ``int``) in ``low..high``."""
+    value = getattr(settings, name)
+    if not is_count(value) or not low <= value <= high:
         raise ValueError(f"{name} must be an integer >= {low} and <= {high}, got {value!r}")
+    object.__setattr__(settings, name, int(value))
 
 
 @dataclass(frozen=True)

@@ -54,7 +54,7 @@ class GatedEubo:
     name: str = "gated-eubo"
 
     def __post_init__(self) -> None:
-        check_count(self.gates, "gates", 1, MAX_GATES)
+        check_count(self, "gates", 1, MAX_GATES)
         scale = self.early_scale
         number = isinstance(scale, int | float) and not isinstance(scale, bool)
         if not number or not 0.01 <= scale <= 100:

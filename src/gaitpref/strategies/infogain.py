@@ -81,7 +81,7 @@ class InformationGain:
     name: str = "information-gain"
 
     def __post_init__(self) -> None:
-        check_count(self.candidates, "candidates", 2, MAX_CANDIDATES)
+        check_count(self, "candidates", 2, MAX_CANDIDATES)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post, rng = context.posterior, context.rng

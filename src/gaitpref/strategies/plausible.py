@@ -47,8 +47,8 @@ class PlausibleEubo:
     name: str = "plausible-eubo"
 
     def __post_init__(self) -> None:
-        check_count(self.samples, "samples", 1, MAX_SAMPLES)
-        check_count(self.gates, "gates", 1, MAX_GATES)
+        check_count(self, "samples", 1, MAX_SAMPLES)
+        check_count(self, "gates", 1, MAX_GATES)
         if self.gates > self.samples:
             raise ValueError(
                 f"gates ({self.gates}) must not exceed samples ({self.samples}): "
