@@ -114,6 +114,11 @@ def test_a_point_is_every_feature_once_and_a_number(small_space: Space) -> None:
     with pytest.raises(KeyError, match=r"unknown features \['typo'\]"):
         small_space.index({**named, "typo": 1.0})
     assert small_space.index(named) == 3
+    # atol=NaN matched any point to its nearest grid point
+    off = [float(point[0]) + 0.5, *point[1:].tolist()]
+    for atol in (np.nan, -1.0, np.inf, "0.1"):
+        with pytest.raises(ValueError, match="atol must be a finite number >= 0"):
+            small_space.index(off, atol=atol)  # type: ignore[arg-type]
 
 
 def test_feature_moves_take_an_index_in_range() -> None:

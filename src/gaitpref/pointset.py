@@ -79,7 +79,7 @@ class PointSet(Space):
         return self._rows.get(key)  # type: ignore[attr-defined, no-any-return]
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
-        coords = np.asarray(self._coords(point))
+        coords = np.asarray(self._coords(point, atol))
         dist = np.max(np.abs(self.points - coords), axis=1) if len(self) else np.zeros(0)
         if dist.size == 0 or dist.min() > atol:
             raise ValueError(f"point {coords.tolist()} is not in this point set")

@@ -319,7 +319,7 @@ class Space:
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
         """Flat index of the grid point equal (within ``atol``) to ``point``."""
-        coords = self._coords(point)
+        coords = self._coords(point, atol)
         idx = []
         for f, v in zip(self.features, coords, strict=True):
             k = int(np.argmin(np.abs(f.array - v)))
@@ -328,9 +328,12 @@ class Space:
             idx.append(k)
         return int(np.ravel_multi_index(tuple(idx), self.shape))
 
-    def _coords(self, point: Sequence[float] | dict[str, float]) -> list[float]:
-        """A point's coordinates in feature order: every feature once (by name in a dict,
+    def _coords(self, point: Sequence[float] | dict[str, float], atol: float) -> list[float]:
+        """A point's coordinates in feature order (with ``atol``, the tolerance it is matched
+        with, a finite number >= 0: NaN matched any point): every feature once (by name in a dict,
         no other key), each a number (NaN matched grid value 0 before)."""
+        if not (is_number(atol) and 0 <= atol < math.inf):
+            raise ValueError(f"atol must be a finite number >= 0, got {atol!r}")
         if isinstance(point, dict):
             missing = set(self.names) - set(point)
             if missing:
