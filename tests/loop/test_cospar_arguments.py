@@ -98,6 +98,8 @@ def test_the_parts_are_checked_by_type() -> None:
     with pytest.raises(TypeError, match="line must be a LineSettings or None"):
         LineCoSpar(SPACE, KERNEL, 0.1, line=10)  # type: ignore[arg-type]
     assert LineCoSpar(SPACE, KERNEL, 0.1, line=LineSettings(10)).line_settings.points == 10
+    with pytest.raises(ValueError, match="every feature has a single value"):
+        LineCoSpar(Space([Feature("a", [0.5])]), KERNEL, 0.1)  # failed at the first ask
     with pytest.raises(IndexError, match=r"safety.start\[1\]: action index 99 is off the grid"):
         CoSpar(SPACE, KERNEL, 0.1, safety=Safety(start=(3, 99)))
     # NumPy integers were "not action indices"; a list made the settings unhashable

@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count
 from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
 from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius
@@ -87,6 +88,17 @@ class LineCoSpar(CoSpar):
             raise TypeError(f"domain must be a gaitpref.Space, got {domain!r}")
         if line is not None and not isinstance(line, LineSettings):
             raise TypeError(f"line must be a LineSettings or None, got {line!r}")
+        if all(f.span == 0 for f in domain.features):  # failed at the first ask before
+            raise ValueError(
+                "every feature has a single value: there is no line to draw (give some "
+                "feature a range)"
+            )
+        n = settings.get("n", 1)
+        if domain.grid_size is not None and is_count(n) and n > domain.grid_size:
+            raise ValueError(
+                f"n (actions per query) must be at most the grid's size, {domain.grid_size}, "
+                f"got {n}"
+            )
         safety = settings.get("safety")
         if isinstance(safety, Safety) and safety.start:
             raise ValueError("the line path takes no start gaits (safety.start): a grid does")
@@ -135,6 +147,7 @@ class LineCoSpar(CoSpar):
             return self.pending
         state = self.rng.bit_generator.state
         origin, towards = self.best_point(), self._towards()
+        short = False  # some line drawn had a point to propose but fewer than n points
         with one_blas_thread():
             for draw in range(LINE_DRAWS):
                 seed = int(self.rng.integers(2**63 - 1))
@@ -142,10 +155,19 @@ class LineCoSpar(CoSpar):
                 start = origin if through_best else None  # None: a random point of the seed's
                 line = draw_line(self.domain, rule, seed, start, towards if draw == 0 else None)
                 space, allowed = self._on_line(line)
-                if allowed.any():
+                # a line snapped to few grid values (through a corner, say) may hold fewer
+                # points with the table than the query's n: another is drawn (the strategy's
+                # context refused it, and the ask failed, before)
+                short |= bool(allowed.any()) and len(space) < self.n
+                if allowed.any() and len(space) >= self.n:
                     break
             else:  # nothing drawn, nothing logged: the generator goes back as it was
                 self.rng.bit_generator.state = state
+                if short:
+                    raise ValueError(
+                        f"none of the {LINE_DRAWS} lines tried holds n = {self.n} points with the "
+                        "gaits so far: lower n, or give the discrete features more values"
+                    )
                 through = "random points" if origin is None else "the best point, then random ones"
                 tried = f"{LINE_DRAWS} line" + ("s" if LINE_DRAWS != 1 else "")
                 raise NoSafeGaitError(
