@@ -142,3 +142,9 @@ def test_numpy_counts_in_line_and_learning_settings() -> None:
     assert learning.refit_every == 5 and type(learning.refit_every) is int
     with pytest.raises(ValueError, match="a line needs at least 2 points"):
         LineSettings(True)
+
+
+def test_n_is_at_most_the_grid() -> None:
+    with pytest.raises(ValueError, match="must be at most the grid's size, 20, got 21"):
+        CoSpar(SPACE, KERNEL, 0.1, n=21)  # every ask failed before
+    assert len(CoSpar(SPACE, KERNEL, 0.1, n=20).ask().actions) == 20

@@ -173,6 +173,10 @@ class CoSpar:
         _check_parts(strategy=strategy, learning=learning, ordinal=ordinal, safety=safety)
         n, buffer = int(n), int(buffer)
         _check_grid(space)
+        if not isinstance(space, PointSet) and n > len(space):  # failed at every ask before
+            raise ValueError(
+                f"n (actions per query) must be at most the grid's size, {len(space)}, got {n}"
+            )
         self.space = space
         self.gp = PreferenceGP(space, kernel, noise, sampler=sampler, ordinal=ordinal)
         self.learning = Learning() if learning is None else learning
