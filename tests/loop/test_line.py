@@ -330,3 +330,14 @@ def test_all_the_points_of_a_proposal_are_avoided_at_once() -> None:
             for centre in centres:
                 assert np.linalg.norm(np.array(p) / np.array([1.0, 2.0]) - centre) > 0.1
         loop.tell(q, [(q.actions[0], q.actions[1], "first")] if len(set(q.actions)) == 2 else [])
+
+
+def test_a_posterior_over_no_point_has_no_argmax() -> None:
+    loop = LineCoSpar(Space([Feature.interval("x", 0.0, 1.0)]), KERNEL_1D, 0.05)
+    # NumPy's "attempt to get argmax of an empty sequence" before
+    with pytest.raises(ValueError, match="no actions yet"):
+        _ = loop.posterior.argmax
+    with pytest.raises(ValueError, match="no actions yet"):
+        loop.posterior.argmax_samples(np.random.default_rng(0), 2)
+    assert loop.posterior.argmax_samples(np.random.default_rng(0), 0).size == 0
+    assert loop.best_point() is None

@@ -291,6 +291,8 @@ class Posterior:
         One pass over the samples as :meth:`sample` leaves them: no second ``size x A`` array.
         ``allowed`` is a boolean mask over every action with at least one true entry.
         """
+        if len(self.space) == 0 and size:
+            raise ValueError(_NO_ACTIONS)
         if allowed is not None:
             allowed = self._check_allowed(allowed)
         samples = self.sample(rng, size)
@@ -315,12 +317,19 @@ class Posterior:
     @property
     def argmax(self) -> int:
         """The action with the highest posterior mean (lowest index among exact ties)."""
+        if len(self.space) == 0:
+            raise ValueError(_NO_ACTIONS)
         return int(np.argmax(self.mean))
 
     @property
     def log_evidence(self) -> float:
         """Laplace approximation of the data's log marginal likelihood (0 with no data)."""
         return self.fit.log_evidence if self.fit is not None else 0.0
+
+
+#: What an argmax over no action says (a point set before its first point: the line path
+#: before its first query).
+_NO_ACTIONS = "the posterior has no actions yet (the line path's before its first query): no argmax"
 
 
 def _sample_count(size: object) -> int:
