@@ -44,6 +44,12 @@ def test_off_grid_indices_are_refused_not_wrapped(post: Posterior, reader: str) 
     )
 
 
+def test_rating_probabilities_of_one_action(post: Posterior) -> None:
+    assert np.array_equal(post.rating_probabilities(4), post.rating_probabilities([4]))
+    with pytest.raises(IndexError, match="off the grid"):
+        post.rating_probabilities(-1)
+
+
 def test_preference_probability_checks_both_actions(post: Posterior) -> None:
     with pytest.raises(IndexError, match="action index -1 is off the grid"):
         post.preference_probability(-1, 0)

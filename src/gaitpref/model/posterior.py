@@ -212,7 +212,8 @@ class Posterior:
         """``P(rating = k)`` for each of ``actions`` (``n x K``, ``model/ordinal.py``)."""
         if self.ordinal is None:
             raise ValueError("this posterior was made without an ordinal rating model")
-        idx = self.space.check_indices(actions)
+        one = np.ndim(actions) == 0  # one action: a 1 x K table, as before
+        idx = self.space.check_indices(np.reshape(actions, 1) if one else actions)
         var = np.diag(self.covariance_at(idx)) if idx.size <= 64 else self.variance[idx]
         return rating_probabilities(self.ordinal, self.kernel.variance, self.mean_at(idx), var)
 
