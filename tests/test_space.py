@@ -87,6 +87,8 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, 1], "coactive": "ab"}, "coactive must be two"),
         ({"name": "x", "values": [0, 1], "words": "ab"}, "words must be two"),
         ({"name": "x", "values": [0, 1], "unit": None}, "unit must be a string"),  # was 'None'
+        # a span of inf: the loop failed later with "a prior's median must be positive"
+        ({"name": "x", "values": [-1.7e308, 1.7e308]}, "range of the values must be finite"),
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:

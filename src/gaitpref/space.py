@@ -76,6 +76,8 @@ class Feature:
             raise ValueError(f"feature {name!r}: needs at least one value")
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"feature {name!r}: values must be finite")
+        if not np.isfinite(arr[-1] - arr[0]):  # a range past a float's: moves and scales inf
+            raise ValueError(f"feature {name!r}: the range of the values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
         if continuous and arr.size != 2:
