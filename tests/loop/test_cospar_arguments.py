@@ -148,3 +148,17 @@ def test_n_is_at_most_the_grid() -> None:
     with pytest.raises(ValueError, match="must be at most the grid's size, 20, got 21"):
         CoSpar(SPACE, KERNEL, 0.1, n=21)  # every ask failed before
     assert len(CoSpar(SPACE, KERNEL, 0.1, n=20).ask().actions) == 20
+
+
+def test_iterators_are_read_once() -> None:
+    loop = CoSpar(SPACE, KERNEL, 0.1, n=2)
+    query = loop.ask()
+    # the check read the iterator and nothing was avoided
+    assert loop.avoid_all(iter(query.actions), 0.0)
+    assert set(loop.avoided) == set(query.actions)
+    query = loop.ask()
+    a, b = query.actions
+    assert a != b  # this seed's second query
+    loop.tell(query, [(a, b, "first")])
+    loop.exclude({query.id: iter([0])})
+    assert loop.excluded == {query.id: frozenset({0})}

@@ -377,6 +377,7 @@ class CoSpar:
         """:meth:`avoid` each of ``actions`` (actions of the pending query, say: all named
         before any is withdrawn); returns whether the pending query was withdrawn."""
         check_radius(radius)
+        actions = list(actions)  # read twice below (an iterator too)
         for action in actions:  # all checked before any is avoided: nothing changes on a bad one
             self.space.check_index(action)
         withdrawn = False
@@ -986,8 +987,9 @@ def _merged(
         if qid not in position:
             raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
         size = len(getattr(answers[position[qid]], field))
-        if isinstance(indices, str) or not isinstance(indices, Collection):
+        if isinstance(indices, str | bytes) or not isinstance(indices, Iterable):
             raise TypeError(f"query {qid}: {field} to exclude must be indices, got {indices!r}")
+        indices = list(indices)  # read once (an iterator too)
         odd = [i for i in indices if not is_count(i)]
         if odd:
             raise TypeError(f"query {qid}: {field} to exclude must be integers, got {odd[0]!r}")
