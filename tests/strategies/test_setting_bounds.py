@@ -36,3 +36,9 @@ def test_numpy_counts_are_counts(name: str, setting: str, high: int) -> None:
     assert value == 5 and type(value) is int
     with pytest.raises(ValueError, match=f"{setting} must be an integer"):
         make_strategy(name, **{setting: np.True_})
+
+
+def test_a_strategy_name_is_a_name() -> None:
+    for name in (["eubo"], None, 3):
+        with pytest.raises(ValueError, match="unknown strategy"):  # a list was "unhashable type"
+            make_strategy(name)  # type: ignore[arg-type]
