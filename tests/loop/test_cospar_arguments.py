@@ -162,3 +162,24 @@ def test_iterators_are_read_once() -> None:
     loop.tell(query, [(a, b, "first")])
     loop.exclude({query.id: iter([0])})
     assert loop.excluded == {query.id: frozenset({0})}
+
+
+def test_tell_names_an_argument_that_is_not_a_list() -> None:
+    from gaitpref import Comparison, FeedbackError, Suggestion
+
+    loop = CoSpar(SPACE, KERNEL, 0.1, n=2, seed=1)
+    query = loop.ask()
+    a, b = query.actions
+    # each was a TypeError from unpacking: "Value after * must be an iterable, not Comparison"
+    cases = [
+        ({"answers": Comparison(a, b, "first")}, "answers: .* got one Comparison"),
+        ({"suggestions": Suggestion(a, "a", "+big")}, "suggestions: .* got one Suggestion"),
+        ({"comparisons": Comparison(a, b, "first")}, "comparisons: .* got one Comparison"),
+        ({"answers": None}, "answers: expected a list of feedback records, got None"),
+        ({"answers": "abc"}, "answers: expected a list of feedback records, got 'abc'"),
+    ]
+    for kwargs, message in cases:
+        with pytest.raises(FeedbackError, match=message):
+            loop.tell(query, **kwargs)
+    assert loop.pending is query and not loop.answers
+    assert loop.tell(query, iter([(a, b, "first")])).comparisons == (Comparison(a, b, "first"),)

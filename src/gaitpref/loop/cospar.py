@@ -500,8 +500,14 @@ class CoSpar:
         :class:`FeedbackError` and changes nothing on bad input.
         """
         q = self._check_query(query)
+        given = {"answers": answers, "suggestions": suggestions, "comparisons": comparisons}
+        items = {name: _records(name, value) for name, value in given.items()}
         with self._all_or_nothing():
-            return self._tell(q, [*answers, *_as_comparisons(comparisons)], suggestions)
+            return self._tell(
+                q,
+                [*items["answers"], *_as_comparisons(items["comparisons"])],
+                items["suggestions"],
+            )
 
     @contextmanager
     def _all_or_nothing(self) -> Iterator[None]:
@@ -962,6 +968,19 @@ def _check_parts(**parts: object) -> None:
         kind = {"learning": Learning, "ordinal": Ordinal, "safety": Safety}[name]
         if not isinstance(value, kind):
             raise TypeError(f"{name} must be a {kind.__name__} or None, got {value!r}")
+
+
+def _records(name: str, value: object) -> list[object]:
+    """``tell``'s argument ``name`` as a list of items: a list (or any iterable) of records or
+    raw tuples, not one record, a string or a number (a TypeError from unpacking before)."""
+    if kind_of(value) is not None:
+        raise FeedbackError(
+            f"{name}: expected a list of feedback records, got one {type(value).__name__}: "
+            f"give [{value!r}]"
+        )
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise FeedbackError(f"{name}: expected a list of feedback records, got {value!r}")
+    return list(value)
 
 
 def _as_comparisons(items: Iterable[object]) -> list[object]:
