@@ -35,7 +35,7 @@ class PointSet(Space):
         """``known`` (from :meth:`extended`) is every row's first index, given when it is
         already known so that it is not rebuilt from all the points."""
         super().__init__(domain.features)
-        arr = np.array(points, dtype=np.float64).reshape(-1, domain.ndim)
+        arr = _rows(points, domain.ndim)
         for j, f in enumerate(domain.features):
             col = arr[:, j]
             if col.size and not np.all(np.isfinite(col)):
@@ -93,7 +93,7 @@ class PointSet(Space):
     def extended(self, points: ArrayLike) -> tuple[PointSet, IntArray]:
         """This set with ``points`` appended (those already present, or repeated, are not
         added again) and the row of each given point in the result."""
-        new = np.asarray(points, dtype=np.float64).reshape(-1, self.ndim)
+        new = _rows(points, self.ndim)
         rows: list[list[float]] = []
         seen: dict[tuple[float, ...], int] = {}
         ids = np.empty(new.shape[0], dtype=np.intp)
@@ -138,6 +138,19 @@ class PointSet(Space):
                 "extend the set with move_target first"
             )
         return row
+
+
+def _rows(points: ArrayLike, ndim: int) -> FloatArray:
+    """``points`` as a ``k x ndim`` float array (a copy): rows of one value per feature (a flat
+    list of four numbers became two points of a 2-D space before, three a NumPy error)."""
+    arr = np.array(points, dtype=np.float64)
+    if arr.size == 0:
+        return arr.reshape(0, ndim)
+    if arr.ndim != 2 or arr.shape[1] != ndim:
+        raise ValueError(
+            f"points must be rows of {ndim} values (one per feature), got shape {arr.shape}"
+        )
+    return arr
 
 
 def empty_points(domain: Space) -> PointSet:

@@ -132,6 +132,13 @@ def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
     assert table.index({"x": 1.9, "y": 1.0}) == 1
     with pytest.raises(TypeError, match="feature must be a name or a number"):
         table.move_target(0, True, "+small")  # type: ignore[arg-type]
+    # a flat list of four numbers was two points; a row of three a NumPy reshape error
+    for bad in ([0.1, 0.2, 0.3, 0.4], [[0.1, 0.2, 0.3]]):
+        with pytest.raises(ValueError, match="points must be rows of 2 values"):
+            PointSet(domain, bad)
+        with pytest.raises(ValueError, match="points must be rows of 2 values"):
+            table.extended(bad)
+    assert len(PointSet(domain, [])) == 0
     # an empty set's range read "0..-1"
     with pytest.raises(IndexError, match=r"off the grid \(it has no actions yet\)"):
         empty_points(domain).check_index(0)
