@@ -183,3 +183,33 @@ def test_tell_names_an_argument_that_is_not_a_list() -> None:
             loop.tell(query, **kwargs)
     assert loop.pending is query and not loop.answers
     assert loop.tell(query, iter([(a, b, "first")])).comparisons == (Comparison(a, b, "first"),)
+
+
+class _Fixed:
+    """A strategy written outside the package that proposes what it is told to."""
+
+    def __init__(self, picks: tuple[object, ...]) -> None:
+        self.picks = picks
+        self.name = "fixed"
+
+    def propose(self, context: Any) -> tuple[object, ...]:
+        return self.picks
+
+
+def test_a_strategy_is_held_to_its_protocol() -> None:
+    # each was run as proposed: a query of two actions for n = 1, a gait of index -1 (the last),
+    # a gait near an unsafe flag
+    for picks, message in (
+        ((3, 4), "proposed 2 actions; the query asks 1"),
+        ((-1,), "proposed -1, not an action"),
+        ((1.0,), "proposed 1.0, not an action"),
+    ):
+        loop = CoSpar(SPACE, KERNEL, 0.1, strategy=_Fixed(picks))  # type: ignore[arg-type]
+        with pytest.raises(ValueError, match=message):
+            loop.ask()
+        assert loop.pending is None
+    loop = CoSpar(SPACE, KERNEL, 0.1, strategy=_Fixed((5,)))  # type: ignore[arg-type]
+    loop.flag_unsafe(5)
+    with pytest.raises(ValueError, match="proposed action 5, which may not be proposed"):
+        loop.ask()
+    assert CoSpar(SPACE, KERNEL, 0.1, strategy=_Fixed((np.int64(7),))).ask().actions == (7,)  # type: ignore[arg-type]

@@ -442,7 +442,7 @@ class CoSpar:
                 self._rescaled,
             )
             with one_blas_thread():
-                actions += tuple(int(a) for a in self.strategy.propose(context))
+                actions += proposed(self.strategy, context)
         points = tuple(tuple(row) for row in self.space.points_of(actions).tolist())
         self.pending = Query(self._next_id, actions, self._buffer, points)
         self._next_id += 1
@@ -951,6 +951,25 @@ def _check_grid(space: Space) -> None:
             "would not fit in memory): use gaitpref.loop.line.LineCoSpar (the line path; "
             "[cospar] subspace = 'line' in a config)"
         )
+
+
+def proposed(strategy: Strategy, context: AskContext) -> tuple[int, ...]:
+    """What ``strategy`` proposes, checked: ``context.n`` integer actions of the context's
+    posterior, each allowed (a strategy written outside the package is held to the protocol:
+    a gait outside ``allowed``, in the region of avoidance or near an unsafe flag, was run)."""
+    picks = tuple(strategy.propose(context))
+    name = getattr(strategy, "name", type(strategy).__name__)
+    if len(picks) != context.n:
+        raise ValueError(
+            f"strategy {name!r} proposed {len(picks)} actions; the query asks {context.n}"
+        )
+    size = len(context.posterior.space)
+    for a in picks:
+        if not is_count(a) or not 0 <= a < size:
+            raise ValueError(f"strategy {name!r} proposed {a!r}, not an action (0..{size - 1})")
+        if context.allowed is not None and not context.allowed[a]:
+            raise ValueError(f"strategy {name!r} proposed action {a}, which may not be proposed")
+    return tuple(int(a) for a in picks)
 
 
 def _check_parts(**parts: object) -> None:

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from gaitpref.checks import is_count
 from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
-from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius
+from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius, proposed
 from gaitpref.loop.lines import (
     LINE_DRAWS,
     Line,
@@ -185,7 +185,7 @@ class LineCoSpar(CoSpar):
             context = AskContext(
                 posterior, self.n, self._buffer, len(self.executed), self.rng, allowed, rescaled
             )
-            chosen = [int(a) for a in self.strategy.propose(context)]
+            chosen = list(proposed(self.strategy, context))
         self._rng_before_pending = state
         self._table_before_pending = self.space
         table, actions = self.space.extended(space.points[chosen])
