@@ -40,6 +40,7 @@ from gaitpref.feedback import (
     Comparison,
     FeedbackKind,
     ModelContext,
+    Observations,
     Preference,
     Suggestion,
     Tie,
@@ -525,6 +526,7 @@ class CoSpar:
         ignored: list[Hashable] = []
         for kind, record in records:
             terms = kind.observations(record, context, q.id)
+            self._check_terms(kind.name, terms)
             prefs += terms.preferences
             ties += terms.ties
             singles += terms.singles
@@ -730,6 +732,26 @@ class CoSpar:
         if not dropped:
             return answer.singles
         return tuple(o for k, o in enumerate(answer.singles) if k not in dropped)
+
+    def _check_terms(self, kind: str, terms: Observations) -> None:
+        """A kind's likelihood terms name actions of the grid, with a positive noise: a kind
+        registered outside the package is held to it (a term on action -1 was fitted on the
+        last gait)."""
+        size = len(self.space)
+        actions = [a for p in terms.preferences for a in (p.winner, p.loser)]
+        actions += [a for t in terms.ties for a in (t.first, t.second)]
+        actions += [o.action for o in terms.singles]
+        for a in actions:
+            if not is_count(a) or not 0 <= a < size:
+                raise FeedbackError(
+                    f"feedback kind {kind!r} made a term on {a!r}, not an action (0..{size - 1})"
+                )
+        for p in terms.preferences:
+            if not (is_number(p.noise) and np.isfinite(p.noise) and p.noise > 0):
+                raise FeedbackError(
+                    f"feedback kind {kind!r} made a preference with noise {p.noise!r} "
+                    "(it must be positive)"
+                )
 
     def _check_evidence(self, singles: list[ActionObservation]) -> None:
         """Refuse, naming the kind, single-action terms the evidence fit cannot differentiate."""
