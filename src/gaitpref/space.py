@@ -76,7 +76,7 @@ class Feature:
             raise ValueError(f"feature {name!r}: needs at least one value")
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"feature {name!r}: values must be finite")
-        if not np.isfinite(arr[-1] - arr[0]):  # a range past a float's: moves and scales inf
+        if not math.isfinite(float(arr[-1]) - float(arr[0])):  # past a float: moves, scales inf
             raise ValueError(f"feature {name!r}: the range of the values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
