@@ -63,6 +63,11 @@ def test_exclude_is_idempotent_and_checks_input() -> None:
             loop.exclude({qid: [bad]})  # type: ignore[list-item]
     with pytest.raises(TypeError, match="must be indices, got '0'"):
         loop.exclude({qid: "0"})
+    # an AttributeError ('list' object has no attribute 'items') before
+    with pytest.raises(TypeError, match="preferences to exclude: expected a mapping"):
+        loop.exclude([qid])  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="singles to exclude: expected a mapping"):
+        loop.exclude({qid: [0]}, [0])  # type: ignore[arg-type]
     assert loop.posterior is before
     assert loop.excluded == {qid: frozenset({0})}
 

@@ -1042,6 +1042,10 @@ def _merged(
     field: str,
 ) -> dict[int, frozenset[int]]:
     """``current`` with ``drops`` (query id -> indices into that answer's ``field``) added."""
+    if not isinstance(drops, Mapping):
+        raise TypeError(
+            f"{field} to exclude: expected a mapping of query id -> indices, got {drops!r}"
+        )
     new = dict(current)
     for qid, indices in drops.items():
         if qid not in position:
