@@ -213,3 +213,10 @@ def test_a_strategy_is_held_to_its_protocol() -> None:
     with pytest.raises(ValueError, match="proposed action 5, which may not be proposed"):
         loop.ask()
     assert CoSpar(SPACE, KERNEL, 0.1, strategy=_Fixed((np.int64(7),))).ask().actions == (7,)  # type: ignore[arg-type]
+
+
+def test_a_warm_start_is_a_warm_start() -> None:
+    loop = CoSpar(SPACE, KERNEL, 0.1)
+    with pytest.raises(TypeError, match="warm must be a WarmStart"):  # an AttributeError before
+        loop.warm_start({"rho": 0.5})  # type: ignore[arg-type]
+    assert loop.warm is None

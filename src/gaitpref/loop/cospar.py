@@ -409,6 +409,8 @@ class CoSpar:
     def warm_start(self, warm: WarmStart) -> None:
         """Include earlier subjects' answers in every fit from now on (``loop/warm.py``);
         only before the first answer."""
+        if not isinstance(warm, WarmStart):
+            raise TypeError(f"warm must be a WarmStart (loop.warm), got {warm!r}")
         if self.answers or self.pending is not None:
             raise QueryError("a warm start must come before the first query")
         self.warm = warm
