@@ -82,6 +82,13 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, np.nan]}, "finite"),
         ({"name": "x y", "values": [0, 1]}, "identifier"),
         ({"name": "x", "values": [0, 1], "coactive": (0.3, 0.1)}, "coactive"),
+        ({"name": "x", "values": "abc"}, "'x': values must be numbers"),
+        ({"name": "x", "values": [0, 1], "coactive": (0.1, 0.2, 0.3)}, "coactive must be two"),
+        ({"name": "x", "values": [0, 1], "coactive": "ab"}, "coactive must be two"),
+        ({"name": "x", "values": [0, 1], "words": "ab"}, "words must be two"),
+        ({"name": "x", "values": [0, 1], "unit": None}, "unit must be a string"),  # was 'None'
+        # a span of inf: the loop failed later with "a prior's median must be positive"
+        ({"name": "x", "values": [-1.7e308, 1.7e308]}, "range of the values must be finite"),
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:
@@ -96,3 +103,68 @@ def test_duplicate_feature_names_rejected() -> None:
 
 def test_moves_constant() -> None:
     assert MOVES == ("+big", "+small", "-small", "-big")
+
+
+def test_a_point_is_every_feature_once_and_a_number(small_space: Space) -> None:
+    names = small_space.names
+    point = small_space.point(3)
+    # NaN matched the first grid value before
+    with pytest.raises(ValueError, match="= nan is not a value"):
+        small_space.index([np.nan, *point[1:]])
+    # a key the space does not have (a typo beside the right names) was ignored
+    named = dict(zip(names, point.tolist(), strict=True))
+    with pytest.raises(KeyError, match=r"unknown features \['typo'\]"):
+        small_space.index({**named, "typo": 1.0})
+    assert small_space.index(named) == 3
+    # atol=NaN matched any point to its nearest grid point
+    off = [float(point[0]) + 0.5, *point[1:].tolist()]
+    for atol in (np.nan, -1.0, np.inf, "0.1"):
+        with pytest.raises(ValueError, match="atol must be a finite number >= 0"):
+            small_space.index(off, atol=atol)  # type: ignore[arg-type]
+
+
+def test_feature_moves_take_an_index_in_range() -> None:
+    f = Feature("x", [0.0, 1.0, 2.0, 3.0, 4.0], coactive=(0.25, 0.5))
+    assert f.move(4, "-small") == 3
+    # -1 read the last value before (and moved from it)
+    for bad in (-1, 5, 1.0, True):
+        with pytest.raises(IndexError, match=r"value index must be an integer in 0\.\.4"):
+            f.move(bad, "-small")  # type: ignore[arg-type]
+    assert f.move(np.int64(4), "-small") == 3
+    with pytest.raises(ValueError, match="a value must be a number, got nan"):
+        f.snap(np.nan)  # it gave the first value
+
+
+def test_coactive_move_names_a_bad_feature(small_space: Space) -> None:
+    for bad in (True, 1.5):
+        with pytest.raises(TypeError, match="feature must be a name or a number"):
+            small_space.coactive_move(0, bad, "+big")  # type: ignore[arg-type]
+    with pytest.raises(IndexError, match="feature number -1 out of range"):
+        small_space.coactive_move(0, -1, "+big")
+    assert small_space.coactive_move(0, np.int64(1), "+big") == small_space.coactive_move(
+        0, small_space.names[1], "+big"
+    )
+
+
+def test_space_and_linspace_arguments() -> None:
+    with pytest.raises(TypeError, match=r"features\[0\] must be a Feature"):
+        Space(["a"])  # type: ignore[list-item]
+    for num in (2.5, True):
+        with pytest.raises(ValueError, match="num must be an integer >= 1"):
+            Feature.linspace("x", 0, 1, num)  # type: ignore[arg-type]
+    assert len(Feature.linspace("x", 0, 1, np.int64(3))) == 3
+    # '2'..'10' compared as text ("max must exceed min"); None a TypeError
+    with pytest.raises(ValueError, match="min and max must be numbers"):
+        Feature.interval("x", "2", "10")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="min and max must be numbers"):
+        Feature.linspace("x", None, 1, 3)  # type: ignore[arg-type]
+
+
+def test_one_point_does_not_build_the_grid() -> None:
+    # 40^5 = 102,400,000 actions: describe(7) built every point (7.8 GiB, 27 s) before
+    space = Space([Feature.linspace(f"f{k}", 0, 1, 40) for k in range(5)])
+    assert space.values_of(len(space) - 1) == dict.fromkeys(space.names, 1.0)
+    assert space.describe(7).startswith("f0=0, f1=0")
+    assert "points" not in vars(space)  # the cached grid was never made
+    small = Space([Feature.linspace("a", 0, 1, 7), Feature("b", [0.1, 0.35, 2.0])])
+    assert all(np.array_equal(small.point(i), small.points[i]) for i in range(len(small)))

@@ -35,9 +35,11 @@ class PointSet(Space):
         """``known`` (from :meth:`extended`) is every row's first index, given when it is
         already known so that it is not rebuilt from all the points."""
         super().__init__(domain.features)
-        arr = np.array(points, dtype=np.float64).reshape(-1, domain.ndim)
+        arr = _rows(points, domain.ndim)
         for j, f in enumerate(domain.features):
             col = arr[:, j]
+            if col.size and not np.all(np.isfinite(col)):
+                raise ValueError(f"{f.name}: points must be numbers, got {col.tolist()}")
             if col.size and (col.min() < f.values[0] or col.max() > f.values[-1]):
                 raise ValueError(
                     f"{f.name}: points must lie in {f.values[0]:g} .. {f.values[-1]:g}"
@@ -77,18 +79,13 @@ class PointSet(Space):
         return self._rows.get(key)  # type: ignore[attr-defined, no-any-return]
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
-        if isinstance(point, dict):
-            coords = np.array([float(point[n]) for n in self.names])
-        else:
-            coords = np.asarray(point, dtype=np.float64)
-        if coords.shape != (self.ndim,):
-            raise ValueError(f"point has {coords.size} coordinates, space has {self.ndim}")
+        coords = np.asarray(self._coords(point, atol))
         dist = np.max(np.abs(self.points - coords), axis=1) if len(self) else np.zeros(0)
         if dist.size == 0 or dist.min() > atol:
             raise ValueError(f"point {coords.tolist()} is not in this point set")
         return int(np.argmin(dist))
 
-    def points_of(self, actions: Sequence[int]) -> FloatArray:
+    def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
         out: FloatArray = self.points[idx].reshape(-1, self.ndim)
         return out
@@ -96,7 +93,7 @@ class PointSet(Space):
     def extended(self, points: ArrayLike) -> tuple[PointSet, IntArray]:
         """This set with ``points`` appended (those already present, or repeated, are not
         added again) and the row of each given point in the result."""
-        new = np.asarray(points, dtype=np.float64).reshape(-1, self.ndim)
+        new = _rows(points, self.ndim)
         rows: list[list[float]] = []
         seen: dict[tuple[float, ...], int] = {}
         ids = np.empty(new.shape[0], dtype=np.intp)
@@ -120,9 +117,7 @@ class PointSet(Space):
         feature's fraction of its range, clipped, snapped on a discrete feature), or None
         when it lands back on the same point."""
         i = self.check_index(index)
-        f = self.feature_index(feature) if isinstance(feature, str) else int(feature)
-        if not 0 <= f < self.ndim:
-            raise IndexError(f"feature number {f} out of range (0..{self.ndim - 1})")
+        f = self.feature_number(feature)
         value = self.features[f].move_value(float(self.points[i, f]), move)
         if value is None:
             return None
@@ -143,6 +138,19 @@ class PointSet(Space):
                 "extend the set with move_target first"
             )
         return row
+
+
+def _rows(points: ArrayLike, ndim: int) -> FloatArray:
+    """``points`` as a ``k x ndim`` float array (a copy): rows of one value per feature (a flat
+    list of four numbers became two points of a 2-D space before, three a NumPy error)."""
+    arr = np.array(points, dtype=np.float64)
+    if arr.size == 0:
+        return arr.reshape(0, ndim)
+    if arr.ndim != 2 or arr.shape[1] != ndim:
+        raise ValueError(
+            f"points must be rows of {ndim} values (one per feature), got shape {arr.shape}"
+        )
+    return arr
 
 
 def empty_points(domain: Space) -> PointSet:

@@ -31,6 +31,8 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from gaitpref.checks import is_number
+
 Move = Literal["+big", "+small", "-small", "-big"]
 MOVES: tuple[Move, ...] = get_args(Move)
 
@@ -66,22 +68,38 @@ class Feature:
     ) -> None:
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"feature name must be an identifier, got {name!r}")
-        arr = np.asarray(values, dtype=np.float64).ravel()
+        try:
+            arr = np.asarray(values, dtype=np.float64).ravel()
+        except (TypeError, ValueError):
+            raise ValueError(f"feature {name!r}: values must be numbers, got {values!r}") from None
         if arr.size == 0:
             raise ValueError(f"feature {name!r}: needs at least one value")
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"feature {name!r}: values must be finite")
+        if not math.isfinite(float(arr[-1]) - float(arr[0])):  # past a float: moves, scales inf
+            raise ValueError(f"feature {name!r}: the range of the values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
         if continuous and arr.size != 2:
             raise ValueError(f"feature {name!r}: a continuous feature is given as (min, max)")
-        small, big = (float(c) for c in coactive)
+        try:
+            small, big = (float(c) for c in coactive)
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"feature {name!r}: coactive must be two numbers (small, big), got {coactive!r}"
+            ) from None
         if not (0 < small <= big <= 1):
             raise ValueError(
                 f"feature {name!r}: coactive must be (small, big) with 0 < small <= big <= 1, "
                 f"got {tuple(coactive)!r}"
             )
-        if len(words) != 2 or not all(isinstance(w, str) and w for w in words):
+        if not isinstance(unit, str):
+            raise ValueError(f"feature {name!r}: unit must be a string, got {unit!r}")
+        if (
+            isinstance(words, str)
+            or len(words) != 2
+            or not all(isinstance(w, str) and w for w in words)
+        ):
             raise ValueError(f"feature {name!r}: words must be two non-empty strings")
         object.__setattr__(self, "name", name)
         object.__setattr__(self, "values", tuple(float(v) for v in arr))
@@ -93,6 +111,8 @@ class Feature:
     @classmethod
     def interval(cls, name: str, lo: float, hi: float, **kwargs: object) -> Feature:
         """A continuous feature over ``[lo, hi]`` (``values`` holds the two bounds)."""
+        if not (is_number(lo) and is_number(hi)):
+            raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
         if not hi > lo:
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, (lo, hi), continuous=True, **kwargs)  # type: ignore[arg-type]
@@ -100,8 +120,10 @@ class Feature:
     @classmethod
     def linspace(cls, name: str, lo: float, hi: float, num: int, **kwargs: object) -> Feature:
         """A feature with ``num`` equally spaced values from ``lo`` to ``hi`` inclusive."""
-        if num < 1:
-            raise ValueError(f"feature {name!r}: num must be >= 1, got {num}")
+        if not (is_number(lo) and is_number(hi)):
+            raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
+        if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
+            raise ValueError(f"feature {name!r}: num must be an integer >= 1, got {num!r}")
         if num > 1 and not hi > lo:
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
@@ -127,6 +149,8 @@ class Feature:
 
     def snap(self, value: float) -> float:
         """``value`` clipped to the range and, for a discrete feature, the nearest grid value."""
+        if math.isnan(value):
+            raise ValueError(f"feature {self.name!r}: a value must be a number, got nan")
         clipped = min(max(float(value), self.values[0]), self.values[-1])
         if self.continuous:
             return clipped
@@ -150,6 +174,15 @@ class Feature:
 
     def move(self, value_index: int, move: Move) -> int | None:
         """Value index after a coactive move, or ``None`` when it clips back to the same value."""
+        if (
+            isinstance(value_index, bool)
+            or not isinstance(value_index, int | np.integer)
+            or not 0 <= value_index < len(self.values)
+        ):
+            raise IndexError(
+                f"feature {self.name!r}: value index must be an integer in "
+                f"0..{len(self.values) - 1}, got {value_index!r}"
+            )
         new = self.move_value(self.values[value_index], move)
         return None if new is None else self.values.index(new)
 
@@ -163,6 +196,9 @@ class Space:
 
     def __init__(self, features: Sequence[Feature]) -> None:
         feats = tuple(features)
+        for k, f in enumerate(feats):
+            if not isinstance(f, Feature):
+                raise TypeError(f"features[{k}] must be a Feature, got {f!r}")
         if not feats:
             raise ValueError("a space needs at least one feature")
         names = [f.name for f in feats]
@@ -239,10 +275,34 @@ class Space:
             raise TypeError(f"action index must be an integer, got {index!r}")
         i = int(index)
         if not 0 <= i < len(self):
-            raise IndexError(f"action index {i} is off the grid (0..{len(self) - 1})")
+            raise IndexError(f"action index {i} is off the grid ({self._range_words()})")
         return i
 
-    def points_of(self, actions: Sequence[int]) -> FloatArray:
+    def _range_words(self) -> str:
+        """The valid indices in words: ``0..A-1``, or none (an empty point set)."""
+        return f"0..{len(self) - 1}" if len(self) else "it has no actions yet"
+
+    def check_indices(self, values: ArrayLike, name: str = "actions") -> IntArray:
+        """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
+        ``TypeError`` for anything but integers (floats and bools included), ``IndexError`` for
+        an index off the grid (negative ones too: they never wrap)."""
+        arr = np.asarray(values)
+        if arr.ndim != 1:
+            raise ValueError(
+                f"{name} must be a 1-D sequence of grid indices, got shape {arr.shape}"
+            )
+        if arr.size and not np.issubdtype(arr.dtype, np.integer):
+            raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
+        idx = arr.astype(np.intp)
+        bad = (idx < 0) | (idx >= len(self))
+        if np.any(bad):
+            raise IndexError(
+                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
+                f"({self._range_words()})"
+            )
+        return idx
+
+    def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         """Feature values of ``actions`` (``k x d``) without building every grid point."""
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
         multi = np.unravel_index(idx, self.shape)
@@ -250,8 +310,9 @@ class Space:
         return np.stack(cols, axis=1) if cols else np.zeros((0, 0))
 
     def point(self, index: int) -> FloatArray:
-        """Feature values of the action with flat index ``index``."""
-        out: FloatArray = self.points[self.check_index(index)].copy()
+        """Feature values of the action with flat index ``index`` (from the features' values:
+        not every grid point, which a grid of 10^8 actions holds in gigabytes)."""
+        out: FloatArray = self.points_of([index])[0]
         return out
 
     def values_of(self, index: int) -> dict[str, float]:
@@ -260,15 +321,7 @@ class Space:
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
         """Flat index of the grid point equal (within ``atol``) to ``point``."""
-        if isinstance(point, dict):
-            missing = set(self.names) - set(point)
-            if missing:
-                raise KeyError(f"point is missing features {sorted(missing)}")
-            coords = [float(point[n]) for n in self.names]
-        else:
-            coords = [float(v) for v in point]
-        if len(coords) != self.ndim:
-            raise ValueError(f"point has {len(coords)} coordinates, space has {self.ndim}")
+        coords = self._coords(point, atol)
         idx = []
         for f, v in zip(self.features, coords, strict=True):
             k = int(np.argmin(np.abs(f.array - v)))
@@ -277,12 +330,46 @@ class Space:
             idx.append(k)
         return int(np.ravel_multi_index(tuple(idx), self.shape))
 
+    def _coords(self, point: Sequence[float] | dict[str, float], atol: float) -> list[float]:
+        """A point's coordinates in feature order (with ``atol``, the tolerance it is matched
+        with, a finite number >= 0: NaN matched any point): every feature once (by name in a dict,
+        no other key), each a number (NaN matched grid value 0 before)."""
+        if not (is_number(atol) and 0 <= atol < math.inf):
+            raise ValueError(f"atol must be a finite number >= 0, got {atol!r}")
+        if isinstance(point, dict):
+            missing = set(self.names) - set(point)
+            if missing:
+                raise KeyError(f"point is missing features {sorted(missing)}")
+            unknown = set(point) - set(self.names)
+            if unknown:
+                raise KeyError(
+                    f"point names unknown features {sorted(map(str, unknown))}; this space has "
+                    f"{', '.join(self.names)}"
+                )
+            coords = [float(point[n]) for n in self.names]
+        else:
+            coords = [float(v) for v in point]
+        if len(coords) != self.ndim:
+            raise ValueError(f"point has {len(coords)} coordinates, space has {self.ndim}")
+        for name, v in zip(self.names, coords, strict=True):
+            if math.isnan(v):
+                raise ValueError(f"{name} = nan is not a value")
+        return coords
+
+    def feature_number(self, feature: str | int) -> int:
+        """A feature's position from its name or its number (``0..d-1``; no bools)."""
+        if isinstance(feature, str):
+            return self.feature_index(feature)
+        if isinstance(feature, bool) or not isinstance(feature, int | np.integer):
+            raise TypeError(f"feature must be a name or a number, got {feature!r}")
+        if not 0 <= feature < self.ndim:
+            raise IndexError(f"feature number {feature} out of range (0..{self.ndim - 1})")
+        return int(feature)
+
     def coactive_move(self, index: int, feature: str | int, move: Move) -> int | None:
         """Flat index after moving one feature of action ``index``; ``None`` if it clips back."""
         i = self.check_index(index)
-        f = self.feature_index(feature) if isinstance(feature, str) else int(feature)
-        if not 0 <= f < self.ndim:
-            raise IndexError(f"feature number {f} out of range (0..{self.ndim - 1})")
+        f = self.feature_number(feature)
         multi = [int(m) for m in np.unravel_index(i, self.shape)]
         new = self.features[f].move(multi[f], move)
         if new is None:

@@ -57,6 +57,17 @@ def test_exclude_is_idempotent_and_checks_input() -> None:
         loop.exclude({999: [0]})
     with pytest.raises(IndexError, match="cannot exclude index 7"):
         loop.exclude({qid: [7]})
+    # 0.5 and True were read as indices 0 and 1, "0" as the characters of a string
+    for bad, message in ((0.5, "must be integers, got 0.5"), (True, "must be integers, got True")):
+        with pytest.raises(TypeError, match=message):
+            loop.exclude({qid: [bad]})  # type: ignore[list-item]
+    with pytest.raises(TypeError, match="must be indices, got '0'"):
+        loop.exclude({qid: "0"})
+    # an AttributeError ('list' object has no attribute 'items') before
+    with pytest.raises(TypeError, match="preferences to exclude: expected a mapping"):
+        loop.exclude([qid])  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="singles to exclude: expected a mapping"):
+        loop.exclude({qid: [0]}, [0])  # type: ignore[arg-type]
     assert loop.posterior is before
     assert loop.excluded == {qid: frozenset({0})}
 

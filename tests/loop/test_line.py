@@ -118,6 +118,32 @@ def test_coactive_moves_stay_fractions_of_the_range() -> None:
     assert ids.tolist() == [2, 0] and bigger.coactive_move(0, "x", "+small") == 2
 
 
+def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
+    domain = Space([Feature.interval("x", 0.0, 2.0), Feature.linspace("y", 0.0, 1.0, 6)])
+    # NaN passed the range check and was stored as a point
+    with pytest.raises(ValueError, match="x: points must be numbers"):
+        PointSet(domain, [[np.nan, 0.4]])
+    table = PointSet(domain, [[1.0, 0.4], [1.9, 1.0]])
+    # NaN found row 0 before; an unknown name was ignored
+    with pytest.raises(ValueError, match="x = nan is not a value"):
+        table.index([np.nan, 1.0])
+    with pytest.raises(KeyError, match="unknown features"):
+        table.index({"x": 1.9, "y": 1.0, "z": 0.0})
+    assert table.index({"x": 1.9, "y": 1.0}) == 1
+    with pytest.raises(TypeError, match="feature must be a name or a number"):
+        table.move_target(0, True, "+small")  # type: ignore[arg-type]
+    # a flat list of four numbers was two points; a row of three a NumPy reshape error
+    for bad in ([0.1, 0.2, 0.3, 0.4], [[0.1, 0.2, 0.3]]):
+        with pytest.raises(ValueError, match="points must be rows of 2 values"):
+            PointSet(domain, bad)
+        with pytest.raises(ValueError, match="points must be rows of 2 values"):
+            table.extended(bad)
+    assert len(PointSet(domain, [])) == 0
+    # an empty set's range read "0..-1"
+    with pytest.raises(IndexError, match=r"off the grid \(it has no actions yet\)"):
+        empty_points(domain).check_index(0)
+
+
 def test_lines_span_the_box_and_pass_through_the_origin() -> None:
     domain = Space([Feature.interval(f"x{k}", -1.0, 3.0) for k in range(5)])
     for rule in ("random", "coordinate"):
@@ -311,3 +337,14 @@ def test_all_the_points_of_a_proposal_are_avoided_at_once() -> None:
             for centre in centres:
                 assert np.linalg.norm(np.array(p) / np.array([1.0, 2.0]) - centre) > 0.1
         loop.tell(q, [(q.actions[0], q.actions[1], "first")] if len(set(q.actions)) == 2 else [])
+
+
+def test_a_posterior_over_no_point_has_no_argmax() -> None:
+    loop = LineCoSpar(Space([Feature.interval("x", 0.0, 1.0)]), KERNEL_1D, 0.05)
+    # NumPy's "attempt to get argmax of an empty sequence" before
+    with pytest.raises(ValueError, match="no actions yet"):
+        _ = loop.posterior.argmax
+    with pytest.raises(ValueError, match="no actions yet"):
+        loop.posterior.argmax_samples(np.random.default_rng(0), 2)
+    assert loop.posterior.argmax_samples(np.random.default_rng(0), 0).size == 0
+    assert loop.best_point() is None

@@ -90,3 +90,22 @@ def test_a_line_with_every_point_avoided_is_drawn_again_from_the_generator(
     assert a_query.points == b_query.points
     assert a_query.line is not None and b_query.line is not None
     np.testing.assert_array_equal(a_query.line.points, b_query.line.points)
+
+
+def test_a_line_with_fewer_points_than_n_is_drawn_again() -> None:
+    """On a small discrete domain a line snaps to few grid points (through a corner: one); with
+    n = 2 the strategy's context refused such a line and the ask failed (123 of 200 seeds on a
+    2 x 2 grid within three asks): another line is drawn instead."""
+    domain = Space([Feature("a", [0.0, 1.0]), Feature("b", [0.0, 1.0])])
+    kernel = SquaredExponential(0.3, 1.0, 1e-6)
+    for seed in range(40):
+        loop = LineCoSpar(domain, kernel, 0.1, n=2, seed=seed)
+        for _ in range(3):
+            q = loop.ask()
+            assert len(q.actions) == 2
+            first, second = q.actions
+            loop.tell(q, [(first, second, "first")] if first != second else [])
+    with pytest.raises(ValueError, match="none of the 12 lines tried holds n = 4 points"):
+        LineCoSpar(domain, kernel, 0.1, n=4).ask()  # no line covers the four corners
+    with pytest.raises(ValueError, match="must be at most the grid's size, 4, got 5"):
+        LineCoSpar(domain, kernel, 0.1, n=5)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gaitpref import Feature, Space, SquaredExponential
+from gaitpref import Feature, Space, SquaredExponential, load_config
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import Confidence, StopRule, confidence
 from gaitpref.model.engines import make_engine
@@ -102,6 +102,25 @@ def test_the_rule_triggers_on_confidence_or_trials() -> None:
         StopRule(confidence=1.5)
     with pytest.raises(ValueError, match="tolerance"):
         StopRule(tolerance=1.0)
+    # samples=10**9 ran a million blocks; True was a rule of one trial or of certainty
+    with pytest.raises(ValueError, match=r"samples must be an integer in 1\.\.100000"):
+        StopRule(samples=10**9)
+    with pytest.raises(ValueError, match="max_trials must be an integer >= 1, got True"):
+        StopRule(max_trials=True)
+    with pytest.raises(ValueError, match="confidence must lie"):
+        StopRule(confidence=True)
+    with pytest.raises(ValueError, match="tolerance must be a fraction"):
+        StopRule(tolerance="0.1")  # type: ignore[arg-type]
+
+
+def test_confidence_takes_a_bounded_count_of_samples() -> None:
+    loop = load_config("exo-1d-step-length").make_loop(seed=0)
+    for samples in (2.5, 10**12, 0, True):
+        with pytest.raises(ValueError, match=r"samples must be an integer in 1\.\.100000"):
+            confidence(loop.posterior, np.random.default_rng(0), samples=samples)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="block must be an integer >= 1"):
+        confidence(loop.posterior, np.random.default_rng(0), samples=10, block=1.5)  # type: ignore[arg-type]
+    assert confidence(loop.posterior, np.random.default_rng(0), samples=np.int64(10)).samples == 10
 
 
 def test_the_confidence_is_about_the_smooth_utility_not_the_jitter() -> None:

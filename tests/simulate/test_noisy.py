@@ -46,3 +46,12 @@ def test_answer_frequencies_follow_the_ordered_probit() -> None:
 def test_a_negative_band_is_rejected() -> None:
     with pytest.raises(ValueError, match="band must be >= 0"):
         IndifferentUser(SPACE, OBJECTIVE, np.random.default_rng(0), band=-0.1)
+
+
+@pytest.mark.parametrize("band", [True, "0.1", None])
+def test_the_band_is_a_number(band: object) -> None:
+    # True was a band of 1; a string or None a NumPy ufunc TypeError
+    with pytest.raises(ValueError, match="band must be >= 0"):
+        IndifferentUser(
+            SPACE, np.arange(len(SPACE), dtype=float), np.random.default_rng(0), band=band
+        )  # type: ignore[arg-type]

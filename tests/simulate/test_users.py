@@ -80,3 +80,30 @@ def test_simulation_reports_trials_and_scores() -> None:
     assert np.allclose(result.normalized_objective, user.normalized(result.actions))
     assert abs(x[result.posterior_argmax] - 0.132) < 0.015
     assert result.argmax_normalized_objective > 0.95
+
+
+def test_users_take_grid_indices_and_a_generator(line: Space) -> None:
+    user = SimulatedUser(line, np.arange(len(line), dtype=float), np.random.default_rng(0))
+    last = len(line) - 1
+    # -1 read the last gait (normalized 1.0), 1.7 gait 1
+    with pytest.raises(IndexError, match=r"actions\[0\] = -1 is off the grid"):
+        user.normalized([-1])
+    with pytest.raises(TypeError, match="integer grid indices"):
+        user.normalized([1.7])
+    with pytest.raises(IndexError, match="action index -1 is off the grid"):
+        user.compare(-1, 0)
+    assert user.compare(last, 0) == "first"
+    with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
+        SimulatedUser(line, np.arange(len(line), dtype=float), 0)  # type: ignore[arg-type]
+    coactive = GradientCoactive(line, np.arange(len(line), dtype=float) ** 2)
+    with pytest.raises(IndexError, match="action index -1 is off the grid"):
+        coactive.suggest(-1)
+
+
+def test_simulation_trials_are_a_count() -> None:
+    config = load_config("exo-1d-step-length")
+    objective = np.linspace(0.0, 1.0, len(config.space))
+    for trials in (2.5, True, 0):
+        user = SimulatedUser(config.space, objective, np.random.default_rng(0))
+        with pytest.raises(ValueError, match="trials must be an integer >= 1"):
+            run_simulation(config.make_loop(seed=0), user, trials)  # type: ignore[arg-type]

@@ -49,8 +49,10 @@ from gaitpref.loop.learning import (
     WARM_FIRST,
 )
 from gaitpref.loop.lines import DIRECTIONS, MAX_LINES, MAX_STAR_POINTS
+from gaitpref.loop.stopping import MAX_SAMPLES as MAX_CONFIDENCE_SAMPLES
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
+from gaitpref.strategies.base import MAX_CANDIDATES, MAX_GATES, MAX_SAMPLES
 
 #: A grid (the product of every feature's ``num`` or ``values``) has at most this many actions.
 MAX_ACTIONS: Final = 1_000_000
@@ -134,7 +136,8 @@ STOP: Final[dict[str, Key]] = {
     "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule
     "max_trials": Key(Integer(1, 1_000_000), None),  # None: no limit
     "tolerance": Key(Number(0.0, 0.5), 0.05),  # "within 5% of the best" (of the utility's range)
-    "samples": Key(Integer(100, 100_000), 2000),  # posterior samples behind the probability
+    # posterior samples behind the probability
+    "samples": Key(Integer(100, MAX_CONFIDENCE_SAMPLES), 2000),
 }
 FEATURE: Final[dict[str, Key]] = {
     "min": Key(Number(), None),
@@ -192,11 +195,11 @@ COSPAR: Final[dict[str, Key]] = {
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.
 _SETTING_SPECS: Final[dict[str, Spec]] = {
-    "gates": Integer(1, 1000),
+    "gates": Integer(1, MAX_GATES),
     "trials": Integer(0, 1_000_000),
     "beta": Number(0.0, 100.0),
-    "candidates": Integer(2, 4096),
-    "samples": Integer(1, 4096),
+    "candidates": Integer(2, MAX_CANDIDATES),
+    "samples": Integer(1, MAX_SAMPLES),
     "early_scale": Number(0.01, 100.0),
     "early_trials": Integer(0, 1_000_000),
     "sparring_from": Integer(0, 1_000_000),

@@ -33,12 +33,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.errors import FeedbackError, NoSafeGaitError, QueryError
 from gaitpref.feedback import (
     ActionObservation,
     Comparison,
     FeedbackKind,
     ModelContext,
+    Observations,
     Preference,
     Suggestion,
     Tie,
@@ -154,13 +156,28 @@ class CoSpar:
         ordinal: Ordinal | None = None,
         safety: Safety | None = None,
     ) -> None:
-        if not isinstance(n, int) or n < 1:
+        if not isinstance(space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
+        if not is_count(n) or n < 1:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
-        if not isinstance(buffer, int) or buffer < 0:
+        if not is_count(buffer) or buffer < 0:
             raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
-        if not (np.isfinite(coactive_weight) and coactive_weight > 0):
+        if not (
+            is_number(coactive_weight) and np.isfinite(coactive_weight) and coactive_weight > 0
+        ):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        if not isinstance(seed, np.random.Generator) and not (is_count(seed) and seed >= 0):
+            raise ValueError(
+                f"seed must be an integer >= 0 or a numpy.random.Generator, got {seed!r} (every "
+                "random choice comes from it: None would draw from the operating system)"
+            )
+        _check_parts(strategy=strategy, learning=learning, ordinal=ordinal, safety=safety)
+        n, buffer = int(n), int(buffer)
         _check_grid(space)
+        if not isinstance(space, PointSet) and n > len(space):  # failed at every ask before
+            raise ValueError(
+                f"n (actions per query) must be at most the grid's size, {len(space)}, got {n}"
+            )
         self.space = space
         self.gp = PreferenceGP(space, kernel, noise, sampler=sampler, ordinal=ordinal)
         self.learning = Learning() if learning is None else learning
@@ -186,8 +203,11 @@ class CoSpar:
             if ordinal is None:
                 raise ValueError("a region of avoidance needs a rating scale (ordinal=...)")
             self.safety.threshold(ordinal, kernel.variance)  # checks avoid < categories
-        for a in self.safety.start:
-            space.check_index(a)
+        for k, a in enumerate(self.safety.start):
+            try:
+                space.check_index(a)
+            except IndexError as exc:
+                raise IndexError(f"safety.start[{k}]: {exc}") from None
         self.unsafe: set[int] = set()  # actions flagged unsafe (flag_unsafe)
         self.avoided: dict[int, float] = {}  # action -> radius never proposed again (avoid)
         self._avoided_mask: NDArray[np.bool_] | None = None
@@ -345,8 +365,7 @@ class CoSpar:
         scaled to ``[0, 1]``, as for unsafe flags): e.g. a gait that cannot be made.  Unlike an
         unsafe flag it is never taken back.  A pending query that proposes such an action is
         withdrawn as by :meth:`flag_unsafe`; returns whether it was."""
-        if not (np.isfinite(radius) and 0 <= radius <= 1):
-            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        check_radius(radius)
         index = self.space.check_index(action)
         self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))
         banned = near(self.space, [index], self.avoided[index])
@@ -358,6 +377,10 @@ class CoSpar:
     def avoid_all(self, actions: Sequence[int], radius: float) -> bool:
         """:meth:`avoid` each of ``actions`` (actions of the pending query, say: all named
         before any is withdrawn); returns whether the pending query was withdrawn."""
+        check_radius(radius)
+        actions = list(actions)  # read twice below (an iterator too)
+        for action in actions:  # all checked before any is avoided: nothing changes on a bad one
+            self.space.check_index(action)
         withdrawn = False
         for action in actions:
             withdrawn |= self.avoid(action, radius)
@@ -379,11 +402,15 @@ class CoSpar:
 
     def unflag_unsafe(self, action: int) -> None:
         """Take an unsafe flag back (the flag's undo)."""
+        if not is_count(action):
+            raise TypeError(f"action index must be an integer, got {action!r}")
         self.unsafe.discard(int(action))
 
     def warm_start(self, warm: WarmStart) -> None:
         """Include earlier subjects' answers in every fit from now on (``loop/warm.py``);
         only before the first answer."""
+        if not isinstance(warm, WarmStart):
+            raise TypeError(f"warm must be a WarmStart (loop.warm), got {warm!r}")
         if self.answers or self.pending is not None:
             raise QueryError("a warm start must come before the first query")
         self.warm = warm
@@ -418,7 +445,7 @@ class CoSpar:
                 self._rescaled,
             )
             with one_blas_thread():
-                actions += tuple(int(a) for a in self.strategy.propose(context))
+                actions += proposed(self.strategy, context)
         points = tuple(tuple(row) for row in self.space.points_of(actions).tolist())
         self.pending = Query(self._next_id, actions, self._buffer, points)
         self._next_id += 1
@@ -476,8 +503,14 @@ class CoSpar:
         :class:`FeedbackError` and changes nothing on bad input.
         """
         q = self._check_query(query)
+        given = {"answers": answers, "suggestions": suggestions, "comparisons": comparisons}
+        items = {name: _records(name, value) for name, value in given.items()}
         with self._all_or_nothing():
-            return self._tell(q, [*answers, *_as_comparisons(comparisons)], suggestions)
+            return self._tell(
+                q,
+                [*items["answers"], *_as_comparisons(items["comparisons"])],
+                items["suggestions"],
+            )
 
     @contextmanager
     def _all_or_nothing(self) -> Iterator[None]:
@@ -495,6 +528,7 @@ class CoSpar:
         ignored: list[Hashable] = []
         for kind, record in records:
             terms = kind.observations(record, context, q.id)
+            self._check_terms(kind.name, terms)
             prefs += terms.preferences
             ties += terms.ties
             singles += terms.singles
@@ -701,6 +735,26 @@ class CoSpar:
             return answer.singles
         return tuple(o for k, o in enumerate(answer.singles) if k not in dropped)
 
+    def _check_terms(self, kind: str, terms: Observations) -> None:
+        """A kind's likelihood terms name actions of the grid, with a positive noise: a kind
+        registered outside the package is held to it (a term on action -1 was fitted on the
+        last gait)."""
+        size = len(self.space)
+        actions = [a for p in terms.preferences for a in (p.winner, p.loser)]
+        actions += [a for t in terms.ties for a in (t.first, t.second)]
+        actions += [o.action for o in terms.singles]
+        for a in actions:
+            if not is_count(a) or not 0 <= a < size:
+                raise FeedbackError(
+                    f"feedback kind {kind!r} made a term on {a!r}, not an action (0..{size - 1})"
+                )
+        for p in terms.preferences:
+            if not (is_number(p.noise) and np.isfinite(p.noise) and p.noise > 0):
+                raise FeedbackError(
+                    f"feedback kind {kind!r} made a preference with noise {p.noise!r} "
+                    "(it must be positive)"
+                )
+
     def _check_evidence(self, singles: list[ActionObservation]) -> None:
         """Refuse, naming the kind, single-action terms the evidence fit cannot differentiate."""
         context = self.context()
@@ -887,6 +941,12 @@ GRID_LIMIT_ACTIONS = 10_000_000
 GRID_LIMIT_VALUES = 1_000
 
 
+def check_radius(radius: object) -> None:
+    """An avoided neighbourhood's radius: a number in ``[0, 1]`` (a fraction of the ranges)."""
+    if not (is_number(radius) and np.isfinite(radius) and 0 <= radius <= 1):  # type: ignore[call-overload, operator]
+        raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+
+
 def _check_grid(space: Space) -> None:
     """A clear refusal where the full-grid path would not fit (issue 13, item 3)."""
     if isinstance(space, PointSet):
@@ -917,6 +977,55 @@ def _check_grid(space: Space) -> None:
         )
 
 
+def proposed(strategy: Strategy, context: AskContext) -> tuple[int, ...]:
+    """What ``strategy`` proposes, checked: ``context.n`` integer actions of the context's
+    posterior, each allowed (a strategy written outside the package is held to the protocol:
+    a gait outside ``allowed``, in the region of avoidance or near an unsafe flag, was run)."""
+    picks = tuple(strategy.propose(context))
+    name = getattr(strategy, "name", type(strategy).__name__)
+    if len(picks) != context.n:
+        raise ValueError(
+            f"strategy {name!r} proposed {len(picks)} actions; the query asks {context.n}"
+        )
+    size = len(context.posterior.space)
+    for a in picks:
+        if not is_count(a) or not 0 <= a < size:
+            raise ValueError(f"strategy {name!r} proposed {a!r}, not an action (0..{size - 1})")
+        if context.allowed is not None and not context.allowed[a]:
+            raise ValueError(f"strategy {name!r} proposed action {a}, which may not be proposed")
+    return tuple(int(a) for a in picks)
+
+
+def _check_parts(**parts: object) -> None:
+    """The loop's parts are what their names say (a strategy from ``make_strategy``, ...):
+    a name or a dict in their place failed at the first ask or tell."""
+    for name, value in parts.items():
+        if value is None:
+            continue
+        if name == "strategy":
+            if not callable(getattr(value, "propose", None)):
+                raise TypeError(
+                    f"strategy must be a Strategy (gaitpref.make_strategy(name)), got {value!r}"
+                )
+            continue
+        kind = {"learning": Learning, "ordinal": Ordinal, "safety": Safety}[name]
+        if not isinstance(value, kind):
+            raise TypeError(f"{name} must be a {kind.__name__} or None, got {value!r}")
+
+
+def _records(name: str, value: object) -> list[object]:
+    """``tell``'s argument ``name`` as a list of items: a list (or any iterable) of records or
+    raw tuples, not one record, a string or a number (a TypeError from unpacking before)."""
+    if kind_of(value) is not None:
+        raise FeedbackError(
+            f"{name}: expected a list of feedback records, got one {type(value).__name__}: "
+            f"give [{value!r}]"
+        )
+    if isinstance(value, str | bytes) or not isinstance(value, Iterable):
+        raise FeedbackError(f"{name}: expected a list of feedback records, got {value!r}")
+    return list(value)
+
+
 def _as_comparisons(items: Iterable[object]) -> list[object]:
     """``comparisons=`` items: raw triples or :class:`Comparison` records, nothing else."""
     out = list(items)
@@ -935,11 +1044,21 @@ def _merged(
     field: str,
 ) -> dict[int, frozenset[int]]:
     """``current`` with ``drops`` (query id -> indices into that answer's ``field``) added."""
+    if not isinstance(drops, Mapping):
+        raise TypeError(
+            f"{field} to exclude: expected a mapping of query id -> indices, got {drops!r}"
+        )
     new = dict(current)
     for qid, indices in drops.items():
         if qid not in position:
             raise QueryError(f"cannot exclude from query {qid}: it has no recorded answer")
         size = len(getattr(answers[position[qid]], field))
+        if isinstance(indices, str | bytes) or not isinstance(indices, Iterable):
+            raise TypeError(f"query {qid}: {field} to exclude must be indices, got {indices!r}")
+        indices = list(indices)  # read once (an iterator too)
+        odd = [i for i in indices if not is_count(i)]
+        if odd:
+            raise TypeError(f"query {qid}: {field} to exclude must be integers, got {odd[0]!r}")
         chosen = {int(i) for i in indices}
         bad = sorted(i for i in chosen if not 0 <= i < size)
         if bad:

@@ -45,6 +45,7 @@ from typing import Literal
 
 import numpy as np
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.feedback import Preference, Tie
 from gaitpref.model.evidence import PairData
 from gaitpref.model.hyperfit import HyperPrior
@@ -82,14 +83,13 @@ class Learning:
             raise ValueError(f"ties must be one of {', '.join(TIES_MODES)}; got {self.ties!r}")
         if self.fit not in FIT_MODES:
             raise ValueError(f"fit must be one of {', '.join(FIT_MODES)}; got {self.fit!r}")
-        if isinstance(self.refit_every, bool) or not (
-            isinstance(self.refit_every, int) and self.refit_every >= 1
-        ):
+        if not is_count(self.refit_every) or self.refit_every < 1:
             raise ValueError(f"refit_every must be an integer >= 1, got {self.refit_every!r}")
+        object.__setattr__(self, "refit_every", int(self.refit_every))
         if self.tie_band is not None:
             if self.ties == "drop":
                 raise ValueError("tie_band is only used with ties = 'model'")
-            if not (np.isfinite(self.tie_band) and self.tie_band > 0):
+            if not (is_number(self.tie_band) and np.isfinite(self.tie_band) and self.tie_band > 0):
                 raise ValueError(f"tie_band must be positive, got {self.tie_band!r}")
         elif self.ties == "model" and self.fit == "fixed":
             raise ValueError("ties = 'model' with fit = 'fixed' needs a tie_band (a number)")
@@ -97,10 +97,16 @@ class Learning:
             raise ValueError(f"hyper must be one of {', '.join(HYPER_MODES)}; got {self.hyper!r}")
         if self.hyper == "average" and self.fit != "evidence":
             raise ValueError("hyper = 'average' needs fit = 'evidence'")
-        if not self.hypotheses or not all(
-            isinstance(c, float | int) and np.isfinite(c) and c > 0 for c in self.hypotheses
+        if (
+            isinstance(self.hypotheses, str)
+            or not isinstance(self.hypotheses, Sequence | np.ndarray)
+            or len(self.hypotheses) == 0
+            or not all(is_number(c) and np.isfinite(c) and c > 0 for c in self.hypotheses)
         ):
             raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
+        object.__setattr__(self, "hypotheses", tuple(float(c) for c in self.hypotheses))
+        if self.prior is not None and not isinstance(self.prior, HyperPrior):
+            raise TypeError(f"prior must be a HyperPrior or None, got {self.prior!r}")
         if len(set(self.hypotheses)) != len(self.hypotheses):
             raise ValueError(f"hypotheses must differ, got {self.hypotheses!r}")
         if self.share not in SHARE_MODES:

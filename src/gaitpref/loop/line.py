@@ -33,9 +33,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count
 from gaitpref.errors import NoSafeGaitError, QueryError
 from gaitpref.feedback import FeedbackKind, Suggestion
-from gaitpref.loop.cospar import Answer, CoSpar, Query
+from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius, proposed
 from gaitpref.loop.lines import (
     LINE_DRAWS,
     Line,
@@ -83,6 +84,21 @@ class LineCoSpar(CoSpar):
     ) -> None:
         if isinstance(domain, PointSet):
             raise TypeError("the line path takes the features' space, not a point set")
+        if not isinstance(domain, Space):
+            raise TypeError(f"domain must be a gaitpref.Space, got {domain!r}")
+        if line is not None and not isinstance(line, LineSettings):
+            raise TypeError(f"line must be a LineSettings or None, got {line!r}")
+        if all(f.span == 0 for f in domain.features):  # failed at the first ask before
+            raise ValueError(
+                "every feature has a single value: there is no line to draw (give some "
+                "feature a range)"
+            )
+        n = settings.get("n", 1)
+        if domain.grid_size is not None and is_count(n) and n > domain.grid_size:
+            raise ValueError(
+                f"n (actions per query) must be at most the grid's size, {domain.grid_size}, "
+                f"got {n}"
+            )
         safety = settings.get("safety")
         if isinstance(safety, Safety) and safety.start:
             raise ValueError("the line path takes no start gaits (safety.start): a grid does")
@@ -131,6 +147,7 @@ class LineCoSpar(CoSpar):
             return self.pending
         state = self.rng.bit_generator.state
         origin, towards = self.best_point(), self._towards()
+        short = False  # some line drawn had a point to propose but fewer than n points
         with one_blas_thread():
             for draw in range(LINE_DRAWS):
                 seed = int(self.rng.integers(2**63 - 1))
@@ -138,10 +155,19 @@ class LineCoSpar(CoSpar):
                 start = origin if through_best else None  # None: a random point of the seed's
                 line = draw_line(self.domain, rule, seed, start, towards if draw == 0 else None)
                 space, allowed = self._on_line(line)
-                if allowed.any():
+                # a line snapped to few grid values (through a corner, say) may hold fewer
+                # points with the table than the query's n: another is drawn (the strategy's
+                # context refused it, and the ask failed, before)
+                short |= bool(allowed.any()) and len(space) < self.n
+                if allowed.any() and len(space) >= self.n:
                     break
             else:  # nothing drawn, nothing logged: the generator goes back as it was
                 self.rng.bit_generator.state = state
+                if short:
+                    raise ValueError(
+                        f"none of the {LINE_DRAWS} lines tried holds n = {self.n} points with the "
+                        "gaits so far: lower n, or give the discrete features more values"
+                    )
                 through = "random points" if origin is None else "the best point, then random ones"
                 tried = f"{LINE_DRAWS} line" + ("s" if LINE_DRAWS != 1 else "")
                 raise NoSafeGaitError(
@@ -159,7 +185,7 @@ class LineCoSpar(CoSpar):
             context = AskContext(
                 posterior, self.n, self._buffer, len(self.executed), self.rng, allowed, rescaled
             )
-            chosen = [int(a) for a in self.strategy.propose(context)]
+            chosen = list(proposed(self.strategy, context))
         self._rng_before_pending = state
         self._table_before_pending = self.space
         table, actions = self.space.extended(space.points[chosen])
@@ -251,8 +277,7 @@ class LineCoSpar(CoSpar):
         """As :meth:`avoid` for each of ``actions``, all read in the table as it is now: the
         withdrawal that the first would cause takes the pending query's rows out of the table,
         so one at a time the next row would name another point, or none."""
-        if not (np.isfinite(radius) and 0 <= radius <= 1):
-            raise ValueError(f"radius must be in [0, 1], got {radius!r}")
+        check_radius(radius)
         indices = [self.space.check_index(a) for a in actions]
         for index in indices:
             self.avoided[index] = max(float(radius), self.avoided.get(index, 0.0))

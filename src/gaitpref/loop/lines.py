@@ -32,6 +32,7 @@ from typing import Literal, get_args
 
 import numpy as np
 
+from gaitpref.checks import is_count
 from gaitpref.space import FloatArray, Space
 
 Direction = Literal["random", "coordinate", "coactive"]
@@ -60,16 +61,14 @@ class LineSettings:
     lines: int = 1
 
     def __post_init__(self) -> None:
-        if isinstance(self.points, bool) or not isinstance(self.points, int) or self.points < 2:
+        if not is_count(self.points) or self.points < 2:
             raise ValueError(f"a line needs at least 2 points, got points = {self.points!r}")
-        if (
-            isinstance(self.lines, bool)
-            or not isinstance(self.lines, int)
-            or not 1 <= self.lines <= MAX_LINES
-        ):
+        if not is_count(self.lines) or not 1 <= self.lines <= MAX_LINES:
             raise ValueError(
                 f"lines per query must be an integer from 1 to {MAX_LINES}, got {self.lines!r}"
             )
+        object.__setattr__(self, "points", int(self.points))  # a NumPy integer as an int
+        object.__setattr__(self, "lines", int(self.lines))
         if self.lines * self.points > MAX_STAR_POINTS:
             raise ValueError(
                 f"{self.lines} lines of {self.points} points are {self.lines * self.points} "

@@ -60,6 +60,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import FloatArray, Space
@@ -88,24 +89,36 @@ class Safety:
     reach: float | None = None
 
     def __post_init__(self) -> None:
-        if isinstance(self.avoid, bool) or not isinstance(self.avoid, int) or self.avoid < 0:
+        if not is_count(self.avoid) or self.avoid < 0:
             raise ValueError(f"avoid must be a number of categories >= 0, got {self.avoid!r}")
-        if not (np.isfinite(self.lam) and self.lam >= 0):
+        object.__setattr__(self, "avoid", int(self.avoid))
+        if not (is_number(self.lam) and np.isfinite(self.lam) and self.lam >= 0):
             raise ValueError(f"lambda must be a finite number >= 0, got {self.lam!r}")
-        if not (np.isfinite(self.unsafe_radius) and 0 <= self.unsafe_radius <= 1):
+        if not (
+            is_number(self.unsafe_radius)
+            and np.isfinite(self.unsafe_radius)
+            and 0 <= self.unsafe_radius <= 1
+        ):
             raise ValueError(f"unsafe_radius must be in [0, 1], got {self.unsafe_radius!r}")
-        if self.risk is not None and not (np.isfinite(self.risk) and 0 < self.risk < 1):
+        if self.risk is not None and not (
+            is_number(self.risk) and np.isfinite(self.risk) and 0 < self.risk < 1
+        ):
             raise ValueError(f"risk must be a probability in (0, 1), got {self.risk!r}")
         if self.cautious is not None:
             if self.risk is None:
                 raise ValueError("cautious needs the risk rule (risk), not ROIAL's bound")
-            if not (np.isfinite(self.cautious) and 0 < self.cautious < 1):
+            if not (
+                is_number(self.cautious) and np.isfinite(self.cautious) and 0 < self.cautious < 1
+            ):
                 raise ValueError(f"cautious must be a fraction in (0, 1), got {self.cautious!r}")
-        if not (np.isfinite(self.explore) and self.explore >= 0):
+        if not (is_number(self.explore) and np.isfinite(self.explore) and self.explore >= 0):
             raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
-        if any(isinstance(a, bool) or not isinstance(a, int) or a < 0 for a in self.start):
+        if isinstance(self.start, str) or any(not is_count(a) or a < 0 for a in self.start):
             raise ValueError(f"start must hold action indices >= 0, got {self.start!r}")
-        if self.reach is not None and not (np.isfinite(self.reach) and self.reach > 0):
+        object.__setattr__(self, "start", tuple(int(a) for a in self.start))
+        if self.reach is not None and not (
+            is_number(self.reach) and np.isfinite(self.reach) and self.reach > 0
+        ):
             raise ValueError(f"reach must be a number of lengthscales > 0, got {self.reach!r}")
         if len(set(self.start)) != len(self.start):
             raise ValueError(f"start names a gait twice: {self.start!r}")

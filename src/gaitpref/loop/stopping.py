@@ -31,11 +31,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.share_mix import PosteriorMixture
 
 #: At most this many sampled values (``block x A``) are held at once: 32 MiB.
 BLOCK_ELEMENTS = 1 << 22
+#: The most samples one confidence reads (a config's ``[stop] samples`` too): each is a draw
+#: over every gait, so 10**12 ran for days, one block at a time.
+MAX_SAMPLES = 100_000
 
 
 @dataclass(frozen=True)
@@ -64,7 +68,14 @@ class Confidence:
         }
 
 
+def _check_samples(samples: object) -> None:
+    if not is_count(samples) or not 1 <= samples <= MAX_SAMPLES:  # type: ignore[operator]
+        raise ValueError(f"samples must be an integer in 1..{MAX_SAMPLES}, got {samples!r}")
+
+
 def check_tolerance(tolerance: float) -> float:
+    if not is_number(tolerance):
+        raise ValueError(f"tolerance must be a fraction in [0, 1), got {tolerance!r}")
     value = float(tolerance)
     if not (np.isfinite(value) and 0.0 <= value < 1.0):
         raise ValueError(f"tolerance must be a fraction in [0, 1), got {tolerance!r}")
@@ -92,8 +103,9 @@ def confidence(
     tolerance = check_tolerance(tolerance)
     if block is None:
         block = max(1, min(256, BLOCK_ELEMENTS // len(posterior.space)))
-    if samples < 1 or block < 1:
-        raise ValueError(f"samples and block must be >= 1, got {samples} and {block}")
+    _check_samples(samples)
+    if not is_count(block) or block < 1:
+        raise ValueError(f"block must be an integer >= 1, got {block!r}")
     mean = np.array(posterior.mean)
     if allowed is not None:
         if not allowed.any():
@@ -132,11 +144,14 @@ class StopRule:
     samples: int = 2000
 
     def __post_init__(self) -> None:
-        if self.confidence is not None and not 0.0 < self.confidence <= 1.0:
+        if self.confidence is not None and not (
+            is_number(self.confidence) and 0.0 < self.confidence <= 1.0
+        ):
             raise ValueError(f"confidence must lie in (0, 1], got {self.confidence!r}")
-        if self.max_trials is not None and self.max_trials < 1:
-            raise ValueError(f"max_trials must be >= 1, got {self.max_trials!r}")
+        if self.max_trials is not None and not (is_count(self.max_trials) and self.max_trials >= 1):
+            raise ValueError(f"max_trials must be an integer >= 1, got {self.max_trials!r}")
         check_tolerance(self.tolerance)
+        _check_samples(self.samples)
 
     @property
     def active(self) -> bool:

@@ -193,10 +193,10 @@ def laplace_evidence(
     kernel = hyper.kernel()
     K = kernel.cross(space, visited, rows=visited)
     m = visited.shape[0]
+    points = space.points_of(visited)  # not every grid point (A x d) for the visited ones
 
     def kernel_gradient(B: FloatArray) -> FloatArray:
         out = np.zeros(space.ndim + 1)
-        points = space.points[visited]
         se = K - kernel.jitter * np.eye(m)  # the squared-exponential part
         for j, ell in enumerate(hyper.lengthscale):
             dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2

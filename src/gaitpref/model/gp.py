@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gaitpref.checks import is_number
 from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
@@ -22,22 +23,6 @@ from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
 from gaitpref.model.ordinal import Ordinal, rating_likelihood
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import IntArray, Space
-
-
-def _as_indices(space: Space, values: ArrayLike, name: str) -> IntArray:
-    arr = np.asarray(values)
-    if arr.ndim != 1:
-        raise ValueError(f"{name} must be a 1-D sequence of grid indices")
-    if arr.size and not np.issubdtype(arr.dtype, np.integer):
-        raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
-    idx = arr.astype(np.intp)
-    bad = (idx < 0) | (idx >= len(space))
-    if np.any(bad):
-        raise IndexError(
-            f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
-            f"(0..{len(space) - 1})"
-        )
-    return idx
 
 
 class PreferenceGP:
@@ -56,7 +41,11 @@ class PreferenceGP:
         sampler: str = "auto",
         ordinal: Ordinal | None = None,
     ) -> None:
-        if not (np.isfinite(noise) and noise > 0):
+        if not isinstance(space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
+        if not isinstance(kernel, SquaredExponential):
+            raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {kernel!r}")
+        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
             raise ValueError(f"preference noise must be positive, got {noise!r}")
         kernel.lengthscales(space.ndim)  # checks the count
         self.space = space
@@ -89,22 +78,39 @@ class PreferenceGP:
         ``noise`` overrides the default probit noise per comparison; ``init`` is a previous
         posterior whose mean warm-starts Newton's method.
         """
-        w = _as_indices(self.space, winners, "winners")
-        loser_idx = _as_indices(self.space, losers, "losers")
+        w = self.space.check_indices(winners, "winners")
+        loser_idx = self.space.check_indices(losers, "losers")
         if w.shape != loser_idx.shape:
             raise ValueError(f"{w.size} winners but {loser_idx.size} losers")
         if noise is None:
             sigma = np.full(w.size, self.noise)
         else:
-            sigma = np.broadcast_to(np.asarray(noise, dtype=np.float64), w.shape).copy()
+            try:
+                sigma = np.broadcast_to(np.asarray(noise, dtype=np.float64), w.shape).copy()
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"noise must be one number or one per comparison ({w.size}), got {noise!r}"
+                ) from None
             if not np.all(np.isfinite(sigma) & (sigma > 0)):
                 raise ValueError("every comparison's noise must be positive and finite")
         if not ratings:
             return self.posterior_from(w, loser_idx, Probit(sigma), init=init)
         if self.ordinal is None:
             raise ValueError("ratings need PreferenceGP(..., ordinal=Ordinal(...))")
-        actions = _as_indices(self.space, [a for a, _ in ratings], "rating actions")
-        labels = [self.ordinal.label_index(label) for _, label in ratings]
+        rated, labels = [], []
+        for k, item in enumerate(ratings):
+            try:
+                action, label = item
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"ratings[{k}] must be an (action, label) pair, got {item!r}"
+                ) from None
+            try:
+                labels.append(self.ordinal.label_index(label))
+            except ValueError as exc:
+                raise ValueError(f"ratings[{k}]: {exc}") from None
+            rated.append(action)
+        actions = self.space.check_indices(rated, "rating actions")
         lik = rating_likelihood(self.ordinal, self.kernel.variance, labels)
         return self.posterior_from(
             w, loser_idx, Probit(sigma), init=init, single=actions, single_likelihood=lik
@@ -126,7 +132,7 @@ class PreferenceGP:
         utilities ``f[single_k]`` (the second shape of likelihood term, ``laplace.py``).
         """
         if single is not None:
-            single = _as_indices(self.space, single, "single")
+            single = self.space.check_indices(single, "single")
             if single.size == 0:
                 single = single_likelihood = None
             elif single_likelihood is None:

@@ -18,11 +18,11 @@ Notation: ``A`` grid points, ``m`` columns asked for, ``d`` features.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.checks import is_number
 from gaitpref.pointset import PointSet
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -39,17 +39,16 @@ class SquaredExponential:
     def __post_init__(self) -> None:
         ls = self.lengthscale
         ls_t: tuple[float, ...] | float
-        if isinstance(ls, int | float | np.floating):
-            ls_t = float(ls)
-            values: Sequence[float] = [ls_t]
-        else:
-            ls_t = tuple(float(v) for v in ls)
-            values = ls_t
-        if not values or not all(np.isfinite(v) and v > 0 for v in values):
+        items = list(np.ravel(np.asarray(ls, dtype=object)))
+        if not items or not all(is_number(v) and np.isfinite(v) and v > 0 for v in items):
             raise ValueError(f"lengthscale must be positive and finite, got {ls!r}")
-        if not (np.isfinite(self.variance) and self.variance > 0):
+        if is_number(ls) or np.ndim(ls) == 0:
+            ls_t = float(items[0])
+        else:
+            ls_t = tuple(float(v) for v in items)
+        if not (is_number(self.variance) and np.isfinite(self.variance) and self.variance > 0):
             raise ValueError(f"signal variance must be positive, got {self.variance!r}")
-        if not (np.isfinite(self.jitter) and self.jitter >= 0):
+        if not (is_number(self.jitter) and np.isfinite(self.jitter) and self.jitter >= 0):
             raise ValueError(f"jitter must be >= 0, got {self.jitter!r}")
         object.__setattr__(self, "lengthscale", ls_t)
         object.__setattr__(self, "variance", float(self.variance))

@@ -42,8 +42,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import log_ndtr, ndtr, ndtri
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.model.likelihood import interval_ratios, mills_ratio
 from gaitpref.space import FloatArray
+
+#: The most categories a rating scale may have (an operator picks one of them after a trial).
+MAX_CATEGORIES = 100
 
 
 @dataclass(frozen=True)
@@ -64,17 +68,36 @@ class Ordinal:
         thresholds: Sequence[float] | None = None,
         noise: float = 0.02,
     ) -> None:
-        labels = (
-            tuple(str(k) for k in range(1, categories + 1))
-            if isinstance(categories, int)
-            else tuple(categories)
-        )
+        labels: tuple[str, ...]
+        if isinstance(categories, int | np.integer) and is_count(categories):
+            if not 2 <= categories <= MAX_CATEGORIES:
+                raise ValueError(
+                    f"an ordinal scale needs 2 to {MAX_CATEGORIES} categories, got {categories!r}"
+                )
+            labels = tuple(str(k) for k in range(1, int(categories) + 1))
+        elif isinstance(categories, str) or not isinstance(categories, Sequence):
+            raise ValueError(
+                "categories must be a number of categories or a sequence of their names "
+                f"(worst first), got {categories!r}"
+            )
+        else:
+            labels = tuple(categories)
+            if not all(isinstance(c, str) and c for c in labels):
+                raise ValueError(f"category names must be non-empty strings, got {labels!r}")
         if len(labels) < 2 or len(set(labels)) != len(labels):
             raise ValueError(f"an ordinal scale needs >= 2 distinct categories, got {labels!r}")
-        if not (np.isfinite(noise) and noise > 0):
+        if len(labels) > MAX_CATEGORIES:
+            raise ValueError(
+                f"an ordinal scale needs 2 to {MAX_CATEGORIES} categories, got {len(labels)}"
+            )
+        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
             raise ValueError(f"the rating noise must be positive, got {noise!r}")
         t = None
         if thresholds is not None:
+            if isinstance(thresholds, str) or not isinstance(thresholds, Sequence | np.ndarray):
+                raise ValueError(f"thresholds must be a sequence of numbers, got {thresholds!r}")
+            if not all(is_number(x) for x in thresholds):
+                raise ValueError(f"thresholds must be numbers, got {thresholds!r}")
             t = tuple(float(x) for x in thresholds)
             if len(t) != len(labels) - 1:
                 raise ValueError(f"{len(labels)} categories need {len(labels) - 1} thresholds")
@@ -219,7 +242,13 @@ def rating_likelihood(
     ordinal: Ordinal, signal_variance: float, labels: ArrayLike
 ) -> OrdinalLikelihood:
     """The likelihood of ratings ``labels`` (``1..K``) under ``ordinal``."""
-    idx = np.asarray(labels, dtype=np.intp)
+    given = np.asarray(labels)
+    if given.ndim != 1 or (given.size and not np.issubdtype(given.dtype, np.integer)):
+        raise ValueError(
+            f"rating labels must be a 1-D sequence of integers 1..{ordinal.size}, got "
+            f"dtype {given.dtype} and shape {given.shape}"
+        )
+    idx = given.astype(np.intp)
     if idx.size and (idx.min() < 1 or idx.max() > ordinal.size):
         raise ValueError(f"rating labels must be in 1..{ordinal.size}")
     t = np.asarray(ordinal.thresholds_for(signal_variance), dtype=np.float64)

@@ -340,10 +340,10 @@ def population_evidence(
     weights = subject_weights(subjects, subjects, rho, share)
     K = full * weights
     d = space.ndim
+    points = space.points_of(gaits)  # not every grid point (A x d) for the gaits in the data
 
     def kernel_gradient(B: FloatArray) -> FloatArray:
         out = np.zeros(d + 2)
-        points = space.points[gaits]
         se = (full - kernel.jitter * (gaits[:, None] == gaits[None, :])) * weights
         for j, ell in enumerate(hyper.lengthscale):
             dK = se * ((points[:, j, None] - points[None, :, j]) / ell) ** 2

@@ -38,7 +38,8 @@ from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
 
-#: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB.
+#: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB, and
+#: :meth:`Posterior.covariance_at` as many actions.
 COVARIANCE_LIMIT_ACTIONS = 11_585
 
 __all__ = ["KroneckerPriorSampler", "Posterior", "random_argmax"]
@@ -93,7 +94,7 @@ class Posterior:
 
     def mean_at(self, actions: ArrayLike) -> FloatArray:
         """Posterior mean of the given actions only, ``O(len(actions) m)``."""
-        idx = np.asarray(actions, dtype=np.intp)
+        idx = self.space.check_indices(actions)
         if self.fit is None:
             return np.zeros(idx.shape[0])
         out: FloatArray = self.cross.rows(idx) @ self._alpha
@@ -137,7 +138,7 @@ class Posterior:
 
     def variance_at(self, actions: ArrayLike) -> FloatArray:
         """Posterior marginal variance of the given actions only, ``O(len(actions) m^2)``."""
-        idx = np.asarray(actions, dtype=np.intp)
+        idx = self.space.check_indices(actions)
         var = np.asarray(self.kernel.diagonal(self.space), dtype=np.float64)[idx]
         if self.fit is None or idx.size == 0:
             return var
@@ -167,7 +168,7 @@ class Posterior:
         (``O(len(actions) m^2)`` still, but a product rather than two triangular solves: about
         3x faster at 57,750 actions and 300 visited); with fewer, :meth:`variance_at`.  The
         results agree to rounding (tested), not bit for bit."""
-        idx = np.asarray(actions, dtype=np.intp)
+        idx = self.space.check_indices(actions)
         if self.fit is None or idx.size <= self.visited.size:
             return self.variance_at(idx)
         var = np.asarray(self.kernel.diagonal(self.space), dtype=np.float64)[idx]
@@ -180,8 +181,15 @@ class Posterior:
         return out
 
     def covariance_at(self, actions: ArrayLike) -> FloatArray:
-        """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``)."""
-        idx = np.asarray(actions, dtype=np.intp)
+        """The posterior covariance among ``actions`` (``n x n``, ``O(n m^2)``); refuses more
+        than :data:`COVARIANCE_LIMIT_ACTIONS` actions, as :meth:`covariance` does."""
+        idx = self.space.check_indices(actions)
+        if idx.size > COVARIANCE_LIMIT_ACTIONS:
+            raise ValueError(
+                f"covariance_at would build a {idx.size} x {idx.size} matrix "
+                f"({idx.size**2 * 8 / 2**30:.1f} GiB; at most {COVARIANCE_LIMIT_ACTIONS} actions): "
+                "use variance_at for the variances"
+            )
         out: FloatArray = np.asarray(self.kernel.cross(self.space, idx, rows=idx), dtype=float)
         if self.fit is None:
             return out
@@ -195,7 +203,7 @@ class Posterior:
         ``Phi((mu_a - mu_b) / sqrt(2 sigma^2 + var_a + var_b - 2 cov_ab))``."""
         if self.noise is None:
             raise ValueError("this posterior was made without a preference noise")
-        cov = self.covariance_at([a, b])
+        cov = self.covariance_at([self.space.check_index(a), self.space.check_index(b)])
         spread = 2.0 * self.noise**2 + cov[0, 0] + cov[1, 1] - 2.0 * cov[0, 1]
         mean = self.mean_at([a, b])
         return float(ndtr((mean[0] - mean[1]) / np.sqrt(max(spread, 1e-300))))
@@ -204,7 +212,8 @@ class Posterior:
         """``P(rating = k)`` for each of ``actions`` (``n x K``, ``model/ordinal.py``)."""
         if self.ordinal is None:
             raise ValueError("this posterior was made without an ordinal rating model")
-        idx = np.asarray(actions, dtype=np.intp).reshape(-1)
+        one = np.ndim(actions) == 0  # one action: a 1 x K table, as before
+        idx = self.space.check_indices(np.reshape(actions, 1) if one else actions)
         var = np.diag(self.covariance_at(idx)) if idx.size <= 64 else self.variance[idx]
         return rating_probabilities(self.ordinal, self.kernel.variance, self.mean_at(idx), var)
 
@@ -240,8 +249,8 @@ class Posterior:
         Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
         place (and the jitter's draw without the nugget), plus the engine's bounded blocks.
         """
-        if size < 0:
-            raise ValueError(f"size must be >= 0, got {size}")
+        size = _sample_count(size)
+        _check_generator(rng)
         if self.fit is None or size == 0:
             f, e = self.engine.prior_parts(rng, size)
             if not nugget and e is not None:
@@ -281,21 +290,62 @@ class Posterior:
         with ``allowed``, the argmax over the allowed actions only.
 
         One pass over the samples as :meth:`sample` leaves them: no second ``size x A`` array.
+        ``allowed`` is a boolean mask over every action with at least one true entry.
         """
+        if len(self.space) == 0 and size:
+            raise ValueError(_NO_ACTIONS)
+        if allowed is not None:
+            allowed = self._check_allowed(allowed)
         samples = self.sample(rng, size)
         if allowed is not None:
             samples[:, ~allowed] = -np.inf
         return np.array([random_argmax(s, rng) for s in samples], dtype=np.intp)
 
+    def _check_allowed(self, allowed: object) -> NDArray[np.bool_]:
+        """``allowed`` as a boolean mask over every action with an allowed one, else an error
+        naming it (an all-false mask made every action equally likely: disallowed ones too)."""
+        arr = np.asarray(allowed)
+        size = len(self.space)
+        if arr.dtype != np.bool_ or arr.shape != (size,):
+            raise ValueError(
+                f"allowed must be a boolean mask over the {size} actions, got dtype {arr.dtype} "
+                f"and shape {arr.shape}"
+            )
+        if not arr.any():
+            raise ValueError("allowed allows no action: there is no argmax among none")
+        return arr
+
     @property
     def argmax(self) -> int:
         """The action with the highest posterior mean (lowest index among exact ties)."""
+        if len(self.space) == 0:
+            raise ValueError(_NO_ACTIONS)
         return int(np.argmax(self.mean))
 
     @property
     def log_evidence(self) -> float:
         """Laplace approximation of the data's log marginal likelihood (0 with no data)."""
         return self.fit.log_evidence if self.fit is not None else 0.0
+
+
+#: What an argmax over no action says (a point set before its first point: the line path
+#: before its first query).
+_NO_ACTIONS = "the posterior has no actions yet (the line path's before its first query): no argmax"
+
+
+def _sample_count(size: object) -> int:
+    """A number of samples: an integer >= 0 (not a bool, not a float)."""
+    if isinstance(size, bool) or not isinstance(size, int | np.integer) or size < 0:
+        raise ValueError(f"size (the number of samples) must be an integer >= 0, got {size!r}")
+    return int(size)
+
+
+def _check_generator(rng: object) -> None:
+    """Every random choice comes from an explicit generator (no seed, no global state)."""
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(
+            f"rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), got {rng!r}"
+        )
 
 
 def random_argmax(values: FloatArray, rng: np.random.Generator) -> int:

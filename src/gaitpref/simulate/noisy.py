@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.checks import is_number
 from gaitpref.feedback import Outcome
 from gaitpref.simulate.users import SimulatedUser
 
@@ -32,7 +33,7 @@ class IndifferentUser(SimulatedUser):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not (np.isfinite(self.band) and self.band >= 0):
+        if not (is_number(self.band) and np.isfinite(self.band) and self.band >= 0):
             raise ValueError(f"band must be >= 0, got {self.band!r}")
 
     def compare(self, i: int, j: int) -> Outcome:

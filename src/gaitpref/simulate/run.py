@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.checks import is_count
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.posterior import Posterior
@@ -60,8 +61,8 @@ def run_simulation(
     ``rater`` also rates every executed action (the loop needs a rating scale with as many
     categories).  ``progress`` is called with the number of trials done after every iteration.
     """
-    if trials < 1:
-        raise ValueError(f"trials must be >= 1, got {trials}")
+    if not is_count(trials) or trials < 1:
+        raise ValueError(f"trials must be an integer >= 1, got {trials!r}")
     executed: list[int] = []
     rated: list[int] = []
     while len(executed) < trials:

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.special import ndtr
 
+from gaitpref.checks import is_number
 from gaitpref.feedback import Comparison, Outcome, Suggestion
 from gaitpref.loop.cospar import Query
 from gaitpref.space import FloatArray, Move, Space
@@ -54,18 +55,23 @@ class SimulatedUser:
     def __post_init__(self) -> None:
         self.objective = objective_on_grid(self.space, self.objective)
         self.utility = -self.objective if self.minimize else self.objective
-        if not (np.isfinite(self.noise) and self.noise >= 0):
+        if not (is_number(self.noise) and np.isfinite(self.noise) and self.noise >= 0):
             raise ValueError(f"noise must be >= 0, got {self.noise!r}")
+        if not isinstance(self.rng, np.random.Generator):
+            raise TypeError(
+                f"rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), "
+                f"got {self.rng!r}"
+            )
 
     def normalized(self, actions: ArrayLike) -> FloatArray:
         """``(f - worst) / (best - worst)`` of actions: 1 at the optimum, 0 at the worst."""
         lo, hi = float(self.utility.min()), float(self.utility.max())
         span = hi - lo if hi > lo else 1.0
-        return (self.utility[np.asarray(actions, dtype=np.intp)] - lo) / span
+        return (self.utility[self.space.check_indices(actions)] - lo) / span
 
     def compare(self, i: int, j: int) -> Outcome:
         """Which of ``i`` and ``j`` this user prefers."""
-        diff = self.utility[i] - self.utility[j]
+        diff = self.utility[self.space.check_index(i)] - self.utility[self.space.check_index(j)]
         if self.noise > 0:
             p_first = float(ndtr(diff / (np.sqrt(2.0) * self.noise)))
             return "first" if self.rng.random() < p_first else "second"
@@ -128,7 +134,7 @@ class GradientCoactive:
 
     def suggest(self, action: int) -> Suggestion | None:
         """The suggestion for an executed ``action``, or None (none given, or it would clip)."""
-        g = self.gradient[action]
+        g = self.gradient[self.space.check_index(action)]
         k = int(np.argmax(np.abs(g)))
         mag = abs(g[k])
         if mag <= self.thresholds[0, k]:

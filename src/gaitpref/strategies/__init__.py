@@ -45,7 +45,7 @@ def make_strategy(name: str, **settings: Any) -> Strategy:
     Settings not given keep the strategy's defaults.  An unknown name or setting, or a setting's
     bad value, raises ``ValueError`` naming it.
     """
-    if name not in STRATEGY_CLASSES:
+    if not isinstance(name, str) or name not in STRATEGY_CLASSES:
         raise ValueError(f"unknown strategy {name!r}; strategies are {', '.join(STRATEGIES)}")
     allowed = STRATEGY_SETTINGS[name]
     for setting in settings:

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import IntArray
-from gaitpref.strategies.base import AskContext
+from gaitpref.strategies.base import MAX_CANDIDATES, AskContext, check_count
 from gaitpref.strategies.eubo import best_pair, eubo_against
 
 
@@ -91,11 +91,6 @@ def _start(context: AskContext, candidates: int) -> list[int]:
     return [x, y]
 
 
-def _check_candidates(candidates: object) -> None:
-    if isinstance(candidates, bool) or not isinstance(candidates, int) or candidates < 2:
-        raise ValueError(f"candidates must be an integer >= 2, got {candidates!r}")
-
-
 @dataclass(frozen=True)
 class Eubo:
     """Greedy EUBO against the best buffered or chosen action (see the module docstring)."""
@@ -104,7 +99,7 @@ class Eubo:
     name: str = "eubo"
 
     def __post_init__(self) -> None:
-        _check_candidates(self.candidates)
+        check_count(self, "candidates", 2, MAX_CANDIDATES)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         return eubo_fill(context, _start(context, self.candidates)[: context.n], None)
@@ -122,7 +117,7 @@ class ConfidentEubo:
         beta = self.beta
         if isinstance(beta, bool) or not isinstance(beta, int | float) or not 0 <= beta < np.inf:
             raise ValueError(f"beta must be a finite number >= 0, got {beta!r}")
-        _check_candidates(self.candidates)
+        check_count(self, "candidates", 2, MAX_CANDIDATES)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post = context.posterior

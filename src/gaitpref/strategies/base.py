@@ -19,7 +19,24 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_count
 from gaitpref.model.posterior import Posterior
+
+#: The most candidates an EUBO search compares (its pairs are a ``c x c`` matrix), the most
+#: joint samples a strategy draws per ask (``samples x A`` values) and the most gates: the
+#: bounds a config's ``[cospar.strategy_settings]`` has (``config/schema.py``).
+MAX_CANDIDATES = 4096
+MAX_SAMPLES = 4096
+MAX_GATES = 1000
+
+
+def check_count(settings: object, name: str, low: int, high: int) -> None:
+    """The count setting ``name`` of a (frozen) strategy: an integer (not a bool; a NumPy one is
+    kept as an ``int``) in ``low..high``."""
+    value = getattr(settings, name)
+    if not is_count(value) or not low <= value <= high:
+        raise ValueError(f"{name} must be an integer >= {low} and <= {high}, got {value!r}")
+    object.__setattr__(settings, name, int(value))
 
 
 @dataclass(frozen=True)

@@ -37,7 +37,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from gaitpref.strategies.acquire import Eubo, eubo_fill
-from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+from gaitpref.strategies.base import MAX_GATES, AskContext, SelfSparring, Strategy, check_count
 
 
 @dataclass(frozen=True)
@@ -54,8 +54,7 @@ class GatedEubo:
     name: str = "gated-eubo"
 
     def __post_init__(self) -> None:
-        if isinstance(self.gates, bool) or not isinstance(self.gates, int) or self.gates < 1:
-            raise ValueError(f"gates must be >= 1, got {self.gates!r}")
+        check_count(self, "gates", 1, MAX_GATES)
         scale = self.early_scale
         number = isinstance(scale, int | float) and not isinstance(scale, bool)
         if not number or not 0.01 <= scale <= 100:

@@ -36,7 +36,7 @@ from numpy.typing import NDArray
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import FloatArray, IntArray
 from gaitpref.strategies.bald import information_against, rating_information, variance_at
-from gaitpref.strategies.base import AskContext
+from gaitpref.strategies.base import MAX_CANDIDATES, AskContext, check_count
 
 
 def _top(score: FloatArray, k: int, rng: np.random.Generator) -> IntArray:
@@ -81,9 +81,7 @@ class InformationGain:
     name: str = "information-gain"
 
     def __post_init__(self) -> None:
-        c = self.candidates
-        if isinstance(c, bool) or not isinstance(c, int) or c < 2:
-            raise ValueError(f"candidates must be an integer >= 2, got {c!r}")
+        check_count(self, "candidates", 2, MAX_CANDIDATES)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         post, rng = context.posterior, context.rng

@@ -35,12 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gaitpref.strategies.acquire import eubo_fill
-from gaitpref.strategies.base import AskContext
-
-
-def _count(value: object, name: str, low: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or value < low:
-        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+from gaitpref.strategies.base import MAX_GATES, MAX_SAMPLES, AskContext, check_count
 
 
 @dataclass(frozen=True)
@@ -52,8 +47,8 @@ class PlausibleEubo:
     name: str = "plausible-eubo"
 
     def __post_init__(self) -> None:
-        _count(self.samples, "samples", 1)
-        _count(self.gates, "gates", 1)
+        check_count(self, "samples", 1, MAX_SAMPLES)
+        check_count(self, "gates", 1, MAX_GATES)
         if self.gates > self.samples:
             raise ValueError(
                 f"gates ({self.gates}) must not exceed samples ({self.samples}): "

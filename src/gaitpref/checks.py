@@ -1,0 +1,26 @@
+"""Checks of the numbers a caller hands the library (loops, models, kernels, rating scales).
+
+A number is an ``int`` or ``float`` or a NumPy one, never a ``bool`` (``True`` is not a noise of
+1) nor a string; a count is an integer of either kind.  Each check returns the plain Python value
+and raises ``ValueError`` with the caller's message otherwise, so that a bad argument is named
+where it is given rather than failing deep in NumPy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def is_number(value: object) -> bool:
+    """Whether ``value`` is a real number (Python or NumPy; not a bool, not a string)."""
+    return not isinstance(value, bool | np.bool_) and isinstance(
+        value, int | float | np.integer | np.floating
+    )
+
+
+def is_count(value: object) -> bool:
+    """Whether ``value`` is an integer (Python or NumPy; not a bool)."""
+    return not isinstance(value, bool | np.bool_) and isinstance(value, int | np.integer)
+
+
+__all__ = ["is_count", "is_number"]

@@ -1,0 +1,78 @@
+"""The model's constructors name a bad number: a string, a bool, None (before: NumPy ufunc
+errors, or True read as 1)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gaitpref import Feature, Ordinal, PreferenceGP, Space, SquaredExponential
+
+SPACE = Space([Feature.linspace("a", 0, 1, 5), Feature.linspace("b", 0, 1, 4)])
+KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
+
+
+@pytest.mark.parametrize("noise", ["0.1", True, None, np.nan])
+def test_the_preference_noise_is_a_number(noise: object) -> None:
+    with pytest.raises(ValueError, match="preference noise must be positive"):
+        PreferenceGP(SPACE, KERNEL, noise)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"lengthscale": True, "variance": 1.0}, "lengthscale must be positive and finite"),
+        ({"lengthscale": "0.3", "variance": 1.0}, "lengthscale must be positive and finite"),
+        ({"lengthscale": (0.3, None), "variance": 1.0}, "lengthscale must be positive"),
+        ({"lengthscale": 0.3, "variance": "1"}, "signal variance must be positive"),
+        ({"lengthscale": 0.3, "variance": None}, "signal variance must be positive"),
+        ({"lengthscale": 0.3, "variance": 1.0, "jitter": True}, "jitter must be >= 0"),
+    ],
+)
+def test_kernel_numbers_are_numbers(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        SquaredExponential(**kwargs)
+
+
+def test_kernel_lengthscales_from_numpy() -> None:
+    assert SquaredExponential(np.array(0.3), 1.0).lengthscale == 0.3  # a 0-d array failed
+    assert SquaredExponential(np.array([0.3, 0.2]), 1.0).lengthscale == (0.3, 0.2)
+    assert SquaredExponential([np.float64(0.3)], np.float64(1.0)).lengthscale == (0.3,)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"categories": "abc"}, "categories must be a number of categories or a sequence"),
+        ({"categories": True}, "categories must be a number of categories or a sequence"),
+        ({"categories": 10**9}, "needs 2 to 100 categories"),
+        ({"categories": [1, 2, 3]}, "category names must be non-empty strings"),
+        ({"categories": 3, "noise": "x"}, "the rating noise must be positive"),
+        ({"categories": 3, "noise": True}, "the rating noise must be positive"),
+        ({"categories": 2, "thresholds": 0.5}, "thresholds must be a sequence of numbers"),
+        ({"categories": 3, "thresholds": "ab"}, "thresholds must be a sequence of numbers"),
+        ({"categories": 3, "thresholds": [0.1, None]}, "thresholds must be numbers"),
+    ],
+)
+def test_rating_scale_arguments(kwargs: dict[str, Any], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        Ordinal(**kwargs)
+
+
+def test_rating_scale_from_numpy() -> None:
+    assert Ordinal(np.int64(3)).categories == ("1", "2", "3")  # it was "not iterable"
+    assert Ordinal(2, thresholds=np.array([0.1])).thresholds == (0.1,)
+
+
+def test_rating_likelihood_labels_are_integers() -> None:
+    from gaitpref.model import rating_likelihood
+
+    scale = Ordinal(3)
+    # 1.5 was truncated to label 1, True read as 1
+    for labels in ([1.5], [True], [[1, 2]]):
+        with pytest.raises(ValueError, match=r"rating labels must be a 1-D sequence of integers"):
+            rating_likelihood(scale, 1.0, labels)
+    assert rating_likelihood(scale, 1.0, np.array([3, 1], dtype=np.int8)).labels.tolist() == [3, 1]
+    assert rating_likelihood(scale, 1.0, []).labels.size == 0

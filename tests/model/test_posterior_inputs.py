@@ -1,0 +1,113 @@
+"""The posterior's readers check what a caller gives them: indices, sizes, generators, masks."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+
+from gaitpref import Feature, Ordinal, Posterior, PreferenceGP, Space, SquaredExponential
+
+SPACE = Space([Feature.linspace("a", 0, 1, 5), Feature.linspace("b", 0, 1, 4)])
+
+
+@pytest.fixture(scope="module")
+def post() -> Posterior:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0, 1e-6), 0.1, ordinal=Ordinal(3))
+    return gp.posterior([0, 1], [2, 3], ratings=[(5, 3)])
+
+
+READERS: dict[str, Callable[[Posterior, Any], object]] = {
+    "mean_at": lambda p, a: p.mean_at(a),
+    "variance_at": lambda p, a: p.variance_at(a),
+    "variance_many": lambda p, a: p.variance_many(a),
+    "covariance_at": lambda p, a: p.covariance_at(a),
+    "rating_probabilities": lambda p, a: p.rating_probabilities(a),
+}
+
+
+@pytest.mark.parametrize("reader", READERS)
+def test_off_grid_indices_are_refused_not_wrapped(post: Posterior, reader: str) -> None:
+    read = READERS[reader]
+    for bad in ([-1], [20], [3, -20]):
+        with pytest.raises(IndexError, match=r"actions\[\d\] = -?\d+ is off the grid \(0\.\.19\)"):
+            read(post, bad)
+    with pytest.raises(TypeError, match="integer grid indices, got dtype float64"):
+        read(post, [1.7])
+    with pytest.raises(ValueError, match="1-D"):
+        read(post, [[1, 2]])
+    # valid indices of any integer type read as before
+    assert np.array_equal(
+        np.asarray(read(post, np.array([19, 0], dtype=np.int32))), np.asarray(read(post, [19, 0]))
+    )
+
+
+def test_rating_probabilities_of_one_action(post: Posterior) -> None:
+    assert np.array_equal(post.rating_probabilities(4), post.rating_probabilities([4]))
+    with pytest.raises(IndexError, match="off the grid"):
+        post.rating_probabilities(-1)
+
+
+def test_preference_probability_checks_both_actions(post: Posterior) -> None:
+    with pytest.raises(IndexError, match="action index -1 is off the grid"):
+        post.preference_probability(-1, 0)
+    with pytest.raises(IndexError, match="action index 20 is off the grid"):
+        post.preference_probability(0, 20)
+    with pytest.raises(TypeError, match=r"action index must be an integer, got 1\.5"):
+        post.preference_probability(1.5, 0)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="must be an integer, got True"):
+        post.preference_probability(True, 0)
+    assert post.preference_probability(np.int64(19), 0) == post.preference_probability(19, 0)
+
+
+@pytest.mark.parametrize("size", [-1, 2.5, True, "3"])
+def test_sample_size_must_be_a_count(post: Posterior, size: object) -> None:
+    with pytest.raises(ValueError, match=r"size \(the number of samples\) must be an integer >= 0"):
+        post.sample(np.random.default_rng(0), size)  # type: ignore[arg-type]
+
+
+def test_sample_takes_numpy_counts_and_needs_a_generator(post: Posterior) -> None:
+    assert post.sample(np.random.default_rng(0), np.int64(3)).shape == (3, 20)
+    for rng in (0, None, np.random.RandomState(0)):
+        with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
+            post.sample(rng, 2)  # type: ignore[arg-type]
+
+
+def test_argmax_samples_checks_the_mask(post: Posterior) -> None:
+    rng = np.random.default_rng(0)
+    with pytest.raises(ValueError, match="boolean mask over the 20 actions"):
+        post.argmax_samples(rng, 2, np.ones(3, dtype=bool))
+    with pytest.raises(ValueError, match="boolean mask over the 20 actions"):
+        post.argmax_samples(rng, 2, np.ones(20))  # type: ignore[arg-type]
+    # all false: before, every action tied at -inf and disallowed ones were returned
+    with pytest.raises(ValueError, match="allows no action"):
+        post.argmax_samples(rng, 2, np.zeros(20, dtype=bool))
+    only = np.zeros(20, dtype=bool)
+    only[7] = True
+    assert post.argmax_samples(rng, 3, only).tolist() == [7, 7, 7]
+
+
+def test_posterior_names_a_bad_noise_or_rating() -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1, ordinal=Ordinal(3))
+    with pytest.raises(ValueError, match=r"noise must be one number or one per comparison \(2\)"):
+        gp.posterior([0, 1], [2, 3], noise=[0.1, 0.2, 0.3])
+    with pytest.raises(ValueError, match=r"ratings\[1\] must be an \(action, label\) pair"):
+        gp.posterior([0], [1], ratings=[(2, 1), (3,)])  # type: ignore[list-item]
+    with pytest.raises(ValueError, match=r"ratings\[0\]: rating 4 is not a category"):
+        gp.posterior([0], [1], ratings=[(2, 4)])
+    assert gp.posterior([0], [1], ratings=[(2, 3)]).visited.tolist() == [0, 1, 2]
+
+
+def test_covariance_at_has_the_covariance_limit() -> None:
+    from gaitpref.model.posterior import COVARIANCE_LIMIT_ACTIONS
+
+    big = Space([Feature.linspace("a", 0, 1, 200), Feature.linspace("b", 0, 1, 100)])
+    post = PreferenceGP(big, SquaredExponential(0.3, 1.0, 1e-6), 0.1).posterior([0], [1])
+    # 20,000 actions asked for a 3 GiB matrix (covariance() refuses the same)
+    with pytest.raises(ValueError, match=r"covariance_at would build a 20000 x 20000 matrix"):
+        post.covariance_at(np.arange(len(big)))
+    with pytest.raises(ValueError, match=f"at most {COVARIANCE_LIMIT_ACTIONS} actions"):
+        post.covariance_at(np.zeros(COVARIANCE_LIMIT_ACTIONS + 1, dtype=np.intp))
+    assert post.covariance_at([0, 5, 7]).shape == (3, 3)
