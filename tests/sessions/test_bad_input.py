@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from gaitpref import ConfigError, FeedbackError, QueryError, Session, SessionStateError
+from gaitpref.feedback import Comparison, Suggestion
 from gaitpref.storage import (
     MemoryStorage,
     SchemaError,
@@ -73,8 +74,9 @@ def test_stale_and_unknown_queries(db: str | Storage, drive: Drive) -> None:
         s.answer(answered, [], [])
     with pytest.raises(QueryError, match="not the pending query"):
         s.answer(q.id + 100, [], [])
-    with pytest.raises(QueryError, match="not the pending query"):
-        s.answer(True, [], [])  # type: ignore[arg-type]
+    for not_an_id in (True, q, str(q.id), float(q.id)):  # the query itself, not its id
+        with pytest.raises(QueryError, match="query_id must be the pending query's id"):
+            s.answer(not_an_id, [], [])  # type: ignore[arg-type]
     s.undo()  # q is discarded; the last answer's query is pending again
     with pytest.raises(QueryError, match="stale"):
         s.answer(q.id, [], [])
@@ -91,6 +93,9 @@ def test_stale_and_unknown_queries(db: str | Storage, drive: Drive) -> None:
         ([], [(999, "step_length", "+big")], "off the grid"),
         ([], [(None, "step_width", "+big")], "integer"),
         ("Q", [], "expected"),
+        (Comparison(0, 1, "first"), [], "got one Comparison: give \\[Comparison"),
+        ([], Suggestion(0, "step_length", "+big"), "suggestions: expected a list"),
+        ([], 7, "suggestions: expected a list"),
     ],
 )
 def test_actions_off_the_grid_and_malformed_answers(

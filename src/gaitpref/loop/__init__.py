@@ -6,7 +6,7 @@
   past memory (LineCoSpar, Tucker et al. IROS 2020), its :class:`LineSettings` and :class:`Line`.
 """
 
-from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError
+from gaitpref.loop.cospar import Answer, CoSpar, Query, QueryError, as_records
 from gaitpref.loop.learning import FIT_MODES, TIES_MODES, FitMode, Learning, TiesMode, pair_data
 from gaitpref.loop.line import LineCoSpar
 from gaitpref.loop.lines import Line, LineSettings
@@ -26,5 +26,6 @@ __all__ = [
     "QueryError",
     "Safety",
     "TiesMode",
+    "as_records",
     "pair_data",
 ]

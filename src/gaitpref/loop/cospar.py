@@ -504,7 +504,7 @@ class CoSpar:
         """
         q = self._check_query(query)
         given = {"answers": answers, "suggestions": suggestions, "comparisons": comparisons}
-        items = {name: _records(name, value) for name, value in given.items()}
+        items = {name: as_records(name, value) for name, value in given.items()}
         with self._all_or_nothing():
             return self._tell(
                 q,
@@ -1013,9 +1013,10 @@ def _check_parts(**parts: object) -> None:
             raise TypeError(f"{name} must be a {kind.__name__} or None, got {value!r}")
 
 
-def _records(name: str, value: object) -> list[object]:
-    """``tell``'s argument ``name`` as a list of items: a list (or any iterable) of records or
-    raw tuples, not one record, a string or a number (a TypeError from unpacking before)."""
+def as_records(name: str, value: object) -> list[object]:
+    """``tell``'s (or ``Session.answer``'s) argument ``name`` as a list of items: a list (or any
+    iterable) of records or raw tuples, not one record, a string or a number (a TypeError from
+    unpacking before)."""
     if kind_of(value) is not None:
         raise FeedbackError(
             f"{name}: expected a list of feedback records, got one {type(value).__name__}: "

@@ -30,9 +30,10 @@ from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
+from gaitpref.checks import is_count
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.errors import NoSafeGaitError, ReplayError, SessionStateError
-from gaitpref.loop.cospar import QueryError
+from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
@@ -320,7 +321,13 @@ class Session:
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, and a session that is finished or paused.
         """
-        comps, suggs = [*answers, *comparisons], list(suggestions)
+        if not is_count(query_id):
+            raise QueryError(
+                f"query_id must be the pending query's id (an integer: SessionQuery.id), "
+                f"got {query_id!r}"
+            )
+        comps = [*as_records("answers", answers), *as_records("comparisons", comparisons)]
+        suggs = as_records("suggestions", suggestions)
         return self._locked(lambda: self._answer(query_id, comps, suggs, retry=True))
 
     def _answer(
