@@ -52,6 +52,7 @@ from gaitpref.storage.base import (
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
+    SessionsCheck,
     SessionSpec,
     Status,
     Storage,
@@ -142,6 +143,25 @@ class SQLStorage(Storage):
     def create_session(
         self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
     ) -> SessionRecord:
+        return self._create(spec, events, status, None)
+
+    def create_session_checked(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent] = (),
+        status: Status = "active",
+        *,
+        check: SessionsCheck,
+    ) -> SessionRecord:
+        return self._create(spec, events, status, check)
+
+    def _create(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent],
+        status: Status,
+        check: SessionsCheck | None,
+    ) -> SessionRecord:
         spec = check_spec(spec)
         checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
         status = check_status(status)
@@ -153,6 +173,23 @@ class SQLStorage(Storage):
                 .values(code=spec.subject, created_at=stamp)
                 .on_conflict_do_nothing(index_elements=["code"])
             )
+            if check is not None:
+                # SQLite: BEGIN IMMEDIATE already holds the database's write lock.  PostgreSQL:
+                # every creator of this subject's sessions locks its row, so the next one waits
+                # here and then (READ COMMITTED) reads the sessions committed before it
+                if not self._sqlite:
+                    conn.execute(
+                        select(subjects_t.c.code)
+                        .where(subjects_t.c.code == spec.subject)
+                        .with_for_update()
+                    )
+                mine = select(sessions_t).where(sessions_t.c.subject == spec.subject)
+                check(
+                    [
+                        _session(r._mapping, self.url)
+                        for r in conn.execute(mine.order_by(sessions_t.c.id))
+                    ]
+                )
             sid = conn.execute(
                 insert(sessions_t)
                 .values(
