@@ -405,6 +405,7 @@ def database_status(url: str) -> str:
     """
     parsed = parse_url(url)
     where = _masked(parsed)
+    _plain_engine(parsed).dispose()  # a driver that cannot be loaded is refused, as on opening
     if parsed.get_backend_name() == "sqlite" and not _sqlite_memory(parsed):
         path = Path(parsed.database or "")
         near = (path.with_name(path.name + suffix) for suffix in ("-wal", "-journal"))
@@ -437,10 +438,14 @@ def database_status(url: str) -> str:
 
 
 def _has_tables(url: URL) -> bool:
-    engine = create_engine(url)
+    """Whether the SQLite file holds a table; True too when it cannot be read (not a database,
+    unreadable): opening it then names the problem, as without leftover files."""
+    engine = _plain_engine(url)
     try:
         with engine.connect() as conn:
             return bool(conn.exec_driver_sql("SELECT name FROM sqlite_master").first())
+    except DBAPIError:
+        return True
     finally:
         engine.dispose()
 
@@ -477,28 +482,34 @@ def _sqlite_memory(url: URL) -> bool:
     return url.database in (None, "", ":memory:")
 
 
-def _engine(url: URL) -> Engine:
-    serializer = functools.partial(json.dumps, allow_nan=False)
+def _plain_engine(url: URL, **options: Any) -> Engine:
+    """``create_engine(url, **options)`` (it connects to nothing), or
+    :class:`StorageConnectError` naming a driver that is not installed or unknown."""
     try:
-        if url.get_backend_name() == "postgresql":
-            return create_engine(
-                url,
-                json_serializer=serializer,
-                connect_args={"connect_timeout": 10},
-                pool_pre_ping=True,
-            )
-        memory = _sqlite_memory(url)
-        engine = create_engine(
-            url,
-            json_serializer=serializer,
-            connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
-            **({"poolclass": StaticPool} if memory else {}),
-        )
-    except (ImportError, ArgumentError) as exc:  # a driver not installed, or unknown
+        return create_engine(url, **options)
+    except (ImportError, ArgumentError) as exc:
         raise StorageConnectError(
             f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
             f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
         ) from None
+
+
+def _engine(url: URL) -> Engine:
+    serializer = functools.partial(json.dumps, allow_nan=False)
+    if url.get_backend_name() == "postgresql":
+        return _plain_engine(
+            url,
+            json_serializer=serializer,
+            connect_args={"connect_timeout": 10},
+            pool_pre_ping=True,
+        )
+    memory = _sqlite_memory(url)
+    engine = _plain_engine(
+        url,
+        json_serializer=serializer,
+        connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
+        **({"poolclass": StaticPool} if memory else {}),
+    )
 
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: object) -> None:
