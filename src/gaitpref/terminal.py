@@ -13,10 +13,11 @@ One iteration (n = 1, b = 1, the paper's protocol)::
 
 Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
 is asked again), ``q`` pauses the session and quits (``gaitpref session run ID [--db URL]``
-resumes it); so do Ctrl-C, a closed terminal (SIGHUP) and the end of input.  A line that is
+resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a closed output
+(``gaitpref session run ID | head``: what is left to print is dropped).  A line that is
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
 The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
-pauses.  A signal that comes
+pauses.  A signal (or a closed output) that comes
 while an answer is being written lets the write finish first.  Nothing is written before the
 operator confirms (answers, undo and a validation ranking alike), and the answer is committed
 before the next trial is shown.  Gaits are named by their gait library id, or ``G<action>`` (as
@@ -27,6 +28,7 @@ in the console) without a library.  The loop only calls the public
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import sys
 from collections.abc import Callable, Iterator
@@ -88,6 +90,7 @@ class Terminal:
         self.resume = resume or f"gaitpref session run {session.id}"
         self._reading = False  # a pause signal now interrupts the read at once
         self._signalled = False  # a pause signal came while writing: pause at the next read
+        self._output_closed = False  # stdout's reader went away: nothing more is printed
 
     # -- input ---------------------------------------------------------------------------------
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
@@ -95,9 +98,40 @@ class Terminal:
             raise _QuitError
         self._signalled = True
 
+    def _on_output_closed(self) -> None:
+        """The reader of the output went away (``run ID | head``): as a pause signal, the write
+        under way finishes and the session pauses at the next read.  What is left to print is
+        dropped, and stdout is pointed at the null device so that no later flush fails (as
+        Rich's own ``on_broken_pipe`` does, which exits at once instead: mid-answer, leaving the
+        session active)."""
+        self._signalled = self._output_closed = True
+        self.console.quiet = True
+        if self.console.file is not sys.stdout and self._read is not input:
+            return  # neither printed to stdout: a stream of the caller's, left to it
+        with contextlib.suppress(OSError, ValueError):  # no file descriptor
+            stdout = sys.stdout.fileno()
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, stdout)
+            os.close(devnull)
+
     @contextlib.contextmanager
     def pause_on_signals(self) -> Iterator[None]:
-        """Ctrl-C and SIGHUP pause the session (main thread only; elsewhere they are left be)."""
+        """Ctrl-C and SIGHUP (main thread only; elsewhere they are left be) and a closed output
+        pause the session."""
+        hooked = "on_broken_pipe" in vars(self.console)
+        previous_hook = self.console.on_broken_pipe
+        self.console.on_broken_pipe = self._on_output_closed  # type: ignore[method-assign]
+        try:
+            with self._signal_handlers():
+                yield
+        finally:
+            if hooked:
+                self.console.on_broken_pipe = previous_hook  # type: ignore[method-assign]
+            else:
+                del self.console.on_broken_pipe
+
+    @contextlib.contextmanager
+    def _signal_handlers(self) -> Iterator[None]:
         try:
             previous = {sig: signal.signal(sig, self._on_signal) for sig in PAUSE_SIGNALS}
         except ValueError:  # not the main thread: signal handlers cannot be set
@@ -121,6 +155,9 @@ class Terminal:
             try:
                 return self._read("> ")
             except (EOFError, KeyboardInterrupt):
+                raise _QuitError from None
+            except BrokenPipeError:  # input() could not write its prompt: the output is closed
+                self._on_output_closed()
                 raise _QuitError from None
             except UnicodeDecodeError:
                 pass
@@ -151,12 +188,13 @@ class Terminal:
             raise SessionStateError(f"session {s.id} is finished")
         if s.status == "paused":
             s.resume()
-        self.console.print(
-            f"Session {s.id}, subject {s.subject}, {s.config.name}: "
-            f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and quit.",
-            markup=False,
-        )
         with self.pause_on_signals():
+            self.console.print(
+                f"Session {s.id}, subject {s.subject}, {s.config.name}: "
+                f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and "
+                "quit.",
+                markup=False,
+            )
             try:
                 while True:
                     if s.validation_plan is not None:
@@ -192,10 +230,15 @@ class Terminal:
             )
 
     def _pause(self) -> None:
-        """Pause the session, then say how to resume (the terminal may be gone: ignore that)."""
+        """Pause the session, then say how to resume (the terminal may be gone: ignore that;
+        with the output closed, it is said on stderr)."""
         self.session.pause()
+        line = f"Paused.  Resume with: {self.resume}"
         with contextlib.suppress(OSError):
-            self.console.print(f"Paused.  Resume with: {self.resume}", markup=False)
+            if self._output_closed:
+                print(f"output closed; {line}", file=sys.stderr)
+            else:
+                self.console.print(line, markup=False)
 
     def _undo(self) -> None:
         answered = self.session.trials()

@@ -183,3 +183,47 @@ def test_a_closed_stdin_pauses_the_session(monkeypatch: pytest.MonkeyPatch) -> N
     console = Console(record=True, width=200, highlight=False)
     Terminal(session, console).run()
     assert session.status == "paused" and "Paused." in console.export_text()
+
+
+class _ClosingStream:
+    """A console's output whose reader goes away (``run ID | head``) once ``after`` is printed."""
+
+    def __init__(self, after: str) -> None:
+        self.after, self.text, self.closed = after, "", False
+
+    def write(self, text: str) -> int:
+        if self.closed:
+            raise BrokenPipeError(32, "Broken pipe")
+        self.text += text
+        self.closed = self.after in self.text
+        return len(text)
+
+    def flush(self) -> None:
+        if self.closed:
+            raise BrokenPipeError(32, "Broken pipe")
+
+
+def test_a_closed_output_pauses_the_session_and_keeps_the_confirmed_answer_and_flag() -> None:
+    """``gaitpref session run ID | head``: the first print after the reader went away raised
+    (Rich: SystemExit(1) at once), between the answer and its unsafe flag, and the session was
+    left active.  The confirmed answer and its flag are written, then the session pauses."""
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    stream = _ClosingStream(after="saved: trial 1")
+    keys = iter(["", "0", "x", "knee buckled", "1", "0", "y"])
+    console = Console(file=stream, width=200, highlight=False)  # type: ignore[arg-type]
+    Terminal(session, console, lambda prompt: next(keys)).run()
+    action = session.trials()[0].action
+    assert session.unsafe_flags() == {1: (action, "knee buckled")}
+    assert len(session.trials()) == 1 and session.status == "paused"
+    assert "flagged unsafe" not in stream.text  # nothing printed after the output closed
+
+
+def test_a_prompt_that_cannot_be_written_pauses_the_session() -> None:
+    """input() raised BrokenPipeError writing its prompt: 'error: Broken pipe', session active."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    terminal, console = _terminal(session, BrokenPipeError(32, "Broken pipe"))
+    terminal.run()
+    assert session.status == "paused" and not session.trials()
+    assert "Paused." not in console.export_text()  # said on stderr instead

@@ -11,7 +11,7 @@ import pytest
 
 from gaitpref import ReplayError, Session
 from gaitpref.sessions.export import ExportError, export_session, import_session
-from gaitpref.storage import MemoryStorage
+from gaitpref.storage import MemoryStorage, SQLStorage
 from tests.sessions.sessionkit import CONFIG, Drive
 
 
@@ -275,3 +275,54 @@ def test_an_export_is_of_one_event_while_another_writer_writes_meanwhile(
     _consistent(tmp_path / "during")
     manifest = json.loads((tmp_path / "during" / "manifest.json").read_text())
     assert manifest["session"]["last_seq"] == exporter.last_seq
+
+
+@pytest.mark.parametrize(
+    "target", ["memory", "sqlite", pytest.param("postgres", marks=pytest.mark.postgres)]
+)
+def test_two_imports_of_one_export_at_once_make_one_session(
+    request: pytest.FixtureRequest,
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
+    sqlite_url: str,
+    drive: Drive,
+    target: str,
+) -> None:
+    """Two importers could both pass the 'already imported' check before either created its
+    session, and the database held two copies.  The check now runs in the transaction that
+    creates the session, the second importer waiting for the first: one copy, one refusal."""
+    import contextlib
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+
+    from gaitpref.sessions import export
+
+    s = Session.create(sqlite_url, CONFIG, "S07", seed=3)
+    drive(s, 2)
+    out = tmp_path / "export"
+    export_session(s, out, "json")
+    s.close()
+    db: str | MemoryStorage = {
+        "memory": lambda: MemoryStorage(),
+        "sqlite": lambda: f"sqlite:///{tmp_path / 'other.db'}",
+        "postgres": lambda: str(request.getfixturevalue("postgres_url")),
+    }[target]()
+    if isinstance(db, str):
+        SQLStorage(db).close()  # the schema made before the race
+    check, barrier = export._check_not_imported, threading.Barrier(2, timeout=2.0)
+
+    def rendezvous(*args: object) -> None:  # both inside the check at once, if they can be
+        check(*args)  # type: ignore[arg-type]
+        with contextlib.suppress(threading.BrokenBarrierError):
+            barrier.wait()
+
+    monkeypatch.setattr(export, "_check_not_imported", rendezvous)
+    with ThreadPoolExecutor(2) as pool:
+        runs = [pool.submit(import_session, db, out) for _ in range(2)]
+    outcomes = [r.exception(timeout=60) or r.result() for r in runs]
+    imported = [o for o in outcomes if isinstance(o, Session)]
+    refused = [o for o in outcomes if isinstance(o, ExportError)]
+    assert len(imported) == 1 and len(refused) == 1, outcomes
+    assert f"imported before as session {imported[0].id}" in str(refused[0])
+    assert [r.id for r in Session.list_sessions(db)] == [imported[0].id]
+    imported[0].close()

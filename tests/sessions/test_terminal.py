@@ -201,3 +201,35 @@ def test_u_and_q_keep_their_meaning_at_the_undo_question_and_the_unsafe_reason(
     child.close()
     with Session.open(url, 1) as s:
         assert s.unsafe_flags() == {} and len(s.trials()) == 1 and s.status == "paused"
+
+
+def test_a_closed_output_pauses_the_session_and_exits_cleanly(tmp_path: Path) -> None:
+    """``gaitpref session run ID | head``: 'error: [Errno 32] Broken pipe', the session left
+    active.  Now the confirmed answer is kept, the session pauses and the status is 0."""
+    import subprocess
+
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, CONFIG, "S01", seed=5).close()
+    env = {**os.environ, "NO_COLOR": "1", "TERM": "dumb", "COLUMNS": "200"}
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CLI, "session", "run", "1", "--db", url],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+        text=True,
+    )
+    assert proc.stdin is not None and proc.stdout is not None and proc.stderr is not None
+    proc.stdin.write("0\ny\n")  # trial 1: no suggestion, confirmed
+    proc.stdin.flush()
+    while "saved: trial 1" not in proc.stdout.readline():
+        pass
+    proc.stdout.close()  # the reader goes away (head has its lines)
+    proc.stdin.write("0\n0\ny\n")
+    proc.stdin.close()
+    err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 0, err
+    assert "Broken pipe" not in err and "Traceback" not in err
+    assert f"output closed; Paused.  Resume with: gaitpref session run 1 --db {url}" in err
+    with Session.open(url, 1) as s:
+        assert s.status == "paused" and len(s.trials()) == 1

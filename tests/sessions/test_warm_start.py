@@ -140,6 +140,12 @@ def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
     bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
     assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output
+    # given but naming nothing: refused, not a session without a warm start
+    listed = [r.id for r in Session.list_sessions(url)]
+    for given in (",", " , "):
+        empty = CliRunner().invoke(app, [*args, "--prior-from", given])
+        assert empty.exit_code == 2 and "--prior-from names nothing" in empty.output
+    assert [r.id for r in Session.list_sessions(url)] == listed
 
 
 def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions(

@@ -56,6 +56,15 @@ def test_paper_2d_refuses_bad_options(tmp_path: Path) -> None:
     assert not (tmp_path / "summary.md").exists()
 
 
+@pytest.mark.parametrize("given", [[","], ["", " , "]])
+def test_a_settings_list_that_names_none_is_refused(tmp_path: Path, given: list[str]) -> None:
+    """``--settings ,`` split to no name and silently ran all six settings."""
+    args = [a for v in given for a in ("--settings", v)]
+    code, out = invoke("paper-2d", *args, "--runs", "1", "--trials", "2", "--out", str(tmp_path))
+    assert code == 2 and "--settings names nothing" in out, out
+    assert not (tmp_path / "runs.csv").exists()
+
+
 def test_paper_2d_on_ray(tmp_path: Path, ray_runtime: None) -> None:
     code, out = invoke(
         "paper-2d",
@@ -127,6 +136,7 @@ def test_compass_gait_poly_and_hzd(tmp_path: Path) -> None:
         (("--objective", "hzd", "--library", "none.json"), "no such gait library"),
         (("--objective", "spline"), "--objective must be 'poly' or 'hzd'"),
         (("--iterations", "a,b"), "--iterations must be comma-separated integers"),
+        (("--iterations", ","), "--iterations must be comma-separated integers, got none"),
     ],
 )
 def test_compass_gait_refuses_bad_options(

@@ -41,6 +41,8 @@ def test_the_study_is_run_k_on_objective_k() -> None:
     assert [s.name for s in only.settings] == ["n1_b1"]
     with pytest.raises(ValueError, match="unknown setting 'n4_b0'"):
         paper_2d_study(settings=["n4_b0"])
+    with pytest.raises(ValueError, match="no setting named"):  # not all six
+        paper_2d_study(settings=[])
     with pytest.raises(ValueError, match=r"runs must be 1\.\.100"):
         paper_2d_study(runs=101)
 

@@ -63,3 +63,35 @@ def test_the_db_status_command_says_so(tmp_path: Path) -> None:
     result = CliRunner().invoke(app, ["db", "status", "--db", f"sqlite:///{tmp_path / 'lab.db'}"])
     assert result.exit_code == 0, result.output
     assert "interrupted" in result.output and "does not exist" not in result.output
+
+
+def _db_status(url: str, *command: str) -> tuple[int, str]:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    result = CliRunner().invoke(app, [*(command or ("db", "status")), "--db", url])
+    return result.exit_code, " ".join(result.output.split())
+
+
+def test_an_unknown_driver_is_refused_as_by_every_command(tmp_path: Path) -> None:
+    """With the file there and leftover -wal/-journal files, the check for tables made an engine
+    of the unknown driver itself: a NoSuchModuleError traceback.  Without them the line was a
+    status (exit 0) naming the URL twice."""
+    upgrade_database(f"sqlite:///{tmp_path / 'x.db'}")
+    url = f"sqlite+unknowndriver:///{tmp_path / 'x.db'}"
+    code, out = _db_status(url)
+    same = "its driver 'sqlite+unknowndriver' cannot be loaded"
+    assert code == 2 and out.startswith(f"storage error: cannot open {url}: {same}"), out
+    for suffix in ("-wal", "-journal"):
+        (tmp_path / f"x.db{suffix}").touch()
+    assert _db_status(url) == (code, out)
+    assert _db_status(url, "session", "list") == (code, out)  # the same error
+
+
+def test_a_file_that_is_not_a_database_with_leftovers_is_named(tmp_path: Path) -> None:
+    """The check for tables raised 'file is not a database' as a traceback."""
+    (tmp_path / "x.db").write_text("not a database, a page of text " * 40)
+    (tmp_path / "x.db-journal").touch()
+    code, out = _db_status(f"sqlite:///{tmp_path / 'x.db'}")
+    assert code == 0 and out.endswith("x.db: file is not a database"), out

@@ -42,17 +42,26 @@ Jobs = Annotated[int, typer.Option("--jobs", "-j", help="parallel runs (-1: ever
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
 
 
-def _split(values: list[str] | None) -> list[str] | None:
+def _split(values: list[str] | None, option: str) -> list[str] | None:
+    """The names given (repeated or comma-separated), None when the option was not given; given
+    but naming none (``--settings ,``) is refused, not taken for the default."""
     if not values:
         return None
-    return [v.strip() for item in values for v in item.split(",") if v.strip()]
+    names = [v.strip() for item in values for v in item.split(",") if v.strip()]
+    if not names:
+        given = " ".join(f"{option} {v!r}" for v in values)
+        raise ValueError(f"{option} names nothing ({given}); leave it out for the default")
+    return names
 
 
 def _integers(text: str, option: str) -> list[int]:
     try:
-        return [int(v) for v in text.split(",") if v.strip()]
+        numbers = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise ValueError(f"{option} must be comma-separated integers, got {text!r}") from None
+    if not numbers:
+        raise ValueError(f"{option} must be comma-separated integers, got none in {text!r}")
+    return numbers
 
 
 def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyResult:
@@ -127,7 +136,9 @@ def paper_2d(
     from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
     from gaitpref.simulate.tables import write_curves, write_table
 
-    study = guard(lambda: paper_2d_study(runs, trials, _split(settings), baseline, seed))
+    study = guard(
+        lambda: paper_2d_study(runs, trials, _split(settings, "--settings"), baseline, seed)
+    )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
     _folder(out)

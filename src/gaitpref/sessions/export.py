@@ -32,6 +32,7 @@ log and none is made again; the target database's gait cache gets them as replay
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import io
 import json
@@ -445,9 +446,15 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
     try:
-        if not as_new:
-            _check_not_imported(storage, spec, info)
-        record = storage.create_session(spec, events, status)
+        if as_new:
+            record = storage.create_session(spec, events, status)
+        else:  # checked in the transaction that creates it: two imports cannot both pass
+            record = storage.create_session_checked(
+                spec,
+                events,
+                status,
+                check=functools.partial(_check_not_imported, storage.url, spec, info),
+            )
         session = Session.open(storage, record.id)
     except BaseException:
         if owns:
@@ -536,10 +543,13 @@ def origin_of(record: SessionRecord) -> str | None:
     return record.origin
 
 
-def _check_not_imported(storage: Storage, spec: SessionSpec, info: dict[str, Any]) -> None:
-    """Refuse an export whose session ``storage`` already holds (imported, or the original)."""
+def _check_not_imported(
+    where: str, spec: SessionSpec, info: dict[str, Any], sessions: list[SessionRecord]
+) -> None:
+    """Refuse an export whose session is among the subject's ``sessions`` in the database
+    ``where`` (imported, or the original)."""
     mine = spec.meta["imported_from"]
-    for rec in storage.list_sessions(spec.subject):
+    for rec in sessions:
         origin = rec.meta.get("imported_from")
         again = isinstance(origin, dict) and origin.get("events_sha256") == mine["events_sha256"]
         original = (
@@ -551,7 +561,7 @@ def _check_not_imported(storage: Storage, spec: SessionSpec, info: dict[str, Any
             how = "imported before as" if again else "the exported session itself, as"
             raise ExportError(
                 f"this export (session {info.get('id')} of subject {spec.subject}) is already in "
-                f"{storage.url}: {how} session {rec.id}; nothing was written.  To keep a second "
+                f"{where}: {how} session {rec.id}; nothing was written.  To keep a second "
                 "copy under a new id, import it with --as-new"
             )
 

@@ -47,9 +47,12 @@ MAX_SE_BELOW = 3.0
 
 
 def paper_2d_settings(names: Sequence[str] | None = None, baseline: bool = True) -> list[Setting]:
-    """The named settings (default: all six), plus random selection when ``baseline``."""
+    """The named settings (None: all six), plus random selection when ``baseline``; naming none
+    (an empty list) is refused, not taken for all six."""
     known = {s.name: s for s in (*PAPER_2D_SETTINGS, RANDOM)}
-    chosen = list(names) if names else [s.name for s in PAPER_2D_SETTINGS]
+    if names is not None and not list(names):
+        raise ValueError(f"no setting named; give some of {', '.join(known)}, or None for all six")
+    chosen = list(names) if names is not None else [s.name for s in PAPER_2D_SETTINGS]
     unknown = [n for n in chosen if n not in known]
     if unknown:
         raise ValueError(f"unknown setting {unknown[0]!r}; the settings are {', '.join(known)}")

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -145,6 +145,10 @@ class SubjectRecord:
     created_at: datetime
 
 
+#: a check of a subject's sessions before one more is created (raises to refuse it)
+SessionsCheck = Callable[[list[SessionRecord]], None]
+
+
 class Storage(ABC):
     """Subjects, sessions and their append-only event logs (see the module's contract)."""
 
@@ -159,6 +163,27 @@ class Storage(ABC):
         status: Status = "active",
     ) -> SessionRecord:
         """Create a session (and its subject, if new) with its first ``events``, atomically."""
+
+    def create_session_checked(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent] = (),
+        status: Status = "active",
+        *,
+        check: SessionsCheck,
+    ) -> SessionRecord:
+        """:meth:`create_session`, once ``check(the subject's sessions, by id)`` returned; what
+        it raises is raised and nothing is written.
+
+        The check and the creation are one step: the backends here run ``check`` inside the
+        transaction that creates the session, while every other creator of a session of that
+        subject waits (SQLite: ``BEGIN IMMEDIATE``; PostgreSQL: the subject's row locked
+        ``FOR UPDATE``; memory: its lock), so that two creators cannot both pass it (two
+        imports of one export).  This default, for a backend that does not override it, checks
+        and then creates, without that guarantee.
+        """
+        check(self.list_sessions(spec.subject))
+        return self.create_session(spec, events, status)
 
     @abstractmethod
     def get_session(self, session_id: int) -> SessionRecord:

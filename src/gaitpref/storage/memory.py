@@ -18,6 +18,7 @@ from gaitpref.storage.base import (
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
+    SessionsCheck,
     SessionSpec,
     Status,
     Storage,
@@ -44,10 +45,37 @@ class MemoryStorage(Storage):
     def create_session(
         self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
     ) -> SessionRecord:
+        return self._create(spec, events, status, None)
+
+    def create_session_checked(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent] = (),
+        status: Status = "active",
+        *,
+        check: SessionsCheck,
+    ) -> SessionRecord:
+        return self._create(spec, events, status, check)
+
+    def _create(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent],
+        status: Status,
+        check: SessionsCheck | None,
+    ) -> SessionRecord:
         spec = check_spec(spec)
         checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
         status = check_status(status)
         with self._lock:
+            if check is not None:  # under the lock: no other creator between check and create
+                check(
+                    [
+                        _copy_session(s)
+                        for _, s in sorted(self._sessions.items())
+                        if s.subject == spec.subject
+                    ]
+                )
             stamp = now()
             sid = max(self._sessions, default=0) + 1
             self._subjects.setdefault(spec.subject, SubjectRecord(spec.subject, stamp))

@@ -52,6 +52,7 @@ from gaitpref.storage.base import (
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
+    SessionsCheck,
     SessionSpec,
     Status,
     Storage,
@@ -142,6 +143,25 @@ class SQLStorage(Storage):
     def create_session(
         self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
     ) -> SessionRecord:
+        return self._create(spec, events, status, None)
+
+    def create_session_checked(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent] = (),
+        status: Status = "active",
+        *,
+        check: SessionsCheck,
+    ) -> SessionRecord:
+        return self._create(spec, events, status, check)
+
+    def _create(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent],
+        status: Status,
+        check: SessionsCheck | None,
+    ) -> SessionRecord:
         spec = check_spec(spec)
         checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
         status = check_status(status)
@@ -153,6 +173,23 @@ class SQLStorage(Storage):
                 .values(code=spec.subject, created_at=stamp)
                 .on_conflict_do_nothing(index_elements=["code"])
             )
+            if check is not None:
+                # SQLite: BEGIN IMMEDIATE already holds the database's write lock.  PostgreSQL:
+                # every creator of this subject's sessions locks its row, so the next one waits
+                # here and then (READ COMMITTED) reads the sessions committed before it
+                if not self._sqlite:
+                    conn.execute(
+                        select(subjects_t.c.code)
+                        .where(subjects_t.c.code == spec.subject)
+                        .with_for_update()
+                    )
+                mine = select(sessions_t).where(sessions_t.c.subject == spec.subject)
+                check(
+                    [
+                        _session(r._mapping, self.url)
+                        for r in conn.execute(mine.order_by(sessions_t.c.id))
+                    ]
+                )
             sid = conn.execute(
                 insert(sessions_t)
                 .values(
@@ -368,6 +405,7 @@ def database_status(url: str) -> str:
     """
     parsed = parse_url(url)
     where = _masked(parsed)
+    _plain_engine(parsed).dispose()  # a driver that cannot be loaded is refused, as on opening
     if parsed.get_backend_name() == "sqlite" and not _sqlite_memory(parsed):
         path = Path(parsed.database or "")
         near = (path.with_name(path.name + suffix) for suffix in ("-wal", "-journal"))
@@ -400,10 +438,14 @@ def database_status(url: str) -> str:
 
 
 def _has_tables(url: URL) -> bool:
-    engine = create_engine(url)
+    """Whether the SQLite file holds a table; True too when it cannot be read (not a database,
+    unreadable): opening it then names the problem, as without leftover files."""
+    engine = _plain_engine(url)
     try:
         with engine.connect() as conn:
             return bool(conn.exec_driver_sql("SELECT name FROM sqlite_master").first())
+    except DBAPIError:
+        return True
     finally:
         engine.dispose()
 
@@ -440,28 +482,34 @@ def _sqlite_memory(url: URL) -> bool:
     return url.database in (None, "", ":memory:")
 
 
-def _engine(url: URL) -> Engine:
-    serializer = functools.partial(json.dumps, allow_nan=False)
+def _plain_engine(url: URL, **options: Any) -> Engine:
+    """``create_engine(url, **options)`` (it connects to nothing), or
+    :class:`StorageConnectError` naming a driver that is not installed or unknown."""
     try:
-        if url.get_backend_name() == "postgresql":
-            return create_engine(
-                url,
-                json_serializer=serializer,
-                connect_args={"connect_timeout": 10},
-                pool_pre_ping=True,
-            )
-        memory = _sqlite_memory(url)
-        engine = create_engine(
-            url,
-            json_serializer=serializer,
-            connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
-            **({"poolclass": StaticPool} if memory else {}),
-        )
-    except (ImportError, ArgumentError) as exc:  # a driver not installed, or unknown
+        return create_engine(url, **options)
+    except (ImportError, ArgumentError) as exc:
         raise StorageConnectError(
             f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
             f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
         ) from None
+
+
+def _engine(url: URL) -> Engine:
+    serializer = functools.partial(json.dumps, allow_nan=False)
+    if url.get_backend_name() == "postgresql":
+        return _plain_engine(
+            url,
+            json_serializer=serializer,
+            connect_args={"connect_timeout": 10},
+            pool_pre_ping=True,
+        )
+    memory = _sqlite_memory(url)
+    engine = _plain_engine(
+        url,
+        json_serializer=serializer,
+        connect_args={"timeout": BUSY_TIMEOUT_S, "check_same_thread": False},
+        **({"poolclass": StaticPool} if memory else {}),
+    )
 
     @event.listens_for(engine, "connect")
     def _on_connect(dbapi_connection: Any, _record: object) -> None:

@@ -42,6 +42,7 @@ from gaitpref.storage import (
     NewEvent,
     SessionFinishedError,
     SessionNotFoundError,
+    SessionRecord,
     SessionSpec,
     Storage,
     StorageError,
@@ -109,6 +110,26 @@ class StorageContract:
         assert [s.id for s in db.list_sessions("S01")] == [first.id, third.id]
         assert [s.code for s in db.list_subjects()] == ["S01", "S02"]
         assert [e.kind for e in db.events(first.id)] == ["created"]
+
+    def test_a_checked_create_sees_the_subjects_sessions_and_a_refusal_writes_nothing(
+        self, open_db: Opener
+    ) -> None:
+        db = open_db()
+        first = db.create_session(_spec("S01"))
+        db.create_session(_spec("S02"))
+        seen: list[list[int]] = []
+        made = db.create_session_checked(
+            _spec("S01"), check=lambda sessions: seen.append([r.id for r in sessions])
+        )
+        assert seen == [[first.id]] and db.get_session(made.id).subject == "S01"
+
+        def refuse(sessions: list[SessionRecord]) -> None:
+            raise StorageError("refused")
+
+        with pytest.raises(StorageError, match="refused"):
+            db.create_session_checked(_spec("S03"), [NewEvent("created")], check=refuse)
+        assert [r.subject for r in db.list_sessions()] == ["S01", "S02", "S01"]
+        assert [s.code for s in db.list_subjects()] == ["S01", "S02"]
 
     def test_append_numbers_events_and_round_trips_json(self, open_db: Opener) -> None:
         db = open_db()
