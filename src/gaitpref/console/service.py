@@ -27,7 +27,7 @@ from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir, discard
 from gaitpref.console.errors import InputError
-from gaitpref.errors import NoSafeGaitError, SessionStateError
+from gaitpref.errors import GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.sessions.session import Answered, Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
@@ -45,8 +45,9 @@ class Pending:
     """What the trial page can show now: a query, or why there is none."""
 
     query: SessionQuery | None
-    reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe"
-    detail: str = ""  # why, in words (the NoSafeGaitError's message)
+    reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe",
+    # "no-gait" (the gait generator failed to make a proposed gait)
+    detail: str = ""  # why, in words (the NoSafeGaitError's or GaitError's message)
 
 
 @dataclass(frozen=True)
@@ -299,6 +300,8 @@ def pending_of(session: Session) -> Pending:
         return Pending(session.next_query(), "")
     except NoSafeGaitError as exc:  # nothing was written: say why and propose nothing
         return Pending(None, "no-safe", str(exc))
+    except GaitError as exc:  # the generator failed (not an infeasible gait): nothing written
+        return Pending(None, "no-gait", str(exc) or type(exc).__name__)
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:
