@@ -189,7 +189,7 @@ class SessionService:
             if expected_query is not None:
                 pending = session.pending
                 if pending is None or pending.id != expected_query:
-                    now = "no query is pending" if pending is None else f"query {pending.id} is"
+                    now = "no query is" if pending is None else f"query {pending.id} is"
                     raise SessionStateError(
                         f"the undo was asked while query {expected_query} was pending, but now "
                         f"{now} pending (another tab answered or undid first); nothing was undone"
