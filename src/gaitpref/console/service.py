@@ -277,10 +277,18 @@ class SessionService:
 
     # -- export --------------------------------------------------------------------------------
     def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:
-        """The session's export folder (``session export``) as a zip archive."""
+        """The session's export folder (``session export``) as a zip archive.
+
+        Made from a copy of the session opened for it, not the shared one: an export of a long
+        session takes its time (the confidence after every answer is worked out again), and the
+        answers, pages and figures of that session must not wait for it.
+        """
         from gaitpref.sessions.export import export_session
 
-        with self.locked(session_id) as session, tempfile.TemporaryDirectory() as tmp:
+        with (
+            Session.open(self.storage, session_id) as session,
+            tempfile.TemporaryDirectory() as tmp,
+        ):
             folder = Path(tmp) / f"session-{session_id}"
             export_session(session, folder, fmt)
             buf = io.BytesIO()

@@ -1,0 +1,44 @@
+"""Operator flows end to end (no browser): what a second tab, a long export or a failed step
+does to the other requests of the same session."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+import gaitpref.sessions.export as export_module
+from tests.console.conftest import answer_once, new_session
+
+
+def test_an_export_does_not_hold_up_the_answers_of_its_session(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The export was made under the shared session's lock: on a 150-trial session the
+    operator's next answer waited for it (about a minute on this machine)."""
+    sid = new_session(client)
+    answer_once(client, sid)
+    real = export_module.export_session
+    during: list[httpx.Response] = []
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    body = {"query_id": q["query_id"], "comparisons": [[*q["comparisons"][0], "first"]]}
+
+    def slow_export(session: Any, out: Path, fmt: Any = "csv") -> Path:
+        answering = threading.Thread(
+            target=lambda: during.append(client.post(f"/api/sessions/{sid}/answers", json=body)),
+            daemon=True,
+        )
+        answering.start()
+        answering.join(timeout=30)  # blocked until the export ended, before
+        assert not answering.is_alive(), "the answer waited for the export"
+        return real(session, out, fmt)
+
+    monkeypatch.setattr(export_module, "export_session", slow_export)
+    r = client.get(f"/sessions/{sid}/export.zip")
+    assert r.status_code == 200
+    assert [a.status_code for a in during] == [200]
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2
