@@ -42,3 +42,15 @@ def test_an_export_does_not_hold_up_the_answers_of_its_session(
     assert r.status_code == 200
     assert [a.status_code for a in during] == [200]
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2
+
+
+def test_the_sessions_page_says_its_times_are_utc(client: TestClient) -> None:
+    """The table's 'updated' times were UTC without saying so (an hour or more off the lab's
+    clock in most of Europe)."""
+    sid = new_session(client)
+    updated = client.get("/api/sessions").json()[0]["updated_at"]
+    assert updated.endswith("+00:00")
+    html = client.get("/").text
+    row = html[html.index(f'data-session="{sid}"') :]
+    shown = f"{updated[:10]} {updated[11:16]} UTC"
+    assert f'<time datetime="{updated}">{shown}</time>' in row
