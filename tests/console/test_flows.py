@@ -54,3 +54,26 @@ def test_the_sessions_page_says_its_times_are_utc(client: TestClient) -> None:
     row = html[html.index(f'data-session="{sid}"') :]
     shown = f"{updated[:10]} {updated[11:16]} UTC"
     assert f'<time datetime="{updated}">{shown}</time>' in row
+
+
+def test_a_reloaded_page_does_not_say_what_another_tab_took_back(client: TestClient) -> None:
+    """Reloading ``?answered=2`` after another tab undid trial 2 said "Saved: trial 2." above
+    trial 2 asked again; and any text after ``answered=`` was shown as saved."""
+    sid = new_session(client)
+    answer_once(client, sid)
+    answer_once(client, sid)
+    assert "Saved: trial 2." in client.get(f"/sessions/{sid}?answered=2").text
+    assert client.post(f"/api/sessions/{sid}/undo").status_code == 200  # the other tab
+    page = client.get(f"/sessions/{sid}?answered=2").text
+    assert "Saved: trial 2." not in page and "Run now: trial 2" in page
+    assert "Undone: the answer to trial 2" in client.get(f"/sessions/{sid}?undone=2").text
+    answer_once(client, sid)
+    assert "Undone" not in client.get(f"/sessions/{sid}?undone=2").text  # answered again since
+    assert 'id="flash"' not in client.get(f"/sessions/{sid}?answered=9").text
+    assert 'id="flash"' not in client.get(f"/sessions/{sid}?answered=all%20done").text
+    flag = f"/api/sessions/{sid}/trials/2/unsafe"
+    assert client.post(flag, json={"reason": "slipped"}).status_code == 200
+    assert "Trial 2 flagged unsafe" in client.get(f"/sessions/{sid}?flagged=2").text
+    assert client.post(f"{flag}/withdraw").status_code == 200  # the other tab
+    assert "flagged unsafe" not in client.get(f"/sessions/{sid}?flagged=2").text
+    assert "flag of trial 2 was withdrawn" in client.get(f"/sessions/{sid}?withdrawn=2").text
