@@ -12,7 +12,8 @@ import pytest
 from fastapi.testclient import TestClient
 
 import gaitpref.sessions.export as export_module
-from tests.console.conftest import answer_once, new_session
+from tests.console.conftest import answer_once, event_count, new_session
+from tests.console.htmlforms import forms_of
 
 
 def test_an_export_does_not_hold_up_the_answers_of_its_session(
@@ -77,3 +78,42 @@ def test_a_reloaded_page_does_not_say_what_another_tab_took_back(client: TestCli
     assert client.post(f"{flag}/withdraw").status_code == 200  # the other tab
     assert "flagged unsafe" not in client.get(f"/sessions/{sid}?flagged=2").text
     assert "flag of trial 2 was withdrawn" in client.get(f"/sessions/{sid}?withdrawn=2").text
+
+
+def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
+    client: TestClient,
+) -> None:
+    """A flag on a gait the open round shows draws the round again with the same number; a
+    validation page loaded before (another tab, the operator's tablet) posted its ranking of
+    the gaits it showed, and it was booked against the new round's gaits."""
+    from tests.console.test_ratings_safety import rated_config
+
+    sid = new_session(client, rated_config(0.05))
+    for _ in range(3):
+        answer_once(client, sid)
+    for _ in range(12):  # until a round shows a gait a trial walked
+        answer_once(client, sid)
+        r = client.post(f"/api/sessions/{sid}/validation")
+        assert r.status_code == 200, r.text
+        plan = r.json()
+        shown = {g["gait"]["index"] for g in plan["gaits"]}
+        trials = client.get(f"/api/sessions/{sid}/trials").json()
+        walked = [t for t in trials if t["gait"]["index"] in shown]
+        if walked:
+            break
+        ranking = {"ranking": ["A", "B", "C"]}
+        client.post(f"/api/sessions/{sid}/validation/{plan['round']}/ranking", json=ranking)
+    assert walked, "no round showed a walked gait"
+    stale = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
+    flag = f"/api/sessions/{sid}/trials/{walked[0]['trial']}/unsafe"
+    assert client.post(flag, json={"reason": "knee gave way"}).status_code == 200
+    again = client.get(f"/api/sessions/{sid}/validation").json()[-1]
+    assert again["round"] == plan["round"] and again["gaits"] != plan["gaits"]
+    before = event_count(client, sid)
+    data = {**stale.fields, "rank1": "A", "rank2": "B", "rank3": "C"}
+    r = client.post(stale.action, data=data, follow_redirects=False)
+    assert r.status_code == 409 and "was drawn again since this page was loaded" in r.text
+    assert event_count(client, sid) == before
+    fresh = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
+    r = client.post(fresh.action, data={**fresh.fields, "rank1": "A", "rank2": "B", "rank3": "C"})
+    assert r.status_code == 200 and f'id="round-{plan["round"]}"' in r.text

@@ -8,6 +8,7 @@ without), and a successful post redirects (303) so that reloading never posts tw
 from __future__ import annotations
 
 import functools
+import json
 import re
 from typing import Annotated, Any
 
@@ -362,6 +363,7 @@ def _validation_page(request: Request, session: Session) -> Response:
         session=session,
         plan=plan,
         gaits=gaits,
+        shown=json.dumps([g.gait_id for _, g in gaits]),  # checked when the ranking is posted
         results=list(reversed(results)),
         trials=len(session.trials()),
     )
@@ -383,8 +385,23 @@ async def post_ranking(
     for k, label in enumerate(ranking, start=1):
         if not label:
             raise InputError(f"rank{k}", "choose a gait for every place")
-    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking)
+    shown = _shown(fields.get("shown"))
+    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
+
+
+def _shown(text: str | None) -> list[str] | None:
+    """The gaits a validation page showed, in label order (a JSON list of names; None: not
+    said, as from a form made elsewhere)."""
+    if text is None:
+        return None
+    try:
+        names = json.loads(text)
+    except ValueError:
+        names = None
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise InputError("shown", "the gaits the page showed, as a JSON list of their names")
+    return names
 
 
 # -- export ------------------------------------------------------------------------------------

@@ -261,10 +261,28 @@ class SessionService:
         with self.locked(session_id) as session:
             return session.start_validation()
 
-    def rank(self, session_id: int, round_: int, ranking: Sequence[str]) -> ValidationResult:
-        """Record the blind ranking (labels, best first) of the open round ``round_``."""
+    def rank(
+        self,
+        session_id: int,
+        round_: int,
+        ranking: Sequence[str],
+        shown: Sequence[str] | None = None,
+    ) -> ValidationResult:
+        """Record the blind ranking (labels, best first) of the open round ``round_``; with
+        ``shown`` (the gaits' names in label order, as a page showed them), only if the round
+        still shows those gaits: a flag on a gait it showed draws it again with the same number,
+        and a ranking of the gaits walked before must not be booked against the new ones."""
         with self.locked(session_id) as session:
             plan = session.validation_plan
+            if shown is not None and plan is not None and plan.round == round_:
+                now = [g.gait for g in session.validation_gaits()]
+                if list(shown) != now:
+                    raise SessionStateError(
+                        f"validation round {round_} was drawn again since this page was loaded "
+                        f"(an unsafe flag withdrew a gait it showed): it now shows "
+                        f"{', '.join(now)}, not {', '.join(shown)}; nothing was written, run "
+                        "the round's gaits as shown now"
+                    )
             if plan is not None and plan.round == round_:
                 labels = [str(r).upper() for r in ranking]
                 if sorted(labels) != sorted(plan.labels):
