@@ -117,3 +117,20 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     fresh = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
     r = client.post(fresh.action, data={**fresh.fields, "rank1": "A", "rank2": "B", "rank3": "C"})
     assert r.status_code == 200 and f'id="round-{plan["round"]}"' in r.text
+
+
+@pytest.mark.parametrize("spoil", ["exclude", "unsafe"])
+def test_no_undo_is_offered_that_the_session_refuses(client: TestClient, spoil: str) -> None:
+    """An excluded or flagged last trial kept its 'Undo last answer' button, whose confirm step
+    ended in a 409 page (the session refuses to undo such an answer)."""
+    sid = new_session(client)
+    answer_once(client, sid)
+    answer_once(client, sid)
+    assert 'id="undo-form"' in client.get(f"/sessions/{sid}").text
+    body = {"reason": "stumble"} if spoil == "exclude" else {"reason": "knee gave way"}
+    assert client.post(f"/api/sessions/{sid}/trials/2/{spoil}", json=body).status_code == 200
+    assert client.post(f"/api/sessions/{sid}/undo").status_code == 409
+    assert 'id="undo-form"' not in client.get(f"/sessions/{sid}").text
+    if spoil == "unsafe":
+        client.post(f"/api/sessions/{sid}/trials/2/unsafe/withdraw")
+        assert 'id="undo-form"' in client.get(f"/sessions/{sid}").text
