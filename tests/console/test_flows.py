@@ -134,3 +134,16 @@ def test_no_undo_is_offered_that_the_session_refuses(client: TestClient, spoil: 
     if spoil == "unsafe":
         client.post(f"/api/sessions/{sid}/trials/2/unsafe/withdraw")
         assert 'id="undo-form"' in client.get(f"/sessions/{sid}").text
+
+
+def test_a_finished_sessions_open_round_offers_no_ranking(client: TestClient) -> None:
+    """A session finished with a validation round open showed the round's ranking form, whose
+    every post was a 409 (a finished session takes no ranking)."""
+    sid = new_session(client)
+    for _ in range(4):
+        answer_once(client, sid)
+    assert client.post(f"/api/sessions/{sid}/validation").status_code == 200
+    assert client.post(f"/api/sessions/{sid}/status", json={"status": "finished"}).is_success
+    page = client.get(f"/sessions/{sid}/validation").text
+    assert "ranking-form" not in forms_of(page)
+    assert "finished with this round open" in page
