@@ -114,6 +114,11 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     r = client.post(stale.action, data=data, follow_redirects=False)
     assert r.status_code == 409 and "was drawn again since this page was loaded" in r.text
     assert event_count(client, sid) == before
+    old_ids = [g["gait"]["gait_id"] for g in plan["gaits"]]
+    ranking = f"/api/sessions/{sid}/validation/{plan['round']}/ranking"
+    r = client.post(ranking, json={"ranking": ["A", "B", "C"], "shown": old_ids})
+    assert r.status_code == 409 and "drawn again" in r.json()["detail"]
+    assert event_count(client, sid) == before
     fresh = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
     r = client.post(fresh.action, data={**fresh.fields, "rank1": "A", "rank2": "B", "rank3": "C"})
     assert r.status_code == 200 and f'id="round-{plan["round"]}"' in r.text
