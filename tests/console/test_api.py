@@ -325,6 +325,8 @@ def test_undo_naming_a_query_that_is_no_longer_pending_is_409(client: TestClient
     events = event_count(client, sid)
     r = client.post(f"/api/sessions/{sid}/undo", json={"query_id": q["query_id"]})
     assert r.status_code == 409 and "nothing was undone" in r.json()["detail"]
+    # no query is pending yet after the answer (it was "no query is pending pending")
+    assert "now no query is pending (another tab" in r.json()["detail"]
     assert event_count(client, sid) == events
     r = client.post(f"/api/sessions/{sid}/undo", json={"query_id": "x"})
     assert r.status_code == 422 and "query_id" in loc_of(r)

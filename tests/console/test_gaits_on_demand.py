@@ -3,9 +3,11 @@ gaits that could not be made listed on the trial page, never offered as a trial.
 
 from __future__ import annotations
 
+import pytest
 from fastapi.testclient import TestClient
 
-from tests.console.conftest import new_session
+from gaitpref.errors import GaitGeneratorError, SimulationError
+from tests.console.conftest import event_count, new_session
 from tests.sessions.gaitkit import CONFIG, FakeSteps
 
 
@@ -29,3 +31,28 @@ def test_the_console_runs_a_session_with_gaits_made_on_demand(client: TestClient
     page = client.get(f"/sessions/{sid}").text
     assert "Gaits that could not be made" in page
     assert "too short" in page
+
+
+@pytest.mark.parametrize("error", [GaitGeneratorError("solver crashed"), SimulationError("fell")])
+def test_a_generator_that_fails_leaves_the_trial_page_usable_and_writes_nothing(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch, error: Exception
+) -> None:
+    """A generator that raises (not an infeasible gait: an error) was a 422 "refused input"
+    page for GaitGeneratorError and a bare 500 for SimulationError, on a GET."""
+    sid = new_session(client, CONFIG, seed=4)
+
+    def fails(self: FakeSteps, vector: object, warm_start: object = None) -> None:
+        raise error
+
+    monkeypatch.setattr(FakeSteps, "make", fails)
+    before = event_count(client, sid)
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200
+    assert "The next gait could not be made" in page.text and str(error) in page.text
+    assert 'id="answer-form"' not in page.text
+    assert 'value="finished"' in page.text  # the session can still be finished
+    r = client.get(f"/api/sessions/{sid}/query")
+    assert r.status_code == 503 and str(error) in r.json()["detail"]
+    assert event_count(client, sid) == before
+    monkeypatch.undo()
+    assert client.get(f"/api/sessions/{sid}/query").status_code == 200

@@ -80,6 +80,11 @@ def test_refused_prior_from_items_name_the_field(client: TestClient) -> None:
     assert code == 422 and "<code>prior_from</code>" in text and "J@ne" in text
     code, text = _create(client, "S02", "S09")
     assert code == 422 and "S09" in text and "has no sessions" in text
+    # digits of another script are not a session id (int() read "\u0661" as session 1: the
+    # session was created, warm-started from session 1); the API's pattern refuses them too
+    for odd in ("\u0661", "\u00b2"):
+        code, text = _create(client, "S02", odd)
+        assert code == 422 and "neither a session id nor a subject code" in text, text
     assert len(client.get("/api/sessions").json()) == 1
 
 

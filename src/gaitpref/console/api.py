@@ -262,9 +262,11 @@ def rank(
     round_: Annotated[int, Path(ge=1, le=MAX_ID)],
     body: RankingIn,
 ) -> ValidationOut:
-    """The subject's blind ranking (labels, best first); returns the round unblinded."""
+    """The subject's blind ranking (labels, best first); returns the round unblinded.  With
+    ``shown`` (the gait ids of the round as the client showed them), refused (409) when a flag
+    drew the round again since with other gaits."""
     service = service_of(request)
-    result = service.rank(session_id, round_, body.ranking)
+    result = service.rank(session_id, round_, body.ranking, body.shown)
     return service.read(session_id, lambda s: present.result_out(s, result))
 
 

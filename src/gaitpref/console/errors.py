@@ -18,6 +18,8 @@ error                                       status  meaning
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
 ``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is
+``GaitError`` (not ``GaitLibraryError``)    503     the gait generator failed to make a
+                                                    proposed gait: nothing proposed
 ``ReplayError``                             500     the stored log does not replay: see message
 ==========================================  ======  =========================================
 
@@ -34,6 +36,8 @@ from gaitpref.config import ConfigError
 from gaitpref.errors import (
     ConvergenceError,
     FeedbackError,
+    GaitError,
+    GaitLibraryError,
     NoSafeGaitError,
     PriorFromError,
     PriorNotPositiveDefiniteError,
@@ -76,6 +80,8 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (NoSafeGaitError, 409, "no safe gait"),
     (SchemaError, 503, "database schema"),
     (StorageConnectError, 503, "database unreachable"),
+    (GaitLibraryError, 422, "refused gait library"),
+    (GaitError, 503, "gait not made"),
     (FeedbackError, 422, "refused answer"),
     (ConfigError, 422, "refused config"),
     (PriorNotPositiveDefiniteError, 422, "refused config"),

@@ -8,8 +8,9 @@ without), and a successful post redirects (303) so that reloading never posts tw
 from __future__ import annotations
 
 import functools
+import json
 import re
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
@@ -171,23 +172,46 @@ async def trial_page(
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
-    flash = ""
-    if answered:
-        flash = f"Saved: trial {answered}."
-    elif undone and replaced:
-        flash = (
-            f"Undone: the answer to trial {undone} was taken back; its query proposed a gait "
-            "flagged unsafe since, so a new query is proposed in its place."
-        )
-    elif undone:
-        flash = f"Undone: the answer to trial {undone} was taken back; run it again."
-    elif flagged:
-        flash = (
-            f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
-        )
-    elif withdrawn:
-        flash = f"The unsafe flag of trial {withdrawn} was withdrawn."
+    flash = _flash(context, answered, undone, replaced, flagged, withdrawn)
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
+
+
+def _numbers(text: str | None) -> set[int]:
+    """The trial numbers of a flash parameter (``"3,4"``); none if it is not such a list."""
+    if not text or not re.fullmatch(r"\d{1,18}(,\d{1,18})*", text):
+        return set()
+    return {int(t) for t in text.split(",")}
+
+
+def _flash(
+    context: dict[str, Any],
+    answered: str | None,
+    undone: str | None,
+    replaced: int | None,
+    flagged: int | None,
+    withdrawn: int | None,
+) -> str:
+    """What the redirect after a post says, if it is still so: a page reloaded after another
+    tab undid the answer, withdrew the flag (...) says nothing rather than what is no longer
+    true ("Saved: trial 4." above trial 4 asked again)."""
+    done = {row.trial for row in context["chronology"]}
+    unsafe = context["unsafe"]
+    saved, taken = _numbers(answered), _numbers(undone)
+    if saved and saved <= done:
+        return f"Saved: trial {', '.join(map(str, sorted(saved)))}."
+    if taken and not taken & done:
+        names = ", ".join(map(str, sorted(taken)))
+        if replaced:
+            return (
+                f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
+                "flagged unsafe since, so a new query is proposed in its place."
+            )
+        return f"Undone: the answer to trial {names} was taken back; run it again."
+    if flagged and flagged in unsafe:
+        return f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
+    if withdrawn and withdrawn in done and withdrawn not in unsafe:
+        return f"The unsafe flag of trial {withdrawn} was withdrawn."
+    return ""
 
 
 @router.post("/sessions/{session_id}/answer")
@@ -339,6 +363,7 @@ def _validation_page(request: Request, session: Session) -> Response:
         session=session,
         plan=plan,
         gaits=gaits,
+        shown=json.dumps([g.gait_id for _, g in gaits]),  # checked when the ranking is posted
         results=list(reversed(results)),
         trials=len(session.trials()),
     )
@@ -360,8 +385,23 @@ async def post_ranking(
     for k, label in enumerate(ranking, start=1):
         if not label:
             raise InputError(f"rank{k}", "choose a gait for every place")
-    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking)
+    shown = _shown(fields.get("shown"))
+    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
+
+
+def _shown(text: str | None) -> list[str] | None:
+    """The gaits a validation page showed, in label order (a JSON list of names; None: not
+    said, as from a form made elsewhere)."""
+    if text is None:
+        return None
+    try:
+        names = json.loads(text)
+    except ValueError:
+        names = None
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise InputError("shown", "the gaits the page showed, as a JSON list of their names")
+    return names
 
 
 # -- export ------------------------------------------------------------------------------------

@@ -317,6 +317,15 @@ class RankingIn(_Request):
     ranking: list[Annotated[StrictStr, Field(min_length=1, max_length=4)]] = Field(
         min_length=1, max_length=8, description="labels, best first", examples=[["B", "A", "C"]]
     )
+    shown: list[Annotated[StrictStr, Field(min_length=1, max_length=200)]] | None = Field(
+        None,
+        max_length=8,
+        description=(
+            "optional: the gait ids the round showed, in label order (as GET .../validation "
+            "gave them); refused (409) if a flag drew the round again since"
+        ),
+        examples=[["G7", "G14", "G2"]],
+    )
 
 
 class ErrorOut(BaseModel):

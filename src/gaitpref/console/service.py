@@ -27,7 +27,7 @@ from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir, discard
 from gaitpref.console.errors import InputError
-from gaitpref.errors import NoSafeGaitError, SessionStateError
+from gaitpref.errors import GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.sessions.session import Answered, Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
@@ -45,8 +45,9 @@ class Pending:
     """What the trial page can show now: a query, or why there is none."""
 
     query: SessionQuery | None
-    reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe"
-    detail: str = ""  # why, in words (the NoSafeGaitError's message)
+    reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe",
+    # "no-gait" (the gait generator failed to make a proposed gait)
+    detail: str = ""  # why, in words (the NoSafeGaitError's or GaitError's message)
 
 
 @dataclass(frozen=True)
@@ -188,7 +189,7 @@ class SessionService:
             if expected_query is not None:
                 pending = session.pending
                 if pending is None or pending.id != expected_query:
-                    now = "no query is pending" if pending is None else f"query {pending.id} is"
+                    now = "no query is" if pending is None else f"query {pending.id} is"
                     raise SessionStateError(
                         f"the undo was asked while query {expected_query} was pending, but now "
                         f"{now} pending (another tab answered or undid first); nothing was undone"
@@ -260,10 +261,28 @@ class SessionService:
         with self.locked(session_id) as session:
             return session.start_validation()
 
-    def rank(self, session_id: int, round_: int, ranking: Sequence[str]) -> ValidationResult:
-        """Record the blind ranking (labels, best first) of the open round ``round_``."""
+    def rank(
+        self,
+        session_id: int,
+        round_: int,
+        ranking: Sequence[str],
+        shown: Sequence[str] | None = None,
+    ) -> ValidationResult:
+        """Record the blind ranking (labels, best first) of the open round ``round_``; with
+        ``shown`` (the gaits' names in label order, as a page showed them), only if the round
+        still shows those gaits: a flag on a gait it showed draws it again with the same number,
+        and a ranking of the gaits walked before must not be booked against the new ones."""
         with self.locked(session_id) as session:
             plan = session.validation_plan
+            if shown is not None and plan is not None and plan.round == round_:
+                now = [g.gait for g in session.validation_gaits()]
+                if list(shown) != now:
+                    raise SessionStateError(
+                        f"validation round {round_} was drawn again since this page was loaded "
+                        f"(an unsafe flag withdrew a gait it showed): it now shows "
+                        f"{', '.join(now)}, not {', '.join(shown)}; nothing was written, run "
+                        "the round's gaits as shown now"
+                    )
             if plan is not None and plan.round == round_:
                 labels = [str(r).upper() for r in ranking]
                 if sorted(labels) != sorted(plan.labels):
@@ -276,10 +295,18 @@ class SessionService:
 
     # -- export --------------------------------------------------------------------------------
     def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:
-        """The session's export folder (``session export``) as a zip archive."""
+        """The session's export folder (``session export``) as a zip archive.
+
+        Made from a copy of the session opened for it, not the shared one: an export of a long
+        session takes its time (the confidence after every answer is worked out again), and the
+        answers, pages and figures of that session must not wait for it.
+        """
         from gaitpref.sessions.export import export_session
 
-        with self.locked(session_id) as session, tempfile.TemporaryDirectory() as tmp:
+        with (
+            Session.open(self.storage, session_id) as session,
+            tempfile.TemporaryDirectory() as tmp,
+        ):
             folder = Path(tmp) / f"session-{session_id}"
             export_session(session, folder, fmt)
             buf = io.BytesIO()
@@ -299,6 +326,8 @@ def pending_of(session: Session) -> Pending:
         return Pending(session.next_query(), "")
     except NoSafeGaitError as exc:  # nothing was written: say why and propose nothing
         return Pending(None, "no-safe", str(exc))
+    except GaitError as exc:  # the generator failed (not an infeasible gait): nothing written
+        return Pending(None, "no-gait", str(exc) or type(exc).__name__)
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:

@@ -96,6 +96,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     sure = session.confidence() if learned else None
     ordinal = session.config.ordinal
     categories = ordinal.categories if ordinal is not None else ()
+    unsafe = session.unsafe_flags()
+    last = [t for t in trials if t.query == trials[-1].query] if trials else []
+    # the session refuses to undo an answer whose trial was excluded or flagged since
+    undoable = bool(last) and not any(t.excluded or t.number in unsafe for t in last)
     return {
         "session": session,
         "status": session.status,
@@ -108,7 +112,8 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "suggestions": views.suggestion_groups(space, actions),
         "ratings": views.rating_groups(categories, actions),
         "categories": categories,
-        "unsafe": session.unsafe_flags(),
+        "unsafe": unsafe,
+        "undoable": undoable,
         "infeasible": list(reversed(session.infeasible_gaits()))[:20],
         "multi": len(actions) > 1,
         "chronology": chronology(session),

@@ -66,14 +66,14 @@ def log_sha256(events: Sequence[EventRecord]) -> str:
 
 def read_prior_from(items: Iterable[str]) -> list[int | str]:
     """Typed ``prior_from`` items (the CLI's repeated ``--prior-from``, the console's field):
-    each item may hold several, separated by commas or spaces; digits are a session id, anything
-    else a subject code.  ValueError names an item that is neither."""
+    each item may hold several, separated by commas or spaces; digits (0-9) are a session id,
+    anything else a subject code.  ValueError names an item that is neither."""
     out: list[int | str] = []
     for item in items:
         for token in re.split(r"[,\s]+", item.strip()):
             if not token:
                 continue
-            if token.isdigit():
+            if token.isascii() and token.isdigit():  # not another script's digits
                 out.append(int(token))
                 continue
             try:
