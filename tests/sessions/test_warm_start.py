@@ -155,3 +155,30 @@ def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions
     with pytest.raises(ExportError, match=rf"warm-started from earlier sessions {ids[0]} \(S01\)"):
         import_session(db, tmp_path / "export", as_new=True)
     assert [r.id for r in db.list_sessions()] == before
+
+
+def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each session of S01 warm-started from S01's earlier ones: opening the k-th replayed every
+    path to an earlier session (2**(k-1) - 1 replays: 31 for the sixth, a minute by the tenth,
+    hours by the twentieth); now each once, the same posterior."""
+    from gaitpref.sessions import warm
+
+    db = MemoryStorage()
+    space = load_config(CONFIG).space
+    for k in range(6):
+        with Session.create(db, CONFIG, "S01", seed=k, prior_from=["S01"] if k else []) as s:
+            _run(s, SimulatedSubject(space, bump_utility(space), seed=k), 2)
+            mean = np.asarray(s.posterior().mean).copy()
+    calls = []
+    replay = warm.replay
+
+    def counted(state: object, events: list[object]) -> None:
+        calls.append(events[0])
+        replay(state, events)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(warm, "replay", counted)
+    with Session.open(db, s.id) as again:
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+    assert len(calls) == 5

@@ -133,11 +133,17 @@ def _categories(config: ExperimentConfig) -> tuple[str, ...] | None:
     return None if config.ordinal is None else tuple(config.ordinal.categories)
 
 
-def _earlier_terms(
-    storage: Storage, prior: PriorSession, scale: tuple[str, ...] | None = None
-) -> Earlier:
-    """The terms in force in an earlier session after its recorded event, replayed; its
-    single-action terms (ratings) only when its rating scale is ``scale``, the new one's."""
+#: What a build has replayed of the earlier sessions it reads, by what was recorded of each (id,
+#: subject, last event, hash): the terms in force then and the rating scale.  A session whose
+#: earlier sessions were themselves warm-started (a subject's sessions, each warm-started from
+#: the subject) reads each once, not once per path to it (2**k replays for a chain of k).
+Replayed = dict[PriorSession, tuple[Earlier, tuple[str, ...] | None]]
+
+
+def _replayed(storage: Storage, prior: PriorSession, memo: Replayed) -> None:
+    """Replay ``prior`` (its log checked against the recorded hash) into ``memo``."""
+    if prior in memo:
+        return
     record = storage.get_session(prior.session)
     events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
     if log_sha256(events) != prior.sha256:
@@ -146,22 +152,61 @@ def _earlier_terms(
             f"read, has changed since (its log up to event {prior.last_seq} no longer matches the "
             "hash recorded at creation); the warm start cannot be rebuilt"
         )
-    state = prepare_state(storage, record)
+    state = prepare_state(storage, record, memo=memo)
     replay(state, events)
     loop = state.loop
-    same_scale = scale is not None and _categories(state.config) == scale
-    return Earlier(loop.preferences, loop.ties, loop.singles if same_scale else ())
+    memo[prior] = (Earlier(loop.preferences, loop.ties, loop.singles), _categories(state.config))
+
+
+def _read_in_order(storage: Storage, prior: Sequence[PriorSession], memo: Replayed) -> None:
+    """Replay ``prior`` and every earlier session their own warm starts read, each once, oldest
+    first: each one's own earlier sessions are then already in ``memo`` (they were created
+    before it), so the replays never nest (a subject's long chain of warm-started sessions
+    would otherwise recurse once per session)."""
+    seen: set[PriorSession] = set()
+    stack = [p for p in prior if p not in memo]
+    while stack:
+        p = stack.pop()
+        if p in seen or p in memo:
+            continue
+        seen.add(p)
+        raw = storage.get_session(p.session).meta.get("prior_from") or []
+        stack.extend(PriorSession.model_validate(x) for x in raw)
+    for p in sorted(seen, key=lambda p: (p.session, p.last_seq)):
+        _replayed(storage, p, memo)
+
+
+def _earlier_terms(
+    storage: Storage,
+    prior: PriorSession,
+    scale: tuple[str, ...] | None = None,
+    memo: Replayed | None = None,
+) -> Earlier:
+    """The terms in force in an earlier session after its recorded event, replayed; its
+    single-action terms (ratings) only when its rating scale is ``scale``, the new one's."""
+    memo = {} if memo is None else memo
+    _replayed(storage, prior, memo)
+    terms, categories = memo[prior]
+    if scale is not None and categories == scale:
+        return terms
+    return Earlier(terms.preferences, terms.ties, ())
 
 
 def earlier_subjects(
-    storage: Storage, prior: Sequence[PriorSession], config: ExperimentConfig | None = None
+    storage: Storage,
+    prior: Sequence[PriorSession],
+    config: ExperimentConfig | None = None,
+    memo: Replayed | None = None,
 ) -> list[Earlier]:
     """The earlier sessions' terms, one :class:`Earlier` per subject code (in order of first
-    id); ratings only from sessions rated on ``config``'s scale (None: no ratings)."""
+    id); ratings only from sessions rated on ``config``'s scale (None: no ratings).  ``memo``:
+    what this build has already replayed (:data:`Replayed`)."""
     scale = None if config is None else _categories(config)
+    memo = {} if memo is None else memo
+    _read_in_order(storage, prior, memo)
     by_subject: dict[str, list[Earlier]] = {}
     for p in prior:
-        by_subject.setdefault(p.subject, []).append(_earlier_terms(storage, p, scale))
+        by_subject.setdefault(p.subject, []).append(_earlier_terms(storage, p, scale, memo))
     return [
         Earlier(
             [x for e in group for x in e.preferences],
@@ -204,17 +249,20 @@ def prepare_state(
     record: SessionRecord,
     config: ExperimentConfig | None = None,
     gait_cache: GaitCache | None = None,
+    *,
+    memo: Replayed | None = None,
 ) -> SessionState:
     """A fresh state for ``record`` (its parsed ``config``, if at hand), with its warm start
     when it has one (not yet replayed); gaits made on demand come from ``gait_cache`` (default:
-    the database's, ``stored_config.gait_cache_of``)."""
+    the database's, ``stored_config.gait_cache_of``); ``memo``: the earlier sessions this build
+    has replayed already (:data:`Replayed`)."""
     config = config_of(record) if config is None else config
     cache = gait_cache if gait_cache is not None else gait_cache_of(storage, config)
     state = SessionState(config, record.seed, record.meta.get("gait_ids"), gait_cache=cache)
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]
-        groups = earlier_subjects(storage, prior, config)
+        groups = earlier_subjects(storage, prior, config, memo)
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
