@@ -481,7 +481,9 @@ class Session:
     def confidence(self) -> Confidence:
         """How sure the model is of its recommendation (``sessions/confidence.py``), with the
         config's ``[stop]`` tolerance and sample count: ``.sentence(name)`` reads
-        "88% that G95 is within 5% of the best".  Kept until the log moves on."""
+        "88% that G95 is within 5% of the best".  Kept until the log moves on.
+        :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be proposed: there is no
+        gait to recommend."""
 
         def run() -> Confidence:
             seq = self._state.last_seq
