@@ -182,3 +182,22 @@ def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once
     with Session.open(db, s.id) as again:
         assert np.array_equal(np.asarray(again.posterior().mean), mean)
     assert len(calls) == 5
+
+
+def test_a_warm_start_past_the_node_limit_is_refused_by_count_before_anything_is_written(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Hundreds of earlier subjects were taken whole: 300 subjects of 15 answers made every
+    answer of the new session take 150 s (a dense refit over every (gait, subject) pair)."""
+    from gaitpref.errors import PriorFromError
+    from gaitpref.sessions import warm
+
+    db = MemoryStorage()
+    ids = _earlier(db)
+    monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 5)
+    before = [r.id for r in db.list_sessions()]
+    with pytest.raises(PriorFromError, match=r"visit \d+ \(gait, subject\) pairs; a warm start "):
+        Session.create(db, CONFIG, "S03", prior_from=ids)
+    assert [r.id for r in db.list_sessions()] == before
+    monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 2000)
+    Session.create(db, CONFIG, "S03", prior_from=ids).close()

@@ -29,6 +29,8 @@ import re
 from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import PriorFromError, ReplayError
 from gaitpref.loop.warm import (
@@ -55,6 +57,13 @@ from gaitpref.storage.base import check_subject
 
 if TYPE_CHECKING:
     from gaitpref.gaits.gait_cache import GaitCache
+
+
+#: The most distinct (gait, earlier subject) pairs a new warm start's earlier sessions may visit:
+#: each answer of the new session refits the population model over them (and the share's
+#: hypotheses), dense in their number; about 1,000 took 6 s an answer on two cores, 3,000 about
+#: 150 s.  Checked when a session is created; sessions recorded with more replay as they were.
+MAX_PRIOR_NODES = 2000
 
 
 def log_sha256(events: Sequence[EventRecord]) -> str:
@@ -221,11 +230,24 @@ def make_warm_start(
     storage: Storage, config: ExperimentConfig, prior: Sequence[PriorSession], seed: int
 ) -> WarmStart:
     """The warm start of a new session, every term carried, ``rho`` learned from the earlier
-    subjects."""
+    subjects; :class:`~gaitpref.errors.PriorFromError` when their terms visit more than
+    :data:`MAX_PRIOR_NODES` (gait, subject) pairs."""
     loop = config.make_loop(seed=seed)
+    groups = earlier_subjects(storage, prior, config)
+    model_ties = loop.learning.ties == "model"
+    data, singles = warm_terms(loop.context(), model_ties, groups)
+    parts = [data.first, data.second] + ([] if singles is None else [singles.actions])
+    nodes = int(np.unique(np.concatenate(parts)).size)
+    if nodes > MAX_PRIOR_NODES:
+        raise PriorFromError(
+            f"prior_from: the earlier sessions' answers visit {nodes} (gait, subject) pairs; a "
+            f"warm start takes at most {MAX_PRIOR_NODES} (every answer of the new session "
+            "refits them all, at a cost growing with the cube of their number): name fewer "
+            "sessions or subjects"
+        )
     return warm_start(
-        config.space, loop.hyper, loop.prior, earlier_subjects(storage, prior, config),
-        context=loop.context(), model_ties=loop.learning.ties == "model",
+        config.space, loop.hyper, loop.prior, groups,
+        context=loop.context(), model_ties=model_ties,
     )  # fmt: skip
 
 
@@ -279,6 +301,7 @@ def prepare_state(
 
 
 __all__ = [
+    "MAX_PRIOR_NODES",
     "RELEARN_EVERY",
     "SHARE_GATE",
     "describe_prior",
