@@ -201,3 +201,21 @@ def test_a_warm_start_past_the_node_limit_is_refused_by_count_before_anything_is
     assert [r.id for r in db.list_sessions()] == before
     monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 2000)
     Session.create(db, CONFIG, "S03", prior_from=ids).close()
+
+
+def test_an_earlier_session_whose_row_was_edited_is_named_when_it_does_not_replay(
+    tmp_path: Path,
+) -> None:
+    """Its log intact (the hash matches) but its seed edited: the error was the earlier
+    session's 'event 2 (query_issued): actions ...' alone, read as the opened session's own."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new = s.id
+    with sqlite3.connect(path) as con:
+        con.execute("UPDATE sessions SET seed = 12345 WHERE id = ?", (ids[0],))
+    with pytest.raises(
+        ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* does not replay.*event"
+    ):
+        Session.open(url, new)

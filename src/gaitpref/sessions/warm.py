@@ -153,16 +153,26 @@ def _replayed(storage: Storage, prior: PriorSession, memo: Replayed) -> None:
     """Replay ``prior`` (its log checked against the recorded hash) into ``memo``."""
     if prior in memo:
         return
-    record = storage.get_session(prior.session)
+    which = (
+        f"session {prior.session} (subject {prior.subject}), which this session's warm start read,"
+    )
+    try:
+        record = storage.get_session(prior.session)
+    except SessionNotFoundError:
+        raise ReplayError(
+            f"{which} is not in this database; the warm start cannot be rebuilt"
+        ) from None
     events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
     if log_sha256(events) != prior.sha256:
         raise ReplayError(
-            f"session {prior.session} (subject {prior.subject}), which this session's warm start "
-            f"read, has changed since (its log up to event {prior.last_seq} no longer matches the "
-            "hash recorded at creation); the warm start cannot be rebuilt"
+            f"{which} has changed since (its log up to event {prior.last_seq} no longer matches "
+            "the hash recorded at creation); the warm start cannot be rebuilt"
         )
-    state = prepare_state(storage, record, memo=memo)
-    replay(state, events)
+    try:
+        state = prepare_state(storage, record, memo=memo)
+        replay(state, events)
+    except ReplayError as exc:  # its own log, or its row, no longer replays: say whose it is
+        raise ReplayError(f"{which} does not replay from its log as stored: {exc}") from None
     loop = state.loop
     memo[prior] = (Earlier(loop.preferences, loop.ties, loop.singles), _categories(state.config))
 
