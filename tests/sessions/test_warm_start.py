@@ -140,6 +140,11 @@ def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
     bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
     assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output
+    before = len(Session.list_sessions(url))
+    for blank in ("", " , "):  # "$PRIOR" unset: a cold session was created, saying nothing
+        bad = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", blank])
+        assert bad.exit_code != 0 and f"--prior-from {blank!r} names no session" in bad.output
+    assert len(Session.list_sessions(url)) == before
 
 
 def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions(

@@ -116,6 +116,9 @@ def new(
             if not gait_ids.is_file():
                 raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
             library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
+        for item in prior_from or []:  # an empty one (an unset shell variable) is no warm start
+            if not read_prior_from([item]):
+                raise ValueError(f"--prior-from {item!r} names no session id or subject code")
         prior = read_prior_from(prior_from or [])
         return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
