@@ -147,3 +147,10 @@ def test_objectives_that_are_not_one_grid_per_subject_are_named_by_shape_or_subj
         population_bench(cfg, bad, 1)
     with pytest.raises(ValueError, match=r"truths: subject 0 .*shape \(16,\)"):
         population_bench(cfg, np.zeros((3, A)), 1, truths=np.zeros((3, A + 1)))
+
+
+def test_an_infinite_user_noise_is_refused_as_not_finite() -> None:
+    """It was refused as 'noise must be >= 0, got inf' (which it is)."""
+    cfg = load_config(CONFIG)
+    with pytest.raises(ValueError, match="noise must be a finite number >= 0, got inf"):
+        population_bench(cfg, np.zeros((2, len(cfg.space))), 1, user_noise=float("inf"))
