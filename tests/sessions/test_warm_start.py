@@ -224,3 +224,20 @@ def test_an_earlier_session_whose_row_was_edited_is_named_when_it_does_not_repla
         ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* does not replay.*event"
     ):
         Session.open(url, new)
+
+
+def test_an_earlier_session_missing_from_the_database_is_named_as_the_warm_starts(
+    tmp_path: Path,
+) -> None:
+    """Deleted by another tool: opening the warm session said 'no session 1', not which."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new = s.id
+    with sqlite3.connect(path) as con:
+        con.execute("DROP TRIGGER events_no_delete")
+        con.execute("DELETE FROM events WHERE session_id = ?", (ids[0],))
+        con.execute("DELETE FROM sessions WHERE id = ?", (ids[0],))
+    with pytest.raises(ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* not in"):
+        Session.open(url, new)

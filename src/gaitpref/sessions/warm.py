@@ -149,19 +149,27 @@ def _categories(config: ExperimentConfig) -> tuple[str, ...] | None:
 Replayed = dict[PriorSession, tuple[Earlier, tuple[str, ...] | None]]
 
 
+def _which(prior: PriorSession) -> str:
+    return (
+        f"session {prior.session} (subject {prior.subject}), which this session's warm start read,"
+    )
+
+
+def _record_of(storage: Storage, prior: PriorSession) -> SessionRecord:
+    try:
+        return storage.get_session(prior.session)
+    except SessionNotFoundError:
+        raise ReplayError(
+            f"{_which(prior)} is not in this database; the warm start cannot be rebuilt"
+        ) from None
+
+
 def _replayed(storage: Storage, prior: PriorSession, memo: Replayed) -> None:
     """Replay ``prior`` (its log checked against the recorded hash) into ``memo``."""
     if prior in memo:
         return
-    which = (
-        f"session {prior.session} (subject {prior.subject}), which this session's warm start read,"
-    )
-    try:
-        record = storage.get_session(prior.session)
-    except SessionNotFoundError:
-        raise ReplayError(
-            f"{which} is not in this database; the warm start cannot be rebuilt"
-        ) from None
+    which = _which(prior)
+    record = _record_of(storage, prior)
     events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
     if log_sha256(events) != prior.sha256:
         raise ReplayError(
@@ -189,7 +197,7 @@ def _read_in_order(storage: Storage, prior: Sequence[PriorSession], memo: Replay
         if p in seen or p in memo:
             continue
         seen.add(p)
-        raw = storage.get_session(p.session).meta.get("prior_from") or []
+        raw = _record_of(storage, p).meta.get("prior_from") or []
         stack.extend(PriorSession.model_validate(x) for x in raw)
     for p in sorted(seen, key=lambda p: (p.session, p.last_seq)):
         _replayed(storage, p, memo)
