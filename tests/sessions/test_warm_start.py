@@ -241,3 +241,20 @@ def test_an_earlier_session_missing_from_the_database_is_named_as_the_warm_start
         con.execute("DELETE FROM sessions WHERE id = ?", (ids[0],))
     with pytest.raises(ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* not in"):
         Session.open(url, new)
+
+
+def test_prior_from_must_be_a_list_not_one_code_a_number_or_a_mapping() -> None:
+    """'S01' was read a character at a time (subjects 'S', '0', '1': a subject 'S' was taken
+    silently), 7 was a TypeError ('int' object is not iterable), a dict gave its keys."""
+    db = MemoryStorage()
+    ids = _earlier(db)
+    Session.create(db, CONFIG, "S", seed=4).close()
+    before = [r.id for r in db.list_sessions()]
+    for bad in ("S01", ids[0], {ids[0]: 1}, b"S01"):
+        with pytest.raises(ValueError, match="prior_from: expected a list of session ids"):
+            Session.create(db, CONFIG, "S03", prior_from=bad)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"prior_from: expected session ids .*got 1\.0"):
+        Session.create(db, CONFIG, "S03", prior_from=[1.0])  # type: ignore[list-item]
+    assert [r.id for r in db.list_sessions()] == before
+    with Session.create(db, CONFIG, "S03", prior_from=iter(["S01"])) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids[:2]

@@ -26,7 +26,7 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -93,6 +93,24 @@ def read_prior_from(items: Iterable[str]) -> list[int | str]:
                     "(letters, digits, '-', '_' and '.')"
                 ) from None
     return out
+
+
+def check_prior_from(prior_from: object) -> list[int | str]:
+    """``prior_from`` as a list of session ids and subject codes; PriorFromError for anything
+    else, such as one code given as a string (it was read a character at a time: ``"S01"``
+    named subjects ``S``, ``0`` and ``1``), a number or a mapping.  None: no warm start."""
+    if prior_from is None:
+        return []
+    if isinstance(prior_from, str | bytes | Mapping) or not isinstance(prior_from, Iterable):
+        raise PriorFromError(
+            f"prior_from: expected a list of session ids or subject codes, got {prior_from!r}"
+            + (f" (for one, [{prior_from!r}])" if isinstance(prior_from, str | int) else "")
+        )
+    items = list(prior_from)
+    for item in items:
+        if isinstance(item, bool) or not isinstance(item, int | str):
+            raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
+    return items
 
 
 def resolve_prior(
@@ -322,6 +340,7 @@ __all__ = [
     "MAX_PRIOR_NODES",
     "RELEARN_EVERY",
     "SHARE_GATE",
+    "check_prior_from",
     "describe_prior",
     "earlier_subjects",
     "log_sha256",
