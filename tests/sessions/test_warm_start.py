@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 import sqlite3
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import numpy as np
 import pytest
 
 from gaitpref import Session, load_config
+from gaitpref.config import parse_config
 from gaitpref.errors import ReplayError
 from gaitpref.sessions import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
@@ -123,6 +125,29 @@ def test_prior_from_names_what_it_cannot_use() -> None:
         Session.create(db, CONFIG, "S03", prior_from=["S09"])
     with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
+
+
+def test_the_same_grid_worded_otherwise_is_the_same_grid_and_another_is_named() -> None:
+    """A config that words the coactive moves otherwise (or moves by other fractions) was refused
+    as 'run on another grid'; another grid named no difference."""
+    base = load_config(CONFIG)
+    db = MemoryStorage()
+
+    def variant(old: str, new: str) -> int:
+        cfg = parse_config(base.text.replace(old, new))
+        with Session.create(db, cfg, "S01") as s:
+            return s.id
+
+    worded = variant('words = ["longer", "shorter"]', 'words = ["up", "down"]')
+    moved = variant("coactive = [0.1, 0.2]", "coactive = [0.1, 0.3]")
+    Session.create(db, base, "S02", prior_from=[worded, moved]).close()
+    for old, new, says in (
+        ('unit = "m"', 'unit = "cm"', "step_length is in 'cm', not 'm'"),
+        ("num = 15", "num = 16", "step_length takes 16 values 0.08..0.18, not 15 values"),
+    ):
+        other = variant(old, new)
+        with pytest.raises(ValueError, match=rf"another grid \(config '[^']+': {re.escape(says)}"):
+            Session.create(db, base, "S02", prior_from=[other])
 
 
 def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:

@@ -46,6 +46,7 @@ from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.sessions.stored_config import config_of, gait_cache_of
+from gaitpref.space import Space
 from gaitpref.storage import (
     EventRecord,
     SessionNotFoundError,
@@ -113,6 +114,24 @@ def check_prior_from(prior_from: object) -> list[int | str]:
     return items
 
 
+def grid_difference(earlier: Space, new: Space) -> str:
+    """How the earlier session's grid differs from the new one's ("": the same grid: the same
+    features, values and units; how an operator words a coactive move may differ)."""
+    if [f.name for f in earlier] != [f.name for f in new]:
+        return f"features {[f.name for f in earlier]}, not {[f.name for f in new]}"
+    for a, b in zip(earlier, new, strict=True):
+        if a.continuous != b.continuous:
+            return f"{a.name} is {'' if a.continuous else 'not '}continuous"
+        if a.values != b.values:
+            return (
+                f"{a.name} takes {len(a.values)} values {a.values[0]:g}..{a.values[-1]:g}, not "
+                f"{len(b.values)} values {b.values[0]:g}..{b.values[-1]:g}"
+            )
+        if a.unit != b.unit:
+            return f"{a.name} is in {a.unit!r}, not {b.unit!r}"
+    return ""
+
+
 def resolve_prior(
     storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str]
 ) -> list[SessionRecord]:
@@ -133,10 +152,12 @@ def resolve_prior(
             if not records:
                 raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
         for record in records:
-            if config_of(record).space != config.space:
+            differs = grid_difference(config_of(record).space, config.space)
+            if differs:
                 raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
-                    f"another grid (config {record.config_name!r}); a warm start needs the same"
+                    f"another grid (config {record.config_name!r}: {differs}); a warm start "
+                    "needs the same"
                 )
             found[record.id] = record
     return [found[k] for k in sorted(found)]
@@ -343,6 +364,7 @@ __all__ = [
     "check_prior_from",
     "describe_prior",
     "earlier_subjects",
+    "grid_difference",
     "log_sha256",
     "make_warm_start",
     "prepare_state",
