@@ -230,6 +230,11 @@ def test_a_warm_start_past_the_node_limit_is_refused_by_count_before_anything_is
         Session.create(db, CONFIG, "S03", prior_from=ids)
     assert [r.id for r in db.list_sessions()] == before
     monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 2000)
+    monkeypatch.setattr(warm, "MAX_PRIOR_SESSIONS", 2)  # sessions with no answer cost replays
+    with pytest.raises(PriorFromError, match="names more than 2 sessions"):
+        Session.create(db, CONFIG, "S03", prior_from=["S01", "S02"])
+    assert [r.id for r in db.list_sessions()] == before
+    monkeypatch.setattr(warm, "MAX_PRIOR_SESSIONS", 3)
     Session.create(db, CONFIG, "S03", prior_from=ids).close()
 
 

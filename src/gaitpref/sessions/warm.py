@@ -65,6 +65,9 @@ if TYPE_CHECKING:
 #: hypotheses), dense in their number; about 1,000 took 6 s an answer on two cores, 3,000 about
 #: 150 s.  Checked when a session is created; sessions recorded with more replay as they were.
 MAX_PRIOR_NODES = 2000
+#: The most earlier sessions a new warm start may read (a subject code counts each of the
+#: subject's sessions): every opening of the new session replays each of them from its log.
+MAX_PRIOR_SESSIONS = 256
 
 
 def log_sha256(events: Sequence[EventRecord]) -> str:
@@ -160,6 +163,12 @@ def resolve_prior(
                     "needs the same"
                 )
             found[record.id] = record
+            if len(found) > MAX_PRIOR_SESSIONS:
+                raise PriorFromError(
+                    f"prior_from: names more than {MAX_PRIOR_SESSIONS} sessions (a subject code "
+                    "counts each of the subject's sessions); a warm start reads at most "
+                    f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
+                )
     return [found[k] for k in sorted(found)]
 
 
@@ -359,6 +368,7 @@ def prepare_state(
 
 __all__ = [
     "MAX_PRIOR_NODES",
+    "MAX_PRIOR_SESSIONS",
     "RELEARN_EVERY",
     "SHARE_GATE",
     "check_prior_from",
