@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 import re
 import sqlite3
 from pathlib import Path
@@ -16,7 +17,7 @@ from gaitpref.errors import ReplayError
 from gaitpref.sessions import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
-from gaitpref.sessions.warm import prepare_state
+from gaitpref.sessions.warm import log_sha256, prepare_state
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.sessionkit import CONFIG, state_of
 
@@ -288,3 +289,23 @@ def test_prior_from_must_be_a_list_not_one_code_a_number_or_a_mapping() -> None:
     assert [r.id for r in db.list_sessions()] == before
     with Session.create(db, CONFIG, "S03", prior_from=iter(["S01"])) as s:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids[:2]
+
+
+def test_a_warm_start_naming_a_later_session_is_refused_as_an_altered_database(
+    tmp_path: Path,
+) -> None:
+    """A row edited so that a session's warm start names itself (its hash matching): opening it
+    recursed until Python's RecursionError."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new, meta, sha = s.id, s.record.meta, log_sha256(s.events()[:1])
+    itself = {"session": new, "subject": "S03", "last_seq": 1, "sha256": sha}  # hash matches
+    with sqlite3.connect(path) as con:
+        con.execute(
+            "UPDATE sessions SET meta = ? WHERE id = ?",
+            (json.dumps({**meta, "prior_from": [itself]}), new),
+        )
+    with pytest.raises(ReplayError, match=f"session {new}: its warm start names session {new}"):
+        Session.open(url, new)

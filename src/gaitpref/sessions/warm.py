@@ -350,6 +350,12 @@ def prepare_state(
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]
+        later = [p.session for p in prior if p.session >= record.id]
+        if later:  # only a row edited outside gaitpref: a warm start reads sessions made before
+            raise ReplayError(
+                f"session {record.id}: its warm start names session {later[0]}, not made before "
+                "it; the database was altered"
+            )
         groups = earlier_subjects(storage, prior, config, memo)
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
