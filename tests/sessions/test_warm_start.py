@@ -289,6 +289,8 @@ def test_prior_from_must_be_a_list_not_one_code_a_number_or_a_mapping() -> None:
     assert [r.id for r in db.list_sessions()] == before
     with Session.create(db, CONFIG, "S03", prior_from=iter(["S01"])) as s:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids[:2]
+    with Session.create(db, CONFIG, "S04", prior_from=np.array(ids)) as s:  # NumPy ids are ids
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
 
 
 def test_a_warm_start_naming_a_later_session_is_refused_as_an_altered_database(

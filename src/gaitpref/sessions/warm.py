@@ -110,10 +110,13 @@ def check_prior_from(prior_from: object) -> list[int | str]:
             f"prior_from: expected a list of session ids or subject codes, got {prior_from!r}"
             + (f" (for one, [{prior_from!r}])" if isinstance(prior_from, str | int) else "")
         )
-    items = list(prior_from)
-    for item in items:
+    items: list[int | str] = []
+    for item in prior_from:
+        if isinstance(item, np.integer):  # a NumPy id is an id
+            item = int(item)
         if isinstance(item, bool) or not isinstance(item, int | str):
             raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
+        items.append(item)
     return items
 
 
