@@ -64,7 +64,7 @@ class FeedbackError(GaitprefError, ValueError):
 
 class PriorFromError(GaitprefError, ValueError):
     """A warm start's ``prior_from`` names a session or subject that is not there, or one run
-    on another grid; nothing was created."""
+    on another grid, or more answers than a warm start takes; nothing was created."""
 
 
 class QueryError(GaitprefError, ValueError):

@@ -297,9 +297,10 @@ class Terminal:
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
             mean = s.posterior().mean
             if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
-                sure = s.confidence()
-                line = sure.sentence(gait_name(s, sure.recommended))
-                self.console.print(f"  {line}", markup=False)
+                with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
+                    sure = s.confidence()
+                    line = sure.sentence(gait_name(s, sure.recommended))
+                    self.console.print(f"  {line}", markup=False)
             if reason:
                 redrawn = False
                 for t in dict.fromkeys(q.trials):

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from gaitpref import Session
+from gaitpref import Rating, Session
 from gaitpref.config import ExperimentConfig, load_config, parse_config
-from gaitpref.errors import ConfigError
+from gaitpref.errors import ConfigError, NoSafeGaitError
+from gaitpref.sessions import export_session
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive, state_of
 
@@ -61,3 +64,54 @@ def test_a_bad_stop_table_names_the_key() -> None:
         _config("confidence = 1.5\n")
     with pytest.raises(ConfigError, match=r"\[stop\]"):
         _config("patience = 3\n")
+
+
+RATED = """
+name = "rated-5"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 5
+[model]
+lengthscale = 0.2
+signal_variance = 0.005
+noise = 0.02
+[cospar]
+seed = 2
+strategy = "self-sparring"
+[feedback.rating]
+labels = ["very bad", "bad", "okay", "good"]
+[safety]
+avoid = ["very bad"]
+cautious = 0
+[stop]
+confidence = 0.9
+"""
+
+
+def test_an_answer_that_leaves_no_gait_to_recommend_is_written_and_states_no_confidence(
+    tmp_path: Path,
+) -> None:
+    """One 'very bad' on a five-gait grid this smooth puts every gait in the region: the
+    answer was written, then the [stop] rule's confidence raised ValueError('no gait is
+    allowed') from answer(); the export (the confidence table) failed the same way."""
+    from fastapi.testclient import TestClient
+
+    from gaitpref.console import create_app
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    s = Session.create(url, parse_config(RATED), "S01")
+    q = s.next_query()
+    s.answer(q.id, [Rating(q.actions[0], "very bad")])
+    assert [e.kind for e in s.events()][-1] == "rating_given"
+    assert s.stop_reason() is None and s.validation_plan is None
+    with pytest.raises(NoSafeGaitError):
+        s.next_query()
+    with pytest.raises(NoSafeGaitError, match="no gait may be recommended"):
+        s.confidence()
+    assert s.confidence_history() == []
+    export_session(s, tmp_path / "export", fmt="json")
+    client = TestClient(create_app(url))
+    got = client.get(f"/api/sessions/{s.id}/posterior")
+    assert got.status_code == 200 and got.json()["confidence"] is None
+    assert client.get(f"/sessions/{s.id}").status_code == 200

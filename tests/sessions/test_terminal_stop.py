@@ -42,3 +42,26 @@ def test_without_a_rule_the_terminal_still_shows_the_confidence(tmp_path: Path) 
     child.expect(r"Trial 2: run G\d+")
     child.sendline("q")
     child.expect(pexpect.EOF)
+
+
+def test_the_terminal_goes_on_when_an_answer_leaves_no_gait_to_recommend(tmp_path: Path) -> None:
+    """A 'very bad' that puts every gait in the region: the terminal crashed with a ValueError
+    traceback ('no gait is allowed') after the answer was written."""
+    from tests.sessions.test_stopping import RATED
+
+    config = tmp_path / "rated.toml"
+    config.write_text(RATED, encoding="utf-8")
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    Session.create(url, config, "S01").close()
+    child = _spawn("session", "run", "1", "--db", url)
+    child.expect(r"Trial 1: run G\d+")
+    child.expect(r"Rating of trial 1: 1 very bad")
+    child.sendline("1")
+    child.expect(r"Suggestion for step_length")
+    child.sendline("0")
+    child.expect(r"Write: .*y yes, n re-enter")
+    child.sendline("y")
+    child.expect("saved: trial 1")
+    child.expect("no gait may be proposed")
+    child.expect(pexpect.EOF)
+    assert "Traceback" not in (child.before or "")

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
+import json
+import re
 import sqlite3
 from pathlib import Path
 
@@ -10,11 +12,12 @@ import numpy as np
 import pytest
 
 from gaitpref import Session, load_config
+from gaitpref.config import parse_config
 from gaitpref.errors import ReplayError
 from gaitpref.sessions import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
-from gaitpref.sessions.warm import prepare_state
+from gaitpref.sessions.warm import log_sha256, prepare_state
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.sessionkit import CONFIG, state_of
 
@@ -125,6 +128,29 @@ def test_prior_from_names_what_it_cannot_use() -> None:
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
 
 
+def test_the_same_grid_worded_otherwise_is_the_same_grid_and_another_is_named() -> None:
+    """A config that words the coactive moves otherwise (or moves by other fractions) was refused
+    as 'run on another grid'; another grid named no difference."""
+    base = load_config(CONFIG)
+    db = MemoryStorage()
+
+    def variant(old: str, new: str) -> int:
+        cfg = parse_config(base.text.replace(old, new))
+        with Session.create(db, cfg, "S01") as s:
+            return s.id
+
+    worded = variant('words = ["longer", "shorter"]', 'words = ["up", "down"]')
+    moved = variant("coactive = [0.1, 0.2]", "coactive = [0.1, 0.3]")
+    Session.create(db, base, "S02", prior_from=[worded, moved]).close()
+    for old, new, says in (
+        ('unit = "m"', 'unit = "cm"', "step_length is in 'cm', not 'm'"),
+        ("num = 15", "num = 16", "step_length takes 16 values 0.08..0.18, not 15 values"),
+    ):
+        other = variant(old, new)
+        with pytest.raises(ValueError, match=rf"another grid \(config '[^']+': {re.escape(says)}"):
+            Session.create(db, base, "S02", prior_from=[other])
+
+
 def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
     from typer.testing import CliRunner
 
@@ -140,12 +166,11 @@ def test_the_cli_warm_starts_a_new_session(tmp_path: Path) -> None:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
     bad = CliRunner().invoke(app, [*args, "--prior-from", "S09"])
     assert bad.exit_code != 0 and "subject 'S09' has no sessions" in bad.output
-    # given but naming nothing: refused, not a session without a warm start
-    listed = [r.id for r in Session.list_sessions(url)]
-    for given in (",", " , "):
-        empty = CliRunner().invoke(app, [*args, "--prior-from", given])
-        assert empty.exit_code == 2 and "--prior-from names nothing" in empty.output
-    assert [r.id for r in Session.list_sessions(url)] == listed
+    before = len(Session.list_sessions(url))
+    for blank in ("", ",", " , "):  # "$PRIOR" unset: a cold session was created, saying nothing
+        bad = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", blank])
+        assert bad.exit_code != 0 and f"--prior-from {blank!r} names no session" in bad.output
+    assert len(Session.list_sessions(url)) == before
 
 
 def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions(
@@ -161,3 +186,128 @@ def test_a_warm_started_session_is_refused_on_import_naming_its_earlier_sessions
     with pytest.raises(ExportError, match=rf"warm-started from earlier sessions {ids[0]} \(S01\)"):
         import_session(db, tmp_path / "export", as_new=True)
     assert [r.id for r in db.list_sessions()] == before
+
+
+def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each session of S01 warm-started from S01's earlier ones: opening the k-th replayed every
+    path to an earlier session (2**(k-1) - 1 replays: 31 for the sixth, a minute by the tenth,
+    hours by the twentieth); now each once, the same posterior."""
+    from gaitpref.sessions import warm
+
+    db = MemoryStorage()
+    space = load_config(CONFIG).space
+    for k in range(6):
+        with Session.create(db, CONFIG, "S01", seed=k, prior_from=["S01"] if k else []) as s:
+            _run(s, SimulatedSubject(space, bump_utility(space), seed=k), 2)
+            mean = np.asarray(s.posterior().mean).copy()
+    calls = []
+    replay = warm.replay
+
+    def counted(state: object, events: list[object]) -> None:
+        calls.append(events[0])
+        replay(state, events)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(warm, "replay", counted)
+    with Session.open(db, s.id) as again:
+        assert np.array_equal(np.asarray(again.posterior().mean), mean)
+    assert len(calls) == 5
+
+
+def test_a_warm_start_past_the_node_limit_is_refused_by_count_before_anything_is_written(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Hundreds of earlier subjects were taken whole: 300 subjects of 15 answers made every
+    answer of the new session take 150 s (a dense refit over every (gait, subject) pair)."""
+    from gaitpref.errors import PriorFromError
+    from gaitpref.sessions import warm
+
+    db = MemoryStorage()
+    ids = _earlier(db)
+    monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 5)
+    before = [r.id for r in db.list_sessions()]
+    with pytest.raises(PriorFromError, match=r"visit \d+ \(gait, subject\) pairs; a warm start "):
+        Session.create(db, CONFIG, "S03", prior_from=ids)
+    assert [r.id for r in db.list_sessions()] == before
+    monkeypatch.setattr(warm, "MAX_PRIOR_NODES", 2000)
+    monkeypatch.setattr(warm, "MAX_PRIOR_SESSIONS", 2)  # sessions with no answer cost replays
+    with pytest.raises(PriorFromError, match="names more than 2 sessions"):
+        Session.create(db, CONFIG, "S03", prior_from=["S01", "S02"])
+    assert [r.id for r in db.list_sessions()] == before
+    monkeypatch.setattr(warm, "MAX_PRIOR_SESSIONS", 3)
+    Session.create(db, CONFIG, "S03", prior_from=ids).close()
+
+
+def test_an_earlier_session_whose_row_was_edited_is_named_when_it_does_not_replay(
+    tmp_path: Path,
+) -> None:
+    """Its log intact (the hash matches) but its seed edited: the error was the earlier
+    session's 'event 2 (query_issued): actions ...' alone, read as the opened session's own."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new = s.id
+    with sqlite3.connect(path) as con:
+        con.execute("UPDATE sessions SET seed = 12345 WHERE id = ?", (ids[0],))
+    with pytest.raises(
+        ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* does not replay.*event"
+    ):
+        Session.open(url, new)
+
+
+def test_an_earlier_session_missing_from_the_database_is_named_as_the_warm_starts(
+    tmp_path: Path,
+) -> None:
+    """Deleted by another tool: opening the warm session said 'no session 1', not which."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new = s.id
+    with sqlite3.connect(path) as con:
+        con.execute("DROP TRIGGER events_no_delete")
+        con.execute("DELETE FROM events WHERE session_id = ?", (ids[0],))
+        con.execute("DELETE FROM sessions WHERE id = ?", (ids[0],))
+    with pytest.raises(ReplayError, match=rf"session {ids[0]} \(subject S01\), which .* not in"):
+        Session.open(url, new)
+
+
+def test_prior_from_must_be_a_list_not_one_code_a_number_or_a_mapping() -> None:
+    """'S01' was read a character at a time (subjects 'S', '0', '1': a subject 'S' was taken
+    silently), 7 was a TypeError ('int' object is not iterable), a dict gave its keys."""
+    db = MemoryStorage()
+    ids = _earlier(db)
+    Session.create(db, CONFIG, "S", seed=4).close()
+    before = [r.id for r in db.list_sessions()]
+    for bad in ("S01", ids[0], {ids[0]: 1}, b"S01"):
+        with pytest.raises(ValueError, match="prior_from: expected a list of session ids"):
+            Session.create(db, CONFIG, "S03", prior_from=bad)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"prior_from: expected session ids .*got 1\.0"):
+        Session.create(db, CONFIG, "S03", prior_from=[1.0])  # type: ignore[list-item]
+    assert [r.id for r in db.list_sessions()] == before
+    with Session.create(db, CONFIG, "S03", prior_from=iter(["S01"])) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids[:2]
+    with Session.create(db, CONFIG, "S04", prior_from=np.array(ids)) as s:  # NumPy ids are ids
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
+
+
+def test_a_warm_start_naming_a_later_session_is_refused_as_an_altered_database(
+    tmp_path: Path,
+) -> None:
+    """A row edited so that a session's warm start names itself (its hash matching): opening it
+    recursed until Python's RecursionError."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new, meta, sha = s.id, s.record.meta, log_sha256(s.events()[:1])
+    itself = {"session": new, "subject": "S03", "last_seq": 1, "sha256": sha}  # hash matches
+    with sqlite3.connect(path) as con:
+        con.execute(
+            "UPDATE sessions SET meta = ? WHERE id = ?",
+            (json.dumps({**meta, "prior_from": [itself]}), new),
+        )
+    with pytest.raises(ReplayError, match=f"session {new}: its warm start names session {new}"):
+        Session.open(url, new)

@@ -129,3 +129,28 @@ def test_no_more_workers_than_subjects(monkeypatch: pytest.MonkeyPatch) -> None:
     grids = np.array([-((x - p) ** 2) for p in (0.6, 0.65, 0.7)])
     population_bench(load_config(CONFIG), grids, 2, jobs=8)
     assert asked == [3, 3]  # cold, then warm
+
+
+def test_objectives_that_are_not_one_grid_per_subject_are_named_by_shape_or_subject() -> None:
+    """A flat file of S x A values, or one subject's grid alone, was iterated value by value:
+    'objective has shape (); the grid needs (15,)'; a NaN named no subject."""
+    cfg = load_config(CONFIG)
+    A = len(cfg.space)
+    for flat in (np.zeros(3 * A), np.zeros(A)):
+        with pytest.raises(
+            ValueError, match=rf"one utility grid per subject.*shape \({flat.size},\)"
+        ):
+            population_bench(cfg, flat, 1)
+    bad = np.zeros((3, A))
+    bad[2, 4] = np.nan
+    with pytest.raises(ValueError, match=r"objectives: subject 2 .*must be finite"):
+        population_bench(cfg, bad, 1)
+    with pytest.raises(ValueError, match=r"truths: subject 0 .*shape \(16,\)"):
+        population_bench(cfg, np.zeros((3, A)), 1, truths=np.zeros((3, A + 1)))
+
+
+def test_an_infinite_user_noise_is_refused_as_not_finite() -> None:
+    """It was refused as 'noise must be >= 0, got inf' (which it is)."""
+    cfg = load_config(CONFIG)
+    with pytest.raises(ValueError, match="noise must be a finite number >= 0, got inf"):
+        population_bench(cfg, np.zeros((2, len(cfg.space))), 1, user_noise=float("inf"))

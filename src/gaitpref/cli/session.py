@@ -116,12 +116,10 @@ def new(
             if not gait_ids.is_file():
                 raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
             library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
+        for item in prior_from or []:  # an empty one (an unset shell variable) is no warm start
+            if not read_prior_from([item]):
+                raise ValueError(f"--prior-from {item!r} names no session id or subject code")
         prior = read_prior_from(prior_from or [])
-        if prior_from and not prior:  # given, naming nothing: not taken for no warm start
-            given = " ".join(f"--prior-from {v!r}" for v in prior_from)
-            raise ValueError(
-                f"--prior-from names nothing ({given}); leave it out for no warm start"
-            )
         return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
     session = guard(run)

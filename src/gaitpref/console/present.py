@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from gaitpref.console import views
@@ -18,6 +20,7 @@ from gaitpref.console.schemas import (
     ValidationGaitOut,
     ValidationOut,
 )
+from gaitpref.errors import NoSafeGaitError
 from gaitpref.sessions.records import ShownGait
 from gaitpref.sessions.session import Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
@@ -116,8 +119,11 @@ def posterior_out(session: Session) -> PosteriorOut:
     sd = np.asarray(post.std, dtype=float)
     space = session.space
     confidence = None
+    sure = None
     if mean.size and mean.max() > mean.min():  # something learnt (the trial page shows it too)
-        sure = session.confidence()
+        with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend: none stated
+            sure = session.confidence()
+    if sure is not None:
         confidence = ConfidenceOut(
             sentence=sure.sentence(session.gait_name(sure.recommended)),
             probability=sure.probability,

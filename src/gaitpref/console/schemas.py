@@ -202,7 +202,9 @@ class PosteriorOut(BaseModel):
     )
     trials: list[int] = Field(description="executed actions in trial order")
     confidence: ConfidenceOut | None = Field(
-        default=None, description="how sure the model is of argmax (None before any answer)"
+        default=None,
+        description="how sure the model is of argmax (None before any answer, and when no gait "
+        "may be proposed)",
     )
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -10,6 +11,7 @@ import numpy as np
 from gaitpref.console import views
 from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
+from gaitpref.errors import NoSafeGaitError
 from gaitpref.sessions.session import Session
 
 
@@ -93,7 +95,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     best = int(np.argmax(mean))
     trials = session.trials()
     learned = bool(mean.max() > mean.min())
-    sure = session.confidence() if learned else None
+    sure = None
+    if learned:
+        with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend: none stated
+            sure = session.confidence()
     ordinal = session.config.ordinal
     categories = ordinal.categories if ordinal is not None else ()
     unsafe = session.unsafe_flags()

@@ -10,7 +10,7 @@ An earlier subject is either their preferences alone (what warm starts carried f
 the sessions that recorded it) or an :class:`Earlier`: every registered kind's terms in force,
 pair terms (preferences, and ties when the new loop models them) and single-action terms
 (ratings), each made with the new loop's likelihood (:func:`warm_terms`), as its own answers
-are.  The new
+are, except that a preference keeps the probit noise it carries (its own session's).  The new
 subject's answers join those data in every fit (``CoSpar.warm_start``): with ``rho = 0`` their
 posterior is the one they would have had alone.
 

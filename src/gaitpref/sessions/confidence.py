@@ -5,7 +5,10 @@ The probability comes from posterior samples drawn with a generator of its own,
 the loop's generator (so replay is unaffected) and gives the same number for the same session
 state, whoever asks (terminal, console, export).  :func:`confidence_history` replays a log and
 states the confidence after every step that changed the model (an answer, an undo, an
-exclusion): the export's ``confidence`` table.
+exclusion): the export's ``confidence`` table.  When no gait may be proposed (the region of
+avoidance and the unsafe flags cover the grid) there is nothing to recommend: the session states
+no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the rule does not act on one and the
+table has no row for that step.
 """
 
 from __future__ import annotations
@@ -15,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from gaitpref.errors import NoSafeGaitError
 from gaitpref.loop.stopping import Confidence, StopRule, confidence
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -24,8 +28,15 @@ CONFIDENCE_STREAM = 0xC0F1DE7CE  # the confidence's generator: (seed, this, answ
 
 
 def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
-    """The confidence of ``state``'s posterior with the rule's tolerance and sample count."""
+    """The confidence of ``state``'s posterior with the rule's tolerance and sample count;
+    :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be proposed (none to recommend)."""
     loop = state.loop
+    allowed = loop.allowed()
+    if allowed is not None and not allowed.any():
+        raise NoSafeGaitError(
+            "no gait may be recommended: every gait is in the region of avoidance or near a "
+            "gait flagged unsafe, so there is no confidence to state"
+        )
     answers = len(loop.answers)
     rng = np.random.default_rng(
         np.random.SeedSequence(state.seed, spawn_key=(CONFIDENCE_STREAM, answers))
@@ -35,9 +46,15 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
         rng,
         tolerance=rule.tolerance,
         samples=rule.samples,
-        allowed=loop.allowed(),
+        allowed=allowed,
         draws=loop.share_mixture(),
     )
+
+
+def recommends(state: SessionState) -> bool:
+    """Whether some gait may be proposed, so recommended (else no confidence is stated)."""
+    allowed = state.loop.allowed()
+    return allowed is None or bool(allowed.any())
 
 
 def stop_reason(state: SessionState, rule: StopRule) -> str | None:
@@ -45,7 +62,9 @@ def stop_reason(state: SessionState, rule: StopRule) -> str | None:
     if not rule.active:
         return None
     trials = len(state.loop.executed)
-    sure = session_confidence(state, rule) if rule.confidence is not None else None
+    sure = None
+    if rule.confidence is not None and recommends(state):
+        sure = session_confidence(state, rule)
     return rule.reason(trials, sure)
 
 
@@ -65,6 +84,8 @@ def confidence_history(
         if st.loop.posterior is seen[0]:
             return
         seen[0] = st.loop.posterior
+        if not recommends(st):  # nothing may be proposed: no confidence was stated
+            return
         sure = session_confidence(st, rule)
         rows.append(
             {
@@ -86,4 +107,10 @@ def confidence_history(
     return rows
 
 
-__all__ = ["CONFIDENCE_STREAM", "confidence_history", "session_confidence", "stop_reason"]
+__all__ = [
+    "CONFIDENCE_STREAM",
+    "confidence_history",
+    "recommends",
+    "session_confidence",
+    "stop_reason",
+]

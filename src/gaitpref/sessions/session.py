@@ -64,6 +64,7 @@ from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.sessions.warm import (
     RELEARN_EVERY,
     SHARE_GATE,
+    check_prior_from,
     describe_prior,
     make_warm_start,
     prepare_state,
@@ -141,10 +142,11 @@ class Session:
         if gait_ids is not None:
             meta["gait_ids"] = gait_ids
         cfg.make_loop(seed=use_seed)  # the settings make a loop
+        named = check_prior_from(prior_from)
         storage = open_storage(db)
         prior, rho = [], None
-        if prior_from:
-            prior = describe_prior(storage, resolve_prior(storage, cfg, prior_from))
+        if named:
+            prior = describe_prior(storage, resolve_prior(storage, cfg, named))
             rho = make_warm_start(storage, cfg, prior, use_seed).rho
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
@@ -488,7 +490,9 @@ class Session:
     def confidence(self) -> Confidence:
         """How sure the model is of its recommendation (``sessions/confidence.py``), with the
         config's ``[stop]`` tolerance and sample count: ``.sentence(name)`` reads
-        "88% that G95 is within 5% of the best".  Kept until the log moves on."""
+        "88% that G95 is within 5% of the best".  Kept until the log moves on.
+        :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be proposed: there is no
+        gait to recommend."""
 
         def run() -> Confidence:
             seq = self._state.last_seq

@@ -26,8 +26,10 @@ from __future__ import annotations
 import hashlib
 import json
 import re
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import PriorFromError, ReplayError
@@ -44,6 +46,7 @@ from gaitpref.sessions.events import PriorSession
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.sessions.stored_config import config_of, gait_cache_of
+from gaitpref.space import Space
 from gaitpref.storage import (
     EventRecord,
     SessionNotFoundError,
@@ -55,6 +58,16 @@ from gaitpref.storage.base import check_subject
 
 if TYPE_CHECKING:
     from gaitpref.gaits.gait_cache import GaitCache
+
+
+#: The most distinct (gait, earlier subject) pairs a new warm start's earlier sessions may visit:
+#: each answer of the new session refits the population model over them (and the share's
+#: hypotheses), dense in their number; about 1,000 took 6 s an answer on two cores, 3,000 about
+#: 150 s.  Checked when a session is created; sessions recorded with more replay as they were.
+MAX_PRIOR_NODES = 2000
+#: The most earlier sessions a new warm start may read (a subject code counts each of the
+#: subject's sessions): every opening of the new session replays each of them from its log.
+MAX_PRIOR_SESSIONS = 256
 
 
 def log_sha256(events: Sequence[EventRecord]) -> str:
@@ -86,6 +99,45 @@ def read_prior_from(items: Iterable[str]) -> list[int | str]:
     return out
 
 
+def check_prior_from(prior_from: object) -> list[int | str]:
+    """``prior_from`` as a list of session ids and subject codes; PriorFromError for anything
+    else, such as one code given as a string (it was read a character at a time: ``"S01"``
+    named subjects ``S``, ``0`` and ``1``), a number or a mapping.  None: no warm start."""
+    if prior_from is None:
+        return []
+    if isinstance(prior_from, str | bytes | Mapping) or not isinstance(prior_from, Iterable):
+        raise PriorFromError(
+            f"prior_from: expected a list of session ids or subject codes, got {prior_from!r}"
+            + (f" (for one, [{prior_from!r}])" if isinstance(prior_from, str | int) else "")
+        )
+    items: list[int | str] = []
+    for item in prior_from:
+        if isinstance(item, np.integer):  # a NumPy id is an id
+            item = int(item)
+        if isinstance(item, bool) or not isinstance(item, int | str):
+            raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
+        items.append(item)
+    return items
+
+
+def grid_difference(earlier: Space, new: Space) -> str:
+    """How the earlier session's grid differs from the new one's ("": the same grid: the same
+    features, values and units; how an operator words a coactive move may differ)."""
+    if [f.name for f in earlier] != [f.name for f in new]:
+        return f"features {[f.name for f in earlier]}, not {[f.name for f in new]}"
+    for a, b in zip(earlier, new, strict=True):
+        if a.continuous != b.continuous:
+            return f"{a.name} is {'' if a.continuous else 'not '}continuous"
+        if a.values != b.values:
+            return (
+                f"{a.name} takes {len(a.values)} values {a.values[0]:g}..{a.values[-1]:g}, not "
+                f"{len(b.values)} values {b.values[0]:g}..{b.values[-1]:g}"
+            )
+        if a.unit != b.unit:
+            return f"{a.name} is in {a.unit!r}, not {b.unit!r}"
+    return ""
+
+
 def resolve_prior(
     storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str]
 ) -> list[SessionRecord]:
@@ -106,12 +158,20 @@ def resolve_prior(
             if not records:
                 raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
         for record in records:
-            if config_of(record).space != config.space:
+            differs = grid_difference(config_of(record).space, config.space)
+            if differs:
                 raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
-                    f"another grid (config {record.config_name!r}); a warm start needs the same"
+                    f"another grid (config {record.config_name!r}: {differs}); a warm start "
+                    "needs the same"
                 )
             found[record.id] = record
+            if len(found) > MAX_PRIOR_SESSIONS:
+                raise PriorFromError(
+                    f"prior_from: names more than {MAX_PRIOR_SESSIONS} sessions (a subject code "
+                    "counts each of the subject's sessions); a warm start reads at most "
+                    f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
+                )
     return [found[k] for k in sorted(found)]
 
 
@@ -133,35 +193,98 @@ def _categories(config: ExperimentConfig) -> tuple[str, ...] | None:
     return None if config.ordinal is None else tuple(config.ordinal.categories)
 
 
-def _earlier_terms(
-    storage: Storage, prior: PriorSession, scale: tuple[str, ...] | None = None
-) -> Earlier:
-    """The terms in force in an earlier session after its recorded event, replayed; its
-    single-action terms (ratings) only when its rating scale is ``scale``, the new one's."""
-    record = storage.get_session(prior.session)
+#: What a build has replayed of the earlier sessions it reads, by what was recorded of each (id,
+#: subject, last event, hash): the terms in force then and the rating scale.  A session whose
+#: earlier sessions were themselves warm-started (a subject's sessions, each warm-started from
+#: the subject) reads each once, not once per path to it (2**k replays for a chain of k).
+Replayed = dict[PriorSession, tuple[Earlier, tuple[str, ...] | None]]
+
+
+def _which(prior: PriorSession) -> str:
+    return (
+        f"session {prior.session} (subject {prior.subject}), which this session's warm start read,"
+    )
+
+
+def _record_of(storage: Storage, prior: PriorSession) -> SessionRecord:
+    try:
+        return storage.get_session(prior.session)
+    except SessionNotFoundError:
+        raise ReplayError(
+            f"{_which(prior)} is not in this database; the warm start cannot be rebuilt"
+        ) from None
+
+
+def _replayed(storage: Storage, prior: PriorSession, memo: Replayed) -> None:
+    """Replay ``prior`` (its log checked against the recorded hash) into ``memo``."""
+    if prior in memo:
+        return
+    which = _which(prior)
+    record = _record_of(storage, prior)
     events = [e for e in storage.events(prior.session) if e.seq <= prior.last_seq]
     if log_sha256(events) != prior.sha256:
         raise ReplayError(
-            f"session {prior.session} (subject {prior.subject}), which this session's warm start "
-            f"read, has changed since (its log up to event {prior.last_seq} no longer matches the "
-            "hash recorded at creation); the warm start cannot be rebuilt"
+            f"{which} has changed since (its log up to event {prior.last_seq} no longer matches "
+            "the hash recorded at creation); the warm start cannot be rebuilt"
         )
-    state = prepare_state(storage, record)
-    replay(state, events)
+    try:
+        state = prepare_state(storage, record, memo=memo)
+        replay(state, events)
+    except ReplayError as exc:  # its own log, or its row, no longer replays: say whose it is
+        raise ReplayError(f"{which} does not replay from its log as stored: {exc}") from None
     loop = state.loop
-    same_scale = scale is not None and _categories(state.config) == scale
-    return Earlier(loop.preferences, loop.ties, loop.singles if same_scale else ())
+    memo[prior] = (Earlier(loop.preferences, loop.ties, loop.singles), _categories(state.config))
+
+
+def _read_in_order(storage: Storage, prior: Sequence[PriorSession], memo: Replayed) -> None:
+    """Replay ``prior`` and every earlier session their own warm starts read, each once, oldest
+    first: each one's own earlier sessions are then already in ``memo`` (they were created
+    before it), so the replays never nest (a subject's long chain of warm-started sessions
+    would otherwise recurse once per session)."""
+    seen: set[PriorSession] = set()
+    stack = [p for p in prior if p not in memo]
+    while stack:
+        p = stack.pop()
+        if p in seen or p in memo:
+            continue
+        seen.add(p)
+        raw = _record_of(storage, p).meta.get("prior_from") or []
+        stack.extend(PriorSession.model_validate(x) for x in raw)
+    for p in sorted(seen, key=lambda p: (p.session, p.last_seq)):
+        _replayed(storage, p, memo)
+
+
+def _earlier_terms(
+    storage: Storage,
+    prior: PriorSession,
+    scale: tuple[str, ...] | None = None,
+    memo: Replayed | None = None,
+) -> Earlier:
+    """The terms in force in an earlier session after its recorded event, replayed; its
+    single-action terms (ratings) only when its rating scale is ``scale``, the new one's."""
+    memo = {} if memo is None else memo
+    _replayed(storage, prior, memo)
+    terms, categories = memo[prior]
+    if scale is not None and categories == scale:
+        return terms
+    return Earlier(terms.preferences, terms.ties, ())
 
 
 def earlier_subjects(
-    storage: Storage, prior: Sequence[PriorSession], config: ExperimentConfig | None = None
+    storage: Storage,
+    prior: Sequence[PriorSession],
+    config: ExperimentConfig | None = None,
+    memo: Replayed | None = None,
 ) -> list[Earlier]:
     """The earlier sessions' terms, one :class:`Earlier` per subject code (in order of first
-    id); ratings only from sessions rated on ``config``'s scale (None: no ratings)."""
+    id); ratings only from sessions rated on ``config``'s scale (None: no ratings).  ``memo``:
+    what this build has already replayed (:data:`Replayed`)."""
     scale = None if config is None else _categories(config)
+    memo = {} if memo is None else memo
+    _read_in_order(storage, prior, memo)
     by_subject: dict[str, list[Earlier]] = {}
     for p in prior:
-        by_subject.setdefault(p.subject, []).append(_earlier_terms(storage, p, scale))
+        by_subject.setdefault(p.subject, []).append(_earlier_terms(storage, p, scale, memo))
     return [
         Earlier(
             [x for e in group for x in e.preferences],
@@ -176,11 +299,24 @@ def make_warm_start(
     storage: Storage, config: ExperimentConfig, prior: Sequence[PriorSession], seed: int
 ) -> WarmStart:
     """The warm start of a new session, every term carried, ``rho`` learned from the earlier
-    subjects."""
+    subjects; :class:`~gaitpref.errors.PriorFromError` when their terms visit more than
+    :data:`MAX_PRIOR_NODES` (gait, subject) pairs."""
     loop = config.make_loop(seed=seed)
+    groups = earlier_subjects(storage, prior, config)
+    model_ties = loop.learning.ties == "model"
+    data, singles = warm_terms(loop.context(), model_ties, groups)
+    parts = [data.first, data.second] + ([] if singles is None else [singles.actions])
+    nodes = int(np.unique(np.concatenate(parts)).size)
+    if nodes > MAX_PRIOR_NODES:
+        raise PriorFromError(
+            f"prior_from: the earlier sessions' answers visit {nodes} (gait, subject) pairs; a "
+            f"warm start takes at most {MAX_PRIOR_NODES} (every answer of the new session "
+            "refits them all, at a cost growing with the cube of their number): name fewer "
+            "sessions or subjects"
+        )
     return warm_start(
-        config.space, loop.hyper, loop.prior, earlier_subjects(storage, prior, config),
-        context=loop.context(), model_ties=loop.learning.ties == "model",
+        config.space, loop.hyper, loop.prior, groups,
+        context=loop.context(), model_ties=model_ties,
     )  # fmt: skip
 
 
@@ -204,17 +340,26 @@ def prepare_state(
     record: SessionRecord,
     config: ExperimentConfig | None = None,
     gait_cache: GaitCache | None = None,
+    *,
+    memo: Replayed | None = None,
 ) -> SessionState:
     """A fresh state for ``record`` (its parsed ``config``, if at hand), with its warm start
     when it has one (not yet replayed); gaits made on demand come from ``gait_cache`` (default:
-    the database's, ``stored_config.gait_cache_of``)."""
+    the database's, ``stored_config.gait_cache_of``); ``memo``: the earlier sessions this build
+    has replayed already (:data:`Replayed`)."""
     config = config_of(record) if config is None else config
     cache = gait_cache if gait_cache is not None else gait_cache_of(storage, config)
     state = SessionState(config, record.seed, record.meta.get("gait_ids"), gait_cache=cache)
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]
-        groups = earlier_subjects(storage, prior, config)
+        later = [p.session for p in prior if p.session >= record.id]
+        if later:  # only a row edited outside gaitpref: a warm start reads sessions made before
+            raise ReplayError(
+                f"session {record.id}: its warm start names session {later[0]}, not made before "
+                "it; the database was altered"
+            )
+        groups = earlier_subjects(storage, prior, config, memo)
         rho = record.meta.get("prior_rho")
         if not isinstance(rho, float):
             raise ReplayError(f"session {record.id}: its warm start's rho is missing")
@@ -231,10 +376,14 @@ def prepare_state(
 
 
 __all__ = [
+    "MAX_PRIOR_NODES",
+    "MAX_PRIOR_SESSIONS",
     "RELEARN_EVERY",
     "SHARE_GATE",
+    "check_prior_from",
     "describe_prior",
     "earlier_subjects",
+    "grid_difference",
     "log_sha256",
     "make_warm_start",
     "prepare_state",

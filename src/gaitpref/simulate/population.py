@@ -155,6 +155,25 @@ def cluster_bootstrap(
     return out
 
 
+def _subject_grids(config: ExperimentConfig, objectives: FloatArray, name: str) -> list[FloatArray]:
+    """One flat utility grid per subject from ``S x grid`` (or ``S x`` the grid's shape);
+    ValueError names the array's shape, or the subject whose grid cannot be used."""
+    arr = np.asarray(objectives)
+    space = config.space
+    if arr.ndim != 1 + len(space.shape) and arr.ndim != 2:
+        raise ValueError(
+            f"{name}: expected one utility grid per subject, S x {len(space)} or S x "
+            f"{' x '.join(map(str, space.shape))}, got an array of shape {arr.shape}"
+        )
+    out = []
+    for k, grid in enumerate(arr):
+        try:
+            out.append(objective_on_grid(space, grid))
+        except ValueError as exc:
+            raise ValueError(f"{name}: subject {k} (row {k} of the array): {exc}") from None
+    return out
+
+
 def population_bench(
     config: ExperimentConfig,
     objectives: FloatArray,
@@ -175,13 +194,13 @@ def population_bench(
     starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``);
     ``truths``: the grids on which the recommendation is judged (``S x A``; None: the
     objectives; :func:`gp_population` gives the smooth parts of prior draws)."""
-    grids = [objective_on_grid(config.space, o) for o in np.asarray(objectives)]
+    grids = _subject_grids(config, objectives, "objectives")
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
     if truths is None:
         judged = grids
     else:
-        judged = [objective_on_grid(config.space, t) for t in np.asarray(truths)]
+        judged = _subject_grids(config, truths, "truths")
         if len(judged) != len(grids):
             raise ValueError(f"truths: one grid per subject ({len(grids)}), got {len(judged)}")
     if trials < 1:

@@ -37,7 +37,7 @@ class OrdinalRater:
         if q.ndim != 1 or q.size < 1 or np.any((q <= 0) | (q >= 1)) or np.any(np.diff(q) <= 0):
             raise ValueError(f"quantiles must increase strictly inside (0, 1), got {q.tolist()}")
         if not (np.isfinite(self.noise) and self.noise >= 0):
-            raise ValueError(f"noise must be >= 0, got {self.noise!r}")
+            raise ValueError(f"noise must be a finite number >= 0, got {self.noise!r}")
         grid = objective_on_grid(self.space, self.objective)
         utility = -grid if self.minimize else grid
         lo, hi = float(utility.min()), float(utility.max())

@@ -56,7 +56,7 @@ class SimulatedUser:
         self.objective = objective_on_grid(self.space, self.objective)
         self.utility = -self.objective if self.minimize else self.objective
         if not (is_number(self.noise) and np.isfinite(self.noise) and self.noise >= 0):
-            raise ValueError(f"noise must be >= 0, got {self.noise!r}")
+            raise ValueError(f"noise must be a finite number >= 0, got {self.noise!r}")
         if not isinstance(self.rng, np.random.Generator):
             raise TypeError(
                 f"rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), "
