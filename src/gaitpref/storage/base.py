@@ -328,3 +328,33 @@ def check_status(status: object) -> Status:
     if status not in STATUSES:
         raise StorageError(f"status must be one of {', '.join(STATUSES)}; got {status!r}")
     return status
+
+
+class CheckedCreation(Storage):
+    """A backend that runs ``create_session_checked``'s check inside the transaction creating
+    the session: both creators forward to :meth:`_create` (``check`` None: no check)."""
+
+    def create_session(
+        self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
+    ) -> SessionRecord:
+        return self._create(spec, events, status, None)
+
+    def create_session_checked(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent] = (),
+        status: Status = "active",
+        *,
+        check: SessionsCheck,
+    ) -> SessionRecord:
+        return self._create(spec, events, status, check)
+
+    @abstractmethod
+    def _create(
+        self,
+        spec: SessionSpec,
+        events: Sequence[NewEvent],
+        status: Status,
+        check: SessionsCheck | None,
+    ) -> SessionRecord:
+        """Create the session, running ``check`` (if any) under the creating transaction."""

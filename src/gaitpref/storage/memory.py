@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 from gaitpref.storage.base import (
+    CheckedCreation,
     ConflictError,
     EventRecord,
     NewEvent,
@@ -21,7 +22,6 @@ from gaitpref.storage.base import (
     SessionsCheck,
     SessionSpec,
     Status,
-    Storage,
     SubjectRecord,
     as_utc,
     check_event,
@@ -32,7 +32,7 @@ from gaitpref.storage.base import (
 )
 
 
-class MemoryStorage(Storage):
+class MemoryStorage(CheckedCreation):
     """Sessions and events in dictionaries (``url`` is ``memory://``)."""
 
     def __init__(self) -> None:
@@ -41,21 +41,6 @@ class MemoryStorage(Storage):
         self._subjects: dict[str, SubjectRecord] = {}
         self._sessions: dict[int, SessionRecord] = {}
         self._events: dict[int, list[EventRecord]] = {}
-
-    def create_session(
-        self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
-    ) -> SessionRecord:
-        return self._create(spec, events, status, None)
-
-    def create_session_checked(
-        self,
-        spec: SessionSpec,
-        events: Sequence[NewEvent] = (),
-        status: Status = "active",
-        *,
-        check: SessionsCheck,
-    ) -> SessionRecord:
-        return self._create(spec, events, status, check)
 
     def _create(
         self,

@@ -46,6 +46,7 @@ from sqlalchemy.pool import StaticPool
 from gaitpref.errors import StorageError
 from gaitpref.storage import base, migrate
 from gaitpref.storage.base import (
+    CheckedCreation,
     ConflictError,
     EventRecord,
     NewEvent,
@@ -55,7 +56,6 @@ from gaitpref.storage.base import (
     SessionsCheck,
     SessionSpec,
     Status,
-    Storage,
     StorageConnectError,
     SubjectRecord,
     as_utc,
@@ -96,7 +96,7 @@ def _masked(url: URL) -> str:
     return url.render_as_string(hide_password=True)
 
 
-class SQLStorage(Storage):
+class SQLStorage(CheckedCreation):
     """Sessions in a SQL database through SQLAlchemy 2 (see the module docstring)."""
 
     def __init__(self, url: str, *, create: bool = True) -> None:
@@ -140,21 +140,6 @@ class SQLStorage(Storage):
             raise StorageConnectError(f"cannot open {self.url}: {_reason(exc)}") from None
 
     # -- Storage -----------------------------------------------------------------------------
-    def create_session(
-        self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
-    ) -> SessionRecord:
-        return self._create(spec, events, status, None)
-
-    def create_session_checked(
-        self,
-        spec: SessionSpec,
-        events: Sequence[NewEvent] = (),
-        status: Status = "active",
-        *,
-        check: SessionsCheck,
-    ) -> SessionRecord:
-        return self._create(spec, events, status, check)
-
     def _create(
         self,
         spec: SessionSpec,
