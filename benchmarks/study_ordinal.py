@@ -404,6 +404,19 @@ def _cached(path: Path, arm: Arm, count: int) -> bool:
     return len(runs) >= count and (not arm.rated or all("fit_acc_roi_30" in r for r in runs))
 
 
+def _runs_machine() -> dict[str, object] | None:
+    """The machine the cached runs were made on (``run`` records it beside the cache)."""
+    path = CACHE / "machine.json"
+    return json.loads(path.read_text()) if path.is_file() else None  # type: ignore[no-any-return]
+
+
+def _machine_sections(ran: dict[str, object] | None) -> list[str]:
+    here = machine_markdown(machine_description())
+    if ran is None:
+        return ["## Machine", "", here, ""]
+    return ["## Runs' machine", "", machine_markdown(ran), "", "## Report's machine", "", here, ""]
+
+
 def run(
     arms: list[Arm],
     grids: list[str],
@@ -413,6 +426,8 @@ def run(
     skip_cached: bool = False,
     infogain_2d: int | None = None,
 ) -> None:
+    CACHE.mkdir(parents=True, exist_ok=True)
+    (CACHE / "machine.json").write_text(json.dumps({**machine_description(), "jobs": jobs}))
     for grid in grids:
         for scenario in scenarios:
             for arm in arms:
@@ -585,18 +600,20 @@ def _summary(data: Data) -> None:
     lines += _comparisons(data)
     runs = sum(len(r) for r in data.values())
     seconds = sum(float(x["seconds"]) for r in data.values() for x in r)  # type: ignore[arg-type]
+    ran = _runs_machine()
+    jobs = ran.get("jobs", 1) if ran else 1
     lines += [
         "## What ran",
         "",
         f"{runs} runs of 60 trials ({len(data)} grid x subject x arm cells), "
-        f"{seconds / 60:.0f} minutes of run time in all (the sum of each run's wall time, one",
-        "process, `--jobs 1`, one BLAS thread).  `s/run` is wall time on a machine shared",
-        "with other work (see the load below): read it as a rough cost, not a speed result.",
+        f"{seconds / 60:.0f} minutes of run time in all (the sum of each run's wall time, "
+        f"`--jobs {jobs}` processes, one BLAS thread each).  `s/run` is wall time on a machine",
+        "shared with other work (see the load below): read it as a rough cost, not a speed result.",
         "",
     ]
     if NOTES.is_file():
         lines += ["## Reading the results", "", NOTES.read_text().strip(), ""]
-    lines += ["## Machine", "", machine_markdown(machine_description()), ""]
+    lines += _machine_sections(ran)
     (RESULTS / "summary.md").write_text("\n".join(lines))
 
 
@@ -776,7 +793,7 @@ def report_start() -> None:
                     f"| {_pm(a['early'] - b['early'], True)} | {_pm(a['all'] - b['all'], True)} "
                     f"| {'yes' if met else 'no'} |"
                 )
-    lines += ["", "## Machine", "", machine_markdown(machine_description()), ""]
+    lines += ["", *_machine_sections(_runs_machine())]
     (RESULTS / "start.md").write_text("\n".join(lines))
 
 
