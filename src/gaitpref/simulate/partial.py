@@ -3,11 +3,11 @@
 A run fails when :func:`~gaitpref.simulate.study.run_one` raises (in a worker, its exception
 is caught there and sent back as a :class:`RunFailure` naming the run) or when the worker
 running it dies (a crash, the out-of-memory killer: on joblib every run in progress then is a
-candidate, each marked while it runs; Ray names the one).  :func:`~gaitpref.simulate.sweep.
-run_study` then starts no more runs, keeps those that finished (on joblib, also the runs in
-progress when a run raised, once they finish) in memory and, when asked, in a ``partial`` CSV
-run table written run by run, and raises :class:`StudyRunError`, which names the failed run
-(setting, objective, seed) and where the finished runs are.
+candidate, each marked while it runs; Ray names the one).
+:func:`~gaitpref.simulate.sweep.run_study` then starts no more runs, keeps those that finished
+(on joblib, also the runs in progress when a run raised, once they finish) in memory and, when
+asked, in a ``partial`` CSV run table written run by run, and raises :class:`StudyRunError`,
+which names the failed run (setting, objective, seed) and where the finished runs are.
 """
 
 from __future__ import annotations
