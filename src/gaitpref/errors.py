@@ -10,7 +10,8 @@ family                     raised when
 =========================  ====================================================================
 :class:`ConfigError`       a config (TOML, dict or web form) is not valid; names table and key
 :class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
-                           not positive definite, :class:`NoSafeGaitError`: no gait is safe)
+                           not positive definite, :class:`NoSafeGaitError`: no gait is safe,
+                           :class:`InfeasibleProposalsError`: an ask's proposals had no gait)
 :class:`FeedbackError`     an answer does not fit its query; nothing was changed
 :class:`QueryError`        an answer to a query that is unknown, stale or already answered
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
@@ -56,6 +57,18 @@ class PriorNotPositiveDefiniteError(ModelError, ValueError):
 class NoSafeGaitError(ModelError, RuntimeError):
     """Every gait is in the region of avoidance or near a gait flagged unsafe: the loop proposes
     nothing rather than a gait it should avoid."""
+
+
+class InfeasibleProposalsError(NoSafeGaitError):
+    """Gaits made on demand: one ask made ``[gaits] max_infeasible`` proposals (or a few more,
+    in its last proposal) whose gait could not be made, and stopped without proposing.  Each is
+    logged (``gait_infeasible``) and avoided, so asking again goes on from there; ``infeasible``
+    is how many this ask made, ``limit`` the config's bound."""
+
+    def __init__(self, message: str, *, infeasible: int = 0, limit: int = 0) -> None:
+        super().__init__(message)
+        self.infeasible = infeasible
+        self.limit = limit
 
 
 class FeedbackError(GaitprefError, ValueError):
@@ -116,6 +129,7 @@ __all__ = [
     "GaitGeneratorError",
     "GaitLibraryError",
     "GaitprefError",
+    "InfeasibleProposalsError",
     "ModelError",
     "NoSafeGaitError",
     "PriorNotPositiveDefiniteError",

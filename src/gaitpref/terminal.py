@@ -206,11 +206,12 @@ class Terminal:
                             markup=False,
                         )
                         raise _QuitError
+                    skipped = len(s.infeasible_gaits())
                     try:
-                        skipped = len(s.infeasible_gaits())
                         query = s.next_query()
                         self._say_infeasible(s.infeasible_gaits()[skipped:])
-                    except NoSafeGaitError as exc:
+                    except NoSafeGaitError as exc:  # an ask that stopped logged its skipped gaits
+                        self._say_infeasible(s.infeasible_gaits()[skipped:])
                         self.console.print(f"No gait to propose: {exc}", markup=False)
                         raise _QuitError from None
                     try:

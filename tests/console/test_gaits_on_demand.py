@@ -56,3 +56,28 @@ def test_a_generator_that_fails_leaves_the_trial_page_usable_and_writes_nothing(
     assert event_count(client, sid) == before
     monkeypatch.undo()
     assert client.get(f"/api/sessions/{sid}/query").status_code == 200
+
+
+def test_an_ask_that_stops_at_max_infeasible_says_so_and_a_reload_goes_on(
+    client: TestClient,
+) -> None:
+    FakeSteps.below = 0.95  # most step lengths have no gait
+    config = CONFIG.replace("avoid_radius = 0.1\n", "avoid_radius = 0.1\nmax_infeasible = 2\n")
+    sid = new_session(client, config, seed=4)
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200
+    assert "No gait could be made for this ask" in page.text
+    assert "2 gaits that cannot be made" in page.text and "max_infeasible" in page.text
+    assert "Gaits that could not be made" in page.text  # the stopped ask's, listed
+    assert 'id="answer-form"' not in page.text
+    kinds = [e["kind"] for e in client.get(f"/api/sessions/{sid}/events").json()]
+    assert kinds == ["created", "gait_infeasible", "gait_infeasible", "query_stopped"]
+    r = client.get(f"/api/sessions/{sid}/query")
+    assert r.status_code == 409 and "max_infeasible" in r.json()["detail"]
+    for _ in range(30):  # each reload goes on from the gaits avoided so far
+        if 'id="answer-form"' in client.get(f"/sessions/{sid}").text:
+            break
+    else:
+        raise AssertionError("no query after 30 reloads")
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    assert all(g["values"]["step_length"] >= FakeSteps.below for g in q["actions"])

@@ -15,6 +15,7 @@ from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.safety import Safety
 from gaitpref.model.ordinal import Ordinal
+from gaitpref.simulate.partial import StudyRunError
 from gaitpref.simulate.raters import OrdinalRater
 from gaitpref.simulate.run import run_simulation
 from gaitpref.simulate.study import Setting, Study, run_one, run_seed_sequence
@@ -44,7 +45,8 @@ def _study(*settings: Setting, trials: int = 20) -> Study:
 def _truth(objective: np.ndarray) -> np.ndarray:
     obj = objective.reshape(-1)
     norm = (obj - obj.min()) / (obj.max() - obj.min())
-    return 1 + np.searchsorted(np.quantile(norm, QUARTILES), norm, side="right")
+    labels: np.ndarray = 1 + np.searchsorted(np.quantile(norm, QUARTILES), norm, side="right")
+    return labels
 
 
 def test_a_rating_setting_rates_every_trial_with_the_true_category() -> None:
@@ -137,8 +139,11 @@ def test_bad_rating_settings_are_refused_naming_the_setting(
 
 def test_a_run_left_without_a_safe_gait_fails_naming_the_run() -> None:
     study = _study(Setting("strict", 1, 1, rating_quantiles=QUARTILES, config=STRICT), trials=40)
-    with pytest.raises(NoSafeGaitError, match=r"setting 'strict', objective 3, seed 0: no gait"):
+    with pytest.raises(StudyRunError, match=r"setting 'strict', objective 3, seed 0 failed") as e:
         run_study(study, jobs=1)
+    assert isinstance(e.value.__cause__, NoSafeGaitError)
+    assert "(NoSafeGaitError): no gait may be proposed" in str(e.value)
+    assert (e.value.setting, e.value.objective_id, e.value.seed) == ("strict", 3, 0)
 
 
 def test_random_selection_takes_no_region_of_avoidance() -> None:

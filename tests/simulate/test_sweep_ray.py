@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 import ray
 
-from gaitpref.simulate.study import Study
+from gaitpref.simulate.study import RunResult, Study
 from gaitpref.simulate.sweep import run_study
 
 
@@ -20,16 +20,47 @@ def test_ray_and_joblib_give_identical_tables(ray_runtime: None, small_study: St
 
 def test_a_failed_run_raises_its_own_error_as_on_joblib(ray_runtime: None) -> None:
     """Ray wrapped it in a RayTaskError whose text is the remote traceback (ANSI colours and
-    file lines in the CLI's 'model error: ...')."""
+    file lines in the CLI's 'model error: ...'): the study's error names the run and has the
+    run's own error as its cause, as on joblib."""
     from gaitpref.errors import NoSafeGaitError
+    from gaitpref.simulate.partial import StudyRunError
     from gaitpref.simulate.study import Setting
     from tests.simulate.test_sweep_ratings import QUARTILES, STRICT, _study
 
     study = _study(Setting("strict", 1, 1, rating_quantiles=QUARTILES, config=STRICT), trials=40)
-    with pytest.raises(NoSafeGaitError) as info:
+    with pytest.raises(StudyRunError) as info:
         run_study(study, backend="ray", jobs=2)
-    assert type(info.value) is NoSafeGaitError
-    assert str(info.value).startswith("setting 'strict', objective 3, seed 0: no gait")
+    assert type(info.value.__cause__) is NoSafeGaitError
+    assert str(info.value).startswith(
+        "setting 'strict', objective 3, seed 0 failed (NoSafeGaitError): no gait"
+    )
+
+
+def test_a_run_whose_worker_dies_is_named_and_the_finished_runs_kept(
+    ray_runtime: None, small_study: Study, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.simulate.partial import StudyRunError
+    from tests.simulate.breaking import Dying
+    from tests.simulate.test_sweep_failures import _tasks_with
+
+    last = len(small_study) - 1  # random selection, objective 7, seed 1
+    monkeypatch.setattr(Study, "tasks", _tasks_with(Study.tasks, Dying(), last))
+    with pytest.raises(StudyRunError) as info:
+        run_study(small_study, backend="ray", jobs=2)
+    err = info.value
+    assert (err.setting, err.objective_id, err.seed) == ("random", 7, 1)
+    assert "the worker running it died" in str(err)
+    assert ray.is_initialized()  # the shared runtime is left running
+    monkeypatch.undo()
+    clean = {(r.setting, r.objective_id, r.seed): r for r in _runs(small_study)}
+    for r in err.finished:  # those that finished before it, as they run in a clean study
+        assert (r.actions == clean[(r.setting, r.objective_id, r.seed)].actions).all()
+
+
+def _runs(study: Study) -> list[RunResult]:
+    from gaitpref.simulate.study import run_one
+
+    return [run_one(t) for t in study.tasks()]
 
 
 def test_an_address_where_nothing_listens_is_refused_at_once(

@@ -40,6 +40,8 @@ Address = Annotated[
 ]
 Jobs = Annotated[int, typer.Option("--jobs", "-j", help="parallel runs (-1: every core)")]
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
+#: the finished runs of a study that has not finished (in --out): removed when every run has
+PARTIAL = "runs.partial.csv"
 
 
 def _split(values: list[str] | None, option: str) -> list[str] | None:
@@ -64,16 +66,24 @@ def _integers(text: str, option: str) -> list[int]:
     return numbers
 
 
-def _run(study: Study, backend: str, jobs: int, address: str | None) -> StudyResult:
+def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
+    """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
+    finished (then the file is removed), so a run that fails loses none of the others."""
+    from gaitpref.simulate.partial import StudyRunError
     from gaitpref.simulate.sweep import BACKENDS, run_study
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    partial = out / PARTIAL
     try:
-        return run_study(study, backend, jobs, address, progress=True, console=_console)
+        return run_study(
+            study, backend, jobs, address, progress=True, console=_console, partial=partial
+        )
+    except StudyRunError as exc:  # names the run and where the finished runs are
+        fail(str(exc), 1)  # a computation that could not finish
     except HANDLED as exc:
         report(exc)
-    except RuntimeError as exc:  # a Ray runtime that cannot start, a failed worker
+    except RuntimeError as exc:  # a Ray runtime that cannot start
         fail(str(exc))
 
 
@@ -143,7 +153,7 @@ def paper_2d(
     table_path = _table_path(out, table)
     _folder(out)
     load_before = load_average()
-    result = _run(study, backend, jobs, address)
+    result = _run(study, backend, jobs, address, out)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
@@ -214,7 +224,7 @@ def compass_gait(
         _console.print(f"[yellow]note:[/yellow] {obj.note}")
     table_path = _table_path(out, table)
     _folder(out)
-    result = _run(study, backend, jobs, address)
+    result = _run(study, backend, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
     write_table(result.table, table_path)

@@ -5,7 +5,9 @@ generator's fixed settings are keys of ``[gaits]`` (``speed`` for ``compass-hzd`
 ``max_iterations`` bounds the solver iterations of one gait (every generator is given it; it has
 a default since defaults version 0.5, and configs recorded before get ``None``: no budget) and
 ``avoid_radius`` is the neighbourhood (a fraction of each feature's range, as ``[safety]
-unsafe_radius``) that a proposal whose gait cannot be made takes out of every later query::
+unsafe_radius``) that a proposal whose gait cannot be made takes out of every later query;
+``max_infeasible`` bounds how many such proposals one ask makes before it stops proposing
+(``sessions/gaits.py``)::
 
     [space.step_length]
     min = 0.08
@@ -17,6 +19,7 @@ unsafe_radius``) that a proposal whose gait cannot be made takes out of every la
     speed = 0.2
     avoid_radius = 0.05
     max_iterations = 60
+    max_infeasible = 20
 
 The generator is built once here to check that it understands the features; gaits/ (SciPy's
 optimizers) is imported only when a config names a generator.
@@ -45,6 +48,7 @@ class GeneratorSpec:
     name: str
     settings: dict[str, Any] = field(default_factory=dict)
     avoid_radius: float = 0.0
+    max_infeasible: int = 20
 
     def make(self, space: Space) -> GaitGenerator:
         """The generator over ``space``'s features."""
@@ -58,7 +62,9 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     from gaitpref.errors import GaitGeneratorError
 
     settings = {k: gaits[k] for k in GENERATOR_SETTINGS if gaits[k] is not None}
-    spec = GeneratorSpec(gaits["generator"], settings, gaits["avoid_radius"])
+    spec = GeneratorSpec(
+        gaits["generator"], settings, gaits["avoid_radius"], gaits["max_infeasible"]
+    )
     try:
         generator = spec.make(space)
     except GaitGeneratorError as exc:

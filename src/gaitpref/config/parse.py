@@ -58,6 +58,7 @@ made when first proposed (``generator.py``; ``docs/gaits.md``, "Gaits on demand"
     speed = 0.2                    # its fixed settings (m/s; or a step_duration feature)
     avoid_radius = 0.05            # optional: taken out around a gait that cannot be made
     max_iterations = 60            # optional: solver iterations one gait may take (defaults 0.5)
+    max_infeasible = 20            # optional: proposals without a gait one ask may make (1..1000)
 
 Every key, its type, default and allowed values are declared once in ``schema.py``
 (:data:`~gaitpref.config.schema.DEFAULTS` is the table of defaults); every error is a
@@ -197,7 +198,11 @@ def parse_config(
     elif gaits:
         if gaits["library"] is None:
             fail("gaits", None, 'needs library = "FILE" or generator = "NAME"')
-        given = [k for k in ("speed", "avoid_radius", "max_iterations") if k not in gaits_defaulted]
+        given = [
+            k
+            for k in ("speed", "avoid_radius", "max_iterations", "max_infeasible")
+            if k not in gaits_defaulted
+        ]
         if given:
             fail("gaits", given[0], "is a gait generator's setting; a library takes none")
         if top["space"] is not None:

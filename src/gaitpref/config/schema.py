@@ -72,6 +72,9 @@ MAX_TEXT: Final = 10_000
 #: ``[gaits] max_iterations``: a gait made on demand may be given at most this many solver
 #: iterations (each costs about 10 ms with ``compass-hzd``: past this, a request is not bounded).
 MAX_GAIT_ITERATIONS: Final = 10_000
+#: ``[gaits] max_infeasible``: one ask may be allowed at most this many proposals whose gait
+#: cannot be made (each costs up to ``max_iterations`` solver iterations).
+MAX_INFEASIBLE: Final = 1000
 
 LIMITS: Final[dict[str, float]] = {
     "actions": MAX_ACTIONS,
@@ -155,6 +158,9 @@ GAITS: Final[dict[str, Key]] = {
     "avoid_radius": Key(Number(0.0, 1.0), 0.05),  # around an infeasible proposal, of ranges
     # the solver iterations one gait may take, all starts together (None before defaults 0.5)
     "max_iterations": Key(Integer(1, MAX_GAIT_ITERATIONS), 60),
+    # proposals whose gait cannot be made that one ask may make before it stops, proposing
+    # nothing (only live asks: replay follows the log, so every earlier session replays as it ran)
+    "max_infeasible": Key(Integer(1, MAX_INFEASIBLE), 20),
 }
 MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),

@@ -13,6 +13,10 @@ error                                       status  meaning
 ``SessionFinishedError``                    409     the session takes no more events
 ``NoSafeGaitError``                         409     no gait may be proposed (all avoided or
                                                     near an unsafe flag): nothing proposed
+``InfeasibleProposalsError``                 409     (a ``NoSafeGaitError``) gaits on demand:
+                                                    the ask stopped at ``[gaits]
+                                                    max_infeasible`` gaits that cannot be
+                                                    made; nothing proposed, *those* logged
 ``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
 ``PriorFromError``                          422     a warm start's prior_from names no session
 ``InputError`` (console) / ``ValueError``   422     any other refused input
@@ -23,9 +27,11 @@ error                                       status  meaning
 ``ReplayError``                             500     the stored log does not replay: see message
 ==========================================  ======  =========================================
 
-In every case the session API wrote nothing (it checks before it writes), so a refused request
-leaves the database as it was.  API requests get JSON (``{"detail": ...}``; 422 in FastAPI's
-shape, with ``loc`` naming the field), pages get an HTML page that says what happened.
+In every case but one the session API wrote nothing (it checks before it writes), so a refused
+request leaves the database as it was; the one is ``InfeasibleProposalsError``, whose ask logged
+the gaits it found could not be made (and avoids them), so that asking again goes on from there.
+API requests get JSON (``{"detail": ...}``; 422 in FastAPI's shape, with ``loc`` naming the
+field), pages get an HTML page that says what happened.
 """
 
 from __future__ import annotations

@@ -27,7 +27,12 @@ from typing import Literal, TypeVar
 
 from gaitpref.console.configs import choose_config, default_library_dir, discard
 from gaitpref.console.errors import InputError
-from gaitpref.errors import GaitError, NoSafeGaitError, SessionStateError
+from gaitpref.errors import (
+    GaitError,
+    InfeasibleProposalsError,
+    NoSafeGaitError,
+    SessionStateError,
+)
 from gaitpref.sessions.session import Answered, Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
@@ -46,7 +51,8 @@ class Pending:
 
     query: SessionQuery | None
     reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe",
-    # "no-gait" (the gait generator failed to make a proposed gait)
+    # "no-gait" (the gait generator failed to make a proposed gait), "infeasible" (the ask
+    # stopped at [gaits] max_infeasible gaits that cannot be made: logged, a reload goes on)
     detail: str = ""  # why, in words (the NoSafeGaitError's or GaitError's message)
 
 
@@ -324,6 +330,8 @@ def pending_of(session: Session) -> Pending:
         return Pending(None, "validation")
     try:
         return Pending(session.next_query(), "")
+    except InfeasibleProposalsError as exc:  # its gaits were logged (and are avoided)
+        return Pending(None, "infeasible", str(exc))
     except NoSafeGaitError as exc:  # nothing was written: say why and propose nothing
         return Pending(None, "no-safe", str(exc))
     except GaitError as exc:  # the generator failed (not an infeasible gait): nothing written

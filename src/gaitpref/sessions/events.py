@@ -8,7 +8,9 @@ kind's own payload class, ``gaitpref.feedback``: ``comparison_answered``, ``sugg
 all carrying the query's id.  A query's ``id`` is the sequence number of its ``query_issued``
 event: unique in the session and never reused.  With gaits made on demand, a query is a batch too:
 ``gait_made`` for each gait new to the session and ``gait_infeasible`` for each proposal whose gait
-cannot be made (the loop proposes again without it), then the ``query_issued``.
+cannot be made (the loop proposes again without it), then the ``query_issued``; an ask that
+reaches ``[gaits] max_infeasible`` such proposals ends its batch with ``query_stopped`` instead
+and proposes nothing.
 
 Payloads are validated when written (:func:`new_event`) and when read (:func:`read_payload`,
 which also checks the stored schema version).  Replay compares each re-derived event with the
@@ -198,6 +200,18 @@ class GaitInfeasible(GaitInfeasibleV1):
 
     version: ClassVar[int] = 2
     gait: Annotated[dict[str, Any], Recorded]
+
+
+class QueryStopped(EventPayload):
+    """``query_stopped``: an ask that proposed nothing, written after its gait events: its
+    proposals' gaits could not be made, ``infeasible`` of them (``gait_infeasible`` events of
+    this batch), once ``[gaits] max_infeasible`` (``limit``) was reached; each is avoided, so the
+    next ask goes on from there (``sessions/gaits.py``).  Replay stops the batch where the log
+    does, with the logged ``limit``."""
+
+    kind: ClassVar[str] = "query_stopped"
+    infeasible: Annotated[int, Field(ge=1)]
+    limit: Annotated[int, Field(ge=1)]
 
 
 class HyperValues(BaseModel):
@@ -394,6 +408,7 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     QueryIssued,
     GaitMade,
     GaitInfeasible,
+    QueryStopped,
     TrialExecuted,
     HyperparametersRefit,
     ShareRefit,
@@ -419,6 +434,7 @@ CREATED = Created.kind
 QUERY = QueryIssued.kind
 GAIT_MADE = GaitMade.kind
 GAIT_INFEASIBLE = GaitInfeasible.kind
+QUERY_STOPPED = QueryStopped.kind
 TRIAL = TrialExecuted.kind
 REFIT = HyperparametersRefit.kind
 SHARE_REFIT = ShareRefit.kind
@@ -568,6 +584,7 @@ __all__ = [
     "Paused",
     "PriorSession",
     "QueryIssued",
+    "QueryStopped",
     "Resumed",
     "ShareRefit",
     "TrialExcluded",

@@ -12,6 +12,17 @@ line path that frees its rows, so they are all named before).  Each gait new to 
 logged as ``gait_made`` (even when the proposal is then withdrawn: its gait is made); both events
 carry the gait itself (payload version 2).
 
+One ask is bounded: once its proposals reach ``[gaits] max_infeasible`` gaits that cannot be
+made (counted at the end of a proposal, so the last may pass it by a few when a query proposes
+several actions), it stops and proposes nothing.  Its batch, every ``gait_made`` and
+``gait_infeasible`` so far, is then logged with a closing ``query_stopped`` (how many, and the
+limit) instead of a ``query_issued``, and the session raises
+:class:`~gaitpref.errors.InfeasibleProposalsError`.  The loop has avoided each of them, exactly
+as the log says, so the next ask goes on from there (with the same random state a longer ask
+would have had), and replay derives the stopped batch again with the logged limit.  Replay of
+a batch that ends in ``query_issued`` applies no limit: logs written before it replay as they
+ran.
+
 Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
 carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
 the one derived for the proposed point, its document must read as a gait, and its verdict must
@@ -23,10 +34,10 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
-from gaitpref.errors import GaitLibraryError, ReplayError
+from gaitpref.errors import GaitLibraryError, InfeasibleProposalsError, ReplayError
 from gaitpref.loop import CoSpar, Query
 from gaitpref.sessions import events as log
 from gaitpref.storage import EventRecord, NewEvent
@@ -48,6 +59,18 @@ class RecordedGaits:
 
     def __init__(self, records: Sequence[EventRecord]) -> None:
         self._next = deque(r for r in records if log.is_query_part(r.kind))
+        last = records[-1] if records else None
+        #: the limit a stopped ask's batch was logged with (None: the batch issued its query)
+        self.limit: int | None = (
+            int(last.payload["limit"])
+            if last is not None and last.kind == log.QUERY_STOPPED
+            else None
+        )
+
+    @property
+    def exhausted(self) -> bool:
+        """Whether every gait event of the batch has been handed out (or skipped)."""
+        return not self._next
 
     def skip(self) -> None:
         if self._next:
@@ -83,17 +106,23 @@ def propose_with_gaits(
     gaits: OnDemandGaits,
     config: ExperimentConfig,
     recorded: RecordedGaits | None = None,
-) -> tuple[list[NewEvent], Query]:
+) -> tuple[list[NewEvent], Query | None]:
     """The events of the gaits made for the loop's next feasible proposal, and the proposal;
-    ``recorded``: on replay, the gaits the log carries for it.
+    ``recorded``: on replay, the gaits the log carries for it.  None instead of a proposal when
+    the ask stopped at ``[gaits] max_infeasible`` (live; on replay, the logged batch's limit, or
+    none): the events then end with ``query_stopped``.
 
-    Terminates: each round takes at least one more action out of the proposals, and an empty
-    choice raises :class:`~gaitpref.errors.NoSafeGaitError` from ``ask``.
+    Terminates: each round takes at least one more action out of the proposals, an empty
+    choice raises :class:`~gaitpref.errors.NoSafeGaitError` from ``ask``, a live ask makes at
+    most ``max_infeasible`` rounds, and a replay at most one round past the logged batch.
     """
     assert config.generator is not None
     radius = config.generator.avoid_radius
+    limit = config.generator.max_infeasible if recorded is None else recorded.limit
+    infeasible = 0
     events: list[NewEvent] = []
     while True:
+        past_the_log = recorded is not None and recorded.exhausted
         query = loop.ask()
         space = loop.space  # the grid, or the line path's points (which the ask may extend)
         bad = []
@@ -110,6 +139,28 @@ def propose_with_gaits(
         if not bad:
             return events, query
         loop.avoid_all(bad, radius)  # all at once: on the line path withdrawal frees their rows
+        infeasible += len(bad)
+        if limit is not None and infeasible >= limit:  # the loop has avoided all it logs
+            events.append(log.new_event(log.QueryStopped(infeasible=infeasible, limit=limit)))
+            return events, None
+        if past_the_log:  # replay: a proposal the log does not have; it finds the difference
+            return events, None
+
+
+def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> InfeasibleProposalsError:
+    """What a stopped ask (its logged ``query_stopped`` ``payload``) tells the operator."""
+    infeasible, limit = int(payload["infeasible"]), int(payload["limit"])
+    radius = config.generator.avoid_radius if config.generator is not None else 0.0
+    return InfeasibleProposalsError(
+        f"no gait proposed: this ask's proposals had {infeasible} gaits that cannot be made "
+        f"(at most {limit} per ask, [gaits] max_infeasible), so it stopped.  Each is logged as "
+        f"infeasible and never proposed again, nor the gaits within avoid_radius {radius:g} of "
+        "it.  Ask again to go on proposing from there; or, if most of [space] has no gait, "
+        "finish this session and start one whose [space] leaves those gaits out (or with a "
+        "larger [gaits] avoid_radius or max_infeasible)",
+        infeasible=infeasible,
+        limit=limit,
+    )
 
 
 def _made(action: int, made: MadeGait, values: dict[str, float]) -> log.GaitMade:
@@ -143,4 +194,4 @@ def _infeasible(
     )
 
 
-__all__ = ["RecordedGaits", "propose_with_gaits"]
+__all__ = ["RecordedGaits", "propose_with_gaits", "stopped_error"]

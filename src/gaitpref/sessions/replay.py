@@ -8,7 +8,7 @@ machine replays, and a refit's numbers are then taken from the log).  The first 
 raises :class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's
 events (one transaction: trials, one event per feedback record of any registered kind, the
 refit) are replayed together, and so are a query's (the gaits made on demand for it, then the
-query).
+query, or the ``query_stopped`` of an ask that stopped at ``[gaits] max_infeasible``).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def replay(
                 after(state, records[j - 1])
             i = j
             continue
-        if log.is_query_part(r.kind) or r.kind == log.QUERY:
+        if log.is_query_part(r.kind) or r.kind in (log.QUERY, log.QUERY_STOPPED):
             j = i
             while j < len(records) and log.is_query_part(records[j].kind):
                 j += 1
@@ -96,10 +96,11 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
 
 
 def _replay_query(state: SessionState, group: Sequence[EventRecord]) -> None:
-    """A query's batch: the gaits made on demand for it (if any), then its ``query_issued``; the
-    gaits themselves are taken from the log where it carries them (``gaits.py``)."""
+    """A query's batch: the gaits made on demand for it (if any), then its ``query_issued`` (or
+    ``query_stopped``: an ask that proposed nothing); the gaits themselves are taken from the log
+    where it carries them (``gaits.py``)."""
     first, last = group[0], group[-1]
-    if last.kind != log.QUERY:
+    if last.kind not in (log.QUERY, log.QUERY_STOPPED):
         raise ReplayError(
             f"event {first.seq} ({first.kind}): gaits made for a query that was never issued"
         )

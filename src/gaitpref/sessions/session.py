@@ -32,12 +32,18 @@ from typing import Any, TypeVar
 
 from gaitpref.checks import is_count
 from gaitpref.config import ExperimentConfig, load_config
-from gaitpref.errors import NoSafeGaitError, ReplayError, SessionStateError
+from gaitpref.errors import (
+    InfeasibleProposalsError,
+    NoSafeGaitError,
+    ReplayError,
+    SessionStateError,
+)
 from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
 from gaitpref.sessions.confidence import confidence_history, session_confidence, stop_reason
+from gaitpref.sessions.gaits import stopped_error
 from gaitpref.sessions.records import (
     Answered,
     ComparisonRecord,
@@ -262,7 +268,12 @@ class Session:
 
     # -- the loop ------------------------------------------------------------------------------
     def next_query(self) -> SessionQuery:
-        """The pending query, or a new one, logged (committed) before it is returned."""
+        """The pending query, or a new one, logged (committed) before it is returned.
+
+        With gaits made on demand, an ask whose proposals reach ``[gaits] max_infeasible``
+        gaits that cannot be made stops: it logs them (each avoided from then on, as always)
+        and raises :class:`~gaitpref.errors.InfeasibleProposalsError`; asking again goes on
+        from there (``sessions/gaits.py``)."""
         return self._locked(self._next_query)
 
     def _next_query(self) -> SessionQuery:
@@ -292,7 +303,8 @@ class Session:
                 ) from None
         st.commit(records)
         self._broken = False
-        assert st.pending is not None
+        if st.pending is None:  # the ask stopped at [gaits] max_infeasible: its gaits are logged
+            raise stopped_error(records[-1].payload, self.config)
         return st.pending
 
     def _derived_query(self, st: SessionState) -> list[NewEvent]:
@@ -382,6 +394,13 @@ class Session:
                 return None
             try:
                 return self._next_query()
+            except InfeasibleProposalsError as e:
+                raise InfeasibleProposalsError(
+                    "the answer was undone, but its query proposed a gait flagged unsafe since "
+                    f"and was withdrawn; {e}",
+                    infeasible=e.infeasible,
+                    limit=e.limit,
+                ) from e
             except NoSafeGaitError as e:
                 raise NoSafeGaitError(
                     "the answer was undone, but its query proposed a gait flagged unsafe since "

@@ -166,12 +166,16 @@ class SessionState:
     def derive_query(self, recorded: RecordedGaits | None = None) -> list[NewEvent]:
         """Ask CoSpar for the next proposal (the same one until it is answered): its
         ``query_issued`` event, after the gaits made on demand for it (``gaits.py``;
-        ``recorded``: on replay, the gaits the log carries for it)."""
+        ``recorded``: on replay, the gaits the log carries for it).  An ask that stopped at
+        ``[gaits] max_infeasible`` ends with ``query_stopped`` instead: nothing is proposed."""
         events: list[NewEvent] = []
         if self.on_demand is None:
             q = self.loop.ask()
         else:
-            events, q = propose_with_gaits(self.loop, self.on_demand, self.config, recorded)
+            events, proposed = propose_with_gaits(self.loop, self.on_demand, self.config, recorded)
+            if proposed is None:
+                return events
+            q = proposed
         done = self.trial_actions
         numbers = [t for t, _ in done]
         start = numbers[-1] + 1 if numbers else 1
@@ -521,6 +525,8 @@ class SessionState:
         elif r.kind == log.GAIT_INFEASIBLE:  # the loop avoids it since derive_query
             bad = InfeasibleGait(r.seq, p["action"], p["gait_id"], p["reason"], dict(p["values"]))
             self.infeasible.append(bad)
+        elif r.kind == log.QUERY_STOPPED:
+            pass  # its gaits are booked above; the loop proposes anew at the next ask
         elif r.kind == log.NOTE:
             self.notes.append((r.seq, p["text"]))
         elif r.kind in _STATUS_OF:

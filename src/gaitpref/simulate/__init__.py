@@ -9,6 +9,7 @@ The paper's studies: :mod:`gaitpref.simulate.paper2d` (Fig. 4) and
 :mod:`gaitpref.simulate.compass` (Fig. 2); ``gaitpref bench ...`` runs them.
 """
 
+from gaitpref.simulate.partial import StudyRunError
 from gaitpref.simulate.study import RunResult, RunTask, Setting, Study, run_one
 from gaitpref.simulate.sweep import BACKENDS, StudyResult, run_study
 from gaitpref.simulate.tables import (
@@ -30,6 +31,7 @@ __all__ = [
     "Setting",
     "Study",
     "StudyResult",
+    "StudyRunError",
     "read_curves",
     "read_table",
     "run_one",

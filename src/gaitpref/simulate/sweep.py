@@ -13,19 +13,26 @@ either backend and for any number of workers.
   started here and shut down afterwards.  Ray is an optional extra: ``pip install gaitpref[ray]``.
 
 A Rich progress bar (runs done, runs per second, time left) is drawn when ``progress`` is true.
+
+When a run fails (its error, or its worker dies) the study stops and raises
+:class:`~gaitpref.simulate.partial.StudyRunError` naming the run, with the runs that finished;
+given ``partial``, a CSV path, each finished run is also appended there as it finishes (the file
+is removed when the whole study finishes, and kept when it does not, whatever stopped it).
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import socket
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Literal
 
-import numpy as np
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -40,8 +47,9 @@ from rich.progress import (
 )
 from rich.text import Text
 
+from gaitpref.simulate.partial import RunFailure, run_table, sendable, study_error
 from gaitpref.simulate.study import RunResult, RunTask, Study, run_one
-from gaitpref.simulate.tables import Curves, RunTable, summarize
+from gaitpref.simulate.tables import Curves, RunTable, TableAppender, summarize
 
 Backend = Literal["joblib", "ray"]
 BACKENDS: tuple[Backend, ...] = ("joblib", "ray")
@@ -97,8 +105,14 @@ def run_study(
     address: str | None = None,
     progress: bool = False,
     console: Console | None = None,
+    partial: str | Path | None = None,
 ) -> StudyResult:
-    """Run every run of ``study`` and collect the tidy table and curves."""
+    """Run every run of ``study`` and collect the tidy table and curves.
+
+    A run that fails stops the study with :class:`~gaitpref.simulate.partial.StudyRunError`
+    (the run named, the finished runs kept on it); ``partial``: a ``.csv`` file each finished
+    run is appended to as it finishes, removed once every run has finished.
+    """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
@@ -107,54 +121,96 @@ def run_study(
     # no more workers than runs: each loky worker is a process that loads NumPy and SciPy, and
     # a mistyped --jobs 1000 started a thousand of them for a handful of runs
     n_jobs = min(resolve_jobs(jobs), len(tasks))
+    rated = any(s.rating_quantiles for s in study.settings)
     results: list[RunResult | None] = [None] * len(tasks)
+    sink = None if partial is None else TableAppender(partial, rated)  # before any run
     start = time.perf_counter()
-    with _progress(console) if progress else _NoProgress() as bar:
-        tid = bar.add_task(study.name, total=len(tasks))
-        runner = _run_ray if backend == "ray" else _run_joblib
-        for index, result in runner(tasks, n_jobs, address):
-            results[index] = result
-            bar.advance(tid)
+    try:
+        with _progress(console) if progress else _NoProgress() as bar:
+            tid = bar.add_task(study.name, total=len(tasks))
+            runner = _run_ray if backend == "ray" else _run_joblib
+            for index, outcome in runner(tasks, n_jobs, address):
+                if isinstance(outcome, RunFailure):
+                    finished = any(r is not None for r in results)
+                    kept = sink.path if sink is not None and finished else None
+                    raise study_error(outcome, tasks, results, rated, kept)
+                results[index] = outcome
+                if sink is not None:
+                    sink.append(run_table([outcome], rated))
+                bar.advance(tid)
+    finally:
+        if sink is not None:
+            sink.close()
+            if not any(r is not None for r in results):
+                sink.path.unlink(missing_ok=True)  # nothing finished: nothing to keep
     seconds = time.perf_counter() - start
-    table = _table([r for r in results if r is not None], len(tasks))
+    done = [r for r in results if r is not None]
+    if len(done) != len(tasks):
+        raise RuntimeError(f"{len(tasks) - len(done)} of {len(tasks)} runs returned no result")
+    table = run_table(done, rated)
+    if sink is not None:
+        sink.path.unlink(missing_ok=True)  # the whole study finished: its tables are the result
     return StudyResult(study, table, summarize(table), backend, n_jobs, seconds)
 
 
-def _table(results: list[RunResult], expected: int) -> RunTable:
-    if len(results) != expected:
-        raise RuntimeError(f"{expected - len(results)} of {expected} runs returned no result")
-    T = results[0].actions.size
-    rated = any(r.ratings is not None for r in results)
-    return RunTable(
-        np.repeat([r.setting for r in results], T),
-        np.repeat([r.objective_id for r in results], T),
-        np.repeat([r.seed for r in results], T),
-        np.tile(np.arange(1, T + 1), len(results)),
-        np.concatenate([r.actions for r in results]),
-        np.concatenate([r.normalized for r in results]),
-        np.concatenate([np.zeros(T, np.intp) if r.ratings is None else r.ratings for r in results])
-        if rated
-        else None,
-    )
+def _attempt(index: int, task: RunTask) -> RunResult | RunFailure:
+    """``run_one(task)``, or the failure that names it."""
+    try:
+        return run_one(task)
+    except Exception as exc:
+        return RunFailure((index,), sendable(exc))
 
 
-def _indexed(item: tuple[int, RunTask]) -> tuple[int, RunResult]:
-    return item[0], run_one(item[1])
+def _indexed(item: tuple[int, RunTask, str]) -> tuple[int, RunResult | RunFailure]:
+    """A worker's run: marked as running (a file named by its index in ``item[2]``) until it
+    returns, so that a worker that dies leaves the name of the run it was running."""
+    index, task, running = item
+    marker = Path(running) / str(index)
+    with contextlib.suppress(OSError):  # the study stopped and took the folder away
+        marker.touch()
+    try:
+        return index, _attempt(index, task)
+    finally:
+        marker.unlink(missing_ok=True)
 
 
 def _run_joblib(
     tasks: list[RunTask], jobs: int, address: str | None
-) -> Iterator[tuple[int, RunResult]]:
+) -> Iterator[tuple[int, RunResult | RunFailure]]:
+    """Each run's index and result as it finishes; a failure last: after a run's error no more
+    runs start and those in progress finish first (their results are kept)."""
     if jobs == 1:
         for i, task in enumerate(tasks):
-            yield i, run_one(task)
+            outcome = _attempt(i, task)
+            yield i, outcome
+            if isinstance(outcome, RunFailure):
+                return
         return
     from joblib import Parallel, delayed
 
     parallel = Parallel(
         n_jobs=jobs, backend="loky", inner_max_num_threads=1, return_as="generator_unordered"
     )
-    yield from parallel(delayed(_indexed)((i, t)) for i, t in enumerate(tasks))
+    failed: list[RunFailure] = []
+    with tempfile.TemporaryDirectory(prefix="gaitpref-running-") as running:
+
+        def feed() -> Iterator[Any]:  # read by joblib as it dispatches: none after a failure
+            for i, t in enumerate(tasks):
+                if failed:
+                    return
+                yield delayed(_indexed)((i, t, running))
+
+        try:
+            for i, outcome in parallel(feed()):
+                if not isinstance(outcome, RunFailure):
+                    yield i, outcome
+                elif not failed:
+                    failed.append(outcome)
+        except Exception as exc:  # not a run's error (each is sent back): a worker died
+            names = sorted(int(p.name) for p in Path(running).iterdir() if p.name.isdigit())
+            failed.append(RunFailure(tuple(names), exc, died=True))
+    if failed:
+        yield -1, failed[0]
 
 
 def _import_ray() -> Any:
@@ -209,9 +265,10 @@ def _probe(address: str, timeout: float = 5.0) -> None:
 
 def _run_ray(
     tasks: list[RunTask], jobs: int, address: str | None
-) -> Iterator[tuple[int, RunResult]]:
+) -> Iterator[tuple[int, RunResult | RunFailure]]:
     ray = _import_ray()
     started = start_ray(address, jobs)
+    pending: list[Any] = []
     try:
         remote: Callable[..., Any] = ray.remote(num_cpus=1, max_retries=0)(run_one).remote
         refs = [remote(t) for t in tasks]
@@ -220,17 +277,39 @@ def _run_ray(
         while pending:
             done, pending = ray.wait(pending, num_returns=1, timeout=None)
             for ref in done:
+                i = position[ref]
                 try:
                     result = ray.get(ref)
-                except ray.exceptions.RayTaskError as exc:  # the run's own error, as joblib
-                    cause = getattr(exc, "cause", None)  # raises it (not the remote traceback)
-                    if isinstance(cause, Exception):
-                        raise cause from None
-                    raise
-                yield position[ref], result
+                except ray.exceptions.RayTaskError as exc:  # the run's own error, as on joblib
+                    cause = getattr(exc, "cause", None)  # (not the remote traceback)
+                    error = cause if isinstance(cause, Exception) else exc
+                    failure = RunFailure((i,), error)
+                except ray.exceptions.RayError as exc:  # its worker died, or the task was lost
+                    failure = RunFailure((i,), exc, died=True)
+                else:
+                    yield i, result
+                    continue
+                yield from _finished_already(ray, pending, position)
+                yield i, failure
+                return
     finally:
+        for ref in pending:  # the runs not finished when one failed: not left running
+            with contextlib.suppress(Exception):
+                ray.cancel(ref)
         if started:
             ray.shutdown()
+
+
+def _finished_already(
+    ray: Any, pending: list[Any], position: dict[Any, int]
+) -> Iterator[tuple[int, RunResult]]:
+    """The results of ``pending`` runs that have finished by now (a failure stops the rest)."""
+    if not pending:
+        return
+    done, _ = ray.wait(pending, num_returns=len(pending), timeout=0)
+    for ref in done:
+        with contextlib.suppress(ray.exceptions.RayError):
+            yield position[ref], ray.get(ref)
 
 
 class _NoProgress:

@@ -227,13 +227,46 @@ def write_table(table: RunTable, path: str | Path) -> Path:
         pa, pq = _pyarrow()
         pq.write_table(pa.table({c: getattr(table, c) for c in table.columns}), path)
         return path
-    ratings = [] if table.rating is None else table.rating.tolist()
     with _open_text(path, "w") as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(table.columns)
-        for k, (s, o, sd, t, a, v) in enumerate(table.rows()):
-            w.writerow((s, o, sd, t, a, repr(v), *ratings[k : k + 1]))
+        _write_rows(w, table)
     return path
+
+
+def _write_rows(w: Any, table: RunTable) -> None:
+    ratings = [] if table.rating is None else table.rating.tolist()
+    for k, (s, o, sd, t, a, v) in enumerate(table.rows()):
+        w.writerow((s, o, sd, t, a, repr(v), *ratings[k : k + 1]))
+
+
+class TableAppender:
+    """A CSV run table (``.csv``) written a few rows at a time, e.g. each run of a study as it
+    finishes, so that what was written survives what stops the rest; :func:`read_table` reads
+    it.  ``rated``: with the ``rating`` column.  Every :meth:`append` is flushed."""
+
+    def __init__(self, path: str | Path, rated: bool) -> None:
+        self.path = Path(path)
+        if not self.path.name.endswith(".csv"):
+            raise ValueError(f"{self.path}: a table written row by row must end in .csv")
+        self.rated = rated
+        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115
+        self._w = csv.writer(self._fh, lineterminator="\n")
+        self._w.writerow((*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS)
+        self._fh.flush()
+
+    def append(self, table: RunTable) -> None:
+        if self._fh is None:
+            raise ValueError(f"{self.path}: already closed")
+        if (table.rating is not None) != self.rated:
+            raise ValueError(f"{self.path}: rows with columns {table.columns} do not fit")
+        _write_rows(self._w, table)
+        self._fh.flush()
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
 
 
 def read_table(path: str | Path) -> RunTable:
