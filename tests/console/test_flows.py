@@ -112,7 +112,7 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     before = event_count(client, sid)
     data = {**stale.fields, "rank1": "A", "rank2": "B", "rank3": "C"}
     r = client.post(stale.action, data=data, follow_redirects=False)
-    assert r.status_code == 409 and "was drawn again since this page was loaded" in r.text
+    assert r.status_code == 409 and "was drawn again since its gaits were shown" in r.text
     assert event_count(client, sid) == before
     old_ids = [g["gait"]["gait_id"] for g in plan["gaits"]]
     ranking = f"/api/sessions/{sid}/validation/{plan['round']}/ranking"

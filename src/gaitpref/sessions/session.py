@@ -321,7 +321,9 @@ class Session:
         keyword is the same as giving them in ``answers``).
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
-        not in the query, and a session that is finished or paused.
+        not in the query, a session that is finished or paused, and while a blind validation
+        round is open (:class:`SessionStateError`: record its ranking first; the query stays
+        pending).
         """
         if not is_count(query_id):
             raise QueryError(
@@ -340,6 +342,7 @@ class Session:
         query = st.pending
         if query is None or isinstance(query_id, bool) or query_id != query.id:
             raise st.pending_query_error(query_id)
+        self._check_no_open_round(query)
         answer = st.tell(query, comps, suggs)
         events = st.answer_events(query, answer)
         try:
@@ -359,6 +362,23 @@ class Session:
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
         return Answered(query.id, query.trials, tuple(r.seq for r in records), kept, singles)
+
+    def _check_no_open_round(self, query: SessionQuery) -> None:
+        """Refuse an answer while a blind validation round is open (the query was pending when
+        the round opened, or an undo made it pending again): the round compares the subject's
+        ranking with the model as it stood when it opened, and no answer may move the model
+        before the ranking is recorded.  Only new answers: a log written by an earlier release
+        that answered inside a round replays as written (replay does not come here)."""
+        current = self._state.open_round
+        if current is None:
+            return
+        number = current.plan.round
+        raise SessionStateError(
+            f"blind validation round {number} is open: record its ranking before answering "
+            f"query {query.id} (gaitpref session validate {self.id}, the console's validation "
+            f"page, or Session.answer_validation({number}, ...); a round is not cancelled, "
+            f"only answered).  Query {query.id} stays pending; nothing was written"
+        )
 
     def undo(self) -> SessionQuery | None:
         """Take back the last answer: its query is pending again, the model as it was before.
@@ -525,7 +545,10 @@ class Session:
 
     # -- blind validation ----------------------------------------------------------------------
     def start_validation(self) -> ValidationPlan:
-        """Fix and log a random order of the max/mean/min gaits (the open round, if any)."""
+        """Fix and log a random order of the max/mean/min gaits (the open round, if any).
+
+        A query pending when the round opens stays pending, and is answered once the round's
+        ranking is recorded (:meth:`answer` refuses it until then)."""
 
         def run() -> ValidationPlan:
             st = self._state
@@ -544,12 +567,35 @@ class Session:
         current = self._state.open_round
         return None if current is None else current.plan
 
-    def answer_validation(self, round_: int, ranking: Sequence[str] | str) -> ValidationResult:
-        """Record the subject's ranking (best first, e.g. ``"BAC"``), then unblind."""
+    def answer_validation(
+        self,
+        round_: int,
+        ranking: Sequence[str] | str,
+        *,
+        shown: Sequence[str] | None = None,
+    ) -> ValidationResult:
+        """Record the subject's ranking (best first, e.g. ``"BAC"``), then unblind.
+
+        ``shown``: the names of the gaits the subject walked, in label order, as the terminal or
+        a console page showed them (:meth:`validation_gaits`).  A flag on a gait an open round
+        shows draws the round again with the same number; given ``shown``, a ranking of the
+        gaits walked before is refused (:class:`SessionStateError` naming both; nothing is
+        written) rather than booked against the new ones.  Checked in the same turn as the
+        write, so another writer's flag cannot come in between."""
 
         def run() -> ValidationResult:
             st = self._state
             st.check_open("validation")
+            current = st.open_round
+            if shown is not None and current is not None and current.plan.round == round_:
+                now = [current.shown[g.label].gait for g in current.plan.gaits]
+                if [str(g) for g in shown] != now:
+                    raise SessionStateError(
+                        f"validation round {round_} was drawn again since its gaits were shown "
+                        "(an unsafe flag withdrew a gait it showed): it now shows "
+                        f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
+                        "written, run the round's gaits as shown now"
+                    )
             self._append([st.validation_answer_event(round_, ranking)])
             result = self._state.rounds[-1].result
             assert result is not None
