@@ -60,7 +60,7 @@ from gaitpref.sessions.validation import (
     blind_plan,
     unblind,
 )
-from gaitpref.storage import EventRecord, NewEvent, Status
+from gaitpref.storage import EventRecord, NewEvent, SessionRecord, Status
 
 if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a config names a generator
     from gaitpref.gaits.gait_cache import GaitCache
@@ -122,6 +122,7 @@ class SessionState:
     infeasible: list[InfeasibleGait] = field(default_factory=list)
     made_rows: list[int] = field(default_factory=list)  # each gait_made's action, as logged
     made_ids: set[str] = field(default_factory=set)  # each gait_made's gait id
+    row: SessionRecord | None = field(default=None, repr=False)  # checked against `created`
 
     def __post_init__(self) -> None:
         self.loop = self.config.make_loop(seed=self.seed)
