@@ -183,3 +183,13 @@ def test_undo_names_the_answer_it_undid_when_another_writer_answered_meanwhile(
     monkeypatch.setattr(typer, "confirm", answered_meanwhile)
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
     assert [t.number for t in Session.open(db, 1).trials()] == [1, 2, 3, 4, 5]
+
+
+def test_session_new_refuses_a_blank_config_name(tmp_path: Path) -> None:
+    from gaitpref import load_config
+
+    path = tmp_path / "blank.toml"
+    path.write_text(load_config(CONFIG).text.replace("exo-1d-step-length", "  "), "utf-8")
+    db = str(tmp_path / "lab.db")
+    out = _fails("session", "new", "--config", str(path), "--subject", "S01", "--db", db)
+    assert "name: must name the config" in out and "got '  '" in out

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from gaitpref.checks import is_count
-from gaitpref.config import ExperimentConfig, load_config
+from gaitpref.config import ExperimentConfig, check_name, load_config
 from gaitpref.errors import NoSafeGaitError, ReplayError, SessionStateError
 from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
@@ -124,6 +124,7 @@ class Session:
         Everything is checked before the database is touched.
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
+        check_name(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
