@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from datetime import UTC
 from pathlib import Path
 
 import numpy as np
@@ -193,3 +194,15 @@ def test_session_new_refuses_a_blank_config_name(tmp_path: Path) -> None:
     db = str(tmp_path / "lab.db")
     out = _fails("session", "new", "--config", str(path), "--subject", "S01", "--db", db)
     assert "name: must name the config" in out and "got '  '" in out
+
+
+def test_session_list_marks_its_times_utc(tmp_path: Path) -> None:
+    """The times were printed bare ('2026-12-02 14:40'), read as local time at the lab."""
+    db = str(tmp_path / "lab.db")
+    with Session.create(db, CONFIG, "S01") as s:
+        created, updated = s.record.created_at, s.record.updated_at
+    out = _ok("session", "list", "--db", db)  # 80 columns: headers and times wrap
+    assert out.count("(UTC)") == 2 and "created" in out and "updated" in out
+    for when in (created, updated):
+        utc = when.astimezone(UTC)
+        assert f"{utc:%Y-%m-%d}" in out and f"{utc:%H:%M}" in out
