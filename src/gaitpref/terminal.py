@@ -18,13 +18,14 @@ resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a cl
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
 The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
 pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
-written).  A ranking of a round drawn again since its gaits were shown is refused and the round
-shown again, as the console refuses it.  A signal (or a closed output) that comes
-while an answer is being written lets the write finish first.  Nothing is written before the
-operator confirms (answers, undo and a validation ranking alike), and the answer is committed
-before the next trial is shown.  Gaits are named by their gait library id, or ``G<action>`` (as
-in the console) without a library.  The loop only calls the public
-:class:`~gaitpref.sessions.session.Session` API.
+written); when the rule says stop but no round can be drawn (fewer than three gaits may be
+shown), the runner says why after each answer.  A ranking of a round drawn again since its
+gaits were shown is refused and the round shown again, as the console refuses it.  A signal
+(or a closed output) that comes while an answer is being written lets the write finish
+first.  Nothing is written before the operator confirms (answers, undo and a validation ranking
+alike), and the answer is committed before the next trial is shown.  Gaits are named by their
+gait library id, or ``G<action>`` (as in the console) without a library.  The loop only calls
+the public :class:`~gaitpref.sessions.session.Session` API.
 """
 
 from __future__ import annotations
@@ -197,6 +198,7 @@ class Terminal:
                 "quit.",
                 markup=False,
             )
+            self._say_stop_blocked()
             try:
                 while True:
                     if s.validation_plan is not None:
@@ -225,6 +227,13 @@ class Terminal:
                         self._undo()
             except _QuitError:
                 self._pause()
+
+    def _say_stop_blocked(self) -> None:
+        """The ``[stop]`` rule says stop but no blind validation round can be drawn: say why
+        (the rule cannot act; the operator decides)."""
+        blocked = self.session.stop_blocked()
+        if blocked is not None:
+            self.console.print(f"  {blocked}", markup=False)
 
     def _say_infeasible(self, skipped: list[InfeasibleGait]) -> None:
         """Gaits made on demand that could not be made: skipped, never shown to the subject."""
@@ -308,6 +317,7 @@ class Terminal:
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
                     self.console.print(f"  {line}", markup=False)
+            self._say_stop_blocked()
             if reason:
                 redrawn = False
                 for t in dict.fromkeys(q.trials):

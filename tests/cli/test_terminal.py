@@ -318,3 +318,19 @@ def test_an_answer_after_another_writer_opened_a_round_is_refused_and_the_round_
     assert "not written: blind validation round 1 is open" in text
     assert "Unblinded" in text and session.status == "paused"
     assert len(session.trials()) == 3 and session.pending == pending  # asked again on resume
+
+
+def test_the_terminal_says_why_the_stop_rule_cannot_open_validation() -> None:
+    """max_trials reached with nothing learnt: no round can be drawn, and the runner went on
+    with the next trial as if the config had no rule."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(load_config(CONFIG).text + "\n[stop]\nmax_trials = 1\n")
+    session = Session.create(MemoryStorage(), config, "S01", seed=1)
+    terminal, console = _terminal(session, "0", "y")  # trial 1: no suggestion
+    terminal.run()
+    text = console.export_text()
+    assert "the [stop] rule says stop (1 trials reached max_trials = 1), but it cannot" in text
+    assert "open blind validation: the posterior mean is flat" in text
+    assert "Finish the" in text and "go on with trials" in text
+    assert session.validation_plan is None and session.status == "paused"

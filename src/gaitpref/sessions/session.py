@@ -534,14 +534,41 @@ class Session:
         """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
         return self._locked(lambda: stop_reason(self._state, self.config.stop))
 
+    def stop_blocked(self) -> str | None:
+        """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
+        round can be drawn (fewer than three gaits may be shown: unsafe flags, the region of
+        avoidance, gaits made so far; or the posterior mean is flat).  None when there is no
+        rule, it says go on, a round was opened before, or one can be drawn.  The terminal and
+        the console show it after each answer: the rule cannot act, and the operator decides
+        (finish the session, or go on: the rule opens the round after the first answer that
+        lets one be drawn)."""
+
+        def run() -> str | None:
+            st = self._state
+            if st.rounds:
+                return None
+            reason = stop_reason(st, self.config.stop, self.confidence)
+            why = None if reason is None else st.validation_blocked()
+            if why is None:
+                return None
+            return (
+                f"the [stop] rule says stop ({reason}), but it cannot open blind validation: "
+                f"{why}.  Finish the session, or go on with trials (the rule opens the round "
+                "after an answer once one can be drawn)"
+            )
+
+        return self._locked(run)
+
     def _stop_if_sure(self) -> None:
         """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
-        (one round; the operator may go on afterwards, the rule does not reopen it)."""
+        (one round; the operator may go on afterwards, the rule does not reopen it).  When no
+        round can be drawn, nothing is written and :meth:`stop_blocked` says why."""
         st = self._state
-        if st.rounds or st.pending is not None or stop_reason(st, self.config.stop) is None:
+        if st.rounds or st.pending is not None or st.validation_blocked() is not None:
             return
-        # another writer moved on: it decides; fewer than 3 gaits to show: the operator does
-        with contextlib.suppress(ConflictError, SessionStateError):
+        if stop_reason(st, self.config.stop, self.confidence) is None:
+            return
+        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
             self._append([st.validation_event()])
 
     # -- blind validation ----------------------------------------------------------------------
