@@ -159,3 +159,5 @@ def test_max_trials_with_nothing_learnt_says_why_no_round_opens() -> None:
     assert s.stop_reason() == "1 trials reached max_trials = 1" and s.validation_plan is None
     blocked = s.stop_blocked()
     assert blocked is not None and "the posterior mean is flat" in blocked
+    s.finish()  # the operator decided: nothing left to say
+    assert s.stop_blocked() is None

@@ -538,14 +538,15 @@ class Session:
         """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
         round can be drawn (fewer than three gaits may be shown: unsafe flags, the region of
         avoidance, gaits made so far; or the posterior mean is flat).  None when there is no
-        rule, it says go on, a round was opened before, or one can be drawn.  The terminal and
+        rule, it says go on, a round was opened before, one can be drawn, or the session is
+        finished.  The terminal and
         the console show it after each answer: the rule cannot act, and the operator decides
         (finish the session, or go on: the rule opens the round after the first answer that
         lets one be drawn)."""
 
         def run() -> str | None:
             st = self._state
-            if st.rounds:
+            if st.rounds or st.status == "finished":
                 return None
             reason = stop_reason(st, self.config.stop, self.confidence)
             why = None if reason is None else st.validation_blocked()
