@@ -17,12 +17,15 @@ resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a cl
 (``gaitpref session run ID | head``: what is left to print is dropped).  A line that is
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
 The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
-pauses.  A signal (or a closed output) that comes
-while an answer is being written lets the write finish first.  Nothing is written before the
-operator confirms (answers, undo and a validation ranking alike), and the answer is committed
-before the next trial is shown.  Gaits are named by their gait library id, or ``G<action>`` (as
-in the console) without a library.  The loop only calls the public
-:class:`~gaitpref.sessions.session.Session` API.
+pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
+written); when the rule says stop but no round can be drawn (fewer than three gaits may be
+shown), the runner says why after each answer.  A ranking of a round drawn again since its
+gaits were shown is refused and the round shown again, as the console refuses it.  A signal
+(or a closed output) that comes while an answer is being written lets the write finish
+first.  Nothing is written before the operator confirms (answers, undo and a validation ranking
+alike), and the answer is committed before the next trial is shown.  Gaits are named by their
+gait library id, or ``G<action>`` (as in the console) without a library.  The loop only calls
+the public :class:`~gaitpref.sessions.session.Session` API.
 """
 
 from __future__ import annotations
@@ -45,7 +48,7 @@ from gaitpref.sessions.records import (
     check_unsafe_reason,
 )
 from gaitpref.sessions.session import Session
-from gaitpref.sessions.validation import LABELS, check_ranking
+from gaitpref.sessions.validation import LABELS, ValidationPlan, check_ranking
 from gaitpref.space import Feature
 
 Reader = Callable[[str], str]
@@ -195,10 +198,15 @@ class Terminal:
                 "quit.",
                 markup=False,
             )
+            self._say_stop_blocked()
             try:
                 while True:
                     if s.validation_plan is not None:
-                        self.validate()
+                        try:
+                            self.validate()
+                        except SessionStateError as exc:  # the round is gone: go on
+                            self.console.print(f"  {exc}", markup=False)
+                            continue
                         self.console.print(
                             "The validation round is recorded.  The session is paused: resuming "
                             "it goes on with more trials; 'gaitpref session finish "
@@ -220,6 +228,13 @@ class Terminal:
                         self._undo()
             except _QuitError:
                 self._pause()
+
+    def _say_stop_blocked(self) -> None:
+        """The ``[stop]`` rule says stop but no blind validation round can be drawn: say why
+        (the rule cannot act; the operator decides)."""
+        blocked = self.session.stop_blocked()
+        if blocked is not None:
+            self.console.print(f"  {blocked}", markup=False)
 
     def _say_infeasible(self, skipped: list[InfeasibleGait]) -> None:
         """Gaits made on demand that could not be made: skipped, never shown to the subject."""
@@ -292,7 +307,8 @@ class Terminal:
             reason = self._reason() if key == "x" else ""
             try:
                 s.answer(q.id, [*comparisons, *ratings], suggestions)
-            except (QueryError, FeedbackError) as exc:
+            except (QueryError, FeedbackError, SessionStateError) as exc:
+                # a round another writer opened meanwhile: the loop asks its ranking next
                 self.console.print(f"  not written: {exc}", markup=False)
                 return
             self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
@@ -302,6 +318,7 @@ class Terminal:
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
                     self.console.print(f"  {line}", markup=False)
+            self._say_stop_blocked()
             if reason:
                 redrawn = False
                 for t in dict.fromkeys(q.trials):
@@ -411,8 +428,25 @@ class Terminal:
         return out, said
 
     # -- blind validation ----------------------------------------------------------------------
+    def _show_round(self, plan: ValidationPlan) -> list[str]:
+        """Print the round's gaits in label order; their names (checked when it is ranked)."""
+        self.console.print(
+            f"Blind validation, round {plan.round}: run these gaits in this order and tell the "
+            "subject nothing about them.",
+            markup=False,
+        )
+        gaits = self.session.validation_gaits(plan.round)
+        for g in gaits:
+            self.console.print(f"  Gait {g.label}: {g.gait} ({g.text})", markup=False)
+        return [g.gait for g in gaits]
+
     def validate(self, ranking: str | None = None) -> None:
-        """Run (or resume) a blind validation round and report the unblinded result."""
+        """Run (or resume) a blind validation round and report the unblinded result.
+
+        A ranking is refused if the round was drawn again since its gaits were shown (another
+        writer flagged a gait it showed): the round's gaits are shown again as they are now and
+        the ranking asked again (with ``ranking`` given: :class:`SessionStateError`).  When no
+        round is open any more, :class:`SessionStateError` says the ranking was not recorded."""
         s = self.session
         if ranking is not None:  # refused before a round is logged
             try:
@@ -420,13 +454,7 @@ class Terminal:
             except ValueError as exc:
                 raise SessionStateError(str(exc)) from None
         plan = s.start_validation()
-        self.console.print(
-            f"Blind validation, round {plan.round}: run these gaits in this order and tell the "
-            "subject nothing about them.",
-            markup=False,
-        )
-        for g in s.validation_gaits(plan.round):
-            self.console.print(f"  Gait {g.label}: {g.gait} ({g.text})", markup=False)
+        shown = self._show_round(plan)
         while True:
             if ranking is None:
                 self.console.print(
@@ -459,13 +487,23 @@ class Terminal:
                     continue
             else:
                 given = ranking
-            try:
-                result = s.answer_validation(plan.round, given)
+            try:  # refused if the round was drawn again since its gaits were shown
+                result = s.answer_validation(plan.round, given, shown=shown)
                 break
             except SessionStateError as exc:
                 if ranking is not None:
                     raise
                 self.console.print(f"  {exc}", markup=False)
+                now = s.validation_plan  # as another writer left it (a flag, an answer)
+                if now is None:
+                    raise SessionStateError(
+                        f"the ranking {given} was not recorded: no blind validation round is "
+                        "open any more (another writer answered it, or a flag withdrew it and "
+                        "fewer than three gaits are left to show)"
+                    ) from None
+                if now != plan or [g.gait for g in s.validation_gaits()] != shown:
+                    plan = now  # drawn again: the subject walks the round's gaits as they are
+                    shown = self._show_round(plan)
         roles = ", ".join(f"{label} = {result.roles[label]}" for label in plan.labels)
         verdict = "agrees" if result.agrees else "does not agree"
         self.console.print(

@@ -6,6 +6,8 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import pytest
 from rich.console import Console
 
@@ -15,8 +17,12 @@ from gaitpref.terminal import Terminal, gait_name
 from tests.sessions.sessionkit import CONFIG
 
 
-def _terminal(session: Session, *lines: str | BaseException) -> tuple[Terminal, Console]:
-    """A terminal reading ``lines`` (an exception is raised by its read), then the end of input."""
+def _terminal(
+    session: Session, *lines: str | BaseException | Callable[[], str]
+) -> tuple[Terminal, Console]:
+    """A terminal reading ``lines`` (an exception is raised by its read; a function is called,
+    as another writer acting while the operator types, and its line read), then the end of
+    input."""
     keys = iter(lines)
 
     def read(prompt: str) -> str:
@@ -26,7 +32,7 @@ def _terminal(session: Session, *lines: str | BaseException) -> tuple[Terminal, 
             raise EOFError from None
         if isinstance(line, BaseException):
             raise line
-        return line
+        return line() if callable(line) else line
 
     console = Console(record=True, width=200, highlight=False)
     return Terminal(session, console, read), console
@@ -227,3 +233,104 @@ def test_a_prompt_that_cannot_be_written_pauses_the_session() -> None:
     terminal.run()
     assert session.status == "paused" and not session.trials()
     assert "Paused." not in console.export_text()  # said on stderr instead
+
+
+def _open_round_showing_a_walked_gait() -> tuple[Session, Session, int]:
+    """A session whose open round shows a gait within a trial's unsafe radius, a second writer
+    on it (the console, another terminal) and that trial's number."""
+    from gaitpref.config import parse_config
+    from gaitpref.loop.safety import near
+    from tests.sessions.test_unsafe import CONFIG as UNSAFE
+    from tests.sessions.test_unsafe import _answer
+
+    storage = MemoryStorage()
+    session = Session.create(storage, parse_config(UNSAFE), "S01")
+    for k in range(6):
+        _answer(session, k)
+    plan = session.start_validation()
+    space = session.config.space
+    shown = [g.action for g in plan.gaits]
+    trial = next(t for t in session.trials() if near(space, {t.action}, 0.15)[shown].any())
+    return session, Session.open(storage, session.id), trial.number
+
+
+def test_a_ranking_of_a_round_drawn_again_meanwhile_is_refused_and_the_new_gaits_shown() -> None:
+    """Another writer flagged a gait the open round showed while the operator typed the
+    ranking: the round was drawn again with the same number, and the terminal booked the
+    ranking of the gaits walked before against the new ones (the console refused it, 409)."""
+    session, other, trial = _open_round_showing_a_walked_gait()
+    before = [g.gait for g in session.validation_gaits()]
+
+    def flag_then_rank() -> str:
+        assert other.flag_unsafe(trial, "knee gave way") is True  # drawn again, still open
+        return "ABC"
+
+    terminal, console = _terminal(session, flag_then_rank, "y", "BCA", "y")
+    terminal.validate()
+    text = console.export_text()
+    after = [g.gait for g in session.validation_gaits(1)]
+    assert after != before
+    assert "validation round 1 was drawn again since its gaits were shown" in text
+    assert f"it now shows {', '.join(after)}, not {', '.join(before)}" in text
+    assert text.count("Blind validation, round 1") == 2  # the round shown again, as it is now
+    assert all(f"{g} (" in text.split("drawn again")[-1] for g in after)
+    [result] = session.validations()
+    assert "".join(result.ranking) == "BCA"  # only the ranking of the gaits shown now
+    assert [e.kind for e in session.events()].count("validation_answered") == 1
+
+
+def test_a_ranking_of_a_round_no_longer_open_is_not_recorded_and_says_so() -> None:
+    """Another writer answered the round meanwhile: the terminal asked the ranking again and
+    again, refused each time, with no way out but q."""
+    import pytest
+
+    from gaitpref import SessionStateError
+
+    session, other, _ = _open_round_showing_a_walked_gait()
+
+    def answered_elsewhere() -> str:
+        other.answer_validation(1, "CBA")
+        return "ABC"
+
+    terminal, _ = _terminal(session, answered_elsewhere, "y")
+    with pytest.raises(SessionStateError, match="ABC was not recorded: no blind validation round"):
+        terminal.validate()
+    assert ["".join(v.ranking) for v in session.validations()] == ["CBA"]
+
+
+def test_an_answer_after_another_writer_opened_a_round_is_refused_and_the_round_asked() -> None:
+    """The console opened a round while the terminal's query was being answered: the answer
+    was written inside the round, moving the model the round was drawn from."""
+    session = _answered(3)
+    other = Session.open(session.storage, session.id)
+    pending = session.next_query()
+
+    def open_round_then(key: str) -> Callable[[], str]:
+        def run() -> str:
+            other.start_validation()
+            return key
+
+        return run
+
+    terminal, console = _terminal(session, open_round_then("1"), "0", "y", "ABC", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "not written: blind validation round 1 is open" in text
+    assert "Unblinded" in text and session.status == "paused"
+    assert len(session.trials()) == 3 and session.pending == pending  # asked again on resume
+
+
+def test_the_terminal_says_why_the_stop_rule_cannot_open_validation() -> None:
+    """max_trials reached with nothing learnt: no round can be drawn, and the runner went on
+    with the next trial as if the config had no rule."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(load_config(CONFIG).text + "\n[stop]\nmax_trials = 1\n")
+    session = Session.create(MemoryStorage(), config, "S01", seed=1)
+    terminal, console = _terminal(session, "0", "y")  # trial 1: no suggestion
+    terminal.run()
+    text = console.export_text()
+    assert "the [stop] rule says stop (1 trials reached max_trials = 1), but it cannot" in text
+    assert "open blind validation: the posterior mean is flat" in text
+    assert "Finish the" in text and "go on with trials" in text
+    assert session.validation_plan is None and session.status == "paused"

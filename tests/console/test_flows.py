@@ -112,11 +112,11 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     before = event_count(client, sid)
     data = {**stale.fields, "rank1": "A", "rank2": "B", "rank3": "C"}
     r = client.post(stale.action, data=data, follow_redirects=False)
-    assert r.status_code == 409 and "was drawn again since this page was loaded" in r.text
+    assert r.status_code == 409 and "was drawn again since its gaits were shown" in r.text
     assert event_count(client, sid) == before
     old_ids = [g["gait"]["gait_id"] for g in plan["gaits"]]
-    ranking = f"/api/sessions/{sid}/validation/{plan['round']}/ranking"
-    r = client.post(ranking, json={"ranking": ["A", "B", "C"], "shown": old_ids})
+    rank_url = f"/api/sessions/{sid}/validation/{plan['round']}/ranking"
+    r = client.post(rank_url, json={"ranking": ["A", "B", "C"], "shown": old_ids})
     assert r.status_code == 409 and "drawn again" in r.json()["detail"]
     assert event_count(client, sid) == before
     fresh = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
@@ -152,3 +152,16 @@ def test_a_finished_sessions_open_round_offers_no_ranking(client: TestClient) ->
     page = client.get(f"/sessions/{sid}/validation").text
     assert "ranking-form" not in forms_of(page)
     assert "finished with this round open" in page
+
+
+def test_the_console_says_why_the_stop_rule_cannot_open_validation(client: TestClient) -> None:
+    from gaitpref import load_config
+
+    config = load_config("exo-1d-step-length").text + "\n[stop]\nmax_trials = 1\n"
+    sid = new_session(client, config)
+    assert client.get(f"/api/sessions/{sid}").json()["stop_blocked"] is None
+    answer_once(client, sid)  # the first query compares nothing: nothing learnt
+    blocked = client.get(f"/api/sessions/{sid}").json()["stop_blocked"]
+    assert "max_trials = 1" in blocked and "the posterior mean is flat" in blocked
+    page = client.get(f"/sessions/{sid}").text
+    assert 'id="stop-blocked"' in page and "cannot open blind validation" in page

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import json
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -32,7 +34,7 @@ def test_finished_session_takes_nothing(db: str | Storage, drive: Drive) -> None
     q = s.next_query()
     s.finish()
     n = len(s.events())
-    for attempt, message in [
+    attempts: list[tuple[Callable[[], object], str]] = [
         (lambda: s.answer(q.id, [], []), "finished"),
         (s.next_query, "finished"),
         (s.undo, "finished"),
@@ -41,7 +43,8 @@ def test_finished_session_takes_nothing(db: str | Storage, drive: Drive) -> None
         (s.start_validation, "finished"),
         (s.finish, "already finished"),
         (s.resume, "finished"),
-    ]:
+    ]
+    for attempt, message in attempts:
         with pytest.raises(SessionStateError, match=message):
             attempt()
     reopened = Session.open(db, s.id)
@@ -147,7 +150,11 @@ def test_a_database_at_a_newer_schema(tmp_path: Path) -> None:
     Session.create(url, CONFIG, "S01").close()
     with sqlite3.connect(tmp_path / "g.db") as raw:
         raw.execute("UPDATE alembic_version SET version_num = 'ffff'")
-    for attempt in (lambda: Session.open(url, 1), lambda: Session.create(url, CONFIG, "S02")):
+    newer: tuple[Callable[[], Session], ...] = (
+        lambda: Session.open(url, 1),
+        lambda: Session.create(url, CONFIG, "S02"),
+    )
+    for attempt in newer:
         with pytest.raises(SchemaError, match="newer gaitpref"):
             attempt()
     with sqlite3.connect(tmp_path / "g.db") as raw:
@@ -212,3 +219,40 @@ def test_a_config_file_that_is_not_utf8_is_a_config_error(tmp_path: Path) -> Non
     path.write_bytes(b'name = "caf\xff"\n')
     with pytest.raises(ConfigError, match=r"bad.toml' is not UTF-8 text \(byte 11"):
         load_config(path)
+
+
+@pytest.mark.parametrize("name", ["   ", "", "\t"])
+def test_a_blank_config_name_is_refused_for_a_new_session(tmp_path: Path, name: str) -> None:
+    """``name = "   "`` was taken: sessions listed, exported and shown under no name."""
+    from gaitpref.config import load_config, parse_config
+
+    named = f"name = {json.dumps(name)}"  # a TOML basic string: "\t" is a tab
+    text = load_config(CONFIG).text.replace('name = "exo-1d-step-length"', named)
+    path = tmp_path / "blank.toml"
+    path.write_text(text, encoding="utf-8")
+    db = MemoryStorage()
+    for config in (path, parse_config(text)):
+        with pytest.raises(ConfigError, match=r"^name: must name the config") as err:
+            Session.create(db, config, "S01")
+        assert err.value.key == "name"
+    assert Session.list_sessions(db) == []
+
+
+def test_a_session_stored_with_a_blank_config_name_reopens_and_replays(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import gaitpref.sessions.session
+    from gaitpref.config import load_config, parse_config
+
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    text = load_config(CONFIG).text.replace('name = "exo-1d-step-length"', 'name = "   "')
+    with monkeypatch.context() as m:  # as earlier releases took it
+        m.setattr(gaitpref.sessions.session, "check_name", lambda config: None)
+        s = Session.create(url, parse_config(text), "S01", seed=4)
+    drive(s, 3)
+    mean = s.posterior().mean.copy()
+    s.close()
+    with Session.open(url, s.id) as again:
+        assert again.config.name == "   " and again.record.config_name == "   "
+        assert (again.posterior().mean == mean).all() and len(again.trials()) == 3
+        drive(again, 1)  # and it goes on

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sqlite3
+from datetime import UTC
 from pathlib import Path
 
 import numpy as np
@@ -183,3 +184,25 @@ def test_undo_names_the_answer_it_undid_when_another_writer_answered_meanwhile(
     monkeypatch.setattr(typer, "confirm", answered_meanwhile)
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
     assert [t.number for t in Session.open(db, 1).trials()] == [1, 2, 3, 4, 5]
+
+
+def test_session_new_refuses_a_blank_config_name(tmp_path: Path) -> None:
+    from gaitpref import load_config
+
+    path = tmp_path / "blank.toml"
+    path.write_text(load_config(CONFIG).text.replace("exo-1d-step-length", "  "), "utf-8")
+    db = str(tmp_path / "lab.db")
+    out = _fails("session", "new", "--config", str(path), "--subject", "S01", "--db", db)
+    assert "name: must name the config" in out and "got '  '" in out
+
+
+def test_session_list_marks_its_times_utc(tmp_path: Path) -> None:
+    """The times were printed bare ('2026-12-02 14:40'), read as local time at the lab."""
+    db = str(tmp_path / "lab.db")
+    with Session.create(db, CONFIG, "S01") as s:
+        created, updated = s.record.created_at, s.record.updated_at
+    out = _ok("session", "list", "--db", db)  # 80 columns: headers and times wrap
+    assert out.count("(UTC)") == 2 and "created" in out and "updated" in out
+    for when in (created, updated):
+        utc = when.astimezone(UTC)
+        assert f"{utc:%Y-%m-%d}" in out and f"{utc:%H:%M}" in out

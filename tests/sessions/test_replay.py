@@ -54,12 +54,17 @@ def test_replay_equals_the_live_session_at_every_step(sqlite_url: str, drive: Dr
 
 
 def _tamper(path: Path, text: str) -> None:
+    """Another config in the row, and (so that the row still matches it) in the created event:
+    what replay's re-derived proposals must catch."""
     import hashlib
 
+    sha = hashlib.sha256(text.encode()).hexdigest()
     with sqlite3.connect(path) as raw:
+        old = raw.execute("SELECT config_sha256 FROM sessions").fetchone()[0]
+        raw.execute("UPDATE sessions SET config_text = ?, config_sha256 = ?", (text, sha))
+        raw.execute("DROP TRIGGER events_no_update")
         raw.execute(
-            "UPDATE sessions SET config_text = ?, config_sha256 = ?",
-            (text, hashlib.sha256(text.encode()).hexdigest()),
+            "UPDATE events SET payload = replace(payload, ?, ?) WHERE kind = 'created'", (old, sha)
         )
 
 
@@ -109,3 +114,70 @@ def test_an_altered_config_text_is_detected(tmp_path: Path, sqlite_url: str) -> 
         raw.execute("UPDATE sessions SET config_text = config_text || '# edited'")
     with pytest.raises(ReplayError, match="does not match its hash"):
         Session.open(sqlite_url, s.id)
+
+
+def _edit_row(path: Path, sql: str, *args: object) -> None:
+    with sqlite3.connect(path) as raw:
+        raw.execute(sql, args)
+
+
+@pytest.mark.parametrize(
+    ("sql", "args", "named"),
+    [
+        ("UPDATE sessions SET subject = ?", ("S02",), "subject is 'S02' in the row, 'S01'"),
+        ("UPDATE sessions SET seed = ?", (12,), "seed is 12 in the row, 11 in the event"),
+        ("UPDATE sessions SET software_version = ?", ("0.0.9",), "software_version is '0.0.9'"),
+        ("UPDATE sessions SET config_name = ?", ("other",), "config_name is 'other' in the row"),
+        ("UPDATE sessions SET meta = ?", ('{"gait_ids": ["a"]}',), "meta.gait_ids names a gait"),
+        ("UPDATE sessions SET meta = ?", ('{"prior_rho": 0.5}',), "meta.prior_rho is 0.5"),
+    ],
+)
+def test_a_row_that_disagrees_with_its_created_event_is_named(
+    tmp_path: Path, sqlite_url: str, drive: Drive, sql: str, args: tuple[object], named: str
+) -> None:
+    """Replay read seed, config and warm start from the row and never compared it with the
+    created event: an edited subject, version or name went unnoticed, an edited seed surfaced
+    as 'event 2 (query_issued): actions ...'."""
+    s = Session.create(sqlite_url, CONFIG, "S01", seed=11)
+    drive(s, 3)
+    s.close()
+    subject = "S02" if "subject" in sql else "S01"
+    if subject == "S02":
+        _edit_row(tmp_path / "sessions.db", "INSERT INTO subjects (code, created_at) "
+                  "SELECT 'S02', created_at FROM subjects WHERE code = 'S01'")  # fmt: skip
+    _edit_row(tmp_path / "sessions.db", sql, *args)
+    with pytest.raises(ReplayError) as err:
+        Session.open(sqlite_url, s.id)
+    message = str(err.value)
+    assert "its row does not match its created event (event 1)" in message
+    assert named in message and "altered" in message
+
+
+def test_an_altered_row_alone_is_named_before_replay_derives_anything(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """Another config in the row only (text and hash agreeing): the created event names the
+    config the session was made with."""
+    import hashlib
+
+    s = Session.create(sqlite_url, CONFIG, "S01", seed=3)
+    drive(s, 2)
+    s.close()
+    text = load_config(CONFIG).text.replace("noise = 0.02", "noise = 0.05")
+    sha = hashlib.sha256(text.encode()).hexdigest()
+    _edit_row(tmp_path / "sessions.db",
+              "UPDATE sessions SET config_text = ?, config_sha256 = ?", text, sha)  # fmt: skip
+    with pytest.raises(ReplayError, match=f"config_sha256 is '{sha}' in the row"):
+        Session.open(sqlite_url, s.id)
+
+
+def test_a_log_that_does_not_start_with_created_is_refused(drive: Drive) -> None:
+    from gaitpref.storage import MemoryStorage, NewEvent
+    from tests.sessions.gaitkit import copied
+
+    db = MemoryStorage()
+    s = Session.create(db, CONFIG, "S01", seed=3)
+    drive(s, 1)
+    dropped = copied(db, s.id, lambda e: NewEvent("note", {"text": "x"}) if e.seq == 1 else None)
+    with pytest.raises(ReplayError, match="starts with its 'created' event"):
+        Session.open(db, dropped)

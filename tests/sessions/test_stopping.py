@@ -115,3 +115,49 @@ def test_an_answer_that_leaves_no_gait_to_recommend_is_written_and_states_no_con
     got = client.get(f"/api/sessions/{s.id}/posterior")
     assert got.status_code == 200 and got.json()["confidence"] is None
     assert client.get(f"/sessions/{s.id}").status_code == 200
+
+
+def test_a_rule_that_says_stop_with_fewer_than_three_gaits_to_show_says_why_it_cannot_act(
+    tmp_path: Path,
+) -> None:
+    """A flag whose radius leaves two gaits: the rule said stop after every answer, and the
+    round it tried to open was refused in silence; the session went on as if it had no rule."""
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    text = "\n[safety]\nunsafe_radius = 0.45\n[stop]\nconfidence = 0.6\n"
+    s = Session.create(url, parse_config(load_config(CONFIG).text + text), "S01")
+
+    def answer() -> None:
+        q = s.next_query()
+        s.answer(q.id, [], [(q.actions[0], "step_length", "+small")])
+
+    for _ in range(3):
+        answer()
+    assert s.stop_blocked() is None  # the rule does not say stop yet
+    s.flag_unsafe(1, "knee")
+    allowed = s._state.loop.allowed()
+    assert allowed is not None and allowed.sum() == 2
+    for _ in range(2):
+        answer()
+        reason = s.stop_reason()
+        assert reason is not None and s.validation_plan is None
+        blocked = s.stop_blocked()
+        assert blocked is not None
+        assert f"the [stop] rule says stop ({reason})" in blocked
+        assert "needs at least 3 gaits; 2 may be shown" in blocked
+        assert "Finish the session" in blocked
+    assert not any(e.kind.startswith("validation") for e in s.events())  # nothing written
+    s.withdraw_unsafe(1)  # the gaits are back: a round can be drawn
+    assert s.stop_blocked() is None
+    answer()  # the rule opens it if it still says stop (the confidence is over 15 gaits again)
+    assert (s.validation_plan is not None) == (s.stop_reason() is not None)
+
+
+def test_max_trials_with_nothing_learnt_says_why_no_round_opens() -> None:
+    s = Session.create(MemoryStorage(), _config("max_trials = 1\n"), "S01")
+    q = s.next_query()
+    s.answer(q.id, [])  # no comparison (no buffer yet), no suggestion: nothing learnt
+    assert s.stop_reason() == "1 trials reached max_trials = 1" and s.validation_plan is None
+    blocked = s.stop_blocked()
+    assert blocked is not None and "the posterior mean is flat" in blocked
+    s.finish()  # the operator decided: nothing left to say
+    assert s.stop_blocked() is None

@@ -239,3 +239,25 @@ def test_a_flag_on_a_gait_the_open_round_shows_draws_the_round_again(tmp_path: P
         plan, sid = s.validation_plan, s.id
     with Session.open(url, sid) as reopened:
         assert reopened.validation_plan == plan
+
+
+def test_a_ranking_of_the_gaits_a_redrawn_round_showed_before_is_refused(tmp_path: Path) -> None:
+    """``answer_validation(..., shown=...)``: the ranking is of the gaits the subject walked;
+    a round drawn again since (a flag from another writer) is not ranked with it."""
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    with Session.create(url, parse_config(CONFIG + "[stop]\nmax_trials = 6\n"), "S01") as s:
+        for k in range(6):
+            _answer(s, k)
+        walked = [g.gait for g in s.validation_gaits()]
+        shown = {g.action for g in s.validation_gaits()}
+        space = s.config.space
+        trial = next(t for t in s.trials() if near(space, {t.action}, 0.15)[list(shown)].any())
+        with Session.open(url, s.id) as other:
+            assert other.flag_unsafe(trial.number, "knee") is True
+        before = len(s.events())
+        with pytest.raises(SessionStateError, match="round 1 was drawn again") as err:
+            s.answer_validation(1, "ABC", shown=walked)
+        now = [g.gait for g in s.validation_gaits()]
+        assert f"now shows {', '.join(now)}, not {', '.join(walked)}" in str(err.value)
+        assert len(s.events()) == before and s.validations() == []
+        assert s.answer_validation(1, "ABC", shown=now).round == 1

@@ -103,3 +103,57 @@ def test_a_disagreeing_ranking(drive: Drive) -> None:
         s.answer_validation(plan.round, best_first)
     second = s.start_validation()
     assert second.round == 2
+
+
+def test_an_answer_while_a_round_is_open_is_refused_and_waits_for_the_ranking(
+    db: str | Storage, drive: Drive, subject: SimulatedSubject
+) -> None:
+    """A query pending when a round opened (or made pending again by an undo inside the round)
+    was answered, moving the model the round was drawn from before its ranking came in."""
+    s = Session.create(db, CONFIG, "S01", seed=13)
+    drive(s, 8)
+    q = s.next_query()
+    plan = s.start_validation()
+    before = s.last_seq
+    comparisons, suggestions = subject.respond(q)
+    with pytest.raises(SessionStateError) as err:
+        s.answer(q.id, comparisons, suggestions)
+    message = str(err.value)
+    assert f"round {plan.round} is open" in message and "ranking" in message
+    assert f"query {q.id} stays pending" in message.lower()
+    assert s.last_seq == before == len(s.events()) and s.pending == q
+    s.answer_validation(plan.round, subject.rank(plan))
+    s.answer(q.id, comparisons, suggestions)  # the round answered: the query takes its answer
+    assert s.pending is None and len(s.trials()) == 9
+    # an undo inside a round makes the last query pending again: refused the same way
+    drive(s, 1)
+    plan = s.start_validation()
+    again = s.undo()
+    assert again is not None and s.pending == again
+    with pytest.raises(SessionStateError, match=f"round {plan.round} is open"):
+        s.answer(again.id, *subject.respond(again))
+
+
+def test_a_log_that_answered_inside_a_round_still_replays(
+    db: str | Storage,
+    drive: Drive,
+    subject: SimulatedSubject,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Earlier releases took such an answer: their logs open and replay as written."""
+    s = Session.create(db, CONFIG, "S01", seed=13)
+    drive(s, 8)
+    q = s.next_query()
+    plan = s.start_validation()
+    with monkeypatch.context() as m:  # as an earlier release wrote it
+        m.setattr(Session, "_check_no_open_round", lambda self, query: None)
+        s.answer(q.id, *subject.respond(q))
+    kinds = [e.kind for e in s.events()]
+    assert "trial_executed" in kinds[kinds.index("validation_started") :]  # inside the round
+    mean = np.asarray(s.posterior().mean).copy()
+    reopened = Session.open(db, s.id)
+    assert reopened.validation_plan == plan and reopened.last_seq == s.last_seq
+    np.testing.assert_array_equal(np.asarray(reopened.posterior().mean), mean)
+    assert reopened.trials() == s.trials()
+    result = reopened.answer_validation(plan.round, subject.rank(plan))
+    assert result.round == plan.round

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterator
 from contextlib import contextmanager
+from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -185,8 +186,11 @@ def list_sessions(
 
     rows = guard(run)
     table = Table(title="sessions")
-    for col in ("id", "subject", "config", "seed", "status", "events", "created", "updated"):
+    # times are stored in UTC: the headers say so (the console writes "... UTC" after each)
+    for col in ("id", "subject", "config", "seed", "status", "events"):
         table.add_column(col)
+    table.add_column("created (UTC)")
+    table.add_column("updated (UTC)")
     for r in rows:
         table.add_row(
             str(r.id),
@@ -195,10 +199,17 @@ def list_sessions(
             str(r.seed),
             r.status + (f" ({r.origin})" if r.origin else ""),
             str(r.last_seq),
-            r.created_at.strftime("%Y-%m-%d %H:%M"),
-            r.updated_at.strftime("%Y-%m-%d %H:%M"),
+            _utc(r.created_at),
+            _utc(r.updated_at),
         )
     console.print(table)
+
+
+def _utc(when: datetime) -> str:
+    """A stored time in UTC, to the minute (``2026-12-02 14:40``): its column says UTC."""
+    from gaitpref.storage.base import as_utc
+
+    return as_utc(when).strftime("%Y-%m-%d %H:%M")
 
 
 @session_app.command("show")

@@ -168,6 +168,20 @@ def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> Experi
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
+def check_name(config: ExperimentConfig) -> None:
+    """Refuse a blank name (empty, or spaces only) for a *new* session's config: the name is how
+    session lists, the console and exports tell configs apart.  A :class:`ConfigError` naming
+    the key.  Not checked by :func:`parse_config`: sessions stored with such a name (earlier
+    releases took it) parse, reopen and replay as they were."""
+    if not config.name.strip():
+        fail(
+            "",
+            "name",
+            f"must name the config (session lists and exports show it), got {config.name!r}; "
+            "give a name, or leave the key out to use the file's name",
+        )
+
+
 def parse_config(
     text: str,
     default_name: str = "experiment",

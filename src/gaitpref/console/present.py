@@ -103,6 +103,7 @@ def session_out(session: Session) -> SessionOut:
         features=features_out(session),
         rating=rating_scale_out(session),
         unsafe={t: reason for t, (_, reason) in session.unsafe_flags().items()},
+        stop_blocked=session.stop_blocked(),
     )
 
 

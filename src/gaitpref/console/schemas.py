@@ -247,6 +247,11 @@ class SessionOut(BaseModel):
     unsafe: dict[int, str] = Field(
         default_factory=dict, description="trials flagged unsafe -> the reason"
     )
+    stop_blocked: str | None = Field(
+        default=None,
+        description="why the [stop] rule, which says stop, cannot open blind validation (fewer "
+        "than three gaits may be shown, or nothing learnt); None otherwise",
+    )
 
 
 class TrialOut(BaseModel):

@@ -280,15 +280,6 @@ class SessionService:
         and a ranking of the gaits walked before must not be booked against the new ones."""
         with self.locked(session_id) as session:
             plan = session.validation_plan
-            if shown is not None and plan is not None and plan.round == round_:
-                now = [g.gait for g in session.validation_gaits()]
-                if list(shown) != now:
-                    raise SessionStateError(
-                        f"validation round {round_} was drawn again since this page was loaded "
-                        f"(an unsafe flag withdrew a gait it showed): it now shows "
-                        f"{', '.join(now)}, not {', '.join(shown)}; nothing was written, run "
-                        "the round's gaits as shown now"
-                    )
             if plan is not None and plan.round == round_:
                 labels = [str(r).upper() for r in ranking]
                 if sorted(labels) != sorted(plan.labels):
@@ -297,7 +288,8 @@ class SessionService:
                         f"name each of {', '.join(plan.labels)} exactly once, best first; "
                         f"got {', '.join(labels) or 'nothing'}",
                     )
-            return session.answer_validation(round_, list(ranking))
+            # shown: checked by the session in the turn of the write (Session.answer_validation)
+            return session.answer_validation(round_, list(ranking), shown=shown)
 
     # -- export --------------------------------------------------------------------------------
     def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:

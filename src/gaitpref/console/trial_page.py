@@ -128,6 +128,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "learned": learned,
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,
+        "stop_blocked": session.stop_blocked(),
         "prior_from": [p["session"] for p in session.record.meta.get("prior_from", [])],
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",

@@ -13,7 +13,7 @@ table has no row for that step.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -57,15 +57,18 @@ def recommends(state: SessionState) -> bool:
     return allowed is None or bool(allowed.any())
 
 
-def stop_reason(state: SessionState, rule: StopRule) -> str | None:
-    """Why ``state`` should move to blind validation now (None: go on, or no rule)."""
+def stop_reason(
+    state: SessionState, rule: StopRule, sure: Callable[[], Confidence] | None = None
+) -> str | None:
+    """Why ``state`` should move to blind validation now (None: go on, or no rule); ``sure``
+    gives the confidence of ``state`` when the caller keeps it (default: worked out here)."""
     if not rule.active:
         return None
     trials = len(state.loop.executed)
-    sure = None
+    stated = None
     if rule.confidence is not None and recommends(state):
-        sure = session_confidence(state, rule)
-    return rule.reason(trials, sure)
+        stated = session_confidence(state, rule) if sure is None else sure()
+    return rule.reason(trials, stated)
 
 
 def confidence_history(

@@ -22,6 +22,7 @@ from gaitpref.loop.cospar import Answer
 from gaitpref.sessions import events as log
 from gaitpref.sessions.gaits import RecordedGaits
 from gaitpref.sessions.state import SessionState
+from gaitpref.sessions.stored_config import check_row
 from gaitpref.storage import EventRecord, NewEvent
 
 
@@ -38,6 +39,13 @@ def replay(
         if r.seq != state.last_seq + 1:
             raise ReplayError(f"event {r.seq} follows event {state.last_seq}: the log has a gap")
         log.read_payload(r)  # validates the payload and its version
+        if (r.seq == 1) != (r.kind == log.CREATED):
+            raise ReplayError(
+                f"event {r.seq} ({r.kind}): a log starts with its 'created' event, and only "
+                "there; the database was altered"
+            )
+        if r.kind == log.CREATED and state.row is not None:
+            check_row(state.row, r.payload)  # the row replay reads seed and config from
         if log.is_answer_part(r.kind):
             j = i
             while (

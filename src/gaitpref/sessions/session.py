@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from gaitpref.checks import is_count
-from gaitpref.config import ExperimentConfig, load_config
+from gaitpref.config import ExperimentConfig, check_name, load_config
 from gaitpref.errors import (
     InfeasibleProposalsError,
     NoSafeGaitError,
@@ -130,6 +130,7 @@ class Session:
         Everything is checked before the database is touched.
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
+        check_name(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
@@ -333,7 +334,9 @@ class Session:
         keyword is the same as giving them in ``answers``).
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
-        not in the query, and a session that is finished or paused.
+        not in the query, a session that is finished or paused, and while a blind validation
+        round is open (:class:`SessionStateError`: record its ranking first; the query stays
+        pending).
         """
         if not is_count(query_id):
             raise QueryError(
@@ -352,6 +355,7 @@ class Session:
         query = st.pending
         if query is None or isinstance(query_id, bool) or query_id != query.id:
             raise st.pending_query_error(query_id)
+        self._check_no_open_round(query)
         answer = st.tell(query, comps, suggs)
         events = st.answer_events(query, answer)
         try:
@@ -371,6 +375,23 @@ class Session:
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
         return Answered(query.id, query.trials, tuple(r.seq for r in records), kept, singles)
+
+    def _check_no_open_round(self, query: SessionQuery) -> None:
+        """Refuse an answer while a blind validation round is open (the query was pending when
+        the round opened, or an undo made it pending again): the round compares the subject's
+        ranking with the model as it stood when it opened, and no answer may move the model
+        before the ranking is recorded.  Only new answers: a log written by an earlier release
+        that answered inside a round replays as written (replay does not come here)."""
+        current = self._state.open_round
+        if current is None:
+            return
+        number = current.plan.round
+        raise SessionStateError(
+            f"blind validation round {number} is open: record its ranking before answering "
+            f"query {query.id} (gaitpref session validate {self.id}, the console's validation "
+            f"page, or Session.answer_validation({number}, ...); a round is not cancelled, "
+            f"only answered).  Query {query.id} stays pending; nothing was written"
+        )
 
     def undo(self) -> SessionQuery | None:
         """Take back the last answer: its query is pending again, the model as it was before.
@@ -532,19 +553,50 @@ class Session:
         """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
         return self._locked(lambda: stop_reason(self._state, self.config.stop))
 
+    def stop_blocked(self) -> str | None:
+        """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
+        round can be drawn (fewer than three gaits may be shown: unsafe flags, the region of
+        avoidance, gaits made so far; or the posterior mean is flat).  None when there is no
+        rule, it says go on, a round was opened before, one can be drawn, or the session is
+        finished.  The terminal and
+        the console show it after each answer: the rule cannot act, and the operator decides
+        (finish the session, or go on: the rule opens the round after the first answer that
+        lets one be drawn)."""
+
+        def run() -> str | None:
+            st = self._state
+            if st.rounds or st.status == "finished":
+                return None
+            reason = stop_reason(st, self.config.stop, self.confidence)
+            why = None if reason is None else st.validation_blocked()
+            if why is None:
+                return None
+            return (
+                f"the [stop] rule says stop ({reason}), but it cannot open blind validation: "
+                f"{why}.  Finish the session, or go on with trials (the rule opens the round "
+                "after an answer once one can be drawn)"
+            )
+
+        return self._locked(run)
+
     def _stop_if_sure(self) -> None:
         """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
-        (one round; the operator may go on afterwards, the rule does not reopen it)."""
+        (one round; the operator may go on afterwards, the rule does not reopen it).  When no
+        round can be drawn, nothing is written and :meth:`stop_blocked` says why."""
         st = self._state
-        if st.rounds or st.pending is not None or stop_reason(st, self.config.stop) is None:
+        if st.rounds or st.pending is not None or st.validation_blocked() is not None:
             return
-        # another writer moved on: it decides; fewer than 3 gaits to show: the operator does
-        with contextlib.suppress(ConflictError, SessionStateError):
+        if stop_reason(st, self.config.stop, self.confidence) is None:
+            return
+        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
             self._append([st.validation_event()])
 
     # -- blind validation ----------------------------------------------------------------------
     def start_validation(self) -> ValidationPlan:
-        """Fix and log a random order of the max/mean/min gaits (the open round, if any)."""
+        """Fix and log a random order of the max/mean/min gaits (the open round, if any).
+
+        A query pending when the round opens stays pending, and is answered once the round's
+        ranking is recorded (:meth:`answer` refuses it until then)."""
 
         def run() -> ValidationPlan:
             st = self._state
@@ -563,12 +615,35 @@ class Session:
         current = self._state.open_round
         return None if current is None else current.plan
 
-    def answer_validation(self, round_: int, ranking: Sequence[str] | str) -> ValidationResult:
-        """Record the subject's ranking (best first, e.g. ``"BAC"``), then unblind."""
+    def answer_validation(
+        self,
+        round_: int,
+        ranking: Sequence[str] | str,
+        *,
+        shown: Sequence[str] | None = None,
+    ) -> ValidationResult:
+        """Record the subject's ranking (best first, e.g. ``"BAC"``), then unblind.
+
+        ``shown``: the names of the gaits the subject walked, in label order, as the terminal or
+        a console page showed them (:meth:`validation_gaits`).  A flag on a gait an open round
+        shows draws the round again with the same number; given ``shown``, a ranking of the
+        gaits walked before is refused (:class:`SessionStateError` naming both; nothing is
+        written) rather than booked against the new ones.  Checked in the same turn as the
+        write, so another writer's flag cannot come in between."""
 
         def run() -> ValidationResult:
             st = self._state
             st.check_open("validation")
+            current = st.open_round
+            if shown is not None and current is not None and current.plan.round == round_:
+                now = [current.shown[g.label].gait for g in current.plan.gaits]
+                if [str(g) for g in shown] != now:
+                    raise SessionStateError(
+                        f"validation round {round_} was drawn again since its gaits were shown "
+                        "(an unsafe flag withdrew a gait it showed): it now shows "
+                        f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
+                        "written, run the round's gaits as shown now"
+                    )
             self._append([st.validation_answer_event(round_, ranking)])
             result = self._state.rounds[-1].result
             assert result is not None

@@ -60,7 +60,7 @@ from gaitpref.sessions.validation import (
     blind_plan,
     unblind,
 )
-from gaitpref.storage import EventRecord, NewEvent, Status
+from gaitpref.storage import EventRecord, NewEvent, SessionRecord, Status
 
 if TYPE_CHECKING:  # gaits/ loads SciPy's optimizers: only when a config names a generator
     from gaitpref.gaits.gait_cache import GaitCache
@@ -122,6 +122,7 @@ class SessionState:
     infeasible: list[InfeasibleGait] = field(default_factory=list)
     made_rows: list[int] = field(default_factory=list)  # each gait_made's action, as logged
     made_ids: set[str] = field(default_factory=set)  # each gait_made's gait id
+    row: SessionRecord | None = field(default=None, repr=False)  # checked against `created`
 
     def __post_init__(self) -> None:
         self.loop = self.config.make_loop(seed=self.seed)
@@ -369,18 +370,9 @@ class SessionState:
         chose them (1: among every gait or made gait; 2: among those a query could propose)."""
         version = log.ValidationStarted.version if version is None else version
         round_ = len(self.rounds) + 1
-        rng = np.random.default_rng(
-            np.random.SeedSequence(self.seed, spawn_key=(_VALIDATION_STREAM, round_))
-        )
         mean = np.asarray(self.loop.posterior.mean)
-        shown = None if self.on_demand is None else sorted(set(self.walkable))
-        if version >= 2:
-            proposable = self.loop.proposable()
-            if not proposable.all():
-                among = np.flatnonzero(proposable) if shown is None else shown
-                shown = [int(a) for a in among if proposable[a]]
         try:
-            plan, roles = blind_plan(round_, mean, rng, shown)
+            plan, roles = self._blind_plan(round_, mean, version)
         except ValueError as exc:
             raise SessionStateError(f"cannot start a blind validation: {exc}") from None
         gaits = [
@@ -393,6 +385,32 @@ class SessionState:
             for g in plan.gaits
         ]
         return log.new_event(log.ValidationStarted(round=round_, gaits=gaits))
+
+    def validation_blocked(self) -> str | None:
+        """Why no blind validation round can be drawn now (fewer than three gaits may be shown,
+        or the posterior mean is flat), or None when one can."""
+        try:
+            self._blind_plan(len(self.rounds) + 1, np.asarray(self.loop.posterior.mean))
+        except ValueError as exc:
+            return str(exc)
+        return None
+
+    def _blind_plan(
+        self, round_: int, mean: np.ndarray, version: int | None = None
+    ) -> tuple[ValidationPlan, dict[str, str]]:
+        """Round ``round_``'s plan and roles as payload ``version`` chooses them (ValueError:
+        none can be drawn)."""
+        version = log.ValidationStarted.version if version is None else version
+        rng = np.random.default_rng(
+            np.random.SeedSequence(self.seed, spawn_key=(_VALIDATION_STREAM, round_))
+        )
+        shown = None if self.on_demand is None else sorted(set(self.walkable))
+        if version >= 2:
+            proposable = self.loop.proposable()
+            if not proposable.all():
+                among = np.flatnonzero(proposable) if shown is None else shown
+                shown = [int(a) for a in among if proposable[a]]
+        return blind_plan(round_, mean, rng, shown)
 
     def validation_answer_event(self, round_: int, ranking: Sequence[str] | str) -> NewEvent:
         current = self.open_round

@@ -69,6 +69,67 @@ def config_of(record: SessionRecord) -> ExperimentConfig:
     return cfg
 
 
+#: what a session's row duplicates of its ``created`` event: the event's field -> where the row
+#: keeps it (a column, or a ``meta`` key; ``gait_library``: whether the meta names gait ids)
+ROW_OF_CREATED: dict[str, str] = {
+    "subject": "subject",
+    "config_name": "config_name",
+    "config_sha256": "config_sha256",
+    "seed": "seed",
+    "software_version": "software_version",
+    "gait_library": "meta.gait_ids",
+    "prior_from": "meta.prior_from",
+    "prior_rho": "meta.prior_rho",
+    "prior_terms": "meta.prior_terms",
+    "prior_relearn_every": "meta.prior_relearn_every",
+    "prior_share_gate": "meta.prior_share_gate",
+}
+
+
+def check_row(record: SessionRecord, created: Mapping[str, Any]) -> None:
+    """Refuse a session whose row (``record``) says other than its ``created`` event's payload
+    on what both record (:data:`ROW_OF_CREATED`): the row, edited by hand or damaged, would be
+    replayed as another session than the one its log made (replay reads seed, config and warm
+    start from the row).  :class:`ReplayError` names every field that differs.  Every release
+    wrote both from the same values (warm-start keys absent from both when cold), so a stored
+    session whose row is intact always passes."""
+    meta = record.meta
+    row: dict[str, Any] = {
+        "subject": record.subject,
+        "config_name": record.config_name,
+        "config_sha256": record.config_sha256,
+        "seed": record.seed,
+        "software_version": record.software_version,
+        "gait_library": meta.get("gait_ids") is not None,
+        "prior_from": meta.get("prior_from") or [],
+    }
+    event = {key: created.get(key) for key in ROW_OF_CREATED}
+    event["gait_library"] = created.get("gait_library", False)
+    event["prior_from"] = created.get("prior_from") or []
+    differ = []
+    for key, where in ROW_OF_CREATED.items():
+        mine = row[key] if key in row else meta.get(key)
+        theirs = event[key]
+        if mine != theirs or type(mine) is not type(theirs):
+            differ.append(
+                f"{where} is {_short(mine)} in the row, {_short(theirs)} in the event"
+                if key != "gait_library"
+                else f"{where} {'names a' if mine else 'names no'} gait library in the row, the "
+                f"event's gait_library is {_short(theirs)}"
+            )
+    if differ:
+        raise ReplayError(
+            f"session {record.id}: its row does not match its created event (event 1): "
+            f"{'; '.join(differ)}.  The database was altered (edited by hand or damaged); the "
+            "session is not replayed as another one"
+        )
+
+
+def _short(value: object) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
 def library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
     """What replay needs besides the text: the version of the defaults the config relies on (if
     it leaves a changed default to them), and where its gait library is (folder, path, hash)."""

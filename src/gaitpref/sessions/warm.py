@@ -349,7 +349,9 @@ def prepare_state(
     has replayed already (:data:`Replayed`)."""
     config = config_of(record) if config is None else config
     cache = gait_cache if gait_cache is not None else gait_cache_of(storage, config)
-    state = SessionState(config, record.seed, record.meta.get("gait_ids"), gait_cache=cache)
+    state = SessionState(
+        config, record.seed, record.meta.get("gait_ids"), gait_cache=cache, row=record
+    )
     raw = record.meta.get("prior_from")
     if raw:
         prior = [PriorSession.model_validate(p) for p in raw]
