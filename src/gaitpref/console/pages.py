@@ -201,6 +201,12 @@ def _flash(
         return f"Saved: trial {', '.join(map(str, sorted(saved)))}."
     if taken and not taken & done:
         names = ", ".join(map(str, sorted(taken)))
+        if replaced and context["reason"] in ("no-gait", "no-safe"):  # said below it
+            return (
+                f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
+                "flagged unsafe since and was withdrawn, but no new query could be proposed in "
+                "its place."
+            )
         if replaced:
             return (
                 f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
