@@ -393,3 +393,27 @@ def test_an_earlier_sessions_warm_start_garbled_in_its_row_is_named_not_a_valida
             )
         with pytest.raises(ReplayError, match=rf"session {new}: its warm start's prior_from"):
             Session.open(url, new)
+
+
+def test_prior_from_naming_a_session_many_times_reads_it_once() -> None:
+    """Each item was looked up in the database, repeated or not: the console's 'Warm start
+    from' field of '1,' thirty thousand times took 30 s (the form's field may hold half a
+    million); now each distinct item is read once, and what is recorded is the same."""
+    db = MemoryStorage()
+    ids = _earlier(db)
+    reads: list[object] = []
+    get_session, list_sessions = db.get_session, db.list_sessions
+
+    def counted_get(session_id: int) -> object:
+        reads.append(session_id)
+        return get_session(session_id)
+
+    def counted_list(subject: str | None = None) -> object:
+        reads.append(subject)
+        return list_sessions(subject)
+
+    db.get_session = counted_get  # type: ignore[method-assign, assignment]
+    db.list_sessions = counted_list  # type: ignore[method-assign, assignment]
+    with Session.create(db, CONFIG, "S03", prior_from=[ids[2], "S01"] * 50_000) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
+    assert reads.count("S01") == 1 and len(reads) < 50, len(reads)  # not one per item

@@ -144,9 +144,10 @@ def resolve_prior(
 ) -> list[SessionRecord]:
     """The earlier sessions named by ids or subject codes, by id, each once;
     :class:`~gaitpref.errors.PriorFromError` (a ValueError) names an unknown one or one whose
-    grid differs from ``config``'s."""
+    grid differs from ``config``'s.  An item named again is not looked up again (a form's
+    field may repeat one a hundred thousand times)."""
     found: dict[int, SessionRecord] = {}
-    for item in prior_from:
+    for item in dict.fromkeys(prior_from):
         if isinstance(item, bool) or not isinstance(item, int | str):
             raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
         if isinstance(item, int):
