@@ -18,7 +18,7 @@ from __future__ import annotations
 import asyncio
 import json
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, MutableMapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -349,7 +349,11 @@ def _post_form(console: Console, route: Route, fields: dict[str, str]) -> None:
 def test_spoilt_forms_are_refused_not_500_and_write_nothing(console: Console, route: Route) -> None:
     assert route.body is not None
     name = f"{route.name}-form"
-    valid = lambda: route.body(console.pending(name) if name in console.sid else None)  # noqa: E731
+    make = route.body
+
+    def valid() -> dict[str, Any]:
+        return make(console.pending(name) if name in console.sid else None)
+
     for key in valid():
         for bad in BAD_TEXT:
             _post_form(console, route, {**valid(), key: bad})
@@ -415,7 +419,7 @@ def _endless(app: FastAPI, path: str, first: bytes, chunk: bytes, kind: str) -> 
     """POST ``path`` a body that never ends (``first``, then ``chunk`` again and again, with no
     length declared), straight to the ASGI app; returns the status and the bytes it read."""
     read = 0
-    sent: list[dict[str, Any]] = []
+    sent: list[MutableMapping[str, Any]] = []
 
     async def receive() -> dict[str, Any]:
         nonlocal read
@@ -423,7 +427,7 @@ def _endless(app: FastAPI, path: str, first: bytes, chunk: bytes, kind: str) -> 
         read += len(body)
         return {"type": "http.request", "body": body, "more_body": True}
 
-    async def send(message: dict[str, Any]) -> None:
+    async def send(message: MutableMapping[str, Any]) -> None:
         sent.append(message)
 
     scope = {
