@@ -77,7 +77,8 @@ class FeedbackError(GaitprefError, ValueError):
 
 class PriorFromError(GaitprefError, ValueError):
     """A warm start's ``prior_from`` names a session or subject that is not there, or one run
-    on another grid, or more answers than a warm start takes; nothing was created."""
+    on another grid, or one that cannot be rebuilt from the database, or more answers than a
+    warm start takes; nothing was created."""
 
 
 class QueryError(GaitprefError, ValueError):

@@ -311,6 +311,7 @@ def test_undo_makes_the_answered_query_pending_again(client: TestClient) -> None
         "discarded_query_id": q2["query_id"],
         "undone_query_id": first["query_id"],
         "withdrawn": False,
+        "next_query_error": None,
     }
     again = client.get(f"/api/sessions/{sid}/query").json()
     assert again["query_id"] == first["query_id"]

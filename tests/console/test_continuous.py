@@ -55,3 +55,24 @@ def test_a_continuous_generator_session_in_the_console(client: TestClient) -> No
     assert all(g in text for g in shown)
     assert client.post(f"/api/sessions/{sid}/undo").status_code == 200
     assert client.get(f"/sessions/{sid}").status_code == 200
+
+
+def test_a_line_session_over_a_grid_too_large_to_enumerate_serves_its_posterior(
+    client: TestClient,
+) -> None:
+    """Discrete features whose grid (2,000 x 2,000) the line path never enumerates: the
+    session's actions are the points so far, not a grid, and GET /posterior was a 500 (the
+    point set's shape is a TypeError); its shape is null, as for continuous features."""
+    config = "[model]\nlengthscale = 0.2\nsignal_variance = 0.005\nnoise = 0.02\n" + "".join(
+        f"[space.x{i}]\nmin = 0\nmax = 1\nnum = 2000\n" for i in range(2)
+    )
+    sid = new_session(client, config)
+    for _ in range(2):
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        body = {"query_id": q["query_id"], "comparisons": [[*c, "first"] for c in q["comparisons"]]}
+        assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+    r = client.get(f"/api/sessions/{sid}/posterior")
+    assert r.status_code == 200, r.text
+    post = r.json()
+    assert post["shape"] is None and 2 <= len(post["mean"]) == len(post["sd"]) < 2000
+    assert client.get(f"/sessions/{sid}").status_code == 200

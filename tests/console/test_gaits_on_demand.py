@@ -8,6 +8,7 @@ from fastapi.testclient import TestClient
 
 from gaitpref.errors import GaitGeneratorError, SimulationError
 from tests.console.conftest import event_count, new_session
+from tests.console.htmlforms import forms_of
 from tests.sessions.gaitkit import CONFIG, FakeSteps
 
 
@@ -81,3 +82,79 @@ def test_an_ask_that_stops_at_max_infeasible_says_so_and_a_reload_goes_on(
         raise AssertionError("no query after 30 reloads")
     q = client.get(f"/api/sessions/{sid}/query").json()
     assert all(g["values"]["step_length"] >= FakeSteps.below for g in q["actions"])
+
+
+def _withdrawn_on_undo(client: TestClient) -> int:
+    """A session whose last answer's query proposes a gait flagged unsafe since: undoing it
+    withdraws that query and proposes a new one in its place (made on demand)."""
+    sid = new_session(client, CONFIG + "[safety]\nunsafe_radius = 0.3\n", seed=1)
+    for _ in range(2):
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        body = {"query_id": q["query_id"], "comparisons": [[*c, "first"] for c in q["comparisons"]]}
+        assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+    r = client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "hip"})
+    assert r.status_code == 200
+    assert r.json()[1]["gait"]["values"]["step_length"] == 0.65  # near trial 1's 0.4
+    return sid
+
+
+def _generator_fails(monkeypatch: pytest.MonkeyPatch) -> None:
+    def fails(self: FakeSteps, vector: object, warm_start: object = None) -> None:
+        raise GaitGeneratorError("solver crashed")
+
+    monkeypatch.setattr(FakeSteps, "make", fails)
+
+
+def test_an_undo_whose_new_query_cannot_be_made_says_it_was_undone(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The undo was written, then the gait of the query proposed in the withdrawn one's place
+    could not be made: the API answered 503 with the generator's error alone, as if nothing had
+    happened (a client would undo again and take back another answer)."""
+    sid = _withdrawn_on_undo(client)
+    _generator_fails(monkeypatch)
+    before = client.get(f"/api/sessions/{sid}/events").json()
+    r = client.post(f"/api/sessions/{sid}/undo", json={})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["trials"] == [2] and body["withdrawn"] is True
+    assert body["pending_query_id"] is None and "solver crashed" in body["next_query_error"]
+    after = client.get(f"/api/sessions/{sid}/events").json()
+    assert after[: len(before)] == before and [e["kind"] for e in after[len(before) :]] == ["undo"]
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 1
+    r = client.get(f"/api/sessions/{sid}/query")
+    assert r.status_code == 503 and "solver crashed" in r.json()["detail"]
+    monkeypatch.undo()
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    assert q["query_id"] != body["undone_query_id"]
+    # an undo whose query is asked again, or made, says nothing of the kind
+    answered = client.post(
+        f"/api/sessions/{sid}/answers",
+        json={"query_id": q["query_id"], "comparisons": [[*c, "first"] for c in q["comparisons"]]},
+    )
+    assert answered.status_code == 200
+    again = client.post(f"/api/sessions/{sid}/undo", json={}).json()
+    assert again["withdrawn"] is False and again["next_query_error"] is None
+
+
+def test_an_undo_from_the_page_whose_new_query_cannot_be_made_says_it_was_undone(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The page answered a 503 'Gait not made' page for an undo that was written."""
+    sid = _withdrawn_on_undo(client)
+    undo = forms_of(client.get(f"/sessions/{sid}").text)["undo-form"]
+    _generator_fails(monkeypatch)
+    before = event_count(client, sid)
+    r = client.post(
+        f"/sessions/{sid}/undo", data={**undo.fields, "confirmed": "1"}, follow_redirects=False
+    )
+    assert r.status_code == 303, r.text
+    assert event_count(client, sid) == before + 1  # the undo, once
+    page = client.get(r.headers["location"])
+    assert page.status_code == 200
+    text = " ".join(page.text.split())
+    assert "Undone: the answer to trial 2 was taken back" in text
+    assert "no new query could be proposed in its place" in text
+    assert "a new query is proposed in its place" not in text
+    assert "The next gait could not be made" in text and "solver crashed" in text
+    assert event_count(client, sid) == before + 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 
 import httpx
@@ -252,3 +253,21 @@ def test_a_name_is_refused_as_a_subject_code(client: TestClient) -> None:
     r = post(client, "/sessions", form)
     assert r.status_code == 422 and "<code>subject</code>" in r.text and "never a name" in r.text
     assert client.get("/api/sessions").json() == []
+
+
+def test_a_ranking_forms_shown_field_is_read_within_bounds(client: TestClient) -> None:
+    """'shown' (the gaits the validation page showed, a JSON list) deeply nested was a 500
+    (json's RecursionError); a long one was parsed whole, then refused as 409 'drawn again':
+    both are 422 at ``shown`` (at most 8 names, its text measured first), nothing written."""
+    sid = new_session(client)
+    for outcome in ("first", "second", "first"):
+        answer_once(client, sid, outcome)
+    assert client.post(f"/api/sessions/{sid}/validation").status_code == 200
+    rank = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
+    ranked = {**rank.fields, "rank1": "C", "rank2": "B", "rank3": "A"}
+    before = event_count(client, sid)
+    for shown in ("[" * 100_000, "[" * 5_000, json.dumps(["G1"] * 30_000), json.dumps(["G1"] * 9)):
+        r = post(client, rank.action, {**ranked, "shown": shown})
+        assert r.status_code == 422 and "<code>shown</code>" in r.text, r.text[:300]
+    assert event_count(client, sid) == before
+    assert post(client, rank.action, ranked).status_code == 303

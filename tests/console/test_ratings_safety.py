@@ -269,3 +269,24 @@ def test_an_undo_whose_query_proposes_a_gait_flagged_since_proposes_anew(
         json={"query_id": body["undone_query_id"], "comparisons": []},
     )
     assert again.status_code == 409  # the withdrawn query takes no answer
+
+
+def test_an_undo_after_which_no_gait_is_safe_says_it_was_undone(client: TestClient) -> None:
+    """The undo was written, then no gait was left to propose in the withdrawn query's place:
+    the API answered 409, which docs/console.md says writes nothing.  (The page offers no undo
+    then: with no gait safe there is no query, and a form loaded before the flag names a query
+    the flag withdrew, refused as stale.)"""
+    sid = new_session(client, rated_config(1.0))  # a radius of the whole range
+    answer(client, sid, [])
+    answer(client, sid, [])
+    assert client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "hip"})
+    before = event_count(client, sid)
+    r = client.post(f"/api/sessions/{sid}/undo", json={})
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["trials"] == [2] and body["withdrawn"] is True
+    assert body["pending_query_id"] is None
+    assert "no gait may be proposed" in body["next_query_error"]
+    assert event_count(client, sid) == before + 1  # the undo, once
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 1
+    assert client.get(f"/api/sessions/{sid}/query").status_code == 409

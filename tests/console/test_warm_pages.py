@@ -127,3 +127,28 @@ def test_a_prior_from_naming_nothing_usable_is_422_at_prior_from(client: TestCli
     )
     assert r.status_code == 413 and "prior_from: at most 256 items" in r.json()["detail"]
     assert len(client.get("/api/sessions").json()) == 2
+
+
+def test_an_earlier_session_that_cannot_be_rebuilt_is_422_at_prior_from(
+    client: TestClient, db_url: str
+) -> None:
+    """Its row edited (another tool): creating a session warm-started from it answered 500 with
+    the earlier session's replay error, as if the console had failed; it is the request's
+    ``prior_from`` that names a session no warm start can be made from."""
+    import sqlite3
+
+    earlier = _earlier(client, answers=2)
+    with sqlite3.connect(db_url.removeprefix("sqlite:///")) as con:
+        con.execute("UPDATE sessions SET seed = 12345 WHERE id = ?", (earlier,))
+    why = rf"cannot be rebuilt.*session {earlier} \(subject S01\).* does not replay"
+    r = client.post(
+        "/api/sessions",
+        json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": [earlier]},
+    )
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"][0]
+    assert detail["loc"] == ["body", "prior_from"] and re.search(why, detail["msg"]), detail
+    code, text = _create(client, "S02", f"S01, {earlier}")
+    assert code == 422 and "<code>prior_from</code>" in text, text
+    assert re.search(why, " ".join(text.split())) and "Nothing was written." in text
+    assert len(client.get("/api/sessions").json()) == 1

@@ -311,3 +311,109 @@ def test_a_warm_start_naming_a_later_session_is_refused_as_an_altered_database(
         )
     with pytest.raises(ReplayError, match=f"session {new}: its warm start names session {new}"):
         Session.open(url, new)
+
+
+def _damaged(path: Path, ids: list[int]) -> list[tuple[str, str]]:
+    """Earlier sessions damaged in each way a warm start meets (another tool's edits), with
+    what the refusal must say: the session it names, and why."""
+    chained = Session.create(f"sqlite:///{path}", CONFIG, "S04", seed=6, prior_from=[ids[1]])
+    chained.close()
+    with sqlite3.connect(path) as con:
+        con.execute("DROP TRIGGER events_no_update")
+        con.execute("UPDATE sessions SET seed = 12345 WHERE id = ?", (ids[0],))
+        con.execute("UPDATE sessions SET config_text = config_text || ' ' WHERE id = ?", (ids[2],))
+        # the session a warm-started one read has changed since
+        con.execute(
+            "UPDATE events SET payload = replace(payload, '\"first\"', '\"second\"') "
+            "WHERE session_id = ? AND kind = 'comparison_answered'",
+            (ids[1],),
+        )
+    return [
+        (str(ids[0]), rf"session {ids[0]} \(subject S01\).* does not replay"),
+        (str(ids[2]), rf"session {ids[2]}: the stored config text does not match its hash"),
+        (str(chained.id), rf"session {ids[1]} \(subject S01\).* has changed since"),
+    ]
+
+
+def test_an_earlier_session_that_cannot_be_rebuilt_is_a_refused_prior_from(
+    tmp_path: Path,
+) -> None:
+    """It raised the earlier session's ReplayError (the console answered 500, as for a damaged
+    session of its own): the warm start names a session it cannot use, as for one that is not
+    there, and nothing is created."""
+    from gaitpref.errors import PriorFromError
+
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    cases = _damaged(path, ids)
+    before = [r.id for r in Session.list_sessions(url)]
+    for item, why in cases:
+        with pytest.raises(PriorFromError, match=rf"^prior_from: .*cannot be rebuilt.*{why}"):
+            Session.create(url, CONFIG, "S05", prior_from=[int(item)])
+    assert [r.id for r in Session.list_sessions(url)] == before
+
+
+def test_the_cli_refuses_an_earlier_session_that_cannot_be_rebuilt_as_the_library_does(
+    tmp_path: Path,
+) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    cases = _damaged(path, ids)
+    before = [r.id for r in Session.list_sessions(url)]
+    args = ["session", "new", "--config", CONFIG, "--subject", "S05", "--db", url]
+    for item, why in cases:
+        bad = CliRunner().invoke(app, [*args, "--prior-from", item])
+        said = " ".join(bad.output.split())
+        assert bad.exit_code == 2, said
+        assert re.search(rf"error: prior_from: .*cannot be rebuilt.*{why}", said), said
+    assert [r.id for r in Session.list_sessions(url)] == before
+
+
+def test_an_earlier_sessions_warm_start_garbled_in_its_row_is_named_not_a_validation_error(
+    tmp_path: Path,
+) -> None:
+    """Its meta's prior_from edited into something that is not a list of earlier sessions:
+    opening it raised pydantic's ValidationError (or a TypeError), naming no session."""
+    path = tmp_path / "s.db"
+    url = f"sqlite:///{path}"
+    ids = _earlier(url)
+    with Session.create(url, CONFIG, "S03", seed=5, prior_from=[ids[0]]) as s:
+        new, meta = s.id, s.record.meta
+    for garbled in ([{"session": "x"}], 7, [3]):
+        with sqlite3.connect(path) as con:
+            con.execute(
+                "UPDATE sessions SET meta = ? WHERE id = ?",
+                (json.dumps({**meta, "prior_from": garbled}), new),
+            )
+        with pytest.raises(ReplayError, match=rf"session {new}: its warm start's prior_from"):
+            Session.open(url, new)
+
+
+def test_prior_from_naming_a_session_many_times_reads_it_once() -> None:
+    """Each item was looked up in the database, repeated or not: the console's 'Warm start
+    from' field of '1,' thirty thousand times took 30 s (the form's field may hold half a
+    million); now each distinct item is read once, and what is recorded is the same."""
+    db = MemoryStorage()
+    ids = _earlier(db)
+    reads: list[object] = []
+    get_session, list_sessions = db.get_session, db.list_sessions
+
+    def counted_get(session_id: int) -> object:
+        reads.append(session_id)
+        return get_session(session_id)
+
+    def counted_list(subject: str | None = None) -> object:
+        reads.append(subject)
+        return list_sessions(subject)
+
+    db.get_session = counted_get  # type: ignore[method-assign, assignment]
+    db.list_sessions = counted_list  # type: ignore[method-assign, assignment]
+    with Session.create(db, CONFIG, "S03", prior_from=[ids[2], "S01"] * 50_000) as s:
+        assert [p["session"] for p in s.record.meta["prior_from"]] == ids
+    assert reads.count("S01") == 1 and len(reads) < 50, len(reads)  # not one per item

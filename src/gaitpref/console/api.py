@@ -148,8 +148,10 @@ def undo(
     request: Request, session_id: SessionId, body: Annotated[UndoIn | None, Body()] = None
 ) -> UndoneOut:
     """Take back the last answer; its query is pending again (or, where it proposed a gait
-    flagged unsafe since, a new query in its place: ``withdrawn``).  With ``query_id``, refused
-    (409) unless that query is the pending one (so two clients cannot undo twice)."""
+    flagged unsafe since, a new query in its place: ``withdrawn``; should none be proposed, as
+    the gait generator failed or no gait may be proposed, the undo stands and
+    ``next_query_error`` says why).  With ``query_id``, refused (409) unless that query is the
+    pending one (so two clients cannot undo twice)."""
     done = service_of(request).undo(session_id, None if body is None else body.query_id)
     pending = done.pending
     return UndoneOut(
@@ -158,6 +160,7 @@ def undo(
         discarded_query_id=done.discarded_query,
         undone_query_id=done.undone_query,
         withdrawn=done.withdrawn,
+        next_query_error=done.detail or None,
     )
 
 

@@ -19,23 +19,27 @@ import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from gaitpref.config import (
-    ConfigError,
     ExperimentConfig,
     load_config,
     parse_config,
     read_toml,
     shipped_configs,
 )
+from gaitpref.config.schema import MAX_ACTIONS as LIBRARY_ACTIONS
 from gaitpref.console.errors import InputError
 from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
 
 #: grids larger than this are refused at creation (the console draws and sends every action)
 MAX_ACTIONS = 250_000
+#: the most values a config's features may have in all (every feature's values are sent with the
+#: session, GET /api/sessions/{id}); a continuous feature (no num) has none
+MAX_VALUES = 250_000
 
 
 def default_library_dir(url: str) -> Path:
@@ -97,15 +101,39 @@ def store_library(
     return target, GaitLibrary.load(target), wrote
 
 
-def _named_library(text: str) -> str | None:
-    try:
-        raw = read_toml(text)
-    except ConfigError:
-        return None  # parse_config reports it
+def _named_library(raw: dict[str, Any]) -> str | None:
     gaits = raw.get("gaits")
     if isinstance(gaits, dict) and isinstance(gaits.get("library"), str):
         return str(gaits["library"])
     return None
+
+
+def _values_given(raw: dict[str, Any]) -> int:
+    """The values the features of a config's TOML will have in all, counted in the text before
+    any is made, as the session reads it (a ``num`` past the library's limit on actions is a
+    continuous feature, no values); tables that are not features are left to the parser."""
+    space = raw.get("space")
+    if not isinstance(space, dict):
+        return 0
+    total = 0
+    for table in space.values():
+        if not isinstance(table, dict):
+            continue
+        values, num = table.get("values"), table.get("num")
+        if isinstance(values, list):
+            total += len(values)
+        elif isinstance(num, int) and not isinstance(num, bool) and 0 < num <= LIBRARY_ACTIONS:
+            total += num
+    return total
+
+
+def _too_many_values(total: int) -> InputError:
+    return InputError(
+        "config",
+        f"the features have {total:,} values in all; the console serves at most {MAX_VALUES:,} "
+        "(it sends every feature's values): give fewer, or leave out num (a continuous "
+        "feature, min and max only)",
+    )
 
 
 def _inside(base: Path, name: str) -> Path:
@@ -173,7 +201,10 @@ def _choose(
                 "nor TOML config text",
             )
         stem = _safe_name(name, "uploaded")
-        named = _named_library(source)
+        raw = read_toml(source)  # a ConfigError: 422 at config
+        if _values_given(raw) > MAX_VALUES:
+            raise _too_many_values(_values_given(raw))
+        named = _named_library(raw)
         base: Path | None = None
         if named is not None and uploaded is not None:
             if Path(named).name != uploaded[0].name or len(Path(named).parts) != 1:
@@ -186,11 +217,19 @@ def _choose(
         elif named is not None:
             _inside(library_dir, named)
             base = library_dir
-        cfg = parse_config(source, default_name=stem, base_dir=base, max_actions=MAX_ACTIONS)
+        # read as the session will read the stored text (Session.open), with the library's
+        # limits: with the console's own, a subspace of 'auto' or a num past them resolved
+        # otherwise here than in the session that then ran
+        cfg = parse_config(source, default_name=stem, base_dir=base)
+    values = sum(len(f.values) for f in cfg.space.features if not f.continuous)
+    if values > MAX_VALUES:  # a gait library's grid
+        raise _too_many_values(values)
     if cfg.subspace == "grid" and len(cfg.space) > MAX_ACTIONS:
         raise InputError(
             "config",
-            f"the grid has {len(cfg.space)} actions; the console serves at most {MAX_ACTIONS}",
+            f"the grid has {len(cfg.space):,} actions; the console serves at most "
+            f"{MAX_ACTIONS:,} on the full grid (with [cospar] subspace = 'line' it runs on "
+            "lines through it)",
         )
     if uploaded is not None and cfg.library is None:
         _same_grid(cfg, uploaded[1])

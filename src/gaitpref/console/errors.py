@@ -18,7 +18,8 @@ error                                       status  meaning
                                                     max_infeasible`` gaits that cannot be
                                                     made; nothing proposed, *those* logged
 ``FeedbackError`` / ``ConfigError``         422     an answer or a config that cannot be used
-``PriorFromError``                          422     a warm start's prior_from names no session
+``PriorFromError``                          422     a warm start's prior_from names no session,
+                                                    or one that cannot be rebuilt
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
 ``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is

@@ -201,6 +201,12 @@ def _flash(
         return f"Saved: trial {', '.join(map(str, sorted(saved)))}."
     if taken and not taken & done:
         names = ", ".join(map(str, sorted(taken)))
+        if replaced and context["reason"] in ("no-gait", "no-safe"):  # said below it
+            return (
+                f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
+                "flagged unsafe since and was withdrawn, but no new query could be proposed in "
+                "its place."
+            )
         if replaced:
             return (
                 f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
@@ -390,17 +396,30 @@ async def post_ranking(
     return see_other(f"/sessions/{session_id}/validation")
 
 
+#: the most gaits ``shown`` may name (a validation round shows three), and the most characters of
+#: its text, measured before it is parsed (gait ids are a library's: no shorter bound is theirs)
+MAX_SHOWN, MAX_SHOWN_TEXT = 8, 64_000
+
+
 def _shown(text: str | None) -> list[str] | None:
     """The gaits a validation page showed, in label order (a JSON list of names; None: not
-    said, as from a form made elsewhere)."""
+    said, as from a form made elsewhere), within bounds: the text is measured before it is
+    parsed (a deeply nested one raised json's RecursionError)."""
     if text is None:
         return None
+    what = f"the gaits the page showed, as a JSON list of at most {MAX_SHOWN} names"
+    if len(text) > MAX_SHOWN_TEXT:
+        raise InputError("shown", f"{what}; got {len(text):,} characters")
     try:
         names = json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):
         names = None
-    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
-        raise InputError("shown", "the gaits the page showed, as a JSON list of their names")
+    if (
+        not isinstance(names, list)
+        or len(names) > MAX_SHOWN
+        or not all(isinstance(n, str) for n in names)
+    ):
+        raise InputError("shown", what)
     return names
 
 

@@ -21,6 +21,7 @@ from gaitpref.console.schemas import (
     ValidationOut,
 )
 from gaitpref.errors import NoSafeGaitError
+from gaitpref.pointset import PointSet
 from gaitpref.sessions.records import ShownGait
 from gaitpref.sessions.session import Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
@@ -136,7 +137,7 @@ def posterior_out(session: Session) -> PosteriorOut:
     return PosteriorOut(
         session_id=session.id,
         features=list(space.names),
-        shape=None if space.continuous else list(space.shape),
+        shape=None if space.continuous or isinstance(space, PointSet) else list(space.shape),
         mean=mean.tolist(),
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,

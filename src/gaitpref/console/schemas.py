@@ -156,6 +156,13 @@ class UndoneOut(BaseModel):
         description="the undone query proposed a gait flagged unsafe after it was asked, so it "
         "was withdrawn rather than asked again"
     )
+    next_query_error: str | None = Field(
+        default=None,
+        description="the undo stands, but no query could be proposed in the withdrawn one's "
+        "place: why (the gait generator's error, or that no gait may be proposed); GET /query "
+        "tries again (503 while the generator fails, 409 while no gait may be proposed). Null "
+        "otherwise",
+    )
 
 
 class NoteIn(_Request):

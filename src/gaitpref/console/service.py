@@ -67,6 +67,11 @@ class Undone:
     trials: tuple[int, ...]
     pending: SessionQuery | None
     discarded_query: int | None
+    #: why no query is pending in the withdrawn one's place, when one was to be proposed: the
+    #: undo is written, but the gait generator failed ("no-gait") or no gait may be proposed
+    #: ("no-safe"), as :class:`Pending` says; "" otherwise
+    unproposed: str = ""
+    detail: str = ""  # its error, in words
 
     @property
     def withdrawn(self) -> bool:
@@ -203,13 +208,25 @@ class SessionService:
             before = session.pending
             done = session.trials()
             undone = done[-1].query if done else None
-            pending = session.undo()
+            unproposed = Pending(None, "")
+            try:
+                pending = session.undo()
+            except (NoSafeGaitError, GaitError) as exc:
+                # the undo is written, then its query, withdrawn, has no query to take its
+                # place (as after an answer, the page and GET .../query say why) - or nothing
+                # was written: the log says which
+                session.sync()
+                if undone is None or any(t.query == undone for t in session.trials()):
+                    raise
+                pending, unproposed = None, no_query(exc)
             assert undone is not None  # an undo with no answer in force raised above
             return Undone(
                 undone_query=undone,
                 trials=tuple(t.number for t in done if t.query == undone),
                 pending=pending,
                 discarded_query=None if before is None else before.id,
+                unproposed=unproposed.reason,
+                detail=unproposed.detail,
             )
 
     def acknowledge(self, session_id: int, query_id: int) -> bool:
@@ -322,12 +339,20 @@ def pending_of(session: Session) -> Pending:
         return Pending(None, "validation")
     try:
         return Pending(session.next_query(), "")
-    except InfeasibleProposalsError as exc:  # its gaits were logged (and are avoided)
+    except (NoSafeGaitError, GaitError) as exc:  # say why, propose nothing
+        return no_query(exc)
+
+
+def no_query(exc: NoSafeGaitError | GaitError) -> Pending:
+    """No query, and why: the ask stopped after too many infeasible gaits (``infeasible``: they
+    were logged and are avoided), no gait may be proposed (``no-safe``: nothing written), or the
+    gait generator failed to make a proposed gait (``no-gait``: an error, not an infeasible
+    gait)."""
+    if isinstance(exc, InfeasibleProposalsError):
         return Pending(None, "infeasible", str(exc))
-    except NoSafeGaitError as exc:  # nothing was written: say why and propose nothing
+    if isinstance(exc, NoSafeGaitError):
         return Pending(None, "no-safe", str(exc))
-    except GaitError as exc:  # the generator failed (not an infeasible gait): nothing written
-        return Pending(None, "no-gait", str(exc) or type(exc).__name__)
+    return Pending(None, "no-gait", str(exc) or type(exc).__name__)
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:

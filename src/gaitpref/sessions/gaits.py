@@ -152,8 +152,8 @@ def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> Infeasib
     infeasible, limit = int(payload["infeasible"]), int(payload["limit"])
     radius = config.generator.avoid_radius if config.generator is not None else 0.0
     return InfeasibleProposalsError(
-        f"no gait proposed: this ask's proposals had {infeasible} gaits that cannot be made "
-        f"(at most {limit} per ask, [gaits] max_infeasible), so it stopped.  Each is logged as "
+        f"this ask stopped without proposing: its proposals had {infeasible} gaits that cannot "
+        f"be made (at most {limit} per ask, [gaits] max_infeasible).  Each is logged as "
         f"infeasible and never proposed again, nor the gaits within avoid_radius {radius:g} of "
         "it.  Ask again to go on proposing from there; or, if most of [space] has no gait, "
         "finish this session and start one whose [space] leaves those gaits out (or with a "

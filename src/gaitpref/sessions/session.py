@@ -71,10 +71,8 @@ from gaitpref.sessions.warm import (
     RELEARN_EVERY,
     SHARE_GATE,
     check_prior_from,
-    describe_prior,
-    make_warm_start,
+    new_warm_start,
     prepare_state,
-    resolve_prior,
 )
 from gaitpref.space import Space
 from gaitpref.storage import (
@@ -151,10 +149,10 @@ class Session:
         cfg.make_loop(seed=use_seed)  # the settings make a loop
         named = check_prior_from(prior_from)
         storage = open_storage(db)
-        prior, rho = [], None
+        prior: list[log.PriorSession] = []
+        rho: float | None = None
         if named:
-            prior = describe_prior(storage, resolve_prior(storage, cfg, named))
-            rho = make_warm_start(storage, cfg, prior, use_seed).rho
+            prior, rho = new_warm_start(storage, cfg, named, use_seed)
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
             meta["prior_terms"] = "all"

@@ -30,6 +30,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import pydantic
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import PriorFromError, ReplayError
@@ -143,9 +144,10 @@ def resolve_prior(
 ) -> list[SessionRecord]:
     """The earlier sessions named by ids or subject codes, by id, each once;
     :class:`~gaitpref.errors.PriorFromError` (a ValueError) names an unknown one or one whose
-    grid differs from ``config``'s."""
+    grid differs from ``config``'s.  An item named again is not looked up again (a form's
+    field may repeat one a hundred thousand times)."""
     found: dict[int, SessionRecord] = {}
-    for item in prior_from:
+    for item in dict.fromkeys(prior_from):
         if isinstance(item, bool) or not isinstance(item, int | str):
             raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
         if isinstance(item, int):
@@ -173,6 +175,48 @@ def resolve_prior(
                     f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
                 )
     return [found[k] for k in sorted(found)]
+
+
+def recorded_prior(record: SessionRecord) -> list[PriorSession]:
+    """The earlier sessions ``record``'s warm start read, as its row records them (none: no
+    warm start); :class:`~gaitpref.errors.ReplayError` naming the session when the row holds
+    something else (it was edited outside gaitpref)."""
+    raw = record.meta.get("prior_from")
+    if not raw:
+        return []
+    try:
+        if not isinstance(raw, list):
+            raise TypeError(type(raw).__name__)
+        return [PriorSession.model_validate(p) for p in raw]
+    except (TypeError, pydantic.ValidationError):
+        shown = repr(raw)
+        shown = shown if len(shown) <= 200 else shown[:200] + "..."
+        raise ReplayError(
+            f"session {record.id}: its warm start's prior_from in the session's row is not "
+            f"what gaitpref writes (a list of earlier sessions with their log hashes): {shown}; "
+            "the database was altered"
+        ) from None
+
+
+def new_warm_start(
+    storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str], seed: int
+) -> tuple[list[PriorSession], float]:
+    """What a new session's warm start from ``prior_from`` records: the earlier sessions
+    (:func:`resolve_prior`, :func:`describe_prior`) and ``rho`` (:func:`make_warm_start`).
+
+    :class:`~gaitpref.errors.PriorFromError` also when an earlier session, or one its own warm
+    start read, cannot be rebuilt from the database (its log or row altered, its config no longer
+    parses, its gait library gone): the message names it and says why, as opening it would
+    (:class:`~gaitpref.errors.ReplayError`); the new session is not created.
+    """
+    try:
+        prior = describe_prior(storage, resolve_prior(storage, config, prior_from))
+        return prior, make_warm_start(storage, config, prior, seed).rho
+    except ReplayError as exc:
+        raise PriorFromError(
+            "prior_from: an earlier session cannot be rebuilt from the database, so no warm "
+            f"start can be made from it (nothing was created): {exc}"
+        ) from None
 
 
 def describe_prior(storage: Storage, records: Sequence[SessionRecord]) -> list[PriorSession]:
@@ -248,8 +292,7 @@ def _read_in_order(storage: Storage, prior: Sequence[PriorSession], memo: Replay
         if p in seen or p in memo:
             continue
         seen.add(p)
-        raw = _record_of(storage, p).meta.get("prior_from") or []
-        stack.extend(PriorSession.model_validate(x) for x in raw)
+        stack.extend(recorded_prior(_record_of(storage, p)))
     for p in sorted(seen, key=lambda p: (p.session, p.last_seq)):
         _replayed(storage, p, memo)
 
@@ -352,9 +395,8 @@ def prepare_state(
     state = SessionState(
         config, record.seed, record.meta.get("gait_ids"), gait_cache=cache, row=record
     )
-    raw = record.meta.get("prior_from")
-    if raw:
-        prior = [PriorSession.model_validate(p) for p in raw]
+    prior = recorded_prior(record)
+    if prior:
         later = [p.session for p in prior if p.session >= record.id]
         if later:  # only a row edited outside gaitpref: a warm start reads sessions made before
             raise ReplayError(
@@ -388,7 +430,9 @@ __all__ = [
     "grid_difference",
     "log_sha256",
     "make_warm_start",
+    "new_warm_start",
     "prepare_state",
     "read_prior_from",
+    "recorded_prior",
     "resolve_prior",
 ]
