@@ -46,9 +46,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
+from gaitpref.checks import is_number
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import LaplaceMode, fit_laplace
-from gaitpref.model.likelihood import OrderedProbit
+from gaitpref.model.likelihood import OrderedProbit, check_scales
 from gaitpref.model.singles import SingleData
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -75,6 +76,7 @@ class PairData:
             raise ValueError("first, second, sigma, banded and tie need one entry per observation")
         if np.any(self.tie & ~self.banded):
             raise ValueError("a 'no preference' observation must be banded")
+        check_scales(self.sigma, "sigma (each observation's probit noise)")
 
     @property
     def size(self) -> int:
@@ -95,6 +97,21 @@ class Hyperparameters:
     jitter: float
     band: float = 0.0
     thresholds: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        ls = self.lengthscale
+        items = list(ls) if isinstance(ls, tuple | list | np.ndarray) else []
+        if not items or not all(_finite(v, 0.0) for v in items):
+            raise ValueError(f"lengthscale must be a tuple of finite numbers > 0, got {ls!r}")
+        if not _finite(self.variance, 0.0):
+            raise ValueError(f"variance must be finite and > 0, got {self.variance!r}")
+        for name in ("jitter", "band"):
+            value = getattr(self, name)
+            if not _finite(value, 0.0, strict=False):
+                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+        t = self.thresholds
+        if t is not None and not (isinstance(t, tuple | list) and all(_finite(v) for v in t)):
+            raise ValueError(f"thresholds must be None or a tuple of finite numbers, got {t!r}")
 
     @classmethod
     def from_kernel(
@@ -136,6 +153,14 @@ class Hyperparameters:
             float(values[d + 1]),
             thresholds,
         )
+
+
+def _finite(value: object, low: float = -np.inf, *, strict: bool = True) -> bool:
+    """Whether ``value`` is a finite number above ``low`` (``>= low`` unless ``strict``)."""
+    if not is_number(value):
+        return False
+    x = float(value)  # type: ignore[arg-type]
+    return bool(np.isfinite(x) and (x > low if strict else x >= low))
 
 
 @dataclass(frozen=True)

@@ -112,7 +112,11 @@ class Ordinal:
         return len(self.categories)
 
     def thresholds_for(self, signal_variance: float) -> tuple[float, ...]:
-        """The thresholds, or (unset) ``sqrt(v + s^2) Phi^-1(k / K)``, ``k = 1..K-1``."""
+        """The thresholds, or (unset) ``sqrt(v + s^2) Phi^-1(k / K)``, ``k = 1..K-1``.
+
+        ``signal_variance`` (the kernel's ``s^2``) must be a finite number > 0, even where the
+        thresholds are set (a bad one is a caller's error either way)."""
+        check_signal_variance(signal_variance)
         if self.thresholds is not None:
             return self.thresholds
         scale = float(np.sqrt(signal_variance + self.noise**2))
@@ -133,6 +137,12 @@ class Ordinal:
         )
 
 
+def check_signal_variance(signal_variance: object) -> None:
+    """ValueError naming ``signal_variance`` unless it is a finite number > 0."""
+    if not (is_number(signal_variance) and 0 < signal_variance < np.inf):  # type: ignore[operator]
+        raise ValueError(f"signal_variance must be finite and positive, got {signal_variance!r}")
+
+
 @dataclass(frozen=True)
 class OrdinalLikelihood:
     """The ordered probit over single utilities, one label ``1..K`` per observation."""
@@ -141,6 +151,10 @@ class OrdinalLikelihood:
     thresholds: FloatArray  # (K - 1,) increasing
     noise: float
     thresholds_fixed: bool = False  # set by the config: the evidence does not fit them
+
+    def __post_init__(self) -> None:
+        if not (is_number(self.noise) and 0 < self.noise < np.inf):
+            raise ValueError(f"the rating noise must be finite and positive, got {self.noise!r}")
 
     def bounds(self, values: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(lo, hi)`` in units of ``s`` per observation (``-inf`` / ``+inf`` at the ends)."""
@@ -259,12 +273,33 @@ def rating_probabilities(
     ordinal: Ordinal, signal_variance: float, mean: FloatArray, variance: FloatArray
 ) -> FloatArray:
     """``P(rating = k)`` (``n x K``) for utilities ``N(mean, variance)``: the ordered probit with
-    the noise widened to ``sqrt(s^2 + variance)`` (the posterior integrated out)."""
+    the noise widened to ``sqrt(s^2 + variance)`` (the posterior integrated out).
+
+    ``mean`` and ``variance`` are 1-D of one length, finite; a variance may fall below 0 by
+    rounding (a posterior covariance's diagonal) but not by more than ``sqrt(eps)`` times
+    ``signal_variance + s^2``."""
     t = np.concatenate([[-np.inf], ordinal.thresholds_for(signal_variance), [np.inf]])
+    _check_moments(mean, variance, float(signal_variance) + ordinal.noise**2)
     scale = np.sqrt(ordinal.noise**2 + np.asarray(variance))[:, None]
     cdf = ndtr((t[None, :] - np.asarray(mean)[:, None]) / scale)
     out: FloatArray = np.clip(np.diff(cdf, axis=1), 0.0, 1.0)
     return out
+
+
+def _check_moments(mean: object, variance: object, scale: float) -> None:
+    """``mean`` and ``variance`` of :func:`rating_probabilities`, or a ValueError naming them."""
+    m, v = np.asarray(mean), np.asarray(variance)
+    if m.ndim != 1 or v.shape != m.shape or m.dtype.kind not in "iuf" or v.dtype.kind not in "iuf":
+        raise ValueError(
+            "mean and variance must be 1-D arrays of numbers of one length, got shapes "
+            f"{m.shape} and {v.shape} (dtypes {m.dtype} and {v.dtype})"
+        )
+    if not np.all(np.isfinite(m)):
+        raise ValueError("mean must be finite")
+    floor = -float(np.sqrt(np.finfo(float).eps)) * scale
+    if not np.all(np.isfinite(v) & (v >= floor)):
+        low = float(v.min())
+        raise ValueError(f"variance must be finite and >= 0 (to rounding), got min {low!r}")
 
 
 __all__ = ["Ordinal", "OrdinalLikelihood", "rating_likelihood", "rating_probabilities"]

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
+from gaitpref.checks import is_number
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
@@ -64,6 +65,11 @@ class Posterior:
     engine: GridEngine
     noise: float | None = None  # the pairwise probit noise (preference_probability)
     ordinal: Ordinal | None = None  # the rating model (rating_probabilities)
+
+    def __post_init__(self) -> None:
+        noise = self.noise
+        if noise is not None and not (is_number(noise) and 0 < noise < np.inf):
+            raise ValueError(f"preference noise must be None or positive, got {noise!r}")
 
     @property
     def visited(self) -> IntArray:
