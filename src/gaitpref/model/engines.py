@@ -33,6 +33,7 @@ from gaitpref.model.kronecker import (
     BLOCK_ELEMENTS,
     KhatriRaoCross,
     KroneckerPriorSampler,
+    check_sample_budget,
     khatri_rao_split,
 )
 from gaitpref.pointset import PointSet
@@ -235,6 +236,7 @@ class PointEngine:
     ) -> tuple[FloatArray, FloatArray | None]:
         """As :meth:`DenseEngine.prior_parts`."""
         n = len(self.space)
+        check_sample_budget(size, n)
         z = rng.standard_normal((size, n))
         z_jitter = rng.standard_normal((size, n)) if self.jitter_scale else None
         out: FloatArray = z @ self.root_t

@@ -34,7 +34,7 @@ from gaitpref.checks import is_number
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.kronecker import KroneckerPriorSampler
+from gaitpref.model.kronecker import KroneckerPriorSampler, check_sample_budget
 from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.ordinal import Ordinal, rating_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
@@ -254,8 +254,10 @@ class Posterior:
 
         Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
         place (and the jitter's draw without the nugget), plus the engine's bounded blocks.
+        ``size x A`` may not pass :data:`~gaitpref.model.kronecker.SAMPLE_LIMIT_ELEMENTS`
+        (1 GiB of float64): ValueError naming both, before anything is drawn.
         """
-        size = _sample_count(size)
+        size = check_sample_size(size, len(self.space))
         _check_generator(rng)
         if self.fit is None or size == 0:
             f, e = self.engine.prior_parts(rng, size)
@@ -339,10 +341,12 @@ class Posterior:
 _NO_ACTIONS = "the posterior has no actions yet (the line path's before its first query): no argmax"
 
 
-def _sample_count(size: object) -> int:
-    """A number of samples: an integer >= 0 (not a bool, not a float)."""
+def check_sample_size(size: object, points: int) -> int:
+    """A number of samples over ``points`` points: an integer >= 0 (not a bool, not a float)
+    within the sampling budget (:func:`~gaitpref.model.kronecker.check_sample_budget`)."""
     if isinstance(size, bool) or not isinstance(size, int | np.integer) or size < 0:
         raise ValueError(f"size (the number of samples) must be an integer >= 0, got {size!r}")
+    check_sample_budget(int(size), points)
     return int(size)
 
 
