@@ -8,6 +8,9 @@ where it is given rather than failing deep in NumPy.
 
 from __future__ import annotations
 
+import math
+import sys
+
 import numpy as np
 
 
@@ -18,9 +21,19 @@ def is_number(value: object) -> bool:
     )
 
 
+#: The largest noise a model takes: its square (what the likelihoods and predictive
+#: probabilities use) must be a finite float, and Python's ``**`` raises past it.
+MAX_NOISE = math.sqrt(sys.float_info.max)
+
+
+def is_noise(value: object) -> bool:
+    """Whether ``value`` is a number in ``(0, MAX_NOISE]``: a noise whose square is finite."""
+    return is_number(value) and 0 < value <= MAX_NOISE  # type: ignore[operator]
+
+
 def is_count(value: object) -> bool:
     """Whether ``value`` is an integer (Python or NumPy; not a bool)."""
     return not isinstance(value, bool | np.bool_) and isinstance(value, int | np.integer)
 
 
-__all__ = ["is_count", "is_number"]
+__all__ = ["MAX_NOISE", "is_count", "is_noise", "is_number"]

@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_noise
 from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
@@ -45,8 +45,10 @@ class PreferenceGP:
             raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
         if not isinstance(kernel, SquaredExponential):
             raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {kernel!r}")
-        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
-            raise ValueError(f"preference noise must be positive, got {noise!r}")
+        if not is_noise(noise):
+            raise ValueError(
+                f"preference noise must be positive with a finite square, got {noise!r}"
+            )
         kernel.lengthscales(space.ndim)  # checks the count
         self.space = space
         self.kernel = kernel

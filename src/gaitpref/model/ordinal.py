@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import log_ndtr, ndtr, ndtri
 
-from gaitpref.checks import is_count, is_number
+from gaitpref.checks import is_count, is_noise, is_number
 from gaitpref.model.likelihood import interval_ratios, mills_ratio
 from gaitpref.space import FloatArray
 
@@ -90,8 +90,10 @@ class Ordinal:
             raise ValueError(
                 f"an ordinal scale needs 2 to {MAX_CATEGORIES} categories, got {len(labels)}"
             )
-        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
-            raise ValueError(f"the rating noise must be positive, got {noise!r}")
+        if not is_noise(noise):
+            raise ValueError(
+                f"the rating noise must be positive with a finite square, got {noise!r}"
+            )
         t = None
         if thresholds is not None:
             if isinstance(thresholds, str) or not isinstance(thresholds, Sequence | np.ndarray):
@@ -120,6 +122,11 @@ class Ordinal:
         if self.thresholds is not None:
             return self.thresholds
         scale = float(np.sqrt(signal_variance + self.noise**2))
+        if not np.isfinite(scale):
+            raise ValueError(
+                f"signal_variance ({signal_variance!r}) plus the rating noise squared "
+                f"({self.noise!r}**2) overflows: no thresholds can be set from it"
+            )
         return tuple(scale * float(ndtri(k / self.size)) for k in range(1, self.size))
 
     def label_index(self, label: object) -> int:
@@ -153,8 +160,10 @@ class OrdinalLikelihood:
     thresholds_fixed: bool = False  # set by the config: the evidence does not fit them
 
     def __post_init__(self) -> None:
-        if not (is_number(self.noise) and 0 < self.noise < np.inf):
-            raise ValueError(f"the rating noise must be finite and positive, got {self.noise!r}")
+        if not is_noise(self.noise):
+            raise ValueError(
+                f"the rating noise must be positive with a finite square, got {self.noise!r}"
+            )
 
     def bounds(self, values: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(lo, hi)`` in units of ``s`` per observation (``-inf`` / ``+inf`` at the ends)."""

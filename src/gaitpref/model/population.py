@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_noise
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine, make_engine
 from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, evidence_from_prior
@@ -252,8 +252,10 @@ class PopulationModel:
     share: float | None = None  # subject 0's own shared fraction (None: rho)
 
     def __post_init__(self) -> None:
-        if not (is_number(self.noise) and 0 < self.noise < np.inf):
-            raise ValueError(f"preference noise must be positive, got {self.noise!r}")
+        if not is_noise(self.noise):
+            raise ValueError(
+                f"preference noise must be positive with a finite square, got {self.noise!r}"
+            )
         object.__setattr__(self, "rho", check_rho(self.rho))
         object.__setattr__(self, "share", check_share(self.rho, self.share))
 

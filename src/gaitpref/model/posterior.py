@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_noise
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
@@ -68,8 +68,10 @@ class Posterior:
 
     def __post_init__(self) -> None:
         noise = self.noise
-        if noise is not None and not (is_number(noise) and 0 < noise < np.inf):
-            raise ValueError(f"preference noise must be None or positive, got {noise!r}")
+        if noise is not None and not is_noise(noise):
+            raise ValueError(
+                f"preference noise must be None or positive with a finite square, got {noise!r}"
+            )
 
     @property
     def visited(self) -> IntArray:
