@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -208,7 +209,14 @@ class Space:
         object.__setattr__(self, "_names", {n: i for i, n in enumerate(names)})
 
     def __len__(self) -> int:
-        return int(np.prod(self.shape))
+        # exact: NumPy's product wrapped past 2**63 (64 two-valued features read as 0 actions)
+        size = math.prod(self.shape)
+        if size > sys.maxsize:
+            raise OverflowError(
+                f"the grid has {size:,} actions, more than len() can count ({sys.maxsize:,}): "
+                "grid_size gives the number; a model needs a smaller grid or the line path"
+            )
+        return size
 
     def __iter__(self) -> Iterator[Feature]:
         return iter(self.features)

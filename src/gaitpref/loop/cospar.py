@@ -52,6 +52,7 @@ from gaitpref.loop.learning import Learning, pair_data
 from gaitpref.loop.lines import Line
 from gaitpref.loop.safety import Safety, near
 from gaitpref.loop.warm import WarmStart, relearn_share, warm_posterior
+from gaitpref.model.engines import GRID_LIMIT_ACTIONS as MODEL_GRID_LIMIT
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import (
@@ -940,9 +941,10 @@ class CoSpar:
         )
 
 
-#: The full-grid path refuses grids past this many actions (its posterior reads every one);
-#: :class:`~gaitpref.loop.line.LineCoSpar` runs on any space.
-GRID_LIMIT_ACTIONS = 10_000_000
+#: The full-grid path refuses grids past this many actions (its posterior reads every one;
+#: the model's own bound, ``model/engines.py``); :class:`~gaitpref.loop.line.LineCoSpar` runs
+#: on any space.
+GRID_LIMIT_ACTIONS = MODEL_GRID_LIMIT
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000

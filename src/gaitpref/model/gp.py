@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitpref.checks import is_noise
-from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
+from gaitpref.model.engines import GridEngine, check_grid_size, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
@@ -50,6 +50,7 @@ class PreferenceGP:
                 f"preference noise must be positive with a finite square, got {noise!r}"
             )
         kernel.lengthscales(space.ndim)  # checks the count
+        check_grid_size(space)
         self.space = space
         self.kernel = kernel
         self.noise = float(noise)

@@ -20,6 +20,7 @@ Notation: ``A`` grid points, ``d`` features with ``n_f`` values, ``m`` visited a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 
 import numpy as np
@@ -194,9 +195,9 @@ def khatri_rao_split(
     """The first suffix feature of the most balanced split (``max(P, C)`` smallest) whose tables
     ``P x m`` and ``C x m`` both fit in ``block_elements``; None when no split fits."""
     best: tuple[int, int] | None = None
-    total = int(np.prod(shape))
+    total = math.prod(shape)
     for k in range(len(shape)):
-        C = int(np.prod(shape[k:]))
+        C = math.prod(shape[k:])
         largest = max(C, total // C)
         if largest * max(m, 1) <= block_elements and (best is None or largest < best[0]):
             best = (largest, k)

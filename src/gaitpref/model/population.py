@@ -49,7 +49,7 @@ from scipy.linalg import cholesky
 
 from gaitpref.checks import is_noise
 from gaitpref.model.cross import CrossCovariance
-from gaitpref.model.engines import GridEngine, make_engine
+from gaitpref.model.engines import GridEngine, check_grid_size, make_engine
 from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, evidence_from_prior
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
@@ -256,6 +256,7 @@ class PopulationModel:
             raise ValueError(
                 f"preference noise must be positive with a finite square, got {self.noise!r}"
             )
+        check_grid_size(self.space)
         object.__setattr__(self, "rho", check_rho(self.rho))
         object.__setattr__(self, "share", check_share(self.rho, self.share))
 
