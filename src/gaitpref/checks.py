@@ -36,4 +36,12 @@ def is_count(value: object) -> bool:
     return not isinstance(value, bool | np.bool_) and isinstance(value, int | np.integer)
 
 
-__all__ = ["MAX_NOISE", "is_count", "is_noise", "is_number"]
+def check_evaluations(value: object) -> int:
+    """An optimiser's ``max_evaluations``: an integer >= 1, else a ValueError naming it (0, -1
+    or 2.5 ran one evaluation and reported "limit reached"; True was 1)."""
+    if not is_count(value) or not isinstance(value, int | np.integer) or value < 1:
+        raise ValueError(f"max_evaluations must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+__all__ = ["MAX_NOISE", "check_evaluations", "is_count", "is_noise", "is_number"]

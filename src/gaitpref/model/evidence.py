@@ -74,6 +74,8 @@ class PairData:
         shapes = {a.shape for a in (self.first, self.second, self.sigma, self.banded, self.tie)}
         if shapes != {(n,)}:
             raise ValueError("first, second, sigma, banded and tie need one entry per observation")
+        for name in ("first", "second"):
+            check_codes(getattr(self, name), name)
         if np.any(self.tie & ~self.banded):
             raise ValueError("a 'no preference' observation must be banded")
         check_scales(self.sigma, "sigma (each observation's probit noise)")
@@ -155,6 +157,20 @@ class Hyperparameters:
         )
 
 
+def check_codes(codes: object, name: str) -> None:
+    """ValueError naming ``name`` unless ``codes`` is a 1-D array of integers >= 0: grid
+    indices, or a population's node codes ``subject * A + gait`` (a float was truncated to a
+    gait, a negative code wrapped to the last gait of subject -1)."""
+    arr = np.asarray(codes)
+    if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
+        raise ValueError(
+            f"{name} must be a 1-D array of integer indices, got dtype {arr.dtype} and shape "
+            f"{arr.shape}"
+        )
+    if arr.size and int(arr.min()) < 0:
+        raise ValueError(f"{name} must hold indices >= 0, got {int(arr.min())}")
+
+
 def _finite(value: object, low: float = -np.inf, *, strict: bool = True) -> bool:
     """Whether ``value`` is a finite number above ``low`` (``>= low`` unless ``strict``)."""
     if not is_number(value):
@@ -211,6 +227,10 @@ def laplace_evidence(
         singles = None
     if data.size == 0 and singles is None:
         raise ValueError("the evidence needs at least one observation")
+    space.check_indices(data.first, "data.first")
+    space.check_indices(data.second, "data.second")
+    if singles is not None:
+        space.check_indices(singles.actions, "singles.actions")
     fitted = singles is not None and hyper.thresholds is not None and singles.thresholds is not None
     if singles is not None:
         singles = singles.at(hyper.thresholds)

@@ -82,6 +82,8 @@ class PreferenceGP:
         ``noise`` overrides the default probit noise per comparison; ``init`` is a previous
         posterior whose mean warm-starts Newton's method.
         """
+        if init is not None and not isinstance(init, Posterior):
+            raise TypeError(f"init must be a Posterior (a previous fit) or None, got {init!r}")
         w = self.space.check_indices(winners, "winners")
         loser_idx = self.space.check_indices(losers, "losers")
         if w.shape != loser_idx.shape:

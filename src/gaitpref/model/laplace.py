@@ -143,6 +143,10 @@ def fit_laplace(
     if single is not None and single.size == 0:
         single = single_likelihood = None
     m = k_vv.shape[0]
+    if init is not None and np.shape(init) != (m,):
+        raise ValueError(
+            f"init must hold one value per visited action ({m}), got shape {np.shape(init)}"
+        )
     L = _factor_prior(k_vv)
     u = (
         np.zeros(m)
