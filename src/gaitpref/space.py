@@ -40,6 +40,10 @@ MOVES: tuple[Move, ...] = get_args(Move)
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
+#: The most values :meth:`Feature.linspace` makes: as many as the largest grid a model takes
+#: (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features have at most 10**6.
+MAX_LINSPACE_VALUES = 10_000_000
+
 
 @dataclass(frozen=True)
 class Feature:
@@ -123,8 +127,15 @@ class Feature:
         """A feature with ``num`` equally spaced values from ``lo`` to ``hi`` inclusive."""
         if not (is_number(lo) and is_number(hi)):
             raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
-        if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
-            raise ValueError(f"feature {name!r}: num must be an integer >= 1, got {num!r}")
+        if (
+            isinstance(num, bool)
+            or not isinstance(num, int | np.integer)
+            or not 1 <= num <= MAX_LINSPACE_VALUES
+        ):
+            raise ValueError(
+                f"feature {name!r}: num must be an integer in 1..{MAX_LINSPACE_VALUES:,}, "
+                f"got {num!r}"
+            )
         if num > 1 and not hi > lo:
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
