@@ -124,3 +124,24 @@ def test_a_posterior_with_a_negative_noise_was_read_as_positive() -> None:
     assert good.preference_probability(0, 1) == 0.5
     with pytest.raises(ValueError, match="noise"):
         Posterior(SPACE, KERNEL, None, engine, -0.1)
+
+
+def test_a_posteriors_own_moments_are_not_second_guessed() -> None:
+    """``Posterior.rating_probabilities`` reads its own covariance diagonal, which may fall
+    below 0 by the rounding of a prior variance the public function cannot see (a jitter far
+    above the signal variance): it goes through unchecked, as before the check."""
+    from gaitpref.model.ordinal import predictive_probabilities
+
+    scale = Ordinal(3, noise=0.5)
+    mean, variance = np.zeros(1), np.array([-1e-6])
+    with pytest.raises(ValueError, match="variance must be finite and >= 0"):
+        rating_probabilities(scale, 1.0, mean, variance)
+    out = predictive_probabilities(scale, scale.thresholds_for(1.0), mean, variance)
+    assert np.all(np.isfinite(out)) and out.sum() == pytest.approx(1.0)
+    gp = PreferenceGP(SPACE, KERNEL, 0.1, ordinal=scale)
+    post = gp.posterior([0, 2], [1, 3], ratings=[(4, 3)])
+    idx = np.arange(len(SPACE))
+    want = predictive_probabilities(
+        scale, scale.thresholds_for(1.0), post.mean_at(idx), np.diag(post.covariance_at(idx))
+    )
+    assert np.array_equal(post.rating_probabilities(idx), want)

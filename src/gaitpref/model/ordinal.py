@@ -287,8 +287,18 @@ def rating_probabilities(
     ``mean`` and ``variance`` are 1-D of one length, finite; a variance may fall below 0 by
     rounding (a posterior covariance's diagonal) but not by more than ``sqrt(eps)`` times
     ``signal_variance + s^2``."""
-    t = np.concatenate([[-np.inf], ordinal.thresholds_for(signal_variance), [np.inf]])
+    t = ordinal.thresholds_for(signal_variance)
     _check_moments(mean, variance, float(signal_variance) + ordinal.noise**2)
+    return predictive_probabilities(ordinal, t, mean, variance)
+
+
+def predictive_probabilities(
+    ordinal: Ordinal, thresholds: Sequence[float], mean: ArrayLike, variance: ArrayLike
+) -> FloatArray:
+    """:func:`rating_probabilities` with the thresholds given and the moments unchecked: for a
+    posterior's own moments (``Posterior.rating_probabilities``), whose variances may fall
+    below 0 by the rounding of the prior variance (which this function cannot see)."""
+    t = np.concatenate([[-np.inf], thresholds, [np.inf]])
     scale = np.sqrt(ordinal.noise**2 + np.asarray(variance))[:, None]
     cdf = ndtr((t[None, :] - np.asarray(mean)[:, None]) / scale)
     out: FloatArray = np.clip(np.diff(cdf, axis=1), 0.0, 1.0)

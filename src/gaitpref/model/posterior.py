@@ -36,7 +36,7 @@ from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.kronecker import KroneckerPriorSampler, check_sample_budget
 from gaitpref.model.laplace import LaplaceMode
-from gaitpref.model.ordinal import Ordinal, rating_probabilities
+from gaitpref.model.ordinal import Ordinal, predictive_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
 
 #: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB, and
@@ -223,7 +223,8 @@ class Posterior:
         one = np.ndim(actions) == 0  # one action: a 1 x K table, as before
         idx = self.space.check_indices(np.reshape(actions, 1) if one else actions)
         var = np.diag(self.covariance_at(idx)) if idx.size <= 64 else self.variance[idx]
-        return rating_probabilities(self.ordinal, self.kernel.variance, self.mean_at(idx), var)
+        thresholds = self.ordinal.thresholds_for(self.kernel.variance)
+        return predictive_probabilities(self.ordinal, thresholds, self.mean_at(idx), var)
 
     def covariance(self) -> FloatArray:
         """The dense ``A x A`` posterior covariance (small grids: ``O(A^2 m)`` time).
