@@ -6,6 +6,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gaitpref import MOVES, Feature, Space, load_config
+from gaitpref.space import MAX_LINSPACE_VALUES
 
 
 def test_grid_is_c_order_over_features_as_declared(small_space: Space) -> None:
@@ -146,11 +147,20 @@ def test_coactive_move_names_a_bad_feature(small_space: Space) -> None:
     )
 
 
+def test_linspace_bounds_what_it_allocates() -> None:
+    """``num = 10**12`` asked NumPy for 7 TiB (a MemoryError, or on a smaller count an
+    allocation past the machine); a feature never needs more values than a model's grid."""
+    for num in (0, MAX_LINSPACE_VALUES + 1, 10**12):
+        with pytest.raises(ValueError, match=r"num must be an integer in 1\.\.10,000,000"):
+            Feature.linspace("x", 0, 1, num)
+    assert len(Feature.linspace("x", 0, 1, 1)) == 1
+
+
 def test_space_and_linspace_arguments() -> None:
     with pytest.raises(TypeError, match=r"features\[0\] must be a Feature"):
         Space(["a"])  # type: ignore[list-item]
     for num in (2.5, True):
-        with pytest.raises(ValueError, match="num must be an integer >= 1"):
+        with pytest.raises(ValueError, match=r"num must be an integer in 1\.\.10,000,000"):
             Feature.linspace("x", 0, 1, num)  # type: ignore[arg-type]
     assert len(Feature.linspace("x", 0, 1, np.int64(3))) == 3
     # '2'..'10' compared as text ("max must exceed min"); None a TypeError

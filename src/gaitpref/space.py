@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -38,6 +39,10 @@ MOVES: tuple[Move, ...] = get_args(Move)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+
+#: The most values :meth:`Feature.linspace` makes: as many as the largest grid a model takes
+#: (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features have at most 10**6.
+MAX_LINSPACE_VALUES = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -122,8 +127,15 @@ class Feature:
         """A feature with ``num`` equally spaced values from ``lo`` to ``hi`` inclusive."""
         if not (is_number(lo) and is_number(hi)):
             raise ValueError(f"feature {name!r}: min and max must be numbers, got {lo!r}..{hi!r}")
-        if isinstance(num, bool) or not isinstance(num, int | np.integer) or num < 1:
-            raise ValueError(f"feature {name!r}: num must be an integer >= 1, got {num!r}")
+        if (
+            isinstance(num, bool)
+            or not isinstance(num, int | np.integer)
+            or not 1 <= num <= MAX_LINSPACE_VALUES
+        ):
+            raise ValueError(
+                f"feature {name!r}: num must be an integer in 1..{MAX_LINSPACE_VALUES:,}, "
+                f"got {num!r}"
+            )
         if num > 1 and not hi > lo:
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
@@ -208,7 +220,14 @@ class Space:
         object.__setattr__(self, "_names", {n: i for i, n in enumerate(names)})
 
     def __len__(self) -> int:
-        return int(np.prod(self.shape))
+        # exact: NumPy's product wrapped past 2**63 (64 two-valued features read as 0 actions)
+        size = math.prod(self.shape)
+        if size > sys.maxsize:
+            raise OverflowError(
+                f"the grid has {size:,} actions, more than len() can count ({sys.maxsize:,}): "
+                "grid_size gives the number; a model needs a smaller grid or the line path"
+            )
+        return size
 
     def __iter__(self) -> Iterator[Feature]:
         return iter(self.features)

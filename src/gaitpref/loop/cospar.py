@@ -52,6 +52,7 @@ from gaitpref.loop.learning import Learning, pair_data
 from gaitpref.loop.lines import Line
 from gaitpref.loop.safety import Safety, near
 from gaitpref.loop.warm import WarmStart, relearn_share, warm_posterior
+from gaitpref.model.engines import GRID_LIMIT_ACTIONS as MODEL_GRID_LIMIT
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import (
@@ -101,7 +102,8 @@ class Answer:
     ``records``: every feedback record, grouped by kind in registration order (comparisons,
     then suggestions, then other kinds), each kind's in the order given.  ``preferences`` and
     ``ties`` are the pair terms, ``singles`` the single-action terms; ``ignored`` the records
-    that added no term (a suggestion whose move clips back to the same point).
+    that added no term (a suggestion whose move clips back to the same point, a comparison of
+    a gait with itself).
     """
 
     query: Query
@@ -126,6 +128,11 @@ class Answer:
     def ignored_suggestions(self) -> tuple[Suggestion, ...]:
         """Suggestions whose move clips back to the same point (stored, not modelled)."""
         return tuple(r for r in self.ignored if isinstance(r, Suggestion))
+
+    @property
+    def ignored_comparisons(self) -> tuple[Comparison, ...]:
+        """Comparisons of a gait with itself (stored, not modelled: ``docs/model.md``)."""
+        return tuple(r for r in self.ignored if isinstance(r, Comparison))
 
 
 def _light(posterior: Posterior) -> Posterior:
@@ -532,7 +539,7 @@ class CoSpar:
             prefs += terms.preferences
             ties += terms.ties
             singles += terms.singles
-            if terms.empty and not isinstance(record, Comparison):
+            if terms.empty:  # a suggestion that clips back, a self-comparison
                 ignored.append(record)
         if singles and self.learning.fit == "evidence":
             self._check_evidence(singles)
@@ -905,11 +912,12 @@ class CoSpar:
             prefs = [p for a in answers for p in self._kept(a)]
             winners = np.array([p.winner for p in prefs], dtype=np.intp)
             losers = np.array([p.loser for p in prefs], dtype=np.intp)
-            noise = np.array([p.noise for p in prefs])
-            if single is None:
-                if not prefs:
-                    return gp.prior()
-                return gp.posterior(winners, losers, noise, init=self.posterior)
+            noise = np.array([p.noise for p in prefs], dtype=np.float64)
+            if single is None and not prefs:
+                return gp.prior()
+            # posterior_from, not posterior: the same fit (posterior builds this Probit), and it
+            # takes a feedback kind's term of an action against itself as it always has (a
+            # registered kind may make one; posterior refuses one from a caller)
             return gp.posterior_from(
                 winners,
                 losers,
@@ -933,9 +941,10 @@ class CoSpar:
         )
 
 
-#: The full-grid path refuses grids past this many actions (its posterior reads every one);
-#: :class:`~gaitpref.loop.line.LineCoSpar` runs on any space.
-GRID_LIMIT_ACTIONS = 10_000_000
+#: The full-grid path refuses grids past this many actions (its posterior reads every one;
+#: the model's own bound, ``model/engines.py``); :class:`~gaitpref.loop.line.LineCoSpar` runs
+#: on any space.
+GRID_LIMIT_ACTIONS = MODEL_GRID_LIMIT
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000

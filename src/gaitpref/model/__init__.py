@@ -12,7 +12,7 @@ from gaitpref.model.hyperfit import (
     fit_hyperparameters,
 )
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.kronecker import KroneckerPriorSampler
+from gaitpref.model.kronecker import SAMPLE_LIMIT_ELEMENTS, KroneckerPriorSampler
 from gaitpref.model.laplace import (
     LaplaceMode,
 )
@@ -36,6 +36,7 @@ from gaitpref.model.posterior import Posterior
 __all__ = [
     "DENSE_MAX_ACTIONS",
     "SAMPLERS",
+    "SAMPLE_LIMIT_ELEMENTS",
     "ActionLikelihood",
     "ConvergenceError",
     "Evidence",

@@ -33,6 +33,7 @@ from gaitpref.model.kronecker import (
     BLOCK_ELEMENTS,
     KhatriRaoCross,
     KroneckerPriorSampler,
+    check_sample_budget,
     khatri_rao_split,
 )
 from gaitpref.pointset import PointSet
@@ -45,6 +46,34 @@ SAMPLERS: tuple[SamplerName, ...] = get_args(SamplerName)
 DENSE_MAX_ACTIONS = 100
 #: The dense path refuses larger grids: its ``A x A`` prior root would pass 512 MiB.
 DENSE_LIMIT_ACTIONS = 8192
+#: A model on a grid refuses more actions than this: its posterior's mean, variance and samples
+#: each hold one number per action (``loop/cospar.py``'s full-grid path has the same bound) ...
+GRID_LIMIT_ACTIONS = 10_000_000
+#: ... and a feature with more values than this: each fit builds the feature's ``n x n`` kernel
+#: factor, which would pass 1 GiB (the bound ``Posterior.covariance()`` has; ``CoSpar``
+#: allows 1,000 a feature).
+FACTOR_LIMIT_VALUES = 11_585
+
+
+def check_grid_size(space: Space) -> None:
+    """ValueError naming the grid or the feature a model cannot hold (a point set, the line
+    path's, has no grid: its size is its points')."""
+    if isinstance(space, PointSet):
+        return
+    for f in space.features:
+        if len(f.values) > FACTOR_LIMIT_VALUES:
+            raise ValueError(
+                f"feature {f.name!r} has {len(f.values):,} values; a model on a grid takes at most "
+                f"{FACTOR_LIMIT_VALUES:,} a feature (its kernel factor is n x n, built at every "
+                "fit): use fewer values, or the line path"
+            )
+    size = space.grid_size
+    if size is not None and size > GRID_LIMIT_ACTIONS:
+        raise ValueError(
+            f"the grid has {size:,} actions; a model on a grid takes at most "
+            f"{GRID_LIMIT_ACTIONS:,} (its mean, variance and samples hold one number per "
+            "action): use the line path"
+        )
 
 
 def resolve_sampler(sampler: str, size: int) -> Literal["dense", "scalable"]:
@@ -235,6 +264,7 @@ class PointEngine:
     ) -> tuple[FloatArray, FloatArray | None]:
         """As :meth:`DenseEngine.prior_parts`."""
         n = len(self.space)
+        check_sample_budget(size, n)
         z = rng.standard_normal((size, n))
         z_jitter = rng.standard_normal((size, n)) if self.jitter_scale else None
         out: FloatArray = z @ self.root_t

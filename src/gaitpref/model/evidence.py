@@ -46,9 +46,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.linalg import solve_triangular
 
+from gaitpref.checks import is_number
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import LaplaceMode, fit_laplace
-from gaitpref.model.likelihood import OrderedProbit
+from gaitpref.model.likelihood import OrderedProbit, check_scales
 from gaitpref.model.singles import SingleData
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -73,8 +74,11 @@ class PairData:
         shapes = {a.shape for a in (self.first, self.second, self.sigma, self.banded, self.tie)}
         if shapes != {(n,)}:
             raise ValueError("first, second, sigma, banded and tie need one entry per observation")
+        for name in ("first", "second"):
+            check_codes(getattr(self, name), name)
         if np.any(self.tie & ~self.banded):
             raise ValueError("a 'no preference' observation must be banded")
+        check_scales(self.sigma, "sigma (each observation's probit noise)")
 
     @property
     def size(self) -> int:
@@ -95,6 +99,21 @@ class Hyperparameters:
     jitter: float
     band: float = 0.0
     thresholds: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        ls = self.lengthscale
+        items = list(ls) if isinstance(ls, tuple | list | np.ndarray) else []
+        if not items or not all(_finite(v, 0.0) for v in items):
+            raise ValueError(f"lengthscale must be a tuple of finite numbers > 0, got {ls!r}")
+        if not _finite(self.variance, 0.0):
+            raise ValueError(f"variance must be finite and > 0, got {self.variance!r}")
+        for name in ("jitter", "band"):
+            value = getattr(self, name)
+            if not _finite(value, 0.0, strict=False):
+                raise ValueError(f"{name} must be finite and >= 0, got {value!r}")
+        t = self.thresholds
+        if t is not None and not (isinstance(t, tuple | list) and all(_finite(v) for v in t)):
+            raise ValueError(f"thresholds must be None or a tuple of finite numbers, got {t!r}")
 
     @classmethod
     def from_kernel(
@@ -136,6 +155,28 @@ class Hyperparameters:
             float(values[d + 1]),
             thresholds,
         )
+
+
+def check_codes(codes: object, name: str) -> None:
+    """ValueError naming ``name`` unless ``codes`` is a 1-D array of integers >= 0: grid
+    indices, or a population's node codes ``subject * A + gait`` (a float was truncated to a
+    gait, a negative code wrapped to the last gait of subject -1)."""
+    arr = np.asarray(codes)
+    if arr.ndim != 1 or (arr.size and not np.issubdtype(arr.dtype, np.integer)):
+        raise ValueError(
+            f"{name} must be a 1-D array of integer indices, got dtype {arr.dtype} and shape "
+            f"{arr.shape}"
+        )
+    if arr.size and int(arr.min()) < 0:
+        raise ValueError(f"{name} must hold indices >= 0, got {int(arr.min())}")
+
+
+def _finite(value: object, low: float = -np.inf, *, strict: bool = True) -> bool:
+    """Whether ``value`` is a finite number above ``low`` (``>= low`` unless ``strict``)."""
+    if not is_number(value):
+        return False
+    x = float(value)  # type: ignore[arg-type]
+    return bool(np.isfinite(x) and (x > low if strict else x >= low))
 
 
 @dataclass(frozen=True)
@@ -186,6 +227,10 @@ def laplace_evidence(
         singles = None
     if data.size == 0 and singles is None:
         raise ValueError("the evidence needs at least one observation")
+    space.check_indices(data.first, "data.first")
+    space.check_indices(data.second, "data.second")
+    if singles is not None:
+        space.check_indices(singles.actions, "singles.actions")
     fitted = singles is not None and hyper.thresholds is not None and singles.thresholds is not None
     if singles is not None:
         singles = singles.at(hyper.thresholds)

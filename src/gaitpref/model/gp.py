@@ -15,8 +15,8 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gaitpref.checks import is_number
-from gaitpref.model.engines import GridEngine, make_engine, resolve_sampler
+from gaitpref.checks import is_noise
+from gaitpref.model.engines import GridEngine, check_grid_size, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
@@ -45,9 +45,12 @@ class PreferenceGP:
             raise TypeError(f"space must be a gaitpref.Space, got {space!r}")
         if not isinstance(kernel, SquaredExponential):
             raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {kernel!r}")
-        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
-            raise ValueError(f"preference noise must be positive, got {noise!r}")
+        if not is_noise(noise):
+            raise ValueError(
+                f"preference noise must be positive with a finite square, got {noise!r}"
+            )
         kernel.lengthscales(space.ndim)  # checks the count
+        check_grid_size(space)
         self.space = space
         self.kernel = kernel
         self.noise = float(noise)
@@ -71,17 +74,21 @@ class PreferenceGP:
         ratings: Sequence[tuple[int, object]] | None = None,
         init: Posterior | None = None,
     ) -> Posterior:
-        """Laplace posterior given preferences ``winners[k] > losers[k]`` (grid indices) and
+        """Laplace posterior given preferences ``winners[k] > losers[k]`` (grid indices, never
+        ``winners[k] == losers[k]``: a ValueError names the first such ``k``) and
         ordinal ``ratings`` ``(action, label)`` (labels ``1..K`` or category names; needs the
         model's ``ordinal``), all in one fit.
 
         ``noise`` overrides the default probit noise per comparison; ``init`` is a previous
         posterior whose mean warm-starts Newton's method.
         """
+        if init is not None and not isinstance(init, Posterior):
+            raise TypeError(f"init must be a Posterior (a previous fit) or None, got {init!r}")
         w = self.space.check_indices(winners, "winners")
         loser_idx = self.space.check_indices(losers, "losers")
         if w.shape != loser_idx.shape:
             raise ValueError(f"{w.size} winners but {loser_idx.size} losers")
+        _check_distinct_pairs(w, loser_idx, "winners/losers")
         if noise is None:
             sigma = np.full(w.size, self.noise)
         else:
@@ -130,6 +137,11 @@ class PreferenceGP:
 
         ``single`` (grid indices) with ``single_likelihood`` adds observations of single
         utilities ``f[single_k]`` (the second shape of likelihood term, ``laplace.py``).
+        A pair of an action with itself (``first[k] == second[k]``) is taken as given: its
+        difference is 0 whatever the utilities, so it adds the constant ``log p(0)`` to the
+        evidence and nothing to the posterior (an ordered probit's "no preference" between a gait
+        and itself does carry evidence about the band).  :meth:`posterior`, where a preference of
+        an action over itself can only be a mislabelling, refuses one.
         """
         if single is not None:
             single = self.space.check_indices(single, "single")
@@ -151,3 +163,22 @@ class PreferenceGP:
             k_vv, visited, a, b, likelihood, start, single=s, single_likelihood=single_likelihood
         )
         return Posterior(self.space, self.kernel, fit, self.engine, self.noise, self.ordinal)
+
+
+def _check_distinct_pairs(first: IntArray, second: IntArray, names: str) -> None:
+    """Raise ``ValueError`` naming the first observation ``k`` with ``first[k] == second[k]``
+    (``names``: ``"winners/losers"`` or the like).
+
+    A preference of an action over itself is a term in ``f_a - f_a = 0`` whatever the
+    utilities: it says nothing about them, yet it would enter the fit (``log Phi(0)`` in the
+    evidence) and make the action visited; a caller who passes one has mislabelled something.
+    The loop never makes one (``CoSpar.tell`` keeps a self-comparison in the answer's records
+    and :attr:`~gaitpref.loop.Answer.ignored`, and drops its term: ``docs/model.md``)."""
+    same = np.flatnonzero(np.asarray(first) == np.asarray(second))
+    if same.size:
+        k = int(same[0])
+        a, b = names.split("/")
+        raise ValueError(
+            f"{a}[{k}] and {b}[{k}] are both action {int(first[k])}: a preference of an action "
+            f"over itself says nothing about utilities ({same.size} such); leave it out"
+        )

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
+from gaitpref.checks import check_evaluations
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.hypermix import Hypothesis
@@ -261,6 +262,7 @@ def fit_hyperparameters(
     ``start`` (see the module docstring).  Ratings whose thresholds are not fixed have them
     fitted too; ``after.thresholds`` then holds them (``start``'s, or the likelihood's own the
     first time, are the starting values)."""
+    max_evaluations = check_evaluations(max_evaluations)
     if singles is not None and singles.size == 0:
         singles = None
     if prior.band is not None and start.band <= 0:

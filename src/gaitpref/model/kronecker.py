@@ -20,6 +20,7 @@ Notation: ``A`` grid points, ``d`` features with ``n_f`` values, ``m`` visited a
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator, Sequence
 
 import numpy as np
@@ -29,6 +30,23 @@ from gaitpref.space import FloatArray, IntArray, Space
 
 #: Elements (float64) that one block of temporary work may hold: 4 Mi elements = 32 MiB.
 BLOCK_ELEMENTS = 1 << 22
+#: The most values one joint draw of ``size`` samples over ``A`` points (``size x A``) may
+#: hold: 2**27 float64, 1 GiB, the bound ``Posterior.covariance()`` has on its ``A x A`` matrix.
+#: A draw holds a few such arrays at once (the normals, the jitter's normals, the draw), so its
+#: peak is a few GiB at the bound.  It admits the largest query a config allows (64 samples) on
+#: the largest grid (10**6 gaits) twice over; beyond it, draw the samples in batches.
+SAMPLE_LIMIT_ELEMENTS = 1 << 27
+
+
+def check_sample_budget(size: int, points: int) -> None:
+    """ValueError naming ``size``, ``points`` and the budget when ``size x points`` samples
+    would pass :data:`SAMPLE_LIMIT_ELEMENTS` values (checked before anything is drawn)."""
+    if size * points > SAMPLE_LIMIT_ELEMENTS:
+        raise ValueError(
+            f"size = {size} samples over {points} points would be {size * points:,} values, "
+            f"more than the sampling budget of {SAMPLE_LIMIT_ELEMENTS:,} (1 GiB of float64): "
+            f"draw at most {SAMPLE_LIMIT_ELEMENTS // points} samples at a time"
+        )
 
 
 class KroneckerPriorSampler:
@@ -54,7 +72,9 @@ class KroneckerPriorSampler:
             self.roots.append(eigvec * np.sqrt(np.clip(eigval, 0.0, None)))
 
     def draw(self, rng: np.random.Generator, size: int) -> tuple[FloatArray, FloatArray | None]:
-        """The standard normals of ``size`` samples: ``z`` (``size x A``) and ``z'`` (or None)."""
+        """The standard normals of ``size`` samples: ``z`` (``size x A``) and ``z'`` (or None);
+        ValueError past :data:`SAMPLE_LIMIT_ELEMENTS`."""
+        check_sample_budget(size, self.size)
         z = rng.standard_normal((size, self.size))
         z_jitter = rng.standard_normal((size, self.size)) if self.jitter_scale else None
         return z, z_jitter
@@ -175,9 +195,9 @@ def khatri_rao_split(
     """The first suffix feature of the most balanced split (``max(P, C)`` smallest) whose tables
     ``P x m`` and ``C x m`` both fit in ``block_elements``; None when no split fits."""
     best: tuple[int, int] | None = None
-    total = int(np.prod(shape))
+    total = math.prod(shape)
     for k in range(len(shape)):
-        C = int(np.prod(shape[k:]))
+        C = math.prod(shape[k:])
         largest = max(C, total // C)
         if largest * max(m, 1) <= block_elements and (best is None or largest < best[0]):
             best = (largest, k)

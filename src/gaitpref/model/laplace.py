@@ -143,6 +143,10 @@ def fit_laplace(
     if single is not None and single.size == 0:
         single = single_likelihood = None
     m = k_vv.shape[0]
+    if init is not None and np.shape(init) != (m,):
+        raise ValueError(
+            f"init must hold one value per visited action ({m}), got shape {np.shape(init)}"
+        )
     L = _factor_prior(k_vv)
     u = (
         np.zeros(m)
@@ -153,6 +157,8 @@ def fit_laplace(
         u = np.zeros(m)
 
     n_pairs = first.shape[0]
+    # every observation, pairs and single actions, for the error messages
+    n_obs = n_pairs + (0 if single is None else single.shape[0])
     rows = L[first] - L[second]
     if single is not None:
         rows = np.vstack([rows, L[single]])
@@ -177,7 +183,7 @@ def fit_laplace(
         H = np.sqrt(c)[:, None] * rows
         hess = H.T @ H
         hess[np.diag_indices_from(hess)] += 1.0
-        R = _factor_hessian(hess, iteration, first.shape[0])
+        R = _factor_hessian(hess, iteration, n_obs)
         scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
         if gnorm <= tol * scale:
             return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
@@ -191,7 +197,7 @@ def fit_laplace(
                     return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
                 raise ConvergenceError(
                     f"Laplace fit stalled at Newton iteration {iteration} (gradient "
-                    f"{gnorm:.3e}; {first.shape[0]} observations over {m} actions)"
+                    f"{gnorm:.3e}; {n_obs} observations over {m} actions)"
                 )
             last_full_step_gnorm = gnorm
             trial = u + step
@@ -203,11 +209,11 @@ def fit_laplace(
             if trial is None:
                 raise ConvergenceError(
                     f"Laplace fit: line search failed at Newton iteration {iteration} "
-                    f"(gradient {gnorm:.3e}, {first.shape[0]} observations over {m} actions)"
+                    f"(gradient {gnorm:.3e}, {n_obs} observations over {m} actions)"
                 )
         u, value, logp, g, c = trial, new_value, new_logp, new_g, new_c
     raise ConvergenceError(
         f"Laplace fit did not converge in {max_iter} Newton iterations "
-        f"(gradient {gnorm:.3e} > tolerance {tol:.1e}; {first.shape[0]} observations over "
+        f"(gradient {gnorm:.3e} > tolerance {tol:.1e}; {n_obs} observations over "
         f"{m} actions)"
     )

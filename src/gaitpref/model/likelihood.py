@@ -26,6 +26,27 @@ from scipy.special import erf, erfcx, log_ndtr
 
 from gaitpref.space import FloatArray
 
+
+def check_scales(values: object, name: str, *, zero: bool = False) -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``values`` holds real numbers (not bools),
+    every one finite and > 0 (``>= 0`` with ``zero``).  Checked once where a likelihood is
+    built, never in the Newton iterations that evaluate it."""
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError):
+        arr = np.asarray(None)
+    bound = ">= 0" if zero else "positive"
+    if arr.dtype.kind not in "iuf":
+        raise ValueError(f"{name} must be finite numbers {bound}, got {values!r}")
+    good = np.isfinite(arr) & ((arr >= 0) if zero else (arr > 0))
+    if not np.all(good):
+        if arr.ndim == 0:
+            raise ValueError(f"{name} must be finite and {bound}, got {values!r}")
+        k = int(np.flatnonzero(~good.ravel())[0])
+        bad = float(arr.ravel()[k])
+        raise ValueError(f"{name} must be finite and {bound}, got {bad!r} at entry {k}")
+
+
 _SQRT2 = float(np.sqrt(2.0))
 _SQRT_2_OVER_PI = float(np.sqrt(2.0 / np.pi))
 
@@ -80,6 +101,9 @@ class Probit:
     """``P(a > b) = Phi((f_a - f_b) / (sqrt(2) sigma_k))``, one noise per observation."""
 
     sigma: FloatArray
+
+    def __post_init__(self) -> None:
+        check_scales(self.sigma, "the probit noise sigma")
 
     def terms(self, diff: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         scale = _SQRT2 * self.sigma
@@ -154,6 +178,8 @@ class OrderedProbit:
     def __post_init__(self) -> None:
         if not (self.sigma.shape == self.band.shape == self.tie.shape):
             raise ValueError("sigma, band and tie must have one entry per observation")
+        check_scales(self.sigma, "the probit noise sigma")
+        check_scales(self.band, "the indifference band", zero=True)
         if np.any(self.band < 0) or np.any(self.tie & (self.band <= 0)):
             raise ValueError("bands must be >= 0, and > 0 for 'no preference' observations")
 

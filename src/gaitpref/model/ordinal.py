@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import log_ndtr, ndtr, ndtri
 
-from gaitpref.checks import is_count, is_number
+from gaitpref.checks import is_count, is_noise, is_number
 from gaitpref.model.likelihood import interval_ratios, mills_ratio
 from gaitpref.space import FloatArray
 
@@ -90,8 +90,10 @@ class Ordinal:
             raise ValueError(
                 f"an ordinal scale needs 2 to {MAX_CATEGORIES} categories, got {len(labels)}"
             )
-        if not (is_number(noise) and np.isfinite(noise) and noise > 0):
-            raise ValueError(f"the rating noise must be positive, got {noise!r}")
+        if not is_noise(noise):
+            raise ValueError(
+                f"the rating noise must be positive with a finite square, got {noise!r}"
+            )
         t = None
         if thresholds is not None:
             if isinstance(thresholds, str) or not isinstance(thresholds, Sequence | np.ndarray):
@@ -112,10 +114,19 @@ class Ordinal:
         return len(self.categories)
 
     def thresholds_for(self, signal_variance: float) -> tuple[float, ...]:
-        """The thresholds, or (unset) ``sqrt(v + s^2) Phi^-1(k / K)``, ``k = 1..K-1``."""
+        """The thresholds, or (unset) ``sqrt(v + s^2) Phi^-1(k / K)``, ``k = 1..K-1``.
+
+        ``signal_variance`` (the kernel's ``s^2``) must be a finite number > 0, even where the
+        thresholds are set (a bad one is a caller's error either way)."""
+        check_signal_variance(signal_variance)
         if self.thresholds is not None:
             return self.thresholds
         scale = float(np.sqrt(signal_variance + self.noise**2))
+        if not np.isfinite(scale):
+            raise ValueError(
+                f"signal_variance ({signal_variance!r}) plus the rating noise squared "
+                f"({self.noise!r}**2) overflows: no thresholds can be set from it"
+            )
         return tuple(scale * float(ndtri(k / self.size)) for k in range(1, self.size))
 
     def label_index(self, label: object) -> int:
@@ -133,6 +144,12 @@ class Ordinal:
         )
 
 
+def check_signal_variance(signal_variance: object) -> None:
+    """ValueError naming ``signal_variance`` unless it is a finite number > 0."""
+    if not (is_number(signal_variance) and 0 < signal_variance < np.inf):  # type: ignore[operator]
+        raise ValueError(f"signal_variance must be finite and positive, got {signal_variance!r}")
+
+
 @dataclass(frozen=True)
 class OrdinalLikelihood:
     """The ordered probit over single utilities, one label ``1..K`` per observation."""
@@ -141,6 +158,12 @@ class OrdinalLikelihood:
     thresholds: FloatArray  # (K - 1,) increasing
     noise: float
     thresholds_fixed: bool = False  # set by the config: the evidence does not fit them
+
+    def __post_init__(self) -> None:
+        if not is_noise(self.noise):
+            raise ValueError(
+                f"the rating noise must be positive with a finite square, got {self.noise!r}"
+            )
 
     def bounds(self, values: FloatArray) -> tuple[FloatArray, FloatArray]:
         """``(lo, hi)`` in units of ``s`` per observation (``-inf`` / ``+inf`` at the ends)."""
@@ -259,12 +282,43 @@ def rating_probabilities(
     ordinal: Ordinal, signal_variance: float, mean: FloatArray, variance: FloatArray
 ) -> FloatArray:
     """``P(rating = k)`` (``n x K``) for utilities ``N(mean, variance)``: the ordered probit with
-    the noise widened to ``sqrt(s^2 + variance)`` (the posterior integrated out)."""
-    t = np.concatenate([[-np.inf], ordinal.thresholds_for(signal_variance), [np.inf]])
+    the noise widened to ``sqrt(s^2 + variance)`` (the posterior integrated out).
+
+    ``mean`` and ``variance`` are 1-D of one length, finite; a variance may fall below 0 by
+    rounding (a posterior covariance's diagonal) but not by more than ``sqrt(eps)`` times
+    ``signal_variance + s^2``."""
+    t = ordinal.thresholds_for(signal_variance)
+    _check_moments(mean, variance, float(signal_variance) + ordinal.noise**2)
+    return predictive_probabilities(ordinal, t, mean, variance)
+
+
+def predictive_probabilities(
+    ordinal: Ordinal, thresholds: Sequence[float], mean: ArrayLike, variance: ArrayLike
+) -> FloatArray:
+    """:func:`rating_probabilities` with the thresholds given and the moments unchecked: for a
+    posterior's own moments (``Posterior.rating_probabilities``), whose variances may fall
+    below 0 by the rounding of the prior variance (which this function cannot see)."""
+    t = np.concatenate([[-np.inf], thresholds, [np.inf]])
     scale = np.sqrt(ordinal.noise**2 + np.asarray(variance))[:, None]
     cdf = ndtr((t[None, :] - np.asarray(mean)[:, None]) / scale)
     out: FloatArray = np.clip(np.diff(cdf, axis=1), 0.0, 1.0)
     return out
+
+
+def _check_moments(mean: object, variance: object, scale: float) -> None:
+    """``mean`` and ``variance`` of :func:`rating_probabilities`, or a ValueError naming them."""
+    m, v = np.asarray(mean), np.asarray(variance)
+    if m.ndim != 1 or v.shape != m.shape or m.dtype.kind not in "iuf" or v.dtype.kind not in "iuf":
+        raise ValueError(
+            "mean and variance must be 1-D arrays of numbers of one length, got shapes "
+            f"{m.shape} and {v.shape} (dtypes {m.dtype} and {v.dtype})"
+        )
+    if not np.all(np.isfinite(m)):
+        raise ValueError("mean must be finite")
+    floor = -float(np.sqrt(np.finfo(float).eps)) * scale
+    if not np.all(np.isfinite(v) & (v >= floor)):
+        low = float(v.min())
+        raise ValueError(f"variance must be finite and >= 0 (to rounding), got min {low!r}")
 
 
 __all__ = ["Ordinal", "OrdinalLikelihood", "rating_likelihood", "rating_probabilities"]

@@ -47,9 +47,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
+from gaitpref.checks import is_count, is_noise
 from gaitpref.model.cross import CrossCovariance
-from gaitpref.model.engines import GridEngine, make_engine
-from gaitpref.model.evidence import Evidence, Hyperparameters, PairData, evidence_from_prior
+from gaitpref.model.engines import GridEngine, check_grid_size, make_engine
+from gaitpref.model.evidence import (
+    Evidence,
+    Hyperparameters,
+    PairData,
+    check_codes,
+    evidence_from_prior,
+)
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
@@ -251,6 +258,11 @@ class PopulationModel:
     share: float | None = None  # subject 0's own shared fraction (None: rho)
 
     def __post_init__(self) -> None:
+        if not is_noise(self.noise):
+            raise ValueError(
+                f"preference noise must be positive with a finite square, got {self.noise!r}"
+            )
+        check_grid_size(self.space)
         object.__setattr__(self, "rho", check_rho(self.rho))
         object.__setattr__(self, "share", check_share(self.rho, self.share))
 
@@ -271,7 +283,15 @@ class PopulationModel:
     ) -> Posterior:
         """Subject ``target``'s posterior given observations of ``f[first] - f[second]`` and of
         ``f[single]`` (node codes, :func:`node_codes`).  ``init``: a starting mode on the
-        visited nodes (:meth:`visited` of the same data)."""
+        visited nodes (:meth:`visited` of the same data).  Codes are integers >= 0 and
+        ``target`` a subject (an integer >= 0), else a ValueError naming them."""
+        for name, codes in (("first", first), ("second", second), ("single", single)):
+            if codes is not None:
+                check_codes(codes, name)
+        if np.shape(first) != np.shape(second):
+            raise ValueError(f"{np.size(first)} first but {np.size(second)} second codes")
+        if not is_count(target) or target < 0:
+            raise ValueError(f"target must be a subject, an integer >= 0, got {target!r}")
         engine = self.engine
         if first.size == 0 and (single is None or single.size == 0):
             return Posterior(self.space, self.kernel, None, engine, self.noise, self.ordinal)

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
+from gaitpref.checks import check_evaluations
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hyperfit import HyperPrior, prior_bounds
@@ -90,6 +91,7 @@ def fit_population(
     """MAP lengthscales (and whatever else ``prior`` frees) and ``rho`` for population data
     (node codes, ``population.py``) by L-BFGS-B from ``start`` and ``rho``."""
     rho = check_rho(rho)
+    max_evaluations = check_evaluations(max_evaluations)
     rho_prior = LogitNormal() if rho_prior is None else rho_prior
     if start.thresholds is not None:
         start = Hyperparameters(start.lengthscale, start.variance, start.jitter, start.band)

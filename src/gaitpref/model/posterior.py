@@ -30,12 +30,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
+from gaitpref.checks import is_noise
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.kronecker import KroneckerPriorSampler
+from gaitpref.model.kronecker import KroneckerPriorSampler, check_sample_budget
 from gaitpref.model.laplace import LaplaceMode
-from gaitpref.model.ordinal import Ordinal, rating_probabilities
+from gaitpref.model.ordinal import Ordinal, predictive_probabilities
 from gaitpref.space import FloatArray, IntArray, Space
 
 #: :meth:`Posterior.covariance` refuses grids whose ``A x A`` matrix would pass 1 GiB, and
@@ -64,6 +65,13 @@ class Posterior:
     engine: GridEngine
     noise: float | None = None  # the pairwise probit noise (preference_probability)
     ordinal: Ordinal | None = None  # the rating model (rating_probabilities)
+
+    def __post_init__(self) -> None:
+        noise = self.noise
+        if noise is not None and not is_noise(noise):
+            raise ValueError(
+                f"preference noise must be None or positive with a finite square, got {noise!r}"
+            )
 
     @property
     def visited(self) -> IntArray:
@@ -215,7 +223,8 @@ class Posterior:
         one = np.ndim(actions) == 0  # one action: a 1 x K table, as before
         idx = self.space.check_indices(np.reshape(actions, 1) if one else actions)
         var = np.diag(self.covariance_at(idx)) if idx.size <= 64 else self.variance[idx]
-        return rating_probabilities(self.ordinal, self.kernel.variance, self.mean_at(idx), var)
+        thresholds = self.ordinal.thresholds_for(self.kernel.variance)
+        return predictive_probabilities(self.ordinal, thresholds, self.mean_at(idx), var)
 
     def covariance(self) -> FloatArray:
         """The dense ``A x A`` posterior covariance (small grids: ``O(A^2 m)`` time).
@@ -248,8 +257,10 @@ class Posterior:
 
         Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
         place (and the jitter's draw without the nugget), plus the engine's bounded blocks.
+        ``size x A`` may not pass :data:`~gaitpref.model.kronecker.SAMPLE_LIMIT_ELEMENTS`
+        (1 GiB of float64): ValueError naming both, before anything is drawn.
         """
-        size = _sample_count(size)
+        size = check_sample_size(size, len(self.space))
         _check_generator(rng)
         if self.fit is None or size == 0:
             f, e = self.engine.prior_parts(rng, size)
@@ -333,10 +344,12 @@ class Posterior:
 _NO_ACTIONS = "the posterior has no actions yet (the line path's before its first query): no argmax"
 
 
-def _sample_count(size: object) -> int:
-    """A number of samples: an integer >= 0 (not a bool, not a float)."""
+def check_sample_size(size: object, points: int) -> int:
+    """A number of samples over ``points`` points: an integer >= 0 (not a bool, not a float)
+    within the sampling budget (:func:`~gaitpref.model.kronecker.check_sample_budget`)."""
     if isinstance(size, bool) or not isinstance(size, int | np.integer) or size < 0:
         raise ValueError(f"size (the number of samples) must be an integer >= 0, got {size!r}")
+    check_sample_budget(int(size), points)
     return int(size)
 
 

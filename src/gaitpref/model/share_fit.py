@@ -19,6 +19,7 @@ import numpy as np
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize_scalar
 
+from gaitpref.checks import check_evaluations
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.population import check_rho, logit, population_evidence
@@ -92,6 +93,7 @@ def fit_share(
     MAP is taken only where its log evidence exceeds that of ``share = 0`` (the subject alone)
     by more than ``gate``; otherwise ``share = 0``."""
     rho, share = check_rho(rho), check_rho(share)
+    max_evaluations = check_evaluations(max_evaluations)
     if prior.sd <= 0 or not 0.0 < rho < 1.0 or data.size + (singles.size if singles else 0) == 0:
         return ShareFit(share, share, False, "nothing to fit", 0, np.nan, np.nan)
     if hyper.thresholds is not None:

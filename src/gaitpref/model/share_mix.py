@@ -37,7 +37,7 @@ from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hypermix import normalised
 from gaitpref.model.population import check_rho, population_evidence
-from gaitpref.model.posterior import Posterior
+from gaitpref.model.posterior import Posterior, check_sample_size
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.space import FloatArray, Space
 
@@ -175,7 +175,9 @@ class PosteriorMixture:
 
     def sample(self, rng: np.random.Generator, size: int = 1, *, nugget: bool = True) -> FloatArray:
         """``size x A`` joint samples: the components by weight from ``rng`` (one draw of
-        ``size`` indices), then each chosen component's samples in component order."""
+        ``size`` indices), then each chosen component's samples in component order.  ``size``
+        is checked as :meth:`Posterior.sample` checks it, before the components are drawn."""
+        size = check_sample_size(size, len(self.space))
         if len(self.components) == 1:  # one component: its own samples, the generator as its
             return self.components[0][1].sample(rng, size, nugget=nugget)
         which = rng.choice(len(self.components), size=size, p=self.weights)
