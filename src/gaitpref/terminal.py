@@ -20,12 +20,13 @@ The blind validation round the ``[stop]`` rule opens is asked, unblinded, then t
 pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
 written); when the rule says stop but no round can be drawn (fewer than three gaits may be
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
-gaits were shown is refused and the round shown again, as the console refuses it.  A signal
-(or a closed output) that comes while an answer is being written lets the write finish
-first.  Nothing is written before the operator confirms (answers, undo and a validation ranking
-alike), and the answer is committed before the next trial is shown.  Gaits are named by their
-gait library id, or ``G<action>`` (as in the console) without a library.  The loop only calls
-the public :class:`~gaitpref.sessions.session.Session` API.
+gaits were shown is refused and the round shown again, as the console refuses it.  A gait
+the generator fails to make (gaits on demand; after an undo too) is said and the session
+paused.  A signal (or a closed output) that comes while an answer is being written lets the
+write finish first.  Nothing is written before the operator confirms (answers, undo and a
+validation ranking alike), and the answer is committed before the next trial is shown.
+Gaits are named by their gait library id, or ``G<action>`` (as in the console) without a
+library.  The loop only calls the public :class:`~gaitpref.sessions.session.Session` API.
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ from types import FrameType
 
 from rich.console import Console
 
-from gaitpref.errors import FeedbackError, NoSafeGaitError, SessionStateError
+from gaitpref.errors import FeedbackError, GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.records import (
@@ -222,6 +223,10 @@ class Terminal:
                         self._say_infeasible(s.infeasible_gaits()[skipped:])
                         self.console.print(f"No gait to propose: {exc}", markup=False)
                         raise _QuitError from None
+                    except GaitError as exc:  # the generator failed: nothing written, pause
+                        self._say_infeasible(s.infeasible_gaits()[skipped:])
+                        self._say_no_gait(exc)
+                        raise _QuitError from None
                     try:
                         self._one(query)
                     except _UndoError:
@@ -244,6 +249,13 @@ class Terminal:
                 f"({bad.reason})",
                 markup=False,
             )
+
+    def _say_no_gait(self, exc: GaitError) -> None:
+        """The gait generator failed to make a proposed gait (an error, not an infeasible gait):
+        say so; the caller pauses the session, and resuming asks again."""
+        self.console.print(
+            f"The next gait could not be made: {exc or type(exc).__name__}", markup=False
+        )
 
     def _pause(self) -> None:
         """Pause the session, then say how to resume (the terminal may be gone: ignore that;
@@ -275,6 +287,10 @@ class Terminal:
             return
         except NoSafeGaitError as exc:
             self.console.print(f"No gait to propose: {exc}", markup=False)
+            raise _QuitError from None
+        except GaitError as exc:  # the undo is written; the query in its place could not be made
+            self.console.print("Undone.", markup=False)
+            self._say_no_gait(exc)
             raise _QuitError from None
         if pending is None or (answered and pending.id != answered[-1].query):
             self.console.print(
