@@ -337,7 +337,7 @@ class CheckedCreation(Storage):
     def create_session(
         self, spec: SessionSpec, events: Sequence[NewEvent] = (), status: Status = "active"
     ) -> SessionRecord:
-        return self._create(spec, events, status, None)
+        return self.create_session_checked(spec, events, status, check=None)
 
     def create_session_checked(
         self,
@@ -345,9 +345,11 @@ class CheckedCreation(Storage):
         events: Sequence[NewEvent] = (),
         status: Status = "active",
         *,
-        check: SessionsCheck,
+        check: SessionsCheck | None,
     ) -> SessionRecord:
-        return self._create(spec, events, status, check)
+        spec = check_spec(spec)
+        checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
+        return self._create(spec, checked, check_status(status), check)
 
     @abstractmethod
     def _create(
@@ -357,4 +359,5 @@ class CheckedCreation(Storage):
         status: Status,
         check: SessionsCheck | None,
     ) -> SessionRecord:
-        """Create the session, running ``check`` (if any) under the creating transaction."""
+        """Create the session, running ``check`` (if any) under the creating transaction;
+        ``spec``, ``events`` and ``status`` come checked."""

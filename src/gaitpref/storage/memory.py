@@ -26,7 +26,6 @@ from gaitpref.storage.base import (
     as_utc,
     check_event,
     check_json,
-    check_spec,
     check_status,
     now,
 )
@@ -49,9 +48,6 @@ class MemoryStorage(CheckedCreation):
         status: Status,
         check: SessionsCheck | None,
     ) -> SessionRecord:
-        spec = check_spec(spec)
-        checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
-        status = check_status(status)
         with self._lock:
             if check is not None:  # under the lock: no other creator between check and create
                 check(
@@ -75,7 +71,7 @@ class MemoryStorage(CheckedCreation):
                 status=status,
                 created_at=stamp,
                 updated_at=stamp,
-                last_seq=len(checked),
+                last_seq=len(events),
                 meta=spec.meta,
             )
             self._sessions[sid] = record
@@ -83,7 +79,7 @@ class MemoryStorage(CheckedCreation):
                 EventRecord(
                     sid, k + 1, e.kind, e.payload, as_utc(e.at) if e.at else stamp, e.version
                 )
-                for k, e in enumerate(checked)
+                for k, e in enumerate(events)
             ]
             return _copy_session(record)
 

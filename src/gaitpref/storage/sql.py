@@ -60,7 +60,6 @@ from gaitpref.storage.base import (
     SubjectRecord,
     as_utc,
     check_event,
-    check_spec,
     check_status,
     now,
 )
@@ -147,9 +146,6 @@ class SQLStorage(CheckedCreation):
         status: Status,
         check: SessionsCheck | None,
     ) -> SessionRecord:
-        spec = check_spec(spec)
-        checked = [check_event(e, f"event {k}") for k, e in enumerate(events)]
-        status = check_status(status)
         stamp = now()
         with self._write() as conn:
             ins = sqlite_insert if self._sqlite else pg_insert
@@ -187,13 +183,13 @@ class SQLStorage(CheckedCreation):
                     status=status,
                     created_at=stamp,
                     updated_at=stamp,
-                    last_seq=len(checked),
+                    last_seq=len(events),
                     meta=spec.meta,
                 )
                 .returning(sessions_t.c.id)
             ).scalar_one()
-            if checked:
-                conn.execute(insert(events_t), _rows(sid, 0, checked, stamp))
+            if events:
+                conn.execute(insert(events_t), _rows(sid, 0, events, stamp))
             row = conn.execute(select(sessions_t).where(sessions_t.c.id == sid)).one()
         return _session(row._mapping, self.url)
 
