@@ -95,6 +95,44 @@ def test_asking_again_goes_on_as_one_long_ask_would_have(
     assert again.pending == q and again.infeasible_gaits() == bounded.infeasible_gaits()
 
 
+@PATHS
+def test_an_ask_left_without_a_gait_before_the_limit_logs_the_gaits_it_found(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, base: str
+) -> None:
+    """With avoid_radius 1 two infeasible gaits leave no gait to propose, far below
+    max_infeasible (20): the ask raised NoSafeGaitError and wrote nothing, so its gaits were in
+    the gait cache only, and the log (a replay, the next ask) did not have them."""
+    import shutil
+
+    FakeSteps.below = MOSTLY_INFEASIBLE
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    text = _config(None, base).replace("avoid_radius = 0.1\n", "avoid_radius = 1.0\n")
+    s = Session.create(url, parse_config(text), subject="S01")
+    with pytest.raises(NoSafeGaitError) as caught:
+        s.next_query()
+    err = caught.value
+    assert not isinstance(err, InfeasibleProposalsError)  # the limit was not reached
+    assert "2 gaits that cannot be made" in str(err) and "no gait was left" in str(err)
+    assert len(FakeSteps.calls) == 2
+    kinds = [e.kind for e in s.events()]
+    assert kinds == ["created", "gait_infeasible", "gait_infeasible", "query_stopped"]
+    assert s.events()[-1].payload == {"infeasible": 2, "limit": 20}
+    logged = [e.payload["gait_id"] for e in s.events() if e.kind == "gait_infeasible"]
+    assert [g.gait_id for g in s.infeasible_gaits()] == logged and s.pending is None
+    # asking again, nothing changed: no gait may be proposed, nothing written, nothing made
+    with pytest.raises(NoSafeGaitError, match="no gait may be proposed"):
+        s.next_query()
+    assert [e.kind for e in s.events()] == kinds and len(FakeSteps.calls) == 2
+    # the log alone gives the same state (no gait made again), and the same next ask
+    monkeypatch.setattr(FakeSteps, "make", never_made)
+    shutil.rmtree(tmp_path / "lab.db.gaits")
+    again = Session.open(url, s.id)
+    assert again.infeasible_gaits() == s.infeasible_gaits() and again.pending is None
+    with pytest.raises(NoSafeGaitError, match="no gait may be proposed"):
+        again.next_query()
+    assert [e.kind for e in again.events()] == kinds
+
+
 def test_the_session_answers_undoes_and_exports_after_a_stopped_ask(tmp_path: Path) -> None:
     from gaitpref.sessions.export import export_session, import_session
 

@@ -29,8 +29,10 @@ error                                       status  meaning
 ==========================================  ======  =========================================
 
 In every case but one the session API wrote nothing (it checks before it writes), so a refused
-request leaves the database as it was; the one is ``InfeasibleProposalsError``, whose ask logged
-the gaits it found could not be made (and avoids them), so that asking again goes on from there.
+request leaves the database as it was; the one is an ask that stopped (``query_stopped``), which
+logged the gaits it found could not be made (and avoids them): ``InfeasibleProposalsError``, so
+that asking again goes on from there, or a ``NoSafeGaitError`` when no gait was left to propose
+after them.
 API requests get JSON (``{"detail": ...}``; 422 in FastAPI's shape, with ``loc`` naming the
 field), pages get an HTML page that says what happened.
 """

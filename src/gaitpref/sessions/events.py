@@ -9,8 +9,8 @@ all carrying the query's id.  A query's ``id`` is the sequence number of its ``q
 event: unique in the session and never reused.  With gaits made on demand, a query is a batch too:
 ``gait_made`` for each gait new to the session and ``gait_infeasible`` for each proposal whose gait
 cannot be made (the loop proposes again without it), then the ``query_issued``; an ask that
-reaches ``[gaits] max_infeasible`` such proposals ends its batch with ``query_stopped`` instead
-and proposes nothing.
+reaches ``[gaits] max_infeasible`` such proposals (or after some finds no gait left that may be
+proposed) ends its batch with ``query_stopped`` instead and proposes nothing.
 
 Payloads are validated when written (:func:`new_event`) and when read (:func:`read_payload`,
 which also checks the stored schema version).  Replay compares each re-derived event with the
@@ -206,8 +206,10 @@ class QueryStopped(EventPayload):
     """``query_stopped``: an ask that proposed nothing, written after its gait events: its
     proposals' gaits could not be made, ``infeasible`` of them (``gait_infeasible`` events of
     this batch), once ``[gaits] max_infeasible`` (``limit``) was reached; each is avoided, so the
-    next ask goes on from there (``sessions/gaits.py``).  Replay stops the batch where the log
-    does, with the logged ``limit``."""
+    next ask goes on from there (``sessions/gaits.py``).  ``infeasible`` under ``limit``: the
+    ask stopped because, with those avoided, no gait was left that may be proposed (the payload
+    is the same; logs from before have no such event, as such an ask wrote nothing).  Replay
+    stops the batch where the log does, with the logged ``limit``."""
 
     kind: ClassVar[str] = "query_stopped"
     infeasible: Annotated[int, Field(ge=1)]

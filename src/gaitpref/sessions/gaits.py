@@ -23,6 +23,17 @@ would have had), and replay derives the stopped batch again with the logged limi
 a batch that ends in ``query_issued`` applies no limit: logs written before it replay as they
 ran.
 
+An ask whose infeasible gaits leave no gait that may be proposed before the limit (``ask``
+raises :class:`~gaitpref.errors.NoSafeGaitError`: the region of avoidance, the unsafe flags and
+the gaits avoided cover the space) stops the same way: its batch is logged with a closing
+``query_stopped`` whose ``infeasible`` is under its ``limit``, and the session raises a plain
+:class:`~gaitpref.errors.NoSafeGaitError` saying so.  Before, such an ask wrote nothing: its
+gaits were in the gait cache only, so the log, and what the next ask or a replay saw, lacked
+them.  A log has no such batch from before (an ask that ran out wrote nothing), so every log
+replays as it ran; replay derives such a batch again as it derives one stopped at the limit (the
+same rounds, then ``ask`` refuses where the log stops).  An ask that finds no gait may be
+proposed before any proposal writes nothing, as before.
+
 Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
 carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
 the one derived for the proposed point, its document must read as a gait, and its verdict must
@@ -37,7 +48,12 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
-from gaitpref.errors import GaitLibraryError, InfeasibleProposalsError, ReplayError
+from gaitpref.errors import (
+    GaitLibraryError,
+    InfeasibleProposalsError,
+    NoSafeGaitError,
+    ReplayError,
+)
 from gaitpref.loop import CoSpar, Query
 from gaitpref.sessions import events as log
 from gaitpref.storage import EventRecord, NewEvent
@@ -110,7 +126,9 @@ def propose_with_gaits(
     """The events of the gaits made for the loop's next feasible proposal, and the proposal;
     ``recorded``: on replay, the gaits the log carries for it.  None instead of a proposal when
     the ask stopped at ``[gaits] max_infeasible`` (live; on replay, the logged batch's limit, or
-    none): the events then end with ``query_stopped``.
+    none), or when no gait was left to propose after some were infeasible: the events then end
+    with ``query_stopped``.  :class:`~gaitpref.errors.NoSafeGaitError` when none may be proposed
+    at the first proposal (nothing to log), or on replay of a batch that issued its query.
 
     Terminates: each round takes at least one more action out of the proposals, an empty
     choice raises :class:`~gaitpref.errors.NoSafeGaitError` from ``ask``, a live ask makes at
@@ -123,7 +141,14 @@ def propose_with_gaits(
     events: list[NewEvent] = []
     while True:
         past_the_log = recorded is not None and recorded.exhausted
-        query = loop.ask()
+        try:
+            query = loop.ask()
+        except NoSafeGaitError:
+            if not infeasible or limit is None:  # none found yet (nothing to log), or a replay
+                raise  # of a batch that issued its query: the log has a difference
+            # no gait left before the limit: the ask stops as at the limit, logging what it found
+            events.append(log.new_event(log.QueryStopped(infeasible=infeasible, limit=limit)))
+            return events, None
         space = loop.space  # the grid, or the line path's points (which the ask may extend)
         bad = []
         for action in dict.fromkeys(query.actions):  # each distinct action once, in order
@@ -147,17 +172,32 @@ def propose_with_gaits(
             return events, None
 
 
-def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> InfeasibleProposalsError:
-    """What a stopped ask (its logged ``query_stopped`` ``payload``) tells the operator."""
+def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> NoSafeGaitError:
+    """What a stopped ask (its logged ``query_stopped`` ``payload``) tells the operator: an
+    :class:`~gaitpref.errors.InfeasibleProposalsError` when it reached the limit, a plain
+    :class:`~gaitpref.errors.NoSafeGaitError` when no gait was left to propose before it
+    (``infeasible`` < ``limit``: asking again proposes nothing until something changes)."""
     infeasible, limit = int(payload["infeasible"]), int(payload["limit"])
     radius = config.generator.avoid_radius if config.generator is not None else 0.0
+    logged = (
+        f"Each is logged as infeasible and never proposed again, nor the gaits within "
+        f"avoid_radius {radius:g} of it."
+    )
+    if infeasible < limit:
+        return NoSafeGaitError(
+            f"this ask stopped without proposing: its proposals had {infeasible} gaits that "
+            "cannot be made, and then no gait was left that may be proposed (every gait is in "
+            "the region of avoidance, near a gait flagged unsafe, or near a gait that cannot be "
+            f"made).  {logged}  Withdraw an unsafe flag if one is wrong; or finish this session "
+            "and start one whose [space] leaves those gaits out (or with a smaller [gaits] "
+            "avoid_radius)"
+        )
     return InfeasibleProposalsError(
         f"this ask stopped without proposing: its proposals had {infeasible} gaits that cannot "
-        f"be made (at most {limit} per ask, [gaits] max_infeasible).  Each is logged as "
-        f"infeasible and never proposed again, nor the gaits within avoid_radius {radius:g} of "
-        "it.  Ask again to go on proposing from there; or, if most of [space] has no gait, "
-        "finish this session and start one whose [space] leaves those gaits out (or with a "
-        "larger [gaits] avoid_radius or max_infeasible)",
+        f"be made (at most {limit} per ask, [gaits] max_infeasible).  {logged}  Ask again to go "
+        "on proposing from there; or, if most of [space] has no gait, finish this session and "
+        "start one whose [space] leaves those gaits out (or with a larger [gaits] avoid_radius "
+        "or max_infeasible)",
         infeasible=infeasible,
         limit=limit,
     )

@@ -8,7 +8,8 @@ machine replays, and a refit's numbers are then taken from the log).  The first 
 raises :class:`~gaitpref.errors.ReplayError` showing it; nothing is written.  An answer's
 events (one transaction: trials, one event per feedback record of any registered kind, the
 refit) are replayed together, and so are a query's (the gaits made on demand for it, then the
-query, or the ``query_stopped`` of an ask that stopped at ``[gaits] max_infeasible``).
+query, or the ``query_stopped`` of an ask that stopped at ``[gaits] max_infeasible``, or with
+no gait left to propose).
 """
 
 from __future__ import annotations

@@ -272,7 +272,9 @@ class Session:
         With gaits made on demand, an ask whose proposals reach ``[gaits] max_infeasible``
         gaits that cannot be made stops: it logs them (each avoided from then on, as always)
         and raises :class:`~gaitpref.errors.InfeasibleProposalsError`; asking again goes on
-        from there (``sessions/gaits.py``)."""
+        from there (``sessions/gaits.py``).  An ask whose infeasible gaits leave no gait to
+        propose before that logs them the same way and raises
+        :class:`~gaitpref.errors.NoSafeGaitError`."""
         return self._locked(self._next_query)
 
     def _next_query(self) -> SessionQuery:
@@ -302,7 +304,7 @@ class Session:
                 ) from None
         st.commit(records)
         self._broken = False
-        if st.pending is None:  # the ask stopped at [gaits] max_infeasible: its gaits are logged
+        if st.pending is None:  # the ask stopped (query_stopped): its gaits are logged
             raise stopped_error(records[-1].payload, self.config)
         return st.pending
 

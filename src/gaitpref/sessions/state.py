@@ -168,7 +168,8 @@ class SessionState:
         """Ask CoSpar for the next proposal (the same one until it is answered): its
         ``query_issued`` event, after the gaits made on demand for it (``gaits.py``;
         ``recorded``: on replay, the gaits the log carries for it).  An ask that stopped at
-        ``[gaits] max_infeasible`` ends with ``query_stopped`` instead: nothing is proposed."""
+        ``[gaits] max_infeasible``, or with no gait left after some were infeasible, ends with
+        ``query_stopped`` instead: nothing is proposed."""
         events: list[NewEvent] = []
         if self.on_demand is None:
             q = self.loop.ask()
