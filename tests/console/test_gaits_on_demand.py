@@ -59,9 +59,13 @@ def test_a_generator_that_fails_leaves_the_trial_page_usable_and_writes_nothing(
     assert client.get(f"/api/sessions/{sid}/query").status_code == 200
 
 
-def test_an_ask_that_stops_at_max_infeasible_says_so_and_a_reload_goes_on(
+def test_an_ask_that_stops_at_max_infeasible_says_so_and_only_an_explicit_ask_goes_on(
     client: TestClient,
 ) -> None:
+    """Each reload of the page (and each poll of GET .../query) asked again, so a session whose
+    asks keep stopping made up to max_infeasible more gaits per request, without end on a
+    continuous space with avoid_radius 0.  A read now says the stop again; asking again is the
+    page's "Ask again" (or POST .../query)."""
     FakeSteps.below = 0.95  # most step lengths have no gait
     config = CONFIG.replace("avoid_radius = 0.1\n", "avoid_radius = 0.1\nmax_infeasible = 2\n")
     sid = new_session(client, config, seed=4)
@@ -73,15 +77,43 @@ def test_an_ask_that_stops_at_max_infeasible_says_so_and_a_reload_goes_on(
     assert 'id="answer-form"' not in page.text
     kinds = [e["kind"] for e in client.get(f"/api/sessions/{sid}/events").json()]
     assert kinds == ["created", "gait_infeasible", "gait_infeasible", "query_stopped"]
-    r = client.get(f"/api/sessions/{sid}/query")
-    assert r.status_code == 409 and "max_infeasible" in r.json()["detail"]
-    for _ in range(30):  # each reload goes on from the gaits avoided so far
-        if 'id="answer-form"' in client.get(f"/sessions/{sid}").text:
+    made = len(FakeSteps.calls)
+    for _ in range(5):  # reloads and polls: the same stop, no gait made, nothing written
+        assert "2 gaits that cannot be made" in client.get(f"/sessions/{sid}").text
+        r = client.get(f"/api/sessions/{sid}/query")
+        assert r.status_code == 409 and "2 gaits that cannot be made" in r.json()["detail"]
+    assert event_count(client, sid) == len(kinds) and len(FakeSteps.calls) == made
+    for _ in range(30):  # each "Ask again" goes on from the gaits avoided so far
+        page = client.get(f"/sessions/{sid}")
+        if 'id="answer-form"' in page.text:
             break
+        ask = forms_of(page.text)["ask-form"]
+        r = client.post(ask.action, data=ask.fields, follow_redirects=False)
+        assert r.status_code == 303
     else:
-        raise AssertionError("no query after 30 reloads")
+        raise AssertionError("no query after 30 asks")
     q = client.get(f"/api/sessions/{sid}/query").json()
     assert all(g["values"]["step_length"] >= FakeSteps.below for g in q["actions"])
+
+
+def test_the_api_asks_again_only_when_posted(client: TestClient) -> None:
+    FakeSteps.below = 0.95
+    config = CONFIG.replace("avoid_radius = 0.1\n", "avoid_radius = 0.1\nmax_infeasible = 2\n")
+    sid = new_session(client, config, seed=4)
+    assert client.get(f"/api/sessions/{sid}/query").status_code == 409  # the first ask stops
+    count = event_count(client, sid)
+    assert client.get(f"/api/sessions/{sid}/query").status_code == 409
+    assert event_count(client, sid) == count
+    for _ in range(30):
+        r = client.post(f"/api/sessions/{sid}/query")
+        if r.status_code == 200:
+            break
+        assert r.status_code == 409 and "max_infeasible" in r.json()["detail"]
+        assert event_count(client, sid) > count  # this ask went on, and logged its stop
+        count = event_count(client, sid)
+    else:
+        raise AssertionError("no query after 30 asks")
+    assert client.get(f"/api/sessions/{sid}/query").json()["query_id"] == r.json()["query_id"]
 
 
 def _withdrawn_on_undo(client: TestClient) -> int:

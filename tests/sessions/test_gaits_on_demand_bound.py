@@ -133,6 +133,35 @@ def test_an_ask_left_without_a_gait_before_the_limit_logs_the_gaits_it_found(
     assert [e.kind for e in again.events()] == kinds
 
 
+def test_a_read_does_not_ask_again_after_a_stopped_ask_until_something_is_logged(
+    tmp_path: Path,
+) -> None:
+    """next_query(retry=False), what a page reload or a controller's poll calls: after an ask
+    that stopped, with nothing logged since, it raises that stop's error again and makes no
+    gait (each read made up to max_infeasible more); after any other event it asks."""
+    FakeSteps.below = MOSTLY_INFEASIBLE
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = Session.create(url, parse_config(_config(2)), subject="S01")
+    with pytest.raises(InfeasibleProposalsError) as caught:
+        s.next_query(retry=False)  # the first ask: nothing stopped before it
+    made, events = len(FakeSteps.calls), len(s.events())
+    for reader in (s, Session.open(url, s.id)):  # live, and as replayed from the log
+        for _ in range(3):
+            with pytest.raises(InfeasibleProposalsError) as again:
+                reader.next_query(retry=False)
+            assert str(again.value) == str(caught.value)
+            assert (again.value.infeasible, again.value.limit) == (2, 2)
+    assert (len(FakeSteps.calls), len(s.events())) == (made, events)
+    s.note("the subject rests")  # something logged since: a read asks again
+    with pytest.raises(InfeasibleProposalsError):
+        s.next_query(retry=False)
+    assert len(FakeSteps.calls) > made and s.events()[-1].kind == "query_stopped"
+    made = len(FakeSteps.calls)
+    with pytest.raises(InfeasibleProposalsError):
+        s.next_query()  # an explicit ask goes on
+    assert len(FakeSteps.calls) > made
+
+
 def test_the_session_answers_undoes_and_exports_after_a_stopped_ask(tmp_path: Path) -> None:
     from gaitpref.sessions.export import export_session, import_session
 

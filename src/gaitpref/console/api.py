@@ -109,8 +109,19 @@ def get_query(request: Request, session_id: SessionId) -> QueryOut:
     Issued (and logged) on the first read; every later read returns the same query until it is
     answered.  409 while the session is paused or finished, a blind validation is open, or no
     gait may be proposed (every gait is in the region of avoidance or near an unsafe flag: the
-    reason says so; nothing is written).
+    reason says so; nothing is written).  With gaits made on demand, after an ask that stopped
+    (``query_stopped``; nothing logged since) a read does not ask again: 409 with that stop's
+    reason, no gait made, however often a controller polls; ``POST`` asks again.
     """
+    return service_of(request).read(
+        session_id, lambda s: present.query_out(s, s.next_query(retry=False))
+    )
+
+
+@router.post("/sessions/{session_id}/query", response_model=QueryOut)
+def ask_query(request: Request, session_id: SessionId) -> QueryOut:
+    """The pending query, or an explicit new ask: as ``GET``, but after an ask that stopped it
+    asks again, going on from the gaits avoided so far (409 when this ask stops too)."""
     return service_of(request).read(session_id, lambda s: present.query_out(s, s.next_query()))
 
 

@@ -27,6 +27,7 @@ from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
     ExportFormat,
     SessionService,
+    ask_again,
     pending_of,
     session_query_error,
 )
@@ -290,6 +291,14 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
     done = await run_in_threadpool(service.undo, session_id, query_id)
     flag = "&replaced=1" if done.withdrawn else ""
     return see_other(f"/sessions/{session_id}?undone={','.join(map(str, done.trials))}{flag}")
+
+
+@router.post("/sessions/{session_id}/ask")
+async def post_ask(request: Request, session_id: SessionId) -> Response:
+    """Ask again after an ask that stopped (a reload does not: it would make gaits each time)."""
+    await read_form(request)  # the CSRF check
+    await run_in_threadpool(service_of(request).read, session_id, ask_again)
+    return see_other(f"/sessions/{session_id}")
 
 
 @router.post("/sessions/{session_id}/note")

@@ -52,7 +52,8 @@ class Pending:
     query: SessionQuery | None
     reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe",
     # "no-gait" (the gait generator failed to make a proposed gait), "infeasible" (the ask
-    # stopped at [gaits] max_infeasible gaits that cannot be made: logged, a reload goes on)
+    # stopped at [gaits] max_infeasible gaits that cannot be made: logged; an explicit ask, not
+    # a reload, goes on)
     detail: str = ""  # why, in words (the NoSafeGaitError's or GaitError's message)
 
 
@@ -332,15 +333,31 @@ class SessionService:
 
 
 def pending_of(session: Session) -> Pending:
-    """The query to run now (issued and logged if new), or why there is none."""
+    """The query to run now (issued and logged if new), or why there is none.  A page load:
+    after an ask that stopped, with nothing logged since, it says so again rather than asking
+    again (``Session.next_query(retry=False)``), so reloads make no gaits; :func:`ask_again`
+    is the explicit retry."""
     if session.status != "active":
         return Pending(None, session.status)
     if session.validation_plan is not None:
         return Pending(None, "validation")
     try:
-        return Pending(session.next_query(), "")
+        return Pending(session.next_query(retry=False), "")
     except (NoSafeGaitError, GaitError) as exc:  # say why, propose nothing
         return no_query(exc)
+
+
+def ask_again(session: Session) -> None:
+    """The operator's explicit ask after one that stopped (the trial page's "Ask again"): it
+    goes on proposing from the gaits avoided so far.  A stop is logged (the page then shows
+    it); an ask that wrote nothing raises its error (no gait may be proposed at all, or the
+    generator failed), which the page reports as any refused post."""
+    before = session.last_seq
+    try:
+        session.next_query()
+    except NoSafeGaitError:
+        if session.last_seq == before:
+            raise
 
 
 def no_query(exc: NoSafeGaitError | GaitError) -> Pending:

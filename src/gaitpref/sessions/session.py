@@ -266,7 +266,7 @@ class Session:
         return self._state.gait_ids
 
     # -- the loop ------------------------------------------------------------------------------
-    def next_query(self) -> SessionQuery:
+    def next_query(self, *, retry: bool = True) -> SessionQuery:
         """The pending query, or a new one, logged (committed) before it is returned.
 
         With gaits made on demand, an ask whose proposals reach ``[gaits] max_infeasible``
@@ -274,10 +274,16 @@ class Session:
         and raises :class:`~gaitpref.errors.InfeasibleProposalsError`; asking again goes on
         from there (``sessions/gaits.py``).  An ask whose infeasible gaits leave no gait to
         propose before that logs them the same way and raises
-        :class:`~gaitpref.errors.NoSafeGaitError`."""
-        return self._locked(self._next_query)
+        :class:`~gaitpref.errors.NoSafeGaitError`.
 
-    def _next_query(self) -> SessionQuery:
+        ``retry=False``: when the last event logged is such a stopped ask (nothing logged
+        since: no answer, undo, flag, note, resume...), raise its error again instead of asking
+        again, making no gait: what a reader that may be repeated without end wants (a page
+        reload, a device controller's poll), so that it does not make up to ``max_infeasible``
+        gaits each time.  Only an explicit ask (the default) goes on proposing."""
+        return self._locked(lambda: self._next_query(retry))
+
+    def _next_query(self, retry: bool = True) -> SessionQuery:
         st = self._state
         st.check_active("queries")
         if st.open_round is not None:
@@ -287,6 +293,8 @@ class Session:
             )
         if st.pending is not None:
             return st.pending
+        if not retry and st.stopped is not None:
+            raise stopped_error(st.stopped, self.config)
         try:
             records = self._write(self._derived_query(st))
         except ConflictError:  # a writer that does not take turns: catch up and ask once more

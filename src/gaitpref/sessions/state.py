@@ -122,6 +122,7 @@ class SessionState:
     infeasible: list[InfeasibleGait] = field(default_factory=list)
     made_rows: list[int] = field(default_factory=list)  # each gait_made's action, as logged
     made_ids: set[str] = field(default_factory=set)  # each gait_made's gait id
+    stopped: dict[str, Any] | None = None  # the last event's payload if it is a query_stopped
     row: SessionRecord | None = field(default=None, repr=False)  # checked against `created`
 
     def __post_init__(self) -> None:
@@ -445,6 +446,8 @@ class SessionState:
             for r in records:
                 self._commit_one(r)
         self.last_seq = records[-1].seq
+        last = records[-1]
+        self.stopped = dict(last.payload) if last.kind == log.QUERY_STOPPED else None
 
     def _commit_answer(
         self, query: SessionQuery, answer: Answer, records: Sequence[EventRecord]
