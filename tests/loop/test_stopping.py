@@ -94,6 +94,8 @@ def test_the_rule_triggers_on_confidence_or_trials() -> None:
     rule = StopRule(confidence=0.9)
     assert rule.active
     assert "91% that gait 94 is within 5%" in str(rule.reason(3, sure))
+    named = rule.reason(3, sure, "G94")  # a session names it as its confidence sentence does
+    assert named == f"{sure.sentence('G94')} (confidence = 90%)"
     assert rule.reason(3, Confidence(94, 0.89, 0.01, 0.02, 0.05, 2000)) is None
     by_trials = StopRule(max_trials=20)
     assert by_trials.reason(19, None) is None

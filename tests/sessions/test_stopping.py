@@ -44,7 +44,11 @@ def test_confidence_rule_opens_validation_when_the_model_is_sure_enough(drive: D
         assert before < 0.5
         drive(s, 1)
     assert s.validation_plan is not None, "the rule never triggered in 40 answers"
-    assert s.confidence().probability >= 0.5
+    sure = s.confidence()
+    assert sure.probability >= 0.5
+    # the reason names the gait as the confidence sentence does (it said "gait 12", not "G12")
+    sentence = sure.sentence(s.gait_name(sure.recommended))
+    assert s.stop_reason() == f"{sentence} (confidence = 50%)"
 
 
 def test_confidence_is_reproducible_and_leaves_the_loop_alone(drive: Drive) -> None:

@@ -157,16 +157,16 @@ class StopRule:
     def active(self) -> bool:
         return self.confidence is not None or self.max_trials is not None
 
-    def reason(self, trials: int, sure: Confidence | None) -> str | None:
-        """Why to stop after ``trials`` executed trials with confidence ``sure`` (None: go on)."""
+    def reason(self, trials: int, sure: Confidence | None, name: str | None = None) -> str | None:
+        """Why to stop after ``trials`` executed trials with confidence ``sure`` (None: go on);
+        ``name``: the recommended gait's, as its confidence sentence names it (default
+        ``gait <index>``)."""
         if self.max_trials is not None and trials >= self.max_trials:
             return f"{trials} trials reached max_trials = {self.max_trials}"
         if self.confidence is None or sure is None or sure.probability < self.confidence:
             return None
-        return (
-            f"{sure.probability:.0%} that gait {sure.recommended} is within "
-            f"{sure.tolerance:.0%} of the best (confidence = {self.confidence:.0%})"
-        )
+        gait = f"gait {sure.recommended}" if name is None else name
+        return f"{sure.sentence(gait)} (confidence = {self.confidence:.0%})"
 
 
 __all__ = ["Confidence", "StopRule", "check_tolerance", "confidence"]

@@ -61,14 +61,16 @@ def stop_reason(
     state: SessionState, rule: StopRule, sure: Callable[[], Confidence] | None = None
 ) -> str | None:
     """Why ``state`` should move to blind validation now (None: go on, or no rule); ``sure``
-    gives the confidence of ``state`` when the caller keeps it (default: worked out here)."""
+    gives the confidence of ``state`` when the caller keeps it (default: worked out here).
+    The gait is named as the confidence sentence names it (:meth:`SessionState.gait_name`)."""
     if not rule.active:
         return None
     trials = len(state.loop.executed)
     stated = None
     if rule.confidence is not None and recommends(state):
         stated = session_confidence(state, rule) if sure is None else sure()
-    return rule.reason(trials, stated)
+    name = None if stated is None else state.gait_name(stated.recommended)
+    return rule.reason(trials, stated, name)
 
 
 def confidence_history(
@@ -96,7 +98,7 @@ def confidence_history(
                 "answers": len(st.loop.answers),
                 "trials": len(st.loop.executed),
                 "action": sure.recommended,
-                "gait": st.gait_id(sure.recommended) or f"G{sure.recommended}",
+                "gait": st.gait_name(sure.recommended),
                 "values": st.loop.space.values_of(sure.recommended),
                 "probability": sure.probability,
                 "regret": sure.regret,

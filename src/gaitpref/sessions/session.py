@@ -737,7 +737,7 @@ class Session:
     def gait_name(self, action: int) -> str:
         """How the terminal, the console and exports name a gait: its library id, or
         ``G<action>`` without a library."""
-        return self._state.gait_id(action) or f"G{int(action)}"
+        return self._state.gait_name(action)
 
     def describe(self, action: int) -> str:
         """Feature values with units, and the gait id when there is a library."""

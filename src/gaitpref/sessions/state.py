@@ -607,8 +607,12 @@ class SessionState:
     def shown_gait(self, label: str, action: int) -> ShownGait:
         """``action`` as shown now, under ``label`` (a validation round keeps it)."""
         space = self.loop.space
-        name = self.gait_id(action) or f"G{int(action)}"
+        name = self.gait_name(action)
         return ShownGait(label, int(action), name, space.values_of(action), space.describe(action))
+
+    def gait_name(self, action: int) -> str:
+        """How the apps, exports and the stop reason name a gait: its id, or ``G<action>``."""
+        return self.gait_id(action) or f"G{int(action)}"
 
     def gait_id(self, action: int) -> str | None:
         if self.on_demand is not None:
