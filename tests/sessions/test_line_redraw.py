@@ -48,8 +48,9 @@ def test_one_line_per_query_stopped_the_session_with_most_of_the_space_free(
     neighbourhoods cover stops the session."""
     monkeypatch.setattr(line_module, "LINE_DRAWS", 1)
     s = paired_line_session(MemoryStorage(), seed)
-    with pytest.raises(NoSafeGaitError, match="any of the 1 line tried"):
-        prefer_shorter_pairs(s, QUERIES, suggest)
+    with pytest.raises(NoSafeGaitError, match="no gait was left that may be proposed"):
+        prefer_shorter_pairs(s, QUERIES, suggest)  # its line had none: the ask stopped there
+    assert s.events()[-1].kind == "query_stopped"  # its gaits that cannot be made are logged
     assert _free_share(list(s.events())) > 0.5  # while most of the space is free
 
 

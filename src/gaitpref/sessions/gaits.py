@@ -186,9 +186,10 @@ def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> NoSafeGa
     if infeasible < limit:
         return NoSafeGaitError(
             f"this ask stopped without proposing: its proposals had {infeasible} gaits that "
-            "cannot be made, and then no gait was left that may be proposed (every gait is in "
-            "the region of avoidance, near a gait flagged unsafe, or near a gait that cannot be "
-            f"made).  {logged}  Withdraw an unsafe flag if one is wrong; or finish this session "
+            "cannot be made, and then no gait was left that may be proposed (every gait, on the "
+            "line path every point of each line tried, is in the region of avoidance, near a "
+            "gait flagged unsafe, or near a gait that cannot be made).  "
+            f"{logged}  Withdraw an unsafe flag if one is wrong; or finish this session "
             "and start one whose [space] leaves those gaits out (or with a smaller [gaits] "
             "avoid_radius)"
         )
