@@ -18,6 +18,7 @@ from gaitpref.gaits import (
     build_library,
     load_library,
 )
+from gaitpref.gaits.library import grid_size
 
 
 def _document(lib: GaitLibrary, tmp_path: Path) -> dict[str, Any]:
@@ -220,6 +221,22 @@ def test_library_checks_its_grid(duration_library: GaitLibrary) -> None:
     swapped = (lib.axes[1], lib.axes[0])
     with pytest.raises(GaitLibraryError, match="start with step_length"):
         GaitLibrary(lib.params, lib.settings, swapped, lib.gaits)
+
+
+def test_the_grid_size_is_exact_past_int64(
+    duration_library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """np.prod wrapped around silently: (2**22,) * 3 (2**66 points) counted 0, so a library
+    of no gaits passed the count check on such a grid."""
+    huge = (2**22, 2**22, 2**22)
+    assert grid_size(huge) == 2**66 and grid_size((2**21, 2**21, 2**21 + 1)) > 2**63
+    lib = duration_library
+    monkeypatch.setattr(GaitLibrary, "shape", property(lambda self: huge))
+    with pytest.raises(GaitLibraryError, match=f"has {2**66} points but the library has 0"):
+        GaitLibrary(lib.params, lib.settings, lib.axes, ())
+    assert lib.size == 2**66
+    with pytest.raises(OverflowError):  # more than len() can say, rather than a wrong count
+        len(lib)
 
 
 def test_build_rejects_a_bad_grid_before_optimizing() -> None:
