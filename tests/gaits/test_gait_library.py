@@ -41,7 +41,8 @@ def test_grid_order_matches_space(duration_library: GaitLibrary) -> None:
     for i in range(len(lib)):
         assert lib.parameters(i) == space.values_of(i)
         assert lib.gait(i).step_length == lib.parameters(i)["step_length"]
-        assert lib.index(**lib.parameters(i)) == i == space.index(lib.parameters(i))
+        named: dict[str, Any] = lib.parameters(i)  # by name, as keyword arguments
+        assert lib.index(**named) == i == space.index(lib.parameters(i))
     # C order: the last axis (duration) varies fastest
     assert lib.parameters(1) == {"step_length": 0.10, "step_duration": 1.15}
     assert lib.lookup(step_length=0.13, step_duration=0.85) is lib.gait(2)
