@@ -7,24 +7,32 @@ of (K^-1 + Lambda) by dense solves.  Nothing here is shared with gaitpref.model.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from scipy.stats import norm
 
+Array = NDArray[Any]
 
-def dense_kernel(points: np.ndarray, lengthscales, variance: float, jitter: float) -> np.ndarray:
+
+def dense_kernel(points: Array, lengthscales: ArrayLike, variance: float, jitter: float) -> Array:
     diff = (points[:, None, :] - points[None, :, :]) / np.asarray(lengthscales, dtype=float)
-    return variance * np.exp(-0.5 * np.sum(diff**2, axis=-1)) + jitter * np.eye(len(points))
+    out: Array = variance * np.exp(-0.5 * np.sum(diff**2, axis=-1)) + jitter * np.eye(len(points))
+    return out
 
 
-def dense_laplace(K, winners, losers, sigma, iters: int = 200):
+def dense_laplace(
+    K: Array, winners: ArrayLike, losers: ArrayLike, sigma: ArrayLike, iters: int = 200
+) -> tuple[Array, Array]:
     """Mode and covariance of the Laplace posterior by dense Newton on all A utilities."""
     A = K.shape[0]
-    sigma = np.broadcast_to(np.asarray(sigma, dtype=float), np.shape(winners))
-    scale = np.sqrt(2.0) * sigma
+    win, lose = np.asarray(winners, dtype=np.intp), np.asarray(losers, dtype=np.intp)
+    scale = np.sqrt(2.0) * np.broadcast_to(np.asarray(sigma, dtype=float), win.shape)
     K_inv = np.linalg.solve(K, np.eye(A))
-    G = np.zeros((len(winners), A))
-    G[np.arange(len(winners)), winners] += 1.0
-    G[np.arange(len(winners)), losers] -= 1.0
+    G = np.zeros((len(win), A))
+    G[np.arange(len(win)), win] += 1.0
+    G[np.arange(len(win)), lose] -= 1.0
     f = np.zeros(A)
     for _ in range(iters):
         z = (G @ f) / scale
@@ -42,7 +50,9 @@ def dense_laplace(K, winners, losers, sigma, iters: int = 200):
     return f, 0.5 * (cov + cov.T)
 
 
-def _ordered_terms(d, sigma, band, tie):
+def _ordered_terms(
+    d: Array, sigma: ArrayLike, band: ArrayLike, tie: ArrayLike
+) -> tuple[Array, Array, Array]:
     """log p, its first two derivatives in d for the ordered probit, by scipy.stats directly."""
     s = np.sqrt(2.0) * sigma
     hi, lo = (d + band) / s, (d - band) / s
@@ -58,13 +68,22 @@ def _ordered_terms(d, sigma, band, tie):
     return np.log(z), dz / z, d2z / z - (dz / z) ** 2
 
 
-def dense_laplace_ordered(K, first, second, sigma, band, tie, iters: int = 200):
+def dense_laplace_ordered(
+    K: Array,
+    first: ArrayLike,
+    second: ArrayLike,
+    sigma: ArrayLike,
+    band: ArrayLike,
+    tie: ArrayLike,
+    iters: int = 200,
+) -> tuple[Array, Array, float]:
     """Mode, covariance and log evidence for the ordered probit by dense Newton on all A."""
     A = K.shape[0]
     K_inv = np.linalg.solve(K, np.eye(A))
-    G = np.zeros((len(first), A))
-    G[np.arange(len(first)), first] += 1.0
-    G[np.arange(len(first)), second] -= 1.0
+    one, two = np.asarray(first, dtype=np.intp), np.asarray(second, dtype=np.intp)
+    G = np.zeros((len(one), A))
+    G[np.arange(len(one)), one] += 1.0
+    G[np.arange(len(one)), two] -= 1.0
     f = np.zeros(A)
     for _ in range(iters):
         _, g, h = _ordered_terms(G @ f, sigma, band, tie)

@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from hypothesis import given
@@ -24,7 +26,8 @@ def test_grid_is_c_order_over_features_as_declared(small_space: Space) -> None:
 def test_index_point_round_trip(sizes: list[int], data: st.DataObject) -> None:
     space = Space([Feature.linspace(f"f{k}", 0.0, 1.0 + k, n) for k, n in enumerate(sizes)])
     a = data.draw(st.integers(0, len(space) - 1))
-    assert space.index(space.point(a)) == a
+    point: Any = space.point(a)  # an array of the values: taken as the sequence it is
+    assert space.index(point) == a
     assert space.index(space.values_of(a)) == a
     assert np.array_equal(space.multi_index[a], np.unravel_index(a, space.shape))
 
@@ -131,7 +134,8 @@ def test_feature_moves_take_an_index_in_range() -> None:
     for bad in (-1, 5, 1.0, True):
         with pytest.raises(IndexError, match=r"value index must be an integer in 0\.\.4"):
             f.move(bad, "-small")  # type: ignore[arg-type]
-    assert f.move(np.int64(4), "-small") == 3
+    four: Any = np.int64(4)  # a NumPy integer is an index too
+    assert f.move(four, "-small") == 3
     with pytest.raises(ValueError, match="a value must be a number, got nan"):
         f.snap(np.nan)  # it gave the first value
 
@@ -142,7 +146,8 @@ def test_coactive_move_names_a_bad_feature(small_space: Space) -> None:
             small_space.coactive_move(0, bad, "+big")  # type: ignore[arg-type]
     with pytest.raises(IndexError, match="feature number -1 out of range"):
         small_space.coactive_move(0, -1, "+big")
-    assert small_space.coactive_move(0, np.int64(1), "+big") == small_space.coactive_move(
+    one: Any = np.int64(1)
+    assert small_space.coactive_move(0, one, "+big") == small_space.coactive_move(
         0, small_space.names[1], "+big"
     )
 
@@ -162,7 +167,8 @@ def test_space_and_linspace_arguments() -> None:
     for num in (2.5, True):
         with pytest.raises(ValueError, match=r"num must be an integer in 1\.\.10,000,000"):
             Feature.linspace("x", 0, 1, num)  # type: ignore[arg-type]
-    assert len(Feature.linspace("x", 0, 1, np.int64(3))) == 3
+    three: Any = np.int64(3)
+    assert len(Feature.linspace("x", 0, 1, three)) == 3
     # '2'..'10' compared as text ("max must exceed min"); None a TypeError
     with pytest.raises(ValueError, match="min and max must be numbers"):
         Feature.interval("x", "2", "10")  # type: ignore[arg-type]

@@ -7,6 +7,7 @@ import pytest
 
 from gaitpref import ConfigError, load_config, shipped_configs
 from gaitpref.config import parse_config
+from gaitpref.space import Move
 
 GOOD = """
 [space.step_length]
@@ -140,7 +141,7 @@ def test_n1_b0_is_allowed_and_learns_from_suggestions_only() -> None:
     q = loop.ask()
     assert q.buffer == ()
     a = q.actions[0]
-    move = "+big" if cfg.space.point(a)[0] < 0.13 else "-big"
+    move: Move = "+big" if cfg.space.point(a)[0] < 0.13 else "-big"
     loop.tell(q, [], [(a, "step_length", move)])
     target = cfg.space.coactive_move(a, "step_length", move)
     assert target is not None

@@ -9,6 +9,7 @@ from gaitpref.config import (
     DEFAULT_FIT,
     DEFAULT_STRATEGY,
     DEFAULT_TIES,
+    ExperimentConfig,
     parse_config,
 )
 from gaitpref.model.hyperfit import LogNormal
@@ -39,7 +40,7 @@ buffer = 1
 """
 
 
-def _cfg(model: str = "", cospar: str = "") -> object:
+def _cfg(model: str = "", cospar: str = "") -> ExperimentConfig:
     return parse_config(BASE.format(model=model, cospar=cospar))
 
 

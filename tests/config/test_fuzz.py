@@ -115,7 +115,7 @@ def test_parsing_never_fails_unnamed_never_allocates_past_a_bound(text: str) -> 
         except ConfigError as exc:
             cfg = None
             assert exc.table is not None or exc.key is not None, str(exc)
-            assert str(exc).startswith(place(exc.table, exc.key) + ":"), str(exc)
+            assert str(exc).startswith(place(exc.table or "", exc.key) + ":"), str(exc)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()

@@ -63,7 +63,10 @@ def upload(c: TestClient, config: str, library: tuple[str, bytes] | None) -> htt
     files = {"config_file": ("study.toml", config.encode())}
     if library is not None:
         files["library_file"] = (library[0], library[1])
-    return c.post("/sessions", data={"csrf_token": csrf, "subject": "S01"}, files=files)
+    response: httpx.Response = c.post(
+        "/sessions", data={"csrf_token": csrf, "subject": "S01"}, files=files
+    )
+    return response
 
 
 def test_a_config_naming_an_uploaded_library(

@@ -20,7 +20,8 @@ def trial_form(client: TestClient, sid: int) -> Form:
 
 
 def post(client: TestClient, url: str, data: dict[str, str]) -> httpx.Response:
-    return client.post(url, data=data, follow_redirects=False)
+    response: httpx.Response = client.post(url, data=data, follow_redirects=False)
+    return response
 
 
 def test_create_from_the_sessions_page_then_answer_with_a_confirm_step(client: TestClient) -> None:

@@ -55,7 +55,8 @@ def answer(client: TestClient, sid: int, feedback: list[dict[str, Any]]) -> http
         "comparisons": [[i, j, "first"] for i, j in q["comparisons"]],
         "feedback": feedback,
     }
-    return client.post(f"/api/sessions/{sid}/answers", json=body)
+    response: httpx.Response = client.post(f"/api/sessions/{sid}/answers", json=body)
+    return response
 
 
 def gait(client: TestClient, sid: int) -> int:
@@ -179,7 +180,8 @@ def test_no_safe_gait_is_409_with_its_reason_and_a_plain_page(client: TestClient
 
 # -- the pages ---------------------------------------------------------------------------------
 def post(client: TestClient, url: str, data: dict[str, str]) -> httpx.Response:
-    return client.post(url, data=data, follow_redirects=False)
+    response: httpx.Response = client.post(url, data=data, follow_redirects=False)
+    return response
 
 
 def form_to(html: str, action: str) -> Form:

@@ -31,7 +31,8 @@ def gait(params: CompassGaitParams) -> Gait:
 @pytest.fixture(scope="session")
 def speed_library() -> GaitLibrary:
     """Seven step lengths over the paper's range at 0.2 m/s, with a two-value width label."""
-    return build_library(np.linspace(0.08, 0.18, 7), speed=0.2, step_widths=[0.25, 0.30], n_jobs=1)
+    lengths = np.linspace(0.08, 0.18, 7).tolist()
+    return build_library(lengths, speed=0.2, step_widths=[0.25, 0.30], n_jobs=1)
 
 
 @pytest.fixture(scope="session")

@@ -24,7 +24,7 @@ KEY_BEFORE_THE_BUDGET = "83df89346fa9dea1831605abd4b780b7a19dd9f362833c9e1139cde
 def spent(monkeypatch: pytest.MonkeyPatch) -> list[tuple[int, int]]:
     """Each SLSQP run's (iteration limit, iterations taken)."""
     runs: list[tuple[int, int]] = []
-    real = optimize_module.minimize
+    from scipy.optimize import minimize as real  # what optimize.py calls
 
     def counting(*args: Any, **kwargs: Any) -> Any:
         res = real(*args, **kwargs)
@@ -107,7 +107,9 @@ def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
 
 
 @pytest.mark.parametrize("meta", [{}, {"config_defaults": "0.4"}, {"config_defaults": "0.1"}])
-def test_a_session_recorded_before_the_budget_replays_without_it(meta: dict[str, str]) -> None:
+def test_a_session_recorded_before_the_budget_replays_without_it(
+    meta: dict[str, object],
+) -> None:
     cfg = config_of(stored_record(CONFIG, meta))
     assert cfg.generator is not None and "max_iterations" not in cfg.generator.settings
     generator = cfg.generator.make(cfg.space)

@@ -18,6 +18,7 @@ from gaitpref.gaits import (
     build_library,
     load_library,
 )
+from gaitpref.gaits.library import grid_size
 
 
 def _document(lib: GaitLibrary, tmp_path: Path) -> dict[str, Any]:
@@ -40,7 +41,8 @@ def test_grid_order_matches_space(duration_library: GaitLibrary) -> None:
     for i in range(len(lib)):
         assert lib.parameters(i) == space.values_of(i)
         assert lib.gait(i).step_length == lib.parameters(i)["step_length"]
-        assert lib.index(**lib.parameters(i)) == i == space.index(lib.parameters(i))
+        named: dict[str, Any] = lib.parameters(i)  # by name, as keyword arguments
+        assert lib.index(**named) == i == space.index(lib.parameters(i))
     # C order: the last axis (duration) varies fastest
     assert lib.parameters(1) == {"step_length": 0.10, "step_duration": 1.15}
     assert lib.lookup(step_length=0.13, step_duration=0.85) is lib.gait(2)
@@ -220,6 +222,22 @@ def test_library_checks_its_grid(duration_library: GaitLibrary) -> None:
     swapped = (lib.axes[1], lib.axes[0])
     with pytest.raises(GaitLibraryError, match="start with step_length"):
         GaitLibrary(lib.params, lib.settings, swapped, lib.gaits)
+
+
+def test_the_grid_size_is_exact_past_int64(
+    duration_library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """np.prod wrapped around silently: (2**22,) * 3 (2**66 points) counted 0, so a library
+    of no gaits passed the count check on such a grid."""
+    huge = (2**22, 2**22, 2**22)
+    assert grid_size(huge) == 2**66 and grid_size((2**21, 2**21, 2**21 + 1)) > 2**63
+    lib = duration_library
+    monkeypatch.setattr(GaitLibrary, "shape", property(lambda self: huge))
+    with pytest.raises(GaitLibraryError, match=f"has {2**66} points but the library has 0"):
+        GaitLibrary(lib.params, lib.settings, lib.axes, ())
+    assert lib.size == 2**66
+    with pytest.raises(OverflowError):  # more than len() can say, rather than a wrong count
+        len(lib)
 
 
 def test_build_rejects_a_bad_grid_before_optimizing() -> None:

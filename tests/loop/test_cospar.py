@@ -1,5 +1,8 @@
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -13,6 +16,7 @@ from gaitpref import (
     SquaredExponential,
     load_config,
 )
+from gaitpref.loop.cospar import Query
 
 
 def _loop(space: Space, kernel: SquaredExponential, **kw: object) -> CoSpar:
@@ -160,9 +164,9 @@ def _state(loop: CoSpar) -> tuple[object, ...]:
 def test_bad_input_raises_and_changes_nothing(
     small_space: Space,
     small_kernel: SquaredExponential,
-    make_bad,
-    error,
-    message,  # type: ignore[no-untyped-def]
+    make_bad: Callable[[Query], tuple[Any, ...]],
+    error: type[Exception],
+    message: str,
 ) -> None:
     loop = _loop(small_space, small_kernel, n=1, buffer=1, seed=5)
     q1 = loop.ask()

@@ -3,7 +3,7 @@ NumPy, and bools passed as numbers)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
@@ -44,7 +44,8 @@ def test_the_line_path_checks_the_same() -> None:
 
 def test_numpy_integers_are_integers() -> None:
     # np.int64(2) was refused as "must be an integer"
-    loop = CoSpar(SPACE, KERNEL, 0.1, n=np.int64(2), buffer=np.int32(1), seed=np.uint32(3))
+    n, buffer, seed = cast(Any, np.int64(2)), cast(Any, np.int32(1)), cast(Any, np.uint32(3))
+    loop = CoSpar(SPACE, KERNEL, 0.1, n=n, buffer=buffer, seed=seed)
     assert (loop.n, loop.buffer_size) == (2, 1)
     assert type(loop.n) is int and type(loop.buffer_size) is int
     same = CoSpar(SPACE, KERNEL, 0.1, n=2, buffer=1, seed=3, learning=Learning())
@@ -129,7 +130,7 @@ def test_avoid_all_checks_every_action_first() -> None:
     line = LineCoSpar(SPACE, KERNEL, 0.1)
     line.ask()
     with pytest.raises(ValueError, match="radius must be in"):
-        line.avoid(0, True)  # type: ignore[arg-type]
+        line.avoid(0, True)
 
 
 def test_numpy_counts_in_line_and_learning_settings() -> None:
@@ -154,13 +155,13 @@ def test_iterators_are_read_once() -> None:
     loop = CoSpar(SPACE, KERNEL, 0.1, n=2)
     query = loop.ask()
     # the check read the iterator and nothing was avoided
-    assert loop.avoid_all(iter(query.actions), 0.0)
+    assert loop.avoid_all(cast(Any, iter(query.actions)), 0.0)
     assert set(loop.avoided) == set(query.actions)
     query = loop.ask()
     a, b = query.actions
     assert a != b  # this seed's second query
     loop.tell(query, [(a, b, "first")])
-    loop.exclude({query.id: iter([0])})
+    loop.exclude({query.id: cast(Any, iter([0]))})
     assert loop.excluded == {query.id: frozenset({0})}
 
 
@@ -171,7 +172,7 @@ def test_tell_names_an_argument_that_is_not_a_list() -> None:
     query = loop.ask()
     a, b = query.actions
     # each was a TypeError from unpacking: "Value after * must be an iterable, not Comparison"
-    cases = [
+    cases: list[tuple[dict[str, Any], str]] = [
         ({"answers": Comparison(a, b, "first")}, "answers: .* got one Comparison"),
         ({"suggestions": Suggestion(a, "a", "+big")}, "suggestions: .* got one Suggestion"),
         ({"comparisons": Comparison(a, b, "first")}, "comparisons: .* got one Comparison"),

@@ -12,7 +12,8 @@ from gaitpref.strategies import make_strategy
 
 def _objective(space: Space) -> np.ndarray:
     p = (space.points - space.points.min(axis=0)) / np.ptp(space.points, axis=0)
-    return np.sin(7 * p[:, 0]) + np.cos(3 * p[:, -1])
+    out: np.ndarray = np.sin(7 * p[:, 0]) + np.cos(3 * p[:, -1])
+    return out
 
 
 def _loop(space: Space, kernel: SquaredExponential, learning: Learning, seed: int = 3) -> CoSpar:
@@ -24,7 +25,7 @@ def _loop(space: Space, kernel: SquaredExponential, learning: Learning, seed: in
 
 def _play(loop: CoSpar, answers: int) -> list[int]:
     objective = _objective(loop.space)
-    proposed = []
+    proposed: list[int] = []
     for _ in range(answers):
         q = loop.ask()
         proposed += q.actions

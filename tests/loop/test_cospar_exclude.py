@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any, cast
+
 import numpy as np
 import pytest
 
@@ -62,7 +64,7 @@ def test_exclude_is_idempotent_and_checks_input() -> None:
         with pytest.raises(TypeError, match=message):
             loop.exclude({qid: [bad]})  # type: ignore[list-item]
     with pytest.raises(TypeError, match="must be indices, got '0'"):
-        loop.exclude({qid: "0"})
+        loop.exclude(cast(Any, {qid: "0"}))
     # an AttributeError ('list' object has no attribute 'items') before
     with pytest.raises(TypeError, match="preferences to exclude: expected a mapping"):
         loop.exclude([qid])  # type: ignore[arg-type]

@@ -9,15 +9,16 @@ import pytest
 
 import gaitpref.model.hyperfit as hf
 from gaitpref import CoSpar, Space, SquaredExponential, load_config, shipped_configs
+from gaitpref.errors import ConvergenceError
 from gaitpref.loop.learning import Learning
-from gaitpref.model.laplace import ConvergenceError
 from gaitpref.simulate.users import SimulatedUser
 from gaitpref.strategies import AskContext
 
 
 def _objective(space: Space) -> np.ndarray:
     p = (space.points - space.points.min(axis=0)) / np.ptp(space.points, axis=0)
-    return np.sin(7 * p[:, 0]) + np.cos(3 * p[:, -1])
+    out: np.ndarray = np.sin(7 * p[:, 0]) + np.cos(3 * p[:, -1])
+    return out
 
 
 def _play(loop: CoSpar, answers: int, ties_every: int = 0) -> None:

@@ -131,7 +131,7 @@ def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
         table.index({"x": 1.9, "y": 1.0, "z": 0.0})
     assert table.index({"x": 1.9, "y": 1.0}) == 1
     with pytest.raises(TypeError, match="feature must be a name or a number"):
-        table.move_target(0, True, "+small")  # type: ignore[arg-type]
+        table.move_target(0, True, "+small")
     # a flat list of four numbers was two points; a row of three a NumPy reshape error
     for bad in ([0.1, 0.2, 0.3, 0.4], [[0.1, 0.2, 0.3]]):
         with pytest.raises(ValueError, match="points must be rows of 2 values"):
@@ -147,7 +147,7 @@ def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
 def test_lines_span_the_box_and_pass_through_the_origin() -> None:
     domain = Space([Feature.interval(f"x{k}", -1.0, 3.0) for k in range(5)])
     for rule in ("random", "coordinate"):
-        line = draw_line(domain, LineSettings(30, rule), 7, np.full(5, 0.5))  # type: ignore[arg-type]
+        line = draw_line(domain, LineSettings(30, rule), 7, np.full(5, 0.5))
         pts = line.points
         assert any(np.array_equal(p, np.full(5, 0.5)) for p in pts)
         assert pts.min() >= -1.0 and pts.max() <= 3.0
@@ -270,7 +270,7 @@ def test_undo_and_a_failed_tell_leave_the_table_as_it_was() -> None:
     loop.undo()
     assert len(loop.space) == size and loop.pending == q
     loop.tell(q, [(q.actions[0], q.buffer[0], "first")], [(q.actions[0], "x", "+big")])
-    assert loop.ask() == nxt and nxt.points == loop.pending.points  # type: ignore[union-attr]
+    assert loop.ask() == nxt and nxt.points == loop.pending.points
 
 
 def test_an_empty_point_set_is_the_prior() -> None:

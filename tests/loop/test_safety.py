@@ -170,7 +170,8 @@ def test_unsafe_radius_and_unflag() -> None:
     loop.flag_unsafe(31)
     banned = near(SPACE, {31}, 0.25)
     assert banned[31] and banned.sum() > 1 and not banned.all()
-    assert np.array_equal(loop.allowed(), ~banned)
+    allowed = loop.allowed()
+    assert allowed is not None and np.array_equal(allowed, ~banned)
     loop.unflag_unsafe(31)
     assert loop.allowed() is None
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -122,7 +124,8 @@ def test_confidence_takes_a_bounded_count_of_samples() -> None:
             confidence(loop.posterior, np.random.default_rng(0), samples=samples)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="block must be an integer >= 1"):
         confidence(loop.posterior, np.random.default_rng(0), samples=10, block=1.5)  # type: ignore[arg-type]
-    assert confidence(loop.posterior, np.random.default_rng(0), samples=np.int64(10)).samples == 10
+    ten: Any = np.int64(10)  # a NumPy integer is an integer too
+    assert confidence(loop.posterior, np.random.default_rng(0), samples=ten).samples == 10
 
 
 def test_the_confidence_is_about_the_smooth_utility_not_the_jitter() -> None:

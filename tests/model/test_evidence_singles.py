@@ -42,7 +42,10 @@ def _ratings(rng: np.random.Generator, A: int, n: int, fixed: bool = False) -> S
 
 
 # -- an independent dense reference (scipy.stats, all A actions, explicit K^-1) ---------------
-def _pair_terms(d, sigma, band, tie):  # type: ignore[no-untyped-def]
+Terms = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _pair_terms(d: np.ndarray, sigma: np.ndarray, band: np.ndarray, tie: np.ndarray) -> Terms:
     s = np.sqrt(2.0) * sigma
     hi, lo = (d + band) / s, (d - band) / s
     z = np.where(tie, norm.cdf(hi) - norm.cdf(lo), norm.cdf(lo))
@@ -51,7 +54,7 @@ def _pair_terms(d, sigma, band, tie):  # type: ignore[no-untyped-def]
     return np.log(z), dz / z, d2z / z - (dz / z) ** 2
 
 
-def _rating_terms(f, labels, thresholds, noise):  # type: ignore[no-untyped-def]
+def _rating_terms(f: np.ndarray, labels: np.ndarray, thresholds: np.ndarray, noise: float) -> Terms:
     t = np.concatenate([[-1e3], thresholds, [1e3]])  # +-1e3 utility: as good as infinite here
     hi, lo = (t[labels] - f) / noise, (t[labels - 1] - f) / noise
     z = norm.cdf(hi) - norm.cdf(lo)
@@ -60,7 +63,14 @@ def _rating_terms(f, labels, thresholds, noise):  # type: ignore[no-untyped-def]
     return np.log(z), dz / z, d2z / z - (dz / z) ** 2
 
 
-def _dense_evidence(K, pairs: PairData, band: float, singles, labels, thresholds) -> float:  # type: ignore[no-untyped-def]
+def _dense_evidence(
+    K: np.ndarray,
+    pairs: PairData,
+    band: float,
+    singles: np.ndarray,
+    labels: np.ndarray,
+    thresholds: tuple[float, ...],
+) -> float:
     A = K.shape[0]
     K_inv = np.linalg.solve(K, np.eye(A))
     G = np.zeros((pairs.size, A))
@@ -70,7 +80,7 @@ def _dense_evidence(K, pairs: PairData, band: float, singles, labels, thresholds
     E[np.arange(singles.size), singles] = 1.0
     bands = np.where(pairs.banded, band, 0.0)
 
-    def terms(f):  # type: ignore[no-untyped-def]
+    def terms(f: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
         lp, g, h = _pair_terms(G @ f, pairs.sigma, bands, pairs.tie)
         lr, gr, hr = _rating_terms(E @ f, labels, np.asarray(thresholds), RATING_NOISE)
         W = -G.T @ (h[:, None] * G) - E.T @ (hr[:, None] * E)

@@ -7,10 +7,10 @@ import pytest
 
 import gaitpref.model.hyperfit as hf
 from gaitpref import Feature, Space, SquaredExponential
+from gaitpref.errors import ConvergenceError
 from gaitpref.model import KroneckerPriorSampler
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hyperfit import LogNormal, default_prior, fit_hyperparameters
-from gaitpref.model.laplace import ConvergenceError
 
 SPACE = Space([Feature.linspace("x", 0.0, 1.0, 12), Feature.linspace("y", 0.0, 2.0, 12)])
 
@@ -78,7 +78,7 @@ def test_evaluations_that_fail_midway_are_counted_and_avoided(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     data = _answers((0.12, 0.8), 4, n=120)
-    real = hf.laplace_evidence
+    from gaitpref.model.evidence import laplace_evidence as real
 
     def fragile(space: Space, hyper: Hyperparameters, *args: object, **kw: object) -> object:
         if hyper.lengthscale[1] > 0.55:  # pretend long y-lengthscales break the Laplace fit

@@ -42,7 +42,8 @@ def _dense_weights(space: Space, data: PairData, factors: tuple[float, ...]) -> 
         )
         logs.append(ev + prior)
     w = np.exp(np.array(logs) - max(logs))
-    return w / w.sum()
+    out: np.ndarray = w / w.sum()
+    return out
 
 
 @pytest.mark.parametrize(("seed", "n"), [(0, 12), (1, 30), (2, 60)])

@@ -7,7 +7,8 @@ from hypothesis import strategies as st
 from scipy.special import log_ndtr
 
 from gaitpref import Feature, PreferenceGP, Space, SquaredExponential
-from gaitpref.model.laplace import ConvergenceError, fit_laplace
+from gaitpref.errors import ConvergenceError
+from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import Probit
 from tests.dense_reference import dense_kernel, dense_laplace
 
@@ -67,7 +68,7 @@ def test_whitened_objective_gradient_and_hessian_match_finite_differences(
 
     def objective(u: np.ndarray) -> float:
         f = L @ u
-        return 0.5 * u @ u - float(np.sum(lik.terms(f[a] - f[b])[0]))
+        return float(0.5 * u @ u) - float(np.sum(lik.terms(f[a] - f[b])[0]))
 
     u = rng.normal(size=visited.size)
     f = L @ u

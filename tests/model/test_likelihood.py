@@ -10,7 +10,8 @@ from gaitpref.model.likelihood import Probit, mills_ratio
 
 
 def _logp(d: np.ndarray, sigma: np.ndarray) -> np.ndarray:
-    return norm.logcdf(d / (np.sqrt(2.0) * sigma))
+    out: np.ndarray = norm.logcdf(d / (np.sqrt(2.0) * sigma))
+    return out
 
 
 @given(

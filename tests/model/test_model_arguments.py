@@ -37,9 +37,13 @@ def test_kernel_numbers_are_numbers(kwargs: dict[str, Any], message: str) -> Non
 
 
 def test_kernel_lengthscales_from_numpy() -> None:
-    assert SquaredExponential(np.array(0.3), 1.0).lengthscale == 0.3  # a 0-d array failed
-    assert SquaredExponential(np.array([0.3, 0.2]), 1.0).lengthscale == (0.3, 0.2)
-    assert SquaredExponential([np.float64(0.3)], np.float64(1.0)).lengthscale == (0.3,)
+    # NumPy values, not the floats and tuples the signature names, are taken too
+    scalar: Any = np.array(0.3)
+    pair: Any = np.array([0.3, 0.2])
+    listed: Any = [np.float64(0.3)]
+    assert SquaredExponential(scalar, 1.0).lengthscale == 0.3  # a 0-d array failed
+    assert SquaredExponential(pair, 1.0).lengthscale == (0.3, 0.2)
+    assert SquaredExponential(listed, np.float64(1.0)).lengthscale == (0.3,)
 
 
 @pytest.mark.parametrize(
@@ -62,8 +66,10 @@ def test_rating_scale_arguments(kwargs: dict[str, Any], message: str) -> None:
 
 
 def test_rating_scale_from_numpy() -> None:
-    assert Ordinal(np.int64(3)).categories == ("1", "2", "3")  # it was "not iterable"
-    assert Ordinal(2, thresholds=np.array([0.1])).thresholds == (0.1,)
+    three: Any = np.int64(3)
+    thresholds: Any = np.array([0.1])
+    assert Ordinal(three).categories == ("1", "2", "3")  # it was "not iterable"
+    assert Ordinal(2, thresholds=thresholds).thresholds == (0.1,)
 
 
 def test_rating_likelihood_labels_are_integers() -> None:

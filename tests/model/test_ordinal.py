@@ -71,7 +71,15 @@ def test_probabilities_sum_to_one_and_prior_thresholds_split_evenly() -> None:
 
 
 @np.errstate(invalid="ignore")  # inf * 0 at the open ends, masked below
-def _dense(K, w, l, sigma, single, labels, noise):  # type: ignore[no-untyped-def]
+def _dense(
+    K: np.ndarray,
+    w: np.ndarray,
+    l: np.ndarray,
+    sigma: float,
+    single: np.ndarray,
+    labels: np.ndarray,
+    noise: float,
+) -> tuple[np.ndarray, np.ndarray]:
     A = K.shape[0]
     K_inv = np.linalg.solve(K, np.eye(A))
     G = np.zeros((w.size, A))
@@ -79,7 +87,7 @@ def _dense(K, w, l, sigma, single, labels, noise):  # type: ignore[no-untyped-de
     t = np.array([-np.inf, *THRESHOLDS, np.inf])
     scale = np.sqrt(2.0) * sigma
 
-    def derivs(f):  # type: ignore[no-untyped-def]
+    def derivs(f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = (G @ f) / scale
         r = np.exp(norm.logpdf(z) - norm.logcdf(z))
         fs = f[single]

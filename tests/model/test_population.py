@@ -190,7 +190,9 @@ def test_refuses_rho_outside_the_unit_interval(
         PopulationModel(small_space, small_kernel, 1.2, SIGMA)
 
 
-def _subjects_alike(rng: np.random.Generator, space: Space, alike: bool, subjects: int = 4):
+def _subjects_alike(
+    rng: np.random.Generator, space: Space, alike: bool, subjects: int = 4
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Preferences of ``subjects`` subjects with one utility (``alike``) or independent ones."""
     x = space.points
     w, l_, who = [], [], []

@@ -59,7 +59,8 @@ def test_preference_probability_checks_both_actions(post: Posterior) -> None:
         post.preference_probability(1.5, 0)  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="must be an integer, got True"):
         post.preference_probability(True, 0)
-    assert post.preference_probability(np.int64(19), 0) == post.preference_probability(19, 0)
+    numpy_19: Any = np.int64(19)  # a NumPy integer is an index too
+    assert post.preference_probability(numpy_19, 0) == post.preference_probability(19, 0)
 
 
 @pytest.mark.parametrize("size", [-1, 2.5, True, "3"])
@@ -69,7 +70,8 @@ def test_sample_size_must_be_a_count(post: Posterior, size: object) -> None:
 
 
 def test_sample_takes_numpy_counts_and_needs_a_generator(post: Posterior) -> None:
-    assert post.sample(np.random.default_rng(0), np.int64(3)).shape == (3, 20)
+    numpy_3: Any = np.int64(3)
+    assert post.sample(np.random.default_rng(0), numpy_3).shape == (3, 20)
     for rng in (0, None, np.random.RandomState(0)):
         with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
             post.sample(rng, 2)  # type: ignore[arg-type]

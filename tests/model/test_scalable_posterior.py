@@ -35,6 +35,8 @@ from gaitpref.model.threads import one_blas_thread
 from gaitpref.space import Feature, Space
 
 ALPHA = 1e-3
+#: the ``problem`` fixture: a grid, its preferences (winners, losers) and their posterior
+Problem = tuple[Space, np.ndarray, np.ndarray, Posterior]
 SHAPE = (6, 5, 4)
 
 
@@ -64,7 +66,7 @@ def _single_blas_thread() -> Iterator[None]:
 
 
 @pytest.fixture(scope="module")
-def problem() -> tuple[Space, np.ndarray, np.ndarray, Posterior]:
+def problem() -> Problem:
     space = _grid(SHAPE)
     winners, losers = _data(space, 45, seed=3)
     posterior = PreferenceGP(space, KERNEL, NOISE, sampler="dense").posterior(winners, losers)
@@ -93,7 +95,7 @@ def _dense_laplace(
     G = np.zeros((winners.size, size))
     G[np.arange(winners.size), winners] += 1.0
     G[np.arange(winners.size), losers] -= 1.0
-    f = np.zeros(size)
+    f: np.ndarray = np.zeros(size)
     for _ in range(100):
         _, g, c = likelihood.terms(G @ f)
         lam = G.T @ (c[:, None] * G)
@@ -114,7 +116,7 @@ def _close(actual: np.ndarray, expected: np.ndarray, rtol: float = 1e-8) -> None
     np.testing.assert_allclose(actual, expected, rtol=rtol, atol=rtol * np.max(np.abs(expected)))
 
 
-def test_moments_equal_the_dense_computation(problem: tuple) -> None:
+def test_moments_equal_the_dense_computation(problem: Problem) -> None:
     space, winners, losers, posterior = problem
     mean, cov = _dense_laplace(KERNEL.dense(space), winners, losers)
     for name, engine in _engines(space).items():
@@ -150,7 +152,7 @@ def _p_values(samples: np.ndarray, mean: np.ndarray, cov: np.ndarray) -> tuple[f
     ("name", "seed"),
     [("dense", 2026), ("scalable", 2027), ("khatri-rao-blocks", 2028), ("row-blocks", 2029)],
 )
-def test_samples_have_the_dense_mean_and_covariance(problem: tuple, name: str, seed: int) -> None:
+def test_samples_have_the_dense_mean_and_covariance(problem: Problem, name: str, seed: int) -> None:
     space, _, _, posterior = problem
     p = _with(posterior, _engines(space)[name])
     samples = p.sample(np.random.default_rng(seed), 4000)
@@ -166,7 +168,7 @@ def test_prior_samples_have_the_prior_covariance() -> None:
     assert p_mean > ALPHA and p_cov > ALPHA, (p_mean, p_cov)
 
 
-def test_the_statistics_have_power(problem: tuple) -> None:
+def test_the_statistics_have_power(problem: Problem) -> None:
     space, _, _, posterior = problem
     mean, cov = posterior.mean, posterior.covariance()
     samples = posterior.sample(np.random.default_rng(2026), 4000)
@@ -176,7 +178,7 @@ def test_the_statistics_have_power(problem: tuple) -> None:
     assert min(_p_values(prior.sample(np.random.default_rng(1), 4000), mean, cov)) < ALPHA
 
 
-def test_dense_and_scalable_draw_the_same_samples(problem: tuple) -> None:
+def test_dense_and_scalable_draw_the_same_samples(problem: Problem) -> None:
     space, _, _, posterior = problem
     draws = {
         name: _with(posterior, engine).sample(np.random.default_rng(5), 6)

@@ -30,7 +30,9 @@ HYPER = Hyperparameters((0.3,), 0.005, 1e-7)
 TINY = Space([Feature.linspace("x", 0.0, 1.0, 6)])  # 6 gaits x 3 subjects: 18 nodes
 
 
-def _dense_log_evidence(space: Space, share: float, w: np.ndarray, l_: np.ndarray, who) -> float:
+def _dense_log_evidence(
+    space: Space, share: float, w: np.ndarray, l_: np.ndarray, who: np.ndarray
+) -> float:
     """The Laplace evidence over every (gait, subject) node, by dense Newton (no visited set)."""
     A = len(space)
     task = RHO + (1 - RHO) * np.eye(3)
@@ -58,7 +60,7 @@ def test_weights_equal_a_dense_brute_force_evidence_times_the_prior() -> None:
     assert got.sum() == pytest.approx(1.0)
     assert len(set(np.round(got, 6))) > 1  # the new subject's answers moved the weights
     for h, value in zip(weighed, logs, strict=True):
-        assert h.objective is not None
+        assert h.objective is not None and weighed[0].objective is not None
         assert h.objective - weighed[0].objective == pytest.approx(value - logs[0], abs=1e-6)
 
 
@@ -97,7 +99,8 @@ def test_one_hypothesis_is_todays_posterior_exactly(
     rng = np.random.default_rng(5)
     w, l_, who = _population_data(rng, small_space, 3, 6)
     data = _pair_data(small_space, w, l_, who)
-    hyper = Hyperparameters(small_kernel.lengthscale, small_kernel.variance, small_kernel.jitter)
+    lengthscales = small_kernel.lengthscales(small_space.ndim)
+    hyper = Hyperparameters(lengthscales, small_kernel.variance, small_kernel.jitter)
     fit = share_mixture_fit(small_space, hyper, RHO, 0.0, data, hypotheses=[(0.3, 1.0)])
     assert fit.after == 0.3 and [h.weight for h in fit.hypotheses] == [1.0]
     model = PopulationModel(small_space, small_kernel, RHO, SIGMA, share=fit.after)

@@ -67,7 +67,15 @@ def test_gaussian_single_terms_give_exact_gp_regression(
     assert np.allclose(post.covariance(), cov, rtol=1e-7, atol=1e-11)
 
 
-def _dense_mixed(K, w, l, sigma, single, y, s):
+def _dense_mixed(
+    K: np.ndarray,
+    w: np.ndarray,
+    l: np.ndarray,
+    sigma: float,
+    single: np.ndarray,
+    y: np.ndarray,
+    s: float,
+) -> tuple[np.ndarray, np.ndarray]:
     A = K.shape[0]
     K_inv = np.linalg.solve(K, np.eye(A))
     G = np.zeros((w.size, A))
@@ -77,7 +85,7 @@ def _dense_mixed(K, w, l, sigma, single, y, s):
     E[np.arange(single.size), single] = 1.0
     scale = np.sqrt(2.0) * sigma
 
-    def derivs(f):
+    def derivs(f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         z = (G @ f) / scale
         r = np.exp(norm.logpdf(z) - norm.logcdf(z))
         zs = y * (E @ f) / s

@@ -54,6 +54,7 @@ def test_fitted_thresholds_stay_increasing(
     assert t.shape == (categories - 1,)
     assert np.all(np.diff(t) > 0), t
     record = fit.to_json()["after"]
+    assert fit.after.thresholds is not None
     assert isinstance(record, dict) and record["thresholds"] == list(fit.after.thresholds)
     centre = np.array(ordinal.thresholds_for(VARIANCE))
     assert abs(t[0] - centre[0]) <= 3 * np.sqrt(VARIANCE) * (1 + 1e-9)
@@ -96,7 +97,8 @@ def test_fixed_thresholds_are_not_fitted_and_the_record_is_as_before() -> None:
     assert fit.accepted and fit.after.thresholds is None
     assert fit.observations == 30
     keys = {"lengthscale", "signal_variance", "jitter", "tie_band"}
-    assert set(fit.to_json()["after"]) == keys  # type: ignore[arg-type]
+    after = fit.to_json()["after"]
+    assert isinstance(after, dict) and set(after) == keys
 
 
 def test_thresholds_fitted_before_are_held_without_ratings() -> None:

@@ -29,7 +29,8 @@ def _session(config: str, answers: int) -> Session:
 
 
 def _legend_texts(fig: Figure) -> set[str]:
-    return {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().texts}
+    legends = [ax.get_legend() for ax in fig.axes]
+    return {t.get_text() for legend in legends if legend for t in legend.texts}
 
 
 def _colour_bar_labels(fig: Figure) -> list[str]:
@@ -54,7 +55,7 @@ def test_the_1d_figures_share_the_2_sd_band(one_d: Session) -> None:
         render_session(session_picture(one_d, samples=0)),
     ):
         band = next(c for c in fig.axes[0].collections if isinstance(c, PolyCollection))
-        ys = band.get_paths()[0].vertices[:, 1]
+        ys = np.asarray(band.get_paths()[0].vertices)[:, 1]
         assert np.isclose(ys.max(), (mean + BAND_SD * std).max())
         assert np.isclose(ys.min(), (mean - BAND_SD * std).min())
         assert BAND_LABEL in _legend_texts(fig)

@@ -75,7 +75,8 @@ def session(request: pytest.FixtureRequest) -> Session:
 
 
 def _legend_texts(fig: Figure) -> set[str]:
-    return {t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().texts}
+    legends = [ax.get_legend() for ax in fig.axes]
+    return {t.get_text() for legend in legends if legend for t in legend.texts}
 
 
 def test_the_shaded_gaits_are_those_the_loop_avoids(session: Session) -> None:

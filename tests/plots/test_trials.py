@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.container import ErrorbarContainer
 
 from gaitpref import Session
 from gaitpref.config import parse_config
@@ -29,7 +30,9 @@ def test_the_trials_picture_is_the_posterior_at_the_trials() -> None:
     fig = render_trials(pic)
     try:
         (ax,) = fig.axes
-        assert len(ax.containers) == 1 and len(ax.containers[0].lines[0].get_xdata()) == 5
+        (bars,) = ax.containers
+        assert isinstance(bars, ErrorbarContainer)
+        assert np.size(bars.lines[0].get_xdata()) == 5
     finally:
         plt.close(fig)
 

@@ -52,6 +52,12 @@ class EffortGiven(EventPayload):
     score: int
 
 
+def _score(observation: ActionObservation) -> int:
+    """An effort observation's score (the value this kind's observations carry)."""
+    assert isinstance(observation.value, int)
+    return observation.value
+
+
 @dataclass(frozen=True)
 class GaussianEffort:
     y: np.ndarray
@@ -90,7 +96,7 @@ class EffortKind(FeedbackKind[Effort]):
     def action_likelihood(
         self, observations: Sequence[ActionObservation], context: ModelContext
     ) -> GaussianEffort:
-        return GaussianEffort(np.array([(5 - int(o.value)) / 100 for o in observations]))
+        return GaussianEffort(np.array([(5 - _score(o)) / 100 for o in observations]))
 
     def payload(self, record: Effort, query: TrialQuery, context: ModelContext) -> EventPayload:
         return EffortGiven(

@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from gaitpref import ReplayError, Session
-from gaitpref.sessions.export import ExportError, export_session, import_session
+from gaitpref.errors import ExportError
+from gaitpref.sessions.export import export_session, import_session
 from gaitpref.storage import MemoryStorage, SQLStorage
 from tests.sessions.sessionkit import CONFIG, Drive
 
@@ -302,11 +304,12 @@ def test_two_imports_of_one_export_at_once_make_one_session(
     out = tmp_path / "export"
     export_session(s, out, "json")
     s.close()
-    db: str | MemoryStorage = {
+    make: dict[str, Callable[[], str | MemoryStorage]] = {
         "memory": lambda: MemoryStorage(),
         "sqlite": lambda: f"sqlite:///{tmp_path / 'other.db'}",
         "postgres": lambda: str(request.getfixturevalue("postgres_url")),
-    }[target]()
+    }
+    db = make[target]()
     if isinstance(db, str):
         SQLStorage(db).close()  # the schema made before the race
     check, barrier = export._check_not_imported, threading.Barrier(2, timeout=2.0)

@@ -129,12 +129,11 @@ def test_a_gait_cache_that_cannot_be_written_does_not_stop_a_session(
     if how == "folder cannot be made":
         (tmp_path / "b" / "lab.db.gaits").write_text("a file where the folder goes")
     else:
-        import gaitpref.gaits.gait_cache as gait_cache
 
         def full(*args: object, **kwargs: object) -> None:
             raise OSError(28, "No space left on device")
 
-        monkeypatch.setattr(gait_cache.os, "replace", full)
+        monkeypatch.setattr("gaitpref.gaits.gait_cache.os.replace", full)
     with pytest.warns(GaitCacheWarning, match="gaits are kept in memory"):
         imported = import_session(url, folder)
     assert imported.pending == s.pending and imported.next_query() == s.next_query()

@@ -12,8 +12,9 @@ from typing import Any
 import pytest
 
 from gaitpref import Session
+from gaitpref.errors import ExportError
 from gaitpref.sessions import export as export_module
-from gaitpref.sessions.export import ExportError, export_session, import_session
+from gaitpref.sessions.export import export_session, import_session
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive
 from tests.sessions.test_line_session import TEXT as LINE_CONFIG

@@ -81,7 +81,7 @@ def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> Non
     reopened = Session.open(url, s.id)
     np.testing.assert_array_equal(reopened.posterior().mean, s.posterior().mean)
     np.testing.assert_array_equal(reopened.space.points, s.space.points)
-    assert reopened.pending == q and reopened.pending.points == q.points  # type: ignore[union-attr]
+    assert reopened.pending == q and reopened.pending.points == q.points
     assert reopened.describe(q.actions[0]) == s.describe(q.actions[0])
     reopened.answer(q.id, [(q.actions[0], q.buffer[0], "first")])
     s.refresh()
@@ -107,8 +107,7 @@ def test_other_lines_stop_replay(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     _drive(s, 3)
     s.close()
     import gaitpref.loop.line as line_module
-
-    drawn = line_module.draw_line
+    from gaitpref.loop.lines import draw_line as drawn
 
     def shifted(space, settings, seed, origin, towards=None):  # type: ignore[no-untyped-def]
         return drawn(space, settings, seed + 1, origin, towards)

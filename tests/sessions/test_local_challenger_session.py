@@ -69,7 +69,9 @@ def test_a_warm_started_local_challenger_session_replays() -> None:
         assert (query, rng) == (query2, rng2)
 
 
-def _burst_session(settings: str) -> tuple[list[tuple[int, ...]], tuple[object, ...], Session]:
+def _burst_session(
+    settings: str,
+) -> tuple[list[tuple[int, ...]], tuple[np.ndarray, np.ndarray, object, object], Session]:
     """Four answers, an undo inside the window, then six more; the queries and the state."""
     db = MemoryStorage()
     config = _config(True, settings)

@@ -30,6 +30,7 @@ def _different_first_answer(db: str | Storage, drive: Drive, undo_twice: bool) -
     if undo_twice:
         a.undo()
     pending = a.undo()
+    assert pending is not None
     assert pending == q if not undo_twice else pending.trials == (5,)
     qa, qb = a.next_query(), b.next_query()
     assert (qa.actions, qa.buffer, qa.trials) == (qb.actions, qb.buffer, qb.trials)

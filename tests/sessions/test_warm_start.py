@@ -6,7 +6,9 @@ import dataclasses
 import json
 import re
 import sqlite3
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -195,6 +197,9 @@ def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once
     path to an earlier session (2**(k-1) - 1 replays: 31 for the sixth, a minute by the tenth,
     hours by the twentieth); now each once, the same posterior."""
     from gaitpref.sessions import warm
+    from gaitpref.sessions.replay import replay
+    from gaitpref.sessions.state import SessionState
+    from gaitpref.storage import EventRecord
 
     db = MemoryStorage()
     space = load_config(CONFIG).space
@@ -202,12 +207,11 @@ def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once
         with Session.create(db, CONFIG, "S01", seed=k, prior_from=["S01"] if k else []) as s:
             _run(s, SimulatedSubject(space, bump_utility(space), seed=k), 2)
             mean = np.asarray(s.posterior().mean).copy()
-    calls = []
-    replay = warm.replay
+    calls: list[EventRecord] = []
 
-    def counted(state: object, events: list[object]) -> None:
+    def counted(state: SessionState, events: Sequence[EventRecord]) -> None:
         calls.append(events[0])
-        replay(state, events)  # type: ignore[arg-type]
+        replay(state, events)
 
     monkeypatch.setattr(warm, "replay", counted)
     with Session.open(db, s.id) as again:
@@ -287,9 +291,11 @@ def test_prior_from_must_be_a_list_not_one_code_a_number_or_a_mapping() -> None:
     with pytest.raises(ValueError, match=r"prior_from: expected session ids .*got 1\.0"):
         Session.create(db, CONFIG, "S03", prior_from=[1.0])  # type: ignore[list-item]
     assert [r.id for r in db.list_sessions()] == before
-    with Session.create(db, CONFIG, "S03", prior_from=iter(["S01"])) as s:
+    lazy: Any = iter(["S01"])  # any iterable of ids, read once
+    with Session.create(db, CONFIG, "S03", prior_from=lazy) as s:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids[:2]
-    with Session.create(db, CONFIG, "S04", prior_from=np.array(ids)) as s:  # NumPy ids are ids
+    numpy_ids: Any = np.array(ids)  # NumPy ids are ids
+    with Session.create(db, CONFIG, "S04", prior_from=numpy_ids) as s:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
 
 

@@ -121,6 +121,7 @@ def _undone_rows_moved(suggest: bool) -> Callable[[int], Session | None]:
         s = _run(MemoryStorage(), seed, 3, suggest=False)
         prefer_shorter_pairs(s, 1, suggest)  # the answer undone next
         q = s.undo()  # its query is pending again, on its rows of the table
+        assert q is not None
         near = min(s.trials(), key=lambda t: abs(s.space.points[t.action][0] - q.points[0][0]))
         s.flag_unsafe(near.number, "knee pain")
         if s.pending is not None:  # the flag did not withdraw the pending query
@@ -151,7 +152,10 @@ def test_the_export_shows_an_undone_trial_as_walked_after_its_rows_moved_on(
 def _trial_walked(s: Session, number: int, seq: int) -> str:
     """The gait id trial ``number`` walked when the answer logged at ``seq`` named it."""
     walked = [e for e in s.events() if e.kind == "trial_executed" and e.seq < seq]
-    return next(e.payload["gait_id"] for e in reversed(walked) if e.payload["trial"] == number)
+    gait_id: str = next(
+        e.payload["gait_id"] for e in reversed(walked) if e.payload["trial"] == number
+    )
+    return gait_id
 
 
 def test_the_export_names_an_undone_answers_gaits_as_walked(tmp_path: Path) -> None:

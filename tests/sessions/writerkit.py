@@ -5,14 +5,31 @@ from __future__ import annotations
 import os
 import time
 from pathlib import Path
+from typing import TypedDict
 
 from gaitpref import QueryError, Session
 from gaitpref.storage import SessionBusyError
 
 
+class Answered(TypedDict):
+    """What :func:`answer_loop` counted: answers accepted, stale and busy; each call's time."""
+
+    accepted: int
+    stale: int
+    busy: int
+    waits: list[float]
+
+
+class Noted(TypedDict):
+    """What :func:`note_loop` counted: notes written and refused as busy."""
+
+    written: int
+    busy: int
+
+
 def answer_loop(
     url: str, session_id: int, attempts: int, barrier: str | None = None, writers: int = 2
-) -> dict[str, object]:
+) -> Answered:
     """Try ``attempts`` answers; count the accepted, the stale and the busy, and each call's time.
 
     Each attempt asks for the pending query and answers it (the first action preferred to the
@@ -46,9 +63,7 @@ def answer_loop(
     return {"accepted": accepted, "stale": stale, "busy": busy, "waits": waits}
 
 
-def note_loop(
-    url: str, session_id: int, notes: int, barrier: str, writers: int = 2
-) -> dict[str, object]:
+def note_loop(url: str, session_id: int, notes: int, barrier: str, writers: int = 2) -> Noted:
     """Write ``notes`` notes as fast as possible (after the start barrier); count the busy."""
     session = Session.open(url, session_id)
     folder = Path(barrier)

@@ -19,3 +19,10 @@ class Dying:
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> Any:
         os._exit(3)
+
+
+def fails_at_three(x: int) -> int:
+    """A run function for :func:`~gaitpref.simulate.sweep.run_tasks`: task 3 raises."""
+    if x == 3:
+        raise ValueError("three broke")
+    return x * x

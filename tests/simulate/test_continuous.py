@@ -193,16 +193,22 @@ def test_a_users_objective_that_fails_is_an_error_naming_it_and_the_run(tmp_path
         f"{tmp_path / 'broken.py'}:f": "cannot be imported: SyntaxError",
         "random-gp:x": "the seed after ':' must be an integer >= 0",
     }
+    refused = (f"{tmp_path / 'broken.py'}:f", "random-gp:x")  # before any run
     for spec, message in cases.items():
         for args in (["simulate"], ["bench", "continuous"]):
             result = CliRunner().invoke(
                 app, [*args, str(cfg), "--objective", spec, "--trials", "3"]
             )
-            assert result.exit_code == 2, result.output  # 1 with a traceback
+            # bench continuous: a run that failed stops the bench with status 1, as a study's
+            stopped = args[0] == "bench" and spec not in refused
+            assert result.exit_code == (1 if stopped else 2), result.output
+            assert isinstance(result.exception, SystemExit), result.exception  # no traceback
             assert message in " ".join(result.output.split()), (args, spec, result.output)
     result = CliRunner().invoke(app, ["bench", "continuous", str(cfg), "--objective",
                                       f"{obj}:raises", "--runs", "2", "--trials", "3"])  # fmt: skip
-    assert "the run of seed 0 (of 0-1): objective" in " ".join(result.output.split())
+    text = " ".join(result.output.split())
+    assert f"objective '{obj}:raises', seed 0 failed (ValueError): objective" in text
+    assert "the bench stopped: 0 of 2 runs finished (none to keep)" in text
 
 
 def test_runs_over_points_report_their_progress(tmp_path: Path) -> None:

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from scipy.stats import norm
 
 from gaitpref import Feature, Space
+from gaitpref.feedback import Outcome
 from gaitpref.simulate.noisy import IndifferentUser
 from gaitpref.simulate.users import SimulatedUser
 
@@ -33,7 +36,7 @@ def test_answer_frequencies_follow_the_ordered_probit() -> None:
     n = 20_000
     answers = [user.compare(2, 1) for _ in range(n)]
     s, d = np.sqrt(2) * noise, OBJECTIVE[2] - OBJECTIVE[1]
-    expected = {
+    expected: dict[Outcome, float] = {
         "first": norm.cdf((d - band) / s),
         "none": norm.cdf((d + band) / s) - norm.cdf((d - band) / s),
         "second": norm.cdf((-d - band) / s),
@@ -49,9 +52,9 @@ def test_a_negative_band_is_rejected() -> None:
 
 
 @pytest.mark.parametrize("band", [True, "0.1", None])
-def test_the_band_is_a_number(band: object) -> None:
+def test_the_band_is_a_number(band: Any) -> None:
     # True was a band of 1; a string or None a NumPy ufunc TypeError
     with pytest.raises(ValueError, match="band must be >= 0"):
         IndifferentUser(
             SPACE, np.arange(len(SPACE), dtype=float), np.random.default_rng(0), band=band
-        )  # type: ignore[arg-type]
+        )

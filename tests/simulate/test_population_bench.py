@@ -98,12 +98,15 @@ def test_the_bench_judges_the_recommendation_on_the_truths_given(tmp_path: Path)
     x = np.linspace(0, 1, len(config.space))
     objectives = np.array([-((x - p) ** 2) for p in (0.6, 0.65)])
     out = population_bench(config, objectives, 4)
-    for s in out["subjects"]:  # the answers behind the calibration, per subject and arm
+    subjects = out["subjects"]
+    assert isinstance(subjects, list)
+    for s in subjects:  # the answers behind the calibration, per subject and arm
         assert len(s["stated"]["cold"]) == len(s["right"]["warm"]) == 4
     # judged on the opposite utility: the same runs, every recommendation near the best is now
     # near the worst
-    flipped = population_bench(config, objectives, 4, truths=-objectives)
-    for a, b in zip(out["subjects"], flipped["subjects"], strict=True):
+    flipped = population_bench(config, objectives, 4, truths=-objectives)["subjects"]
+    assert isinstance(flipped, list)
+    for a, b in zip(subjects, flipped, strict=True):
         assert a["cold"] == b["cold"] and a["stated"] == b["stated"]
         assert all(
             not (r and q) for r, q in zip(a["right"]["cold"], b["right"]["cold"], strict=True)
@@ -121,7 +124,7 @@ def test_no_more_workers_than_subjects(monkeypatch: pytest.MonkeyPatch) -> None:
 
     def parallel(n_jobs: int, **kwargs: object) -> joblib.Parallel:
         asked.append(n_jobs)
-        return real(n_jobs=n_jobs, **kwargs)  # type: ignore[arg-type]
+        return real(n_jobs=n_jobs, **kwargs)
 
     monkeypatch.setattr(joblib, "Parallel", parallel)
     A = len(load_config(CONFIG).space)

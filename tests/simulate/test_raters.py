@@ -9,6 +9,7 @@ import pytest
 from gaitpref import CoSpar, SimulatedUser, load_config, run_simulation
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.simulate.raters import OrdinalRater
+from gaitpref.simulate.run import SimulationResult
 
 
 def test_noiseless_ratings_split_the_grid_at_the_quantiles() -> None:
@@ -43,7 +44,7 @@ def test_a_simulation_rates_every_trial_and_the_ratings_enter_the_model() -> Non
     objective = -((cfg.space.points[:, 0] - 0.12) ** 2)
     ordinal = Ordinal(["very bad", "bad", "okay", "good"], noise=0.02)
 
-    def run(rated: bool) -> object:
+    def run(rated: bool) -> SimulationResult:
         loop = CoSpar(cfg.space, cfg.kernel, cfg.noise, n=1, buffer=1, seed=3, ordinal=ordinal)
         user = SimulatedUser(cfg.space, objective, np.random.default_rng(4))
         rater = (
@@ -54,6 +55,7 @@ def test_a_simulation_rates_every_trial_and_the_ratings_enter_the_model() -> Non
         return run_simulation(loop, user, 12, rater=rater)
 
     with_ratings, without = run(True), run(False)
+    assert with_ratings.ratings is not None
     assert len(with_ratings.ratings) == 12 and set(with_ratings.ratings) <= {1, 2, 3, 4}
     assert with_ratings.to_json()["ratings"] == with_ratings.ratings.tolist()
     assert without.ratings is None and "ratings" not in without.to_json()

@@ -8,7 +8,7 @@ import pytest
 from gaitpref.config import load_config
 from gaitpref.loop.cospar import Query
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
-from gaitpref.space import Feature, Space
+from gaitpref.space import Feature, Move, Space
 
 # A 4 x 5 grid on [0, 1]^2 with f[i, j] = i^2 + g[j].  By hand (numpy.gradient: one-sided at the
 # edges, central inside, in grid-index units):
@@ -32,7 +32,8 @@ def small_space() -> Space:
 
 
 def objective() -> np.ndarray:
-    return np.arange(4.0)[:, None] ** 2 + G[None, :]
+    out: np.ndarray = np.arange(4.0)[:, None] ** 2 + G[None, :]
+    return out
 
 
 def flat(i: int, j: int) -> int:
@@ -64,13 +65,15 @@ def test_gradient_and_thresholds_by_hand() -> None:
         ((3, 3), None),
     ],
 )
-def test_suggestions_by_hand(point: tuple[int, int], expected: object) -> None:
+def test_suggestions_by_hand(
+    point: tuple[int, int], expected: tuple[tuple[int, int], str, Move] | None
+) -> None:
     c = GradientCoactive(small_space(), objective())
     s = c.suggest(flat(*point))
     if expected is None:
         assert s is None
         return
-    (ti, tj), feature, move = expected  # type: ignore[misc]
+    (ti, tj), feature, move = expected
     assert s is not None
     assert (s.action, s.feature, s.move) == (flat(*point), feature, move)
     assert small_space().coactive_move(s.action, s.feature, s.move) == flat(ti, tj)

@@ -72,7 +72,8 @@ def test_gradient_coactive_hand_computed_cases() -> None:
 def test_simulation_reports_trials_and_scores() -> None:
     cfg = load_config("compass-gait")
     x = cfg.space.points[:, 0]
-    cot = np.polyval([-660.1898, 556.5202, -186.4672, 34.1877, -3.4090, 0.1602], x)
+    coefficients = [-660.1898, 556.5202, -186.4672, 34.1877, -3.4090, 0.1602]
+    cot = np.asarray(np.polyval(coefficients, x), dtype=np.float64)
     loop = cfg.make_loop(seed=0)
     user = SimulatedUser(cfg.space, cot, np.random.default_rng(0), minimize=True)
     result = run_simulation(loop, user, trials=41)

@@ -191,7 +191,7 @@ def test_a_database_in_a_read_only_folder_is_named_so(
 
     SQLStorage(_sqlite(tmp_path)).close()
     refused = sqlite3.OperationalError("unable to open database file")
-    monkeypatch.setattr(sql.os, "access", lambda path, mode: False)
+    monkeypatch.setattr("gaitpref.storage.sql.os.access", lambda path, mode: False)
     assert "is read-only" in sql._hint(tmp_path / "g.db", refused)
     assert sql._hint(tmp_path / "missing.db", refused) == ""
     assert sql._hint(tmp_path / "g.db", sqlite3.OperationalError("disk I/O error")) == ""

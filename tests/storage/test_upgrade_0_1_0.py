@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -13,10 +12,9 @@ import pytest
 
 from gaitpref import Session
 from gaitpref.storage.sql import upgrade_database
+from tests.fixtures.make_db_0_1_0 import digest, summary
 
 FIXTURES = Path(__file__).resolve().parent.parent / "fixtures"
-sys.path.insert(0, str(FIXTURES))
-from make_db_0_1_0 import digest, summary  # noqa: E402
 
 EXPECTED = json.loads((FIXTURES / "gaitpref-0.1.0.json").read_text())
 

@@ -63,7 +63,8 @@ def _monte_carlo(post: Posterior, ref: int, draws: int, seed: int) -> np.ndarray
         t = np.concatenate([[-np.inf], post.ordinal.thresholds_for(post.kernel.variance), [np.inf]])
         probs = np.diff(ndtr((t[None, None, :] - f[:, :, None]) / post.ordinal.noise), axis=2)
         info = info + _h(probs.mean(axis=0)) - _h(probs).mean(axis=0)
-    return info
+    out: np.ndarray = info
+    return out
 
 
 @pytest.mark.parametrize("ordinal", [None, SCALE], ids=["preference", "preference+rating"])
@@ -193,7 +194,11 @@ def _corner_posterior(seed: int) -> tuple[Space, Posterior, int]:
 
 
 def test_after_data_in_one_corner_it_asks_away_from_it() -> None:
-    far_ig, far_ss, var_ig, var_ss, widest = [], [], [], [], []
+    far_ig: list[float] = []
+    far_ss: list[float] = []
+    var_ig: list[float] = []
+    var_ss: list[float] = []
+    widest = []
     for seed in range(12):
         space, post, best = _corner_posterior(seed)
         var = np.asarray(post.variance)

@@ -5,6 +5,8 @@ the features' units returning ``m`` utilities), ``hartmann6`` or ``random-gp[:SE
 (``gaitpref.simulate.continuous``).  The run reports, per query, the executed points' feature
 values (``"points"``, one list of points per query) and the objective there (``"objective"``),
 and the final posterior's best point and its objective (``simulate/points.py``).
+``bench continuous`` runs its seeds through :func:`~gaitpref.simulate.sweep.run_tasks`, as a
+study runs its runs: a run that fails stops the rest and keeps the finished ones.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from gaitpref.cli.output import console, guard
@@ -54,6 +57,58 @@ def simulate_points(
     user = PointUser(objective, np.random.default_rng(user_seed), noise)
     helper = PointCoactive(objective, cfg.space, seed=seed) if coactive else None
     return run_points(loop, objective, user, trials, helper, progress=progress)
+
+
+def bench_points(
+    cfg: ExperimentConfig,
+    spec: str,
+    runs: int,
+    *,
+    trials: int,
+    coactive: bool = False,
+    noise: float = 0.0,
+    progress: Callable[[int], None] | None = None,
+    partial: Path | None = None,
+) -> list[PointsResult]:
+    """``gaitpref bench continuous``'s runs, seeds ``0 .. runs - 1`` (``random-gp`` alone: run
+    ``k`` against ``random-gp:k``); ``progress`` is called with the trials done in all runs.
+
+    The noise and the first run's objective are checked before any run (a ValueError); a run
+    that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
+    (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
+    ``partial`` (JSON lines, written as each run finishes, removed once every run has).
+    """
+    from gaitpref.simulate.continuous import objective_from
+    from gaitpref.simulate.partial import JsonLines, partial_file, run_error
+    from gaitpref.simulate.sweep import run_tasks
+    from gaitpref.simulate.users import check_user_noise
+
+    check_user_noise(noise)  # refused here, not as every run's failure
+    specs = [f"random-gp:{k}" if spec == "random-gp" else spec for k in range(runs)]
+    first = objective_from(specs[0], cfg.space, cfg.seed)
+
+    def one(seed: int) -> PointsResult:
+        fn = first if seed == 0 else objective_from(specs[seed], cfg.space, cfg.seed)
+        return simulate_points(
+            cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise,
+            progress=None if progress is None else lambda done: progress(seed * trials + done),
+        )  # fmt: skip
+
+    def record(seed: int, result: PointsResult) -> dict[str, object]:
+        return {"seed": seed, **result.to_json()}
+
+    with partial_file(None if partial is None else JsonLines(partial)) as sink:
+
+        def done(seed: int, result: PointsResult) -> None:
+            if sink is not None:
+                sink.append(record(seed, result))
+
+        results, failure = run_tasks(one, list(range(runs)), 1, done=done)
+        if failure is not None:
+            kept = [record(k, r) for k, r in enumerate(results) if r is not None]
+            names = [f"objective {s!r}, seed {k}" for k, s in enumerate(specs)]
+            raise run_error(failure, names, kept, runs, None if sink is None else sink.path)
+    return [r for r in results if r is not None]
 
 
 def report(cfg: ExperimentConfig, result: PointsResult, seed: int, elapsed: float,
@@ -103,4 +158,11 @@ def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coacti
     report(cfg, result, seed, time.perf_counter() - start, as_json)
 
 
-__all__ = ["is_grid_objective", "load_point_objective", "report", "run_command", "simulate_points"]
+__all__ = [
+    "bench_points",
+    "is_grid_objective",
+    "load_point_objective",
+    "report",
+    "run_command",
+    "simulate_points",
+]

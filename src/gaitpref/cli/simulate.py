@@ -4,16 +4,23 @@
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
+                              [--partial FILE.jsonl]
     gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
+                              [--partial FILE.jsonl]
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
-``sweep``, files in ``tables``/``report``/``figures``).
+``sweep``, files in ``tables``/``report``/``figures``).  A run that fails stops every command
+with status 1 and an error naming the run and where the finished runs are (a study's in
+``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
 """
 
 from __future__ import annotations
 
+import secrets
+import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, TypeVar
 
 import typer
 
@@ -21,7 +28,6 @@ from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 
 if TYPE_CHECKING:
-    from gaitpref.simulate.points import PointsResult
     from gaitpref.simulate.study import Study
     from gaitpref.simulate.sweep import StudyResult
 
@@ -42,6 +48,15 @@ Jobs = Annotated[int, typer.Option("--jobs", "-j", help="parallel runs (-1: ever
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
 #: the finished runs of a study that has not finished (in --out): removed when every run has
 PARTIAL = "runs.partial.csv"
+Partial = Annotated[
+    Path | None,
+    typer.Option(
+        "--partial",
+        help="JSON-lines file each finished run is written to as it finishes, kept when a run "
+        "fails (default: a new file in the temporary folder); removed when every run finishes",
+    ),
+]
+T = TypeVar("T")
 
 
 def _split(values: list[str] | None, option: str) -> list[str] | None:
@@ -69,22 +84,41 @@ def _integers(text: str, option: str) -> list[int]:
 def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
     """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
     finished (then the file is removed), so a run that fails loses none of the others."""
-    from gaitpref.simulate.partial import StudyRunError
     from gaitpref.simulate.sweep import BACKENDS, run_study
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     partial = out / PARTIAL
-    try:
-        return run_study(
+    return _stopping(
+        lambda: run_study(
             study, backend, jobs, address, progress=True, console=_console, partial=partial
         )
-    except StudyRunError as exc:  # names the run and where the finished runs are
-        fail(str(exc), 1)  # a computation that could not finish
+    )
+
+
+def _stopping(sweep: Callable[[], T]) -> T:
+    """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
+    run and where the finished runs are) exits with status 1, a computation that could not
+    finish; refused input as :func:`report` says."""
+    from gaitpref.simulate.partial import RunError
+
+    try:
+        return sweep()
+    except RunError as exc:
+        fail(str(exc), 1)
     except HANDLED as exc:
         report(exc)
     except RuntimeError as exc:  # a Ray runtime that cannot start
         fail(str(exc))
+
+
+def _partial(given: Path | None, command: str) -> Path:
+    """Where a bench keeps its finished runs: ``--partial``, else a new name in the temporary
+    folder (not made until the runs start: a bench refused before leaves no file)."""
+    if given is not None:
+        return given
+    name = f"gaitpref-bench-{command}-{secrets.token_hex(4)}.partial.jsonl"
+    return Path(tempfile.gettempdir()) / name
 
 
 def _folder(out: Path) -> None:
@@ -262,6 +296,7 @@ def population(
         ),
     ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    partial: Partial = None,
 ) -> None:
     """Each subject held out in turn: cold, then warm-started from the others (same seeds)."""
     import json
@@ -276,10 +311,11 @@ def population(
     def run() -> dict[str, object]:
         cfg = load_config(config)
         return population_bench(
-            cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise
-        )
+            cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
+            partial=_partial(partial, "population"),
+        )  # fmt: skip
 
-    result = guard(run)
+    result = _stopping(run)
     if as_json:
         typer.echo(json.dumps(result))
         return
@@ -307,6 +343,7 @@ def continuous(
     coactive: Annotated[bool, typer.Option(help="simulate coactive suggestions")] = False,
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    partial: Partial = None,
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""
@@ -315,34 +352,19 @@ def continuous(
     import numpy as np
 
     from gaitpref.cli.main import progress_bar
-    from gaitpref.cli.points import load_point_objective, simulate_points
+    from gaitpref.cli.points import bench_points
     from gaitpref.config import load_config
 
     cfg = guard(lambda: load_config(config))
-    results: list[PointsResult] = []
-    failed: tuple[int, BaseException] | None = None
     with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
-        for seed in range(runs):
-            spec = f"random-gp:{seed}" if objective == "random-gp" else objective
-            fn = load_point_objective(spec, cfg)
-
-            def progress(done: int, before: int = seed * trials) -> None:
-                bar.update(task, completed=before + done)
-
-            try:
-                run = simulate_points(
-                    cfg, fn, trials=trials, seed=seed, coactive=coactive, noise=noise,
-                    progress=progress,
-                )  # fmt: skip
-            except HANDLED as caught:
-                failed = seed, caught
-                break
-            results.append(run)
-    if failed is not None:  # which run failed; the runs before it are not printed
-        at, problem = failed
-        before = f"; the runs of seeds 0-{at - 1} finished, not reported" if at else ""
-        report(problem, f"the run of seed {at} (of 0-{runs - 1}){before}")
+        results = _stopping(
+            lambda: bench_points(
+                cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
+                progress=lambda done: bar.update(task, completed=done),
+                partial=_partial(partial, "continuous"),
+            )
+        )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
     out = {

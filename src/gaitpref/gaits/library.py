@@ -72,6 +72,12 @@ def check_axes(axes: tuple[tuple[str, tuple[float, ...]], ...], speed: float | N
             )
 
 
+def grid_size(shape: Sequence[int]) -> int:
+    """The number of points of a grid of ``shape``, in exact integer arithmetic (``np.prod``
+    of int64 wrapped around silently: a grid of ``(2**22,) * 3`` had 0 points)."""
+    return math.prod(int(n) for n in shape)
+
+
 def feasible_gait_problem(gait: Gait) -> str | None:
     """What makes a gait flagged feasible unusable (non-finite numbers, ``delta^2`` outside
     ``(0, 1)``), or None: a library, and a gait cache, refuse such a gait."""
@@ -109,9 +115,9 @@ class GaitLibrary:
         object.__setattr__(self, "axes", axes)
         object.__setattr__(self, "gaits", tuple(self.gaits))
         check_axes(axes, self.speed)
-        if len(self.gaits) != len(self):
+        if len(self.gaits) != self.size:  # the exact count: len() cannot hold past 2**63 - 1
             raise GaitLibraryError(
-                f"the grid {self.shape} has {len(self)} points but the library has "
+                f"the grid {self.shape} has {self.size} points but the library has "
                 f"{len(self.gaits)} gaits"
             )
         ids = [self.gait_id(i) for i in range(len(self))]
@@ -157,8 +163,13 @@ class GaitLibrary:
     def shape(self) -> tuple[int, ...]:
         return tuple(len(values) for _, values in self.axes)
 
+    @property
+    def size(self) -> int:
+        """The grid's number of points, exactly (``np.prod`` wrapped around past ``2**63``)."""
+        return grid_size(self.shape)
+
     def __len__(self) -> int:
-        return int(np.prod(self.shape))
+        return self.size
 
     def features(self) -> list[Feature]:
         """The grid's axes as :class:`gaitpref.Feature` (units, coactive fractions, words)."""

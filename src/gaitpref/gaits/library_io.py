@@ -39,6 +39,7 @@ from gaitpref.gaits.gait import Gait, HZDSettings
 from gaitpref.gaits.library import (
     AXES,
     GaitLibrary,
+    grid_size,
 )
 from gaitpref.gaits.params import CompassGaitParams
 
@@ -208,7 +209,7 @@ def from_document(
     gaits_raw = r.get(data, "gaits", "")
     if not isinstance(gaits_raw, list):
         raise r.fail("gaits", "expected a list")
-    expected = int(np.prod([len(v) for _, v in axes])) if axes else 0
+    expected = grid_size([len(v) for _, v in axes]) if axes else 0
     if len(gaits_raw) != expected:
         raise r.fail("gaits", f"{len(gaits_raw)} gaits for a grid of {expected} points")
     gaits = [_gait(r, entry, k, settings.degree) for k, entry in enumerate(gaits_raw)]

@@ -22,7 +22,7 @@ from gaitpref.feedback import Comparison, Suggestion
 from gaitpref.loop.cospar import CoSpar, Query
 from gaitpref.pointset import PointSet
 from gaitpref.simulate.continuous import PointObjective
-from gaitpref.simulate.users import query_pairs
+from gaitpref.simulate.users import check_user_noise, query_pairs
 from gaitpref.space import FloatArray, Move, Space
 
 
@@ -35,8 +35,7 @@ class PointUser:
     noise: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.noise) and self.noise >= 0):
-            raise ValueError(f"noise must be a finite number >= 0, got {self.noise!r}")
+        check_user_noise(self.noise)
 
     def answer(self, query: Query, space: Space) -> list[Comparison]:
         """Every executed action against every other member of the query, each pair once."""

@@ -22,6 +22,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -31,9 +33,15 @@ from gaitpref.feedback import Preference
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import confidence
 from gaitpref.loop.warm import RELEARN_EVERY, relearning, warm_start
-from gaitpref.simulate.sweep import resolve_jobs
-from gaitpref.simulate.users import SimulatedUser, objective_on_grid
+from gaitpref.simulate.partial import JsonLines, partial_file, run_error
+from gaitpref.simulate.sweep import run_tasks
+from gaitpref.simulate.users import SimulatedUser, check_user_noise, objective_on_grid
 from gaitpref.space import FloatArray
+
+#: A subject's two runs, in the order they run: alone, then warm-started from the others.
+ARMS = ("cold", "warm")
+#: The other subjects' preferences a warm run starts from.
+Others = Sequence[Sequence[Preference]]
 
 
 @dataclass(frozen=True)
@@ -48,6 +56,26 @@ class Walked:
     rho: float | None = None
     share: float | None = None  # the new subject's share at the end (warm, re-learned)
     alone: float | None = None  # the weight on share 0 at the end (warm, share = "average")
+
+
+def _walk_args(args: tuple[Any, ...]) -> Walked:
+    """:func:`_walk` of one task's arguments (the function the sweep runs)."""
+    return _walk(*args)
+
+
+def walked_record(subject: int, arm: str, seed: int, walked: Walked) -> dict[str, object]:
+    """One finished run as a bench keeps it when another fails (a line of the partial file)."""
+    return {
+        "subject": subject,
+        "run": arm,
+        "seed": seed,
+        "scores": walked.scores,
+        "stated": walked.stated,
+        "right": walked.right,
+        "rho": walked.rho,
+        "share": walked.share,
+        "alone": walked.alone,
+    }
 
 
 def _walk(
@@ -186,6 +214,7 @@ def population_bench(
     user_noise: float = 0.0,
     relearn_every: int = RELEARN_EVERY,
     truths: FloatArray | None = None,
+    partial: str | Path | None = None,
 ) -> dict[str, object]:
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
     simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
@@ -193,7 +222,12 @@ def population_bench(
     (0: ``rho`` held, as warm starts recorded before share refits; otherwise the new subject
     starts alone and the share is gated as sessions' warm starts, ``loop/warm.py``);
     ``truths``: the grids on which the recommendation is judged (``S x A``; None: the
-    objectives; :func:`gp_population` gives the smooth parts of prior draws)."""
+    objectives; :func:`gp_population` gives the smooth parts of prior draws).
+
+    A run that fails stops the bench with :class:`~gaitpref.simulate.partial.RunError` naming
+    it (subject, cold or warm, seed), its error the ``__cause__``, the finished runs on it as
+    :func:`walked_record` records; ``partial``: a file each finished run's record is appended
+    to as it finishes (JSON lines), removed once every run has finished."""
     grids = _subject_grids(config, objectives, "objectives")
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
@@ -205,35 +239,39 @@ def population_bench(
             raise ValueError(f"truths: one grid per subject ({len(grids)}), got {len(judged)}")
     if trials < 1:
         raise ValueError(f"trials must be >= 1, got {trials}")
-    n_jobs = resolve_jobs(jobs)
+    check_user_noise(user_noise)  # refused here, not as every run's failure
+    S = len(grids)
+    walked: dict[str, list[Walked | None]] = {arm: [None] * S for arm in ARMS}
 
-    def run(calls: list[tuple[int, Sequence[Sequence[Preference]] | None]]) -> list[Walked]:
+    def run(arm: str, others: Sequence[Others | None], sink: JsonLines | None) -> list[Walked]:
+        """Every subject's ``arm`` run; a failure is a RunError keeping the finished runs."""
         args = [
-            (
-                config,
-                grids[k],
-                judged[k],
-                trials,
-                (seed, k),
-                o,
-                tolerance,
-                samples,
-                user_noise,
-                relearn_every,
-            )
-            for k, o in calls
-        ]
-        if n_jobs == 1:
-            return [_walk(*a) for a in args]
-        from joblib import Parallel, delayed
+            (config, grids[k], judged[k], trials, (seed, k), others[k], tolerance, samples,
+             user_noise, relearn_every)
+            for k in range(S)
+        ]  # fmt: skip
 
-        workers = min(n_jobs, len(args))  # a process per run at most (as run_study)
-        parallel = Parallel(n_jobs=workers, backend="loky", inner_max_num_threads=1)
-        return list(parallel(delayed(_walk)(*a) for a in args))
+        def done(k: int, w: Walked) -> None:
+            walked[arm][k] = w
+            if sink is not None:
+                sink.append(walked_record(k, arm, seed, w))
 
-    cold = run([(k, None) for k in range(len(grids))])
-    others = [[cold[j].preferences for j in range(len(grids)) if j != k] for k in range(len(grids))]
-    warm = run([(k, others[k]) for k in range(len(grids))])
+        _, failure = run_tasks(_walk_args, args, jobs, done=done)
+        if failure is not None:
+            kept = [
+                walked_record(k, a, seed, w)
+                for a in ARMS
+                for k, w in enumerate(walked[a])
+                if w is not None
+            ]
+            names = [f"subject {k} ({arm}), seed {seed}" for k in range(S)]
+            raise run_error(failure, names, kept, 2 * S, None if sink is None else sink.path)
+        return [w for w in walked[arm] if w is not None]
+
+    with partial_file(None if partial is None else JsonLines(partial)) as sink:
+        cold = run("cold", [None] * S, sink)
+        warm = run("warm", [[c.preferences for j, c in enumerate(cold) if j != k]
+                            for k in range(S)], sink)  # fmt: skip
     stated = [p for w in (*cold, *warm) for p in w.stated]
     right = [r for w in (*cold, *warm) for r in w.right]
     return {
@@ -302,4 +340,5 @@ __all__ = [
     "gp_population",
     "population_bench",
     "synthetic_population",
+    "walked_record",
 ]

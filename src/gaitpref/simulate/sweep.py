@@ -18,6 +18,10 @@ When a run fails (its error, or its worker dies) the study stops and raises
 :class:`~gaitpref.simulate.partial.StudyRunError` naming the run, with the runs that finished;
 given ``partial``, a CSV path, each finished run is also appended there as it finishes (the file
 is removed when the whole study finishes, and kept when it does not, whatever stopped it).
+
+:func:`run_tasks` is the machinery under it, for any function over any tasks: each result as it
+finishes, and the first failure; ``gaitpref bench continuous`` and ``bench population`` keep
+their finished runs with it too (:mod:`gaitpref.simulate.partial`).
 """
 
 from __future__ import annotations
@@ -28,10 +32,10 @@ import os
 import socket
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 from rich.console import Console
 from rich.progress import (
@@ -47,12 +51,20 @@ from rich.progress import (
 )
 from rich.text import Text
 
-from gaitpref.simulate.partial import RunFailure, run_table, sendable, study_error
-from gaitpref.simulate.study import RunResult, RunTask, Study, run_one
+from gaitpref.simulate.partial import (
+    RunFailure,
+    partial_file,
+    run_table,
+    sendable,
+    study_error,
+)
+from gaitpref.simulate.study import RunResult, Study, run_one
 from gaitpref.simulate.tables import Curves, RunTable, TableAppender, summarize
 
 Backend = Literal["joblib", "ray"]
 BACKENDS: tuple[Backend, ...] = ("joblib", "ray")
+T = TypeVar("T")
+R = TypeVar("R")
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,75 +125,101 @@ def run_study(
     (the run named, the finished runs kept on it); ``partial``: a ``.csv`` file each finished
     run is appended to as it finishes, removed once every run has finished.
     """
+    check_backend(backend, address)
+    tasks = study.tasks()
+    n_jobs = min(resolve_jobs(jobs), len(tasks))
+    rated = any(s.rating_quantiles for s in study.settings)
+    start = time.perf_counter()
+    # the partial table is made before any run: a path that cannot be written fails at once
+    with partial_file(None if partial is None else TableAppender(partial, rated)) as sink:
+        with _progress(console) if progress else _NoProgress() as bar:
+            tid = bar.add_task(study.name, total=len(tasks))
+
+            def done(index: int, result: RunResult) -> None:
+                if sink is not None:
+                    sink.append(run_table([result], rated))
+                bar.advance(tid)
+
+            results, failure = run_tasks(run_one, tasks, n_jobs, backend, address, done)
+        if failure is not None:
+            raise study_error(failure, tasks, results, rated, None if sink is None else sink.path)
+    seconds = time.perf_counter() - start
+    done_runs = [r for r in results if r is not None]
+    if len(done_runs) != len(tasks):
+        raise RuntimeError(f"{len(tasks) - len(done_runs)} of {len(tasks)} runs returned no result")
+    table = run_table(done_runs, rated)
+    return StudyResult(study, table, summarize(table), backend, n_jobs, seconds)
+
+
+def check_backend(backend: str, address: str | None) -> None:
+    """Refuse a backend that is not one of :data:`BACKENDS`, or an address without Ray."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
-    tasks = study.tasks()
+
+
+def run_tasks(
+    fn: Callable[[T], R],
+    tasks: Sequence[T],
+    jobs: int | None = 1,
+    backend: Backend = "joblib",
+    address: str | None = None,
+    done: Callable[[int, R], None] | None = None,
+) -> tuple[list[R | None], RunFailure | None]:
+    """``fn`` of every task, in the tasks' order, on ``backend`` with ``jobs`` workers (as
+    :func:`resolve_jobs` counts; never more than the tasks); ``done(index, result)`` is called
+    here as each run finishes.  The first run that fails (raises, or its worker dies) stops the
+    sweep: no more runs start (on joblib those in progress finish first; on Ray they are
+    cancelled) and its :class:`~gaitpref.simulate.partial.RunFailure` is returned beside the
+    results (None for each run that did not finish); without a failure it is None.  With more
+    than one job (or Ray), ``fn`` and the tasks must pickle."""
+    check_backend(backend, address)
+    results: list[R | None] = [None] * len(tasks)
+    if not tasks:
+        return results, None
     # no more workers than runs: each loky worker is a process that loads NumPy and SciPy, and
     # a mistyped --jobs 1000 started a thousand of them for a handful of runs
     n_jobs = min(resolve_jobs(jobs), len(tasks))
-    rated = any(s.rating_quantiles for s in study.settings)
-    results: list[RunResult | None] = [None] * len(tasks)
-    sink = None if partial is None else TableAppender(partial, rated)  # before any run
-    start = time.perf_counter()
-    try:
-        with _progress(console) if progress else _NoProgress() as bar:
-            tid = bar.add_task(study.name, total=len(tasks))
-            runner = _run_ray if backend == "ray" else _run_joblib
-            for index, outcome in runner(tasks, n_jobs, address):
-                if isinstance(outcome, RunFailure):
-                    finished = any(r is not None for r in results)
-                    kept = sink.path if sink is not None and finished else None
-                    raise study_error(outcome, tasks, results, rated, kept)
-                results[index] = outcome
-                if sink is not None:
-                    sink.append(run_table([outcome], rated))
-                bar.advance(tid)
-    finally:
-        if sink is not None:
-            sink.close()
-            if not any(r is not None for r in results):
-                sink.path.unlink(missing_ok=True)  # nothing finished: nothing to keep
-    seconds = time.perf_counter() - start
-    done = [r for r in results if r is not None]
-    if len(done) != len(tasks):
-        raise RuntimeError(f"{len(tasks) - len(done)} of {len(tasks)} runs returned no result")
-    table = run_table(done, rated)
-    if sink is not None:
-        sink.path.unlink(missing_ok=True)  # the whole study finished: its tables are the result
-    return StudyResult(study, table, summarize(table), backend, n_jobs, seconds)
+    runner = _run_ray if backend == "ray" else _run_joblib
+    for index, outcome in runner(fn, tasks, n_jobs, address):
+        if isinstance(outcome, RunFailure):
+            return results, outcome
+        results[index] = outcome
+        if done is not None:
+            done(index, outcome)
+    return results, None
 
 
-def _attempt(index: int, task: RunTask) -> RunResult | RunFailure:
-    """``run_one(task)``, or the failure that names it."""
+def _attempt(fn: Callable[[T], R], index: int, task: T) -> R | RunFailure:
+    """``fn(task)``, or the failure that names it."""
     try:
-        return run_one(task)
+        return fn(task)
     except Exception as exc:
         return RunFailure((index,), sendable(exc))
 
 
-def _indexed(item: tuple[int, RunTask, str]) -> tuple[int, RunResult | RunFailure]:
-    """A worker's run: marked as running (a file named by its index in ``item[2]``) until it
+def _indexed(item: tuple[Callable[[T], R], int, T, str]) -> tuple[int, R | RunFailure]:
+    """A worker's run: marked as running (a file named by its index in ``item[3]``) until it
     returns, so that a worker that dies leaves the name of the run it was running."""
-    index, task, running = item
+    fn, index, task, running = item
     marker = Path(running) / str(index)
-    with contextlib.suppress(OSError):  # the study stopped and took the folder away
+    with contextlib.suppress(OSError):  # the sweep stopped and took the folder away
         marker.touch()
     try:
-        return index, _attempt(index, task)
+        return index, _attempt(fn, index, task)
     finally:
         marker.unlink(missing_ok=True)
 
 
 def _run_joblib(
-    tasks: list[RunTask], jobs: int, address: str | None
-) -> Iterator[tuple[int, RunResult | RunFailure]]:
+    fn: Callable[[T], R], tasks: Sequence[T], jobs: int, address: str | None
+) -> Iterator[tuple[int, R | RunFailure]]:
     """Each run's index and result as it finishes; a failure last: after a run's error no more
     runs start and those in progress finish first (their results are kept)."""
     if jobs == 1:
         for i, task in enumerate(tasks):
-            outcome = _attempt(i, task)
+            outcome = _attempt(fn, i, task)
             yield i, outcome
             if isinstance(outcome, RunFailure):
                 return
@@ -198,7 +236,7 @@ def _run_joblib(
             for i, t in enumerate(tasks):
                 if failed:
                     return
-                yield delayed(_indexed)((i, t, running))
+                yield delayed(_indexed)((fn, i, t, running))
 
         try:
             for i, outcome in parallel(feed()):
@@ -264,13 +302,13 @@ def _probe(address: str, timeout: float = 5.0) -> None:
 
 
 def _run_ray(
-    tasks: list[RunTask], jobs: int, address: str | None
-) -> Iterator[tuple[int, RunResult | RunFailure]]:
+    fn: Callable[[T], R], tasks: Sequence[T], jobs: int, address: str | None
+) -> Iterator[tuple[int, R | RunFailure]]:
     ray = _import_ray()
     started = start_ray(address, jobs)
     pending: list[Any] = []
     try:
-        remote: Callable[..., Any] = ray.remote(num_cpus=1, max_retries=0)(run_one).remote
+        remote: Callable[..., Any] = ray.remote(num_cpus=1, max_retries=0)(fn).remote
         refs = [remote(t) for t in tasks]
         position = {ref: i for i, ref in enumerate(refs)}
         pending = list(refs)
@@ -302,7 +340,7 @@ def _run_ray(
 
 def _finished_already(
     ray: Any, pending: list[Any], position: dict[Any, int]
-) -> Iterator[tuple[int, RunResult]]:
+) -> Iterator[tuple[int, Any]]:
     """The results of ``pending`` runs that have finished by now (a failure stops the rest)."""
     if not pending:
         return

@@ -243,13 +243,15 @@ def _write_rows(w: Any, table: RunTable) -> None:
 class TableAppender:
     """A CSV run table (``.csv``) written a few rows at a time, e.g. each run of a study as it
     finishes, so that what was written survives what stops the rest; :func:`read_table` reads
-    it.  ``rated``: with the ``rating`` column.  Every :meth:`append` is flushed."""
+    it.  ``rated``: with the ``rating`` column.  Every :meth:`append` is flushed and counted
+    (``appended``)."""
 
     def __init__(self, path: str | Path, rated: bool) -> None:
         self.path = Path(path)
         if not self.path.name.endswith(".csv"):
             raise ValueError(f"{self.path}: a table written row by row must end in .csv")
         self.rated = rated
+        self.appended = 0
         self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115
         self._w = csv.writer(self._fh, lineterminator="\n")
         self._w.writerow((*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS)
@@ -262,6 +264,7 @@ class TableAppender:
             raise ValueError(f"{self.path}: rows with columns {table.columns} do not fit")
         _write_rows(self._w, table)
         self._fh.flush()
+        self.appended += 1
 
     def close(self) -> None:
         if self._fh is not None:

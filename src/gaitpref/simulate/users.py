@@ -41,6 +41,14 @@ def objective_on_grid(space: Space, objective: ArrayLike) -> FloatArray:
     return arr.reshape(-1).copy()
 
 
+def check_user_noise(noise: float) -> float:
+    """A simulated subject's probit noise: a finite number ``>= 0`` (0: noiseless), else a
+    ValueError (checked before a sweep's runs, as well as by each user)."""
+    if not (is_number(noise) and np.isfinite(noise) and noise >= 0):
+        raise ValueError(f"noise must be a finite number >= 0, got {noise!r}")
+    return float(noise)
+
+
 @dataclass
 class SimulatedUser:
     """Answers queries from ``objective`` (higher is better unless ``minimize``)."""
@@ -55,8 +63,7 @@ class SimulatedUser:
     def __post_init__(self) -> None:
         self.objective = objective_on_grid(self.space, self.objective)
         self.utility = -self.objective if self.minimize else self.objective
-        if not (is_number(self.noise) and np.isfinite(self.noise) and self.noise >= 0):
-            raise ValueError(f"noise must be a finite number >= 0, got {self.noise!r}")
+        check_user_noise(self.noise)
         if not isinstance(self.rng, np.random.Generator):
             raise TypeError(
                 f"rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), "

@@ -1,0 +1,221 @@
+"""``gaitpref bench continuous`` and ``bench population`` keep their finished runs when one
+fails, as a study does (``simulate/partial.py``): the error names the run (objective or
+subject, and seed) and its cause, the finished runs are in the ``--partial`` file it names
+(JSON lines, one a run), and the status is 1.  Before, a failure lost every finished run."""
+
+from __future__ import annotations
+
+import json
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+from gaitpref.config import load_config
+from gaitpref.simulate import population as population_module
+from gaitpref.simulate.partial import RunError, RunFailure
+from gaitpref.simulate.population import population_bench
+from gaitpref.simulate.sweep import run_tasks
+from tests.simulate.breaking import fails_at_three
+
+CONTINUOUS = """\
+[space.a]
+min = 0.0
+max = 2.0
+[model]
+lengthscale = 0.4
+signal_variance = 1.0
+noise = 0.05
+jitter = 1e-6
+fit = "fixed"
+"""
+POPULATION = "exo-1d-step-length"
+
+
+def _text(output: str) -> str:
+    return " ".join(output.split())  # Rich wraps long lines
+
+
+def _lines(path: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines()]
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_run_tasks_returns_the_finished_runs_and_the_first_failure(jobs: int) -> None:
+    seen: list[int] = []
+    results, failure = run_tasks(
+        fails_at_three, [0, 1, 2, 3, 4, 5], jobs, done=lambda i, r: seen.append(i)
+    )
+    assert isinstance(failure, RunFailure) and failure.indices == (3,)
+    assert isinstance(failure.error, ValueError) and str(failure.error) == "three broke"
+    finished = [i for i, r in enumerate(results) if r is not None]
+    assert results[3] is None and sorted(seen) == finished
+    assert all(r == i * i for i, r in enumerate(results) if r is not None)
+    if jobs == 1:  # in order: the three before it, none after
+        assert results == [0, 1, 4, None, None, None]
+    assert run_tasks(fails_at_three, [0, 1, 2], jobs) == ([0, 1, 4], None)
+
+
+# -- bench continuous ---------------------------------------------------------------------
+
+
+@pytest.fixture()
+def continuous_args(tmp_path: Path) -> list[str]:
+    cfg = tmp_path / "cont.toml"
+    cfg.write_text(CONTINUOUS)
+    obj = tmp_path / "obj.py"
+    obj.write_text("import numpy as np\ndef f(x):\n    return -np.abs(x[:, 0] - 1.0)\n")
+    return ["bench", "continuous", str(cfg), "--objective", f"{obj}:f", "--runs", "4",
+            "--trials", "5"]  # fmt: skip
+
+
+def _break_seed(monkeypatch: pytest.MonkeyPatch, seed: int) -> None:
+    """The run of ``seed`` raises (the runs of bench continuous run in this process)."""
+    import gaitpref.cli.points as points
+
+    real = points.simulate_points
+
+    def simulate_points(*args: Any, **kwargs: Any) -> Any:
+        if kwargs["seed"] == seed:
+            raise ValueError("the treadmill stopped")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(points, "simulate_points", simulate_points)
+
+
+def test_bench_continuous_names_the_failed_run_and_keeps_the_finished_ones(
+    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    clean = CliRunner().invoke(app, [*continuous_args, "--json"])
+    assert clean.exit_code == 0, clean.output
+    runs = json.loads(clean.stdout)["runs"]
+    _break_seed(monkeypatch, 2)
+    partial = tmp_path / "kept.jsonl"
+    result = CliRunner().invoke(app, [*continuous_args, "--json", "--partial", str(partial)])
+    assert result.exit_code == 1, result.output
+    assert isinstance(result.exception, SystemExit)  # an error, not a traceback
+    assert result.stdout == ""  # no JSON of a bench that did not finish
+    text = _text(result.stderr)
+    obj = continuous_args[4]
+    assert f"objective {obj!r}, seed 2 failed (ValueError): the treadmill stopped" in text
+    assert f"2 of 4 runs finished; their results are in {partial}" in text
+    assert _lines(partial) == runs[:2]  # the runs before it, as the JSON gives them
+
+
+def test_bench_continuous_keeps_them_in_a_temporary_file_by_default(
+    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    folder = tmp_path / "tmp"
+    folder.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
+    ok = CliRunner().invoke(app, continuous_args)
+    assert ok.exit_code == 0, ok.output
+    assert list(folder.iterdir()) == []  # a bench that finished keeps no partial file
+    _break_seed(monkeypatch, 1)
+    result = CliRunner().invoke(app, continuous_args)
+    assert result.exit_code == 1, result.output
+    (kept,) = folder.iterdir()
+    assert kept.name.startswith("gaitpref-bench-continuous-") and kept.suffix == ".jsonl"
+    assert f"1 of 4 runs finished; their results are in {kept}" in _text(result.stderr)
+    assert [r["seed"] for r in _lines(kept)] == [0]
+
+
+def test_a_bench_that_finishes_or_fails_first_leaves_no_partial_file(
+    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    partial = tmp_path / "kept.jsonl"
+    ok = CliRunner().invoke(app, [*continuous_args, "--partial", str(partial)])
+    assert ok.exit_code == 0, ok.output
+    assert not partial.exists()
+    _break_seed(monkeypatch, 0)
+    result = CliRunner().invoke(app, [*continuous_args, "--partial", str(partial)])
+    assert result.exit_code == 1, result.output
+    assert "0 of 4 runs finished (none to keep)" in _text(result.stderr)
+    assert not partial.exists()
+
+
+def test_input_refused_before_any_run_is_status_2_and_keeps_no_file(
+    continuous_args: list[str], population_file: Path, tmp_path: Path
+) -> None:
+    """A noise no subject can have is refused as input, not as every run's failure."""
+    partial = tmp_path / "kept.jsonl"
+    result = CliRunner().invoke(
+        app, [*continuous_args, "--noise", "inf", "--partial", str(partial)]
+    )
+    assert result.exit_code == 2, result.output
+    assert "noise must be a finite number >= 0, got inf" in _text(result.stderr)
+    args = ["bench", "population", "--objectives", str(population_file), "--trials", "2",
+            "--config", POPULATION, "--user-noise", "inf", "--partial", str(partial)]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "noise must be a finite number >= 0, got inf" in _text(result.stderr)
+    assert not partial.exists()
+
+
+# -- bench population ---------------------------------------------------------------------
+
+
+@pytest.fixture()
+def population_file(tmp_path: Path) -> Path:
+    x = np.linspace(0, 1, len(load_config(POPULATION).space))
+    path = tmp_path / "objectives.npy"
+    np.save(path, np.array([-((x - p) ** 2) for p in (0.6, 0.65, 0.7)]))
+    return path
+
+
+def _break_subject(monkeypatch: pytest.MonkeyPatch, subject: int, arm: str) -> None:
+    """Subject ``subject``'s ``arm`` run raises (with jobs = 1 the runs run in this process)."""
+    real = population_module._walk
+
+    def walk(*args: Any) -> Any:
+        seeds, others = args[4], args[5]  # (seed, subject); the others' preferences when warm
+        if seeds[1] == subject and (others is not None) == (arm == "warm"):
+            raise ValueError("the subject left")
+        return real(*args)
+
+    monkeypatch.setattr(population_module, "_walk", walk)
+
+
+def test_bench_population_names_the_failed_run_and_keeps_the_finished_ones(
+    population_file: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    args = ["bench", "population", "--objectives", str(population_file), "--trials", "4",
+            "--config", POPULATION, "--json"]  # fmt: skip
+    clean = CliRunner().invoke(app, args)
+    assert clean.exit_code == 0, clean.output
+    subjects = json.loads(clean.stdout)["subjects"]
+    _break_subject(monkeypatch, 1, "warm")
+    partial = tmp_path / "kept.jsonl"
+    result = CliRunner().invoke(app, [*args, "--partial", str(partial)])
+    assert result.exit_code == 1, result.output
+    assert isinstance(result.exception, SystemExit) and result.stdout == ""
+    text = _text(result.stderr)
+    assert "subject 1 (warm), seed 0 failed (ValueError): the subject left" in text
+    assert f"4 of 6 runs finished; their results are in {partial}" in text
+    kept = _lines(partial)
+    assert [(r["subject"], r["run"]) for r in kept] == [(0, "cold"), (1, "cold"), (2, "cold"),
+                                                         (0, "warm")]  # fmt: skip
+    for r in kept:  # the runs of the bench that finished
+        s = subjects[r["subject"]]
+        assert r["scores"] == s[r["run"]] and r["stated"] == s["stated"][r["run"]]
+        assert r["right"] == s["right"][r["run"]] and r["seed"] == 0
+    assert kept[3]["rho"] == subjects[0]["rho"]
+
+
+def test_population_bench_keeps_the_finished_runs_on_its_error(
+    population_file: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """From Python: the error names the run and carries the finished runs' records; a cold run
+    that fails stops the bench before any warm run."""
+    _break_subject(monkeypatch, 2, "cold")
+    with pytest.raises(RunError) as info:
+        population_bench(load_config(POPULATION), np.load(population_file), 3)
+    err = info.value
+    assert err.run == "subject 2 (cold), seed 0" and err.partial is None
+    assert isinstance(err.__cause__, ValueError)
+    assert [(r["subject"], r["run"]) for r in err.finished] == [(0, "cold"), (1, "cold")]
+    assert "2 of 6 runs finished; their results are on this error (RunError.finished)" in str(err)
