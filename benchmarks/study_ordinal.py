@@ -62,6 +62,7 @@ import argparse
 import csv
 import json
 import time
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -126,6 +127,7 @@ class Arm:
     start: bool = False  # [safety] start: the simulated operator's start gait (start_gait)
     explore: float | None = None  # with cautious: [safety] explore (None: the default, 1)
     reach: float | None = None  # with cautious: [safety] reach (None: anywhere)
+    frontier: float | None = None  # with cautious: [safety] frontier (None: off)
     note: str = ""
 
     def text(self, grid: str, start: int | None = None) -> str:
@@ -147,6 +149,8 @@ class Arm:
                 out += f"explore = {self.explore}\n"
             if self.reach is not None:
                 out += f"reach = {self.reach}\n"
+            if self.frontier is not None:
+                out += f"frontier = {self.frontier}\n"
         if self.start:
             if start is None:
                 raise ValueError(f"arm {self.name} needs its start gait")
@@ -244,11 +248,21 @@ START_ARMS = [  # [safety] start: the simulated operator's start gait (start_gai
         reach=0.5,
         note="cautious 0.4, reach 0.5: chosen by a screen on the 3-D noiseless cell",
     ),
+    Arm(
+        "frontier+start",
+        risk=True,
+        cautious=0.5,
+        start=True,
+        reach=1.0,
+        frontier=0.9,
+        note="cautious 0.5, reach 1, frontier 0.9: chosen by a screen on the 3-D noisy cell",
+    ),
 ]
 START_PAIRS = [  # (arm, base): the target's reading is a region against none, all else equal
     ("cautious+start", "rated+start"),
     ("reach+start", "rated+start"),
     ("strict+start", "rated+start"),
+    ("frontier+start", "rated+start"),
     ("reach+start", "cautious+start"),
     ("rated+start", "rated"),
     ("cautious+start", "avoid-cautious"),
@@ -410,11 +424,24 @@ def _runs_machine() -> dict[str, object] | None:
     return json.loads(path.read_text()) if path.is_file() else None  # type: ignore[no-any-return]
 
 
-def _machine_sections(ran: dict[str, object] | None) -> list[str]:
+def _machine_sections(ran: dict[str, object] | None, names: Collection[str] = ()) -> list[str]:
+    """The runs' machine (``machine.json``), each of ``names``' arm files that records another
+    machine (``run`` writes its own into each arm file), and the report's machine."""
     here = machine_markdown(machine_description())
     if ran is None:
         return ["## Machine", "", here, ""]
-    return ["## Runs' machine", "", machine_markdown(ran), "", "## Report's machine", "", here, ""]
+    out = ["## Runs' machine", "", machine_markdown(ran), ""]
+    elsewhere: dict[str, list[str]] = {}
+    for grid in GRIDS:
+        for scenario in SCENARIOS:
+            for name in names:
+                path = _cache(grid, scenario, name)
+                own = json.loads(path.read_text()).get("machine") if path.is_file() else None
+                if own is not None and own != ran:
+                    elsewhere.setdefault(json.dumps(own), []).append(f"{name} ({grid} {scenario})")
+    for own, where in elsewhere.items():
+        out += [f"### Run elsewhere: {', '.join(where)}", "", machine_markdown(json.loads(own)), ""]
+    return [*out, "## Report's machine", "", here, ""]
 
 
 def run(
@@ -427,7 +454,9 @@ def run(
     infogain_2d: int | None = None,
 ) -> None:
     CACHE.mkdir(parents=True, exist_ok=True)
-    (CACHE / "machine.json").write_text(json.dumps({**machine_description(), "jobs": jobs}))
+    machine = {**machine_description(), "jobs": jobs}
+    if not (CACHE / "machine.json").is_file():  # the machine of runs that do not name their own
+        (CACHE / "machine.json").write_text(json.dumps(machine))
     for grid in grids:
         for scenario in scenarios:
             for arm in arms:
@@ -445,7 +474,7 @@ def run(
                     delayed(run_one)(arm, grid, scenario, k) for k in range(count)
                 )
                 path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(json.dumps({"arm": arm.name, "runs": rows}))
+                path.write_text(json.dumps({"arm": arm.name, "machine": machine, "runs": rows}))
                 s = np.array([r["scores"] for r in rows])
                 c = np.array([r["categories"] for r in rows])
                 print(
@@ -793,7 +822,7 @@ def report_start() -> None:
                     f"| {_pm(a['early'] - b['early'], True)} | {_pm(a['all'] - b['all'], True)} "
                     f"| {'yes' if met else 'no'} |"
                 )
-    lines += ["", *_machine_sections(_runs_machine())]
+    lines += ["", *_machine_sections(_runs_machine(), _START_ORDER)]
     (RESULTS / "start.md").write_text("\n".join(lines))
 
 

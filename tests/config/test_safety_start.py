@@ -66,3 +66,16 @@ def test_start_and_reach_errors() -> None:
         parse_config(BASE + "reach = 1.0\n")
     with pytest.raises(ConfigError, match=r"\[safety\].reach: must be a finite number > 0"):
         parse_config(BASE + 'avoid = ["very bad"]\nreach = 0\n')
+
+
+def test_frontier_is_read_and_checked() -> None:
+    safety = parse_config(BASE + 'avoid = ["very bad"]\nstart = [4]\nfrontier = 0.9\n').safety
+    assert (safety.frontier, safety.cautious, safety.reach) == (0.9, 0.6, None)
+    assert parse_config(BASE + 'avoid = ["very bad"]\n').safety.frontier is None  # absent: off
+    with pytest.raises(ConfigError, match=r"\[safety\].frontier: is a setting of the cautious"):
+        parse_config(BASE + "frontier = 0.9\n")
+    with pytest.raises(ConfigError, match=r"\[safety\].frontier: is a setting of the cautious"):
+        parse_config(BASE + 'avoid = ["very bad"]\ncautious = 0\nfrontier = 0.9\n')
+    for bad in ("0", "1.5", "-0.1", '"a"'):
+        with pytest.raises(ConfigError, match=r"\[safety\].frontier: must be"):
+            parse_config(BASE + f'avoid = ["very bad"]\nfrontier = {bad}\n')

@@ -56,6 +56,7 @@ def _loop(strategy: str, n: int, buffer: int, safety: Safety, seed: int) -> CoSp
     flags=st.lists(st.integers(0, len(SPACE) - 1), max_size=3),
     start=st.lists(st.integers(0, len(SPACE) - 1), max_size=3, unique=True),
     reach=st.one_of(st.none(), st.sampled_from([0.5, 1.0, 2.0])),
+    frontier=st.one_of(st.none(), st.sampled_from([0.5, 0.9, 1.0])),
 )
 def test_no_strategy_proposes_an_avoided_or_flagged_gait(
     strategy: str,
@@ -69,6 +70,7 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
     flags: list[int],
     start: list[int],
     reach: float | None,
+    frontier: float | None,
 ) -> None:
     cautious = cautious if risk is not None else None
     safety = Safety(
@@ -79,6 +81,7 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
         cautious=cautious,
         start=tuple(start),
         reach=reach,
+        frontier=frontier,
     )
     loop = _loop(strategy, n, buffer, safety, seed)
     for a in flags:
@@ -92,7 +95,7 @@ def test_no_strategy_proposes_an_avoided_or_flagged_gait(
                 loop.ask()
             return
         banned = near(SPACE, loop.unsafe, radius) if loop.unsafe else np.zeros(len(SPACE), bool)
-        avoided = _avoided(loop, lam, risk, cautious, banned, safety.start, reach)
+        avoided = _avoided(loop, lam, risk, cautious, banned, safety.start, reach, frontier)
         done = loop.executed
         first = [a for a in start if a not in done and not (banned | avoided)[a]]
         q = loop.ask()
@@ -119,12 +122,14 @@ def _avoided(
     banned: NDArray[np.bool_] | None = None,
     start: tuple[int, ...] = (),
     reach: float | None = None,
+    frontier: float | None = None,
 ) -> NDArray[np.bool_]:
     """The region of avoidance, written out: ROIAL's bound or the probability of a "very bad"
     rating, with the posterior's thresholds; with ``cautious``, while a gait away from the
     ``banned`` ones is known-safe (by its ratings, or in ``start`` and under ``risk``), every
     gait neither known-safe nor possibly better than all of them (and, with ``reach``, within
-    ``reach`` lengthscales of one of them)."""
+    ``reach`` lengthscales of one of them, and with ``frontier``, with ``p`` at most
+    ``frontier`` times an unrated gait's)."""
     post = loop.posterior
     scale = post.ordinal if post.ordinal is not None else SCALE
     t1 = scale.thresholds_for(KERNEL.variance)[0]
@@ -145,6 +150,8 @@ def _avoided(
                 scaled = SPACE.points / np.array([0.03, 0.08])  # KERNEL's lengthscales
                 d = np.linalg.norm(scaled[:, None, :] - scaled[None, pool, :], axis=2)
                 better &= d.min(axis=1) <= reach
+            if frontier is not None:
+                better &= p <= frontier * unrated
             return np.asarray(~(known | better))
     return np.asarray(p > risk)
 

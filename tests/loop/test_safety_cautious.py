@@ -190,6 +190,31 @@ def test_reach_keeps_unexplored_gaits_near_the_known_safe_ones() -> None:
         Safety(avoid=1, risk=0.35, cautious=0.6, reach=-1.0)
 
 
+def test_frontier_keeps_unexplored_gaits_where_the_ratings_speak_for_them() -> None:
+    okay = _rated([(20, "okay")], SHARP)  # the unexplored gaits' mu + sd beat it: all allowed
+    assert _allowed(Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,)), okay).all()
+    frontier = Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), frontier=0.9)
+    allowed = _allowed(frontier, okay)
+    p = _p_worst(okay)
+    t1 = SHARP.thresholds_for(KERNEL.variance)[0]
+    unrated = float(ndtr(t1 / np.sqrt(SHARP.noise**2 + KERNEL.variance + KERNEL.jitter)))
+    # the declared gait, and the others only where the rating lowered P("very bad") below
+    # 0.9 x an unrated gait's (about 0.25: far from the rating)
+    expected = p <= 0.9 * unrated
+    expected[20] = True
+    np.testing.assert_array_equal(allowed, expected)
+    idx = np.flatnonzero(allowed)  # one interval around the rated gait, far gaits left out
+    assert np.array_equal(idx, np.arange(idx[0], idx[-1] + 1)) and idx[0] < 20 < idx[-1]
+    assert not allowed[[0, 5, 35, 40]].any()
+    # every gait it allows the setting without it allows too (it only narrows)
+    loose = _allowed(Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), reach=1.0), okay)
+    both = Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), reach=1.0, frontier=0.9)
+    assert not (_allowed(both, okay) & ~loose).any() and not (_allowed(both, okay) & ~allowed).any()
+    for bad in (0.0, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="frontier"):
+            Safety(avoid=1, risk=0.35, cautious=0.6, frontier=bad)
+
+
 def test_the_loop_walks_the_start_gaits_first() -> None:
     safety = Safety(avoid=1, risk=0.35, cautious=0.6, start=(30, 7))
     loop = CoSpar(SPACE, KERNEL, 0.01, n=1, buffer=1, seed=3, ordinal=SCALE, safety=safety)

@@ -20,6 +20,8 @@
                                              # beats every known-safe gait's ...
     # reach = 1.0                            # ... within reach lengthscales of a known-safe
                                              # gait (default: anywhere)
+    # frontier = 0.9                         # ... and only where P(an avoided rating) is at
+                                             # most frontier x an unrated gait's (default: off)
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
                                              # feature's range; 0: the gait alone)
     # start = [{step_length = 0.12, step_duration = 0.9}]   # gaits the operator declares safe
@@ -117,6 +119,7 @@ def parse_safety(
         safety["explore"],
         start,
         safety["reach"],
+        safety["frontier"],
     ), frozenset(relied)
 
 
@@ -188,7 +191,7 @@ def _cautious(
     if given and cautious > 0 and risk is None:
         fail("safety", "cautious", "needs the risk rule, not ROIAL's bound (lambda)")
     if cautious == 0 or not safety["avoid"] or risk is None:
-        for key in ("explore", "reach"):
+        for key in ("explore", "reach", "frontier"):
             if key not in defaulted:
                 fail("safety", key, "is a setting of the cautious level, which is off here")
         return None

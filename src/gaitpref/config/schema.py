@@ -134,6 +134,8 @@ SAFETY: Final[dict[str, Key]] = {
     "start": Key(Gaits(MAX_QUERY), ()),  # gaits the operator declares safe: executed first
     "reach": Key(Number(0.0, 100.0, open_lo=True), None),  # with cautious: explore only within
     # this many lengthscales of a known-safe gait (None: anywhere)
+    # with cautious: explore only where P(avoided) <= frontier x an unrated gait's (None: off)
+    "frontier": Key(Number(0.0, 1.0, open_lo=True), None),
 }
 STOP: Final[dict[str, Key]] = {
     "confidence": Key(Number(0.0, 1.0, open_lo=True), None),  # None: no confidence rule

@@ -38,8 +38,16 @@ propose is known-safe, the loop proposes only known-safe gaits, and an unexplore
 ``risk`` rule alone decides.  Gaits the operator declares safe (``start``, the device's nominal
 gait: SafeOpt's safe seed) are known-safe from the start, before any rating, unless the ratings
 make an avoided rating likelier than ``risk`` there (the ``risk`` rule avoids them); the loop
-executes them first (``loop/cospar.py``).  The upper bounds need the variance of every
-unexplored gait that the bounds 0 and the prior's leave undecided, often most of them
+executes them first (``loop/cospar.py``).  Two settings narrow the exploring step (both off
+by default): ``reach``, an unexplored gait only within ``reach`` lengthscales of a known-safe
+gait the loop may propose; ``frontier``, only where the ratings have already made an avoided
+rating less likely than before any data,
+
+      P(rating_a <= avoid) <= frontier * p_0,
+
+so the proposals grow from the known-safe gaits into gaits the ratings speak for (SafeOpt's
+expansion set), never into gaits nothing is known about.  The upper bounds need the variance
+of every unexplored gait that the bounds 0 and the prior's leave undecided, often most of them
 (``Posterior.variance_many``: information gain's iteration on 57,750 gaits at 300 comparisons
 0.47 s, against 0.16 s with ``risk`` alone; ``benchmarks/results/infogain.md``).
 
@@ -87,6 +95,9 @@ class Safety:
     #: with cautious: unexplored gaits only within ``reach`` lengthscales of a known-safe gait
     #: (None: anywhere)
     reach: float | None = None
+    #: with cautious: unexplored gaits only where the ratings have made an avoided rating less
+    #: likely than ``frontier`` times an unrated gait's (None: the ``risk`` rule's bound only)
+    frontier: float | None = None
 
     def __post_init__(self) -> None:
         if not is_count(self.avoid) or self.avoid < 0:
@@ -120,6 +131,10 @@ class Safety:
             is_number(self.reach) and np.isfinite(self.reach) and self.reach > 0
         ):
             raise ValueError(f"reach must be a number of lengthscales > 0, got {self.reach!r}")
+        if self.frontier is not None and not (
+            is_number(self.frontier) and np.isfinite(self.frontier) and 0 < self.frontier <= 1
+        ):
+            raise ValueError(f"frontier must be a share in (0, 1], got {self.frontier!r}")
         if len(set(self.start)) != len(self.start):
             raise ValueError(f"start names a gait twice: {self.start!r}")
 
@@ -184,6 +199,8 @@ class Safety:
             better[undecided] = mean[undecided] + self.explore * np.sqrt(var_of(undecided)) > best
         if self.reach is not None and better.any():
             better &= _within(posterior, pool, self.reach)
+        if self.frontier is not None and better.any():  # where the ratings already speak for it
+            better &= ~bounds.region(self.frontier * _unrated(bounds, self.avoid))
         return ~(known | better)
 
     def known_safe(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray | None:
@@ -196,10 +213,7 @@ class Safety:
     def _known(self, bounds: _Bounds) -> tuple[BoolArray, BoolArray]:
         """The known-safe gaits and the ``risk`` rule's region (``cautious`` and ``risk`` set)."""
         assert self.cautious is not None and self.risk is not None
-        unrated = rating_probabilities(bounds.scale, bounds.v, np.zeros(1), bounds.prior[:1])
-        known = ~bounds.region(
-            min(self.cautious * float(unrated[0, : self.avoid].sum()), self.risk)
-        )
+        known = ~bounds.region(min(self.cautious * _unrated(bounds, self.avoid), self.risk))
         risky = bounds.region(self.risk)
         if self.start:  # declared safe: known-safe unless the ratings put them in the region
             declared = np.zeros(known.shape, dtype=bool)
@@ -258,6 +272,13 @@ class _Bounds:
         if undecided.size:
             out[undecided] = rule(scale, v, t, mean[undecided], self.var_of(undecided), level)
         return out
+
+
+def _unrated(bounds: _Bounds, avoid: int) -> float:
+    """``p_0``: the probability of an avoided rating at a gait with no data (mean 0, the prior's
+    variance), on the posterior's rating scale."""
+    probs = rating_probabilities(bounds.scale, bounds.v, np.zeros(1), bounds.prior[:1])
+    return float(probs[0, :avoid].sum())
 
 
 def _within(posterior: Posterior, centres: NDArray[np.intp], reach: float) -> BoolArray:
