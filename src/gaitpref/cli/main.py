@@ -69,9 +69,17 @@ def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
 
 
 def _load_config_or_fail(source: str) -> ExperimentConfig:
-    from gaitpref.config import load_config
+    """A config for a new run: loaded, and checked as a new session checks it (its name and
+    its largest draw), so that a run is refused at once rather than at the first ask."""
+    from gaitpref.config import check_draws, check_name, load_config
 
-    return guard(lambda: load_config(source))
+    def load() -> ExperimentConfig:
+        cfg = load_config(source)
+        check_name(cfg)
+        check_draws(cfg)
+        return cfg
+
+    return guard(load)
 
 
 def _load_objective(path: Path) -> np.ndarray:

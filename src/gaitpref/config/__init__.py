@@ -6,6 +6,7 @@ and the key.  ``schema.py`` declares every key once; :data:`DEFAULTS` is the tab
 and :data:`LIMITS` the sizes a config may ask for.
 """
 
+from gaitpref.config.draws import check_draws, draw_size
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.parse import (
     DEFAULT_BUFFER,
@@ -33,7 +34,9 @@ __all__ = [
     "LIMITS",
     "ConfigError",
     "ExperimentConfig",
+    "check_draws",
     "check_name",
+    "draw_size",
     "load_config",
     "parse_config",
     "read_toml",

@@ -79,6 +79,7 @@ compared with the one before and the loop learns without coactive feedback; 0.1 
 from __future__ import annotations
 
 import tomllib
+import unicodedata
 from importlib import resources
 from pathlib import Path
 from typing import Any, Final
@@ -106,7 +107,7 @@ from gaitpref.config.schema import (
     check_table,
     defaults_for,
 )
-from gaitpref.config.specs import fail
+from gaitpref.config.specs import fail, shown
 from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
@@ -170,15 +171,29 @@ def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> Experi
 
 def check_name(config: ExperimentConfig) -> None:
     """Refuse a blank name (empty, or spaces only) for a *new* session's config: the name is how
-    session lists, the console and exports tell configs apart.  A :class:`ConfigError` naming
-    the key.  Not checked by :func:`parse_config`: sessions stored with such a name (earlier
-    releases took it) parse, reopen and replay as they were."""
+    session lists, the console and exports tell configs apart; and a name holding a control or
+    format character (Unicode category ``C*``: a newline, ESC, NUL, a bidirectional override,
+    ...), which would reach terminals, the console's pages and exports as it is.  A
+    :class:`ConfigError` naming the key.  Not checked by :func:`parse_config`: sessions stored
+    with such a name (earlier releases took it) parse, reopen and replay as they were."""
     if not config.name.strip():
         fail(
             "",
             "name",
             f"must name the config (session lists and exports show it), got {config.name!r}; "
             "give a name, or leave the key out to use the file's name",
+        )
+    hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c)[0] == "C"]
+    if hidden:
+        at, char = hidden[0]
+        named = f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
+        fail(
+            "",
+            "name",
+            f"must not hold control or format characters (Unicode category C*: newlines, tabs, "
+            f"ESC, NUL, ...); {shown(config.name)} holds {len(hidden)}, the first {named} at "
+            f"character {at + 1}: "
+            "terminals, the console and exports would show it as it is",
         )
 
 

@@ -3,7 +3,12 @@
 ==========================================  ======  =========================================
 error                                       status  meaning
 ==========================================  ======  =========================================
+``FormUnreadableError`` (console)           400     a page's form that is not a form
+                                                    (multipart without its boundary, ...)
 ``CsrfError`` (console)                     403     a form without a valid CSRF token
+``FormTooLargeError`` (console)             413     a page's form past a limit of
+                                                    ``limits.py`` (a field's bytes, the
+                                                    fields or files of one form)
 ``SessionNotFoundError``                    404     no such session
 ``QueryError``                              409     stale, unknown or already-answered query
 ``SessionStateError``                       409     paused/finished session, nothing to undo...
@@ -77,9 +82,19 @@ class CsrfError(PermissionError):
     """A form without this console's CSRF token."""
 
 
+class FormTooLargeError(ValueError):
+    """A page's form past one of the form limits (``limits.py``); the message says which."""
+
+
+class FormUnreadableError(ValueError):
+    """A page's form that cannot be parsed as the form it says it is."""
+
+
 #: checked in order: the first matching type gives the status
 STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (CsrfError, 403, "refused form"),
+    (FormTooLargeError, 413, "form too large"),
+    (FormUnreadableError, 400, "form not readable"),
     (SessionNotFoundError, 404, "not found"),
     (QueryError, 409, "stale query"),
     (SessionStateError, 409, "not now"),

@@ -5,6 +5,8 @@ what                        limit           beyond it
 ==========================  ==============  ==================================================
 a JSON body (``/api/...``)  1 MB            413, before the JSON is read
 a form body (pages)         66 MB           413 (a config upload and a gait library fit)
+a form field (not a file)   1 MiB           413 saying so (a note, a reason, ...)
+a form's fields; its files  1000 each       413 saying so
 an uploaded config          200 kB          422 naming ``config_file``
 an uploaded gait library    64 MB           422 naming ``library_file``
 a list in a JSON body       256 items       413 naming the field (``comparisons``, ...)
@@ -12,13 +14,19 @@ a list in a JSON body       256 items       413 naming the field (``comparisons`
 
 The byte limits are checked on ``Content-Length`` when the client sends one and on the bytes
 actually received otherwise (a chunked body is cut off as soon as it passes the limit), so a
-50 MB body costs the server the time to read 1 MB, not to parse 50 MB.
+50 MB body costs the server the time to read 1 MB, not to parse 50 MB.  The form limits are
+Starlette's form parser's, given to it here (:func:`form_error` reads its refusals); they were
+its defaults, and its refusal a bare JSON 400.  The API answers JSON; a page answers with the
+console's HTML error page, which says what was too large.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from typing import TYPE_CHECKING
+
+from gaitpref.console.errors import FormTooLargeError, FormUnreadableError, Refusal
 
 if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlette
     from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -33,6 +41,11 @@ MAX_UPLOAD = 200_000
 MAX_LIBRARY_BYTES = 64_000_000
 #: the most bytes of a form body (a config and a library upload, with room for the fields)
 MAX_FORM_BODY = MAX_LIBRARY_BYTES + MAX_UPLOAD + 2_000_000
+#: the most bytes of one field of a form that is not a file (Starlette's default, made explicit)
+MAX_FORM_FIELD = 1024 * 1024
+#: the most fields, and the most files, of one form (Starlette's defaults, made explicit)
+MAX_FORM_FIELDS = 1000
+MAX_FORM_FILES = 1000
 
 
 def body_limit(scope: Scope) -> int:
@@ -45,6 +58,38 @@ def too_large(limit: int) -> str:
         f"the request body is larger than {limit:,} bytes, the most this console accepts "
         "(see the limits in docs/console.md)"
     )
+
+
+def form_too_large(limit: int) -> str:
+    """:func:`too_large` as a page says it: what the limit is made of."""
+    return (
+        f"the form is larger than {limit:,} bytes, the most this console takes in one form (an "
+        f"uploaded config up to {MAX_UPLOAD // 1000} kB and a gait library up to "
+        f"{MAX_LIBRARY_BYTES // 1_000_000} MB, with room for the fields; see the limits in "
+        "docs/console.md)"
+    )
+
+
+def form_error(message: str) -> ValueError:
+    """The console's error for Starlette's refusal ``message`` of a page's form: a
+    :class:`~gaitpref.console.errors.FormTooLargeError` saying which limit it passed, else a
+    :class:`~gaitpref.console.errors.FormUnreadableError` quoting it."""
+    see = "nothing in this console's forms needs more; see the limits in docs/console.md"
+    if message.startswith(("Field exceeded", "Part exceeded")):
+        return FormTooLargeError(
+            f"a field of the form is larger than {MAX_FORM_FIELD:,} bytes (1 MiB), the most "
+            f"one field may hold (files are apart: a config up to {MAX_UPLOAD // 1000} kB, a "
+            f"gait library up to {MAX_LIBRARY_BYTES // 1_000_000} MB); {see}"
+        )
+    if message.startswith("Too many fields"):
+        return FormTooLargeError(
+            f"the form has more than {MAX_FORM_FIELDS:,} fields, the most one form may have; {see}"
+        )
+    if message.startswith("Too many files"):
+        return FormTooLargeError(
+            f"the form has more than {MAX_FORM_FILES:,} files, the most one form may have; {see}"
+        )
+    return FormUnreadableError(f"the form could not be read: {message}")
 
 
 class BodyLimitMiddleware:
@@ -60,7 +105,7 @@ class BodyLimitMiddleware:
         limit = body_limit(scope)
         declared = dict(scope["headers"]).get(b"content-length")
         if declared is not None and (not declared.isdigit() or int(declared) > limit):
-            await _send_413(send, limit)
+            await _send_413(scope, send, limit)
             return
         received = 0
         over = False
@@ -83,7 +128,7 @@ class BodyLimitMiddleware:
             if over:
                 if not started:
                     started = True
-                    await _send_413(send, limit)
+                    await _send_413(scope, send, limit)
                 return  # whatever the app answers to a cut-off body is replaced by the 413
             started = started or message["type"] == "http.response.start"
             await send(message)
@@ -94,15 +139,36 @@ class BodyLimitMiddleware:
             if not over:
                 raise
         if over and not started:
-            await _send_413(send, limit)
+            await _send_413(scope, send, limit)
 
 
-async def _send_413(send: Send, limit: int) -> None:
-    data = json.dumps({"detail": too_large(limit)}).encode()
+async def _send_413(scope: Scope, send: Send, limit: int) -> None:
+    """The 413: JSON for the API, the console's HTML error page for a page."""
+    if scope["path"].startswith("/api/"):
+        data = json.dumps({"detail": too_large(limit)}).encode()
+        content_type = b"application/json"
+    else:
+        data = _error_page(scope, limit)
+        content_type = b"text/html; charset=utf-8"
     headers = [
-        (b"content-type", b"application/json"),
+        (b"content-type", content_type),
         (b"content-length", str(len(data)).encode()),
         (b"connection", b"close"),
+        (b"cache-control", b"no-store"),
     ]
     await send({"type": "http.response.start", "status": 413, "headers": headers})
     await send({"type": "http.response.body", "body": data})
+
+
+def _error_page(scope: Scope, limit: int) -> bytes:
+    """The error page of a form past ``limit`` bytes (before routing: the session, if the path
+    names one, is read from it for the page's link back to the trial)."""
+    from starlette.requests import Request
+
+    from gaitpref.console.templating import page_error
+
+    named = re.match(r"/sessions/(\d+)(/|$)", scope["path"])
+    params = {"session_id": named.group(1)} if named else {}
+    request = Request({**scope, "path_params": params})
+    ref = Refusal(413, "form too large", form_too_large(limit), None)
+    return bytes(page_error(request, ref).body)

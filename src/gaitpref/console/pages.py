@@ -16,12 +16,20 @@ from fastapi import APIRouter, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 from starlette.datastructures import UploadFile
+from starlette.exceptions import HTTPException
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
 from gaitpref.console.answers import read_rating_fields
 from gaitpref.console.errors import CsrfError, InputError
-from gaitpref.console.limits import MAX_LIBRARY_BYTES, MAX_UPLOAD
+from gaitpref.console.limits import (
+    MAX_FORM_FIELD,
+    MAX_FORM_FIELDS,
+    MAX_FORM_FILES,
+    MAX_LIBRARY_BYTES,
+    MAX_UPLOAD,
+    form_error,
+)
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
@@ -51,8 +59,17 @@ def see_other(url: str) -> RedirectResponse:
 
 
 async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadFile]]:
-    """The posted form (each field once), after checking its CSRF token."""
-    form = await request.form()
+    """The posted form (each field once), after checking its CSRF token; a form past the form
+    limits (``limits.py``), or one that cannot be parsed, is the console's error (an HTML page
+    saying which), not Starlette's bare JSON 400."""
+    try:
+        form = await request.form(
+            max_files=MAX_FORM_FILES, max_fields=MAX_FORM_FIELDS, max_part_size=MAX_FORM_FIELD
+        )
+    except HTTPException as exc:  # Starlette's parser refused it
+        if exc.status_code != 400:
+            raise
+        raise form_error(str(exc.detail)) from None
     fields: dict[str, str] = {}
     files: dict[str, UploadFile] = {}
     for key, value in form.multi_items():

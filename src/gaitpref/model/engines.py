@@ -33,6 +33,7 @@ from gaitpref.model.kronecker import (
     BLOCK_ELEMENTS,
     KhatriRaoCross,
     KroneckerPriorSampler,
+    add_jitter_draw,
     check_sample_budget,
     khatri_rao_split,
 )
@@ -104,16 +105,18 @@ class DenseEngine:
         self.root_t = np.ascontiguousarray(self.prior.scale * root.T)  # so z @ root_t
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
-        return self.prior_parts(rng, size)[0]
+        return self.prior_parts(rng, size, jitter_part=False)[0]
 
     def prior_parts(
-        self, rng: np.random.Generator, size: int
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
     ) -> tuple[FloatArray, FloatArray | None]:
         """Prior samples (as :meth:`prior_samples`, the same generator use and values) and
-        their jitter part ``sqrt(jitter) z'`` (None without jitter)."""
-        z, z_jitter = self.prior.draw(rng, size)
-        out: FloatArray = z @ self.root_t
-        return _plus_jitter(out, self.prior.jitter_scale, z_jitter)
+        their jitter part ``sqrt(jitter) z'`` (None without jitter or ``jitter_part``).  The
+        generator draws ``z``, then ``z'``; ``z`` is freed after the product and ``z'`` drawn
+        block by block unless kept (:data:`~gaitpref.model.kronecker.SAMPLE_PEAK_ARRAYS`)."""
+        check_sample_budget(size, self.prior.size)
+        out: FloatArray = rng.standard_normal((size, self.prior.size)) @ self.root_t
+        return add_jitter_draw(out, rng, self.prior.jitter_scale, jitter_part)
 
     def cross(self, visited: IntArray) -> CrossCovariance:
         return DenseCross(self.space, self.kernel, visited)
@@ -135,11 +138,10 @@ class ScalableEngine:
         return self.prior.sample(rng, size)
 
     def prior_parts(
-        self, rng: np.random.Generator, size: int
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
     ) -> tuple[FloatArray, FloatArray | None]:
         """As :meth:`DenseEngine.prior_parts`."""
-        z, z_jitter = self.prior.draw(rng, size)
-        return _plus_jitter(self.prior.transform(z, None), self.prior.jitter_scale, z_jitter)
+        return self.prior.parts(rng, size, jitter_part=jitter_part)
 
     def cross(self, visited: IntArray) -> CrossCovariance:
         split = khatri_rao_split(self.space.shape, visited.shape[0], self.block_elements)
@@ -186,17 +188,6 @@ def psd_root_t(matrix: FloatArray) -> FloatArray:
             f"entry of its pivoted Cholesky factor is off by {-missed.min():.3g})"
         )
     return root
-
-
-def _plus_jitter(
-    out: FloatArray, scale: float, z_jitter: FloatArray | None
-) -> tuple[FloatArray, FloatArray | None]:
-    """``out + scale z'`` in place (the same rounding as adding it at once) and ``scale z'``."""
-    if z_jitter is None:
-        return out, None
-    part: FloatArray = scale * z_jitter
-    out += part
-    return out, part
 
 
 class PointEngine:
@@ -257,18 +248,16 @@ class PointEngine:
         return psd_root_t(self.plain)
 
     def prior_samples(self, rng: np.random.Generator, size: int) -> FloatArray:
-        return self.prior_parts(rng, size)[0]
+        return self.prior_parts(rng, size, jitter_part=False)[0]
 
     def prior_parts(
-        self, rng: np.random.Generator, size: int
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
     ) -> tuple[FloatArray, FloatArray | None]:
         """As :meth:`DenseEngine.prior_parts`."""
         n = len(self.space)
         check_sample_budget(size, n)
-        z = rng.standard_normal((size, n))
-        z_jitter = rng.standard_normal((size, n)) if self.jitter_scale else None
-        out: FloatArray = z @ self.root_t
-        return _plus_jitter(out, self.jitter_scale, z_jitter)
+        out: FloatArray = rng.standard_normal((size, n)) @ self.root_t
+        return add_jitter_draw(out, rng, self.jitter_scale, jitter_part)
 
     def cross(self, visited: IntArray) -> CrossCovariance:
         """``K_{:,V}``; once :attr:`plain` is computed, its columns plus the jitter where a row

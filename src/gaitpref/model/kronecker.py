@@ -32,10 +32,20 @@ from gaitpref.space import FloatArray, IntArray, Space
 BLOCK_ELEMENTS = 1 << 22
 #: The most values one joint draw of ``size`` samples over ``A`` points (``size x A``) may
 #: hold: 2**27 float64, 1 GiB, the bound ``Posterior.covariance()`` has on its ``A x A`` matrix.
-#: A draw holds a few such arrays at once (the normals, the jitter's normals, the draw), so its
-#: peak is a few GiB at the bound.  It admits the largest query a config allows (64 samples) on
-#: the largest grid (10**6 gaits) twice over; beyond it, draw the samples in batches.
+#: It admits the largest query a config allows (64 samples) on the largest grid (10**6 gaits)
+#: twice over; beyond it, draw the samples in batches.  A new session checks its config's
+#: largest draw against it (``config/draws.py``); the numerics check every draw.
 SAMPLE_LIMIT_ELEMENTS = 1 << 27
+#: What one draw holds at its peak, in ``size x A`` arrays (measured with tracemalloc,
+#: ``tests/model/test_draw_memory.py``): two, the normals and the first axis's product while
+#: the prior's root is applied, then each axis's input and output.  The products are not split
+#: into blocks of samples: BLAS rounds a row of a matrix product differently with another
+#: number of rows (measured: 1e-15 on a 17 x 300 grid), and stored sessions must replay bit for
+#: bit.  The jitter's normals are drawn and added :data:`BLOCK_ELEMENTS` at a time.  So a draw
+#: at the budget peaks near 2 GiB (before: four arrays, the normals, the jitter's normals, their
+#: scaled copy and the samples).  ``Posterior.sample(..., nugget=False)`` keeps the jitter's
+#: part (one more), and a warm start's draw (``population.py``) its shared part (one more).
+SAMPLE_PEAK_ARRAYS = 2
 
 
 def check_sample_budget(size: int, points: int) -> None:
@@ -81,8 +91,15 @@ class KroneckerPriorSampler:
 
     def transform(self, z: FloatArray, z_jitter: FloatArray | None) -> FloatArray:
         """``s (S_1 (x) ... (x) S_d) z + sqrt(jitter) z'`` for ``z`` of shape ``size x A``."""
-        size = z.shape[0]
-        x = z
+        out = self._rooted(z)
+        if z_jitter is not None:
+            out += self.jitter_scale * z_jitter
+        return out
+
+    def _rooted(self, x: FloatArray) -> FloatArray:
+        """``s (S_1 (x) ... (x) S_d) x``, axis by axis; an ``x`` its caller no longer holds is
+        freed after the first axis (two ``size x A`` arrays at a time)."""
+        size = x.shape[0]
         pre, post = size, self.size
         for root in self.roots:
             n = root.shape[0]
@@ -94,13 +111,46 @@ class KroneckerPriorSampler:
             pre *= n
         out: FloatArray = x.reshape(size, self.size)
         out *= self.scale
-        if z_jitter is not None:
-            out += self.jitter_scale * z_jitter
         return out
+
+    def parts(
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
+    ) -> tuple[FloatArray, FloatArray | None]:
+        """``size x A`` joint prior samples and their jitter part ``sqrt(jitter) z'`` (None
+        without jitter, or without ``jitter_part``): the generator used and the values exactly
+        as :meth:`transform` of :meth:`draw`, at a peak of :data:`SAMPLE_PEAK_ARRAYS` arrays."""
+        check_sample_budget(size, self.size)
+        out = self._rooted(rng.standard_normal((size, self.size)))
+        return add_jitter_draw(out, rng, self.jitter_scale, jitter_part)
 
     def sample(self, rng: np.random.Generator, size: int) -> FloatArray:
         """``size x A`` joint prior samples."""
-        return self.transform(*self.draw(rng, size))
+        return self.parts(rng, size, jitter_part=False)[0]
+
+
+def add_jitter_draw(
+    out: FloatArray, rng: np.random.Generator, scale: float, keep: bool
+) -> tuple[FloatArray, FloatArray | None]:
+    """``out += scale z'`` in place for standard normals ``z'`` of ``out``'s shape from ``rng``,
+    and the part ``scale z'`` when ``keep`` (else None; None too when ``scale`` is 0, which
+    draws nothing).  The same generator use, values and rounding as ``part = scale *
+    rng.standard_normal(out.shape); out += part``; without ``keep`` the normals are drawn and
+    added :data:`BLOCK_ELEMENTS` at a time (a generator's normals come in the same sequence
+    however they are split into calls)."""
+    if not scale:
+        return out, None
+    if keep:
+        part: FloatArray = rng.standard_normal(out.shape)
+        part *= scale
+        out += part
+        return out, part
+    rows = max(1, BLOCK_ELEMENTS // max(1, out.shape[1]))
+    for start in range(0, out.shape[0], rows):
+        block = out[start : start + rows]
+        normals = rng.standard_normal(block.shape)
+        normals *= scale
+        block += normals
+    return out, None
 
 
 def _khatri_rao(columns: Sequence[FloatArray], m: int) -> FloatArray:

@@ -203,7 +203,7 @@ class PopulationPosterior(Posterior):
         return gaits, np.where(subjects == self.target, 1.0, self._other)
 
     def _prior_draw(
-        self, rng: np.random.Generator, size: int
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
     ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
         """The subject's own part first (so ``rho = 0`` draws as one subject), then the shared
         part, then the other subjects' own parts on their visited gaits, in subject order.
@@ -211,11 +211,14 @@ class PopulationPosterior(Posterior):
         With ``rho = 0`` the factors are block-diagonal by subject and the other subjects' draws
         cannot reach this subject's samples: they are left at 0 and the generator moves exactly
         as a single-subject posterior's does.  The third entry is the jitter part of the
-        subject's grid draw, ``sqrt(1 - rho) e_own + sqrt(rho) e_shared``."""
+        subject's grid draw, ``sqrt(1 - rho) e_own + sqrt(rho) e_shared`` (None without
+        ``jitter_part``).  The mixture is formed in the own part's array (each entry rounded as
+        ``a * own + b * shared`` is), so the draw holds the two parts and one product."""
         gaits, subjects = self._nodes
         rho, mix = self.rho, self._mix
-        own, e_own = self.engine.prior_parts(rng, size) if mix < 1.0 else (None, None)
-        shared, e_shared = self.engine.prior_parts(rng, size) if mix > 0.0 else (None, None)
+        keep = {"jitter_part": jitter_part}
+        own, e_own = self.engine.prior_parts(rng, size, **keep) if mix < 1.0 else (None, None)
+        shared, e_shared = self.engine.prior_parts(rng, size, **keep) if mix > 0.0 else (None, None)
         e: FloatArray | None
         if own is None:
             assert shared is not None
@@ -223,10 +226,10 @@ class PopulationPosterior(Posterior):
         elif shared is None:
             f, e = own, e_own
         else:
-            f = np.sqrt(1.0 - mix) * own + np.sqrt(mix) * shared
+            f = _mixed(own, shared, mix)
             e = None
             if e_own is not None and e_shared is not None:
-                e = np.sqrt(1.0 - mix) * e_own + np.sqrt(mix) * e_shared
+                e = _mixed(e_own, e_shared, mix)
         f_visited = np.empty((size, gaits.shape[0]))
         mine = subjects == self.target
         f_visited[:, mine] = f[:, gaits[mine]]
@@ -243,6 +246,14 @@ class PopulationPosterior(Posterior):
                 part += np.sqrt(rho) * shared[:, at]
             f_visited[:, nodes] = part
         return f, f_visited, e
+
+
+def _mixed(own: FloatArray, shared: FloatArray, mix: float) -> FloatArray:
+    """``sqrt(1 - mix) own + sqrt(mix) shared`` in ``own``'s array (the same rounding as the
+    expression: each product and the sum are rounded once either way)."""
+    own *= np.sqrt(1.0 - mix)
+    own += np.sqrt(mix) * shared
+    return own
 
 
 @dataclass(frozen=True)

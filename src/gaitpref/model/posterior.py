@@ -256,18 +256,21 @@ class Posterior:
         of ``K_{:,V}``).  The generator is used exactly as with the nugget.
 
         Memory: the ``size x A`` prior draw, into which the pathwise correction is added in
-        place (and the jitter's draw without the nugget), plus the engine's bounded blocks.
-        ``size x A`` may not pass :data:`~gaitpref.model.kronecker.SAMPLE_LIMIT_ELEMENTS`
-        (1 GiB of float64): ValueError naming both, before anything is drawn.
+        place (and the jitter's draw without the nugget), plus the engine's bounded blocks; at
+        its peak, while the prior's root is applied,
+        :data:`~gaitpref.model.kronecker.SAMPLE_PEAK_ARRAYS` such arrays (one more without the
+        nugget).  ``size x A`` may not pass
+        :data:`~gaitpref.model.kronecker.SAMPLE_LIMIT_ELEMENTS` (1 GiB of float64): ValueError
+        naming both, before anything is drawn.
         """
         size = check_sample_size(size, len(self.space))
         _check_generator(rng)
         if self.fit is None or size == 0:
-            f, e = self.engine.prior_parts(rng, size)
+            f, e = self.engine.prior_parts(rng, size, jitter_part=not nugget)
             if not nugget and e is not None:
                 f -= e
             return f
-        f, f_visited, e = self._prior_draw(rng, size)
+        f, f_visited, e = self._prior_draw(rng, size, jitter_part=not nugget)
         L, R = self.fit.chol_prior, self.fit.chol_hessian
         w = solve_triangular(L, f_visited.T, lower=True, check_finite=False)
         v = solve_triangular(R, w, lower=True, trans="T", check_finite=False) - w
@@ -286,12 +289,13 @@ class Posterior:
         return self.visited, np.ones(self.visited.shape[0])
 
     def _prior_draw(
-        self, rng: np.random.Generator, size: int
+        self, rng: np.random.Generator, size: int, *, jitter_part: bool = True
     ) -> tuple[FloatArray, FloatArray, FloatArray | None]:
         """A joint prior draw over every action (``size x A``), the visited set (``size x
-        m``) and the draw's jitter part over every action (None without jitter); here the
-        visited set is part of the grid (``model/population.py`` overrides it)."""
-        f, e = self.engine.prior_parts(rng, size)
+        m``) and the draw's jitter part over every action (None without jitter or
+        ``jitter_part``); here the visited set is part of the grid (``model/population.py``
+        overrides it)."""
+        f, e = self.engine.prior_parts(rng, size, jitter_part=jitter_part)
         return f, f[:, self.visited], e
 
     def argmax_samples(

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Any
 
 from gaitpref.strategies.acquire import ConfidentEubo, Eubo
-from gaitpref.strategies.base import AskContext, SelfSparring, Strategy
+from gaitpref.strategies.base import AskContext, SelfSparring, Strategy, joint_draws
 from gaitpref.strategies.hybrid import GatedEubo, Switch
 from gaitpref.strategies.infogain import InformationGain
 from gaitpref.strategies.plausible import PlausibleEubo
@@ -71,5 +71,6 @@ __all__ = [
     "SelfSparring",
     "Strategy",
     "Switch",
+    "joint_draws",
     "make_strategy",
 ]

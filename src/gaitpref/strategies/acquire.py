@@ -104,6 +104,10 @@ class Eubo:
     def propose(self, context: AskContext) -> tuple[int, ...]:
         return eubo_fill(context, _start(context, self.candidates)[: context.n], None)
 
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """One sample (the first action of an unbuffered query; as :class:`SelfSparring`)."""
+        return 1, None
+
 
 @dataclass(frozen=True)
 class ConfidentEubo:
@@ -134,3 +138,7 @@ class ConfidentEubo:
             if context.allowed is None or np.isfinite(masked).any():
                 rest = np.array([int(np.argmax(masked))], dtype=np.intp)
         return eubo_fill(context, chosen, rest.astype(np.intp))
+
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """One sample (the first action of an unbuffered query; as :class:`SelfSparring`)."""
+        return 1, None

@@ -76,6 +76,18 @@ class Strategy(Protocol):
         ...
 
 
+def joint_draws(strategy: Strategy, n: int) -> tuple[int, str | None]:
+    """The most joint posterior samples one ask of ``strategy`` draws at once (``samples x A``
+    values, checked against the sampling budget) with ``n`` new actions a query, and the setting
+    that sets the number (``"n"``, a setting's name, or None).  The registered strategies say it
+    (their ``joint_draws``); one that does not is taken to draw as self-sparring, ``n``."""
+    says = getattr(strategy, "joint_draws", None)
+    if says is None:
+        return n, "n"
+    count, setting = says(n)
+    return int(count), setting
+
+
 @dataclass(frozen=True)
 class SelfSparring:
     """The paper's rule: the argmax of each of ``n`` joint posterior samples (Thompson
@@ -86,3 +98,8 @@ class SelfSparring:
     def propose(self, context: AskContext) -> tuple[int, ...]:
         picks = context.posterior.argmax_samples(context.rng, context.n, context.allowed)
         return tuple(int(a) for a in picks)
+
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """The most joint posterior samples one ask draws at once (``n`` new actions a query)
+        and the setting that sets that number (``"n"``: the query's; None: fixed)."""
+        return n, "n"

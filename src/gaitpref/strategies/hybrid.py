@@ -37,7 +37,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from gaitpref.strategies.acquire import Eubo, eubo_fill
-from gaitpref.strategies.base import MAX_GATES, AskContext, SelfSparring, Strategy, check_count
+from gaitpref.strategies.base import (
+    MAX_GATES,
+    AskContext,
+    SelfSparring,
+    Strategy,
+    check_count,
+    joint_draws,
+)
 
 
 @dataclass(frozen=True)
@@ -79,6 +86,13 @@ class GatedEubo:
                     return (pick,)
         return eubo_fill(self._chooser(context), [], None)
 
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """``gates``, or ``n`` in a burst of self-sparring when that is more (as
+        :class:`SelfSparring`)."""
+        if self.sparring_from < self.sparring_until and n > self.gates:
+            return n, "n"
+        return self.gates, "gates"
+
     def _chooser(self, context: AskContext) -> AskContext:
         """The context EUBO chooses in: the rescaled posterior early, else ``context``."""
         early = context.trial < self.early_trials and self.early_scale != 1.0
@@ -103,3 +117,7 @@ class Switch:
     def propose(self, context: AskContext) -> tuple[int, ...]:
         chosen = self.early if context.trial < self.trials else self.late
         return chosen.propose(context)
+
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """The more of ``early``'s and ``late``'s (as :class:`SelfSparring`)."""
+        return max(joint_draws(self.early, n), joint_draws(self.late, n), key=lambda d: d[0])

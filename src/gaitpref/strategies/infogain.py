@@ -118,6 +118,10 @@ class InformationGain:
             chosen.append(int(pool[random_argmax(np.where(fresh, values, -np.inf), rng)]))
         return tuple(chosen)
 
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """None: it reads means and variances (as :class:`~gaitpref.strategies.SelfSparring`)."""
+        return 0, None
+
 
 def _best_reference(posterior: Posterior, refs: list[int], rng: np.random.Generator) -> int:
     """The reference with the highest posterior mean (exact ties at random)."""

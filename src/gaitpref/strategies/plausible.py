@@ -66,3 +66,7 @@ class PlausibleEubo:
                 if pick in context.buffer:
                     return (pick,)
         return eubo_fill(context, [], plausible)
+
+    def joint_draws(self, n: int) -> tuple[int, str | None]:
+        """``samples`` (as :class:`~gaitpref.strategies.SelfSparring`)."""
+        return self.samples, "samples"
