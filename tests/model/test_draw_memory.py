@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import tracemalloc
+from typing import Any
 
 import numpy as np
 import pytest
@@ -24,7 +25,6 @@ from gaitpref import Feature, PointSet, PreferenceGP, Space, SquaredExponential
 from gaitpref.model import PopulationModel, Probit
 from gaitpref.model.engines import DenseEngine, PointEngine, ScalableEngine
 from gaitpref.model.kronecker import SAMPLE_PEAK_ARRAYS, KroneckerPriorSampler
-from gaitpref.model.posterior import Posterior
 
 BLOCK = 1 << 14  # the blocks' share of the peak is then negligible beside the 32 MiB draw
 
@@ -33,9 +33,10 @@ def _grid(*shape: int) -> Space:
     return Space([Feature.linspace(f"f{i}", 0.0, 1.0, n) for i, n in enumerate(shape)])
 
 
-def _peak(post: Posterior | object, size: int, points: int, **kw: bool) -> float:
-    """Peak traced memory of one ``sample`` in ``size x points`` float64 arrays."""
-    sample = post.sample  # type: ignore[attr-defined]
+def _peak(post: Any, size: int, points: int, **kw: bool) -> float:
+    """Peak traced memory of one ``sample`` (of a posterior, or a mixture of them) in ``size x
+    points`` float64 arrays."""
+    sample = post.sample
     sample(np.random.default_rng(0), 1, **kw)  # cached means, crosses and factors first
     tracemalloc.start()
     try:
@@ -108,7 +109,8 @@ def test_the_kronecker_draw_is_the_old_formula_bit_for_bit(
             after, part = sampler.parts(rng, size, jitter_part=keep)
             assert np.array_equal(after, before)
             if keep and jitter:
-                assert zj is not None and np.array_equal(part, sampler.jitter_scale * zj)
+                assert zj is not None and part is not None
+                assert np.array_equal(part, sampler.jitter_scale * zj)
             else:
                 assert part is None
             assert (
@@ -141,7 +143,7 @@ def test_the_dense_and_point_engines_draw_the_old_formula_bit_for_bit(jitter: fl
                 assert np.array_equal(f, before)
                 assert (e is None) == (part is None or not keep)
                 if e is not None:
-                    assert np.array_equal(e, part)
+                    assert part is not None and np.array_equal(e, part)
 
 
 @pytest.mark.parametrize("rho", [0.0, 0.5, 1.0])
