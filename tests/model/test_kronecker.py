@@ -111,3 +111,28 @@ def test_dense_cross_is_read_only() -> None:
     cross = DenseCross(space, SquaredExponential(0.3, 1.0), np.array([1, 5]))
     with pytest.raises(ValueError):
         cross.matrix[0, 0] = 1.0
+
+
+@pytest.mark.parametrize("shape", [(200,), (20, 15), (6, 5, 4)])
+@pytest.mark.parametrize("kind", ["dense", "khatri-rao", "row-block"])
+def test_the_cross_covariance_of_no_visited_gait_is_empty(
+    shape: tuple[int, ...], kind: str
+) -> None:
+    """The prior's ``K_{:,V}`` (no gait visited yet) is ``A x 0``: its rows, blocks and products
+    work and add nothing (a reshape to ``-1`` columns failed on 0 columns)."""
+    space, kernel = _grid(shape), SquaredExponential(0.2, 1e-4, 1e-6)
+    none = np.zeros(0, dtype=np.intp)
+    cross: DenseCross | KhatriRaoCross | RowBlockCross
+    if kind == "dense":
+        cross = DenseCross(space, kernel, none)
+    elif kind == "khatri-rao":
+        cross = KhatriRaoCross(space, kernel, none, len(shape) // 2)
+    else:
+        cross = RowBlockCross(space, kernel, none, 64)
+    assert cross.rows(np.arange(5)).shape == (5, 0)
+    starts = [(start, block.shape) for start, block in cross.blocks()]
+    assert sum(rows for _, (rows, _) in starts) == len(space)
+    assert all(cols == 0 for _, (_, cols) in starts)
+    out = np.ones((3, len(space)))
+    cross.add_product(out, np.zeros((0, 3)))
+    assert np.array_equal(out, np.ones((3, len(space))))

@@ -89,7 +89,7 @@ class SquaredExponential:
             row_idx = np.arange(len(space))
             out = np.full((1, m), self.variance)
             for g in gathered:
-                out = (out[:, None, :] * g[None, :, :]).reshape(-1, m)
+                out = (out[:, None, :] * g[None, :, :]).reshape(out.shape[0] * g.shape[0], m)
         else:
             row_idx = np.asarray(rows, dtype=np.intp)
             row_mi = np.unravel_index(row_idx, space.shape)

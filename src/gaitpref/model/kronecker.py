@@ -157,7 +157,7 @@ def _khatri_rao(columns: Sequence[FloatArray], m: int) -> FloatArray:
     """Column-wise Khatri-Rao product (C order over the factors' rows); ``1 x m`` ones if none."""
     out = np.ones((1, m))
     for col in columns:
-        out = (out[:, None, :] * col[None, :, :]).reshape(-1, m)
+        out = (out[:, None, :] * col[None, :, :]).reshape(out.shape[0] * col.shape[0], m)
     return out
 
 
@@ -197,11 +197,13 @@ class KhatriRaoCross:
         s = coef.shape[1]
         P, C = self.n_prefix, self.n_suffix
         view = out.reshape(s, P, C)
-        step = max(1, self.block_elements // max(C * s, self.m * s))
+        step = max(1, self.block_elements // max(C * s, self.m * s, 1))
         coef_t = coef.T  # s x m
         for p0 in range(0, P, step):
             p1 = min(P, p0 + step)
-            scaled = (self.prefix[p0:p1, None, :] * coef_t[None, :, :]).reshape(-1, self.m)
+            scaled = (self.prefix[p0:p1, None, :] * coef_t[None, :, :]).reshape(
+                (p1 - p0) * s, self.m
+            )
             block = scaled @ self.suffix_t  # (nb s) x C
             view[:, p0:p1, :] += block.reshape(p1 - p0, s, C).transpose(1, 0, 2)
         if self.jitter:
@@ -222,10 +224,10 @@ class KhatriRaoCross:
         """``(start, K[start:start + len(block), V])`` over the whole grid, block by block."""
         P, C, m = self.n_prefix, self.n_suffix, self.m
         suffix = self.suffix_t.T  # C x m (a view)
-        step = max(1, self.block_elements // (C * m))
+        step = max(1, self.block_elements // max(C * m, 1))
         for p0 in range(0, P, step):
             p1 = min(P, p0 + step)
-            block = (self.prefix[p0:p1, None, :] * suffix[None, :, :]).reshape(-1, m)
+            block = (self.prefix[p0:p1, None, :] * suffix[None, :, :]).reshape((p1 - p0) * C, m)
             start = p0 * C
             if self.jitter:
                 _add_jitter(block, start, self.visited, self.jitter)
