@@ -339,9 +339,12 @@ def true_category(space: Space, utility: np.ndarray) -> np.ndarray:
     return out
 
 
-def run_one(arm: Arm, grid: str, scenario: str, k: int) -> dict[str, object]:
-    """One 60-trial run of ``arm`` on objective ``k`` of ``grid`` against ``scenario``."""
-    obj = objective(grid, k)
+def run_one(
+    arm: Arm, grid: str, scenario: str, k: int, obj: np.ndarray | None = None
+) -> dict[str, object]:
+    """One 60-trial run of ``arm`` on objective ``k`` of ``grid`` against ``scenario`` (``obj``:
+    another objective on the grid instead, with run ``k``'s seeds: a held-out check)."""
+    obj = objective(grid, k) if obj is None else obj
     category = true_category(Arm("").config(grid).space, obj)
     cfg = arm.config(grid, start_gait(grid, category, k) if arm.start else None)
     loop_ss, user_ss, rater_ss = np.random.SeedSequence([STUDY_SEED, k]).spawn(3)
