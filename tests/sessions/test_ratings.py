@@ -147,10 +147,17 @@ def test_a_session_with_the_cautious_level_replays_and_older_ones_replay_without
         assert again.next_query().actions == pending
 
 
-def test_a_declared_start_gait_is_walked_first_and_replays(tmp_path: Path) -> None:
-    text = CONFIG.replace("lambda = 2.0", "start = [{step_length = 0.13}]\nreach = 1.0")
+@pytest.mark.parametrize(
+    ("keys", "cautious", "frontier"),
+    [("reach = 1.0", 0.6, None), ("reach = 1.0\ncautious = 0.5\nfrontier = 0.9", 0.5, 0.9)],
+)
+def test_a_declared_start_gait_is_walked_first_and_replays(
+    tmp_path: Path, keys: str, cautious: float, frontier: float | None
+) -> None:
+    text = CONFIG.replace("lambda = 2.0", "start = [{step_length = 0.13}]\n" + keys)
     cfg = parse_config(text)
-    assert cfg.safety.start == (7,) and cfg.safety.cautious == 0.6
+    assert cfg.safety.start == (7,) and cfg.safety.cautious == cautious
+    assert cfg.safety.frontier == frontier
     url = f"sqlite:///{tmp_path / 'r.db'}"
     with Session.create(url, cfg, "S02") as s:
         walked = []
