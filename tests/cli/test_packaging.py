@@ -8,7 +8,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
 WEB = {"fastapi", "starlette", "uvicorn", "jinja2", "multipart", "python_multipart"}
-WEB_DISTRIBUTIONS = {"fastapi", "uvicorn", "jinja2", "python-multipart"}
+WEB_DISTRIBUTIONS = {"fastapi", "starlette", "uvicorn", "jinja2", "python-multipart"}
 
 
 def _names(requirements: list[str]) -> set[str]:

@@ -76,6 +76,10 @@ def test_frontier_is_read_and_checked() -> None:
         parse_config(BASE + "frontier = 0.9\n")
     with pytest.raises(ConfigError, match=r"\[safety\].frontier: is a setting of the cautious"):
         parse_config(BASE + 'avoid = ["very bad"]\ncautious = 0\nfrontier = 0.9\n')
+    with pytest.raises(ConfigError, match=r"\[safety\].frontier: must exceed cautious \(0.6\)"):
+        parse_config(BASE + 'avoid = ["very bad"]\nfrontier = 0.6\n')
+    with pytest.raises(ConfigError, match=r"\[safety\].frontier: must exceed cautious \(0.95\)"):
+        parse_config(BASE + 'avoid = ["very bad"]\ncautious = 0.95\nfrontier = 0.9\n')
     for bad in ("0", "1.5", "-0.1", '"a"'):
         with pytest.raises(ConfigError, match=r"\[safety\].frontier: must be"):
             parse_config(BASE + f'avoid = ["very bad"]\nfrontier = {bad}\n')

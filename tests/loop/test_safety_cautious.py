@@ -210,7 +210,7 @@ def test_frontier_keeps_unexplored_gaits_where_the_ratings_speak_for_them() -> N
     loose = _allowed(Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), reach=1.0), okay)
     both = Safety(avoid=1, risk=0.35, cautious=0.6, start=(20,), reach=1.0, frontier=0.9)
     assert not (_allowed(both, okay) & ~loose).any() and not (_allowed(both, okay) & ~allowed).any()
-    for bad in (0.0, 1.5, float("nan")):
+    for bad in (0.0, 1.5, float("nan"), 0.6, 0.5):  # at or under cautious: nothing to explore
         with pytest.raises(ValueError, match="frontier"):
             Safety(avoid=1, risk=0.35, cautious=0.6, frontier=bad)
 

@@ -3,9 +3,11 @@
 A name is printed by ``gaitpref session list`` and the terminal, put in the console's pages and
 written to exports.  ``name = "lab\\u001b[2J"`` (ESC: an escape sequence that clears the
 operator's terminal), a newline (a forged second line in a listing), NUL or a right-to-left
-override were taken as they were.  Now a new session refuses every Unicode ``C*`` character
-(``Cc`` control, ``Cf`` format, ``Cs``, ``Co``, ``Cn``) with a ConfigError naming ``name``; a
-session stored with one by an earlier release reopens and replays as it was.
+override were taken as they were.  Now a new session refuses control (``Cc``), format (``Cf``),
+surrogate (``Cs``) and line or paragraph separator (``Zl``, ``Zp``) characters with a
+ConfigError naming ``name``; private-use and unassigned code points pass (whether a code point
+is assigned depends on the Python version); a session stored with one by an earlier release
+reopens and replays as it was.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ HIDDEN = [
     ("lab\u202egnp.exe", "U+202E RIGHT-TO-LEFT OVERRIDE"),  # Cf: reorders the text shown
     ("lab\u200bx", "U+200B ZERO WIDTH SPACE"),  # Cf: invisible
     ("lab\tx", "U+0009"),  # a tab inside a name that is not blank
+    ("lab\u2028x", "U+2028 LINE SEPARATOR"),  # Zl: a line break in many renderers
 ]
 
 
@@ -52,7 +55,9 @@ def test_a_new_session_refuses_control_and_format_characters_in_the_name(
     path.write_text(text, encoding="utf-8")
     db = MemoryStorage()
     for config in (path, parse_config(text)):
-        with pytest.raises(ConfigError, match=r"^name: must not hold control or format") as err:
+        with pytest.raises(
+            ConfigError, match=r"^name: must not hold control, format or line-break"
+        ) as err:
             Session.create(db, config, "S01")
         assert err.value.key == "name"
         assert f"the first {first} at character 4" in str(err.value)
@@ -60,7 +65,9 @@ def test_a_new_session_refuses_control_and_format_characters_in_the_name(
     assert Session.list_sessions(db) == []
 
 
-@pytest.mark.parametrize("name", ["exo 1d (café, ☃)", "Übung-2 – 步长", "a b"])
+@pytest.mark.parametrize(
+    "name", ["exo 1d (café, ☃)", "Übung-2 – 步长", "a b", "lab \ue000 private", "lab \u0378"]
+)
 def test_printable_names_are_taken(name: str) -> None:
     config = parse_config(_text(name))
     check_name(config)

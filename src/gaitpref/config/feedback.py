@@ -21,7 +21,8 @@
     # reach = 1.0                            # ... within reach lengthscales of a known-safe
                                              # gait (default: anywhere)
     # frontier = 0.9                         # ... and only where P(an avoided rating) is at
-                                             # most frontier x an unrated gait's (default: off)
+                                             # most frontier x an unrated gait's (above
+                                             # cautious; default: off)
     unsafe_radius = 0.1                      # a flagged gait's neighbourhood (fraction of each
                                              # feature's range; 0: the gait alone)
     # start = [{step_length = 0.12, step_duration = 0.9}]   # gaits the operator declares safe
@@ -195,6 +196,15 @@ def _cautious(
             if key not in defaulted:
                 fail("safety", key, "is a setting of the cautious level, which is off here")
         return None
+    frontier = safety["frontier"]
+    if frontier is not None and frontier <= cautious:
+        fail(
+            "safety",
+            "frontier",
+            f"must exceed cautious ({cautious:g}), got {frontier:g}: a gait under frontier x an "
+            "unrated gait's probability is known-safe already, so nothing would be left to "
+            "explore",
+        )
     return cautious
 
 

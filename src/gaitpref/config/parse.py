@@ -169,13 +169,21 @@ def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> Experi
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
+#: Unicode categories a config name may not hold: controls (Cc), format characters (Cf: zero
+#: width, bidirectional overrides), surrogates (Cs), line and paragraph separators (Zl, Zp).
+#: Private-use and unassigned code points are let through: whether a code point is assigned
+#: depends on the Python version's Unicode tables.
+_HIDDEN: Final = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
+
+
 def check_name(config: ExperimentConfig) -> None:
     """Refuse a blank name (empty, or spaces only) for a *new* session's config: the name is how
-    session lists, the console and exports tell configs apart; and a name holding a control or
-    format character (Unicode category ``C*``: a newline, ESC, NUL, a bidirectional override,
-    ...), which would reach terminals, the console's pages and exports as it is.  A
-    :class:`ConfigError` naming the key.  Not checked by :func:`parse_config`: sessions stored
-    with such a name (earlier releases took it) parse, reopen and replay as they were."""
+    session lists, the console and exports tell configs apart; and a name holding a control,
+    format or line-break character (:data:`_HIDDEN`: a newline, ESC, NUL, a bidirectional
+    override, a line separator, ...), which would reach terminals, the console's pages and
+    exports as it is.  A :class:`ConfigError` naming the key.  Not checked by
+    :func:`parse_config`: sessions stored with such a name (earlier releases took it) parse,
+    reopen and replay as they were."""
     if not config.name.strip():
         fail(
             "",
@@ -183,17 +191,17 @@ def check_name(config: ExperimentConfig) -> None:
             f"must name the config (session lists and exports show it), got {config.name!r}; "
             "give a name, or leave the key out to use the file's name",
         )
-    hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c)[0] == "C"]
+    hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c) in _HIDDEN]
     if hidden:
         at, char = hidden[0]
         named = f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
         fail(
             "",
             "name",
-            f"must not hold control or format characters (Unicode category C*: newlines, tabs, "
-            f"ESC, NUL, ...); {shown(config.name)} holds {len(hidden)}, the first {named} at "
-            f"character {at + 1}: "
-            "terminals, the console and exports would show it as it is",
+            f"must not hold control, format or line-break characters (newlines, tabs, ESC, NUL, "
+            f"bidirectional overrides, ...); {shown(config.name)} holds {len(hidden)}, the first "
+            f"{named} at character {at + 1}: terminals, the console and exports would show it as "
+            "it is",
         )
 
 

@@ -135,6 +135,16 @@ class Safety:
             is_number(self.frontier) and np.isfinite(self.frontier) and 0 < self.frontier <= 1
         ):
             raise ValueError(f"frontier must be a share in (0, 1], got {self.frontier!r}")
+        if (
+            self.frontier is not None
+            and self.cautious is not None
+            and self.frontier <= self.cautious
+        ):
+            raise ValueError(
+                f"frontier ({self.frontier!r}) must exceed cautious ({self.cautious!r}): a gait "
+                "under frontier x an unrated gait's probability is known-safe already, so "
+                "nothing would be left to explore"
+            )
         if len(set(self.start)) != len(self.start):
             raise ValueError(f"start names a gait twice: {self.start!r}")
 
@@ -200,7 +210,9 @@ class Safety:
         if self.reach is not None and better.any():
             better &= _within(posterior, pool, self.reach)
         if self.frontier is not None and better.any():  # where the ratings already speak for it
-            better &= ~bounds.region(self.frontier * _unrated(bounds, self.avoid))
+            ahead = np.flatnonzero(better)
+            level = self.frontier * _unrated(bounds, self.avoid)
+            better[ahead] = ~bounds.region_of(level, ahead)
         return ~(known | better)
 
     def known_safe(self, posterior: Posterior, ordinal: Ordinal | None) -> BoolArray | None:
@@ -266,11 +278,19 @@ class _Bounds:
 
     def region(self, level: float | None) -> BoolArray:
         """The gaits the rule at ``level`` avoids (variances only of the undecided ones)."""
-        rule, scale, v, t, mean = self.safety._rule, self.scale, self.v, self.t, self.mean
+        return self.region_of(level, np.arange(self.mean.size))
+
+    def region_of(self, level: float | None, actions: NDArray[np.intp]) -> BoolArray:
+        """Whether the rule at ``level`` avoids each of ``actions`` (variances only of the
+        undecided ones)."""
+        rule, scale, v, t = self.safety._rule, self.scale, self.v, self.t
+        mean, prior = self.mean[actions], self.prior[actions]
         out = rule(scale, v, t, mean, np.zeros_like(mean), level)
-        undecided = np.flatnonzero(out != rule(scale, v, t, mean, self.prior, level))
+        undecided = np.flatnonzero(out != rule(scale, v, t, mean, prior, level))
         if undecided.size:
-            out[undecided] = rule(scale, v, t, mean[undecided], self.var_of(undecided), level)
+            out[undecided] = rule(
+                scale, v, t, mean[undecided], self.var_of(actions[undecided]), level
+            )
         return out
 
 
