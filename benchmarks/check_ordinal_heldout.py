@@ -60,20 +60,25 @@ def main() -> None:
     args = parser.parse_args()
     arms = {a.name: a for a in START_ARMS}
     data: Data = {}
+    machine = {**machine_description(), "jobs": args.jobs}  # recorded in each arm file it runs
+    machines: dict[str, list[str]] = {}
     for grid in GRIDS:
         objs = objectives(grid, args.objectives)
         for scenario in SCENARIOS:
             for name in ARMS:
                 path = OUT / grid / scenario / f"{name}.json"
-                if path.is_file() and len(json.loads(path.read_text())["runs"]) >= len(objs):
-                    data[(grid, scenario, name)] = json.loads(path.read_text())["runs"]
+                cached = json.loads(path.read_text()) if path.is_file() else {}
+                if len(cached.get("runs", ())) >= len(objs) and "machine" in cached:
+                    data[(grid, scenario, name)] = cached["runs"][: len(objs)]
+                    machines.setdefault(json.dumps(cached["machine"]), []).append(name)
                     continue
                 runs = Parallel(n_jobs=args.jobs)(
                     delayed(run_one)(arms[name], grid, scenario, OFFSET + k, obj)
                     for k, obj in enumerate(objs)
                 )
                 path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(json.dumps({"arm": name, "runs": runs}))
+                path.write_text(json.dumps({"arm": name, "machine": machine, "runs": runs}))
+                machines.setdefault(json.dumps(machine), []).append(name)
                 data[(grid, scenario, name)] = runs
                 print(f"{grid} {scenario} {name}: done", flush=True)
     lines = [
@@ -113,7 +118,10 @@ def main() -> None:
             f"| {grid} | {scenario} | {name} | {_pm(m['early'])} | {_pm(m['all'])} "
             f"| {m['worst'].mean() * TRIALS:.2f} |"
         )
-    lines += ["", "## Machine", "", machine_markdown(machine_description()), ""]
+    for ran, names in machines.items():
+        arms_run = ", ".join(sorted(set(names)))
+        lines += ["", f"## Runs' machine ({arms_run})", "", machine_markdown(json.loads(ran))]
+    lines += ["", "## Report's machine", "", machine_markdown(machine_description()), ""]
     (RESULTS / "heldout.md").write_text("\n".join(lines))
 
 

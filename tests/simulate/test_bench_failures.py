@@ -219,3 +219,46 @@ def test_population_bench_keeps_the_finished_runs_on_its_error(
     assert isinstance(err.__cause__, ValueError)
     assert [(r["subject"], r["run"]) for r in err.finished] == [(0, "cold"), (1, "cold")]
     assert "2 of 6 runs finished; their results are on this error (RunError.finished)" in str(err)
+
+
+OVER_BUDGET = """\
+name = "over-budget"
+[space.a]
+min = 0.0
+max = 1.0
+num = 500
+[space.b]
+min = 0.0
+max = 1.0
+num = 500
+[model]
+lengthscale = 0.2
+signal_variance = 1.0
+noise = 0.05
+[cospar]
+strategy = "plausible-eubo"
+[cospar.strategy_settings]
+samples = 4096
+"""
+
+
+@pytest.mark.parametrize("bench", ["continuous", "population"])
+def test_a_bench_refuses_a_config_over_the_sampling_budget_before_any_run(
+    tmp_path: Path, bench: str
+) -> None:
+    """As a new session and ``gaitpref simulate`` do (``config/draws.py``): named, status 2,
+    no run made (before, each run failed at its first ask)."""
+    config = tmp_path / "over.toml"
+    config.write_text(OVER_BUDGET)
+    partial = tmp_path / "runs.jsonl"
+    if bench == "continuous":
+        args = ["bench", "continuous", str(config), "--objective", "random-gp", "--runs", "2"]
+    else:
+        objectives = tmp_path / "f.npy"
+        np.save(objectives, np.zeros((2, 3)))
+        args = ["bench", "population", "--config", str(config), "--objectives", str(objectives)]
+    result = CliRunner().invoke(app, [*args, "--trials", "2", "--partial", str(partial)])
+    assert result.exit_code == 2, result.output
+    assert "[cospar.strategy_settings].samples: is 4096" in _text(result.output)
+    assert "set samples to at most 536" in _text(result.output)
+    assert not partial.exists()

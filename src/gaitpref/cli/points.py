@@ -59,6 +59,11 @@ def simulate_points(
     return run_points(loop, objective, user, trials, helper, progress=progress)
 
 
+def run_record(seed: int, result: PointsResult) -> dict[str, object]:
+    """One run of ``bench continuous`` as its JSON's ``runs`` and the partial file hold it."""
+    return {"seed": seed, **result.to_json()}
+
+
 def bench_points(
     cfg: ExperimentConfig,
     spec: str,
@@ -94,18 +99,15 @@ def bench_points(
             progress=None if progress is None else lambda done: progress(seed * trials + done),
         )  # fmt: skip
 
-    def record(seed: int, result: PointsResult) -> dict[str, object]:
-        return {"seed": seed, **result.to_json()}
-
     with partial_file(None if partial is None else JsonLines(partial)) as sink:
 
         def done(seed: int, result: PointsResult) -> None:
             if sink is not None:
-                sink.append(record(seed, result))
+                sink.append(run_record(seed, result))
 
         results, failure = run_tasks(one, list(range(runs)), 1, done=done)
         if failure is not None:
-            kept = [record(k, r) for k, r in enumerate(results) if r is not None]
+            kept = [run_record(k, r) for k, r in enumerate(results) if r is not None]
             names = [f"objective {s!r}, seed {k}" for k, s in enumerate(specs)]
             raise run_error(failure, names, kept, runs, None if sink is None else sink.path)
     return [r for r in results if r is not None]

@@ -28,6 +28,7 @@ from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 
 if TYPE_CHECKING:
+    from gaitpref.config import ExperimentConfig
     from gaitpref.simulate.study import Study
     from gaitpref.simulate.sweep import StudyResult
 
@@ -154,6 +155,17 @@ def _table_path(out: Path, fmt: str) -> Path:
     except RuntimeError as exc:
         fail(f"--table {fmt}: {exc}")
     return path
+
+
+def _bench_config(source: str) -> ExperimentConfig:
+    """A bench's config, with a new session's check of its largest draw against the sampling
+    budget (``config/draws.py``): refused before any run, naming the key, rather than as every
+    run's failure."""
+    from gaitpref.config import check_draws, load_config
+
+    cfg = load_config(source)
+    check_draws(cfg)
+    return cfg
 
 
 @bench_app.command("paper-2d")
@@ -303,13 +315,12 @@ def population(
 
     import numpy as np
 
-    from gaitpref.config import load_config
     from gaitpref.simulate.population import population_bench
 
     arr = read_array(objectives, "objectives file")
+    cfg = guard(lambda: _bench_config(config))
 
     def run() -> dict[str, object]:
-        cfg = load_config(config)
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
             partial=_partial(partial, "population"),
@@ -352,10 +363,9 @@ def continuous(
     import numpy as np
 
     from gaitpref.cli.main import progress_bar
-    from gaitpref.cli.points import bench_points
-    from gaitpref.config import load_config
+    from gaitpref.cli.points import bench_points, run_record
 
-    cfg = guard(lambda: load_config(config))
+    cfg = guard(lambda: _bench_config(config))
     with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
@@ -371,7 +381,7 @@ def continuous(
         "config": cfg.name,
         "objective": objective,
         "path": cfg.subspace,
-        "runs": [{"seed": k, **r.to_json()} for k, r in enumerate(results)],
+        "runs": [run_record(k, r) for k, r in enumerate(results)],
         "mean_curve": curves.mean(axis=0).tolist(),
         "best_objective_mean": float(best.mean()),
         "best_objective_se": float(best.std(ddof=1) / np.sqrt(runs)) if runs > 1 else 0.0,

@@ -32,9 +32,10 @@ from gaitpref.space import FloatArray, IntArray, Space
 BLOCK_ELEMENTS = 1 << 22
 #: The most values one joint draw of ``size`` samples over ``A`` points (``size x A``) may
 #: hold: 2**27 float64, 1 GiB, the bound ``Posterior.covariance()`` has on its ``A x A`` matrix.
-#: It admits the largest query a config allows (64 samples) on the largest grid (10**6 gaits)
-#: twice over; beyond it, draw the samples in batches.  A new session checks its config's
-#: largest draw against it (``config/draws.py``); the numerics check every draw.
+#: It admits the largest query (``n = 64`` samples) on the largest grid (10**6 gaits) twice
+#: over; a strategy's settings may ask for more (plausible-eubo's ``samples``, gated-eubo's
+#: ``gates``), so a new session checks its config's largest draw against it
+#: (``config/draws.py``); beyond it, draw the samples in batches.  The numerics check every draw.
 SAMPLE_LIMIT_ELEMENTS = 1 << 27
 #: What one draw holds at its peak, in ``size x A`` arrays (measured with tracemalloc,
 #: ``tests/model/test_draw_memory.py``): two, the normals and the first axis's product while
