@@ -356,7 +356,9 @@ def ask_again(session: Session) -> None:
     try:
         session.next_query()
     except NoSafeGaitError:
-        if session.last_seq == before:
+        # shown by the page only if this ask logged its stop: something was written and the
+        # last event is the stop (a writer's events caught up on may have moved last_seq)
+        if session.last_seq == before or not session.ask_stopped:
             raise
 
 

@@ -263,6 +263,12 @@ class Session:
         return self._state.last_seq
 
     @property
+    def ask_stopped(self) -> bool:
+        """Whether the last event logged is an ask that stopped without proposing
+        (``query_stopped``: its infeasible gaits are logged; ``sessions/gaits.py``)."""
+        return self._state.stopped is not None
+
+    @property
     def gait_ids(self) -> list[str] | None:
         return self._state.gait_ids
 
