@@ -12,6 +12,7 @@ family                     raised when
 :class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
                            not positive definite, :class:`NoSafeGaitError`: no gait is safe,
                            :class:`InfeasibleProposalsError`: an ask's proposals had no gait)
+:class:`ShortLinesError`   the line path: no line drawn holds the query's ``n`` points
 :class:`FeedbackError`     an answer does not fit its query; nothing was changed
 :class:`QueryError`        an answer to a query that is unknown, stale or already answered
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
@@ -69,6 +70,13 @@ class InfeasibleProposalsError(NoSafeGaitError):
         super().__init__(message)
         self.infeasible = infeasible
         self.limit = limit
+
+
+class ShortLinesError(GaitprefError, ValueError):
+    """The line path: none of the lines an ask drew holds the query's ``n`` points (with the
+    points so far) and a point that may be proposed; a line snapped to a few grid values of
+    discrete features may hold fewer (``loop/line.py``).  Nothing was proposed.  A ``ValueError``
+    as before it had a class, so the CLI and the console report it as they did."""
 
 
 class FeedbackError(GaitprefError, ValueError):
@@ -138,6 +146,7 @@ __all__ = [
     "ReplayError",
     "SessionError",
     "SessionStateError",
+    "ShortLinesError",
     "SimulationError",
     "StorageError",
 ]

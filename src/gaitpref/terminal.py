@@ -35,7 +35,7 @@ import contextlib
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
 
 from rich.console import Console
@@ -87,11 +87,16 @@ class Terminal:
         console: Console | None = None,
         read: Reader = input,
         resume: str | None = None,
+        record_with: Callable[[Sequence[str]], str] | None = None,
     ):
         self.session = session
         self.console = console or Console(highlight=False, soft_wrap=True)
         self._read = read
         self.resume = resume or f"gaitpref session run {session.id}"
+        #: the command that records a round's ranking later, given the gait names it showed
+        #: (``gaitpref session validate ID --gaits ...``): printed with each round shown
+        self.record_with = record_with
+        self.shown_gaits: list[str] | None = None  # the names of the round shown last
         self._reading = False  # a pause signal now interrupts the read at once
         self._signalled = False  # a pause signal came while writing: pause at the next read
         self._output_closed = False  # stdout's reader went away: nothing more is printed
@@ -444,8 +449,10 @@ class Terminal:
         return out, said
 
     # -- blind validation ----------------------------------------------------------------------
-    def _show_round(self, plan: ValidationPlan) -> list[str]:
-        """Print the round's gaits in label order; their names (checked when it is ranked)."""
+    def _show_round(self, plan: ValidationPlan, hint: bool = True) -> list[str]:
+        """Print the round's gaits in label order (and, with ``hint``, the command that records
+        their ranking later: :meth:`_say_record_with`); their names (checked when it is
+        ranked)."""
         self.console.print(
             f"Blind validation, round {plan.round}: run these gaits in this order and tell the "
             "subject nothing about them.",
@@ -454,23 +461,66 @@ class Terminal:
         gaits = self.session.validation_gaits(plan.round)
         for g in gaits:
             self.console.print(f"  Gait {g.label}: {g.gait} ({g.text})", markup=False)
-        return [g.gait for g in gaits]
+        self.shown_gaits = [g.gait for g in gaits]
+        if hint:
+            self._say_record_with(self.shown_gaits)
+        return self.shown_gaits
 
-    def validate(self, ranking: str | None = None) -> None:
+    def _say_record_with(self, names: list[str]) -> None:
+        """With :attr:`record_with`, print the command that records the ranking of the round
+        that shows the gaits ``names``."""
+        if self.record_with is not None:
+            self.console.print(
+                f"  To record the ranking later: {self.record_with(names)}\n"
+                "  (RANKING: the subject's, best first; refused if the round shows other gaits "
+                "by then)",
+                markup=False,
+            )
+
+    def validate(self, ranking: str | None = None, gaits: Sequence[str] | None = None) -> None:
         """Run (or resume) a blind validation round and report the unblinded result.
 
         A ranking is refused if the round was drawn again since its gaits were shown (another
         writer flagged a gait it showed): the round's gaits are shown again as they are now and
         the ranking asked again (with ``ranking`` given: :class:`SessionStateError`).  When no
-        round is open any more, :class:`SessionStateError` says the ranking was not recorded."""
+        round is open any more, :class:`SessionStateError` says the ranking was not recorded.
+
+        ``gaits``, with ``ranking``: the names of the gaits the subject walked, in label order,
+        as an earlier display of the round showed them (``session validate ID --gaits``, typed
+        in another command).  The ranking is then recorded only if the open round shows those
+        gaits now (:class:`SessionStateError` naming both lists otherwise; the round is shown as
+        it is now), and no round is opened: without them, the round shown here is the one
+        ranked, and a round drawn again in between went unnoticed."""
         s = self.session
+        if gaits is not None and ranking is None:
+            raise SessionStateError("the gaits shown check a ranking: give the ranking too")
         if ranking is not None:  # refused before a round is logged
             try:
                 check_ranking(ranking, LABELS)
             except ValueError as exc:
                 raise SessionStateError(str(exc)) from None
-        plan = s.start_validation()
-        shown = self._show_round(plan)
+        if gaits is None:
+            plan = s.start_validation()
+        else:
+            open_ = s.validation_plan
+            if open_ is None:
+                raise SessionStateError(
+                    f"the ranking {ranking} of {', '.join(gaits)} was not recorded: no blind "
+                    "validation round is open (the round that showed them was answered since, "
+                    "or an unsafe flag withdrew it and fewer than three gaits are left to show); "
+                    "nothing was written"
+                )
+            plan = open_
+        shown = self._show_round(plan, hint=ranking is None)
+        # compared joined: a name with a comma in it comes split by the command line
+        if gaits is not None and ",".join(gaits) != ",".join(shown):
+            self._say_record_with(shown)
+            raise SessionStateError(
+                f"the ranking {ranking} was not recorded: it ranks the gaits {', '.join(gaits)}, "
+                f"but validation round {plan.round} shows {', '.join(shown)} now (drawn again "
+                "since those were shown: an unsafe flag on one of them; or mistyped); nothing "
+                "was written: run the round's gaits as shown now and record their ranking"
+            )
         while True:
             if ranking is None:
                 self.console.print(
@@ -545,12 +595,25 @@ def run_validation(
     ranking: str | None = None,
     console: Console | None = None,
     read: Reader = input,
+    *,
+    gaits: Sequence[str] | None = None,
+    record_with: Callable[[Sequence[str]], str] | None = None,
 ) -> bool:
-    """The blind validation of ``gaitpref session validate``; False if the operator quit."""
-    terminal = Terminal(session, console, read)
+    """The blind validation of ``gaitpref session validate``; False if the operator quit.
+
+    ``gaits``: the round's gait names as shown earlier (:meth:`Terminal.validate`);
+    ``record_with``: the command that records the ranking later, given the names shown, printed
+    with the round and, when the operator quits, with the round's state."""
+    terminal = Terminal(session, console, read, record_with=record_with)
     try:
         with terminal.pause_on_signals():
-            terminal.validate(ranking)
+            terminal.validate(ranking, gaits)
     except (_QuitError, _UndoError):
+        if record_with is not None and terminal.shown_gaits is not None:
+            terminal.console.print(
+                "No ranking recorded; the round stays open (no trials are proposed until it is "
+                f"answered).  Record it with: {record_with(terminal.shown_gaits)}",
+                markup=False,
+            )
         return False
     return True

@@ -8,7 +8,8 @@ status 2; nothing is written when a command fails.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
+import shlex
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
@@ -147,22 +148,58 @@ def validate(
     ranking: Annotated[
         str | None, typer.Option(help="The subject's ranking, best first (e.g. BCA).")
     ] = None,
+    gaits: Annotated[
+        str | None,
+        typer.Option(
+            help="With --ranking: the round's gait names as shown, in the shown order, "
+            "comma-separated (the display of the round prints the command); the ranking is "
+            "refused if the open round shows other gaits now (drawn again meanwhile)."
+        ),
+    ] = None,
     db: DbOption = None,
     yes: YesOption = False,
 ) -> None:
     """Blind validation: the max/mean/min gaits in a logged random order, then unblinding."""
     from gaitpref.terminal import run_validation
 
+    names = None if gaits is None else _gait_names(gaits, ranking)
     with _opened(db, session_id) as session:
         if ranking is not None:
-            _confirm(f"Record the ranking {ranking} for session {session_id}?", yes)
-        if not guard(lambda: run_validation(session, ranking, console)):
-            again = f"gaitpref session validate {session_id}" + (f" --db {db}" if db else "")
-            console.print(
-                "No ranking recorded; the round stays open (no trials are proposed until it is "
-                f"answered).  Record it with: {again}",
-                markup=False,
-            )
+            of = "" if names is None else f" of {', '.join(names)}"
+            _confirm(f"Record the ranking {ranking}{of} for session {session_id}?", yes)
+
+        def record_with(shown: Sequence[str]) -> str:
+            return _validate_command(session_id, db, shown)
+
+        guard(
+            lambda: run_validation(session, ranking, console, gaits=names, record_with=record_with)
+        )
+
+
+def _gait_names(gaits: str, ranking: str | None) -> list[str]:
+    """``--gaits``: the names between commas; refused without ``--ranking`` or with an empty
+    name."""
+    if ranking is None:
+        fail(
+            "--gaits checks the ranking given with --ranking: give both (or neither, to show "
+            "the round and type its ranking)"
+        )
+    names = [name.strip() for name in gaits.split(",")]
+    if not all(names):
+        fail(
+            "--gaits names the round's gaits as shown, separated by commas (e.g. G3,G7,G1), "
+            f"got {gaits!r}"
+        )
+    return names
+
+
+def _validate_command(session_id: int, db: str | None, gaits: Sequence[str]) -> str:
+    """The command that records the ranking of the round that showed ``gaits``."""
+    where = f" --db {shlex.quote(db)}" if db else ""
+    return (
+        f"gaitpref session validate {session_id}{where} --gaits "
+        f"{shlex.quote(','.join(gaits))} --ranking RANKING"
+    )
 
 
 @session_app.command("list")

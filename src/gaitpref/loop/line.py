@@ -13,7 +13,9 @@ query strategy (self-sparring, EUBO, gated EUBO, information gain) runs unchange
 posterior with ``allowed`` set to the line's points, so it chooses along the line.  When no
 point of the line may be proposed (every one avoided, near a gait flagged unsafe, or in the
 region of avoidance) the ask draws another line, up to ``LINE_DRAWS`` (``loop/lines.py``), and
-raises :class:`~gaitpref.errors.NoSafeGaitError` only when none of them has such a point.
+raises :class:`~gaitpref.errors.NoSafeGaitError` only when none of them has such a point
+(:class:`~gaitpref.errors.ShortLinesError` when some had, but each such line held fewer than the
+query's ``n`` points with the table).
 
 Actions are rows of the table: they keep their index for the whole session, and a point seen
 twice (a line through a visited point, a coactive suggestion landing on one) is one action.
@@ -34,7 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from gaitpref.checks import is_count
-from gaitpref.errors import NoSafeGaitError, QueryError
+from gaitpref.errors import NoSafeGaitError, QueryError, ShortLinesError
 from gaitpref.feedback import FeedbackKind, Suggestion
 from gaitpref.loop.cospar import Answer, CoSpar, Query, check_radius, proposed
 from gaitpref.loop.lines import (
@@ -164,7 +166,7 @@ class LineCoSpar(CoSpar):
             else:  # nothing drawn, nothing logged: the generator goes back as it was
                 self.rng.bit_generator.state = state
                 if short:
-                    raise ValueError(
+                    raise ShortLinesError(
                         f"none of the {LINE_DRAWS} lines tried holds n = {self.n} points with the "
                         "gaits so far: lower n, or give the discrete features more values"
                     )

@@ -207,9 +207,11 @@ class QueryStopped(EventPayload):
     proposals' gaits could not be made, ``infeasible`` of them (``gait_infeasible`` events of
     this batch), once ``[gaits] max_infeasible`` (``limit``) was reached; each is avoided, so the
     next ask goes on from there (``sessions/gaits.py``).  ``infeasible`` under ``limit``: the
-    ask stopped because, with those avoided, no gait was left that may be proposed (the payload
-    is the same; logs from before have no such event, as such an ask wrote nothing).  Replay
-    stops the batch where the log does, with the logged ``limit``."""
+    ask stopped because, with those avoided, no gait was left that may be proposed (on the line
+    path also: no line that has one holds the query's ``n`` points; the payload is the same;
+    logs from before have no such event, as such an ask wrote nothing).  Replay stops the batch
+    where the log does, with the logged ``limit``.  An ask cut by the gait generator's error
+    is not logged (``sessions/gaits.py`` says why)."""
 
     kind: ClassVar[str] = "query_stopped"
     infeasible: Annotated[int, Field(ge=1)]

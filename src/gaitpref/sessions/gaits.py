@@ -25,14 +25,28 @@ ran.
 
 An ask whose infeasible gaits leave no gait that may be proposed before the limit (``ask``
 raises :class:`~gaitpref.errors.NoSafeGaitError`: the region of avoidance, the unsafe flags and
-the gaits avoided cover the space) stops the same way: its batch is logged with a closing
+the gaits avoided cover the space; or, on the line path,
+:class:`~gaitpref.errors.ShortLinesError`: each line drawn that still has such a point holds
+fewer than the query's ``n`` points) stops the same way: its batch is logged with a closing
 ``query_stopped`` whose ``infeasible`` is under its ``limit``, and the session raises a plain
 :class:`~gaitpref.errors.NoSafeGaitError` saying so.  Before, such an ask wrote nothing: its
 gaits were in the gait cache only, so the log, and what the next ask or a replay saw, lacked
 them.  A log has no such batch from before (an ask that ran out wrote nothing), so every log
 replays as it ran; replay derives such a batch again as it derives one stopped at the limit (the
-same rounds, then ``ask`` refuses where the log stops).  An ask that finds no gait may be
-proposed before any proposal writes nothing, as before.
+same rounds, then ``ask`` refuses where the log stops: the loop alone decides, from the log).
+An ask that finds no gait may be proposed before any proposal writes nothing, as before.
+
+An ask in which the gait generator fails (raises a :class:`~gaitpref.errors.GaitError`, as
+opposed to finding a gait infeasible) writes nothing, even after it found gaits: a batch cut
+there ends neither at the limit nor where no gait is left, the two stops a ``query_stopped``
+can say and replay re-derives without the generator; replay would go on proposing past the end
+of such a batch (making, or failing to make, the next gait) and find a difference, and a reload
+that says a stop again from its payload (``retry=False``) would give the wrong reason.  Logging
+it needs a payload that says why (a new version and a migration) or a new event kind.  Nothing
+is lost: every gait it made is in the gait cache, so the next ask, with nothing logged in
+between, proposes the same gaits with the same random state and takes them from the cache (or
+makes them again the same way, each warm-started from the same earlier gait), logging exactly
+what an ask without the failure would have; the error says so (:func:`unlogged_error`).
 
 Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
 carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
@@ -49,10 +63,14 @@ from typing import TYPE_CHECKING, Any
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.errors import (
+    GaitError,
+    GaitGeneratorError,
     GaitLibraryError,
     InfeasibleProposalsError,
     NoSafeGaitError,
     ReplayError,
+    ShortLinesError,
+    SimulationError,
 )
 from gaitpref.loop import CoSpar, Query
 from gaitpref.sessions import events as log
@@ -127,8 +145,11 @@ def propose_with_gaits(
     ``recorded``: on replay, the gaits the log carries for it.  None instead of a proposal when
     the ask stopped at ``[gaits] max_infeasible`` (live; on replay, the logged batch's limit, or
     none), or when no gait was left to propose after some were infeasible: the events then end
-    with ``query_stopped``.  :class:`~gaitpref.errors.NoSafeGaitError` when none may be proposed
-    at the first proposal (nothing to log), or on replay of a batch that issued its query.
+    with ``query_stopped``.  :class:`~gaitpref.errors.NoSafeGaitError` (or, on the line path,
+    :class:`~gaitpref.errors.ShortLinesError`) when none may be proposed at the first proposal
+    (nothing to log), or on replay of a batch that issued its query.  A
+    :class:`~gaitpref.errors.GaitError` of the generator is raised as it is, or, live after
+    this ask found gaits, as :func:`unlogged_error` says it (nothing is logged).
 
     Terminates: each round takes at least one more action out of the proposals, an empty
     choice raises :class:`~gaitpref.errors.NoSafeGaitError` from ``ask``, a live ask makes at
@@ -143,7 +164,7 @@ def propose_with_gaits(
         past_the_log = recorded is not None and recorded.exhausted
         try:
             query = loop.ask()
-        except NoSafeGaitError:
+        except (NoSafeGaitError, ShortLinesError):  # nothing left (line path: no line of n)
             if not infeasible or limit is None:  # none found yet (nothing to log), or a replay
                 raise  # of a batch that issued its query: the log has a difference
             # no gait left before the limit: the ask stops as at the limit, logging what it found
@@ -152,7 +173,12 @@ def propose_with_gaits(
         space = loop.space  # the grid, or the line path's points (which the ask may extend)
         bad = []
         for action in dict.fromkeys(query.actions):  # each distinct action once, in order
-            made, new = gaits.get(space.point(action), recorded)
+            try:
+                made, new = gaits.get(space.point(action), recorded)
+            except GaitError as exc:  # not logged: see the module's docstring
+                if recorded is not None or not events:
+                    raise
+                raise unlogged_error(exc, events) from exc
             if made.feasible:
                 if new:
                     events.append(log.new_event(_made(action, made, space.values_of(action))))
@@ -184,14 +210,22 @@ def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> NoSafeGa
         f"avoid_radius {radius:g} of it."
     )
     if infeasible < limit:
+        on_lines = config.subspace == "line"
+        short = (
+            "; or each line tried that has a gait that may be proposed holds fewer than the "
+            f"query's n = {config.n} points, as a line snapped to the values of discrete "
+            "features may"
+            if on_lines
+            else ""
+        )
         return NoSafeGaitError(
             f"this ask stopped without proposing: its proposals had {infeasible} gaits that "
             "cannot be made, and then no gait was left that may be proposed (every gait, on the "
             "line path every point of each line tried, is in the region of avoidance, near a "
-            "gait flagged unsafe, or near a gait that cannot be made).  "
+            f"gait flagged unsafe, or near a gait that cannot be made{short}).  "
             f"{logged}  Withdraw an unsafe flag if one is wrong; or finish this session "
             "and start one whose [space] leaves those gaits out (or with a smaller [gaits] "
-            "avoid_radius)"
+            "avoid_radius" + (", or a smaller [cospar] n" if on_lines else "") + ")"
         )
     return InfeasibleProposalsError(
         f"this ask stopped without proposing: its proposals had {infeasible} gaits that cannot "
@@ -202,6 +236,25 @@ def stopped_error(payload: dict[str, Any], config: ExperimentConfig) -> NoSafeGa
         infeasible=infeasible,
         limit=limit,
     )
+
+
+def unlogged_error(exc: GaitError, events: Sequence[NewEvent]) -> GaitError:
+    """The generator's error ``exc`` saying what became of the gaits this ask found before it
+    (``events``: their events, none logged): of ``exc``'s class when it is one of gaitpref's
+    (a generator's own class may take other arguments: then a :class:`GaitError`, raised
+    from ``exc``)."""
+    found = {e.payload["gait_id"]: e.kind for e in events if log.is_query_part(e.kind)}
+    bad = sum(kind == log.GAIT_INFEASIBLE for kind in found.values())
+    said = str(exc).rstrip(".") or type(exc).__name__
+    text = (
+        f"{said}.  This ask had found {len(found)} gaits before it "
+        f"({bad} that cannot be made): none is logged (an ask is logged whole, and its log "
+        "cannot say that the generator failed), but each is in the gait cache: asking again, "
+        "with nothing changed, proposes the same gaits and logs them, taking them from there "
+        "(or making them again the same way), and makes the failed one again"
+    )
+    own = (GaitError, GaitLibraryError, GaitGeneratorError, SimulationError)
+    return type(exc)(text) if type(exc) in own else GaitError(text)  # each takes a message
 
 
 def _made(action: int, made: MadeGait, values: dict[str, float]) -> log.GaitMade:
@@ -235,4 +288,4 @@ def _infeasible(
     )
 
 
-__all__ = ["RecordedGaits", "propose_with_gaits", "stopped_error"]
+__all__ = ["RecordedGaits", "propose_with_gaits", "stopped_error", "unlogged_error"]
