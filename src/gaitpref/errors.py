@@ -12,7 +12,7 @@ family                     raised when
 :class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
                            not positive definite, :class:`NoSafeGaitError`: no gait is safe,
                            :class:`InfeasibleProposalsError`: an ask's proposals had no gait)
-:class:`ShortLinesError`   the line path: no line drawn holds the query's ``n`` points
+:class:`ShortLinesError`   (a :class:`NoSafeGaitError`) the line path: no line drawn holds ``n``
 :class:`FeedbackError`     an answer does not fit its query; nothing was changed
 :class:`QueryError`        an answer to a query that is unknown, stale or already answered
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
@@ -72,11 +72,12 @@ class InfeasibleProposalsError(NoSafeGaitError):
         self.limit = limit
 
 
-class ShortLinesError(GaitprefError, ValueError):
+class ShortLinesError(NoSafeGaitError, ValueError):
     """The line path: none of the lines an ask drew holds the query's ``n`` points (with the
     points so far) and a point that may be proposed; a line snapped to a few grid values of
-    discrete features may hold fewer (``loop/line.py``).  Nothing was proposed.  A ``ValueError``
-    as before it had a class, so the CLI and the console report it as they did."""
+    discrete features may hold fewer (``loop/line.py``).  Nothing was proposed.  A
+    :class:`NoSafeGaitError` (no gait may be proposed: the terminal pauses, the console answers
+    409 and says why) and, as before it had a class, a ``ValueError``."""
 
 
 class FeedbackError(GaitprefError, ValueError):

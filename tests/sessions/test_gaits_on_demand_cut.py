@@ -181,8 +181,11 @@ def test_an_ask_left_with_only_short_lines_logs_the_gaits_it_found(
     assert [g.gait_id for g in s.infeasible_gaits()] == logged and s.pending is None
     # asking again, nothing changed: the loop refuses at once; nothing written, nothing made
     made = len(FakeSteps.calls)
-    with pytest.raises(ShortLinesError, match="none of the 12 lines tried holds n = 4 points"):
+    with pytest.raises(ShortLinesError, match="none of the 12 lines tried holds n = 4 points") as e:
         s.next_query()
+    # no gait may be proposed: the terminal pauses and the console answers 409 as for any
+    # NoSafeGaitError (a ValueError too, as before it had a class)
+    assert isinstance(e.value, NoSafeGaitError) and isinstance(e.value, ValueError)
     assert [e.kind for e in s.events()] == kinds and len(FakeSteps.calls) == made
     # a reload says the stop again from the log
     with pytest.raises(NoSafeGaitError, match="holds fewer than the query's n = 4"):
