@@ -12,7 +12,7 @@ family                     raised when
 :class:`ModelError`        the numerics cannot go on (:class:`ConvergenceError`, a prior that is
                            not positive definite, :class:`NoSafeGaitError`: no gait is safe,
                            :class:`InfeasibleProposalsError`: an ask's proposals had no gait)
-:class:`ShortLinesError`   (a :class:`NoSafeGaitError`) the line path: no line drawn holds ``n``
+:class:`ShortLinesError`   a :class:`NoSafeGaitError`: no line drawn holds the ``n`` points
 :class:`FeedbackError`     an answer does not fit its query; nothing was changed
 :class:`QueryError`        an answer to a query that is unknown, stale or already answered
 :class:`SessionError`      a session's state refuses an operation, its log does not replay, an
