@@ -90,7 +90,7 @@ class Terminal:
         record_with: Callable[[Sequence[str]], str] | None = None,
     ):
         self.session = session
-        self.console = console or Console(highlight=False, soft_wrap=True)
+        self.console = console or Console(highlight=False, soft_wrap=True, markup=False)
         self._read = read
         self.resume = resume or f"gaitpref session run {session.id}"
         #: the command that records a round's ranking later, given the gait names it showed

@@ -111,3 +111,26 @@ def test_simulate_says_what_its_time_is(tmp_path: Path) -> None:
     assert "simulated 4 trials in" in result.output and "s (wall clock)" in result.output
     assert not any(line.strip().endswith(" s") and len(line.split()) == 2
                    for line in result.output.splitlines())  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["lab [/bold] [red]x", "exo [v2]", "a [b]c[/b] d"])
+def test_names_and_notes_print_as_they_are_not_as_rich_markup(tmp_path: Path, name: str) -> None:
+    """A config name (or a note, a reason) with brackets was read as Rich markup: "[v2]"
+    vanished from listings and "[/bold]" raised MarkupError after the session was created."""
+    text = load_config("exo-1d-step-length").text
+    config = tmp_path / "c.toml"
+    config.write_text(f"name = {name!r}\n" + "\n".join(
+        line for line in text.splitlines() if not line.startswith("name =")
+    ))  # fmt: skip
+    db = str(tmp_path / "s.db")
+    new = runner.invoke(
+        app, ["session", "new", "--config", str(config), "--subject", "S01", "--db", db]
+    )
+    assert new.exit_code == 0, new.output
+    assert f"config {name}," in new.output
+    assert runner.invoke(app, ["session", "note", "1", f"check {name}", "--db", db]).exit_code == 0
+    listed = runner.invoke(app, ["session", "list", "--db", db])
+    assert listed.exit_code == 0, listed.output
+    assert all(word in listed.output for word in name.split())  # a narrow table wraps it
+    shown = runner.invoke(app, ["session", "show", "1", "--db", db, "--no-figure"])
+    assert shown.exit_code == 0 and f"S01, {name}, seed" in shown.output

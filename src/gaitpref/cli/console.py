@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.markup import escape
 
 from gaitpref.cli.output import err_console as _out
 from gaitpref.cli.output import fail
@@ -76,8 +77,8 @@ def serve(
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
     app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
-    _out.print(f"[bold]gaitpref console[/] on {resolve_url(db)}", soft_wrap=True)
-    _out.print(f"open [bold]{console_url(host, port, use_token)}[/]", soft_wrap=True)
+    _out.print(f"[bold]gaitpref console[/] on {escape(resolve_url(db))}", markup=True)
+    _out.print(f"open [bold]{escape(console_url(host, port, use_token))}[/]", markup=True)
     if use_token is not None:
         _out.print(
             "every request needs this token (Authorization: Bearer <token> for the API)",

@@ -154,6 +154,8 @@ def build(
         MofNCompleteColumn(),
         TimeElapsedColumn(),
     )
+    from rich.markup import escape
+
     with reported(), Progress(*columns, console=err_console) as bar:
         task = bar.add_task("gaits", total=total)
         lib = build_library(  # checks the grid (ids, step lengths) before optimizing
@@ -171,7 +173,10 @@ def build(
     err_console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
     if bad:
         for i in bad:
-            err_console.print(f"[red]infeasible[/red] {lib.gait_id(i)}: {lib.gaits[i].message}")
+            err_console.print(
+                f"[red]infeasible[/red] {escape(lib.gait_id(i))}: {escape(lib.gaits[i].message)}",
+                markup=True,
+            )
         raise typer.Exit(code=1)
 
 
@@ -182,6 +187,7 @@ def show(
 ) -> None:
     """List the gaits of a library: parameters, duration, COT, delta^2, feasibility."""
     from rich.table import Table
+    from rich.text import Text
 
     lib = _load(file)
     if as_json:
@@ -209,13 +215,19 @@ def show(
         typer.echo(json.dumps(doc, indent=1))
         return
     speed = f", speed {lib.speed:g} m/s" if lib.speed is not None else ""
-    table = Table(title=f"{file.name}: {len(lib)} gaits over {' x '.join(lib.names)}{speed}")
-    for col in ("#", "id", *lib.names, "duration [s]", "COT", "delta^2", "feasible"):
+    feasible = len(lib) - len(lib.infeasible())
+    table = Table(
+        title=f"{file.name}: {len(lib)} gaits ({feasible} feasible) over "
+        f"{' x '.join(lib.names)}{speed}"
+    )
+    # "ok": feasible; the unit in "duration [s]" shows now that markup is off, and 80 columns
+    # hold the table with the short header
+    for col in ("#", "id", *lib.names, "duration [s]", "COT", "delta^2", "ok"):
         table.add_column(col, justify="left" if col == "id" else "right", no_wrap=True)
     for i, gait in enumerate(lib.gaits):
         params = [f"{v:.4g}" for v in lib.parameters(i).values()]
         cot = f"{gait.cot:.5f}" if gait.feasible else "-"
-        ok = "yes" if gait.feasible else "[red]no[/red]"
+        ok = Text("yes") if gait.feasible else Text("no", style="red")
         table.add_row(
             str(i), lib.gait_id(i), *params, f"{gait.step_duration:.4f}", cot,
             f"{gait.delta_squared:.4f}", ok,

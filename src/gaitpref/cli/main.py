@@ -327,6 +327,8 @@ def demo(
     trials: Annotated[int, typer.Option(min=1)] = 150,
 ) -> None:
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
+    from rich.markup import escape
+
     from gaitpref.config import load_config
     from gaitpref.data import paper_objectives
     from gaitpref.plots.posterior import posterior_picture, save_posterior_figure
@@ -335,7 +337,8 @@ def demo(
     objective = paper_objectives()[objective_index]
     console.print(
         f"[bold]gaitpref {__version__} demo[/]: CoSpar n={cfg.n}, b={cfg.buffer} with coactive "
-        f"feedback on the paper's synthetic objective {objective_index} (30 x 30 grid)"
+        f"feedback on the paper's synthetic objective {objective_index} (30 x 30 grid)",
+        markup=True,
     )
     start = time.perf_counter()
     result = simulate_once(
@@ -356,7 +359,7 @@ def demo(
         f"{score[:25].mean():.3f}, 126-150: {score[-25:].mean():.3f}; "
         f"the posterior's best action scores {_norm(objective, result.posterior_argmax):.3f}"
     )
-    console.print(f"figure: [bold]{figure}[/]")
+    console.print(f"figure: [bold]{escape(str(figure))}[/]", markup=True)
     from gaitpref.sessions.demo import print_demo_session
 
     print_demo_session(out, console)

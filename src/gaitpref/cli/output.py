@@ -37,8 +37,11 @@ from gaitpref import errors
 
 T = TypeVar("T")
 
-console = Console(highlight=False, soft_wrap=True)
-err_console = Console(stderr=True, highlight=False, soft_wrap=True)
+#: Markup off: config names, descriptions, notes, reasons and paths are printed as they are
+#: ("exo [v2]" vanished, "[/bold]" raised MarkupError); a print of ours that styles passes
+#: ``markup=True`` with everything it interpolates escaped.
+console = Console(highlight=False, soft_wrap=True, markup=False)
+err_console = Console(stderr=True, highlight=False, soft_wrap=True, markup=False)
 
 #: (family, label, exit status), most specific first.
 FAMILIES: tuple[tuple[type[BaseException], str, int], ...] = (
@@ -82,7 +85,7 @@ def report(exc: BaseException, where: str = "") -> NoReturn:
 
 def _print_error(label: str, message: str) -> None:
     # the message is printed as is: brackets in it (``[model]``, ``gaitpref[console]``) are text
-    err_console.print(f"[bold red]{label}:[/] {escape(message)}")
+    err_console.print(f"[bold red]{label}:[/] {escape(message)}", markup=True)
 
 
 def guard(fn: Callable[[], T]) -> T:

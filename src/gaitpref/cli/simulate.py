@@ -240,6 +240,8 @@ def compass_gait(
     table: TableFormat = "csv",
 ) -> None:
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
+    from rich.markup import escape
+
     from gaitpref.simulate.compass import (
         compass_gait_study,
         compass_objective,
@@ -267,7 +269,7 @@ def compass_gait(
     except ValueError as exc:
         report(exc)
     if obj.note:
-        _console.print(f"[yellow]note:[/yellow] {obj.note}")
+        _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
     table_path = _table_path(out, table)
     _folder(out)
     result = _run(study, backend, jobs, address, out)
