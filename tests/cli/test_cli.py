@@ -95,5 +95,9 @@ def test_configs_lists_the_shipped_configs() -> None:
 def test_demo_writes_its_figure(tmp_path: Path) -> None:
     result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--trials", "20"])
     assert result.exit_code == 0, result.output
+    # styled as Rich markup, never printed as its tags
+    assert "scripted session: a simulated subject" in result.output
+    assert "[bold]" not in result.output and "[/]" not in result.output
+    assert f"database: {tmp_path / 'sessions.db'}" in " ".join(result.output.split())
     figure = tmp_path / "posterior.png"
     assert figure.is_file() and figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 from rich.console import Console
+from rich.markup import escape
 
 from gaitpref.config import ExperimentConfig, load_config
 from gaitpref.feedback import Comparison, Suggestion
@@ -128,15 +129,19 @@ def print_demo_session(out: Path, console: Console) -> DemoSession:
     console.print(
         f"[bold]scripted session[/]: a simulated subject answered {done.trials} trials of "
         f"exo-2d-length-width through the Session API in {time.perf_counter() - start:.1f} s; "
-        f"best gait {done.best_description}; blind ranking {''.join(v.ranking)} "
+        f"best gait {escape(done.best_description)}; blind ranking {escape(''.join(v.ranking))} "
         f"{'agrees' if v.agrees else 'does not agree'} with the posterior "
         f"(Kendall's tau {v.kendall_tau:+.2f})",
         soft_wrap=True,
+        markup=True,
     )
-    console.print(f"database: [bold]{done.database}[/] (session {done.session_id})", soft_wrap=True)
+    said = f"database: [bold]{escape(str(done.database))}[/] (session {done.session_id})"
+    console.print(said, soft_wrap=True, markup=True)
     if done.figure is not None:
-        console.print(f"session figure: [bold]{done.figure}[/]", soft_wrap=True)
-    console.print(f"export: [bold]{export}[/]", soft_wrap=True)
+        console.print(
+            f"session figure: [bold]{escape(str(done.figure))}[/]", soft_wrap=True, markup=True
+        )
+    console.print(f"export: [bold]{escape(str(export))}[/]", soft_wrap=True, markup=True)
     command = f"gaitpref session show {done.session_id} --db {done.database} --no-figure"
     console.print(f"try: {command}", soft_wrap=True)
     return done
