@@ -170,7 +170,9 @@ def test_bench_continuous_sweeps_seeds_with_a_function(tmp_path: Path) -> None:
 
 def test_a_users_objective_that_fails_is_an_error_naming_it_and_the_run(tmp_path: Path) -> None:
     """A file that does not import, a function that raises, returns NaN or the wrong count:
-    a traceback, or a NaN utility taken silently ('objective nan'), before."""
+    a traceback, or a NaN utility taken silently ('objective nan'), before; booleans failed
+    later with numpy's 'boolean subtract is not supported', naming nothing, and complex
+    numbers had their imaginary parts dropped."""
     cfg = tmp_path / "cont.toml"
     cfg.write_text(CONFIG)
     obj = tmp_path / "obj.py"
@@ -184,12 +186,18 @@ def test_a_users_objective_that_fails_is_an_error_naming_it_and_the_run(tmp_path
         "    return np.where(x[:, 0] > -1, np.nan, 0.0) if x.shape[0] != 2 else -x[:, 0]\n"
         "def count(x):\n"
         "    return np.zeros(x.shape[0] + 1) if x.shape[0] != 2 else -x[:, 0]\n"
+        "def flags(x):\n"
+        "    return x[:, 0] > 0.5 if x.shape[0] != 2 else -x[:, 0]\n"
+        "def cplx(x):\n"
+        "    return x[:, 0] + 1j if x.shape[0] != 2 else -x[:, 0]\n"
     )
     (tmp_path / "broken.py").write_text("def f(x) return 1\n")
     cases = {
         f"{obj}:raises": "failed on 1 point(s): RuntimeError: sensor model blew up",
         f"{obj}:nan": "must return 1 finite utilities, got values that are not finite",
         f"{obj}:count": "must return 1 finite utilities, got shape (2,)",
+        f"{obj}:flags": "must return 1 real utilities, got bool values",
+        f"{obj}:cplx": "must return 1 real utilities, got complex128 values",
         f"{tmp_path / 'broken.py'}:f": "cannot be imported: SyntaxError",
         "random-gp:x": "the seed after ':' must be an integer >= 0",
     }

@@ -191,6 +191,46 @@ def test_array_files_that_are_not_one_array_are_refused_naming_the_file(tmp_path
     assert code == 2 and "lib.npz: cannot be read as npz" in out
 
 
+def test_array_files_whose_header_the_file_does_not_hold_or_not_of_numbers_are_refused(
+    tmp_path: Path,
+) -> None:
+    """A 200-byte .npy whose header says (10**9,) made simulate allocate 7.45 GiB before it
+    found the data missing (a MemoryError traceback where memory is limited); a structured
+    array gave a TypeError traceback and a complex one ran with its imaginary parts dropped."""
+    import tracemalloc
+
+    import numpy as np
+
+    from gaitpref.cli.main import app as root
+
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': (1000000000,), }"
+    header = header.ljust(117) + "\n"
+    liar = tmp_path / "liar.npy"
+    liar.write_bytes(b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode())
+    record = tmp_path / "record.npy"
+    np.save(record, np.zeros((5, 5), dtype=[("x", "f8")]))
+    complex_ = tmp_path / "complex.npy"
+    np.save(complex_, np.zeros((5, 5), complex))
+    for path, message in (
+        (liar, "is not a readable .npy array"),
+        (record, "holds [('x', '<f8')] values; give an array of real numbers"),
+        (complex_, "holds complex128 values; give an array of real numbers"),
+    ):
+        for args in (
+            ["simulate", "synthetic-2d", "--objective", str(path), "--trials", "2"],
+            ["bench", "population", "--objectives", str(path), "--trials", "2"],
+        ):
+            tracemalloc.start()
+            try:
+                result = runner.invoke(root, args)
+                peak = tracemalloc.get_traced_memory()[1]
+            finally:
+                tracemalloc.stop()
+            assert result.exit_code == 2, result.output
+            assert f"'{path}' {message}" in " ".join(result.output.split())
+            assert peak < 2**30, peak
+
+
 def test_parquet_without_pyarrow_is_refused_before_the_study_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

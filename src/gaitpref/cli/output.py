@@ -99,7 +99,11 @@ def guard(fn: Callable[[], T]) -> T:
 def read_array(path: Path, what: str) -> Any:
     """The one NumPy array (``.npy``) at ``path``, or :func:`fail` naming ``what`` and the file:
     missing, not an array file (a zip that is not one raised ``BadZipFile``), an ``.npz``
-    archive of several (iterated as its names before), or an array of objects."""
+    archive of several (iterated as its names before), or an array of objects; and an array
+    that is not of real numbers (a structured record, text, complex numbers: a TypeError
+    traceback, or a ComplexWarning and the imaginary parts dropped).  The file is mapped
+    (``mmap_mode="r"``) before it is copied: a header whose shape the file does not hold is
+    refused without first allocating that shape (a 200-byte file asked for 7.45 GiB)."""
     import zipfile
 
     import numpy as np
@@ -107,14 +111,17 @@ def read_array(path: Path, what: str) -> Any:
     where = f"{what} {str(path)!r}"
     if not path.is_file():
         fail(f"{where} does not exist")
-    try:
-        arr = np.load(path, allow_pickle=False)
+    try:  # errstate: a shape past int64 overflows numpy's size arithmetic (a warning)
+        with np.errstate(over="ignore"):
+            arr = np.load(path, mmap_mode="r", allow_pickle=False)
     except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
         fail(f"{where} is not a readable .npy array: {exc}")
     if not isinstance(arr, np.ndarray):  # an .npz archive
         arr.close()
         fail(f"{where} is an .npz archive; give one .npy array (numpy.save)")
-    return arr
+    if arr.dtype.kind not in "biuf":
+        fail(f"{where} holds {arr.dtype} values; give an array of real numbers (numpy.save)")
+    return np.array(arr)
 
 
 @contextmanager

@@ -164,17 +164,25 @@ def objective_from(spec: str, space: Space, seed: int = 0) -> PointObjective:
 def checked_objective(fn: PointObjective, spec: str, ndim: int) -> PointObjective:
     """``fn`` (the user's function), checked at every call: an error it raises, or a result
     that is not ``m`` finite numbers for ``m`` points, is a ValueError naming ``spec`` (a
-    traceback, or a NaN utility taken silently, before).  The values pass through unchanged."""
+    traceback, or a NaN utility taken silently, before); so are booleans (numpy's "boolean
+    subtract is not supported", naming nothing) and complex numbers (their imaginary parts
+    dropped with a ComplexWarning).  The values pass through unchanged."""
 
     def objective(points: FloatArray) -> FloatArray:
         m = int(np.shape(points)[0])
         try:
             values = fn(points)
-            got = np.asarray(values, dtype=np.float64)
+            dtype = np.asarray(values).dtype
+            got = np.asarray(values, dtype=np.float64) if dtype.kind not in "bcV" else None
         except Exception as exc:
             raise ValueError(
                 f"objective {spec!r} failed on {m} point(s): {type(exc).__name__}: {exc}"
             ) from exc
+        if got is None:  # bool, complex, records: dropped or refused later, naming nothing
+            raise ValueError(
+                f"objective {spec!r}: for a {m} x {ndim} array of points it must return {m} "
+                f"real utilities, got {dtype} values"
+            )
         if got.shape != (m,) or not np.all(np.isfinite(got)):
             what = f"shape {got.shape}" if got.shape != (m,) else "values that are not finite"
             raise ValueError(
