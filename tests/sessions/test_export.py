@@ -329,3 +329,32 @@ def test_two_imports_of_one_export_at_once_make_one_session(
     assert f"imported before as session {imported[0].id}" in str(refused[0])
     assert [r.id for r in Session.list_sessions(db)] == [imported[0].id]
     imported[0].close()
+
+
+def test_csv_cells_a_spreadsheet_would_run_as_formulas_are_quoted(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """A reason typed at the bench that starts like a formula ('=cmd|...' runs a command in some
+    spreadsheets) is written to the CSV tables with a leading quote; the JSON tables, the event
+    log and an import keep the text as typed."""
+    s = Session.create(sqlite_url, CONFIG, "S08", seed=3)
+    drive(s, 4)
+    typed = "=cmd|' /C calc'!A0"
+    s.exclude(2, "other", typed)
+    s.flag_unsafe(3, "+1 wobble")
+    export_session(s, tmp_path / "csv", "csv")
+    export_session(s, tmp_path / "json", "json")
+    cells = [
+        cell
+        for path in (tmp_path / "csv").glob("*.csv")
+        for row in csv.reader(path.open(encoding="utf-8"))
+        for cell in row
+    ]
+    assert any(cell.startswith("'=cmd") for cell in cells)
+    assert "'+1 wobble" in cells
+    assert not any(cell.startswith(("=", "+", "@")) for cell in cells)
+    words = json.dumps([json.loads(p.read_text()) for p in (tmp_path / "json").glob("*.json")])
+    assert json.dumps(typed)[1:-1] in words and "'=cmd" not in words
+    imported = import_session(f"sqlite:///{tmp_path / 'back.db'}", tmp_path / "csv")
+    assert [e.payload for e in imported.events()] == [e.payload for e in s.events()]
+    imported.close()

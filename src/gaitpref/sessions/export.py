@@ -41,7 +41,7 @@ import tempfile
 from collections.abc import Sequence
 from datetime import datetime
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Final, Literal
 
 import numpy as np
 
@@ -373,6 +373,12 @@ def _csv(rows: Sequence[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
+#: A CSV text cell starting with one of these is read as a formula by spreadsheets ("=cmd|..."
+#: runs a command in some): such a cell is written with a leading ``'`` (OWASP's advice), in the
+#: CSV tables only; the event log, the JSON tables and import keep the text as it is.
+FORMULA_STARTS: Final = ("=", "+", "-", "@", "\t", "\r")
+
+
 def _cell(value: object) -> object:
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -380,6 +386,8 @@ def _cell(value: object) -> object:
         return ""
     if isinstance(value, float):
         return repr(value)
+    if isinstance(value, str) and value.startswith(FORMULA_STARTS):
+        return "'" + value
     return value
 
 
