@@ -22,13 +22,13 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Generic, Protocol, TypeVar
+from typing import Generic, Protocol, TypeVar
 
 import numpy as np
 
 from gaitpref.errors import GaitprefError
 from gaitpref.simulate.study import RunResult, RunTask
-from gaitpref.simulate.tables import RunTable
+from gaitpref.simulate.tables import RecordFile, RunTable
 
 R = TypeVar("R")
 
@@ -249,26 +249,13 @@ def partial_file(sink: A | None) -> Iterator[A | None]:
         sink.path.unlink(missing_ok=True)
 
 
-class JsonLines:
+class JsonLines(RecordFile):
     """A JSON-lines file (one JSON object a line: one finished run of a bench) written a run at
-    a time, each line flushed, so that what was written survives what stops the rest."""
-
-    def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
-        self.appended = 0
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8")  # noqa: SIM115
+    a time (a :class:`~gaitpref.simulate.tables.RecordFile`)."""
 
     def append(self, record: Mapping[str, object]) -> None:
-        if self._fh is None:
-            raise ValueError(f"{self.path}: already closed")
-        self._fh.write(json.dumps(record) + "\n")
-        self._fh.flush()
-        self.appended += 1
-
-    def close(self) -> None:
-        if self._fh is not None:
-            self._fh.close()
-            self._fh = None
+        self._open().write(json.dumps(record) + "\n")
+        self._recorded()
 
 
 __all__ = [

@@ -240,36 +240,52 @@ def _write_rows(w: Any, table: RunTable) -> None:
         w.writerow((s, o, sd, t, a, repr(v), *ratings[k : k + 1]))
 
 
-class TableAppender:
-    """A CSV run table (``.csv``) written a few rows at a time, e.g. each run of a study as it
-    finishes, so that what was written survives what stops the rest; :func:`read_table` reads
-    it.  ``rated``: with the ``rating`` column.  Every :meth:`append` is flushed and counted
-    (``appended``)."""
+class RecordFile:
+    """A text file written a record at a time, each record flushed and counted (``appended``),
+    so that what was written survives what stops the rest; ``newline`` as :func:`open`'s."""
 
-    def __init__(self, path: str | Path, rated: bool) -> None:
+    def __init__(self, path: str | Path, newline: str | None = None) -> None:
         self.path = Path(path)
-        if not self.path.name.endswith(".csv"):
-            raise ValueError(f"{self.path}: a table written row by row must end in .csv")
-        self.rated = rated
         self.appended = 0
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8", newline="")  # noqa: SIM115
-        self._w = csv.writer(self._fh, lineterminator="\n")
-        self._w.writerow((*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS)
-        self._fh.flush()
+        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8", newline=newline)  # noqa: SIM115
 
-    def append(self, table: RunTable) -> None:
+    def _open(self) -> IO[str]:
+        """The file, while it is open (ValueError once closed)."""
         if self._fh is None:
             raise ValueError(f"{self.path}: already closed")
-        if (table.rating is not None) != self.rated:
-            raise ValueError(f"{self.path}: rows with columns {table.columns} do not fit")
-        _write_rows(self._w, table)
-        self._fh.flush()
+        return self._fh
+
+    def _recorded(self) -> None:
+        """One more record written: flushed and counted."""
+        self._open().flush()
         self.appended += 1
 
     def close(self) -> None:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
+
+
+class TableAppender(RecordFile):
+    """A CSV run table (``.csv``) written a few rows at a time, e.g. each run of a study as it
+    finishes (a :class:`RecordFile`); :func:`read_table` reads it.  ``rated``: with the
+    ``rating`` column."""
+
+    def __init__(self, path: str | Path, rated: bool) -> None:
+        if not Path(path).name.endswith(".csv"):
+            raise ValueError(f"{Path(path)}: a table written row by row must end in .csv")
+        super().__init__(path, newline="")
+        self.rated = rated
+        self._w = csv.writer(self._open(), lineterminator="\n")
+        self._w.writerow((*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS)
+        self._open().flush()
+
+    def append(self, table: RunTable) -> None:
+        self._open()
+        if (table.rating is not None) != self.rated:
+            raise ValueError(f"{self.path}: rows with columns {table.columns} do not fit")
+        _write_rows(self._w, table)
+        self._recorded()
 
 
 def read_table(path: str | Path) -> RunTable:
