@@ -517,13 +517,17 @@ JSON_VALUES = st.recursive(
 )
 
 
-@settings(
+#: The fuzz tests' examples: many, the same every run (derandomized, no example database)
+FUZZ = settings(
     max_examples=300,
     deadline=None,
     derandomize=True,
     database=None,
     suppress_health_check=list(HealthCheck),
 )
+
+
+@FUZZ
 @given(route=st.sampled_from(API), body=JSON_VALUES, pending=st.booleans())
 def test_any_json_to_any_api_route_is_not_500(
     console: Console, route: Route, body: object, pending: bool
@@ -565,13 +569,7 @@ FIELD_NAMES = st.one_of(
 )
 
 
-@settings(
-    max_examples=300,
-    deadline=None,
-    derandomize=True,
-    database=None,
-    suppress_health_check=list(HealthCheck),
-)
+@FUZZ
 @given(
     route=st.sampled_from(FORMS),
     fields=st.dictionaries(FIELD_NAMES, st.one_of(st.text(max_size=40), st.sampled_from(BAD_TEXT))),

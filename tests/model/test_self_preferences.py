@@ -12,15 +12,12 @@ given (a registered feedback kind's self-pairs replay as before).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 import pytest
 
 from gaitpref import Comparison, CoSpar, Feature, PreferenceGP, Space, SquaredExponential
-from gaitpref.feedback import register, unregister
 from gaitpref.model import Probit
-from tests.loop.test_custom_kind_terms import Nudge, NudgeKind
+from tests.loop.test_custom_kind_terms import Nudge, nudges  # noqa: F401 (a fixture)
 
 SPACE = Space([Feature.linspace("x", 0.0, 1.0, 6), Feature.linspace("y", 0.0, 1.0, 4)])
 KERNEL = SquaredExponential((0.3, 0.4), 1.0, 1e-6)
@@ -56,13 +53,6 @@ def test_the_loop_lists_a_self_comparison_as_ignored() -> None:
     assert answer.ignored_comparisons == answer.comparisons  # and said to add no term
     assert answer.preferences == () and loop.preferences == []
     assert loop.posterior.fit is None  # nothing entered the model
-
-
-@pytest.fixture
-def nudges() -> Iterator[None]:
-    register(NudgeKind())
-    yield
-    unregister("nudge")
 
 
 @pytest.mark.usefixtures("nudges")
