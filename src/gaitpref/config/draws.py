@@ -9,12 +9,18 @@ made a session, and the operator learnt of it at the first ask, with the subject
 :func:`check_draws` says it when a session is created (and ``gaitpref simulate`` loads a
 config), naming the setting to lower.  Like :func:`~gaitpref.config.parse.check_name` it is not
 part of :func:`~gaitpref.config.parse.parse_config`: a stored config is never refused on replay.
+
+It also checks a ``[stop] samples`` given in the text against the confidence's budget
+(:data:`~gaitpref.loop.stopping.CONFIDENCE_VALUES` sampled values after each answer): past it a
+session would read fewer samples than the config says (``StopRule.samples_for``), so a value
+given is refused there, naming the most the grid allows; the default is sized to the grid.
 """
 
 from __future__ import annotations
 
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.specs import fail
+from gaitpref.loop.stopping import CONFIDENCE_VALUES
 from gaitpref.model.kronecker import SAMPLE_LIMIT_ELEMENTS, SAMPLE_PEAK_ARRAYS
 from gaitpref.strategies import joint_draws, make_strategy
 
@@ -33,9 +39,31 @@ def draw_size(config: ExperimentConfig) -> tuple[int, int, str | None]:
     return samples, points, setting
 
 
+def check_stop_samples(config: ExperimentConfig) -> None:
+    """A :class:`~gaitpref.config.ConfigError` naming ``[stop] samples`` when the text gives more
+    than the grid lets a confidence read (module docstring); nothing otherwise (the line path's
+    table grows with the run: its rule reads fewer samples once it passes the budget)."""
+    if "stop.samples" in config.defaulted or config.subspace == "line":
+        return
+    actions = len(config.space)
+    rule = config.stop
+    most = rule.samples_for(actions)
+    if rule.samples > most:
+        fail(
+            "stop",
+            "samples",
+            f"is {rule.samples}: a confidence after each answer draws every sample over the "
+            f"{actions:,} gaits, and past {CONFIDENCE_VALUES:,} sampled values it takes seconds "
+            f"to minutes; set samples to at most {most}, or leave it out (the default is sized "
+            "to the grid)",
+        )
+
+
 def check_draws(config: ExperimentConfig) -> None:
     """A :class:`~gaitpref.config.ConfigError` naming the setting when one ask of ``config``
-    would draw more than the sampling budget (module docstring); nothing otherwise."""
+    would draw more than the sampling budget, or its ``[stop] samples`` more than the
+    confidence's (module docstring); nothing otherwise."""
+    check_stop_samples(config)
     samples, points, setting = draw_size(config)
     values = samples * points
     if values <= SAMPLE_LIMIT_ELEMENTS:

@@ -270,7 +270,7 @@ def parse_config(
             )
     grid = None if on_line else space
     safety, relied = parse_safety(top["safety"], ordinal, defaults, grid, library)
-    stop = parse_stop(top["stop"])
+    stop, stop_defaulted = parse_stop(top["stop"])
     return ExperimentConfig(
         name=top["name"] if top["name"] is not None else default_name,
         description=top["description"],
@@ -297,7 +297,8 @@ def parse_config(
         defaulted=frozenset(f"cospar.{k}" for k in defaulted if on_line or k not in LINE_KEYS)
         | frozenset(f"gaits.{k}" for k in gaits_defaulted if generator is not None)
         | relied
-        | model_defaulted,
+        | model_defaulted
+        | stop_defaulted,
         defaults_version=defaults,
     )
 

@@ -19,7 +19,10 @@ to, and the probability falls far below the observed frequency
 
 Both are Monte Carlo averages over ``samples`` draws (their standard error is at most
 ``0.5 / sqrt(samples)``), computed in blocks so that no more than :data:`BLOCK_ELEMENTS` values
-are held (the posterior's own sampling adds its bounded blocks).
+are held (the posterior's own sampling adds its bounded blocks).  Every draw covers every gait,
+so the time grows with ``samples x gaits``: a :class:`StopRule` reads at most
+:data:`CONFIDENCE_VALUES` sampled values (:meth:`StopRule.samples_for`: fewer samples on large
+grids, never fewer than :data:`MIN_RULE_SAMPLES`).
 A :class:`StopRule` (the config's ``[stop]`` table) says when a session has learnt enough:
 once the probability reaches ``confidence``, or after ``max_trials`` executed trials.
 """
@@ -40,6 +43,14 @@ BLOCK_ELEMENTS = 1 << 22
 #: The most samples one confidence reads (a config's ``[stop] samples`` too): each is a draw
 #: over every gait, so 10**12 ran for days, one block at a time.
 MAX_SAMPLES = 100_000
+#: The most sampled values (``samples x gaits``) a session's confidence reads after an answer:
+#: 2000 samples took 15 s over 57,750 gaits and minutes over 2**20 (2 cores), after every
+#: answer and for every row of an export; this budget is about 2 s
+#: (``benchmarks/results/stopping.md``).
+CONFIDENCE_VALUES = 1 << 24
+#: The fewest samples a rule reads however large the grid (``[stop] samples``' least value):
+#: the probability's standard error stays at most 0.05.
+MIN_RULE_SAMPLES = 100
 
 
 @dataclass(frozen=True)
@@ -143,6 +154,14 @@ class StopRule:
     tolerance: float = 0.05
     samples: int = 2000
 
+    def samples_for(self, actions: int) -> int:
+        """The samples a confidence over ``actions`` gaits reads: :attr:`samples`, or fewer where
+        they would pass :data:`CONFIDENCE_VALUES` sampled values, but never fewer than
+        :data:`MIN_RULE_SAMPLES` (then its time grows with the grid, as one ask's does)."""
+        if not is_count(actions) or actions < 1:
+            raise ValueError(f"actions must be an integer >= 1, got {actions!r}")
+        return min(self.samples, max(MIN_RULE_SAMPLES, CONFIDENCE_VALUES // actions))
+
     def __post_init__(self) -> None:
         if self.confidence is not None and not (
             is_number(self.confidence) and 0.0 < self.confidence <= 1.0
@@ -169,4 +188,11 @@ class StopRule:
         return f"{sure.sentence(gait)} (confidence = {self.confidence:.0%})"
 
 
-__all__ = ["Confidence", "StopRule", "check_tolerance", "confidence"]
+__all__ = [
+    "CONFIDENCE_VALUES",
+    "MIN_RULE_SAMPLES",
+    "Confidence",
+    "StopRule",
+    "check_tolerance",
+    "confidence",
+]

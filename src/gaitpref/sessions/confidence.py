@@ -28,7 +28,8 @@ CONFIDENCE_STREAM = 0xC0F1DE7CE  # the confidence's generator: (seed, this, answ
 
 
 def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
-    """The confidence of ``state``'s posterior with the rule's tolerance and sample count;
+    """The confidence of ``state``'s posterior with the rule's tolerance and sample count (fewer
+    samples on large grids: :meth:`StopRule.samples_for`);
     :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be proposed (none to recommend)."""
     loop = state.loop
     allowed = loop.allowed()
@@ -45,7 +46,7 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
         loop.posterior,
         rng,
         tolerance=rule.tolerance,
-        samples=rule.samples,
+        samples=rule.samples_for(len(loop.posterior.space)),
         allowed=allowed,
         draws=loop.share_mixture(),
     )
