@@ -93,3 +93,22 @@ def test_sessions_read_the_bounded_count_stored_ones_too(monkeypatch: pytest.Mon
     q = fresh.next_query()
     fresh.answer(q.id, [(q.actions[0], q.actions[1])] if len(q.actions) > 1 else [])
     assert fresh.confidence().samples == 120
+
+
+def test_an_export_reports_its_progress_through_the_log(tmp_path: Path) -> None:
+    """The confidence table replays the whole log: ``progress`` sees every event, in order."""
+    from gaitpref.sessions import export_session
+
+    db = MemoryStorage()
+    session = Session.create(db, parse_config(GRID), "S01")
+    for _ in range(3):
+        q = session.next_query()
+        session.answer(q.id, [(q.actions[0], q.actions[1])] if len(q.actions) > 1 else [])
+    seen: list[tuple[int, int]] = []
+    export_session(
+        session, tmp_path / "out", "json", lambda done, total: seen.append((done, total))
+    )
+    events = len(session.events())
+    assert seen[-1] == (events, events) and {total for _, total in seen} == {events}
+    assert [done for done, _ in seen] == sorted({done for done, _ in seen})  # forward, once each
+    assert len(seen) >= 3  # a step per answer at least

@@ -416,12 +416,19 @@ def export(
     db: DbOption = None,
 ) -> None:
     """Export events, trials, comparisons and the posterior, with a manifest."""
+    from gaitpref.cli.main import progress_bar
     from gaitpref.sessions import export_session
 
     if fmt not in ("csv", "json"):
         fail(f"--format must be csv or json, got {fmt!r}")
-    with _opened(db, session_id) as session:
-        manifest = guard(lambda: export_session(session, out, fmt))  # type: ignore[arg-type]
+    with _opened(db, session_id) as session, progress_bar(transient=True) as bar:
+        # the confidence after every answer is worked out again: minutes on a large grid
+        task = bar.add_task("confidence table", total=None)
+
+        def advance(done: int, total: int) -> None:
+            bar.update(task, completed=done, total=total)
+
+        manifest = guard(lambda: export_session(session, out, fmt, advance))  # type: ignore[arg-type]
         console.print(f"exported session {session_id} to {out} (manifest: {manifest.name})")
 
 

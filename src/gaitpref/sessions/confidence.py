@@ -75,18 +75,26 @@ def stop_reason(
 
 
 def confidence_history(
-    state: SessionState, events: Sequence[EventRecord], rule: StopRule
+    state: SessionState,
+    events: Sequence[EventRecord],
+    rule: StopRule,
+    progress: Callable[[int, int], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Replay ``events`` into the fresh ``state`` and, after every step whose posterior differs
     from the one before, the confidence then (the same numbers the terminal and the console
     showed): one row per step with ``seq`` (its last event), ``answers`` and ``trials`` in
     force, the recommended ``action``, its ``gait`` name and feature ``values`` then (on the
     line path a row may name another point later), ``probability``, ``regret``,
-    ``relative_regret``, ``tolerance`` and ``samples``."""
+    ``relative_regret``, ``tolerance`` and ``samples``.  ``progress(done, total)``: called
+    after each step with the events replayed so far and their number (an export of a long
+    session on a large grid takes minutes: the CLI shows a bar)."""
     rows: list[dict[str, Any]] = []
     seen = [state.loop.posterior]
+    first = events[0].seq if events else 0
 
     def step(st: SessionState, last: EventRecord) -> None:
+        if progress is not None:
+            progress(last.seq - first + 1, len(events))
         if st.loop.posterior is seen[0]:
             return
         seen[0] = st.loop.posterior

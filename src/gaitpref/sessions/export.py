@@ -38,7 +38,7 @@ import io
 import json
 import shutil
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from datetime import datetime
 from pathlib import Path
 from typing import Any, Final, Literal
@@ -75,8 +75,15 @@ EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 
 
 # -- export ------------------------------------------------------------------------------------
-def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
+def export_session(
+    session: Session,
+    out: Path,
+    fmt: Format = "csv",
+    progress: Callable[[int, int], None] | None = None,
+) -> Path:
     """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path.
+    ``progress(done, total)``: the events replayed for the confidence table so far, and their
+    number (``Session.confidence_history``; the long part of a long session's export).
 
     The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
     written: an export that fails (a full disk, text that cannot be written) leaves no
@@ -92,7 +99,7 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     try:
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
-        session.read(lambda s: _write_export(s, partial, fmt))
+        session.read(lambda s: _write_export(s, partial, fmt, progress))
         if out.exists():
             out.rmdir()  # empty, checked above
         partial.rename(out)
@@ -102,10 +109,12 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     return out / "manifest.json"
 
 
-def _write_export(session: Session, out: Path, fmt: Format) -> None:
+def _write_export(
+    session: Session, out: Path, fmt: Format, progress: Callable[[int, int], None] | None
+) -> None:
     events = [e for e in session.events() if e.seq <= session.last_seq]  # as the state holds
     walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
-    tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked)
+    tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked, progress)
     written: dict[str, str] = {}
 
     def put(name: str, text: str) -> None:
@@ -208,7 +217,10 @@ def posterior_summary(session: Session) -> dict[str, Any]:
 
 
 def _tables(
-    session: Session, at: dict[int, str], walked: dict[int, dict[str, Any]]
+    session: Session,
+    at: dict[int, str],
+    walked: dict[int, dict[str, Any]],
+    progress: Callable[[int, int], None] | None = None,
 ) -> dict[str, list[dict[str, Any]]]:
     """The tables; a trial's values and gait id are its ``trial_executed`` event's (``walked``,
     by seq): on the line path an undone answer's rows can go to other points later (its query,
@@ -323,7 +335,7 @@ def _tables(
             **row["values"],
             "at": at.get(row["seq"]),
         }
-        for row in session.confidence_history()
+        for row in session.confidence_history(progress)
     ]
     return {
         "trials": trials,

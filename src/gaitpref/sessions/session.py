@@ -557,11 +557,16 @@ class Session:
 
         return self._locked(run)
 
-    def confidence_history(self) -> list[dict[str, Any]]:
+    def confidence_history(
+        self, progress: Callable[[int, int], None] | None = None
+    ) -> list[dict[str, Any]]:
         """The confidence after every answer, undo and exclusion so far, as it was stated then
-        (``sessions/confidence.py``; the log is replayed afresh): the export's table."""
+        (``sessions/confidence.py``; the log is replayed afresh): the export's table.
+        ``progress(done, total)``: the events replayed so far, and their number."""
         return self._locked(
-            lambda: confidence_history(self._fresh_state(), self.events(), self.config.stop)
+            lambda: confidence_history(
+                self._fresh_state(), self.events(), self.config.stop, progress
+            )
         )
 
     def stop_reason(self) -> str | None:
