@@ -194,7 +194,13 @@ def simulate(
             "or a built-in: hartmann6, random-gp[:SEED]."
         ),
     ],
-    minimize: Annotated[bool, typer.Option(help="Lower objective values are better.")] = False,
+    minimize: Annotated[
+        bool,
+        typer.Option(
+            help="Lower objective values are better (a .npy objective, or with "
+            "--rating-quantiles; a function over points is maximized)."
+        ),
+    ] = False,
     trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
     seed: Annotated[int | None, typer.Option(min=0, help="Seed (default: the config's).")] = None,
     coactive: Annotated[bool, typer.Option(help="Simulate coactive suggestions.")] = False,
@@ -231,6 +237,11 @@ def simulate(
     cfg = _load_config_or_fail(config)
     use_seed = cfg.seed if seed is None else seed
     if not is_grid_objective(objective) and not rating_quantiles:
+        if minimize:  # the subject over points prefers higher values: it was ignored
+            fail(
+                f"--minimize: objective {objective!r} is a function over points, and those are "
+                "maximized (higher is better); negate it in PATH.py:NAME instead"
+            )
         run_command(cfg, objective, trials, use_seed, coactive, noise, as_json)
         return
     if cfg.subspace == "line":
