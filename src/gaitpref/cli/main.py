@@ -217,7 +217,10 @@ def simulate(
     ] = 0.0,
     noise: Annotated[
         float,
-        typer.Option(help="The simulated subject's probit noise (objectives over points)."),
+        typer.Option(
+            help="The simulated subject's probit noise (objectives over points, without "
+            "--rating-quantiles; refused otherwise)."
+        ),
     ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
@@ -244,6 +247,11 @@ def simulate(
             )
         run_command(cfg, objective, trials, use_seed, coactive, noise, as_json)
         return
+    if noise != 0:  # the grid's subject takes no noise here: any value (nan too) was ignored
+        fail(
+            f"--noise {noise!r}: only a subject over points (PATH.py:NAME, hartmann6, random-gp "
+            "without --rating-quantiles) takes a probit noise; leave it out"
+        )
     if cfg.subspace == "line":
         if rating_quantiles:
             fail(
