@@ -156,6 +156,21 @@ def test_input_refused_before_any_run_is_status_2_and_keeps_no_file(
     assert not partial.exists()
 
 
+@pytest.mark.parametrize("tolerance", ["nan", "-0.1", "1", "inf"])
+def test_a_tolerance_outside_0_1_is_refused_before_any_run(
+    population_file: Path, tmp_path: Path, tolerance: str
+) -> None:
+    """It was checked by every run: the first run's failure, status 1 ("0 of 6 runs")."""
+    partial = tmp_path / "kept.jsonl"
+    args = ["bench", "population", "--objectives", str(population_file), "--trials", "2"]
+    args += ["--config", POPULATION, "--tolerance", tolerance, "--partial", str(partial)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "tolerance must be a fraction in [0, 1)" in _text(result.stderr)
+    assert "runs finished" not in _text(result.stderr)
+    assert not partial.exists()
+
+
 # -- bench population ---------------------------------------------------------------------
 
 
