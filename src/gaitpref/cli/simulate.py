@@ -30,6 +30,7 @@ from gaitpref.cli.output import err_console as _console
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
     from gaitpref.simulate.study import Study
+    from gaitpref.simulate.sweep import Backend as SweepBackend
     from gaitpref.simulate.sweep import StudyResult
 
 bench_app = typer.Typer(
@@ -82,17 +83,32 @@ def _integers(text: str, option: str) -> list[int]:
     return numbers
 
 
-def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
-    """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
-    finished (then the file is removed), so a run that fails loses none of the others."""
-    from gaitpref.simulate.sweep import BACKENDS, run_study
+def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
+    """``--backend``, checked with ``--jobs`` and ``--address`` before the output folder is made
+    (refused by the run itself, they left an empty ``--out`` folder)."""
+    from gaitpref.simulate.sweep import BACKENDS, check_backend, resolve_jobs
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+
+    def check() -> None:
+        check_backend(backend, address)
+        resolve_jobs(jobs)
+
+    guard(check)
+    return backend
+
+
+def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
+    """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
+    finished (then the file is removed), so a run that fails loses none of the others."""
+    from gaitpref.simulate.sweep import run_study
+
+    checked = _execution(backend, jobs, address)
     partial = out / PARTIAL
     return _stopping(
         lambda: run_study(
-            study, backend, jobs, address, progress=True, console=_console, partial=partial
+            study, checked, jobs, address, progress=True, console=_console, partial=partial
         )
     )
 
@@ -197,6 +213,7 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
+    _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
     result = _run(study, backend, jobs, address, out)
@@ -250,6 +267,8 @@ def compass_gait(
     from gaitpref.simulate.sweep import resolve_jobs
     from gaitpref.simulate.tables import write_curves, write_table
 
+    table_path = _table_path(out, table)  # before a gait library is built
+    _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
         if objective not in ("poly", "hzd"):
@@ -270,7 +289,6 @@ def compass_gait(
         report(exc)
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
-    table_path = _table_path(out, table)
     _folder(out)
     result = _run(study, backend, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing

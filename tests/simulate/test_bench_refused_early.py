@@ -1,0 +1,44 @@
+"""``bench paper-2d`` and ``bench compass-gait`` refuse ``--backend``, ``--jobs``,
+``--address`` and ``--table`` before they make the ``--out`` folder or build anything.
+
+The run itself refused the first three, after the output folder was made: ``--jobs 0`` left
+an empty ``--out`` folder behind.  ``bench compass-gait --objective hzd`` (no ``--library``)
+made the folder and built its 24 gaits before ``--table xls`` was refused.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+
+BAD = [
+    (["--backend", "foo"], "--backend must be one of"),
+    (["--jobs", "0"], "jobs must be a positive count"),
+    (["--address", "localhost:1"], "address is for the Ray backend"),
+    (["--table", "xls"], "--table must be csv"),
+]
+
+
+@pytest.mark.parametrize(("option", "message"), BAD)
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_refused_before_the_output_folder_is_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, study: str, option: list[str], message: str
+) -> None:
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before the options were checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), *option]
+    if study == "compass-gait":
+        args += ["--objective", "hzd"]  # no --library: it would build one into --out
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert message in " ".join(result.output.split())
+    assert not out.exists()
