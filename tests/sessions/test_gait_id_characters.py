@@ -61,3 +61,29 @@ def test_a_session_stored_with_such_an_id_reopens(
     s.close()
     with Session.open(url, s.id) as again:
         assert again.gait_ids == ids
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"G0\n\xff\n", "is not UTF-8 text (byte 3: invalid start byte)"),
+        (None, "is a folder; give a text file"),
+        ("missing", "does not exist; give a text file"),
+    ],
+)
+def test_session_new_names_a_gait_id_file_it_cannot_read(
+    tmp_path: Path, content: bytes | str | None, message: str
+) -> None:
+    """A file not in UTF-8 was refused as "'utf-8' codec can't decode byte 0xff ...", naming
+    neither the option nor the file; a folder as a file that "does not exist"."""
+    path = tmp_path / "ids.txt"
+    if isinstance(content, bytes):
+        path.write_bytes(content)
+    elif content is None:
+        path.mkdir()
+    db = tmp_path / "lab.db"
+    args = ["session", "new", "--config", CONFIG, "--subject", "S01", "--db", str(db)]
+    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
+    assert result.exit_code == 2, result.output
+    assert f"--gait-ids {str(path)!r} {message}" in " ".join(result.output.split())
+    assert not db.exists()

@@ -145,8 +145,16 @@ def new(
         library = None
         if gait_ids is not None:
             if not gait_ids.is_file():
-                raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
-            library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
+                what = "is a folder" if gait_ids.is_dir() else "does not exist"
+                raise ValueError(f"--gait-ids {str(gait_ids)!r} {what}; give a text file")
+            try:  # UTF-8, whatever the locale; the error named neither the option nor the file
+                text = gait_ids.read_text(encoding="utf-8")
+            except UnicodeDecodeError as exc:
+                raise ValueError(
+                    f"--gait-ids {str(gait_ids)!r} is not UTF-8 text (byte {exc.start}: "
+                    f"{exc.reason})"
+                ) from None
+            library = [ln.strip() for ln in text.splitlines() if ln.strip()]
         for item in prior_from or []:  # an empty one (an unset shell variable) is no warm start
             if not read_prior_from([item]):
                 raise ValueError(f"--prior-from {item!r} names no session id or subject code")
