@@ -277,3 +277,20 @@ def test_a_bench_refuses_a_config_over_the_sampling_budget_before_any_run(
     assert "[cospar.strategy_settings].samples: is 4096" in _text(result.output)
     assert "set samples to at most 536" in _text(result.output)
     assert not partial.exists()
+
+
+def test_bench_continuous_refuses_more_runs_than_a_study_holds(
+    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--runs 1000000000000`` made the list of its runs first: a MemoryError traceback.  At
+    most MAX_RUNS (a study's limit), refused before any run (here lowered to 3)."""
+    import gaitpref.simulate.study
+
+    monkeypatch.setattr(gaitpref.simulate.study, "MAX_RUNS", 3)
+    partial = tmp_path / "kept.jsonl"
+    args = [*continuous_args, "--partial", str(partial)]
+    args[args.index("--runs") + 1] = "4"
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "--runs must be 1 to 3, got 4" in _text(result.stderr)
+    assert not partial.exists()
