@@ -71,12 +71,19 @@ def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
 def _load_config_or_fail(source: str) -> ExperimentConfig:
     """A config for a new run: loaded, and checked as a new session checks it (its name and
     its largest draw), so that a run is refused at once rather than at the first ask."""
-    from gaitpref.config import check_description, check_draws, check_name, load_config
+    from gaitpref.config import (
+        check_description,
+        check_draws,
+        check_labels,
+        check_name,
+        load_config,
+    )
 
     def load() -> ExperimentConfig:
         cfg = load_config(source)
         check_name(cfg)
         check_description(cfg)
+        check_labels(cfg)
         check_draws(cfg)
         return cfg
 

@@ -246,6 +246,31 @@ def check_description(config: ExperimentConfig) -> None:
         )
 
 
+def check_labels(config: ExperimentConfig) -> None:
+    """Refuse, for a *new* session's config, a label shown to the operator with each trial that
+    holds a control, format or line-break character (:data:`_HIDDEN`, as :func:`check_name`):
+    a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
+    (``[feedback.rating]``).  A :class:`ConfigError` naming the table and key.  Not checked by
+    :func:`parse_config`: sessions stored with such a label parse, reopen and replay."""
+    labels: list[tuple[str, str, str]] = []
+    for feature in config.space.features:
+        table = f"space.{feature.name}"
+        labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
+    if config.ordinal is not None:
+        labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
+    for table, key, label in labels:
+        hidden = [c for c in label if unicodedata.category(c) in _HIDDEN]
+        if hidden:
+            named = f"U+{ord(hidden[0]):04X} {unicodedata.name(hidden[0], '')}".strip()
+            fail(
+                table,
+                key,
+                f"must not hold control, format or line-break characters (newlines, tabs, ESC, "
+                f"NUL, bidirectional overrides, ...); {shown(label)} holds {named}: the operator "
+                "is shown it with each trial",
+            )
+
+
 def parse_config(
     text: str,
     default_name: str = "experiment",

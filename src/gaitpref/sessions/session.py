@@ -35,6 +35,7 @@ from gaitpref.config import (
     ExperimentConfig,
     check_description,
     check_draws,
+    check_labels,
     check_name,
     load_config,
 )
@@ -136,6 +137,7 @@ class Session:
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
         check_name(cfg)
         check_description(cfg)
+        check_labels(cfg)
         check_draws(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed
