@@ -4,7 +4,8 @@
 ran the same maximizing subject as without it (the point path never took the option);
 ``--noise`` with a ``.npy`` objective (or with ``--rating-quantiles``, which evaluates the
 objective over the grid) ran a noiseless subject whatever the value, ``nan`` included.  Both
-now exit with status 2 naming the option, before any trial.
+now exit with status 2 naming the option, before any trial.  So does ``demo`` given a file
+as its ``--out`` folder (a traceback after the whole run).
 """
 
 from __future__ import annotations
@@ -75,3 +76,26 @@ def test_noise_with_rating_quantiles_is_refused(tmp_path: Path, points_spec: str
     assert runner.invoke(app, args).exit_code == 0
     # --minimize is taken there: the grid's subject minimizes
     assert runner.invoke(app, [*args, "--minimize"]).exit_code == 0
+
+
+@pytest.mark.parametrize("below", [False, True])
+def test_demo_refuses_a_file_as_its_out_folder_before_running(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, below: bool
+) -> None:
+    """``demo --out FILE`` ran the whole simulation, then died with a FileExistsError (or,
+    for ``FILE/sub``, NotADirectoryError) traceback."""
+    import importlib
+
+    main = importlib.import_module("gaitpref.cli.main")  # the package's `main` is a function
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the demo ran before --out was checked")
+
+    monkeypatch.setattr(main, "simulate_once", never)
+    file = tmp_path / "taken"
+    file.write_text("a file", encoding="utf-8")
+    out = file / "sub" if below else file
+    result = runner.invoke(app, ["demo", "--out", str(out), "--trials", "2"])
+    assert result.exit_code == 2, result.output
+    assert f"--out {str(out)!r}" in " ".join(result.output.split())
+    assert file.read_text(encoding="utf-8") == "a file"

@@ -356,10 +356,12 @@ def demo(
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
     from rich.markup import escape
 
+    from gaitpref.cli.simulate import _folder
     from gaitpref.config import load_config
     from gaitpref.data import paper_objectives
     from gaitpref.plots.posterior import posterior_picture, save_posterior_figure
 
+    _folder(out)  # before the run: a file there was a FileExistsError traceback after it
     cfg = load_config("synthetic-2d")
     objective = paper_objectives()[objective_index]
     console.print(
