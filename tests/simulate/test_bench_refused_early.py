@@ -42,3 +42,21 @@ def test_refused_before_the_output_folder_is_made(
     assert result.exit_code == 2, result.output
     assert message in " ".join(result.output.split())
     assert not out.exists()
+
+
+def test_notes_past_the_limit_are_refused_before_the_study(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--notes`` was read whole: ``--notes /dev/zero`` was a MemoryError traceback.  At most
+    MAX_NOTES_BYTES (1 MB; lowered here to 10) are read."""
+    import gaitpref.cli.simulate
+
+    monkeypatch.setattr(gaitpref.cli.simulate, "MAX_NOTES_BYTES", 10)
+    notes = tmp_path / "notes.md"
+    out = tmp_path / "out"
+    args = ["bench", "paper-2d", "--runs", "1", "--trials", "2", "--out", str(out)]
+    notes.write_text("x" * 11, encoding="utf-8")
+    result = CliRunner().invoke(app, [*args, "--notes", str(notes)])
+    assert result.exit_code == 2, result.output
+    assert f"--notes {str(notes)!r} is larger than" in " ".join(result.output.split())
+    assert not out.exists()

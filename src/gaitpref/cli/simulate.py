@@ -148,12 +148,21 @@ def _folder(out: Path) -> None:
         fail(f"--out {str(out)!r}: cannot make the output folder ({exc.strerror or exc})")
 
 
+#: The most ``--notes`` a summary takes: read whole, ``/dev/zero`` was a MemoryError traceback.
+MAX_NOTES_BYTES = 1_000_000
+
+
 def _notes(notes: Path | None) -> str:
-    """The ``--notes`` file's text, or fail naming it."""
+    """The ``--notes`` file's text (at most :data:`MAX_NOTES_BYTES`; a pipe is read too), or
+    fail naming it."""
     if notes is None:
         return ""
     try:
-        return notes.read_text(encoding="utf-8")
+        with notes.open("rb") as file:
+            data = file.read(MAX_NOTES_BYTES + 1)
+        if len(data) > MAX_NOTES_BYTES:
+            fail(f"--notes {str(notes)!r} is larger than {MAX_NOTES_BYTES // 1_000_000} MB")
+        return data.decode("utf-8")
     except UnicodeDecodeError:
         fail(f"--notes {str(notes)!r} is not UTF-8 text")
     except OSError as exc:
