@@ -294,3 +294,34 @@ def test_bench_continuous_refuses_more_runs_than_a_study_holds(
     assert result.exit_code == 2, result.output
     assert "--runs must be 1 to 3, got 4" in _text(result.stderr)
     assert not partial.exists()
+
+
+@pytest.mark.parametrize("kind", ["file", "symlink", "folder", "no-folder"])
+@pytest.mark.parametrize("bench", ["continuous", "population"])
+def test_a_partial_path_that_exists_or_has_no_folder_is_refused(
+    continuous_args: list[str], population_file: Path, tmp_path: Path, kind: str, bench: str
+) -> None:
+    """``--partial`` is opened for writing and removed once every run has finished: an existing
+    file was truncated and then deleted (``--partial /dev/null`` removed /dev/null), a symlink
+    removed after its target was truncated.  Now refused before any run, naming the option."""
+    kept = tmp_path / "results.jsonl"
+    kept.write_text('{"earlier": "results"}\n', encoding="utf-8")
+    given = {
+        "file": kept,
+        "symlink": tmp_path / "link.jsonl",
+        "folder": tmp_path,
+        "no-folder": tmp_path / "missing" / "kept.jsonl",
+    }[kind]
+    if kind == "symlink":
+        given.symlink_to(kept)
+    args = (
+        continuous_args
+        if bench == "continuous"
+        else ["bench", "population", "--objectives", str(population_file), "--trials", "2",
+              "--config", POPULATION]
+    )  # fmt: skip
+    result = CliRunner().invoke(app, [*args, "--partial", str(given)])
+    assert result.exit_code == 2, result.output
+    assert f"--partial {str(given)!r}" in _text(result.stderr)
+    assert kept.read_text(encoding="utf-8") == '{"earlier": "results"}\n'
+    assert kind != "symlink" or given.is_symlink()

@@ -132,7 +132,14 @@ def _stopping(sweep: Callable[[], T]) -> T:
 def _partial(given: Path | None, command: str) -> Path:
     """Where a bench keeps its finished runs: ``--partial``, else a new name in the temporary
     folder (not made until the runs start: a bench refused before leaves no file)."""
-    if given is not None:
+    if given is not None:  # opened for writing, and removed once every run has finished
+        if given.exists() or given.is_symlink():  # was truncated, then removed (/dev/null too)
+            fail(
+                f"--partial {str(given)!r} already exists: give a new file name (the file is "
+                "written afresh and removed once every run has finished)"
+            )
+        if not given.parent.is_dir():
+            fail(f"--partial {str(given)!r}: no folder {str(given.parent)!r} to write it in")
         return given
     name = f"gaitpref-bench-{command}-{secrets.token_hex(4)}.partial.jsonl"
     return Path(tempfile.gettempdir()) / name
@@ -348,11 +355,12 @@ def population(
 
     arr = read_array(objectives, "objectives file")
     cfg = guard(lambda: _bench_config(config))
+    kept = _partial(partial, "population")
 
     def run() -> dict[str, object]:
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
-            partial=_partial(partial, "population"),
+            partial=kept,
         )  # fmt: skip
 
     result = _stopping(run)
@@ -395,13 +403,14 @@ def continuous(
     from gaitpref.cli.points import bench_points, run_record
 
     cfg = guard(lambda: _bench_config(config))
+    kept = _partial(partial, "continuous")
     with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
-                partial=_partial(partial, "continuous"),
+                partial=kept,
             )
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
