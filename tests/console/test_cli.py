@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -67,3 +68,16 @@ def test_a_given_token_from_the_option_or_the_environment(
     assert "?token=local" in out
     loopback = TestClient(served["app"], base_url="http://127.0.0.1:8000")
     assert loopback.get("/api/configs").status_code == 401
+
+
+def test_a_file_given_as_the_libraries_folder_is_refused(
+    served: dict[str, Any], db_url: str, tmp_path: Path
+) -> None:
+    """It was taken: the console served, and every upload then failed to make its folder."""
+    file = tmp_path / "libs"
+    file.write_text("not a folder", encoding="utf-8")
+    result = CliRunner().invoke(app, ["console", "--db", db_url, "--libraries", str(file)])
+    assert result.exit_code == 2, result.output
+    assert "--libraries" in result.output and "is a file, not a folder" in result.output
+    assert served == {}  # nothing served
+    run("--db", db_url, "--libraries", str(tmp_path / "new-folder"))  # a new folder is fine

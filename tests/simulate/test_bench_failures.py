@@ -156,6 +156,21 @@ def test_input_refused_before_any_run_is_status_2_and_keeps_no_file(
     assert not partial.exists()
 
 
+@pytest.mark.parametrize("tolerance", ["nan", "-0.1", "1", "inf"])
+def test_a_tolerance_outside_0_1_is_refused_before_any_run(
+    population_file: Path, tmp_path: Path, tolerance: str
+) -> None:
+    """It was checked by every run: the first run's failure, status 1 ("0 of 6 runs")."""
+    partial = tmp_path / "kept.jsonl"
+    args = ["bench", "population", "--objectives", str(population_file), "--trials", "2"]
+    args += ["--config", POPULATION, "--tolerance", tolerance, "--partial", str(partial)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "tolerance must be a fraction in [0, 1)" in _text(result.stderr)
+    assert "runs finished" not in _text(result.stderr)
+    assert not partial.exists()
+
+
 # -- bench population ---------------------------------------------------------------------
 
 
@@ -262,3 +277,51 @@ def test_a_bench_refuses_a_config_over_the_sampling_budget_before_any_run(
     assert "[cospar.strategy_settings].samples: is 4096" in _text(result.output)
     assert "set samples to at most 536" in _text(result.output)
     assert not partial.exists()
+
+
+def test_bench_continuous_refuses_more_runs_than_a_study_holds(
+    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--runs 1000000000000`` made the list of its runs first: a MemoryError traceback.  At
+    most MAX_RUNS (a study's limit), refused before any run (here lowered to 3)."""
+    import gaitpref.simulate.study
+
+    monkeypatch.setattr(gaitpref.simulate.study, "MAX_RUNS", 3)
+    partial = tmp_path / "kept.jsonl"
+    args = [*continuous_args, "--partial", str(partial)]
+    args[args.index("--runs") + 1] = "4"
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "--runs must be 1 to 3, got 4" in _text(result.stderr)
+    assert not partial.exists()
+
+
+@pytest.mark.parametrize("kind", ["file", "symlink", "folder", "no-folder"])
+@pytest.mark.parametrize("bench", ["continuous", "population"])
+def test_a_partial_path_that_exists_or_has_no_folder_is_refused(
+    continuous_args: list[str], population_file: Path, tmp_path: Path, kind: str, bench: str
+) -> None:
+    """``--partial`` is opened for writing and removed once every run has finished: an existing
+    file was truncated and then deleted (``--partial /dev/null`` removed /dev/null), a symlink
+    removed after its target was truncated.  Now refused before any run, naming the option."""
+    kept = tmp_path / "results.jsonl"
+    kept.write_text('{"earlier": "results"}\n', encoding="utf-8")
+    given = {
+        "file": kept,
+        "symlink": tmp_path / "link.jsonl",
+        "folder": tmp_path,
+        "no-folder": tmp_path / "missing" / "kept.jsonl",
+    }[kind]
+    if kind == "symlink":
+        given.symlink_to(kept)
+    args = (
+        continuous_args
+        if bench == "continuous"
+        else ["bench", "population", "--objectives", str(population_file), "--trials", "2",
+              "--config", POPULATION]
+    )  # fmt: skip
+    result = CliRunner().invoke(app, [*args, "--partial", str(given)])
+    assert result.exit_code == 2, result.output
+    assert f"--partial {str(given)!r}" in _text(result.stderr)
+    assert kept.read_text(encoding="utf-8") == '{"earlier": "results"}\n'
+    assert kind != "symlink" or given.is_symlink()

@@ -74,6 +74,11 @@ def serve(
         )
     from gaitpref.storage import resolve_url
 
+    if libraries is not None and libraries.exists() and not libraries.is_dir():
+        fail(  # taken before: the console served, and each upload failed to make its folder
+            f"--libraries {str(libraries)!r} is a file, not a folder (uploaded gait libraries "
+            "are kept in it)"
+        )
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
     app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)

@@ -71,11 +71,19 @@ def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
 def _load_config_or_fail(source: str) -> ExperimentConfig:
     """A config for a new run: loaded, and checked as a new session checks it (its name and
     its largest draw), so that a run is refused at once rather than at the first ask."""
-    from gaitpref.config import check_draws, check_name, load_config
+    from gaitpref.config import (
+        check_description,
+        check_draws,
+        check_labels,
+        check_name,
+        load_config,
+    )
 
     def load() -> ExperimentConfig:
         cfg = load_config(source)
         check_name(cfg)
+        check_description(cfg)
+        check_labels(cfg)
         check_draws(cfg)
         return cfg
 
@@ -193,7 +201,13 @@ def simulate(
             "or a built-in: hartmann6, random-gp[:SEED]."
         ),
     ],
-    minimize: Annotated[bool, typer.Option(help="Lower objective values are better.")] = False,
+    minimize: Annotated[
+        bool,
+        typer.Option(
+            help="Lower objective values are better (a .npy objective, or with "
+            "--rating-quantiles; a function over points is maximized)."
+        ),
+    ] = False,
     trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
     seed: Annotated[int | None, typer.Option(min=0, help="Seed (default: the config's).")] = None,
     coactive: Annotated[bool, typer.Option(help="Simulate coactive suggestions.")] = False,
@@ -210,7 +224,10 @@ def simulate(
     ] = 0.0,
     noise: Annotated[
         float,
-        typer.Option(help="The simulated subject's probit noise (objectives over points)."),
+        typer.Option(
+            help="The simulated subject's probit noise (objectives over points, without "
+            "--rating-quantiles; refused otherwise)."
+        ),
     ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
@@ -230,8 +247,18 @@ def simulate(
     cfg = _load_config_or_fail(config)
     use_seed = cfg.seed if seed is None else seed
     if not is_grid_objective(objective) and not rating_quantiles:
+        if minimize:  # the subject over points prefers higher values: it was ignored
+            fail(
+                f"--minimize: objective {objective!r} is a function over points, and those are "
+                "maximized (higher is better); negate it in PATH.py:NAME instead"
+            )
         run_command(cfg, objective, trials, use_seed, coactive, noise, as_json)
         return
+    if noise != 0:  # the grid's subject takes no noise here: any value (nan too) was ignored
+        fail(
+            f"--noise {noise!r}: only a subject over points (PATH.py:NAME, hartmann6, random-gp "
+            "without --rating-quantiles) takes a probit noise; leave it out"
+        )
     if cfg.subspace == "line":
         if rating_quantiles:
             fail(
@@ -329,10 +356,12 @@ def demo(
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
     from rich.markup import escape
 
+    from gaitpref.cli.simulate import _folder
     from gaitpref.config import load_config
     from gaitpref.data import paper_objectives
     from gaitpref.plots.posterior import posterior_picture, save_posterior_figure
 
+    _folder(out)  # before the run: a file there was a FileExistsError traceback after it
     cfg = load_config("synthetic-2d")
     objective = paper_objectives()[objective_index]
     console.print(

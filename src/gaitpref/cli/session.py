@@ -28,10 +28,41 @@ session_app = typer.Typer(
 )
 db_app = typer.Typer(name="db", help="The session database.", no_args_is_help=True)
 
+
+def _kept_db(db: str | None) -> str | None:
+    """``--db`` (or ``$GAITPREF_DB``), refused naming the option when it is an in-memory
+    database (``memory://``, ``sqlite:///:memory:``, and ``sqlite://`` or ``sqlite:///`` with no
+    path, as ``sqlite:///$UNSET`` gives): every command runs in a process of its own, so what it
+    wrote was gone when it ended, though ``session new`` printed the id and how to run it."""
+    from sqlalchemy.engine import make_url
+    from sqlalchemy.exc import ArgumentError
+
+    from gaitpref.storage import resolve_url
+
+    url = resolve_url(db)
+    memory = url == "memory://"
+    if not memory:
+        try:
+            parsed = make_url(url)
+        except ArgumentError:  # refused, naming it, when the command opens it
+            return db
+        memory = parsed.get_backend_name() == "sqlite" and parsed.database in (None, "", ":memory:")
+    if memory:
+        given = "--db" if db else "$GAITPREF_DB"
+        raise typer.BadParameter(
+            f"{url!r} is an in-memory database: what the command writes would be gone when it "
+            "ends; give a database file (e.g. --db lab.db or sqlite:///lab/gaitpref.db)",
+            param_hint=f"'{given}'",
+        )
+    return db
+
+
 DbOption = Annotated[
     str | None,
     typer.Option(
-        "--db", help="Database URL or SQLite path (default: $GAITPREF_DB, else ./gaitpref.db)."
+        "--db",
+        help="Database URL or SQLite path (default: $GAITPREF_DB, else ./gaitpref.db).",
+        callback=_kept_db,
     ),
 ]
 IdArgument = Annotated[
@@ -73,9 +104,7 @@ def db_upgrade(db: DbOption = None) -> None:
     from gaitpref.storage import migrate, resolve_url
     from gaitpref.storage.sql import upgrade_database
 
-    url = resolve_url(db)
-    if url == "memory://":
-        fail("an in-memory database needs no upgrade")
+    url = resolve_url(db)  # not in memory (refused by --db's check)
     shown = guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
 
@@ -116,8 +145,16 @@ def new(
         library = None
         if gait_ids is not None:
             if not gait_ids.is_file():
-                raise ValueError(f"gait id file {str(gait_ids)!r} does not exist")
-            library = [ln.strip() for ln in gait_ids.read_text().splitlines() if ln.strip()]
+                what = "is a folder" if gait_ids.is_dir() else "does not exist"
+                raise ValueError(f"--gait-ids {str(gait_ids)!r} {what}; give a text file")
+            try:  # UTF-8, whatever the locale; the error named neither the option nor the file
+                text = gait_ids.read_text(encoding="utf-8")
+            except UnicodeDecodeError as exc:
+                raise ValueError(
+                    f"--gait-ids {str(gait_ids)!r} is not UTF-8 text (byte {exc.start}: "
+                    f"{exc.reason})"
+                ) from None
+            library = [ln.strip() for ln in text.splitlines() if ln.strip()]
         for item in prior_from or []:  # an empty one (an unset shell variable) is no warm start
             if not read_prior_from([item]):
                 raise ValueError(f"--prior-from {item!r} names no session id or subject code")

@@ -30,6 +30,7 @@ from gaitpref.cli.output import err_console as _console
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
     from gaitpref.simulate.study import Study
+    from gaitpref.simulate.sweep import Backend as SweepBackend
     from gaitpref.simulate.sweep import StudyResult
 
 bench_app = typer.Typer(
@@ -82,17 +83,32 @@ def _integers(text: str, option: str) -> list[int]:
     return numbers
 
 
-def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
-    """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
-    finished (then the file is removed), so a run that fails loses none of the others."""
-    from gaitpref.simulate.sweep import BACKENDS, run_study
+def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
+    """``--backend``, checked with ``--jobs`` and ``--address`` before the output folder is made
+    (refused by the run itself, they left an empty ``--out`` folder)."""
+    from gaitpref.simulate.sweep import BACKENDS, check_backend, resolve_jobs
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+
+    def check() -> None:
+        check_backend(backend, address)
+        resolve_jobs(jobs)
+
+    guard(check)
+    return backend
+
+
+def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
+    """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
+    finished (then the file is removed), so a run that fails loses none of the others."""
+    from gaitpref.simulate.sweep import run_study
+
+    checked = _execution(backend, jobs, address)
     partial = out / PARTIAL
     return _stopping(
         lambda: run_study(
-            study, backend, jobs, address, progress=True, console=_console, partial=partial
+            study, checked, jobs, address, progress=True, console=_console, partial=partial
         )
     )
 
@@ -116,7 +132,14 @@ def _stopping(sweep: Callable[[], T]) -> T:
 def _partial(given: Path | None, command: str) -> Path:
     """Where a bench keeps its finished runs: ``--partial``, else a new name in the temporary
     folder (not made until the runs start: a bench refused before leaves no file)."""
-    if given is not None:
+    if given is not None:  # opened for writing, and removed once every run has finished
+        if given.exists() or given.is_symlink():  # was truncated, then removed (/dev/null too)
+            fail(
+                f"--partial {str(given)!r} already exists: give a new file name (the file is "
+                "written afresh and removed once every run has finished)"
+            )
+        if not given.parent.is_dir():
+            fail(f"--partial {str(given)!r}: no folder {str(given.parent)!r} to write it in")
         return given
     name = f"gaitpref-bench-{command}-{secrets.token_hex(4)}.partial.jsonl"
     return Path(tempfile.gettempdir()) / name
@@ -132,12 +155,21 @@ def _folder(out: Path) -> None:
         fail(f"--out {str(out)!r}: cannot make the output folder ({exc.strerror or exc})")
 
 
+#: The most ``--notes`` a summary takes: read whole, ``/dev/zero`` was a MemoryError traceback.
+MAX_NOTES_BYTES = 1_000_000
+
+
 def _notes(notes: Path | None) -> str:
-    """The ``--notes`` file's text, or fail naming it."""
+    """The ``--notes`` file's text (at most :data:`MAX_NOTES_BYTES`; a pipe is read too), or
+    fail naming it."""
     if notes is None:
         return ""
     try:
-        return notes.read_text(encoding="utf-8")
+        with notes.open("rb") as file:
+            data = file.read(MAX_NOTES_BYTES + 1)
+        if len(data) > MAX_NOTES_BYTES:
+            fail(f"--notes {str(notes)!r} is larger than {MAX_NOTES_BYTES // 1_000_000} MB")
+        return data.decode("utf-8")
     except UnicodeDecodeError:
         fail(f"--notes {str(notes)!r} is not UTF-8 text")
     except OSError as exc:
@@ -197,6 +229,7 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
+    _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
     result = _run(study, backend, jobs, address, out)
@@ -250,6 +283,8 @@ def compass_gait(
     from gaitpref.simulate.sweep import resolve_jobs
     from gaitpref.simulate.tables import write_curves, write_table
 
+    table_path = _table_path(out, table)  # before a gait library is built
+    _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
         if objective not in ("poly", "hzd"):
@@ -270,7 +305,6 @@ def compass_gait(
         report(exc)
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
-    table_path = _table_path(out, table)
     _folder(out)
     result = _run(study, backend, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
@@ -321,11 +355,12 @@ def population(
 
     arr = read_array(objectives, "objectives file")
     cfg = guard(lambda: _bench_config(config))
+    kept = _partial(partial, "population")
 
     def run() -> dict[str, object]:
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
-            partial=_partial(partial, "population"),
+            partial=kept,
         )  # fmt: skip
 
     result = _stopping(run)
@@ -368,13 +403,14 @@ def continuous(
     from gaitpref.cli.points import bench_points, run_record
 
     cfg = guard(lambda: _bench_config(config))
+    kept = _partial(partial, "continuous")
     with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
-                partial=_partial(partial, "continuous"),
+                partial=kept,
             )
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])

@@ -205,6 +205,72 @@ def check_name(config: ExperimentConfig) -> None:
         )
 
 
+#: Bidirectional formatting characters (Unicode's Bidi_Control property): embeddings,
+#: overrides, isolates and marks, which reorder the text shown around them.
+_BIDI: Final = frozenset(
+    {
+        "\u061c",
+        "\u200e",
+        "\u200f",
+        *map(chr, range(0x202A, 0x202F)),
+        *map(chr, range(0x2066, 0x206A)),
+    }
+)
+
+
+def check_description(config: ExperimentConfig) -> None:
+    """Refuse a description holding a character that would garble a terminal or the text shown
+    around it, for a *new* session's config: a control character other than a tab or a newline
+    (ESC, NUL, a carriage return, DEL, C1 controls), a surrogate, a line or paragraph
+    separator, or a bidirectional formatting character (U+202E and the like).  Newlines and
+    tabs stay (a description may run over lines), and so do other format characters (zero
+    width joiners, which Persian and emoji sequences need).  A :class:`ConfigError` naming
+    the key.  Like :func:`check_name`, not checked by :func:`parse_config`: sessions stored
+    with such a description parse, reopen and replay as they were."""
+    text = config.description
+    hidden = [
+        (i, c)
+        for i, c in enumerate(text)
+        if c in _BIDI or (unicodedata.category(c) in _HIDDEN - {"Cf"} and c not in "\t\n")
+    ]
+    if hidden:
+        at, char = hidden[0]
+        named = f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
+        fail(
+            "",
+            "description",
+            f"must not hold control characters other than newlines and tabs (ESC, NUL, a "
+            f"carriage return, ...), line separators or bidirectional overrides; "
+            f"{shown(text)} holds {len(hidden)}, the first {named} at character {at + 1}: "
+            "terminals, the console and exports would show it as it is",
+        )
+
+
+def check_labels(config: ExperimentConfig) -> None:
+    """Refuse, for a *new* session's config, a label shown to the operator with each trial that
+    holds a control, format or line-break character (:data:`_HIDDEN`, as :func:`check_name`):
+    a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
+    (``[feedback.rating]``).  A :class:`ConfigError` naming the table and key.  Not checked by
+    :func:`parse_config`: sessions stored with such a label parse, reopen and replay."""
+    labels: list[tuple[str, str, str]] = []
+    for feature in config.space.features:
+        table = f"space.{feature.name}"
+        labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
+    if config.ordinal is not None:
+        labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
+    for table, key, label in labels:
+        hidden = [c for c in label if unicodedata.category(c) in _HIDDEN]
+        if hidden:
+            named = f"U+{ord(hidden[0]):04X} {unicodedata.name(hidden[0], '')}".strip()
+            fail(
+                table,
+                key,
+                f"must not hold control, format or line-break characters (newlines, tabs, ESC, "
+                f"NUL, bidirectional overrides, ...); {shown(label)} holds {named}: the operator "
+                "is shown it with each trial",
+            )
+
+
 def parse_config(
     text: str,
     default_name: str = "experiment",

@@ -31,7 +31,14 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from gaitpref.checks import is_count
-from gaitpref.config import ExperimentConfig, check_draws, check_name, load_config
+from gaitpref.config import (
+    ExperimentConfig,
+    check_description,
+    check_draws,
+    check_labels,
+    check_name,
+    load_config,
+)
 from gaitpref.errors import (
     InfeasibleProposalsError,
     NoSafeGaitError,
@@ -129,6 +136,8 @@ class Session:
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
         check_name(cfg)
+        check_description(cfg)
+        check_labels(cfg)
         check_draws(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed

@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike, NDArray
 from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
 from gaitpref.loop.cospar import CoSpar
-from gaitpref.loop.stopping import confidence
+from gaitpref.loop.stopping import check_tolerance, confidence
 from gaitpref.loop.warm import RELEARN_EVERY, relearning, warm_start
 from gaitpref.simulate.partial import JsonLines, partial_file, run_error
 from gaitpref.simulate.sweep import run_tasks
@@ -240,6 +240,7 @@ def population_bench(
     if trials < 1:
         raise ValueError(f"trials must be >= 1, got {trials}")
     check_user_noise(user_noise)  # refused here, not as every run's failure
+    check_tolerance(tolerance)  # likewise (a run failure, status 1, before)
     S = len(grids)
     walked: dict[str, list[Walked | None]] = {arm: [None] * S for arm in ARMS}
 

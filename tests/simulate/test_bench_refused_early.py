@@ -1,0 +1,62 @@
+"""``bench paper-2d`` and ``bench compass-gait`` refuse ``--backend``, ``--jobs``,
+``--address`` and ``--table`` before they make the ``--out`` folder or build anything.
+
+The run itself refused the first three, after the output folder was made: ``--jobs 0`` left
+an empty ``--out`` folder behind.  ``bench compass-gait --objective hzd`` (no ``--library``)
+made the folder and built its 24 gaits before ``--table xls`` was refused.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+
+BAD = [
+    (["--backend", "foo"], "--backend must be one of"),
+    (["--jobs", "0"], "jobs must be a positive count"),
+    (["--address", "localhost:1"], "address is for the Ray backend"),
+    (["--table", "xls"], "--table must be csv"),
+]
+
+
+@pytest.mark.parametrize(("option", "message"), BAD)
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_refused_before_the_output_folder_is_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, study: str, option: list[str], message: str
+) -> None:
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before the options were checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), *option]
+    if study == "compass-gait":
+        args += ["--objective", "hzd"]  # no --library: it would build one into --out
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert message in " ".join(result.output.split())
+    assert not out.exists()
+
+
+def test_notes_past_the_limit_are_refused_before_the_study(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--notes`` was read whole: ``--notes /dev/zero`` was a MemoryError traceback.  At most
+    MAX_NOTES_BYTES (1 MB; lowered here to 10) are read."""
+    import gaitpref.cli.simulate
+
+    monkeypatch.setattr(gaitpref.cli.simulate, "MAX_NOTES_BYTES", 10)
+    notes = tmp_path / "notes.md"
+    out = tmp_path / "out"
+    args = ["bench", "paper-2d", "--runs", "1", "--trials", "2", "--out", str(out)]
+    notes.write_text("x" * 11, encoding="utf-8")
+    result = CliRunner().invoke(app, [*args, "--notes", str(notes)])
+    assert result.exit_code == 2, result.output
+    assert f"--notes {str(notes)!r} is larger than" in " ".join(result.output.split())
+    assert not out.exists()
