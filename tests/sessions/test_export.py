@@ -206,6 +206,23 @@ def test_importing_the_same_export_twice_needs_as_new(
     second.close()
 
 
+def test_an_export_of_an_imported_copy_is_refused_where_its_original_is(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """A session taken to another database and exported from there (its row created anew, its
+    log's times kept) was imported back beside its original as a second copy."""
+    s = _session(sqlite_url, drive)
+    export_session(s, tmp_path / "first", "csv")
+    elsewhere = f"sqlite:///{tmp_path / 'analysis.db'}"
+    copy = import_session(elsewhere, tmp_path / "first")
+    export_session(copy, tmp_path / "back", "csv")
+    copy.close()
+    with pytest.raises(ExportError, match=f"the session it is a copy of, as session {s.id}"):
+        import_session(sqlite_url, tmp_path / "back")
+    assert [r.id for r in Session.list_sessions(sqlite_url)] == [s.id]
+    import_session(sqlite_url, tmp_path / "back", as_new=True).close()
+
+
 def test_session_list_marks_imported_sessions(
     tmp_path: Path, sqlite_url: str, drive: Drive
 ) -> None:

@@ -461,7 +461,7 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
                 spec,
                 events,
                 status,
-                check=functools.partial(_check_not_imported, storage.url, spec, info),
+                check=functools.partial(_check_not_imported, storage.url, spec, info, events[0].at),
             )
         session = Session.open(storage, record.id)
     except BaseException:
@@ -552,21 +552,31 @@ def origin_of(record: SessionRecord) -> str | None:
 
 
 def _check_not_imported(
-    where: str, spec: SessionSpec, info: dict[str, Any], sessions: list[SessionRecord]
+    where: str,
+    spec: SessionSpec,
+    info: dict[str, Any],
+    made: datetime | None,
+    sessions: list[SessionRecord],
 ) -> None:
     """Refuse an export whose session is among the subject's ``sessions`` in the database
-    ``where`` (imported, or the original)."""
+    ``where`` (imported, or the original).  An original is known by its creation time: the
+    exported session's, or its log's ``created`` event's (``made``), which every import keeps,
+    so that an export of an imported copy is refused where its original is."""
     mine = spec.meta["imported_from"]
     for rec in sessions:
         origin = rec.meta.get("imported_from")
         again = isinstance(origin, dict) and origin.get("events_sha256") == mine["events_sha256"]
-        original = (
-            rec.config_sha256 == spec.config_sha256
-            and rec.seed == spec.seed
-            and rec.created_at.isoformat() == info.get("created_at")
-        )
-        if again or original:
-            how = "imported before as" if again else "the exported session itself, as"
+        same = rec.config_sha256 == spec.config_sha256 and rec.seed == spec.seed
+        itself = same and rec.created_at.isoformat() == info.get("created_at")
+        copied = same and made is not None and rec.created_at == made
+        if again or itself or copied:
+            how = (
+                "imported before as"
+                if again
+                else "the exported session itself, as"
+                if itself
+                else "the session it is a copy of, as"
+            )
             raise ExportError(
                 f"this export (session {info.get('id')} of subject {spec.subject}) is already in "
                 f"{where}: {how} session {rec.id}; nothing was written.  To keep a second "
