@@ -238,8 +238,9 @@ def _tables(
             **walked[t.seq]["values"],
             "gait_id": _walked_gait(session, t.action, walked[t.seq]),
             "gait": _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}",
-            "unsafe": t.number in unsafe,
-            "unsafe_reason": unsafe.get(t.number, (0, ""))[1],
+            # a flag is of the trial of its number in force (an undo is refused while one is)
+            "unsafe": not t.undone and t.number in unsafe,
+            "unsafe_reason": "" if t.undone else unsafe.get(t.number, (0, ""))[1],
             "excluded": t.excluded is not None,
             "exclusion_reason": t.excluded,
             "exclusion_detail": t.exclusion_detail,
