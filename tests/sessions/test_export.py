@@ -6,6 +6,7 @@ import csv
 import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -374,4 +375,26 @@ def test_csv_cells_a_spreadsheet_would_run_as_formulas_are_quoted(
     assert json.dumps(typed)[1:-1] in words and "'=cmd" not in words
     imported = import_session(f"sqlite:///{tmp_path / 'back.db'}", tmp_path / "csv")
     assert [e.payload for e in imported.events()] == [e.payload for e in s.events()]
+    imported.close()
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_an_export_written_where_text_files_end_lines_with_crlf_imports(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch, fmt: str
+) -> None:
+    """Each file is written as the bytes its SHA-256 in the manifest is of: written as text on
+    Windows, every "\\n" became "\\r\\n" and no export there could be imported (config.toml and
+    events.jsonl did not match their hashes)."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 3)
+    write_text = Path.write_text
+
+    def as_on_windows(self: Path, data: str, *args: Any, **kwargs: Any) -> int:
+        return write_text(self, data, *args, **{"newline": "\r\n", **kwargs})
+
+    monkeypatch.setattr(Path, "write_text", as_on_windows)
+    export_session(s, tmp_path / "export", fmt)  # type: ignore[arg-type]
+    monkeypatch.undo()
+    imported = import_session(MemoryStorage(), tmp_path / "export")
+    assert imported.last_seq == s.last_seq
     imported.close()

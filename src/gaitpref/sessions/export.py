@@ -109,8 +109,9 @@ def _write_export(session: Session, out: Path, fmt: Format) -> None:
     written: dict[str, str] = {}
 
     def put(name: str, text: str) -> None:
-        (out / name).write_text(text, encoding="utf-8")
-        written[name] = hashlib.sha256(text.encode()).hexdigest()
+        data = text.encode()  # the bytes hashed, "\n" line ends on every system
+        (out / name).write_bytes(data)
+        written[name] = hashlib.sha256(data).hexdigest()
 
     put("config.toml", session.record.config_text)
     put(
