@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -398,3 +400,23 @@ def test_an_export_written_where_text_files_end_lines_with_crlf_imports(
     imported = import_session(MemoryStorage(), tmp_path / "export")
     assert imported.last_seq == s.last_seq
     imported.close()
+
+
+def test_an_export_folder_is_made_as_mkdir_makes_one(tmp_path: Path, drive: Drive) -> None:
+    """The export folder was the hidden work folder renamed, made by mkdtemp with mode 0700: a
+    colleague's account could not read it (its import: permission denied), and an empty folder
+    given to export into was replaced by one with that mode."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 2)
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o2770)  # a group's folder
+    umask = os.umask(0o022)
+    try:
+        export_session(s, tmp_path / "new", "csv")
+        export_session(s, shared, "csv")
+    finally:
+        os.umask(umask)
+    assert stat.S_IMODE((tmp_path / "new").stat().st_mode) == 0o755
+    assert stat.S_IMODE(shared.stat().st_mode) == 0o2770
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "shared"]  # no work folder left

@@ -78,8 +78,8 @@ EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path.
 
-    The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
-    written: an export that fails (a full disk, text that cannot be written) leaves no
+    The files are written into a folder in a hidden one beside ``out``, renamed to ``out`` once
+    all are written: an export that fails (a full disk, text that cannot be written) leaves no
     half-written folder behind, and may be run again.  The session is brought up to date first
     and every file is of the same event, however other writers move it on meanwhile.
     """
@@ -88,17 +88,20 @@ def export_session(session: Session, out: Path, fmt: Format = "csv") -> Path:
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
     out.parent.mkdir(parents=True, exist_ok=True)
-    partial = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
+        partial = work / "export"
+        partial.mkdir()  # its mode by the umask, as out's would be (mkdtemp's is 0700)
+        if out.exists():
+            shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
         session.read(lambda s: _write_export(s, partial, fmt))
         if out.exists():
             out.rmdir()  # empty, checked above
         partial.rename(out)
-    except BaseException:
-        shutil.rmtree(partial, ignore_errors=True)
-        raise
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     return out / "manifest.json"
 
 
