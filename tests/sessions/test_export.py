@@ -420,3 +420,27 @@ def test_an_export_folder_is_made_as_mkdir_makes_one(tmp_path: Path, drive: Driv
     assert stat.S_IMODE((tmp_path / "new").stat().st_mode) == 0o755
     assert stat.S_IMODE(shared.stat().st_mode) == 0o2770
     assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "shared"]  # no work folder left
+
+
+def test_an_import_names_a_missing_folder_a_file_and_a_folder_in_a_files_place(
+    tmp_path: Path, drive: Drive
+) -> None:
+    """Each said the export lacks a file (a folder named events.jsonl: 'lacks events.jsonl'; a
+    path that is not there, or the manifest itself given: 'no manifest.json')."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 2)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    target = tmp_path / "target.db"
+    cases = [
+        (tmp_path / "nowhere", r"'.*nowhere' does not exist"),
+        (out / "manifest.json", "is a file, not an export's folder"),
+    ]
+    for folder, match in cases:
+        with pytest.raises(ExportError, match=match):
+            import_session(f"sqlite:///{target}", folder)
+    (out / "events.jsonl").unlink()
+    (out / "events.jsonl").mkdir()
+    with pytest.raises(ExportError, match=r"events\.jsonl, which manifest\.json lists, is a fold"):
+        import_session(f"sqlite:///{target}", out)
+    assert not target.exists()

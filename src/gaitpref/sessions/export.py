@@ -603,6 +603,8 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
         path = (folder / str(name)).resolve()
         if Path(str(name)).is_absolute() or not path.is_relative_to(root):
             raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
+        if path.is_dir():
+            raise ExportError(f"{name}, which manifest.json lists, is a folder, not a file")
         if not path.is_file():
             raise ExportError(f"the export lacks {name}, which manifest.json lists")
         if _sha256(path) != expected:
@@ -644,6 +646,13 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:
     path = folder / "manifest.json"
+    if not folder.exists():
+        raise ExportError(f"{str(folder)!r} does not exist")
+    if not folder.is_dir():
+        raise ExportError(
+            f"{str(folder)!r} is a file, not an export's folder (give the folder that holds "
+            "manifest.json)"
+        )
     if not path.is_file():
         raise ExportError(f"{str(folder)!r} is not a gaitpref export (no manifest.json)")
     _check_size(path, "manifest.json", MAX_TEXT_BYTES)
