@@ -410,7 +410,7 @@ def test_an_export_folder_is_made_as_mkdir_makes_one(tmp_path: Path, drive: Driv
     drive(s, 2)
     shared = tmp_path / "shared"
     shared.mkdir()
-    shared.chmod(0o2770)  # a group's folder
+    shared.chmod(0o750)  # a folder its group may read
     umask = os.umask(0o022)
     try:
         export_session(s, tmp_path / "new", "csv")
@@ -418,7 +418,7 @@ def test_an_export_folder_is_made_as_mkdir_makes_one(tmp_path: Path, drive: Driv
     finally:
         os.umask(umask)
     assert stat.S_IMODE((tmp_path / "new").stat().st_mode) == 0o755
-    assert stat.S_IMODE(shared.stat().st_mode) == 0o2770
+    assert stat.S_IMODE(shared.stat().st_mode) == 0o750
     assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "shared"]  # no work folder left
 
 
