@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import csv
 import json
+import os
+import stat
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -206,6 +209,23 @@ def test_importing_the_same_export_twice_needs_as_new(
     second.close()
 
 
+def test_an_export_of_an_imported_copy_is_refused_where_its_original_is(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """A session taken to another database and exported from there (its row created anew, its
+    log's times kept) was imported back beside its original as a second copy."""
+    s = _session(sqlite_url, drive)
+    export_session(s, tmp_path / "first", "csv")
+    elsewhere = f"sqlite:///{tmp_path / 'analysis.db'}"
+    copy = import_session(elsewhere, tmp_path / "first")
+    export_session(copy, tmp_path / "back", "csv")
+    copy.close()
+    with pytest.raises(ExportError, match=f"the session it is a copy of, as session {s.id}"):
+        import_session(sqlite_url, tmp_path / "back")
+    assert [r.id for r in Session.list_sessions(sqlite_url)] == [s.id]
+    import_session(sqlite_url, tmp_path / "back", as_new=True).close()
+
+
 def test_session_list_marks_imported_sessions(
     tmp_path: Path, sqlite_url: str, drive: Drive
 ) -> None:
@@ -358,3 +378,69 @@ def test_csv_cells_a_spreadsheet_would_run_as_formulas_are_quoted(
     imported = import_session(f"sqlite:///{tmp_path / 'back.db'}", tmp_path / "csv")
     assert [e.payload for e in imported.events()] == [e.payload for e in s.events()]
     imported.close()
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json"])
+def test_an_export_written_where_text_files_end_lines_with_crlf_imports(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch, fmt: str
+) -> None:
+    """Each file is written as the bytes its SHA-256 in the manifest is of: written as text on
+    Windows, every "\\n" became "\\r\\n" and no export there could be imported (config.toml and
+    events.jsonl did not match their hashes)."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 3)
+    write_text = Path.write_text
+
+    def as_on_windows(self: Path, data: str, *args: Any, **kwargs: Any) -> int:
+        return write_text(self, data, *args, **{"newline": "\r\n", **kwargs})
+
+    monkeypatch.setattr(Path, "write_text", as_on_windows)
+    export_session(s, tmp_path / "export", fmt)  # type: ignore[arg-type]
+    monkeypatch.undo()
+    imported = import_session(MemoryStorage(), tmp_path / "export")
+    assert imported.last_seq == s.last_seq
+    imported.close()
+
+
+def test_an_export_folder_is_made_as_mkdir_makes_one(tmp_path: Path, drive: Drive) -> None:
+    """The export folder was the hidden work folder renamed, made by mkdtemp with mode 0700: a
+    colleague's account could not read it (its import: permission denied), and an empty folder
+    given to export into was replaced by one with that mode."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 2)
+    shared = tmp_path / "shared"
+    shared.mkdir()
+    shared.chmod(0o750)  # a folder its group may read
+    umask = os.umask(0o022)
+    try:
+        export_session(s, tmp_path / "new", "csv")
+        export_session(s, shared, "csv")
+    finally:
+        os.umask(umask)
+    assert stat.S_IMODE((tmp_path / "new").stat().st_mode) == 0o755
+    assert stat.S_IMODE(shared.stat().st_mode) == 0o750
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "shared"]  # no work folder left
+
+
+def test_an_import_names_a_missing_folder_a_file_and_a_folder_in_a_files_place(
+    tmp_path: Path, drive: Drive
+) -> None:
+    """Each said the export lacks a file (a folder named events.jsonl: 'lacks events.jsonl'; a
+    path that is not there, or the manifest itself given: 'no manifest.json')."""
+    s = Session.create(MemoryStorage(), CONFIG, "S01", seed=3)
+    drive(s, 2)
+    out = tmp_path / "export"
+    export_session(s, out, "csv")
+    target = tmp_path / "target.db"
+    cases = [
+        (tmp_path / "nowhere", r"'.*nowhere' does not exist"),
+        (out / "manifest.json", "is a file, not an export's folder"),
+    ]
+    for folder, match in cases:
+        with pytest.raises(ExportError, match=match):
+            import_session(f"sqlite:///{target}", folder)
+    (out / "events.jsonl").unlink()
+    (out / "events.jsonl").mkdir()
+    with pytest.raises(ExportError, match=r"events\.jsonl, which manifest\.json lists, is a fold"):
+        import_session(f"sqlite:///{target}", out)
+    assert not target.exists()

@@ -125,6 +125,33 @@ def test_exports_name_gaits_and_mark_unsafe_trials(tmp_path: Path) -> None:
     assert first["first_gait"] == f"G{first['first_action']}"
 
 
+def test_an_undone_trial_is_not_marked_with_the_flag_of_its_number_walked_again(
+    tmp_path: Path,
+) -> None:
+    """Trial numbers are reused after an undo: the flag of the trial walked again marked the
+    undone trial of that number unsafe too, with the same reason, in the export's trials."""
+    import csv
+
+    from gaitpref.sessions import export_session
+
+    with Session.create(f"sqlite:///{tmp_path / 'u.db'}", parse_config(CONFIG), "S01") as s:
+        for k in range(2):
+            _answer(s, k)
+        s.undo()
+        _answer(s, 1)
+        s.flag_unsafe(2, "knee hyperextension")
+        export_session(s, tmp_path / "out")
+    with (tmp_path / "out" / "trials.csv").open() as f:
+        rows = [
+            (r["trial"], r["undone"], r["unsafe"], r["unsafe_reason"]) for r in csv.DictReader(f)
+        ]
+    assert rows == [
+        ("1", "false", "false", ""),
+        ("2", "true", "false", ""),
+        ("2", "false", "true", "knee hyperextension"),
+    ]
+
+
 def _flag_then_undo(url: str, pause: bool) -> tuple[Session, int]:
     """Seed 1 runs gaits 6 then 8 (within the flag's radius of 6); flag trial 1, then undo
     trial 2's answer (optionally paused first)."""

@@ -85,8 +85,8 @@ def export_session(
     ``progress(done, total)``: the events replayed for the confidence table so far, and their
     number (``Session.confidence_history``; the long part of a long session's export).
 
-    The files are written into a hidden folder beside ``out``, renamed to ``out`` once all are
-    written: an export that fails (a full disk, text that cannot be written) leaves no
+    The files are written into a folder in a hidden one beside ``out``, renamed to ``out`` once
+    all are written: an export that fails (a full disk, text that cannot be written) leaves no
     half-written folder behind, and may be run again.  The session is brought up to date first
     and every file is of the same event, however other writers move it on meanwhile.
     """
@@ -95,17 +95,20 @@ def export_session(
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
     out.parent.mkdir(parents=True, exist_ok=True)
-    partial = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
+        partial = work / "export"
+        partial.mkdir()  # its mode by the umask, as out's would be (mkdtemp's is 0700)
+        if out.exists():
+            shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
         session.read(lambda s: _write_export(s, partial, fmt, progress))
         if out.exists():
             out.rmdir()  # empty, checked above
         partial.rename(out)
-    except BaseException:
-        shutil.rmtree(partial, ignore_errors=True)
-        raise
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
     return out / "manifest.json"
 
 
@@ -118,8 +121,9 @@ def _write_export(
     written: dict[str, str] = {}
 
     def put(name: str, text: str) -> None:
-        (out / name).write_text(text, encoding="utf-8")
-        written[name] = hashlib.sha256(text.encode()).hexdigest()
+        data = text.encode()  # the bytes hashed, "\n" line ends on every system
+        (out / name).write_bytes(data)
+        written[name] = hashlib.sha256(data).hexdigest()
 
     put("config.toml", session.record.config_text)
     put(
@@ -250,8 +254,9 @@ def _tables(
             **walked[t.seq]["values"],
             "gait_id": _walked_gait(session, t.action, walked[t.seq]),
             "gait": _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}",
-            "unsafe": t.number in unsafe,
-            "unsafe_reason": unsafe.get(t.number, (0, ""))[1],
+            # a flag is of the trial of its number in force (an undo is refused while one is)
+            "unsafe": not t.undone and t.number in unsafe,
+            "unsafe_reason": "" if t.undone else unsafe.get(t.number, (0, ""))[1],
             "excluded": t.excluded is not None,
             "exclusion_reason": t.excluded,
             "exclusion_detail": t.exclusion_detail,
@@ -473,7 +478,7 @@ def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = Fal
                 spec,
                 events,
                 status,
-                check=functools.partial(_check_not_imported, storage.url, spec, info),
+                check=functools.partial(_check_not_imported, storage.url, spec, info, events[0].at),
             )
         session = Session.open(storage, record.id)
     except BaseException:
@@ -564,21 +569,31 @@ def origin_of(record: SessionRecord) -> str | None:
 
 
 def _check_not_imported(
-    where: str, spec: SessionSpec, info: dict[str, Any], sessions: list[SessionRecord]
+    where: str,
+    spec: SessionSpec,
+    info: dict[str, Any],
+    made: datetime | None,
+    sessions: list[SessionRecord],
 ) -> None:
     """Refuse an export whose session is among the subject's ``sessions`` in the database
-    ``where`` (imported, or the original)."""
+    ``where`` (imported, or the original).  An original is known by its creation time: the
+    exported session's, or its log's ``created`` event's (``made``), which every import keeps,
+    so that an export of an imported copy is refused where its original is."""
     mine = spec.meta["imported_from"]
     for rec in sessions:
         origin = rec.meta.get("imported_from")
         again = isinstance(origin, dict) and origin.get("events_sha256") == mine["events_sha256"]
-        original = (
-            rec.config_sha256 == spec.config_sha256
-            and rec.seed == spec.seed
-            and rec.created_at.isoformat() == info.get("created_at")
-        )
-        if again or original:
-            how = "imported before as" if again else "the exported session itself, as"
+        same = rec.config_sha256 == spec.config_sha256 and rec.seed == spec.seed
+        itself = same and rec.created_at.isoformat() == info.get("created_at")
+        copied = same and made is not None and rec.created_at == made
+        if again or itself or copied:
+            how = (
+                "imported before as"
+                if again
+                else "the exported session itself, as"
+                if itself
+                else "the session it is a copy of, as"
+            )
             raise ExportError(
                 f"this export (session {info.get('id')} of subject {spec.subject}) is already in "
                 f"{where}: {how} session {rec.id}; nothing was written.  To keep a second "
@@ -600,6 +615,8 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
         path = (folder / str(name)).resolve()
         if Path(str(name)).is_absolute() or not path.is_relative_to(root):
             raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
+        if path.is_dir():
+            raise ExportError(f"{name}, which manifest.json lists, is a folder, not a file")
         if not path.is_file():
             raise ExportError(f"the export lacks {name}, which manifest.json lists")
         if _sha256(path) != expected:
@@ -641,6 +658,13 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:
     path = folder / "manifest.json"
+    if not folder.exists():
+        raise ExportError(f"{str(folder)!r} does not exist")
+    if not folder.is_dir():
+        raise ExportError(
+            f"{str(folder)!r} is a file, not an export's folder (give the folder that holds "
+            "manifest.json)"
+        )
     if not path.is_file():
         raise ExportError(f"{str(folder)!r} is not a gaitpref export (no manifest.json)")
     _check_size(path, "manifest.json", MAX_TEXT_BYTES)
