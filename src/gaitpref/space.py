@@ -397,7 +397,7 @@ class Space:
         return int(np.ravel_multi_index(tuple(multi), self.shape))
 
     def describe(self, index: int) -> str:
-        """Human-readable feature values, e.g. ``step_length=0.130 m, step_duration=0.95 s``."""
+        """Human-readable feature values (4 significant digits), e.g. ``step_length=0.13 m``."""
         parts = []
         for f, v in zip(self.features, self.point(index), strict=True):
             unit = f" {f.unit}" if f.unit else ""

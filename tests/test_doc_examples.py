@@ -1,0 +1,89 @@
+"""The docs' Python examples run and their TOML snippets parse, as a new user would paste them.
+
+The README's Python blocks are ``tests/test_readme.py``.  Here: the Python blocks of
+``docs/getting-started.md`` one after the other, the Session API example of ``docs/sessions.md``
+(in a temporary folder), and every TOML block of ``docs/*.md``, each completed into a config by
+the tables of the shipped ``exo-1d-step-length`` that it does not define itself.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+import gaitpref
+from gaitpref.config import parse_config
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
+HEADER = re.compile(r"^\[([^\]]+)\]")
+
+
+def blocks(page: Path, lang: str) -> list[str]:
+    return re.findall(rf"```{lang}\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
+
+
+def test_getting_started_python_blocks_run() -> None:
+    scope: dict[str, object] = {}
+    found = blocks(DOCS / "getting-started.md", "python")
+    assert len(found) >= 2
+    for block in found:
+        exec(compile(block, "getting-started.md", "exec"), scope)
+    posterior = scope["posterior"]
+    assert isinstance(posterior, gaitpref.Posterior)
+    assert posterior.mean.shape == (15,)
+
+
+def test_session_api_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)  # the example writes sqlite:///lab.db in the working directory
+    block = next(b for b in blocks(DOCS / "sessions.md", "python") if "Session.create" in b)
+    scope: dict[str, object] = {}
+    exec(compile(block, "sessions.md", "exec"), scope)
+    session = scope["s"]
+    assert isinstance(session, gaitpref.Session)
+    with session:
+        assert (session.id, session.subject, session.seed) == (1, "S01", 0)
+    assert (tmp_path / "lab.db").is_file()
+
+
+def tables(text: str) -> list[tuple[str, str]]:
+    """``(root table, text)`` of each table of a TOML text; top-level keys have the root ''."""
+    out: list[tuple[str, list[str]]] = [("", [])]
+    for line in text.splitlines():
+        header = HEADER.match(line)
+        if header:
+            out.append((header.group(1).split(".")[0].strip(), []))
+        out[-1][1].append(line)
+    return [(root, "\n".join(lines)) for root, lines in out]
+
+
+def completed(snippet: str) -> str:
+    """The snippet with the shipped exo-1d-step-length's tables whose roots it does not define."""
+    defined = {root for root, _ in tables(snippet) if root}
+    base = gaitpref.load_config("exo-1d-step-length").text
+    kept = [text for root, text in tables(base) if root and root not in defined]
+    return "\n".join([snippet, *kept]) + "\n"
+
+
+def toml_blocks() -> list[tuple[str, int, str]]:
+    return [
+        (page.name, i, block)
+        for page in sorted(DOCS.glob("*.md"))
+        for i, block in enumerate(blocks(page, "toml"))
+    ]
+
+
+def test_the_docs_have_toml_snippets() -> None:
+    assert len(toml_blocks()) >= 8
+
+
+@pytest.mark.parametrize(
+    ("page", "index", "snippet"), toml_blocks(), ids=[f"{p}-{i}" for p, i, _ in toml_blocks()]
+)
+def test_toml_snippet_parses(page: str, index: int, snippet: str) -> None:
+    if re.search(r"^library\s*=", snippet, re.M):
+        pytest.skip("names a gait library file (tests/gaits cover configs over a library)")
+    config = parse_config(completed(snippet), default_name=f"{page}-{index}")
+    assert config.space.describe(0)
