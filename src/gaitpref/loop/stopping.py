@@ -44,8 +44,8 @@ BLOCK_ELEMENTS = 1 << 22
 #: over every gait, so 10**12 ran for days, one block at a time.
 MAX_SAMPLES = 100_000
 #: The most sampled values (``samples x gaits``) a session's confidence reads after an answer:
-#: 2000 samples took 15 s over 57,750 gaits and minutes over 2**20 (2 cores), after every
-#: answer and for every row of an export; this budget is about 2 s
+#: 2000 samples took 7.5 s over 57,750 gaits and 2 minutes over 2**20 (2 cores), after every
+#: answer and for every row of an export; this budget is about 1 s
 #: (``benchmarks/results/stopping.md``).
 CONFIDENCE_VALUES = 1 << 24
 #: The fewest samples a rule reads however large the grid (``[stop] samples``' least value):
