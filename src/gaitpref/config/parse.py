@@ -194,7 +194,7 @@ def check_name(config: ExperimentConfig) -> None:
     hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c) in _HIDDEN]
     if hidden:
         at, char = hidden[0]
-        named = f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
+        named = _named(char)
         fail(
             "",
             "name",
@@ -203,6 +203,11 @@ def check_name(config: ExperimentConfig) -> None:
             f"{named} at character {at + 1}: terminals, the console and exports would show it as "
             "it is",
         )
+
+
+def _named(char: str) -> str:
+    """``"U+001B"``, or ``"U+202E RIGHT-TO-LEFT OVERRIDE"`` where Unicode names it."""
+    return f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
 
 
 #: Bidirectional formatting characters (Unicode's Bidi_Control property): embeddings,
@@ -235,7 +240,7 @@ def check_description(config: ExperimentConfig) -> None:
     ]
     if hidden:
         at, char = hidden[0]
-        named = f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
+        named = _named(char)
         fail(
             "",
             "description",
@@ -261,7 +266,7 @@ def check_labels(config: ExperimentConfig) -> None:
     for table, key, label in labels:
         hidden = [c for c in label if unicodedata.category(c) in _HIDDEN]
         if hidden:
-            named = f"U+{ord(hidden[0]):04X} {unicodedata.name(hidden[0], '')}".strip()
+            named = _named(hidden[0])
             fail(
                 table,
                 key,
