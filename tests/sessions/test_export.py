@@ -444,3 +444,20 @@ def test_an_import_names_a_missing_folder_a_file_and_a_folder_in_a_files_place(
     with pytest.raises(ExportError, match=r"events\.jsonl, which manifest\.json lists, is a fold"):
         import_session(f"sqlite:///{target}", out)
     assert not target.exists()
+
+
+def test_the_working_folder_is_refused_by_name(
+    tmp_path: Path, sqlite_url: str, drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--out .`` failed with "[Errno 22] Invalid argument: '.'" (an empty working folder);
+    the export replaces its folder, so the one the command runs in is refused by name."""
+    s = _session(sqlite_url, drive)
+    here = tmp_path / "empty"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    for out in (Path("."), here, Path("..") / "empty"):
+        with pytest.raises(ExportError, match="is the working folder; give a new folder's name"):
+            export_session(s, out, "csv")
+    assert list(here.iterdir()) == [] and here.is_dir()
+    export_session(s, Path("sub"), "csv")  # a new folder inside it: fine
+    assert (here / "sub" / "manifest.json").is_file()

@@ -94,6 +94,9 @@ def export_session(
         raise ExportError(f"format must be csv or json, got {fmt!r}")
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
+    if out.name in ("", ".", "..") or out.resolve() == Path.cwd().resolve():
+        # the export replaces the folder: not the one the command runs in
+        raise ExportError(f"{str(out)!r} is the working folder; give a new folder's name")
     out.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     try:
