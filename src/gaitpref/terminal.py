@@ -346,7 +346,7 @@ class Terminal:
                     redrawn |= s.flag_unsafe(t, reason)
                 self.console.print(
                     f"flagged unsafe: trial {', '.join(map(str, q.trials))} ({reason}); "
-                    "its gait and its neighbours will not be proposed again",
+                    + s.config.safety.flag_effect(),
                     markup=False,
                 )
                 if redrawn:

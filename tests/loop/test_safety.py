@@ -203,3 +203,11 @@ def test_bad_safety_settings_are_refused() -> None:
         CoSpar(SPACE, KERNEL, 0.02, ordinal=SCALE, safety=Safety(avoid=4))
     with pytest.raises(ValueError, match="unsafe_radius"):
         Safety(unsafe_radius=2.0)
+
+
+def test_a_flag_is_described_as_what_it_removes() -> None:
+    """The terminal and the CLI said "its gait and its neighbours" with no radius."""
+    assert Safety().flag_effect() == "its gait will not be proposed again"
+    assert Safety(unsafe_radius=0.25).flag_effect() == (
+        "its gait and the gaits within unsafe_radius = 0.25 of it will not be proposed again"
+    )

@@ -120,6 +120,8 @@ def test_unsafe_flag_and_withdrawal_from_the_cli(tmp_path: Path, drive: Drive) -
     assert "give --reason" in _fails("session", "unsafe", "1", "2", "--db", db)
     out = _ok("session", "unsafe", "1", "2", "--reason", "knee gave way", "--db", db)
     assert "trial 2 flagged unsafe (knee gave way)" in out
+    # the config's unsafe_radius is 0: no neighbour is removed, and none is said to be
+    assert "its gait will not be proposed again" in out and "neighbour" not in out
     assert "already flagged" in _fails("session", "unsafe", "1", "2", "--reason", "x", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags()[2][1] == "knee gave way"

@@ -419,8 +419,7 @@ def unsafe(
             fail("give --reason: what made the trial unsafe")
         guard(lambda: session.flag_unsafe(trial, reason))
         console.print(
-            f"trial {trial} flagged unsafe ({reason}); its gait and its neighbours will not be "
-            "proposed again"
+            f"trial {trial} flagged unsafe ({reason}); {session.config.safety.flag_effect()}"
         )
 
 

@@ -99,6 +99,15 @@ class Safety:
     #: likely than ``frontier`` times an unrated gait's (None: the ``risk`` rule's bound only)
     frontier: float | None = None
 
+    def flag_effect(self) -> str:
+        """What an unsafe flag does, as the terminal and the CLI say it after one."""
+        if self.unsafe_radius == 0:
+            return "its gait will not be proposed again"
+        return (
+            f"its gait and the gaits within unsafe_radius = {self.unsafe_radius:g} of it will "
+            "not be proposed again"
+        )
+
     def __post_init__(self) -> None:
         if not is_count(self.avoid) or self.avoid < 0:
             raise ValueError(f"avoid must be a number of categories >= 0, got {self.avoid!r}")
