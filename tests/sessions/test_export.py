@@ -461,3 +461,52 @@ def test_the_working_folder_is_refused_by_name(
     assert list(here.iterdir()) == [] and here.is_dir()
     export_session(s, Path("sub"), "csv")  # a new folder inside it: fine
     assert (here / "sub" / "manifest.json").is_file()
+
+
+NAMED_LIKE_COLUMNS = """
+name = "columns"
+[space.mean]
+min = 0.1
+max = 0.3
+num = 3
+[space.action]
+min = 1.0
+max = 2.0
+num = 2
+[space.mean_value]
+min = 5.0
+max = 6.0
+num = 2
+[model]
+lengthscale = 0.5
+signal_variance = 1.0
+noise = 0.1
+"""
+
+
+def test_features_named_like_a_column_keep_both_values(tmp_path: Path) -> None:
+    """A feature named ``mean`` or ``action`` overwrote the posterior's mean and the trial's
+    action in the tables (or was overwritten by them): now its column is ``NAME_value``."""
+    from gaitpref.config import parse_config
+
+    s = Session.create(MemoryStorage(), parse_config(NAMED_LIKE_COLUMNS), "S01", seed=1)
+    q = s.next_query()
+    s.answer(q.id, [(q.actions[0], q.actions[1])] if len(q.actions) > 1 else [])
+    export_session(s, tmp_path / "out", "json")
+    tables = {
+        name: json.loads((tmp_path / "out" / f"{name}.json").read_text())
+        for name in ("trials", "posterior", "confidence")
+    }
+    for row in tables["trials"]:
+        values = s.space.values_of(row["action"])  # the action is the grid index again
+        assert (row["mean_value_2"], row["action_value"], row["mean_value"]) == (
+            values["mean"],
+            values["action"],
+            values["mean_value"],
+        )
+    post = s.posterior()
+    for row in tables["posterior"]:
+        a = row["action"]
+        assert row["mean"] == pytest.approx(float(post.mean[a]))  # the posterior's, not 0.1-0.3
+        assert row["mean_value_2"] == s.space.values_of(a)["mean"]
+    assert {"action", "action_value", "mean_value_2"} <= set(tables["confidence"][0])

@@ -223,6 +223,35 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     }
 
 
+#: The columns of the tables that also carry one column per feature (trials, posterior,
+#: validation, confidence): a feature of one of these names gets its column as ``NAME_value``.
+FIXED_COLUMNS: Final = frozenset(
+    {
+        *("trial", "query", "action", "gait_id", "gait", "unsafe", "unsafe_reason", "excluded"),
+        *("exclusion_reason", "exclusion_detail", "undone", "seq", "at", "mean", "sd", "round"),
+        *("label", "role", "posterior_mean", "subject_rank", "model_rank", "agrees"),
+        *("kendall_tau", "answers", "trials", "probability", "regret", "relative_regret"),
+        *("tolerance", "samples"),
+    }
+)
+
+
+def feature_columns(values: dict[str, Any]) -> dict[str, Any]:
+    """Feature values keyed by their columns: a feature named as a fixed column (``mean``,
+    ``action``, ...) would overwrite that column, or be overwritten by it, so it gets
+    ``NAME_value`` (then ``NAME_value_2``, ... if those are features too)."""
+    out: dict[str, Any] = {}
+    for name, value in values.items():
+        column = name
+        if name in FIXED_COLUMNS:
+            column, k = f"{name}_value", 1
+            while column in values or column in out or column in FIXED_COLUMNS:
+                k += 1
+                column = f"{name}_value_{k}"
+        out[column] = value
+    return out
+
+
 def _tables(
     session: Session,
     at: dict[int, str],
@@ -254,7 +283,7 @@ def _tables(
             "trial": t.number,
             "query": t.query,
             "action": t.action,
-            **walked[t.seq]["values"],
+            **feature_columns(walked[t.seq]["values"]),
             "gait_id": _walked_gait(session, t.action, walked[t.seq]),
             "gait": _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}",
             # a flag is of the trial of its number in force (an undo is refused while one is)
@@ -311,7 +340,7 @@ def _tables(
     posterior = [
         {
             "action": a,
-            **space.values_of(a),
+            **feature_columns(space.values_of(a)),
             "gait_id": session.gait_id(a),
             "gait": session.gait_name(a),
             "mean": float(mean[a]),
@@ -325,7 +354,7 @@ def _tables(
             "label": label,
             "action": r.actions[label],
             "gait": shown[label].gait,
-            **shown[label].values,
+            **feature_columns(shown[label].values),
             "role": r.roles[label],
             "posterior_mean": r.posterior_mean[label],
             "subject_rank": r.ranking.index(label) + 1,
@@ -340,7 +369,7 @@ def _tables(
     confidence = [
         {
             **{k: v for k, v in row.items() if k != "values"},
-            **row["values"],
+            **feature_columns(row["values"]),
             "at": at.get(row["seq"]),
         }
         for row in session.confidence_history(progress)
