@@ -510,3 +510,12 @@ def test_features_named_like_a_column_keep_both_values(tmp_path: Path) -> None:
         assert row["mean"] == pytest.approx(float(post.mean[a]))  # the posterior's, not 0.1-0.3
         assert row["mean_value_2"] == s.space.values_of(a)["mean"]
     assert {"action", "action_value", "mean_value_2"} <= set(tables["confidence"][0])
+
+
+def test_paths_may_be_given_as_text(tmp_path: Path, sqlite_url: str, drive: Drive) -> None:
+    """``export_session(s, "out")`` and ``import_session(db, "out")`` failed on ``str.exists``."""
+    s = _session(sqlite_url, drive)
+    manifest = export_session(s, str(tmp_path / "out"), "csv")
+    assert manifest == tmp_path / "out" / "manifest.json" and manifest.is_file()
+    again = import_session(MemoryStorage(), str(tmp_path / "out"))
+    assert [e.payload for e in again.events()] == [e.payload for e in s.events()]

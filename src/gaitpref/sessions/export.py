@@ -77,11 +77,12 @@ EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 # -- export ------------------------------------------------------------------------------------
 def export_session(
     session: Session,
-    out: Path,
+    out: str | Path,
     fmt: Format = "csv",
     progress: Callable[[int, int], None] | None = None,
 ) -> Path:
-    """Write ``session`` to the folder ``out`` (new or empty); returns the manifest's path.
+    """Write ``session`` to the folder ``out`` (new or empty; a path, or its text); returns the
+    manifest's path.
     ``progress(done, total)``: the events replayed for the confidence table so far, and their
     number (``Session.confidence_history``; the long part of a long session's export).
 
@@ -92,6 +93,7 @@ def export_session(
     """
     if fmt not in ("csv", "json"):
         raise ExportError(f"format must be csv or json, got {fmt!r}")
+    out = Path(out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise ExportError(f"{str(out)!r} exists and is not an empty folder; choose a new one")
     if out.name in ("", ".", "..") or out.resolve() == Path.cwd().resolve():
@@ -441,13 +443,17 @@ def _cell(value: object) -> object:
 
 
 # -- import ------------------------------------------------------------------------------------
-def import_session(db: str | Storage | None, folder: Path, *, as_new: bool = False) -> Session:
-    """Rebuild the exported session in ``db`` (a new id); checked before anything is written.
+def import_session(
+    db: str | Storage | None, folder: str | Path, *, as_new: bool = False
+) -> Session:
+    """Rebuild the exported session in ``db`` (a new id) from ``folder`` (a path, or its text);
+    checked before anything is written.
 
     Every file the manifest lists must match its SHA-256.  A session already in ``db`` (imported
     from this export before, or the exported session itself) is refused unless ``as_new``; the
     new session's metadata says where it came from (``imported_from``, see :func:`origin_of`).
     """
+    folder = Path(folder)
     manifest = _read_manifest(folder)
     _check_files(folder, manifest)
     config_text = _read_checked(folder, "config.toml", manifest, MAX_TEXT_BYTES)
