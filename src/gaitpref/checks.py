@@ -1,4 +1,5 @@
-"""Checks of the numbers a caller hands the library (loops, models, kernels, rating scales).
+"""Checks of the numbers a caller hands the library (loops, models, kernels, rating scales),
+and of text a terminal would show as it is (:func:`first_hidden`).
 
 A number is an ``int`` or ``float`` or a NumPy one, never a ``bool`` (``True`` is not a noise of
 1) nor a string; a count is an integer of either kind.  Each check returns the plain Python value
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import math
 import sys
+import unicodedata
 
 import numpy as np
 
@@ -45,3 +47,35 @@ def check_evaluations(value: object) -> int:
 
 
 __all__ = ["MAX_NOISE", "check_evaluations", "is_count", "is_noise", "is_number"]
+
+
+#: Bidirectional formatting characters (Unicode's Bidi_Control property): embeddings,
+#: overrides, isolates and marks, which reorder the text shown around them.
+BIDI_CONTROLS = frozenset(
+    {
+        "\u061c",
+        "\u200e",
+        "\u200f",
+        *map(chr, range(0x202A, 0x202F)),
+        *map(chr, range(0x2066, 0x206A)),
+    }
+)
+
+
+def first_hidden(text: str) -> tuple[int, str] | None:
+    """The first character of free text that would garble a terminal or the text shown around
+    it, with its index: a control character other than a tab or a newline (ESC, NUL, a carriage
+    return, DEL, C1), a surrogate, a line or paragraph separator, or a bidirectional formatting
+    character; None when there is none.  Other format characters pass (zero width joiners,
+    which Persian and emoji sequences need)."""
+    for i, c in enumerate(text):
+        if c in BIDI_CONTROLS or (
+            unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp") and c not in "\t\n"
+        ):
+            return i, c
+    return None
+
+
+def char_name(char: str) -> str:
+    """``"U+001B"``, or ``"U+202E RIGHT-TO-LEFT OVERRIDE"`` where Unicode names it."""
+    return f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()

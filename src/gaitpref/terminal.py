@@ -46,6 +46,7 @@ from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions.records import (
     InfeasibleGait,
     SessionQuery,
+    check_printable,
     check_unsafe_reason,
 )
 from gaitpref.sessions.session import Session
@@ -371,7 +372,7 @@ class Terminal:
             if not text:
                 continue
             try:
-                return check_unsafe_reason(text)
+                return check_printable(check_unsafe_reason(text), "the reason")
             except ValueError as exc:
                 self.console.print(f"  {exc}; type it again", markup=False)
 

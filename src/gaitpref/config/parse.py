@@ -84,6 +84,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Final
 
+from gaitpref.checks import char_name, first_hidden
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.config.generator import parse_generator
@@ -194,7 +195,7 @@ def check_name(config: ExperimentConfig) -> None:
     hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c) in _HIDDEN]
     if hidden:
         at, char = hidden[0]
-        named = _named(char)
+        named = char_name(char)
         fail(
             "",
             "name",
@@ -203,24 +204,6 @@ def check_name(config: ExperimentConfig) -> None:
             f"{named} at character {at + 1}: terminals, the console and exports would show it as "
             "it is",
         )
-
-
-def _named(char: str) -> str:
-    """``"U+001B"``, or ``"U+202E RIGHT-TO-LEFT OVERRIDE"`` where Unicode names it."""
-    return f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
-
-
-#: Bidirectional formatting characters (Unicode's Bidi_Control property): embeddings,
-#: overrides, isolates and marks, which reorder the text shown around them.
-_BIDI: Final = frozenset(
-    {
-        "\u061c",
-        "\u200e",
-        "\u200f",
-        *map(chr, range(0x202A, 0x202F)),
-        *map(chr, range(0x2066, 0x206A)),
-    }
-)
 
 
 def check_description(config: ExperimentConfig) -> None:
@@ -233,14 +216,10 @@ def check_description(config: ExperimentConfig) -> None:
     the key.  Like :func:`check_name`, not checked by :func:`parse_config`: sessions stored
     with such a description parse, reopen and replay as they were."""
     text = config.description
-    hidden = [
-        (i, c)
-        for i, c in enumerate(text)
-        if c in _BIDI or (unicodedata.category(c) in _HIDDEN - {"Cf"} and c not in "\t\n")
-    ]
+    hidden = [(i, c) for i, c in enumerate(text) if first_hidden(c) is not None]
     if hidden:
         at, char = hidden[0]
-        named = _named(char)
+        named = char_name(char)
         fail(
             "",
             "description",
@@ -266,7 +245,7 @@ def check_labels(config: ExperimentConfig) -> None:
     for table, key, label in labels:
         hidden = [c for c in label if unicodedata.category(c) in _HIDDEN]
         if hidden:
-            named = _named(hidden[0])
+            named = char_name(hidden[0])
             fail(
                 table,
                 key,

@@ -33,6 +33,7 @@ from gaitpref.errors import (
     NoSafeGaitError,
     SessionStateError,
 )
+from gaitpref.sessions.records import check_printable, check_storable
 from gaitpref.sessions.session import Answered, Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.storage import SessionRecord, Storage, SubjectRecord, open_storage, resolve_url
@@ -188,6 +189,10 @@ class SessionService:
         text = (note or "").strip()
         if len(text) > 2000:
             raise InputError("note", "a note has at most 2000 characters")
+        try:  # before the answer is written: a note refused after it would leave half a write
+            check_printable(check_storable(text, "the note"), "the note")
+        except ValueError as exc:
+            raise InputError("note", str(exc)) from None
         with self.locked(session_id) as session:
             answered = session.answer(query_id, [*comparisons, *feedback], suggestions)
             if text:

@@ -6,6 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
+from gaitpref.checks import char_name, first_hidden
+
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
 REASONS: tuple[Reason, ...] = get_args(Reason)
 
@@ -156,6 +158,22 @@ def check_storable(text: str, what: str) -> str:
             f"{what} is not valid text: character {exc.start} is not Unicode (an undecodable "
             "byte?); nothing was written"
         ) from None
+    return text
+
+
+def check_printable(text: str, what: str) -> str:
+    """``text`` unless it holds a character a terminal would act on or that reorders what is
+    shown around it (:func:`~gaitpref.checks.first_hidden`: ESC, NUL, a carriage return, a line
+    separator, a bidirectional override, ...; newlines and tabs pass): a ValueError naming
+    ``what``.  For a *new* note, reason or detail only: events stored with one replay."""
+    hit = first_hidden(text)
+    if hit is not None:
+        at, char = hit
+        raise ValueError(
+            f"{what} holds {char_name(char)} at character {at + 1}: a control character other "
+            "than a newline or a tab, a line separator or a bidirectional override, which "
+            "terminals and exports would show as it is; nothing was written"
+        )
     return text
 
 

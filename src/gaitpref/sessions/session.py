@@ -60,6 +60,7 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    check_printable,
     check_storable,
 )
 from gaitpref.sessions.replay import replay
@@ -458,6 +459,11 @@ class Session:
         """Exclude an answered trial (``reason`` in ``REASONS``): its comparisons and
         suggestions leave the model; the records stay, flagged."""
 
+        if isinstance(detail, str):
+            check_printable(
+                check_storable(detail, "the exclusion's detail"), "the exclusion's detail"
+            )
+
         def run() -> Trial:
             st = self._state
             st.check_open("exclusions")
@@ -480,6 +486,10 @@ class Session:
         open blind validation round that shows one, and the round is drawn again at once among
         the gaits still allowed (none is open after it when fewer than three are).  Returns
         whether a round was withdrawn."""
+
+        if isinstance(reason, str):
+            what = "the unsafe flag's reason"
+            check_printable(check_storable(reason, what), what)
 
         def run() -> bool:
             st = self._state
@@ -518,6 +528,7 @@ class Session:
         if not isinstance(text, str) or not text.strip() or len(text) > 10_000:
             raise ValueError("a note is a non-empty text of at most 10000 characters")
         check_storable(text, "the note")
+        check_printable(text, "the note")
 
         def run() -> int:
             if self._state.status == "finished":
