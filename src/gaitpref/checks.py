@@ -1,5 +1,5 @@
 """Checks of the numbers a caller hands the library (loops, models, kernels, rating scales),
-and of text a terminal would show as it is (:func:`first_hidden`).
+and of text a terminal would show as it is (:func:`hidden_in`).
 
 A number is an ``int`` or ``float`` or a NumPy one, never a ``bool`` (``True`` is not a noise of
 1) nor a string; a count is an integer of either kind.  Each check returns the plain Python value
@@ -62,18 +62,34 @@ BIDI_CONTROLS = frozenset(
 )
 
 
+#: Unicode categories a one-line name may not hold (a config's name, a feature's unit and words,
+#: rating labels, gait ids): controls, format characters (zero width, bidirectional
+#: overrides), surrogates, line and paragraph separators.  Private-use and unassigned code points
+#: are let through: whether a code point is assigned depends on the Python version's tables.
+NAME_HIDDEN = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
+
+
+def hidden_in(text: str, *, name: bool = False) -> list[tuple[int, str]]:
+    """The characters of ``text`` that would garble a terminal or the text shown around it,
+    with their indexes.  Free text (``name=False``: a description, a note, a reason): a control
+    character other than a tab or a newline (ESC, NUL, a carriage return, DEL, C1), a
+    surrogate, a line or paragraph separator, or a bidirectional formatting character; other
+    format characters pass (zero width joiners, which Persian and emoji sequences need).  A
+    name (``name=True``): any character of :data:`NAME_HIDDEN`, tabs and newlines included."""
+    if name:
+        return [(i, c) for i, c in enumerate(text) if unicodedata.category(c) in NAME_HIDDEN]
+    return [
+        (i, c)
+        for i, c in enumerate(text)
+        if c in BIDI_CONTROLS
+        or (unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp") and c not in "\t\n")
+    ]
+
+
 def first_hidden(text: str) -> tuple[int, str] | None:
-    """The first character of free text that would garble a terminal or the text shown around
-    it, with its index: a control character other than a tab or a newline (ESC, NUL, a carriage
-    return, DEL, C1), a surrogate, a line or paragraph separator, or a bidirectional formatting
-    character; None when there is none.  Other format characters pass (zero width joiners,
-    which Persian and emoji sequences need)."""
-    for i, c in enumerate(text):
-        if c in BIDI_CONTROLS or (
-            unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp") and c not in "\t\n"
-        ):
-            return i, c
-    return None
+    """The first character of free text :func:`hidden_in` finds, with its index (None: none)."""
+    hidden = hidden_in(text)
+    return hidden[0] if hidden else None
 
 
 def char_name(char: str) -> str:

@@ -56,7 +56,7 @@ def test_a_session_stored_with_such_an_id_reopens(
     url = f"sqlite:///{tmp_path / 'old.db'}"
     ids = [*IDS[:14], "G\x1b[2J"]
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.stored_config, "_HIDDEN", frozenset())
+        m.setattr(gaitpref.sessions.stored_config, "hidden_in", lambda text, name=False: [])
         s = Session.create(url, CONFIG, "S01", library=ids)
     s.close()
     with Session.open(url, s.id) as again:

@@ -79,12 +79,11 @@ compared with the one before and the loop learns without coactive feedback; 0.1 
 from __future__ import annotations
 
 import tomllib
-import unicodedata
 from importlib import resources
 from pathlib import Path
 from typing import Any, Final
 
-from gaitpref.checks import char_name, first_hidden
+from gaitpref.checks import char_name, hidden_in
 from gaitpref.config.experiment import ExperimentConfig
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.config.generator import parse_generator
@@ -170,19 +169,12 @@ def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> Experi
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
-#: Unicode categories a config name may not hold: controls (Cc), format characters (Cf: zero
-#: width, bidirectional overrides), surrogates (Cs), line and paragraph separators (Zl, Zp).
-#: Private-use and unassigned code points are let through: whether a code point is assigned
-#: depends on the Python version's Unicode tables.
-_HIDDEN: Final = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
-
-
 def check_name(config: ExperimentConfig) -> None:
     """Refuse a blank name (empty, or spaces only) for a *new* session's config: the name is how
     session lists, the console and exports tell configs apart; and a name holding a control,
-    format or line-break character (:data:`_HIDDEN`: a newline, ESC, NUL, a bidirectional
-    override, a line separator, ...), which would reach terminals, the console's pages and
-    exports as it is.  A :class:`ConfigError` naming the key.  Not checked by
+    format or line-break character (:data:`~gaitpref.checks.NAME_HIDDEN`: a newline, ESC, NUL,
+    a bidirectional override, a line separator, ...), which would reach terminals, the
+    console's pages and exports as it is.  A :class:`ConfigError` naming the key.  Not checked by
     :func:`parse_config`: sessions stored with such a name (earlier releases took it) parse,
     reopen and replay as they were."""
     if not config.name.strip():
@@ -192,7 +184,7 @@ def check_name(config: ExperimentConfig) -> None:
             f"must name the config (session lists and exports show it), got {config.name!r}; "
             "give a name, or leave the key out to use the file's name",
         )
-    hidden = [(i, c) for i, c in enumerate(config.name) if unicodedata.category(c) in _HIDDEN]
+    hidden = hidden_in(config.name, name=True)
     if hidden:
         at, char = hidden[0]
         named = char_name(char)
@@ -216,7 +208,7 @@ def check_description(config: ExperimentConfig) -> None:
     the key.  Like :func:`check_name`, not checked by :func:`parse_config`: sessions stored
     with such a description parse, reopen and replay as they were."""
     text = config.description
-    hidden = [(i, c) for i, c in enumerate(text) if first_hidden(c) is not None]
+    hidden = hidden_in(text)
     if hidden:
         at, char = hidden[0]
         named = char_name(char)
@@ -232,7 +224,7 @@ def check_description(config: ExperimentConfig) -> None:
 
 def check_labels(config: ExperimentConfig) -> None:
     """Refuse, for a *new* session's config, a label shown to the operator with each trial that
-    holds a control, format or line-break character (:data:`_HIDDEN`, as :func:`check_name`):
+    holds a control, format or line-break character (as :func:`check_name`):
     a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
     (``[feedback.rating]``).  A :class:`ConfigError` naming the table and key.  Not checked by
     :func:`parse_config`: sessions stored with such a label parse, reopen and replay."""
@@ -243,9 +235,9 @@ def check_labels(config: ExperimentConfig) -> None:
     if config.ordinal is not None:
         labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
     for table, key, label in labels:
-        hidden = [c for c in label if unicodedata.category(c) in _HIDDEN]
+        hidden = hidden_in(label, name=True)
         if hidden:
-            named = char_name(hidden[0])
+            named = char_name(hidden[0][1])
             fail(
                 table,
                 key,

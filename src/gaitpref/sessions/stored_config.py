@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import difflib
 import hashlib
-import unicodedata
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 
+from gaitpref.checks import hidden_in
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ReplayError
 from gaitpref.space import Space
@@ -198,20 +198,15 @@ def gait_ids_of(library: GaitLibraryLike | None, space: Space) -> list[str] | No
     if not all(isinstance(g, str) and g for g in ids):
         raise ValueError("gait ids must be non-empty strings")
     for action, gait in enumerate(ids):  # shown by the terminal loop, the console and exports
-        hidden = [c for c in gait if unicodedata.category(c) in _HIDDEN]
+        hidden = hidden_in(gait, name=True)
         if hidden:
+            code = ord(hidden[0][1])
             raise ValueError(
-                f"gait id {gait!r} (action {action}) holds U+{ord(hidden[0]):04X}: gait ids must "
+                f"gait id {gait!r} (action {action}) holds U+{code:04X}: gait ids must "
                 "not hold control, format or line-break characters (ESC, NUL, tabs, newlines, "
                 "bidirectional overrides, ...)"
             )
     return [str(g) for g in ids]
-
-
-#: Unicode categories a gait id may not hold (as a config name, ``config/parse.py``): controls,
-#: format characters, surrogates, line and paragraph separators.  Checked for a new session's
-#: library only: stored sessions keep their ids.
-_HIDDEN = frozenset({"Cc", "Cf", "Cs", "Zl", "Zp"})
 
 
 def _same_grid(grid: Space, space: Space) -> None:
