@@ -86,12 +86,6 @@ def hidden_in(text: str, *, name: bool = False) -> list[tuple[int, str]]:
     ]
 
 
-def first_hidden(text: str) -> tuple[int, str] | None:
-    """The first character of free text :func:`hidden_in` finds, with its index (None: none)."""
-    hidden = hidden_in(text)
-    return hidden[0] if hidden else None
-
-
 def char_name(char: str) -> str:
     """``"U+001B"``, or ``"U+202E RIGHT-TO-LEFT OVERRIDE"`` where Unicode names it."""
     return f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()

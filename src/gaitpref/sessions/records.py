@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
-from gaitpref.checks import char_name, first_hidden
+from gaitpref.checks import char_name, hidden_in
 
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
 REASONS: tuple[Reason, ...] = get_args(Reason)
@@ -163,12 +163,12 @@ def check_storable(text: str, what: str) -> str:
 
 def check_printable(text: str, what: str) -> str:
     """``text`` unless it holds a character a terminal would act on or that reorders what is
-    shown around it (:func:`~gaitpref.checks.first_hidden`: ESC, NUL, a carriage return, a line
+    shown around it (:func:`~gaitpref.checks.hidden_in`: ESC, NUL, a carriage return, a line
     separator, a bidirectional override, ...; newlines and tabs pass): a ValueError naming
     ``what``.  For a *new* note, reason or detail only: events stored with one replay."""
-    hit = first_hidden(text)
-    if hit is not None:
-        at, char = hit
+    hidden = hidden_in(text)
+    if hidden:
+        at, char = hidden[0]
         raise ValueError(
             f"{what} holds {char_name(char)} at character {at + 1}: a control character other "
             "than a newline or a tab, a line separator or a bidirectional override, which "
