@@ -238,19 +238,19 @@ FIXED_COLUMNS: Final = frozenset(
 )
 
 
-def feature_columns(values: dict[str, Any]) -> dict[str, Any]:
-    """Feature values keyed by their columns: a feature named as a fixed column (``mean``,
-    ``action``, ...) would overwrite that column, or be overwritten by it, so it gets
-    ``NAME_value`` (then ``NAME_value_2``, ... if those are features too)."""
-    out: dict[str, Any] = {}
-    for name, value in values.items():
+def feature_columns(names: Sequence[str]) -> dict[str, str]:
+    """Each feature's column: its name, or ``NAME_value`` for a feature named as a fixed column
+    (``mean``, ``action``, ...), which would overwrite that column or be overwritten by it
+    (then ``NAME_value_2``, ... if those are features' names too)."""
+    out: dict[str, str] = {}
+    for name in names:
         column = name
         if name in FIXED_COLUMNS:
             column, k = f"{name}_value", 1
-            while column in values or column in out or column in FIXED_COLUMNS:
+            while column in names or column in out.values() or column in FIXED_COLUMNS:
                 k += 1
                 column = f"{name}_value_{k}"
-        out[column] = value
+        out[name] = column
     return out
 
 
@@ -265,6 +265,11 @@ def _tables(
     pending again, withdrawn by an unsafe flag).  Comparisons and suggestions name their trials'
     gaits the same way; validation gaits are as their round showed them."""
     space = session.space
+    columns = feature_columns([f.name for f in space.features])
+
+    def valued(values: dict[str, Any]) -> dict[str, Any]:
+        return {columns[name]: value for name, value in values.items()}
+
     unsafe = session.unsafe_flags()
     by_number: dict[int, list[Trial]] = {}
     for t in session.trials(include_undone=True):
@@ -285,7 +290,7 @@ def _tables(
             "trial": t.number,
             "query": t.query,
             "action": t.action,
-            **feature_columns(walked[t.seq]["values"]),
+            **valued(walked[t.seq]["values"]),
             "gait_id": _walked_gait(session, t.action, walked[t.seq]),
             "gait": _walked_gait(session, t.action, walked[t.seq]) or f"G{t.action}",
             # a flag is of the trial of its number in force (an undo is refused while one is)
@@ -342,7 +347,7 @@ def _tables(
     posterior = [
         {
             "action": a,
-            **feature_columns(space.values_of(a)),
+            **valued(space.values_of(a)),
             "gait_id": session.gait_id(a),
             "gait": session.gait_name(a),
             "mean": float(mean[a]),
@@ -356,7 +361,7 @@ def _tables(
             "label": label,
             "action": r.actions[label],
             "gait": shown[label].gait,
-            **feature_columns(shown[label].values),
+            **valued(shown[label].values),
             "role": r.roles[label],
             "posterior_mean": r.posterior_mean[label],
             "subject_rank": r.ranking.index(label) + 1,
@@ -371,7 +376,7 @@ def _tables(
     confidence = [
         {
             **{k: v for k, v in row.items() if k != "values"},
-            **feature_columns(row["values"]),
+            **valued(row["values"]),
             "at": at.get(row["seq"]),
         }
         for row in session.confidence_history(progress)
