@@ -99,16 +99,17 @@ def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
     return backend
 
 
-def _run(study: Study, backend: str, jobs: int, address: str | None, out: Path) -> StudyResult:
+def _run(
+    study: Study, backend: SweepBackend, jobs: int, address: str | None, out: Path
+) -> StudyResult:
     """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
     finished (then the file is removed), so a run that fails loses none of the others."""
     from gaitpref.simulate.sweep import run_study
 
-    checked = _execution(backend, jobs, address)
     partial = out / PARTIAL
     return _stopping(
         lambda: run_study(
-            study, checked, jobs, address, progress=True, console=_console, partial=partial
+            study, backend, jobs, address, progress=True, console=_console, partial=partial
         )
     )
 
@@ -229,10 +230,10 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
-    _execution(backend, jobs, address)
+    checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
-    result = _run(study, backend, jobs, address, out)
+    result = _run(study, checked, jobs, address, out)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
@@ -284,7 +285,7 @@ def compass_gait(
     from gaitpref.simulate.tables import write_curves, write_table
 
     table_path = _table_path(out, table)  # before a gait library is built
-    _execution(backend, jobs, address)
+    checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
         if objective not in ("poly", "hzd"):
@@ -306,7 +307,7 @@ def compass_gait(
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
     _folder(out)
-    result = _run(study, backend, jobs, address, out)
+    result = _run(study, checked, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
     write_table(result.table, table_path)
