@@ -49,6 +49,10 @@ class ExperimentConfig:
     sampler: str = "auto"
     library: GaitLibrary | None = field(default=None, repr=False, compare=False)
     library_path: str | None = None
+    #: the folder a relative ``[gaits].library`` path was taken from (resolved; None when the
+    #: config names no library): sessions store it, a path with ``..`` or through a link cannot
+    #: be traced back to it from the library's resolved path
+    base_dir: str | None = field(default=None, repr=False, compare=False)
     generator: GeneratorSpec | None = None  # [gaits] generator: gaits made on demand
     strategy_settings: dict[str, Any] = field(default_factory=dict)
     defaulted: frozenset[str] = field(default=frozenset(), repr=False, compare=False)

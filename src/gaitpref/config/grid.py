@@ -22,12 +22,15 @@ if TYPE_CHECKING:
     from gaitpref.gaits.library import GaitLibrary
 
 
-def parse_gaits(gaits: dict[str, Any], base_dir: str | Path | None) -> tuple[GaitLibrary, str]:
-    """The gait library ``[gaits].library`` names (relative to ``base_dir``) and its path."""
+def parse_gaits(
+    gaits: dict[str, Any], base_dir: str | Path | None, library_file: str | Path | None = None
+) -> tuple[GaitLibrary, str]:
+    """The gait library ``[gaits].library`` names (relative to ``base_dir``) and its path; read
+    from ``library_file`` instead when given (an imported session's copy of it)."""
     name = gaits["library"]
     if not name:
         fail("gaits", "library", "must be the path of a gait library file")
-    path = Path(name)
+    path = Path(name) if library_file is None else Path(library_file)
     if not path.is_absolute():
         path = Path(base_dir if base_dir is not None else ".") / path
     from gaitpref.errors import GaitLibraryError

@@ -254,16 +254,20 @@ def parse_config(
     *,
     defaults: str = DEFAULTS_VERSION,
     max_actions: int = MAX_ACTIONS,
+    library_file: str | Path | None = None,
 ) -> ExperimentConfig:
     """Parse config TOML text (see the module docstring for the format).
 
-    A relative ``[gaits].library`` path is taken from ``base_dir`` (default: the working folder).
+    A relative ``[gaits].library`` path is taken from ``base_dir`` (default: the working folder);
+    ``library_file`` reads the library from that file instead of the path the text names (a
+    session imported with a copy of its library, ``gaitpref.sessions.export``).
     ``defaults`` picks the version of the defaults (``"0.1"`` for sessions recorded with 0.1's);
     ``max_actions`` lowers the limit on the grid's size (a server's own limit).
     """
     raw = read_toml(text)
     top, _ = check_table(raw, "", TOP)
     library, library_path, generator = None, None, None
+    library_base: str | None = None
     gaits, gaits_defaulted = (
         check_table(top["gaits"], "gaits", GAITS, defaults_for(defaults, "gaits"))
         if top["gaits"] is not None
@@ -286,7 +290,9 @@ def parse_config(
             fail("gaits", given[0], "is a gait generator's setting; a library takes none")
         if top["space"] is not None:
             fail("gaits", None, "give either [space] or [gaits].library (its axes are the space)")
-        library, library_path = parse_gaits(gaits, base_dir)
+        library, library_path = parse_gaits(gaits, base_dir, library_file)
+        if library_file is None:
+            library_base = str(Path(base_dir if base_dir is not None else ".").resolve())
         space = library.space()
         if len(space) > max_actions:
             fail("gaits", "library", f"has {len(space)} gaits; at most {max_actions} are allowed")
@@ -331,6 +337,7 @@ def parse_config(
         line=cospar["line"],
         library=library,
         library_path=library_path,
+        base_dir=library_base,
         generator=generator,
         strategy_settings=settings,
         ordinal=ordinal,

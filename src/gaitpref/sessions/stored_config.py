@@ -141,9 +141,12 @@ def library_meta(cfg: ExperimentConfig) -> dict[str, Any]:
 
     given = Path(tomllib.loads(cfg.text)["gaits"]["library"])
     where = Path(cfg.library_path)
-    base = where
-    for _ in given.parts:
-        base = base.parent
+    if cfg.base_dir is not None:  # the folder the config was read from
+        base = Path(cfg.base_dir)
+    else:  # a config made by hand: the folder, traced back from the library's path
+        base = where
+        for _ in given.parts:
+            base = base.parent
     if not given.is_absolute() and (base / given).resolve() != where:
         raise ValueError(
             f"cannot tell which folder the config's gait library path {str(given)!r} is "
