@@ -6,8 +6,13 @@ library's resolved path, which ``..`` and links do not allow."""
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
+import shutil
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -15,7 +20,10 @@ from typer.testing import CliRunner
 
 from gaitpref import GaitLibrary, Session, load_config
 from gaitpref.cli import app
+from gaitpref.errors import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from gaitpref.sessions.export import export_session, import_session
+from gaitpref.storage import MemoryStorage
 
 CONFIG = """
 [gaits]
@@ -44,7 +52,7 @@ def library() -> GaitLibrary:
 def lab(root: Path, library: GaitLibrary, named: str | None = None) -> Path:
     """``root/configs/c.toml`` naming ``root/libs/x.json`` by ``named`` (default ``../libs/x.json``;
     ``{abs}`` stands for the library's absolute path); returns the config's path."""
-    (root / "configs").mkdir(parents=True)
+    (root / "configs").mkdir(parents=True, exist_ok=True)
     (root / "libs").mkdir()
     library.save(root / "libs" / "x.json")
     given = (named or "../libs/x.json").replace("{abs}", str(root / "libs" / "x.json"))
@@ -108,3 +116,102 @@ def test_an_absolute_library_path(tmp_path: Path, library: GaitLibrary) -> None:
     s = Session.create(url, config, "S01")
     drive(s, 2)
     assert Session.open(url, s.id).gait_ids == s.gait_ids
+
+
+# -- export and import ---------------------------------------------------------------------------
+def exported(
+    tmp_path: Path, library: GaitLibrary, named: str | None = None
+) -> tuple[Session, Path]:
+    """A session over ``lab``'s config, answered 4 times and exported to ``tmp_path/export``."""
+    s = Session.create(
+        f"sqlite:///{tmp_path / 'lab.db'}", lab(tmp_path / "study", library, named), "S01"
+    )
+    drive(s, 4)
+    export_session(s, tmp_path / "export", "csv")
+    return s, tmp_path / "export"
+
+
+def edit_manifest(out: Path, edit: Callable[[dict[str, Any]], object]) -> None:
+    manifest = json.loads((out / "manifest.json").read_text())
+    edit(manifest)
+    (out / "manifest.json").write_text(json.dumps(manifest))
+
+
+@pytest.mark.parametrize("named", ["../libs/x.json", "{abs}"])
+def test_the_export_carries_a_library_named_outside_the_config_folder(
+    tmp_path: Path, library: GaitLibrary, named: str
+) -> None:
+    """Before, an export of such a session held no copy: an import elsewhere could not open it."""
+    s, out = exported(tmp_path, library, named)
+    manifest = json.loads((out / "manifest.json").read_text())
+    data = (tmp_path / "study" / "libs" / "x.json").read_bytes()
+    sha = hashlib.sha256(data).hexdigest()
+    assert manifest["gait_library"] == {"file": "gait_library/x.json", "sha256": sha}
+    assert manifest["files"]["gait_library/x.json"] == sha
+    assert (out / "gait_library" / "x.json").read_bytes() == data
+    shutil.rmtree(tmp_path / "study")  # another machine: the original is not there
+    storage = MemoryStorage()
+    imported = import_session(storage, out)
+    np.testing.assert_array_equal(imported.posterior().mean, s.posterior().mean)
+    assert imported.gait_ids == s.gait_ids
+    again = Session.open(storage, imported.id)
+    assert again.next_query() == s.next_query()
+    meta = imported.record.meta
+    assert meta["library_path"] == str((out / "gait_library" / "x.json").resolve())
+    assert meta["library_copied_from"] == s.record.meta["library_path"]
+
+
+def test_an_import_beside_the_original_keeps_pointing_at_it(
+    tmp_path: Path, library: GaitLibrary
+) -> None:
+    s, out = exported(tmp_path, library)
+    imported = import_session(MemoryStorage(), out)
+    assert imported.record.meta["library_path"] == s.record.meta["library_path"]
+    assert "library_copied_from" not in imported.record.meta
+
+
+def test_an_export_of_the_previous_release_without_a_copy_imports_as_before(
+    tmp_path: Path, library: GaitLibrary
+) -> None:
+    """The previous release wrote no copy of a library named by '..' or an absolute path."""
+    s, out = exported(tmp_path, library)
+    shutil.rmtree(out / "gait_library")
+
+    def as_before(m: dict[str, Any]) -> None:
+        del m["gait_library"], m["files"]["gait_library/x.json"]
+
+    edit_manifest(out, as_before)
+    imported = import_session(MemoryStorage(), out)  # the original is there: used
+    meta = {k: v for k, v in imported.record.meta.items() if k != "imported_from"}
+    assert meta == s.record.meta
+    np.testing.assert_array_equal(imported.posterior().mean, s.posterior().mean)
+    shutil.rmtree(tmp_path / "study")
+    with pytest.raises(ExportError, match="missing or changed, and the export holds no copy"):
+        import_session(MemoryStorage(), out)
+
+
+@pytest.mark.parametrize(
+    "file",
+    ["../x.json", "/tmp/x.json", "gait_library/../gait_library/x.json"],
+)
+def test_a_library_copy_outside_the_export_is_refused(
+    tmp_path: Path, library: GaitLibrary, file: str
+) -> None:
+    _, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+
+    def move(m: dict[str, Any]) -> None:
+        m["files"][file] = m["files"].pop("gait_library/x.json")
+        m["gait_library"]["file"] = file
+
+    edit_manifest(out, move)
+    with pytest.raises(ExportError, match="which is not inside the export"):
+        import_session(MemoryStorage(), out)
+
+
+def test_a_bad_gait_library_entry_is_refused(tmp_path: Path, library: GaitLibrary) -> None:
+    _, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    edit_manifest(out, lambda m: m["gait_library"].__setitem__("file", 5))
+    with pytest.raises(ExportError, match=r"manifest\.json: bad gait_library entry"):
+        import_session(MemoryStorage(), out)

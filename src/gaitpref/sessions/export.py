@@ -153,7 +153,7 @@ def _write_export(
             put(f"{name}.json", json.dumps(rows, indent=1, allow_nan=False) + "\n")
         else:
             put(f"{name}.csv", _csv(rows))
-    library = _copy_library(session, out)
+    library = _copy_library(session, out, written)
     if library is not None:
         written[library[0]] = library[1]
     manifest = _manifest(session, written)
@@ -162,16 +162,25 @@ def _write_export(
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
 
 
-def _copy_library(session: Session, out: Path) -> tuple[str, str] | None:
-    """Copy the config's gait library into the export, at the path the config names."""
+#: where an export keeps a gait library the config names by an absolute path or a path with
+#: ``..`` (or one that would clash with the export's own files): ``gait_library/<its file name>``
+LIBRARY_FOLDER: Final = "gait_library"
+
+
+def _copy_library(session: Session, out: Path, written: dict[str, str]) -> tuple[str, str] | None:
+    """Copy the config's gait library into the export: at the path the config names when that
+    is relative and inside the export, else at ``gait_library/<file name>``; ``written`` names
+    the export's other files.  Returns the copy's path in the export and its SHA-256."""
     path = session.record.meta.get("library_path")
     if not path:
         return None
     import tomllib
 
     given = Path(tomllib.loads(session.record.config_text)["gaits"]["library"])
-    if given.is_absolute() or ".." in given.parts:
-        return None  # the config names it by an absolute path: it is not copied
+    inside = not given.is_absolute() and ".." not in given.parts
+    if not inside or given.as_posix() in written or given.as_posix() == "manifest.json":
+        name = given.name if given.name not in ("", ".", "..") else "gaits.json"
+        given = Path(LIBRARY_FOLDER, name)
     data = Path(path).read_bytes()
     (out / given).parent.mkdir(parents=True, exist_ok=True)
     (out / given).write_bytes(data)
@@ -468,7 +477,7 @@ def import_session(
     info = manifest["session"]
     _check_session_entry(manifest, len(events))
     meta = dict(info.get("meta", {}))
-    _find_library(folder, manifest, meta)
+    _find_library(folder, manifest, meta, config_text)
     _refuse_warm_start(info, meta)
     texts = {
         "session.subject": info.get("subject"),
@@ -648,15 +657,22 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
     """Every file the manifest lists is inside the folder and matches its SHA-256."""
     files = dict(manifest["files"])
     library = manifest.get("gait_library")
-    if isinstance(library, dict) and isinstance(library.get("file"), str):
-        files.setdefault(library["file"], library.get("sha256"))
+    if library is not None:
+        if not (
+            isinstance(library, dict)
+            and isinstance(library.get("file"), str)
+            and isinstance(library.get("sha256"), str)
+        ):
+            raise ExportError(f"manifest.json: bad gait_library entry {library!r}")
+        files.setdefault(library["file"], library["sha256"])
     for name in ("config.toml", "events.jsonl"):
         if name not in files:
             raise ExportError(f"manifest.json lists no {name}")
     root = folder.resolve()
     for name, expected in sorted(files.items()):
         path = (folder / str(name)).resolve()
-        if Path(str(name)).is_absolute() or not path.is_relative_to(root):
+        given = Path(str(name))
+        if given.is_absolute() or ".." in given.parts or not path.is_relative_to(root):
             raise ExportError(f"manifest.json lists {name!r}, which is not inside the export")
         if path.is_dir():
             raise ExportError(f"{name}, which manifest.json lists, is a folder, not a file")
@@ -675,18 +691,28 @@ def _sha256(path: Path) -> str:
         return hashlib.file_digest(f, "sha256").hexdigest()
 
 
-def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) -> None:
-    """Point ``meta`` at the exported copy of the gait library unless the original is intact."""
+def _find_library(
+    folder: Path, manifest: dict[str, Any], meta: dict[str, Any], config_text: str
+) -> tuple[Path, str] | None:
+    """Point ``meta`` at the exported copy of the gait library unless the original is intact;
+    returns the copy and the original's path when ``meta`` points at the copy.
+
+    A copy at the path the config names, taken from the export's folder (every export of a
+    config naming its library by a relative path inside its folder), is found as the config
+    names it (``config_dir``: the export's folder); a copy elsewhere (``gait_library/``: a
+    config naming it by an absolute path or one with ``..``) is read from where it is, the
+    session's meta saying so (``library_copied_from``: the path the exported session read).
+    """
     original, sha = meta.get("library_path"), meta.get("library_sha256")
     if not original:
-        return
+        return None
     if not isinstance(original, str):
         raise ExportError(
             f"manifest.json: session.meta.library_path must be a text, got {original!r}"
         )
     path = Path(original)
     if path.is_file() and _sha256(path) == sha:
-        return
+        return None
     copy = manifest.get("gait_library")
     if not isinstance(copy, dict) or not (folder / str(copy.get("file"))).is_file():
         raise ExportError(
@@ -695,8 +721,24 @@ def _find_library(folder: Path, manifest: dict[str, Any], meta: dict[str, Any]) 
         )
     if _sha256(folder / copy["file"]) != sha:
         raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
-    meta["config_dir"] = str(folder.resolve())
-    meta["library_path"] = str((folder / copy["file"]).resolve())
+    where = (folder / copy["file"]).resolve()
+    meta["library_path"] = str(where)
+    if (folder / _library_named(config_text)).resolve() == where:  # as the config names it
+        meta["config_dir"] = str(folder.resolve())
+        meta.pop("library_copied_from", None)
+    else:
+        meta["library_copied_from"] = original
+    return where, original
+
+
+def _library_named(config_text: str) -> Path:
+    """The gait library's path as the config names it (in the text, taken from nowhere)."""
+    import tomllib
+
+    try:
+        return Path(str(tomllib.loads(config_text)["gaits"]["library"]))
+    except (ValueError, KeyError, TypeError):  # replay names what is wrong with the config
+        return Path()
 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:

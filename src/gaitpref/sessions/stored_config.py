@@ -50,6 +50,8 @@ def config_of(record: SessionRecord) -> ExperimentConfig:
             default_name=record.config_name,
             base_dir=meta.get("config_dir"),
             defaults=meta.get("config_defaults", "0.1"),  # 0.1 sessions relied on 0.1's
+            # an imported session whose library is a copy, not where the config names it
+            library_file=meta["library_path"] if meta.get("library_copied_from") else None,
         )
     except ConfigError as exc:
         if meta.get("library_path"):
