@@ -2,7 +2,10 @@
 absolute path, or a path through a symbolic link.  ``session new`` refused the first and the last
 ("cannot tell which folder the config's gait library path ... is relative to; load the config
 from its file", for a config loaded from its file): the folder was guessed back from the
-library's resolved path, which ``..`` and links do not allow."""
+library's resolved path, which ``..`` and links do not allow.  An export of such a session held
+no copy of the library (an import elsewhere could not open it); and an imported session read the
+export folder's copy, so deleting the folder made it unopenable (now, in a SQLite database, it
+keeps its own copy beside the database)."""
 
 from __future__ import annotations
 
@@ -18,7 +21,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from gaitpref import GaitLibrary, Session, load_config
+from gaitpref import GaitLibrary, ReplayError, Session, load_config
 from gaitpref.cli import app
 from gaitpref.errors import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
@@ -215,3 +218,49 @@ def test_a_bad_gait_library_entry_is_refused(tmp_path: Path, library: GaitLibrar
     edit_manifest(out, lambda m: m["gait_library"].__setitem__("file", 5))
     with pytest.raises(ExportError, match=r"manifest\.json: bad gait_library entry"):
         import_session(MemoryStorage(), out)
+
+
+@pytest.mark.parametrize("named", ["../libs/x.json", "lib/x.json"])
+def test_an_import_into_sqlite_keeps_its_library_beside_the_database(
+    tmp_path: Path, library: GaitLibrary, named: str
+) -> None:
+    """Before, the imported session read the export folder's copy: deleting the folder made it
+    unopenable.  Now its library is copied next to the database (as the gait cache is)."""
+    if named.startswith("lib/"):  # a copy at the path the config names (every release's)
+        (tmp_path / "study" / "configs" / "lib").mkdir(parents=True)
+        library.save(tmp_path / "study" / "configs" / "lib" / "x.json")
+    s, out = exported(tmp_path, library, named)
+    sha = s.record.meta["library_sha256"]
+    shutil.rmtree(tmp_path / "study")
+    url = f"sqlite:///{tmp_path / 'other.db'}"
+    imported = import_session(url, out)
+    kept = tmp_path / "other.db.libraries" / f"{sha}.json"
+    assert imported.record.meta["library_path"] == str(kept.resolve())
+    assert imported.record.meta["library_copied_from"] == s.record.meta["library_path"]
+    imported.close()
+    shutil.rmtree(out)
+    again = Session.open(url, imported.id)
+    np.testing.assert_array_equal(again.posterior().mean, s.posterior().mean)
+    assert again.gait_ids == s.gait_ids
+    assert again.next_query() == s.next_query()
+    # a second import of the same library shares the file
+    export_session(again, tmp_path / "export2", "json")
+    twice = import_session(url, tmp_path / "export2", as_new=True)
+    assert twice.record.meta["library_path"] == str(kept.resolve())
+    assert [p.name for p in kept.parent.iterdir()] == [kept.name]
+
+
+def test_an_import_into_a_server_database_reads_the_export_folder(
+    tmp_path: Path, library: GaitLibrary
+) -> None:
+    """A database that is not a local file has no folder beside it: the session reads the
+    export's copy, and names the library and its hash once the folder is gone."""
+    s, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    storage = MemoryStorage()
+    imported = import_session(storage, out)
+    assert imported.record.meta["library_path"] == str((out / "gait_library" / "x.json").resolve())
+    shutil.rmtree(out)
+    sha = s.record.meta["library_sha256"]
+    with pytest.raises(ReplayError, match=rf"needs its gait library .*x\.json \(sha256 {sha[:12]}"):
+        Session.open(storage, imported.id)

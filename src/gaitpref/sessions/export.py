@@ -32,12 +32,14 @@ log and none is made again; the target database's gait cache gets them as replay
 from __future__ import annotations
 
 import csv
+import dataclasses
 import functools
 import hashlib
 import io
 import json
 import shutil
 import tempfile
+import uuid
 from collections.abc import Callable, Sequence
 from datetime import datetime
 from pathlib import Path
@@ -477,7 +479,7 @@ def import_session(
     info = manifest["session"]
     _check_session_entry(manifest, len(events))
     meta = dict(info.get("meta", {}))
-    _find_library(folder, manifest, meta, config_text)
+    library = _find_library(folder, manifest, meta, config_text)
     _refuse_warm_start(info, meta)
     texts = {
         "session.subject": info.get("subject"),
@@ -523,6 +525,8 @@ def import_session(
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
     try:
+        if library is not None:
+            spec = _keep_library(storage, spec, *library)
         if as_new:
             record = storage.create_session(spec, events, status)
         else:  # checked in the transaction that creates it: two imports cannot both pass
@@ -739,6 +743,43 @@ def _library_named(config_text: str) -> Path:
         return Path(str(tomllib.loads(config_text)["gaits"]["library"]))
     except (ValueError, KeyError, TypeError):  # replay names what is wrong with the config
         return Path()
+
+
+#: the folder beside a SQLite database that keeps the gait libraries of imported sessions:
+#: ``lab.db.libraries/<sha256>.json``
+LIBRARY_COPY_SUFFIX: Final = ".libraries"
+
+
+def _keep_library(storage: Storage, spec: SessionSpec, copy: Path, original: str) -> SessionSpec:
+    """``spec`` reading its gait library from a copy of the export's ``copy`` next to a SQLite
+    database (``lab.db.libraries/<sha256>.json``, shared by every session of that library), so
+    that the imported session does not need the export's folder; ``spec`` as it is for a
+    database that is not a local file (memory, PostgreSQL): it reads the export's copy."""
+    folder = storage.folder_beside(LIBRARY_COPY_SUFFIX)
+    if folder is None:
+        return spec
+    sha = str(spec.meta["library_sha256"])
+    target = folder / f"{sha}.json"
+    try:
+        if not (target.is_file() and _sha256(target) == sha):
+            folder.mkdir(parents=True, exist_ok=True)
+            partial = folder / f".{sha}.{uuid.uuid4().hex}.partial"
+            try:
+                with partial.open("xb") as f, copy.open("rb") as src:
+                    shutil.copyfileobj(src, f)
+                if _sha256(partial) != sha:
+                    raise OSError(f"{copy} changed while it was copied")
+                partial.replace(target)  # whole, or not there: a concurrent import writes alike
+            finally:
+                partial.unlink(missing_ok=True)
+    except OSError as exc:
+        raise ExportError(
+            f"cannot copy the gait library into {folder} ({exc}); nothing was written"
+        ) from None
+    meta = dict(spec.meta)
+    meta["library_copied_from"] = original  # the path the exported session read
+    meta["library_path"] = str(target.resolve())
+    return dataclasses.replace(spec, meta=meta)
 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:
