@@ -48,7 +48,7 @@ Instead of ``[space]``, a config can name a gait library built by ``gaitpref gai
 features then come from the library's axes and every action has a gait id:
 
     [gaits]
-    library = "gaits.json"         # relative to the config file's folder
+    library = "gaits.json"         # relative to the config file's folder ("../x.json" too)
 
 Or a config keeps its ``[space]`` and names a gait generator: each proposed point gets its gait
 made when first proposed (``generator.py``; ``docs/gaits.md``, "Gaits on demand"):

@@ -4,8 +4,10 @@ An export folder is readable without gaitpref:
 
 - ``manifest.json``: format and version, software version, config name and hash, seed, the
   session's row, the features (name, unit), a posterior summary, and the SHA-256 of every file;
-- ``config.toml``: the config exactly as the session was given it (and the gait library it
-  names, at the same relative path, when there is one);
+- ``config.toml``: the config exactly as the session was given it (and a copy of the gait
+  library it names, when there is one: at the same relative path, or at
+  ``gait_library/<file name>`` for an absolute path or one with ``..``; ``manifest.json``'s
+  ``gait_library`` entry names it);
 - ``events.jsonl``: the whole log, one JSON object per line (``seq``, ``kind``, ``at``,
   ``version`` (the payload's schema version), ``payload``);
 - tables as CSV (``--format csv``) or JSON (``--format json``), every gait named as the terminal
@@ -27,6 +29,9 @@ memory first (checking every step and the exported posterior summary) and only t
 session into the target database, under a new id, in one transaction.  With gaits made on
 demand, ``events.jsonl`` carries them (``gait_made`` version 2): both replays take them from the
 log and none is made again; the target database's gait cache gets them as replay puts them.
+The imported session reads its gait library where the exported one did when that file is the
+same, else the export's copy: copied again beside a SQLite database (``lab.db.libraries/``), read
+from the export's folder for a database that is not a local file.
 """
 
 from __future__ import annotations

@@ -3,7 +3,9 @@
 The database keeps the config text exactly as given (and its SHA-256); a config that names a gait
 library also leaves, in the session's metadata, the folder its relative library path is taken
 from, the library's absolute path and its SHA-256, so that reopening the session finds the same
-library, or refuses with :class:`~gaitpref.sessions.records.ReplayError`.
+library, or refuses with :class:`~gaitpref.sessions.records.ReplayError`.  An imported session
+reading a copy of its library away from the config's path (``gaitpref.sessions.export``) also
+has ``library_copied_from``: its library is then read from ``library_path``.
 """
 
 from __future__ import annotations
