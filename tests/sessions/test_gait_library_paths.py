@@ -264,3 +264,20 @@ def test_an_import_into_a_server_database_reads_the_export_folder(
     sha = s.record.meta["library_sha256"]
     with pytest.raises(ReplayError, match=rf"needs its gait library .*x\.json \(sha256 {sha[:12]}"):
         Session.open(storage, imported.id)
+
+
+def test_an_import_that_cannot_keep_its_library_writes_nothing(
+    tmp_path: Path, library: GaitLibrary
+) -> None:
+    _, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    (tmp_path / "other.db.libraries").write_text("not a folder")
+    url = f"sqlite:///{tmp_path / 'other.db'}"
+    with pytest.raises(
+        ExportError, match=r"cannot copy the gait library into .*nothing was written"
+    ):
+        import_session(url, out)
+    from gaitpref.storage import open_storage
+
+    with open_storage(url) as storage:
+        assert storage.list_sessions() == []
