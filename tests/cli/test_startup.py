@@ -96,3 +96,12 @@ def test_session_list_loads_no_model_plots_or_web(tmp_path: Path) -> None:
     assert "S07" in output and "exo-1d-step-length" in output
     assert present(modules, (*WEB, "matplotlib", "scipy.optimize")) == []
     assert "sqlalchemy" in modules  # it did read the database
+
+
+def test_python_m_gaitpref_is_the_command_line() -> None:
+    """``python -m gaitpref`` runs the same app as the ``gaitpref`` script (no __main__ before)."""
+    run = subprocess.run(
+        [sys.executable, "-m", "gaitpref", "configs"], capture_output=True, text=True, timeout=120
+    )
+    assert run.returncode == 0, run.stderr
+    assert "synthetic-2d" in run.stdout
