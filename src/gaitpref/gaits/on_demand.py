@@ -11,7 +11,10 @@ them.  The gait of a parameter vector is, in turn,
    generator's key), used as it is;
 4. a new one from the generator, warm-started from the nearest *feasible* gait this session made
    before (Euclidean distance with each feature divided by its range, as for the unsafe radius;
-   the earliest of equally near ones), then cached.
+   the earliest of equally near ones), then cached.  A generator that raises an error other
+   than gaitpref's own (a bug, a ``LinAlgError``) raises a
+   :class:`~gaitpref.errors.GaitGeneratorFaultError` naming it, the gait and that error; nothing
+   is cached or remembered, so the same gait is made again when next asked for.
 
 On a space with continuous features two proposed points may agree to the generator's displayed
 digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator's followed by
@@ -33,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.gait_cache import CachedGait, GaitCache
 from gaitpref.gaits.generator import GaitGenerator
@@ -121,13 +125,30 @@ class OnDemandGaits:
             made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
         else:
             warm = self.nearest(vec)
-            gait = self.generator.make(vec, None if warm is None else warm.gait)
+            gait = self._make(vec, name, None if warm is None else warm.gait)
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
             self.cache.put(CachedGait(key, gait, made.warm_start), self.generator.document(vec))
         self._by_id[name] = made
         if made.feasible:
             self._feasible.append(made)
         return made, True
+
+    def _make(self, vec: FloatArray, name: str, warm_start: Gait | None) -> Gait:
+        """The generator's gait of ``vec`` (id ``name``); an error other than gaitpref's own (a
+        bug, a ``LinAlgError`` of numpy or scipy) is a
+        :class:`~gaitpref.errors.GaitGeneratorFaultError` naming the generator, the gait and
+        the error, raised from it (``KeyboardInterrupt`` and the like pass unchanged)."""
+        try:
+            return self.generator.make(vec, warm_start)
+        except GaitprefError:
+            raise
+        except Exception as exc:
+            said = str(exc).strip()
+            what = f"{type(exc).__name__}: {said}" if said else type(exc).__name__
+            raise GaitGeneratorFaultError(
+                f"the gait generator {self.generator.name!r} failed making gait {name}: {what} "
+                "(an error in the generator, not a gait found infeasible)"
+            ) from exc
 
 
 __all__ = ["MadeGait", "OnDemandGaits", "exact_gait_id"]
