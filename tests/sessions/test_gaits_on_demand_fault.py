@@ -156,3 +156,26 @@ def test_an_interrupt_in_the_generator_is_not_a_fault(
     assert [e.kind for e in s.events()] == ["created"]
     q = s.next_query()
     assert [e.kind for e in s.events()][-1] == "query_issued" and s.pending == q
+
+
+@pytest.mark.parametrize("method", ["gait_id", "document"])
+def test_a_fault_in_the_generators_other_methods_is_named_too(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, method: str
+) -> None:
+    """A generator of one's own may fail outside ``make``: naming or describing a gait."""
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = Session.create(url, parse_config(CONFIG), subject="S01")
+    original = getattr(FakeSteps, method)
+
+    def broken(self: FakeSteps, vector: FloatArray) -> object:
+        raise TypeError("unsupported operand")
+
+    monkeypatch.setattr(FakeSteps, method, broken)
+    with pytest.raises(GaitGeneratorFaultError) as caught:
+        s.next_query()
+    message = str(caught.value)  # the key is the document's hash: both fail naming the gait
+    assert message.startswith(f"the gait generator {NAME!r} failed naming the gait of (")
+    assert "TypeError: unsupported operand" in message and "Nothing is logged" in message
+    assert [e.kind for e in s.events()] == ["created"]
+    monkeypatch.setattr(FakeSteps, method, original)
+    assert s.next_query() == Session.open(url, s.id).pending
