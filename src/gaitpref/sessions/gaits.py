@@ -252,7 +252,8 @@ def unlogged_error(exc: GaitError, events: Sequence[NewEvent]) -> GaitError:
     """The generator's error ``exc`` saying what became of the gaits this ask found before it
     (``events``: their events, none logged): of ``exc``'s class when it is one of gaitpref's
     (a generator's own class may take other arguments: then a :class:`GaitError`, raised
-    from ``exc``)."""
+    from ``exc``).  With no ``events`` (a :class:`~gaitpref.errors.GaitGeneratorFaultError` at
+    the ask's first gait) it says that nothing is logged."""
     found = {e.payload["gait_id"]: e.kind for e in events if log.is_query_part(e.kind)}
     bad = sum(kind == log.GAIT_INFEASIBLE for kind in found.values())
     said = str(exc).rstrip(".") or type(exc).__name__
