@@ -19,6 +19,8 @@ family                     raised when
                            export cannot be read
 :class:`StorageError`      a database cannot be read or written; nothing was written
 :class:`GaitError`         a gait library, a gait generator or a gait simulation failed
+                           (:class:`GaitGeneratorFaultError`: the generator raised an
+                           unexpected error making a gait)
 =========================  ====================================================================
 """
 
@@ -126,6 +128,11 @@ class GaitGeneratorError(GaitError, ValueError):
     """A gait generator that is unknown or cannot make gaits over the given features."""
 
 
+class GaitGeneratorFaultError(GaitError, RuntimeError):
+    """A gait generator raised an unexpected error making a gait (a fault in the generator or
+    its numerics, not a gait it found infeasible); raised from the generator's error."""
+
+
 class SimulationError(GaitError, RuntimeError):
     """A gait simulation that cannot go on (a fall, a non-finite state, no impact)."""
 
@@ -137,6 +144,7 @@ __all__ = [
     "FeedbackError",
     "GaitError",
     "GaitGeneratorError",
+    "GaitGeneratorFaultError",
     "GaitLibraryError",
     "GaitprefError",
     "InfeasibleProposalsError",

@@ -3,6 +3,7 @@ gaits that could not be made listed on the trial page, never offered as a trial.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
@@ -190,3 +191,31 @@ def test_an_undo_from_the_page_whose_new_query_cannot_be_made_says_it_was_undone
     assert "a new query is proposed in its place" not in text
     assert "The next gait could not be made" in text and "solver crashed" in text
     assert event_count(client, sid) == before + 1
+
+
+@pytest.mark.parametrize(
+    "error", [RuntimeError("boom"), np.linalg.LinAlgError("Singular matrix")], ids=type
+)
+def test_a_generator_fault_is_a_gait_not_made_and_writes_nothing(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch, error: Exception
+) -> None:
+    """A generator that raises an error not of gaitpref's own (a bug, numpy's LinAlgError) was
+    a bare 500 (RuntimeError) or a 422 "refused input" (LinAlgError is a ValueError); it is a
+    gait not made, as a GaitError, naming the generator, the gait and the error."""
+    sid = new_session(client, CONFIG, seed=4)
+
+    def fails(self: FakeSteps, vector: object, warm_start: object = None) -> None:
+        raise error
+
+    monkeypatch.setattr(FakeSteps, "make", fails)
+    before = event_count(client, sid)
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200 and "The next gait could not be made" in page.text
+    r = client.get(f"/api/sessions/{sid}/query")
+    detail = r.json()["detail"]
+    assert r.status_code == 503 and f"{type(error).__name__}: {error}" in detail
+    assert "the gait generator 'test-steps' failed making gait" in detail
+    assert "Nothing is logged" in detail
+    assert event_count(client, sid) == before
+    monkeypatch.undo()
+    assert client.get(f"/api/sessions/{sid}/query").status_code == 200

@@ -135,11 +135,15 @@ def test_plot_refuses_steps_and_formats_before_simulating(built: Path, tmp_path:
     assert text.exit_code == 2 and "does not write '.txt' files" in _text(text.output)
     folder = runner.invoke(app, ["plot", str(built), "--out", str(tmp_path)])
     assert folder.exit_code == 2 and "is a folder" in _text(folder.output)
+    # a folder that does not exist is not made (as for build --out and session show --figure)
+    absent = runner.invoke(app, ["plot", str(built), "--out", str(tmp_path / "sub" / "f.png")])
+    assert absent.exit_code == 2 and "no folder" in _text(absent.output)
     assert not list(tmp_path.iterdir())
 
 
 def test_plot_without_a_suffix_reports_the_png_it_writes(built: Path, tmp_path: Path) -> None:
     target = tmp_path / "sub" / "fig"
+    target.parent.mkdir()
     args = ["plot", str(built), "--id", "L0.120-V0.200", "--steps", "1", "--out", str(target)]
     result = runner.invoke(app, args)
     assert result.exit_code == 0, result.output

@@ -142,6 +142,26 @@ def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:
     assert figure.stat().st_size > 1_000
 
 
+def test_show_refuses_a_figure_in_a_folder_that_does_not_exist(
+    tmp_path: Path, drive: Drive
+) -> None:
+    """``--figure`` made its missing folders silently (a mistyped path scattered folders);
+    like ``gaits build --out`` it now refuses, naming the option, before the session is read.
+    A folder given as the figure is refused too; a folder that exists takes it."""
+    db = str(tmp_path / "lab.db")
+    drive(Session.create(db, CONFIG, "S01", seed=4), 2)
+    missing = tmp_path / "figs" / "sub" / "fig.png"
+    out = _fails("session", "show", "1", "--figure", str(missing), "--db", db)
+    assert "--figure" in out and "no folder" in out and "fig.png" in out
+    assert not (tmp_path / "figs").exists()
+    assert "is a folder" in _fails("session", "show", "1", "--figure", str(tmp_path), "--db", db)
+    (tmp_path / "figs").mkdir()
+    text = _ok("session", "show", "1", "--figure", str(tmp_path / "figs" / "fig"), "--db", db)
+    assert (tmp_path / "figs" / "fig.png").is_file() and "figure: " in text
+    # --no-figure draws nothing, so the path is not looked at
+    _ok("session", "show", "1", "--no-figure", "--figure", str(missing), "--db", db)
+
+
 def test_validate_with_a_bad_ranking_writes_no_round(tmp_path: Path, drive: Drive) -> None:
     db = str(tmp_path / "lab.db")
     with Session.create(db, CONFIG, "S01", seed=4) as s:

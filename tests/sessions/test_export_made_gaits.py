@@ -133,7 +133,7 @@ def test_a_gait_cache_that_cannot_be_written_does_not_stop_a_session(
         def full(*args: object, **kwargs: object) -> None:
             raise OSError(28, "No space left on device")
 
-        monkeypatch.setattr("gaitpref.gaits.gait_cache.os.replace", full)
+        monkeypatch.setattr("gaitpref.atomic.os.replace", full)
     with pytest.warns(GaitCacheWarning, match="gaits are kept in memory"):
         imported = import_session(url, folder)
     assert imported.pending == s.pending and imported.next_query() == s.next_query()

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from gaitpref.cli.output import console, err_console, reported
+from gaitpref.cli.output import check_file_out, console, err_console, reported
 from gaitpref.errors import GaitLibraryError, SimulationError
 
 if TYPE_CHECKING:
@@ -68,24 +68,6 @@ def parse_range(text: str, option: str) -> tuple[float, ...]:
 
 def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
-
-
-def _check_writable(out: Path) -> None:
-    """Refuse an ``--out`` that could not be written, before the gaits are optimized."""
-    import tempfile
-
-    if out.is_dir():
-        raise typer.BadParameter(f"{out} is a folder: give a file name", param_hint="--out")
-    folder = out.parent
-    if not folder.is_dir():
-        raise typer.BadParameter(f"no folder {folder} to write {out.name} in", param_hint="--out")
-    try:
-        with tempfile.TemporaryFile(dir=folder):
-            pass
-    except OSError as exc:
-        raise typer.BadParameter(
-            f"cannot write in {folder} ({exc.strerror or exc})", param_hint="--out"
-        ) from None
 
 
 def _load(path: Path) -> GaitLibrary:
@@ -146,7 +128,7 @@ def build(
         settings = HZDSettings(degree=degree)
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--degree") from None
-    _check_writable(out)
+    check_file_out(out, "--out")
     total = len(lengths) * (len(durations) if durations else 1)
     columns = (
         TextColumn("optimizing gaits"),
@@ -270,6 +252,7 @@ def plot(
         target = figure_target(out if out is not None else file.with_suffix(".png"))
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="--out") from None
+    check_file_out(target, "--out")
     with reported():
         try:
             written = render_library_figure(lib, chosen, target, steps=steps)

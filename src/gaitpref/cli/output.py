@@ -96,6 +96,28 @@ def guard(fn: Callable[[], T]) -> T:
         report(exc)
 
 
+def check_file_out(out: Path, option: str) -> None:
+    """Refuse a file to write (``option``: ``gaits build --out``, ``gaits plot --out``,
+    ``session show --figure``) that could not be written, before any work: a folder, a folder
+    that does not exist (never made: a mistyped path would scatter folders; an output that is
+    a folder, ``session export --out`` or a bench's ``--out``, is made, parents and all), or
+    one that cannot be written in."""
+    import tempfile
+
+    if out.is_dir():
+        raise typer.BadParameter(f"{out} is a folder: give a file name", param_hint=option)
+    folder = out.parent
+    if not folder.is_dir():
+        raise typer.BadParameter(f"no folder {folder} to write {out.name} in", param_hint=option)
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise typer.BadParameter(
+            f"cannot write in {folder} ({exc.strerror or exc})", param_hint=option
+        ) from None
+
+
 def read_array(path: Path, what: str) -> Any:
     """The one NumPy array (``.npy``) at ``path``, or :func:`fail` naming ``what`` and the file:
     missing, not an array file (a zip that is not one raised ``BadZipFile``), an ``.npz``

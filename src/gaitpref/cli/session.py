@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from gaitpref.cli.output import console, fail, guard
+from gaitpref.cli.output import check_file_out, console, fail, guard
 
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
@@ -290,7 +290,10 @@ def _utc(when: datetime) -> str:
 def show(
     session_id: IdArgument,
     figure: Annotated[
-        Path | None, typer.Option(help="Where to draw the figure (default: session-ID.png).")
+        Path | None,
+        typer.Option(
+            help="Where to draw the figure, in a folder that exists (default: session-ID.png)."
+        ),
     ] = None,
     no_figure: Annotated[bool, typer.Option("--no-figure", help="Print only.")] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
@@ -299,6 +302,8 @@ def show(
     """Summarize a session and plot its posterior and trials (as in the paper's figures)."""
     from gaitpref.sessions import posterior_summary
 
+    if figure is not None and not no_figure:
+        check_file_out(figure, "--figure")  # its folder must exist: made by no one but you
     with _opened(db, session_id) as session:
         summary = posterior_summary(session)
         path = None

@@ -22,13 +22,12 @@ Document (``format = "gaitpref-gait"``, schema version 1)::
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from gaitpref.atomic import write_text_atomic
 from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.generator import content_key
@@ -111,14 +110,8 @@ class GaitCache:
         }
         text = json.dumps(doc, indent=1, allow_nan=False) + "\n"
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{entry.key[:16]}.")
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as out:
-                out.write(text)
-            os.replace(tmp, target)
-        except BaseException:  # a full disk: no partial file is left
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        # a full disk leaves no partial file; the mode is by the umask, as open() would make it
+        write_text_atomic(target, text, prefix=f".{entry.key[:16]}.")
 
     def _read(self, key: str) -> CachedGait | None:
         path = self.path(key)

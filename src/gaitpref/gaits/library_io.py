@@ -27,13 +27,12 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from gaitpref.atomic import write_text_atomic
 from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait, HZDSettings
 from gaitpref.gaits.library import (
@@ -105,17 +104,12 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
 
 def save_library(lib: GaitLibrary, path: str | Path) -> None:
     """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename; a write that
-    fails leaves neither a partial library nor the temporary file)."""
+    fails leaves neither a partial library nor the temporary file).  Its mode is what a plain
+    ``open`` would give it: by the umask, or the mode of the file it replaces
+    (:mod:`gaitpref.atomic`)."""
     target = Path(path)
     text = json.dumps(to_document(lib), indent=1, allow_nan=False)
-    fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text + "\n")
-        os.replace(tmp, target)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_text_atomic(target, text + "\n", prefix=f".{target.name}.")
 
 
 def read_json(file: Path) -> Any:

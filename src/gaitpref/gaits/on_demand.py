@@ -11,7 +11,10 @@ them.  The gait of a parameter vector is, in turn,
    generator's key), used as it is;
 4. a new one from the generator, warm-started from the nearest *feasible* gait this session made
    before (Euclidean distance with each feature divided by its range, as for the unsafe radius;
-   the earliest of equally near ones), then cached.
+   the earliest of equally near ones), then cached.  A generator that raises an error other
+   than gaitpref's own (a bug, a ``LinAlgError``) raises a
+   :class:`~gaitpref.errors.GaitGeneratorFaultError` naming it, the gait and that error; nothing
+   is cached or remembered, so the same gait is made again when next asked for.
 
 On a space with continuous features two proposed points may agree to the generator's displayed
 digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator's followed by
@@ -28,11 +31,13 @@ Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.gait_cache import CachedGait, GaitCache
 from gaitpref.gaits.generator import GaitGenerator
@@ -107,27 +112,62 @@ class OnDemandGaits:
         self, vector: FloatArray, recorded: Callable[[str], CachedGait | None] | None = None
     ) -> tuple[MadeGait, bool]:
         """The gait of ``vector`` and whether it is new to this session; ``recorded(key)``,
-        called only for a gait new to the session, gives the one a log carries (None: none)."""
-        vec = self.generator.check(vector)
-        key, name = self.generator.key(vec), self.gait_id(vec)
+        called only for a gait new to the session, gives the one a log carries (None: none).
+
+        An error of the generator other than gaitpref's own (a bug, a ``LinAlgError`` of numpy
+        or scipy) is a :class:`~gaitpref.errors.GaitGeneratorFaultError` naming the generator,
+        the gait and the error, raised from it (``KeyboardInterrupt`` and the like pass
+        unchanged); nothing of that gait is cached or remembered."""
+        with self._faults(f"naming the gait of {_shown(vector)}"):
+            vec = self.generator.check(vector)
+            key, name = self.generator.key(vec), self.gait_id(vec)
         known = self._by_id.get(name)
         if known is not None:
             return known, False
         logged = None if recorded is None else recorded(key)
         cached = logged if logged is not None else self.cache.get(key)
         if logged is not None and self.cache.get(key) is None:
-            self.cache.put(logged, self.generator.document(vec))
+            with self._faults(f"describing gait {name}"):
+                document = self.generator.document(vec)
+            self.cache.put(logged, document)
         if cached is not None:
             made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
         else:
             warm = self.nearest(vec)
-            gait = self.generator.make(vec, None if warm is None else warm.gait)
+            with self._faults(f"making gait {name}"):
+                gait = self.generator.make(vec, None if warm is None else warm.gait)
+            with self._faults(f"describing gait {name}"):
+                document = self.generator.document(vec)
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
-            self.cache.put(CachedGait(key, gait, made.warm_start), self.generator.document(vec))
+            self.cache.put(CachedGait(key, gait, made.warm_start), document)
         self._by_id[name] = made
         if made.feasible:
             self._feasible.append(made)
         return made, True
+
+    @contextmanager
+    def _faults(self, doing: str) -> Iterator[None]:
+        """An error other than gaitpref's own raised by the generator while ``doing``, as a
+        :class:`~gaitpref.errors.GaitGeneratorFaultError` saying so, raised from it."""
+        try:
+            yield
+        except GaitprefError:
+            raise
+        except Exception as exc:
+            said = str(exc).strip()
+            what = f"{type(exc).__name__}: {said}" if said else type(exc).__name__
+            raise GaitGeneratorFaultError(
+                f"the gait generator {self.generator.name!r} failed {doing}: {what} "
+                "(an error in the generator, not a gait found infeasible)"
+            ) from exc
+
+
+def _shown(vector: FloatArray) -> str:
+    """``vector`` as ``(0.4, 0.2)`` for a message (its repr if it is not numbers)."""
+    try:
+        return "(" + ", ".join(f"{float(v):g}" for v in np.ravel(vector)) + ")"
+    except (TypeError, ValueError):
+        return repr(vector)
 
 
 __all__ = ["MadeGait", "OnDemandGaits", "exact_gait_id"]

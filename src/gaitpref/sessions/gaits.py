@@ -47,6 +47,14 @@ is lost: every gait it made is in the gait cache, so the next ask, with nothing 
 between, proposes the same gaits with the same random state and takes them from the cache (or
 makes them again the same way, each warm-started from the same earlier gait), logging exactly
 what an ask without the failure would have; the error says so (:func:`unlogged_error`).
+A generator that raises anything else (a bug, a ``LinAlgError`` of numpy or scipy) raises a
+:class:`~gaitpref.errors.GaitGeneratorFaultError` naming the generator, the gait and the error
+(``gaits/on_demand.py``), handled the same way, and saying that nothing is logged even at the
+ask's first gait; the terminal, the console and the CLI report it as any ``GaitError``.  The
+session writes nothing either way and rebuilds its state from the log before its next
+operation, so a retry is the ask the log says comes next: logging the failure would add an
+event kind (or a payload version) that earlier releases cannot replay, and record nothing the
+next ask needs.
 
 Replay derives the same batch and checks it event by event (``replay.py``).  A gait the log
 carries is taken from the log (:class:`RecordedGaits`), never optimised again: its key must be
@@ -65,6 +73,7 @@ from gaitpref.config import ExperimentConfig
 from gaitpref.errors import (
     GaitError,
     GaitGeneratorError,
+    GaitGeneratorFaultError,
     GaitLibraryError,
     InfeasibleProposalsError,
     NoSafeGaitError,
@@ -176,7 +185,8 @@ def propose_with_gaits(
             try:
                 made, new = gaits.get(space.point(action), recorded)
             except GaitError as exc:  # not logged: see the module's docstring
-                if recorded is not None or not events:
+                fault = isinstance(exc, GaitGeneratorFaultError)
+                if recorded is not None or not (events or fault):
                     raise
                 raise unlogged_error(exc, events) from exc
             if made.feasible:
@@ -242,10 +252,18 @@ def unlogged_error(exc: GaitError, events: Sequence[NewEvent]) -> GaitError:
     """The generator's error ``exc`` saying what became of the gaits this ask found before it
     (``events``: their events, none logged): of ``exc``'s class when it is one of gaitpref's
     (a generator's own class may take other arguments: then a :class:`GaitError`, raised
-    from ``exc``)."""
+    from ``exc``).  With no ``events`` (a :class:`~gaitpref.errors.GaitGeneratorFaultError` at
+    the ask's first gait) it says that nothing is logged."""
     found = {e.payload["gait_id"]: e.kind for e in events if log.is_query_part(e.kind)}
     bad = sum(kind == log.GAIT_INFEASIBLE for kind in found.values())
     said = str(exc).rstrip(".") or type(exc).__name__
+    if not found:  # a generator's fault at the ask's first gait
+        text = (
+            f"{said}.  Nothing is logged: the session is as it was before this ask, and "
+            "asking again, with nothing changed, proposes the same gaits and makes the failed "
+            "one again"
+        )
+        return GaitGeneratorFaultError(text) if isinstance(exc, GaitGeneratorFaultError) else exc
     text = (
         f"{said}.  This ask had found {len(found)} gaits before it "
         f"({bad} that cannot be made): none is logged (an ask is logged whole, and its log "
@@ -253,7 +271,13 @@ def unlogged_error(exc: GaitError, events: Sequence[NewEvent]) -> GaitError:
         "with nothing changed, proposes the same gaits and logs them, taking them from there "
         "(or making them again the same way), and makes the failed one again"
     )
-    own = (GaitError, GaitLibraryError, GaitGeneratorError, SimulationError)
+    own = (
+        GaitError,
+        GaitLibraryError,
+        GaitGeneratorError,
+        GaitGeneratorFaultError,
+        SimulationError,
+    )
     return type(exc)(text) if type(exc) in own else GaitError(text)  # each takes a message
 
 
