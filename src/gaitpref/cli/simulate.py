@@ -289,6 +289,7 @@ def compass_gait(
         compass_objective,
         posterior_snapshots,
     )
+    from gaitpref.simulate.study import MAX_RUNS
     from gaitpref.simulate.sweep import resolve_jobs
     from gaitpref.simulate.tables import write_curves, write_table
 
@@ -301,6 +302,8 @@ def compass_gait(
                 f"--iterations: at most {MAX_SNAPSHOTS} counts, each at most {MAX_TRIALS}, "
                 f"got {iterations!r}"
             )
+        if not 1 <= runs <= MAX_RUNS:  # as compass_gait_study says, but before a build
+            raise ValueError(f"runs must be 1 to {MAX_RUNS}, got {runs}")
         arms = 2 if baseline else 1  # the study's settings; refused before a library is built
         if arms * runs * trials > MAX_STUDY_TRIALS:
             raise ValueError(
