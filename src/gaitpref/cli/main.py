@@ -22,6 +22,7 @@ from gaitpref.cli.gaits import app as gaits_app
 from gaitpref.cli.output import console, err_console, fail, guard, read_array
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
+from gaitpref.limits import MAX_SEED, MAX_TRIALS
 
 if TYPE_CHECKING:
     import numpy as np
@@ -208,8 +209,12 @@ def simulate(
             "--rating-quantiles; a function over points is maximized)."
         ),
     ] = False,
-    trials: Annotated[int, typer.Option(min=1, help="Executed actions to simulate.")] = 150,
-    seed: Annotated[int | None, typer.Option(min=0, help="Seed (default: the config's).")] = None,
+    trials: Annotated[
+        int, typer.Option(min=1, max=MAX_TRIALS, help="Executed actions to simulate.")
+    ] = 150,
+    seed: Annotated[
+        int | None, typer.Option(min=0, max=MAX_SEED, help="Seed (default: the config's).")
+    ] = None,
     coactive: Annotated[bool, typer.Option(help="Simulate coactive suggestions.")] = False,
     rating_quantiles: Annotated[
         str | None,
@@ -351,7 +356,7 @@ def demo(
     objective_index: Annotated[
         int, typer.Option("--objective", min=0, max=99, help="Which of the 100 paper objectives.")
     ] = 0,
-    trials: Annotated[int, typer.Option(min=1)] = 150,
+    trials: Annotated[int, typer.Option(min=1, max=MAX_TRIALS)] = 150,
 ) -> None:
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
     from rich.markup import escape

@@ -78,12 +78,15 @@ def bench_points(
     """``gaitpref bench continuous``'s runs, seeds ``0 .. runs - 1`` (``random-gp`` alone: run
     ``k`` against ``random-gp:k``); ``progress`` is called with the trials done in all runs.
 
-    The runs (at most :data:`~gaitpref.simulate.study.MAX_RUNS`, as a study's), the noise and
+    The runs (at most :data:`~gaitpref.simulate.study.MAX_RUNS`, as a study's), the trials (at
+    most :data:`~gaitpref.limits.MAX_TRIALS`, and runs x trials at most
+    :data:`~gaitpref.limits.MAX_STUDY_TRIALS`), the noise and
     the first run's objective are checked before any run (a ValueError); a run
     that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
     (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
     ``partial`` (JSON lines, written as each run finishes, removed once every run has).
     """
+    from gaitpref.limits import MAX_STUDY_TRIALS, MAX_TRIALS
     from gaitpref.simulate.continuous import objective_from
     from gaitpref.simulate.partial import JsonLines, partial_file, run_error
     from gaitpref.simulate.study import MAX_RUNS
@@ -92,6 +95,13 @@ def bench_points(
 
     if not 1 <= runs <= MAX_RUNS:  # the runs' list is made first: 10**12 was a MemoryError
         raise ValueError(f"--runs must be 1 to {MAX_RUNS}, got {runs}")
+    if not 1 <= trials <= MAX_TRIALS:  # every trial runs: 10**12 ran until memory ran out
+        raise ValueError(f"--trials must be 1 to {MAX_TRIALS}, got {trials}")
+    if runs * trials > MAX_STUDY_TRIALS:  # every run's results are kept, as a study's
+        raise ValueError(
+            f"--runs {runs} x --trials {trials} is {runs * trials} trials, more than "
+            f"{MAX_STUDY_TRIALS}; give fewer runs or trials"
+        )
     check_user_noise(noise)  # refused here, not as every run's failure
     specs = [f"random-gp:{k}" if spec == "random-gp" else spec for k in range(runs)]
     first = objective_from(specs[0], cfg.space, cfg.seed)

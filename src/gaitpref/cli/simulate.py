@@ -26,6 +26,7 @@ import typer
 
 from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
+from gaitpref.limits import MAX_JOBS, MAX_SEED, MAX_SNAPSHOTS, MAX_STUDY_TRIALS, MAX_TRIALS
 
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
@@ -46,7 +47,14 @@ Address = Annotated[
     str | None,
     typer.Option("--address", help="Ray cluster address (default: start a local Ray runtime)"),
 ]
-Jobs = Annotated[int, typer.Option("--jobs", "-j", help="parallel runs (-1: every core)")]
+Jobs = Annotated[
+    int,
+    typer.Option(
+        "--jobs", "-j", max=MAX_JOBS, help=f"parallel runs (-1: every core; at most {MAX_JOBS})"
+    ),
+]
+Trials = typer.Option(min=1, max=MAX_TRIALS, help="executed actions per run")
+Seed = typer.Option(min=0, max=MAX_SEED, help="study seed")
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
 #: the finished runs of a study that has not finished (in --out): removed when every run has
 PARTIAL = "runs.partial.csv"
@@ -204,7 +212,7 @@ def _bench_config(source: str) -> ExperimentConfig:
 @bench_app.command("paper-2d")
 def paper_2d(
     runs: Annotated[int, typer.Option(help="runs per setting; run k uses objective k")] = 100,
-    trials: Annotated[int, typer.Option(help="executed actions per run")] = 150,
+    trials: Annotated[int, Trials] = 150,
     settings: Annotated[
         list[str] | None,
         typer.Option(help="settings (repeat or comma-separate; default: all six)"),
@@ -213,7 +221,7 @@ def paper_2d(
     backend: Backend = "joblib",
     address: Address = None,
     jobs: Jobs = -1,
-    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
+    seed: Annotated[int, Seed] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/paper-2d"),
     table: TableFormat = "csv",
     notes: Annotated[
@@ -261,7 +269,7 @@ def compass_gait(
         ),
     ] = None,
     runs: Annotated[int, typer.Option(help="seeded runs per setting")] = 100,
-    trials: Annotated[int, typer.Option(help="executed actions per run")] = 60,
+    trials: Annotated[int, Trials] = 60,
     iterations: Annotated[
         str, typer.Option(help="iteration counts for the posterior panels")
     ] = "1,5,10,20",
@@ -269,7 +277,7 @@ def compass_gait(
     backend: Backend = "joblib",
     address: Address = None,
     jobs: Jobs = -1,
-    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
+    seed: Annotated[int, Seed] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/compass-gait"),
     table: TableFormat = "csv",
 ) -> None:
@@ -281,6 +289,7 @@ def compass_gait(
         compass_objective,
         posterior_snapshots,
     )
+    from gaitpref.simulate.study import MAX_RUNS
     from gaitpref.simulate.sweep import resolve_jobs
     from gaitpref.simulate.tables import write_curves, write_table
 
@@ -288,6 +297,19 @@ def compass_gait(
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
+        if len(set(its)) > MAX_SNAPSHOTS or max(its) > MAX_TRIALS:  # a panel each, replayed
+            raise ValueError(
+                f"--iterations: at most {MAX_SNAPSHOTS} counts, each at most {MAX_TRIALS}, "
+                f"got {iterations!r}"
+            )
+        if not 1 <= runs <= MAX_RUNS:  # as compass_gait_study says, but before a build
+            raise ValueError(f"runs must be 1 to {MAX_RUNS}, got {runs}")
+        arms = 2 if baseline else 1  # the study's settings; refused before a library is built
+        if arms * runs * trials > MAX_STUDY_TRIALS:
+            raise ValueError(
+                f"{arms} settings x --runs {runs} x --trials {trials} is {arms * runs * trials} "
+                f"trials, more than {MAX_STUDY_TRIALS}; give fewer runs or trials"
+            )
         if objective not in ("poly", "hzd"):
             raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
         build = objective == "hzd" and library is None
@@ -332,10 +354,12 @@ def population(
         Path,
         typer.Option(help=".npy file: one utility grid per subject (S x grid), higher is better"),
     ],
-    trials: Annotated[int, typer.Option(min=1, help="executed trials per subject")] = 20,
+    trials: Annotated[
+        int, typer.Option(min=1, max=MAX_TRIALS, help="executed trials per subject")
+    ] = 20,
     config: Annotated[str, typer.Option(help="config file or shipped name")] = "synthetic-2d",
     jobs: Jobs = 1,
-    seed: Annotated[int, typer.Option(min=0, help="study seed")] = 0,
+    seed: Annotated[int, Seed] = 0,
     tolerance: Annotated[float, typer.Option(help="'within' as a fraction of the range")] = 0.05,
     user_noise: Annotated[
         float,
@@ -388,7 +412,9 @@ def continuous(
         ),
     ],
     runs: Annotated[int, typer.Option(min=1, help="runs (seeds 0..runs-1)")] = 5,
-    trials: Annotated[int, typer.Option(min=1, help="executed trials per run")] = 150,
+    trials: Annotated[
+        int, typer.Option(min=1, max=MAX_TRIALS, help="executed trials per run")
+    ] = 150,
     coactive: Annotated[bool, typer.Option(help="simulate coactive suggestions")] = False,
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,

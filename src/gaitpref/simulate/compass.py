@@ -24,6 +24,7 @@ from typing import Literal
 import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config
+from gaitpref.limits import MAX_SNAPSHOTS, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.simulate.hzd import build_cot_curve, library_objective, read_cot_curve
 from gaitpref.simulate.objectives import cot_polynomial
@@ -123,10 +124,16 @@ def posterior_snapshots(
     run_seed: int = 0,
     samples: int = 3,
 ) -> list[Snapshot]:
-    """Posterior after each of ``iterations`` in run ``run_seed`` of the study's CoSpar setting."""
+    """Posterior after each of ``iterations`` in run ``run_seed`` of the study's CoSpar setting
+    (at most :data:`~gaitpref.limits.MAX_SNAPSHOTS` of them, each at most
+    :data:`~gaitpref.limits.MAX_TRIALS`: the run replays up to the last, each one a panel)."""
     its = sorted(set(int(i) for i in iterations))
     if not its or its[0] < 0:
         raise ValueError(f"iterations must be non-negative counts, got {list(iterations)}")
+    if len(its) > MAX_SNAPSHOTS:  # a figure panel each
+        raise ValueError(f"iterations: at most {MAX_SNAPSHOTS} counts, got {len(its)}")
+    if its[-1] > MAX_TRIALS:  # replayed one by one: 10**12 ran until the memory was full
+        raise ValueError(f"iterations must be at most {MAX_TRIALS}, got {its[-1]}")
     setting = next((s for s in study.settings if s.strategy == "cospar"), None)
     if setting is None:
         raise ValueError("the study has no CoSpar setting to replay")

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
+from gaitpref.limits import MAX_SEED
 from gaitpref.space import FloatArray, Space
 
 PointObjective = Callable[[FloatArray], FloatArray]
@@ -145,8 +146,14 @@ def objective_from(spec: str, space: Space, seed: int = 0) -> PointObjective:
     points of ``space`` (``m`` finite utilities for ``m`` points)."""
     head, _, tail = spec.partition(":")
     if head in BUILTINS:
-        if tail and not (tail.isascii() and tail.isdigit()):
-            raise ValueError(f"objective {spec!r}: the seed after ':' must be an integer >= 0")
+        digits = tail.lstrip("0")  # past MAX_SEED's 19 digits: refused before int() reads it
+        if tail and not (
+            tail.isascii() and tail.isdigit() and len(digits) <= 19 and int(digits or 0) <= MAX_SEED
+        ):
+            raise ValueError(
+                f"objective {spec!r}: the seed after ':' must be an integer >= 0, "
+                f"at most {MAX_SEED}"
+            )
         fn = builtin(head, space, int(tail) if tail else seed)
     else:
         fn = checked_objective(load_function(spec), spec, space.ndim)

@@ -19,6 +19,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from gaitpref.feedback import Comparison, Suggestion
+from gaitpref.limits import MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar, Query
 from gaitpref.pointset import PointSet
 from gaitpref.simulate.continuous import PointObjective
@@ -144,10 +145,11 @@ def run_points(
     progress: Callable[[int], None] | None = None,
     checkpoints: tuple[int, ...] = (),
 ) -> PointsResult:
-    """Run ``loop`` against ``user`` until ``trials`` actions have been executed; with
-    ``checkpoints``, also the objective of the posterior's best point after those trials."""
-    if trials < 1:
-        raise ValueError(f"trials must be >= 1, got {trials}")
+    """Run ``loop`` against ``user`` until ``trials`` actions have been executed (at most
+    :data:`~gaitpref.limits.MAX_TRIALS`); with ``checkpoints``, also the objective of the
+    posterior's best point after those trials."""
+    if not 1 <= trials <= MAX_TRIALS:  # every trial runs: 10**12 ran until the memory was full
+        raise ValueError(f"trials must be 1 to {MAX_TRIALS}, got {trials}")
     points: list[list[list[float]]] = []
     values: list[list[float]] = []
     best_at: dict[int, float] = {}

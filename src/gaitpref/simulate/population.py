@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from gaitpref.config import ExperimentConfig
 from gaitpref.feedback import Preference
+from gaitpref.limits import MAX_POPULATION_NODES, MAX_SEED, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import check_tolerance, confidence
 from gaitpref.loop.warm import RELEARN_EVERY, relearning, warm_start
@@ -227,7 +228,11 @@ def population_bench(
     A run that fails stops the bench with :class:`~gaitpref.simulate.partial.RunError` naming
     it (subject, cold or warm, seed), its error the ``__cause__``, the finished runs on it as
     :func:`walked_record` records; ``partial``: a file each finished run's record is appended
-    to as it finishes (JSON lines), removed once every run has finished."""
+    to as it finishes (JSON lines), removed once every run has finished.
+
+    ``trials`` is at most :data:`~gaitpref.limits.MAX_TRIALS`, and subjects x the gaits each
+    run may visit at most :data:`~gaitpref.limits.MAX_POPULATION_NODES`: refused (a ValueError)
+    before any run."""
     grids = _subject_grids(config, objectives, "objectives")
     if len(grids) < 2:
         raise ValueError(f"a population needs at least 2 subjects, got {len(grids)}")
@@ -237,8 +242,18 @@ def population_bench(
         judged = _subject_grids(config, truths, "truths")
         if len(judged) != len(grids):
             raise ValueError(f"truths: one grid per subject ({len(grids)}), got {len(judged)}")
-    if trials < 1:
-        raise ValueError(f"trials must be >= 1, got {trials}")
+    if not 1 <= trials <= MAX_TRIALS:  # every trial runs: 10**12 ran until the memory was full
+        raise ValueError(f"trials must be 1 to {MAX_TRIALS}, got {trials}")
+    if not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"seed must be 0 to {MAX_SEED}, got {seed}")
+    gaits = min(len(config.space), trials + config.n - 1)  # the most one subject's run visits
+    if len(grids) * gaits > MAX_POPULATION_NODES:  # a warm run's fit is dense in them
+        raise ValueError(
+            f"{len(grids)} subjects x up to {gaits} gaits each ({trials} trials) is "
+            f"{len(grids) * gaits} (gait, subject) nodes in a warm run's model, more than "
+            f"{MAX_POPULATION_NODES} (its fit, dense in them, is refitted after every answer); "
+            "give fewer subjects or trials"
+        )
     check_user_noise(user_noise)  # refused here, not as every run's failure
     check_tolerance(tolerance)  # likewise (a run failure, status 1, before)
     S = len(grids)

@@ -15,6 +15,7 @@ import numpy as np
 
 from gaitpref.checks import is_count
 from gaitpref.feedback import Rating
+from gaitpref.limits import MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.model.posterior import Posterior
 from gaitpref.simulate.raters import OrdinalRater
@@ -56,13 +57,14 @@ def run_simulation(
     progress: Callable[[int], None] | None = None,
     rater: OrdinalRater | None = None,
 ) -> SimulationResult:
-    """Run ``loop`` against ``user`` until ``trials`` actions have been executed.
+    """Run ``loop`` against ``user`` until ``trials`` actions have been executed (at most
+    :data:`~gaitpref.limits.MAX_TRIALS`).
 
     ``rater`` also rates every executed action (the loop needs a rating scale with as many
     categories).  ``progress`` is called with the number of trials done after every iteration.
     """
-    if not is_count(trials) or trials < 1:
-        raise ValueError(f"trials must be an integer >= 1, got {trials!r}")
+    if not is_count(trials) or not 1 <= trials <= MAX_TRIALS:  # 10**12 ran until memory ran out
+        raise ValueError(f"trials must be an integer >= 1 and at most {MAX_TRIALS}, got {trials!r}")
     executed: list[int] = []
     rated: list[int] = []
     while len(executed) < trials:

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 from gaitpref.config import ExperimentConfig, read_toml
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.errors import ConfigError, NoSafeGaitError
+from gaitpref.limits import MAX_SEED, MAX_STUDY_TRIALS, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.safety import Safety
 from gaitpref.model.kernels import SquaredExponential
@@ -323,15 +324,28 @@ class Study:
         ids = ids or tuple(range(obj.shape[0]))
         if len(ids) != obj.shape[0] or len(set(ids)) != len(ids) or min(ids) < 0:
             raise ValueError(f"study {self.name!r}: need {obj.shape[0]} distinct ids >= 0")
+        if max(ids) > MAX_SEED:  # the run table's int64 column: an OverflowError after the runs
+            raise ValueError(f"{where}: objective_ids must be at most {MAX_SEED}, got {max(ids)}")
         seeds = tuple(_integer(s, f"{where}: seeds") for s in self.seeds)
         if not seeds or len(set(seeds)) != len(seeds) or min(seeds) < 0:
             raise ValueError(f"study {self.name!r}: seeds must be distinct integers >= 0")
+        if max(seeds) > MAX_SEED:  # likewise
+            raise ValueError(f"{where}: seeds must be at most {MAX_SEED}, got {max(seeds)}")
         trials, seed = (
             _integer(self.trials, f"{where}: trials"),
             _integer(self.seed, f"{where}: seed"),
         )
         if trials < 1 or seed < 0:
             raise ValueError(f"study {self.name!r}: trials must be >= 1 and seed >= 0")
+        if trials > MAX_TRIALS:  # every trial runs: 10**12 ran until the memory was full
+            raise ValueError(f"{where}: trials must be at most {MAX_TRIALS}, got {trials}")
+        if runs * trials > MAX_STUDY_TRIALS:  # the run table's rows, all held in memory
+            raise ValueError(
+                f"{where}: {runs} runs x {trials} trials is {runs * trials} trials, more than "
+                f"{MAX_STUDY_TRIALS}; give fewer runs or trials, or split it into several studies"
+            )
+        if seed > MAX_SEED:
+            raise ValueError(f"{where}: seed must be at most {MAX_SEED}, got {seed}")
         for s in settings:  # refused here, not by a worker after other runs (naming no setting)
             if s.strategy == "cospar" and s.n > A:
                 raise ValueError(

@@ -51,6 +51,7 @@ from rich.progress import (
 )
 from rich.text import Text
 
+from gaitpref.limits import MAX_JOBS
 from gaitpref.simulate.partial import (
     RunFailure,
     partial_file,
@@ -101,12 +102,15 @@ def _progress(console: Console | None) -> Progress:
 
 
 def resolve_jobs(jobs: int | None) -> int:
-    """``None`` or ``<= 0``: every core (``-1`` is all, ``-2`` all but one, as joblib counts)."""
+    """``None`` or ``<= 0``: every core (``-1`` is all, ``-2`` all but one, as joblib counts);
+    a positive count at most :data:`~gaitpref.limits.MAX_JOBS` (each a local process)."""
     cores = os.cpu_count() or 1
     if jobs is None:
         return cores
     if jobs == 0:
         raise ValueError("jobs must be a positive count or negative (all cores but |jobs| - 1)")
+    if jobs > MAX_JOBS:  # joblib starts every worker asked for (capped by the runs only)
+        raise ValueError(f"jobs must be at most {MAX_JOBS} (local worker processes), got {jobs}")
     return jobs if jobs > 0 else max(1, cores + 1 + jobs)
 
 
