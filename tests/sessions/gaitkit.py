@@ -14,6 +14,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
+import pytest
 
 from gaitpref import Session
 from gaitpref.gaits import Gait, GaitGenerator, register_generator
@@ -199,3 +200,27 @@ def fresh_fake_steps(below: float = 0.3) -> Iterator[None]:
     FakeSteps.below, FakeSteps.calls = below, []
     yield
     FakeSteps.below, FakeSteps.calls = 0.3, []
+
+
+def fail_once(
+    monkeypatch: pytest.MonkeyPatch, call: int, fault: BaseException
+) -> list[tuple[str, float]]:
+    """``FakeSteps`` raises ``fault`` at its ``call``-th gait (counted from 1), once; the gait
+    id and the step length it was asked for at the failure."""
+    make = FakeSteps.make
+    count, failed = [0], []
+
+    def failing(self: FakeSteps, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
+        count[0] += 1
+        if count[0] == call:
+            failed.append((self.gait_id(vector), self.parameters(vector)["step_length"]))
+            raise fault
+        return make(self, vector, warm_start)
+
+    monkeypatch.setattr(FakeSteps, "make", failing)
+    return failed
+
+
+def logged(s: Session) -> list[tuple[str, dict[str, Any]]]:
+    """What a session logged after its creation: each event's kind and payload."""
+    return [(e.kind, e.payload) for e in s.events() if e.kind != "created"]

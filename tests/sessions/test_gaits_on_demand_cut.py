@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import shutil
 from pathlib import Path
-from typing import Any
 
 import pytest
 
@@ -25,11 +24,17 @@ from gaitpref.errors import (
     NoSafeGaitError,
     ShortLinesError,
 )
-from gaitpref.gaits import Gait
 from gaitpref.sessions.gaits import unlogged_error
-from gaitpref.space import FloatArray
 from gaitpref.storage import NewEvent
-from tests.sessions.gaitkit import CONFIG, CONTINUOUS, NAME, FakeSteps, never_made
+from tests.sessions.gaitkit import (
+    CONFIG,
+    CONTINUOUS,
+    NAME,
+    FakeSteps,
+    fail_once,
+    logged,
+    never_made,
+)
 
 #: step lengths 0.00 .. 0.90 have no gait: most of the space
 MOSTLY_INFEASIBLE = 0.95
@@ -43,27 +48,6 @@ PATHS = pytest.mark.parametrize(
     ],
     ids=["grid", "line"],
 )
-
-
-def _fail_at(monkeypatch: pytest.MonkeyPatch, call: int) -> list[float]:
-    """The generator raises at its ``call``-th gait (counted from 1), once; the step lengths it
-    was asked for at the failures."""
-    make = FakeSteps.make
-    count, failed = [0], []
-
-    def flaky(self: FakeSteps, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
-        count[0] += 1
-        if count[0] == call:
-            failed.append(self.parameters(vector)["step_length"])
-            raise GaitGeneratorError("solver crashed")
-        return make(self, vector, warm_start)
-
-    monkeypatch.setattr(FakeSteps, "make", flaky)
-    return failed
-
-
-def _log(s: Session) -> list[tuple[str, dict[str, Any]]]:
-    return [(e.kind, e.payload) for e in s.events() if e.kind != "created"]
 
 
 @PATHS
@@ -80,7 +64,7 @@ def test_an_ask_the_generator_cuts_short_is_not_logged_and_asking_again_logs_the
 
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, config, subject="S01")
-    failed = _fail_at(monkeypatch, 3)
+    failed = fail_once(monkeypatch, 3, GaitGeneratorError("solver crashed"))
     with pytest.raises(GaitGeneratorError) as caught:
         s.next_query()
     # the operator learns what became of the two gaits found before it; nothing is logged
@@ -92,8 +76,8 @@ def test_an_ask_the_generator_cuts_short_is_not_logged_and_asking_again_logs_the
     # asking again: the two from the cache, the failed one made again, then as the reference
     q = s.next_query()
     assert len(FakeSteps.calls) == made
-    assert FakeSteps.calls[2][0] == failed[0]
-    assert _log(s) == _log(reference)
+    assert FakeSteps.calls[2][0] == failed[0][1]
+    assert logged(s) == logged(reference)
     assert (q.loop_id, q.actions, q.points) == (expected.loop_id, expected.actions, expected.points)
     # and the log alone gives the same state, with no gait made again
     monkeypatch.setattr(FakeSteps, "make", never_made)
@@ -106,7 +90,7 @@ def test_a_generator_error_before_any_gait_is_raised_as_it_is(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     s = Session.create(f"sqlite:///{tmp_path / 'lab.db'}", parse_config(CONFIG), subject="S01")
-    _fail_at(monkeypatch, 1)
+    fail_once(monkeypatch, 1, GaitGeneratorError("solver crashed"))
     with pytest.raises(GaitGeneratorError, match=r"^solver crashed$"):
         s.next_query()
     assert [e.kind for e in s.events()] == ["created"]

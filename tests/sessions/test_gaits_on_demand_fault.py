@@ -16,7 +16,6 @@ from __future__ import annotations
 import shutil
 from io import StringIO
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
@@ -25,10 +24,9 @@ from rich.console import Console
 from gaitpref import Session
 from gaitpref.config import parse_config
 from gaitpref.errors import GaitError, GaitGeneratorFaultError
-from gaitpref.gaits import Gait
 from gaitpref.space import FloatArray
 from gaitpref.terminal import Terminal
-from tests.sessions.gaitkit import CONFIG, NAME, FakeSteps, never_made
+from tests.sessions.gaitkit import CONFIG, NAME, FakeSteps, fail_once, logged, never_made
 
 #: step lengths 0.00 .. 0.90 have no gait: an ask finds several before it proposes
 MOSTLY_INFEASIBLE = 0.95
@@ -45,27 +43,6 @@ FAULTS = pytest.mark.parametrize(
 )
 
 
-def _fault_at(monkeypatch: pytest.MonkeyPatch, call: int, fault: BaseException) -> list[str]:
-    """The generator raises ``fault`` at its ``call``-th gait (counted from 1), once; the gait
-    ids it was asked for at the fault."""
-    make = FakeSteps.make
-    count, failed = [0], []
-
-    def faulty(self: FakeSteps, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
-        count[0] += 1
-        if count[0] == call:
-            failed.append(self.gait_id(vector))
-            raise fault
-        return make(self, vector, warm_start)
-
-    monkeypatch.setattr(FakeSteps, "make", faulty)
-    return failed
-
-
-def _log(s: Session) -> list[tuple[str, dict[str, Any]]]:
-    return [(e.kind, e.payload) for e in s.events() if e.kind != "created"]
-
-
 @FAULTS
 def test_a_generator_fault_part_way_is_named_nothing_is_logged_and_asking_again_logs_the_same(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fault: Exception
@@ -80,7 +57,7 @@ def test_a_generator_fault_part_way_is_named_nothing_is_logged_and_asking_again_
 
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, config, subject="S01")
-    failed = _fault_at(monkeypatch, 3, fault)
+    failed = fail_once(monkeypatch, 3, fault)
     with pytest.raises(GaitGeneratorFaultError) as caught:
         s.next_query()
     err = caught.value
@@ -90,7 +67,7 @@ def test_a_generator_fault_part_way_is_named_nothing_is_logged_and_asking_again_
     message = str(err)
     # what failed: the generator, the gait, the original error
     assert message.startswith(
-        f"the gait generator {NAME!r} failed making gait {failed[0]}: "
+        f"the gait generator {NAME!r} failed making gait {failed[0][0]}: "
         f"{type(fault).__name__}: {fault}"
     )
     # and that nothing was lost
@@ -101,7 +78,7 @@ def test_a_generator_fault_part_way_is_named_nothing_is_logged_and_asking_again_
     # asking again (the fault does not recur): the same gaits, logged as without the fault
     q = s.next_query()
     assert len(FakeSteps.calls) == made
-    assert _log(s) == _log(reference)
+    assert logged(s) == logged(reference)
     assert (q.loop_id, q.actions, q.points) == (expected.loop_id, expected.actions, expected.points)
     # and the log alone gives the same state, with no gait made again
     monkeypatch.setattr(FakeSteps, "make", never_made)
@@ -115,12 +92,12 @@ def test_a_generator_fault_at_the_first_gait_says_nothing_is_logged(
 ) -> None:
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, parse_config(CONFIG), subject="S01")
-    failed = _fault_at(monkeypatch, 1, RuntimeError("boom"))
+    failed = fail_once(monkeypatch, 1, RuntimeError("boom"))
     with pytest.raises(GaitGeneratorFaultError) as caught:
         s.next_query()
     message = str(caught.value)
     assert message.startswith(
-        f"the gait generator {NAME!r} failed making gait {failed[0]}: RuntimeError: boom"
+        f"the gait generator {NAME!r} failed making gait {failed[0][0]}: RuntimeError: boom"
     )
     assert "Nothing is logged" in message and "asking again" in message
     assert [e.kind for e in s.events()] == ["created"]
@@ -133,7 +110,7 @@ def test_a_generator_fault_in_the_terminal_is_said_and_the_session_paused(
 ) -> None:
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, parse_config(CONFIG), "S01")
-    _fault_at(monkeypatch, 1, np.linalg.LinAlgError("Singular matrix"))
+    fail_once(monkeypatch, 1, np.linalg.LinAlgError("Singular matrix"))
     out = StringIO()
     Terminal(s, Console(file=out, width=300), read=lambda _: "q").run()
     text = out.getvalue()
@@ -150,7 +127,7 @@ def test_an_interrupt_in_the_generator_is_not_a_fault(
     """Ctrl-C while a gait is made is not the generator's fault: it passes unchanged, and the
     session, which writes nothing, asks again from its log."""
     s = Session.create(f"sqlite:///{tmp_path / 'lab.db'}", parse_config(CONFIG), "S01")
-    _fault_at(monkeypatch, 1, KeyboardInterrupt())
+    fail_once(monkeypatch, 1, KeyboardInterrupt())
     with pytest.raises(KeyboardInterrupt):
         s.next_query()
     assert [e.kind for e in s.events()] == ["created"]
