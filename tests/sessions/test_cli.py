@@ -179,6 +179,17 @@ def test_a_negative_simulation_seed_is_refused_by_its_option() -> None:
     assert "--seed" in out and "greater than or equal to 0" in out
 
 
+@pytest.mark.parametrize("seed", ["-1", str(2**63)])
+def test_session_new_refuses_a_seed_out_of_range_by_its_option(tmp_path: Path, seed: str) -> None:
+    """As simulate's: the option is named (it said 'seed must be ...', without '--'), and no
+    database is made."""
+    db = tmp_path / "lab.db"
+    out = _fails("session", "new", "--config", CONFIG, "--subject", "S01", "--seed", seed,
+                 "--db", str(db))  # fmt: skip
+    assert "Invalid value for '--seed'" in " ".join(out.split())
+    assert not db.exists()
+
+
 def test_a_negative_or_nan_simulated_noise_is_refused() -> None:
     for noise in ("-1", "nan"):
         out = _fails(

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from gaitpref.cli.output import check_file_out, console, fail, guard
+from gaitpref.limits import MAX_SEED
 
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
@@ -124,7 +125,9 @@ def db_status(db: DbOption = None) -> None:
 def new(
     config: Annotated[str, typer.Option(help="Config TOML file or shipped config name.")],
     subject: Annotated[str, typer.Option(help="Pseudonymous subject code, e.g. S01.")],
-    seed: Annotated[int | None, typer.Option(help="Seed (default: the config's).")] = None,
+    seed: Annotated[
+        int | None, typer.Option(min=0, max=MAX_SEED, help="Seed (default: the config's).")
+    ] = None,
     gait_ids: Annotated[
         Path | None,
         typer.Option(help="Text file: one gait id per line, in grid order (a gait library)."),
