@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import (
@@ -168,7 +169,14 @@ class SessionMachine(RuleBasedStateMachine):
             assert not avoided[a], f"query {query.id} proposes gait {a}, in the region of avoidance"
 
     def _ask(self) -> SessionQuery | None:
-        """The pending query, or a new one; None when no gait may be proposed (checked)."""
+        """The pending query, or a new one; None when no gait may be proposed (checked), or
+        while a blind validation round is open and no query is pending (refused, checked)."""
+        if self.s.validation_plan is not None and self.s.pending is None:
+            before = len(self.s.events())
+            with pytest.raises(SessionStateError, match="record its ranking first"):
+                self.s.next_query()
+            self._unchanged(before)
+            return None
         try:
             query = self.s.next_query()
         except NoSafeGaitError:
@@ -194,7 +202,13 @@ class SessionMachine(RuleBasedStateMachine):
     @precondition(lambda self: self.s.status == "active")
     @rule()
     def ask(self) -> None:
-        self._ask()
+        """Ask; while a blind validation round is open a pending query cannot be answered."""
+        q = self._ask()
+        if q is not None and self.s.validation_plan is not None:
+            before = len(self.s.events())
+            with pytest.raises(SessionStateError, match="record its ranking before answering"):
+                self.s.answer(q.id, [])
+            self._unchanged(before)
 
     def _answer(self, data: st.DataObject) -> None:
         """Answer the pending query (a new one if none) at random: comparisons of executed gaits
@@ -224,9 +238,12 @@ class SessionMachine(RuleBasedStateMachine):
 
     @rule(data=st.data(), answers=st.integers(1, 3))
     def answer(self, data: st.DataObject, answers: int) -> None:
-        """The operator resumes a paused session first."""
+        """The operator resumes a paused session first, and records an open blind validation
+        round's ranking."""
         if self.s.status == "paused":
             self.s.resume()
+        if self.s.validation_plan is not None:
+            self.answer_validation(data)
         for _ in range(answers):
             self._answer(data)
 
@@ -324,6 +341,41 @@ class SessionMachine(RuleBasedStateMachine):
             return
         assert allowed is None or allowed[sure.recommended]
 
+    @rule()
+    def start_validation(self) -> None:
+        """Open a blind round (the open one again, if any) among the gaits a query could
+        propose; refused, writing nothing, when fewer than three may be shown."""
+        s = self.s
+        before, already = len(s.events()), s.validation_plan
+        blocked = s._state.validation_blocked()
+        try:
+            plan = s.start_validation()
+        except SessionStateError:
+            assert already is None and blocked is not None
+            self._unchanged(before)
+            return
+        if already is not None:
+            assert plan == already
+            self._unchanged(before)
+            return
+        assert blocked is None and s.validation_plan == plan
+        shown = [g.action for g in plan.gaits]
+        assert len(set(shown)) == 3
+        banned = self._banned()
+        avoided = _avoided(s, banned)
+        assert not any(banned[a] or avoided[a] for a in shown), f"round shows {shown}"
+
+    @precondition(lambda self: self.s.validation_plan is not None)
+    @rule(data=st.data())
+    def answer_validation(self, data: st.DataObject) -> None:
+        plan = self.s.validation_plan
+        assert plan is not None
+        ranking = "".join(data.draw(st.permutations(plan.labels)))
+        done = len(self.s.validations())
+        result = self.s.answer_validation(plan.round, ranking)
+        assert result.round == plan.round and self.s.validation_plan is None
+        assert len(self.s.validations()) == done + 1
+
     @rule(go_on_with_it=st.booleans())
     def reopen(self, go_on_with_it: bool) -> None:
         """A fresh ``Session.open`` replays the log to the live session's state; then either
@@ -359,6 +411,14 @@ class SessionMachine(RuleBasedStateMachine):
         self.seen = now
 
     @invariant()
+    def no_open_round_shows_a_gait_near_a_flag(self) -> None:
+        if self.session is None or self.s.validation_plan is None:
+            return
+        banned = self._banned()
+        shown = [g.action for g in self.s.validation_plan.gaits]
+        assert not any(banned[a] for a in shown), f"the open round shows {shown}, near a flag"
+
+    @invariant()
     def no_pending_query_near_a_flag(self) -> None:
         if self.session is None or self.s.pending is None:
             return
@@ -384,6 +444,8 @@ def _same(copy: Session, live: Session) -> None:
     assert copy.suggestions() == live.suggestions()
     assert copy.feedback() == live.feedback()
     assert copy.unsafe_flags() == live.unsafe_flags() and copy.notes() == live.notes()
+    assert copy.validation_plan == live.validation_plan
+    assert copy.validations() == live.validations()
     assert copy._state.loop.rng.bit_generator.state == live._state.loop.rng.bit_generator.state
     sure: list[object] = []
     for s in (copy, live):
