@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import shutil
 import tempfile
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 
@@ -92,7 +93,7 @@ samples = 100
 """
 )
 
-EventKey = tuple[int, str, dict[str, Any]]
+EventKey = tuple[int, str, int, dict[str, Any], datetime]
 
 
 def _avoided(session: Session, banned: NDArray[np.bool_]) -> NDArray[np.bool_]:
@@ -388,6 +389,23 @@ class SessionMachine(RuleBasedStateMachine):
         else:
             again.close()
 
+    @precondition(lambda self: self.s.status == "active")
+    @rule(data=st.data())
+    def another_writer(self, data: st.DataObject) -> None:
+        """Another object on the same database answers (or notes); the live one catches up."""
+        live = self.session
+        with Session.open(self.url, self.s.id) as other:
+            self.session = other
+            try:
+                if other.validation_plan is None and data.draw(st.booleans()):
+                    self._answer(data)
+                else:
+                    other.note("from the other writer")
+            finally:
+                self.session = live
+            last = other.last_seq
+        assert self.s.sync() and self.s.last_seq == last
+
     @rule()
     def export_import(self) -> None:
         self.copies += 1
@@ -395,8 +413,8 @@ class SessionMachine(RuleBasedStateMachine):
         export_session(self.s, out)
         with import_session(f"sqlite:///{self.folder / f'copy-{self.copies}.db'}", out) as copy:
             _same(copy, self.s)
-            assert [(e.seq, e.kind, e.payload) for e in copy.events()] == [
-                (e.seq, e.kind, e.payload) for e in self.s.events()
+            assert [(e.seq, e.kind, e.version, e.payload, e.at) for e in copy.events()] == [
+                (e.seq, e.kind, e.version, e.payload, e.at) for e in self.s.events()
             ]
 
     # -- invariants ----------------------------------------------------------------------------
@@ -404,9 +422,9 @@ class SessionMachine(RuleBasedStateMachine):
     def the_log_only_grows(self) -> None:
         if self.session is None:
             return
-        now = [(e.seq, e.kind, e.payload) for e in self.s.events()]
+        now = [(e.seq, e.kind, e.version, e.payload, e.at) for e in self.s.events()]
         assert now[: len(self.seen)] == self.seen, "an event read before has changed"
-        assert [seq for seq, _, _ in now] == list(range(1, len(now) + 1))
+        assert [key[0] for key in now] == list(range(1, len(now) + 1))
         assert self.s.last_seq == len(now)
         self.seen = now
 
