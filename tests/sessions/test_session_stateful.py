@@ -43,22 +43,20 @@ from numpy.typing import NDArray
 from scipy.special import ndtr
 
 from gaitpref import Session
-from gaitpref.config import parse_config
+from gaitpref.config import ExperimentConfig, parse_config
 from gaitpref.errors import NoSafeGaitError, SessionStateError
 from gaitpref.feedback import OUTCOMES, Rating, Suggestion
 from gaitpref.loop.safety import near
 from gaitpref.sessions import REASONS, SessionQuery, export_session, import_session
 from gaitpref.space import MOVES
 
-LABELS = ("very bad", "bad", "okay", "good")
-
 #: a 5 x 4 grid, two actions a query and one buffered, ratings with a region of avoidance (the
-#: risk rule with the cautious level: the defaults), unsafe flags with a radius, ties modelled
-#: the hyperparameters refitted every three answers (refits are logged and replayed), and few
-#: samples behind the confidence (an export states it after every answer)
-CONFIG = parse_config(
+#: risk rule with the cautious level: the defaults) and a gait declared safe, unsafe flags with a
+#: radius, ties modelled, the hyperparameters refitted every three answers (refits are logged and
+#: replayed), and few samples behind the confidence (an export states it after every answer)
+PAIRS = parse_config(
     """
-name = "stateful-2d"
+name = "stateful-pairs"
 [space.step_length]
 min = 0.08
 max = 0.18
@@ -87,7 +85,46 @@ strategy = "self-sparring"
 labels = ["very bad", "bad", "okay", "good"]
 [safety]
 avoid = ["very bad"]
+start = [{ step_length = 0.13, step_duration = 1.05 }]
 unsafe_radius = 0.3
+[stop]
+samples = 100
+"""
+)
+
+#: a 6 x 3 grid, one action a query and two buffered, gated EUBO, five labels with the two worst
+#: avoided by the risk rule alone (no cautious level), fixed hyperparameters
+SINGLES = parse_config(
+    """
+name = "stateful-singles"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 6
+unit = "m"
+coactive = [0.1, 0.2]
+[space.step_width]
+min = 0.1
+max = 0.3
+num = 3
+unit = "m"
+coactive = [0.5, 1.0]
+[model]
+lengthscale = { step_length = 0.03, step_width = 0.1 }
+signal_variance = 0.005
+noise = 0.02
+fit = "fixed"
+[cospar]
+n = 1
+buffer = 2
+strategy = "gated-eubo"
+[feedback.rating]
+labels = ["awful", "bad", "okay", "good", "great"]
+[safety]
+avoid = ["awful", "bad"]
+risk = 0.55
+cautious = 0
+unsafe_radius = 0.2
 [stop]
 samples = 100
 """
@@ -97,32 +134,41 @@ EventKey = tuple[int, str, int, dict[str, Any], datetime]
 
 
 def _avoided(session: Session, banned: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    """The region of avoidance written out (``risk`` with ``cautious``, explore 1), as
-    ``tests/loop/test_safety.py`` writes it, with a margin of rounding: a gait is reported
-    avoided only when it is so by more than ``1e-9``."""
+    """The region of avoidance written out (ROIAL's bound, or ``risk`` with or without the
+    cautious level, explore 1, with the gaits declared safe), as ``tests/loop/test_safety.py``
+    writes it, with a margin of rounding: a gait is reported avoided only when it is so by more
+    than ``1e-9``."""
     loop = session._state.loop
     safety = loop.safety
-    assert safety.risk is not None and safety.cautious is not None and safety.avoid == 1
+    assert safety.avoid >= 1 and safety.explore == 1.0
+    assert safety.reach is None and safety.frontier is None
     post = loop.posterior
     scale = post.ordinal if post.ordinal is not None else loop.gp.ordinal
     assert scale is not None
-    v = post.kernel.variance
-    t1 = scale.thresholds_for(v)[0]
-    mean, var = np.asarray(post.mean), np.asarray(post.variance)
-    prior = float(np.asarray(post.kernel.diagonal(post.space))[0])
-    p = ndtr((t1 - mean) / np.sqrt(scale.noise**2 + np.maximum(var, 0.0)))
+    t = scale.thresholds_for(post.kernel.variance)[safety.avoid - 1]
+    mean, var = np.asarray(post.mean), np.maximum(np.asarray(post.variance), 0.0)
     eps = 1e-9
-    unrated = float(ndtr(t1 / np.sqrt(scale.noise**2 + prior)))
+    if safety.risk is None:
+        bound: NDArray[np.bool_] = mean + safety.lam * np.sqrt(var) < t - eps
+        return bound
+    p = ndtr((t - mean) / np.sqrt(scale.noise**2 + var))  # P(an avoided rating)
+    if safety.cautious is None:
+        risky: NDArray[np.bool_] = p > safety.risk + eps
+        return risky
+    prior = float(np.asarray(post.kernel.diagonal(post.space))[0])
+    unrated = float(ndtr(t / np.sqrt(scale.noise**2 + prior)))
     level = min(safety.cautious * unrated, safety.risk)
-    known_for_sure = p <= level - eps
-    known_maybe = p <= level + eps
+    known_for_sure, known_maybe = p <= level - eps, p <= level + eps
+    start = list(safety.start)
+    known_for_sure[start] |= p[start] <= safety.risk - eps
+    known_maybe[start] |= p[start] <= safety.risk + eps
     pool = known_for_sure & ~banned
     if not (known_maybe & ~banned).any():  # no gait is known-safe: the risk rule alone
-        out: NDArray[np.bool_] = p > safety.risk + eps
-        return out
+        alone: NDArray[np.bool_] = p > safety.risk + eps
+        return alone
     if not pool.any():
         return np.zeros(len(p), dtype=bool)  # too close to call
-    upper = mean + np.sqrt(np.maximum(var, 0.0))
+    upper = mean + np.sqrt(var)
     better_maybe = (p <= safety.risk + eps) & (upper > upper[pool].max() - eps)
     return np.asarray(~(known_maybe | better_maybe))
 
@@ -155,7 +201,7 @@ class SessionMachine(RuleBasedStateMachine):
         space = self.s.config.space
         if not flagged:
             return np.zeros(len(space), dtype=bool)
-        return near(space, flagged, CONFIG.safety.unsafe_radius)
+        return near(space, flagged, self.s.config.safety.unsafe_radius)
 
     def _issued(self, query: SessionQuery) -> None:
         """A query just issued: none of its gaits avoided (under the posterior it was asked
@@ -171,12 +217,17 @@ class SessionMachine(RuleBasedStateMachine):
 
     def _ask(self) -> SessionQuery | None:
         """The pending query, or a new one; None when no gait may be proposed (checked), or
-        while a blind validation round is open and no query is pending (refused, checked)."""
-        if self.s.validation_plan is not None and self.s.pending is None:
-            before = len(self.s.events())
+        while a blind validation round is open: asking is refused then, and so is answering a
+        query pending since before the round (checked: nothing is written)."""
+        if self.s.validation_plan is not None:
+            before, pending = len(self.s.events()), self.s.pending
             with pytest.raises(SessionStateError, match="record its ranking first"):
                 self.s.next_query()
+            if pending is not None:
+                with pytest.raises(SessionStateError, match="record its ranking before answering"):
+                    self.s.answer(pending.id, [])
             self._unchanged(before)
+            assert self.s.pending == pending
             return None
         try:
             query = self.s.next_query()
@@ -194,22 +245,23 @@ class SessionMachine(RuleBasedStateMachine):
         assert len(self.s.events()) == before == self.s.last_seq, "a refused call wrote events"
 
     # -- rules ---------------------------------------------------------------------------------
-    @initialize(seed=st.integers(0, 2**16), answers=st.integers(0, 6), data=st.data())
-    def create(self, seed: int, answers: int, data: st.DataObject) -> None:
-        self.session = Session.create(self.url, CONFIG, "S01", seed=seed)
+    @initialize(
+        config=st.sampled_from([PAIRS, SINGLES]),
+        seed=st.integers(0, 2**16),
+        answers=st.integers(0, 6),
+        data=st.data(),
+    )
+    def create(
+        self, config: ExperimentConfig, seed: int, answers: int, data: st.DataObject
+    ) -> None:
+        self.session = Session.create(self.url, config, "S01", seed=seed)
         for _ in range(answers):
             self._answer(data)
 
     @precondition(lambda self: self.s.status == "active")
     @rule()
     def ask(self) -> None:
-        """Ask; while a blind validation round is open a pending query cannot be answered."""
-        q = self._ask()
-        if q is not None and self.s.validation_plan is not None:
-            before = len(self.s.events())
-            with pytest.raises(SessionStateError, match="record its ranking before answering"):
-                self.s.answer(q.id, [])
-            self._unchanged(before)
+        self._ask()
 
     def _answer(self, data: st.DataObject) -> None:
         """Answer the pending query (a new one if none) at random: comparisons of executed gaits
@@ -224,13 +276,16 @@ class SessionMachine(RuleBasedStateMachine):
             if frozenset((a, b)) not in compared:
                 compared.add(frozenset((a, b)))
                 given.append((a, b, data.draw(st.sampled_from(OUTCOMES))))
+        ordinal = self.s._state.loop.gp.ordinal
+        assert ordinal is not None
+        labels = ordinal.categories
         for a in sorted(set(q.actions)):
             if data.draw(st.booleans()):
-                given.append(Rating(a, data.draw(st.sampled_from(LABELS))))
+                given.append(Rating(a, data.draw(st.sampled_from(labels))))
         suggestions: list[object] = []
         if data.draw(st.booleans()):
             a = data.draw(st.sampled_from(sorted(set(q.actions))))
-            feature = data.draw(st.sampled_from(CONFIG.space.names))
+            feature = data.draw(st.sampled_from(self.s.config.space.names))
             suggestions.append(Suggestion(a, feature, data.draw(st.sampled_from(MOVES))))
         answered = self.s.answer(q.id, given, suggestions)
         assert answered.query == q.id and answered.trials == q.trials
