@@ -1,23 +1,29 @@
 """A stateful property test of the session API (hypothesis's ``RuleBasedStateMachine``).
 
-The machine drives one :class:`~gaitpref.Session` on a SQLite file through random sequences of
-what an operator does: ask, answer (comparisons with ties, coactive suggestions, ratings), undo,
-exclude a trial, flag a trial unsafe and withdraw the flag, note, pause and resume, ask for the
-confidence, reopen the session from its database (a full replay, then going on with the reopened
-object or the old one), and export it and import the export into another database.  After every
-step it checks that
+The machine drives one :class:`~gaitpref.Session` on a SQLite file, with one of two small grid
+configs (ratings, a region of avoidance, unsafe flags with a radius), through random sequences
+of what an operator does: ask, answer (comparisons with ties, ratings, coactive suggestions),
+undo, exclude a trial, flag a trial unsafe and withdraw the flag, note, pause and resume, open
+and rank a blind validation round, ask for the confidence, write through another object on the
+same database (the live one catches up), reopen the session from its database (a full replay,
+then going on with the reopened object or the old one), and export it and import the export
+into another database.  After every step it checks that
 
-- the log only grows: every event read before is still there, unchanged (seq, kind, payload),
-  the sequence numbers run 1..n and the session's ``last_seq`` is the last one;
-- no pending query proposes a gait flagged unsafe or within ``unsafe_radius`` of one, and a
-  query, when it is issued, proposes no gait in the region of avoidance (``loop/safety.py``,
-  written out here as ``tests/loop/test_safety.py`` writes it);
+- the log only grows: every event read before is still there, unchanged (seq, kind, version,
+  payload, time), the sequence numbers run 1..n and the session's ``last_seq`` is the last one;
+- no pending query proposes a gait flagged unsafe or within ``unsafe_radius`` of one, nor does
+  an open validation round show one; a query, when it is issued, and a round, when it is drawn,
+  propose no gait in the region of avoidance (``loop/safety.py``, written out here as
+  ``tests/loop/test_safety.py`` writes it, with a margin of rounding: an unexplored gait whose
+  upper bound ties the known-safe gaits' best is not counted as avoided);
 - a refused call (an undo of an excluded or flagged trial's answer, a trial excluded or flagged
-  twice) writes nothing;
+  twice, asking or answering while a round is open, a round that cannot be drawn) writes
+  nothing;
 
 and on reopening and on import that the copy equals the live session: the same posterior mean
-(exactly, as ``test_replay.py`` compares it step by step), pending query, trials, answers,
-flags, notes, status, generator state and confidence; an import also carries every event.
+(exactly, as ``test_replay.py`` compares it step by step), pending query and its points, trials,
+answers of every kind, flags, notes, validation rounds, status, generator state and confidence;
+an import also carries every event.  About 20-40 s on two cores.
 """
 
 from __future__ import annotations
