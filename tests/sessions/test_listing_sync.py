@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
-from gaitpref import Session
+from gaitpref import Session, load_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from tests.sessions.sessionkit import CONFIG
 
@@ -34,3 +35,24 @@ def test_sync_replays_only_what_another_writer_appended(tmp_path: Path) -> None:
     np.testing.assert_array_equal(reader.posterior().mean, writer.posterior().mean)
     assert reader.next_query() == writer.next_query()
     assert reader.sync() is False
+
+
+def test_sync_says_it_caught_up_after_an_ask_that_proposed_nothing(tmp_path: Path) -> None:
+    """An ask that raises (no gait left to propose) leaves the object to be rebuilt by its
+    next call; ``sync`` rebuilt it, caught up with another writer's note, and said False."""
+    from gaitpref.config import parse_config
+    from gaitpref.errors import NoSafeGaitError
+
+    text = load_config(CONFIG).text + "\n[safety]\nunsafe_radius = 1.0\n"
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with Session.create(url, parse_config(text), "S01", seed=3) as live:
+        q = live.next_query()
+        live.answer(q.id, [])
+        live.flag_unsafe(1, "knee")  # within the radius of every gait
+        with pytest.raises(NoSafeGaitError):
+            live.next_query()
+        with Session.open(url, live.id) as other:
+            other.note("from another writer")
+        assert live.sync() is True
+        assert live.notes()[-1][1] == "from another writer"
+        assert live.sync() is False

@@ -807,11 +807,15 @@ class Session:
 
         def run() -> bool:
             if self.storage.get_session(self.id).last_seq == self._state.last_seq:
-                return False
+                # a state left to be rebuilt (an ask that raised) was rebuilt by _locked, up to
+                # what other writers appended: caught up too
+                return self._state.last_seq != seen
             self._catch_up()
             return True
 
-        return self._locked(run, catch_up=False)
+        with self._lock:
+            seen = self._state.last_seq
+            return self._locked(run, catch_up=False)
 
     # -- internals -----------------------------------------------------------------------------
     def _locked(self, fn: Callable[[], T], catch_up: bool = True) -> T:
