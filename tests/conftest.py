@@ -183,3 +183,17 @@ def small_kernel() -> SquaredExponential:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(12345)
+
+
+@pytest.fixture
+def no_trial(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Any ask of the grid or line loop fails the test: for tests that a refused input runs no
+    trial (``pytest.mark.usefixtures("no_trial")``)."""
+    from gaitpref.loop.cospar import CoSpar
+    from gaitpref.loop.line import LineCoSpar
+
+    def ask(self: object) -> None:
+        raise AssertionError("a trial ran")
+
+    monkeypatch.setattr(CoSpar, "ask", ask)
+    monkeypatch.setattr(LineCoSpar, "ask", ask)

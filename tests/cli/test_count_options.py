@@ -28,6 +28,9 @@ from gaitpref.limits import (
     MAX_TRIALS,
 )
 
+#: every ask fails the test (``no_trial``, tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("no_trial")
+
 HUGE = str(10**12)
 CONTINUOUS = """\
 [space.a]
@@ -43,19 +46,6 @@ fit = "fixed"
 
 def _text(output: str) -> str:
     return " ".join(output.split())  # Rich wraps long lines
-
-
-@pytest.fixture(autouse=True)
-def no_trial(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Any ask fails the test: a refused count runs no trial (before, these ran for ever)."""
-    from gaitpref.loop.cospar import CoSpar
-    from gaitpref.loop.line import LineCoSpar
-
-    def ask(self: object) -> None:
-        raise AssertionError("a trial ran")
-
-    monkeypatch.setattr(CoSpar, "ask", ask)
-    monkeypatch.setattr(LineCoSpar, "ask", ask)
 
 
 @pytest.fixture

@@ -34,18 +34,8 @@ from gaitpref.simulate.study import Study
 from gaitpref.simulate.sweep import resolve_jobs
 from gaitpref.simulate.users import SimulatedUser
 
-
-@pytest.fixture(autouse=True)
-def no_trial(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Any ask fails the test: a refused count runs no trial (before, these ran for ever)."""
-    from gaitpref.loop.cospar import CoSpar
-    from gaitpref.loop.line import LineCoSpar
-
-    def ask(self: object) -> None:
-        raise AssertionError("a trial ran")
-
-    monkeypatch.setattr(CoSpar, "ask", ask)
-    monkeypatch.setattr(LineCoSpar, "ask", ask)
+#: every ask fails the test (``no_trial``, tests/conftest.py)
+pytestmark = pytest.mark.usefixtures("no_trial")
 
 
 def _replaced(study: Study, **changes: Any) -> Study:
