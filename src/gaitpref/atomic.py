@@ -3,7 +3,10 @@
 :func:`write_text_atomic` writes a temporary file beside the target and renames it over the
 target, so that a reader sees the old file or the new one, never part of one, and a write that
 fails (a full disk) leaves neither a partial file nor the temporary one.  The gait library files
-(``gaits/library_io.py``) and the gait cache's entries (``gaits/gait_cache.py``) are written so.
+(``gaits/library_io.py``), the gait cache's entries (``gaits/gait_cache.py``), an imported
+session's copy of its library (``sessions/export.py``) and the console's uploaded libraries
+(``console/configs.py``) are written so; the temporary name is unique, so two writers of one
+target never share a temporary file.
 
 ``tempfile.mkstemp`` creates its file with mode 0600 whatever the umask, so a file renamed from
 it could be read by its owner only: on a shared lab machine the group (a colleague's account,
@@ -31,18 +34,23 @@ _FLAGS = (
 _TRIES = 100
 
 
-def write_text_atomic(target: Path, text: str, prefix: str) -> None:
-    """Write ``text`` (UTF-8) to ``target`` atomically, through a temporary file named
-    ``prefix`` + random hex + ``.tmp`` in ``target``'s folder, which must exist."""
+def write_bytes_atomic(target: Path, data: bytes, prefix: str) -> None:
+    """Write ``data`` to ``target`` atomically, through a temporary file named ``prefix`` +
+    random hex + ``.tmp`` in ``target``'s folder, which must exist."""
     fd, tmp = _create(target.parent, prefix)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text)
+        with os.fdopen(fd, "wb") as out:
+            out.write(data)
         _keep_mode(target, tmp)
         os.replace(tmp, target)
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+def write_text_atomic(target: Path, text: str, prefix: str) -> None:
+    """:func:`write_bytes_atomic` of ``text`` in UTF-8 (its newlines as they are)."""
+    write_bytes_atomic(target, text.encode("utf-8"), prefix)
 
 
 def _create(folder: Path, prefix: str) -> tuple[int, Path]:
@@ -65,4 +73,4 @@ def _keep_mode(target: Path, tmp: Path) -> None:
     os.chmod(tmp, mode)
 
 
-__all__ = ["write_text_atomic"]
+__all__ = ["write_bytes_atomic", "write_text_atomic"]

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from gaitpref.atomic import write_bytes_atomic
 from gaitpref.config import (
     ExperimentConfig,
     load_config,
@@ -95,9 +96,7 @@ def store_library(
     wrote = not target.exists()
     if wrote:
         target.parent.mkdir(parents=True, exist_ok=True)
-        part = target.with_suffix(target.suffix + ".part")
-        part.write_bytes(data)
-        part.replace(target)
+        write_bytes_atomic(target, data, prefix=f".{name}.")  # a unique temporary file each
     return target, GaitLibrary.load(target), wrote
 
 

@@ -44,7 +44,6 @@ import io
 import json
 import shutil
 import tempfile
-import uuid
 from collections.abc import Callable, Sequence
 from datetime import datetime
 from pathlib import Path
@@ -52,6 +51,7 @@ from typing import Any, Final, Literal
 
 import numpy as np
 
+from gaitpref.atomic import write_bytes_atomic
 from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions import events as log
@@ -767,16 +767,12 @@ def _keep_library(storage: Storage, spec: SessionSpec, copy: Path, original: str
     target = folder / f"{sha}.json"
     try:
         if not (target.is_file() and _sha256(target) == sha):
+            data = copy.read_bytes()
+            if hashlib.sha256(data).hexdigest() != sha:
+                raise OSError(f"{copy} changed after it was checked")
             folder.mkdir(parents=True, exist_ok=True)
-            partial = folder / f".{sha}.{uuid.uuid4().hex}.partial"
-            try:
-                with partial.open("xb") as f, copy.open("rb") as src:
-                    shutil.copyfileobj(src, f)
-                if _sha256(partial) != sha:
-                    raise OSError(f"{copy} changed while it was copied")
-                partial.replace(target)  # whole, or not there: a concurrent import writes alike
-            finally:
-                partial.unlink(missing_ok=True)
+            # whole, or not there: a concurrent import of the same library writes alike
+            write_bytes_atomic(target, data, prefix=f".{sha[:16]}.")
     except OSError as exc:
         raise ExportError(
             f"cannot copy the gait library into {folder} ({exc}); nothing was written"
