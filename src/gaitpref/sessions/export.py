@@ -181,9 +181,7 @@ def _copy_library(session: Session, out: Path, written: dict[str, str]) -> tuple
     path = session.record.meta.get("library_path")
     if not path:
         return None
-    import tomllib
-
-    given = Path(tomllib.loads(session.record.config_text)["gaits"]["library"])
+    given = _library_named(session.record.config_text)
     inside = not given.is_absolute() and ".." not in given.parts
     if not inside or given.as_posix() in written or given.as_posix() == "manifest.json":
         name = given.name if given.name not in ("", ".", "..") else "gaits.json"
