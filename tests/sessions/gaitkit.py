@@ -17,7 +17,9 @@ import numpy as np
 import pytest
 
 from gaitpref import Session
+from gaitpref.config import ExperimentConfig
 from gaitpref.gaits import Gait, GaitGenerator, register_generator
+from gaitpref.sessions import SessionQuery
 from gaitpref.space import FloatArray
 from gaitpref.storage import EventRecord, NewEvent, SessionSpec, Storage
 
@@ -224,3 +226,15 @@ def fail_once(
 def logged(s: Session) -> list[tuple[str, dict[str, Any]]]:
     """What a session logged after its creation: each event's kind and payload."""
     return [(e.kind, e.payload) for e in s.events() if e.kind != "created"]
+
+
+def reference_ask(url: str, config: ExperimentConfig) -> tuple[Session, SessionQuery, int]:
+    """A session of ``config`` at ``url`` that asked once without a failure: the session, its
+    query and the gaits the ask made (at least 4, so that a failure at the 3rd comes part-way);
+    ``FakeSteps.calls`` is cleared after it."""
+    reference = Session.create(url, config, subject="S01")
+    expected = reference.next_query()
+    made = len(FakeSteps.calls)
+    assert made >= 4, "too few gaits made: a failure would not come part-way"
+    FakeSteps.calls.clear()
+    return reference, expected, made

@@ -34,6 +34,7 @@ from tests.sessions.gaitkit import (
     fail_once,
     logged,
     never_made,
+    reference_ask,
 )
 
 #: step lengths 0.00 .. 0.90 have no gait: most of the space
@@ -56,11 +57,8 @@ def test_an_ask_the_generator_cuts_short_is_not_logged_and_asking_again_logs_the
 ) -> None:
     FakeSteps.below = MOSTLY_INFEASIBLE
     config = parse_config(base)
-    reference = Session.create(f"sqlite:///{tmp_path / 'ref.db'}", config, subject="S01")
-    expected = reference.next_query()  # the same ask without a failure
-    made = len(FakeSteps.calls)
-    assert made >= 4, "too few gaits made: the failure would not come part-way"
-    FakeSteps.calls.clear()
+    # the same ask without a failure
+    reference, expected, made = reference_ask(f"sqlite:///{tmp_path / 'ref.db'}", config)
 
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, config, subject="S01")
