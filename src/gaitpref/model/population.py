@@ -343,9 +343,14 @@ def population_evidence(
     *,
     singles: SingleData | None = None,
     share: float | None = None,
+    gradient: bool = True,
 ) -> Evidence:
     """The Laplace evidence of population data (node codes) and its gradient in
     ``(hyper.log_vector(), logit rho)``: the single-subject entries, then ``logit rho``.
+
+    ``gradient=False``: the value and the fit only, the gradient all NaN.  The value is the same
+    number (the same fit); what is skipped is the gradient's ``N x m`` and ``m x m`` products,
+    more than the fit itself costs on a clinic's data (what a share's weight or MAP needs).
 
     ``rho`` must lie in ``(0, 1)`` for the gradient (``dlogit``); at 0 or 1 its entry is 0.
     With the new subject's ``share`` the value is exact but the gradient's ``logit rho`` entry
@@ -385,6 +390,11 @@ def population_evidence(
             out[d + 1] = np.nan
         return out
 
+    if not gradient:
+        lik = data.likelihood(hyper.band)
+        single_lik = None if singles is None else singles.likelihood
+        fit = fit_laplace(K, visited, a, b, lik, init, single=s, single_likelihood=single_lik)
+        return Evidence(fit.log_evidence, np.full(d + 3, np.nan), fit)
     ev = evidence_from_prior(K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init)
     g = ev.gradient  # (l..., s^2, logit rho, band) -> (l..., s^2, band, logit rho)
     order = np.array([*range(d + 1), d + 2, d + 1])

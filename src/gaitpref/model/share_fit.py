@@ -71,7 +71,7 @@ def share_objective(
     singles: SingleData | None = None,
 ) -> float:
     """Log evidence plus the log prior of ``logit share`` (up to a constant)."""
-    ev = population_evidence(space, hyper, rho, data, singles=singles, share=share)
+    ev = population_evidence(space, hyper, rho, data, singles=singles, share=share, gradient=False)
     z = (logit(min(max(share, _EDGE), 1 - _EDGE)) - logit(prior.median)) / prior.sd
     return float(ev.value - 0.5 * z * z)
 
@@ -144,8 +144,12 @@ def _gated(
     """``best`` if its log evidence beats the subject alone (``share = 0``) by ``gate``, else 0."""
     try:
         with one_blas_thread():
-            alone = population_evidence(space, hyper, rho, data, singles=singles, share=0.0)
-            shared = population_evidence(space, hyper, rho, data, singles=singles, share=best)
+            alone = population_evidence(
+                space, hyper, rho, data, singles=singles, share=0.0, gradient=False
+            )
+            shared = population_evidence(
+                space, hyper, rho, data, singles=singles, share=best, gradient=False
+            )
     except _FAILURES:
         message = "kept the starting value: the evidence cannot be evaluated at the gate"
         return ShareFit(share, share, False, message, evaluations + 2, np.nan, np.nan)

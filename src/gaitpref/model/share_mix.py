@@ -13,6 +13,8 @@ likelihood (GPML eq. (3.32), ``evidence.py``, through :func:`population_evidence
 normalised over ``k``.  The earlier subjects' evidence does not depend on ``share``, so only the
 new subject's answers move the weights; with none, the weights are the prior.  A hypothesis whose
 Laplace fit fails gets weight 0; if every one fails, ``share = 0`` (else the first) keeps weight 1.
+The hypotheses' fits are independent; on a clinic's data they run side by side in threads
+(:data:`PARALLEL_OBSERVATIONS`), the value only (no gradient).
 
 :class:`PosteriorMixture` is the mixture of the posteriors under the hypotheses: its mean is the
 weighted mean, and each of its joint samples draws a hypothesis by weight and then a sample of
@@ -24,6 +26,7 @@ A warm-started loop keeps as its own posterior the one under the mixture's mean 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -39,6 +42,7 @@ from gaitpref.model.hypermix import normalised
 from gaitpref.model.population import check_rho, population_evidence
 from gaitpref.model.posterior import Posterior, check_sample_size
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
+from gaitpref.model.threads import in_threads
 from gaitpref.space import FloatArray, Space
 
 _FAILURES = (
@@ -54,6 +58,11 @@ SHARE_FACTORS: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0)
 #: The prior mass of ``share = 0`` (alone); the other hypotheses share the rest equally (0.2:
 #: uniform over the five; 0.5 held back subjects who share, ``docs/results/population``).
 ALONE_PRIOR = 0.2
+#: From this many observations (the earlier subjects' and the new one's) the hypotheses are
+#: weighed in threads, one per hypothesis up to the CPUs (``threads.in_threads``): each fit is
+#: then tens of milliseconds to seconds of ``m x m`` work; below it, a thread costs more than it
+#: saves.  The numbers are the same either way.
+PARALLEL_OBSERVATIONS = 256
 
 
 @dataclass(frozen=True)
@@ -117,22 +126,26 @@ def weigh_shares(
         raise ValueError("weigh_shares needs at least one hypothesis")
     if hyper.thresholds is not None:
         hyper = Hyperparameters(hyper.lengthscale, hyper.variance, hyper.jitter, hyper.band)
-    empty = data.size + (singles.size if singles else 0) == 0
-    objectives: list[float | None] = []
-    for share, prior in hypotheses:
+    observations = data.size + (singles.size if singles else 0)
+
+    def objective(share: float, prior: float) -> float | None:
         if prior <= 0:
-            objectives.append(None)
-            continue
-        if empty:
-            objectives.append(math.log(prior))
-            continue
+            return None
+        if observations == 0:
+            return math.log(prior)
         try:
-            ev = population_evidence(space, hyper, rho, data, singles=singles, share=share)
+            ev = population_evidence(
+                space, hyper, rho, data, singles=singles, share=share, gradient=False
+            )
         except _FAILURES:
-            objectives.append(None)
-            continue
+            return None
         value = float(ev.value)
-        objectives.append(value + math.log(prior) if math.isfinite(value) else None)
+        return value + math.log(prior) if math.isfinite(value) else None
+
+    objectives = in_threads(
+        [functools.partial(objective, s, p) for s, p in hypotheses],
+        parallel=observations >= PARALLEL_OBSERVATIONS,
+    )
     shares = [s for s, _ in hypotheses]
     weights = normalised(objectives, shares.index(0.0) if 0.0 in shares else 0)
     return tuple(
