@@ -197,3 +197,20 @@ def test_bench_population_refuses_a_warm_model_past_its_nodes(tmp_path: Path) ->
     args = ["bench", "population", "--objectives", str(path), "--trials", "50"]
     _refused(args, f"{subjects} subjects x up to 50 gaits each (50 trials)",
              f"more than {MAX_POPULATION_NODES}")  # fmt: skip
+
+
+@pytest.mark.parametrize("jobs", ["-2", "-7", str(-(10**12))])
+@pytest.mark.parametrize("command", ["paper-2d", "compass-gait", "population"])
+def test_jobs_below_minus_one_are_refused(
+    tmp_path: Path, population_file: Path, command: str, jobs: str
+) -> None:
+    """``--jobs`` is a count, or -1 for every core.  Below -1 was taken as joblib counts
+    (``-2``: every core but one), silently, and past the cores as 1 (``-7`` on 2 cores)."""
+    out = tmp_path / "out"
+    if command == "population":
+        args = ["bench", "population", "--objectives", str(population_file), "--trials", "2"]
+    else:
+        args = ["bench", command, "--runs", "1", "--trials", "2", "--no-baseline",
+                "--out", str(out)]  # fmt: skip
+    _refused([*args, "--jobs", jobs], "Invalid value for '--jobs'", jobs, "-1")
+    assert not out.exists()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 from joblib import cpu_count
@@ -156,3 +157,40 @@ def test_show_refuses_json_nested_past_the_recursion_limit(tmp_path: Path) -> No
     deep.write_text("[" * 100_000 + "]" * 100_000)
     result = runner.invoke(app, ["show", str(deep)])
     assert result.exit_code == 2 and "nested too deeply" in _text(result.output)
+
+
+@pytest.mark.parametrize(
+    ("grid", "chains"),
+    [
+        (["--step-length", "0.12", "--step-duration", "0.9:1.0:2"], 2),  # a chain per duration
+        (["--step-length", "0.10:0.12:2", "--speed", "0.2"], 2),  # a piece per length at most
+        (["--step-length", "0.10:0.14:3", "--speed", "0.2"], 3),
+    ],
+)
+def test_build_starts_no_more_workers_than_chains(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, grid: list[str], chains: int
+) -> None:
+    """Each chain of gaits is one piece of work: ``--jobs 8`` started 8 worker processes for
+    2 chains (joblib starts every worker asked for), 6 of them idle."""
+    import joblib
+
+    from gaitpref.gaits import build
+
+    asked: list[int] = []
+
+    class Recording:
+        """joblib's ``Parallel``, run in this process, recording the workers asked for."""
+
+        def __init__(self, n_jobs: int, **kwargs: object) -> None:
+            asked.append(n_jobs)
+
+        def __call__(self, tasks: Any) -> Any:
+            return (f(*args, **kwargs) for f, args, kwargs in tasks)
+
+    monkeypatch.setattr(joblib, "cpu_count", lambda *a, **k: 8)  # --jobs 8 is allowed here
+    monkeypatch.setattr(build, "Parallel", Recording)
+    out = tmp_path / "lib.json"
+    result = runner.invoke(app, ["build", *grid, "--jobs", "8", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert asked == [chains]
+    assert len(GaitLibrary.load(out)) == chains

@@ -23,10 +23,11 @@ from typer.testing import CliRunner
 
 from gaitpref import GaitLibrary, ReplayError, Session, load_config
 from gaitpref.cli import app
-from gaitpref.errors import ExportError
+from gaitpref.errors import ExportError, StorageError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
-from gaitpref.storage import MemoryStorage
+from gaitpref.storage import MemoryStorage, open_storage
+from gaitpref.storage.sql import SQLStorage
 
 CONFIG = """
 [gaits]
@@ -281,3 +282,101 @@ def test_an_import_that_cannot_keep_its_library_writes_nothing(
 
     with open_storage(url) as storage:
         assert storage.list_sessions() == []
+
+
+# -- an import refused after its library was copied beside the database ---------------------------
+def test_a_refused_import_removes_the_library_copy_it_made(
+    tmp_path: Path, library: GaitLibrary
+) -> None:
+    """An import into the exported session's own database is refused (it is already there) in
+    the transaction that would create it, after the library was copied beside the database.
+    Before, the copy (and its folder) stayed: a file no session reads."""
+    s, out = exported(tmp_path, library)
+    s.close()
+    shutil.rmtree(tmp_path / "study")  # so the import needs its own copy
+    with pytest.raises(ExportError, match=r"the exported session itself.*nothing was written"):
+        import_session(f"sqlite:///{tmp_path / 'lab.db'}", out)
+    assert not (tmp_path / "lab.db.libraries").exists()
+
+
+def test_an_import_refused_by_the_database_removes_the_library_copy_it_made(
+    tmp_path: Path, library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    _, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    kept = tmp_path / "other.db.libraries"
+    kept.mkdir()  # a folder of earlier imports stays, without this import's copy
+    (kept / "earlier.json").write_text("{}")
+
+    def locked(*args: object, **kwargs: object) -> None:
+        assert list(kept.glob("*.json")) != [kept / "earlier.json"]  # the copy is written
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(SQLStorage, "_create", locked)  # the transaction creating the session
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(f"sqlite:///{tmp_path / 'other.db'}", out)
+    assert [p.name for p in kept.iterdir()] == ["earlier.json"]
+
+
+def test_a_refused_import_keeps_a_library_copy_that_was_there(
+    tmp_path: Path, library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The copy is content-addressed: an earlier import of the same library made it, and its
+    session reads it.  Neither a second import refused as already there, nor one refused by the
+    database, removes it."""
+    s, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    url = f"sqlite:///{tmp_path / 'other.db'}"
+    first = import_session(url, out)
+    first.close()
+    kept = tmp_path / "other.db.libraries" / f"{s.record.meta['library_sha256']}.json"
+    data = kept.read_bytes()
+    with pytest.raises(ExportError, match=r"imported before as session"):
+        import_session(url, out)
+    assert kept.read_bytes() == data
+
+    def locked(*args: object, **kwargs: object) -> None:
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(SQLStorage, "_create", locked)
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(url, out, as_new=True)
+    assert kept.read_bytes() == data
+    # a copy no session of the database reads (its session deleted, or the database replaced)
+    third = tmp_path / "third.db.libraries" / kept.name
+    third.parent.mkdir()
+    third.write_bytes(data)
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(f"sqlite:///{tmp_path / 'third.db'}", out)
+    assert third.read_bytes() == data
+    monkeypatch.undo()
+    again = Session.open(url, first.id)
+    assert again.gait_ids == s.gait_ids
+    assert [p.name for p in kept.parent.iterdir()] == [kept.name]
+
+
+def test_a_refused_import_keeps_the_copy_it_made_once_another_session_reads_it(
+    tmp_path: Path, library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two imports of the same library at once: the first writes the copy, the second finds it
+    there and its session is created; the first is then refused.  The copy stays: the other
+    session reads it."""
+    s, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    url = f"sqlite:///{tmp_path / 'other.db'}"
+    create = SQLStorage._create
+
+    def concurrent(self: SQLStorage, spec: Any, events: Any, status: Any, check: Any) -> None:
+        create(self, spec, events, status, None)  # the other import, reading the same copy
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(SQLStorage, "_create", concurrent)
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(url, out)
+    monkeypatch.undo()
+    kept = tmp_path / "other.db.libraries" / f"{s.record.meta['library_sha256']}.json"
+    assert kept.is_file()
+    with open_storage(url) as storage:
+        (record,) = storage.list_sessions()
+    assert record.meta["library_path"] == str(kept.resolve())
+    assert Session.open(url, record.id).gait_ids == s.gait_ids

@@ -93,7 +93,15 @@ def build(
         str | None, typer.Option(help="Step widths [m]: a label only (the model is planar).")
     ] = None,
     degree: Annotated[int, typer.Option(help="Bezier degree of the virtual constraint.")] = 6,
-    jobs: Annotated[int, typer.Option("--jobs", "-j", help="Parallel processes.")] = 1,
+    jobs: Annotated[
+        int,
+        typer.Option(
+            "--jobs",
+            "-j",
+            help="Parallel processes (no more than the chains: one per step duration, or "
+            "per step length at a fixed speed).",
+        ),
+    ] = 1,
 ) -> None:
     """Optimize one gait per grid point and write the library; exit 1 if any is infeasible."""
     from joblib import cpu_count

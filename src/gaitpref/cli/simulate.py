@@ -47,10 +47,28 @@ Address = Annotated[
     str | None,
     typer.Option("--address", help="Ray cluster address (default: start a local Ray runtime)"),
 ]
+
+
+def _jobs(value: int) -> int:
+    """``--jobs``: a count, or -1 for every core.  Below -1, joblib would count back from the
+    cores (-2: all but one) and past them give 1, silently: refused, with status 2."""
+    if value < -1:
+        raise typer.BadParameter(
+            f"{value} is neither a count of processes (1 to {MAX_JOBS}) nor -1 (every core); "
+            "give the count you mean",
+            param_hint="'--jobs'",
+        )
+    return value
+
+
 Jobs = Annotated[
     int,
     typer.Option(
-        "--jobs", "-j", max=MAX_JOBS, help=f"parallel runs (-1: every core; at most {MAX_JOBS})"
+        "--jobs",
+        "-j",
+        max=MAX_JOBS,
+        callback=_jobs,
+        help=f"parallel runs (-1: every core; at most {MAX_JOBS})",
     ),
 ]
 Trials = typer.Option(min=1, max=MAX_TRIALS, help="executed actions per run")

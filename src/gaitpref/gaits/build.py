@@ -73,6 +73,8 @@ def build_library(
     """Optimize one gait per grid point; infeasible points stay in the library, flagged.
 
     ``progress(k)`` is called with the number of gaits just finished (for a progress bar).
+    ``n_jobs`` worker processes at most, and no more than the chains (one per step duration;
+    at a fixed speed, at most one per step length): each chain is one worker's piece of work.
     """
     p = params or CompassGaitParams()
     s = settings or HZDSettings()
@@ -92,12 +94,13 @@ def build_library(
     for length in lengths:
         guard_angle(p, length)  # a step the legs reach: 0 < L < 2 l
     chains = _chains(lengths, durations, speed, n_jobs)
+    workers = min(n_jobs, len(chains))  # joblib starts every worker asked for, idle or not
     base: dict[int, Gait] = {}
-    if n_jobs == 1 or len(chains) == 1:
+    if workers <= 1:
         for chain in chains:
             base.update(_run_chain(chain, p, s, progress))
     else:
-        runner = Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        runner = Parallel(n_jobs=workers, return_as="generator_unordered")
         for done in runner(delayed(_run_chain)(chain, p, s) for chain in chains):
             base.update(done)
             if progress is not None:

@@ -14,7 +14,11 @@ them.  The gait of a parameter vector is, in turn,
    the earliest of equally near ones), then cached.  A generator that raises an error other
    than gaitpref's own (a bug, a ``LinAlgError``) raises a
    :class:`~gaitpref.errors.GaitGeneratorFaultError` naming it, the gait and that error; nothing
-   is cached or remembered, so the same gait is made again when next asked for.
+   is cached or remembered, so the same gait is made again when next asked for.  So is a
+   generator's document (:meth:`~gaitpref.gaits.generator.GaitGenerator.document`) that is not
+   JSON (a numpy array, a set, NaN, a key that is not text:
+   :func:`~gaitpref.gaits.json_document.document_problem`), checked when the gait is named,
+   before its key is hashed or anything is cached.
 
 On a space with continuous features two proposed points may agree to the generator's displayed
 digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator's followed by
@@ -34,6 +38,7 @@ import hashlib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -41,6 +46,7 @@ from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.gait_cache import CachedGait, GaitCache
 from gaitpref.gaits.generator import GaitGenerator
+from gaitpref.gaits.json_document import document_problem
 from gaitpref.space import FloatArray
 
 
@@ -117,18 +123,20 @@ class OnDemandGaits:
         An error of the generator other than gaitpref's own (a bug, a ``LinAlgError`` of numpy
         or scipy) is a :class:`~gaitpref.errors.GaitGeneratorFaultError` naming the generator,
         the gait and the error, raised from it (``KeyboardInterrupt`` and the like pass
-        unchanged); nothing of that gait is cached or remembered."""
+        unchanged), as is a document of the gait that is not JSON, naming where; nothing of
+        that gait is cached or remembered."""
         with self._faults(f"naming the gait of {_shown(vector)}"):
             vec = self.generator.check(vector)
-            key, name = self.generator.key(vec), self.gait_id(vec)
+            name = self.gait_id(vec)
+            document = self.generator.document(vec)
+            self._check_document(document, name, vec)
+            key = self.generator.key(vec)
         known = self._by_id.get(name)
         if known is not None:
             return known, False
         logged = None if recorded is None else recorded(key)
         cached = logged if logged is not None else self.cache.get(key)
         if logged is not None and self.cache.get(key) is None:
-            with self._faults(f"describing gait {name}"):
-                document = self.generator.document(vec)
             self.cache.put(logged, document)
         if cached is not None:
             made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
@@ -136,14 +144,26 @@ class OnDemandGaits:
             warm = self.nearest(vec)
             with self._faults(f"making gait {name}"):
                 gait = self.generator.make(vec, None if warm is None else warm.gait)
-            with self._faults(f"describing gait {name}"):
-                document = self.generator.document(vec)
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
             self.cache.put(CachedGait(key, gait, made.warm_start), document)
         self._by_id[name] = made
         if made.feasible:
             self._feasible.append(made)
         return made, True
+
+    def _check_document(self, document: Any, name: str, vec: FloatArray) -> None:
+        """A :class:`~gaitpref.errors.GaitGeneratorFaultError` when the generator's ``document``
+        of gait ``name`` (at ``vec``) is not JSON that reads back as it is
+        (:func:`~gaitpref.gaits.json_document.document_problem`), naming where."""
+        problem = document_problem(document)
+        if problem is not None:
+            raise GaitGeneratorFaultError(
+                f"the gait generator {self.generator.name!r} described gait {name} "
+                f"{_shown(vec)} with a document that is not JSON: {problem} (a gait's document "
+                "holds only text, finite numbers, true, false, null, lists and objects with text "
+                "keys); nothing of that gait is cached (an error in the generator, not a gait "
+                "found infeasible)"
+            )
 
     @contextmanager
     def _faults(self, doing: str) -> Iterator[None]:

@@ -31,11 +31,14 @@ demand, ``events.jsonl`` carries them (``gait_made`` version 2): both replays ta
 log and none is made again; the target database's gait cache gets them as replay puts them.
 The imported session reads its gait library where the exported one did when that file is the
 same, else the export's copy: copied again beside a SQLite database (``lab.db.libraries/``), read
-from the export's folder for a database that is not a local file.
+from the export's folder for a database that is not a local file.  An import refused after it
+wrote that copy (already imported, a database error) removes it, never a copy that was there
+before (an earlier import's) nor one a session in the database reads by then.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import dataclasses
 import functools
@@ -527,18 +530,25 @@ def import_session(
     _check_summary(trial, manifest.get("posterior") or {})
     storage = open_storage(db)
     owns = not isinstance(db, Storage)
+    made: list[Path] = []  # what this import wrote beside the database, in order
     try:
         if library is not None:
-            spec = _keep_library(storage, spec, *library)
-        if as_new:
-            record = storage.create_session(spec, events, status)
-        else:  # checked in the transaction that creates it: two imports cannot both pass
-            record = storage.create_session_checked(
-                spec,
-                events,
-                status,
-                check=functools.partial(_check_not_imported, storage.url, spec, info, events[0].at),
-            )
+            spec = _keep_library(storage, spec, *library, made)
+        try:
+            if as_new:
+                record = storage.create_session(spec, events, status)
+            else:  # checked in the transaction that creates it: two imports cannot both pass
+                record = storage.create_session_checked(
+                    spec,
+                    events,
+                    status,
+                    check=functools.partial(
+                        _check_not_imported, storage.url, spec, info, events[0].at
+                    ),
+                )
+        except BaseException:  # refused (already there, a database error): no session reads it
+            _unmake(storage, made)
+            raise
         session = Session.open(storage, record.id)
     except BaseException:
         if owns:
@@ -753,11 +763,17 @@ def _library_named(config_text: str) -> Path:
 LIBRARY_COPY_SUFFIX: Final = ".libraries"
 
 
-def _keep_library(storage: Storage, spec: SessionSpec, copy: Path, original: str) -> SessionSpec:
+def _keep_library(
+    storage: Storage, spec: SessionSpec, copy: Path, original: str, made: list[Path]
+) -> SessionSpec:
     """``spec`` reading its gait library from a copy of the export's ``copy`` next to a SQLite
     database (``lab.db.libraries/<sha256>.json``, shared by every session of that library), so
     that the imported session does not need the export's folder; ``spec`` as it is for a
-    database that is not a local file (memory, PostgreSQL): it reads the export's copy."""
+    database that is not a local file (memory, PostgreSQL): it reads the export's copy.
+
+    The folder and the file, when this call creates them (not when they were there: a copy is
+    an earlier import's, whose session reads it), are appended to ``made``, for
+    :func:`_unmake` to remove if the import is then refused."""
     folder = storage.folder_beside(LIBRARY_COPY_SUFFIX)
     if folder is None:
         return spec
@@ -768,9 +784,14 @@ def _keep_library(storage: Storage, spec: SessionSpec, copy: Path, original: str
             data = copy.read_bytes()
             if hashlib.sha256(data).hexdigest() != sha:
                 raise OSError(f"{copy} changed after it was checked")
-            folder.mkdir(parents=True, exist_ok=True)
+            if not folder.is_dir():
+                folder.mkdir(parents=True, exist_ok=True)
+                made.append(folder)
+            new = not target.exists()  # a damaged copy replaced is not this import's own
             # whole, or not there: a concurrent import of the same library writes alike
             write_bytes_atomic(target, data, prefix=f".{sha[:16]}.")
+            if new:
+                made.append(target)
     except OSError as exc:
         raise ExportError(
             f"cannot copy the gait library into {folder} ({exc}); nothing was written"
@@ -779,6 +800,26 @@ def _keep_library(storage: Storage, spec: SessionSpec, copy: Path, original: str
     meta["library_copied_from"] = original  # the path the exported session read
     meta["library_path"] = str(target.resolve())
     return dataclasses.replace(spec, meta=meta)
+
+
+def _unmake(storage: Storage, made: Sequence[Path]) -> None:
+    """Remove what a refused import wrote beside the database (``made``, by
+    :func:`_keep_library`): its library copy, unless a session in the database already reads
+    it (a concurrent import of the same library that found it there; kept too when the database
+    cannot say), then its folder if empty.  Best effort: the refusal is what the caller sees."""
+    for path in reversed(made):
+        if path.is_dir():
+            with contextlib.suppress(OSError):  # not empty: another import's copy is in it
+                path.rmdir()
+            continue
+        try:
+            where = str(path.resolve())
+            if any(r.meta.get("library_path") == where for r in storage.list_sessions()):
+                return  # read by a session: keep it, and its folder
+        except Exception:  # the database cannot say: keep the copy
+            return
+        with contextlib.suppress(OSError):
+            path.unlink()
 
 
 def _read_manifest(folder: Path) -> dict[str, Any]:
