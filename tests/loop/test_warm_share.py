@@ -112,3 +112,49 @@ def test_one_share_hypothesis_runs_as_the_share_held_there(monkeypatch: pytest.M
     a = confidence(held.posterior, np.random.default_rng(2), samples=300)
     b = confidence(one.posterior, np.random.default_rng(2), samples=300, draws=mixture)
     assert a == b
+
+
+def test_posteriors_under_the_weighed_shares_are_the_weighing_fits_to_the_bit() -> None:
+    """An answer's weighing fits every share hypothesis; the posteriors the ask and the
+    confidence read under them are built on those fits, equal to fitting each again."""
+    loop = _averaging()
+    user = SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
+    for _ in range(4):
+        q = loop.ask()
+        loop.tell(q, user.answer(q))
+    refit = loop.answers[-1].share_refit
+    assert refit is not None and loop.warm is not None
+    key, reused = loop._shared
+    assert key is loop.posterior
+    others = {h.share for h in refit.hypotheses} - {loop.warm.share}
+    assert set(reused) == others and others  # built when the answer was told, none fitted since
+    for share, posterior in reused.items():
+        fresh = loop._fit(loop.answers, warm=dataclasses.replace(loop.warm, share=share))
+        assert posterior.fit is not None and fresh.fit is not None
+        assert posterior.fit is refit.fits[share]  # the weighing's own fit, not a new one
+        for name in ("visited", "chol_prior", "chol_hessian", "whitened_mode"):
+            assert np.array_equal(getattr(posterior.fit, name), getattr(fresh.fit, name)), name
+        assert np.array_equal(posterior.mean, fresh.mean)
+    mixture = loop.share_mixture()
+    assert mixture is not None
+    stated = confidence(mixture, np.random.default_rng(3), samples=200)
+    loop._shared = (None, {})  # every hypothesis fitted again, as before the reuse
+    again = loop.share_mixture()
+    assert again is not None
+    assert confidence(again, np.random.default_rng(3), samples=200) == stated
+
+
+def test_a_fit_of_other_data_is_refused() -> None:
+    loop = _averaging()
+    user = SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
+    for _ in range(3):
+        q = loop.ask()
+        loop.tell(q, user.answer(q))
+    first = loop.answers[-1].share_refit
+    assert first is not None and first.fits
+    q = loop.ask()
+    loop.tell(q, user.answer(q))
+    assert loop.warm is not None
+    old = next(iter(first.fits.values()))
+    with pytest.raises(ValueError, match="visited nodes differ"):
+        loop._fit(loop.answers, warm=loop.warm, fit=old)

@@ -64,6 +64,7 @@ from gaitpref.model.hyperfit import (
 )
 from gaitpref.model.hypermix import Hypothesis, weigh_hypotheses
 from gaitpref.model.kernels import SquaredExponential
+from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.likelihood import ActionLikelihood, Probit, StackedActionLikelihood
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
@@ -292,6 +293,31 @@ class CoSpar:
             parts = tuple((h.weight, self._posterior_sharing(h.share)) for h in hypotheses)
         total = sum(w for w, _ in parts)
         return PosteriorMixture(tuple((w / total, p) for w, p in parts))
+
+    def _weighed_posteriors(
+        self,
+        share: ShareFit | None,
+        answers: list[Answer],
+        gp: PreferenceGP,
+        hyper: Hyperparameters,
+        warm: WarmStart | None,
+    ) -> dict[float, Posterior]:
+        """The posteriors under the share hypotheses just weighed, built on the Laplace fits
+        the weighing made (:meth:`_posterior_sharing` would make the same fits again: the same
+        data, kernel, ``rho`` and share, so the same numbers).  Only where those fits are of
+        exactly what the posterior reads: pair terms alone (the weighing holds ratings'
+        thresholds apart) and the weighing's kernel; else none (each is then fitted when
+        needed, as before)."""
+        if share is None or not share.fits or warm is None:
+            return {}
+        single, _ = self._singles(answers, hyper.thresholds)
+        if single is not None or not _same_kernel(gp.kernel, hyper.kernel(), self.space.ndim):
+            return {}
+        return {
+            s: self._fit(answers, gp, hyper, dataclasses.replace(warm, share=s), fit)
+            for s, fit in share.fits.items()
+            if s != warm.share
+        }
 
     def _posterior_sharing(self, share: float) -> Posterior:
         """The posterior with the new subject's share ``share`` (the loop's own at its share)."""
@@ -562,11 +588,13 @@ class CoSpar:
             if share is not None and warm is not None:
                 warm = dataclasses.replace(warm, share=share.after)
             new_posterior = self._fit(answers_now, gp, hyper, warm)
+            sharing = self._weighed_posteriors(share, answers_now, gp, hyper, warm)
         self.warm = warm
         if refit is not None or share is not None:
             answer = dataclasses.replace(answer, refit=refit, share_refit=share)
         self.answers.append(answer)
         self.posterior = new_posterior
+        self._shared = (new_posterior, sharing)
         self.gp, self.hyper = gp, hyper
         if self._rng_before_pending is not None:
             self._rng_before[q.id] = self._rng_before_pending
@@ -668,6 +696,9 @@ class CoSpar:
         derived up to rounding (``sessions/events.py``, :func:`same_value`):
         everything after is then derived from the log's numbers, and the replay cannot drift
         from the recording one rounding at a time.  Returns the answer with those values.
+        When they are this machine's to the bit (a replay where the log was written) nothing
+        changes, and the posterior is not fitted again: it is the one the answer made, as the
+        recording session had it.
         """
         if not self.answers:
             raise QueryError("nothing to adopt: no query has been answered")
@@ -686,6 +717,8 @@ class CoSpar:
                 shares = tuple(ShareHypothesis.from_json(h) for h in share_hypotheses)
             share_fit = dataclasses.replace(share_fit, after=float(share), hypotheses=shares)
             self.warm = dataclasses.replace(self.warm, share=float(share))
+        if fit == answer.refit and share_fit == answer.share_refit:
+            return answer  # the same values, to the bit: the posterior is the answer's own
         self.answers[-1] = dataclasses.replace(answer, refit=fit, share_refit=share_fit)
         with one_blas_thread():
             self.posterior = self._fit(self.answers)
@@ -885,14 +918,17 @@ class CoSpar:
         gp: PreferenceGP | None = None,
         hyper: Hyperparameters | None = None,
         warm: WarmStart | None = None,
+        fit: LaplaceMode | None = None,
     ) -> Posterior:
         """The posterior given ``answers`` (default model: the current kernel, band, thresholds
         and warm start).  With fitted ordinal thresholds, the posterior's rating scale carries
-        them, so its rating probabilities and the region of avoidance use what the fit used."""
+        them, so its rating probabilities and the region of avoidance use what the fit used.
+        ``fit``: a warm start's population fit of the same data, already made (a share
+        hypothesis' from its weighing), taken instead of fitting again."""
         gp = self.gp if gp is None else gp
         hyper = self.hyper if hyper is None else hyper
         warm = self.warm if warm is None else warm
-        posterior = self._fit_model(answers, gp, hyper, warm)
+        posterior = self._fit_model(answers, gp, hyper, warm, fit)
         scale = gp.ordinal
         if hyper.thresholds is None or scale is None:
             return posterior
@@ -905,8 +941,11 @@ class CoSpar:
         gp: PreferenceGP,
         hyper: Hyperparameters,
         warm: WarmStart | None,
+        fit: LaplaceMode | None = None,
     ) -> Posterior:
         band = hyper.band
+        if fit is not None and warm is None:
+            raise ValueError("a fit already made is a warm start's population fit")
         single, single_likelihood = self._singles(answers, hyper.thresholds)
         if self.learning.ties == "drop" and warm is None:  # the paper's likelihood, bit for bit
             prefs = [p for a in answers for p in self._kept(a)]
@@ -927,7 +966,9 @@ class CoSpar:
                 single_likelihood=single_likelihood,
             )
         if warm is not None:
-            return warm_posterior(warm, gp, self._data(answers), band, single, single_likelihood)
+            return warm_posterior(
+                warm, gp, self._data(answers), band, single, single_likelihood, fit
+            )
         data = self._data(answers)
         if data.size == 0 and single is None:
             return gp.prior()
@@ -948,6 +989,16 @@ GRID_LIMIT_ACTIONS = MODEL_GRID_LIMIT
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000
+
+
+def _same_kernel(a: SquaredExponential, b: SquaredExponential, ndim: int) -> bool:
+    """Whether two kernels compute the same covariances (a scalar lengthscale is shared by every
+    feature: ``0.15`` and ``(0.15,)`` are one kernel in 1-D)."""
+    return (a.lengthscales(ndim), a.variance, a.jitter) == (
+        b.lengthscales(ndim),
+        b.variance,
+        b.jitter,
+    )
 
 
 def check_radius(radius: object) -> None:

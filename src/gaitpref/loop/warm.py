@@ -47,6 +47,7 @@ from gaitpref.loop.learning import pair_data
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.gp import PreferenceGP
 from gaitpref.model.hyperfit import HyperPrior
+from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.likelihood import ActionLikelihood, StackedActionLikelihood
 from gaitpref.model.population import PopulationModel, check_rho
 from gaitpref.model.population_fit import LogitNormal, fit_population
@@ -243,16 +244,17 @@ def warm_posterior(
     band: float,
     single: IntArray | None = None,
     single_likelihood: ActionLikelihood | None = None,
+    fit: LaplaceMode | None = None,
 ) -> Posterior:
     """The new subject's posterior given their own observations ``own`` (grid indices) and the
-    earlier subjects' (``warm``), in one population fit."""
+    earlier subjects' (``warm``), in one population fit (``fit``: that fit, already made)."""
     data, single, single_likelihood = _joined(warm, own, single, single_likelihood)
     model = PopulationModel(
         gp.space, gp.kernel, warm.rho, gp.noise, gp.sampler, gp.ordinal, warm.share
     )
     return model.posterior(
         data.first, data.second, data.likelihood(band), 0,
-        single=single, single_likelihood=single_likelihood,
+        single=single, single_likelihood=single_likelihood, fit=fit,
     )  # fmt: skip
 
 

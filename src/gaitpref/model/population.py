@@ -58,7 +58,7 @@ from gaitpref.model.evidence import (
     evidence_from_prior,
 )
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.laplace import fit_laplace
+from gaitpref.model.laplace import LaplaceMode, fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
 from gaitpref.model.ordinal import Ordinal
 from gaitpref.model.posterior import Posterior
@@ -291,11 +291,15 @@ class PopulationModel:
         init: FloatArray | None = None,
         single: IntArray | None = None,
         single_likelihood: ActionLikelihood | None = None,
+        fit: LaplaceMode | None = None,
     ) -> Posterior:
         """Subject ``target``'s posterior given observations of ``f[first] - f[second]`` and of
         ``f[single]`` (node codes, :func:`node_codes`).  ``init``: a starting mode on the
         visited nodes (:meth:`visited` of the same data).  Codes are integers >= 0 and
-        ``target`` a subject (an integer >= 0), else a ValueError naming them."""
+        ``target`` a subject (an integer >= 0), else a ValueError naming them.  ``fit``: this
+        model's Laplace fit of the same data, already made (:func:`population_evidence`'s, with
+        the same kernel, ``rho`` and ``share``), taken instead of fitting again; its visited
+        nodes must be these data's."""
         for name, codes in (("first", first), ("second", second), ("single", single)):
             if codes is not None:
                 check_codes(codes, name)
@@ -307,10 +311,14 @@ class PopulationModel:
         if first.size == 0 and (single is None or single.size == 0):
             return Posterior(self.space, self.kernel, None, engine, self.noise, self.ordinal)
         visited, a, b, s = self.indices(first, second, single)
-        k_vv = population_prior(self.space, self.kernel, self.rho, visited, visited, self.share)
-        fit = fit_laplace(
-            k_vv, visited, a, b, likelihood, init, single=s, single_likelihood=single_likelihood
-        )
+        if fit is not None:
+            if not np.array_equal(fit.visited, visited):
+                raise ValueError("the fit given is not of these data: its visited nodes differ")
+        else:
+            k_vv = population_prior(self.space, self.kernel, self.rho, visited, visited, self.share)
+            fit = fit_laplace(
+                k_vv, visited, a, b, likelihood, init, single=s, single_likelihood=single_likelihood
+            )
         target = 0 if self.rho >= 1.0 else int(target)
         return PopulationPosterior(
             self.space, self.kernel, fit, engine, self.noise, self.ordinal, self.rho, target,

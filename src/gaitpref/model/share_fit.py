@@ -12,8 +12,8 @@ the objective keeps the starting value and says so (:class:`ShareFit`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.linalg import LinAlgError
@@ -22,6 +22,7 @@ from scipy.optimize import minimize_scalar
 from gaitpref.checks import check_evaluations
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
+from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.population import check_rho, logit, population_evidence
 from gaitpref.model.population_fit import LogitNormal
 from gaitpref.model.share_mix import ShareHypothesis, heaviest, share_prior, weigh_shares
@@ -55,6 +56,9 @@ class ShareFit:
     #: with the share averaged (``share_mix.py``): the weighted hypotheses, ``after`` the
     #: heaviest one's share; empty for a MAP fit
     hypotheses: tuple[ShareHypothesis, ...] = ()
+    #: each weighed hypothesis' Laplace fit by its share (not logged, not compared: what the
+    #: posteriors under the hypotheses are built on, ``loop/cospar.py``); empty for a MAP fit
+    fits: Mapping[float, LaplaceMode] = field(default_factory=dict, compare=False, repr=False)
 
 
 def _sigmoid(x: float) -> float:
@@ -177,8 +181,9 @@ def share_mixture_fit(
     their sum over the hypotheses, the mixture's (after)."""
     rho, share = check_rho(rho), check_rho(share)
     given = share_prior(rho) if hypotheses is None else tuple(hypotheses)
+    fits: dict[float, LaplaceMode] = {}
     with one_blas_thread():
-        weighed = weigh_shares(space, hyper, rho, given, data, singles)
+        weighed = weigh_shares(space, hyper, rho, given, data, singles, fits=fits)
     mean = min(sum(h.weight * h.share for h in weighed), 1.0)
     top = heaviest(weighed)
     alone = next((h.objective for h in weighed if h.share == 0.0), None)
@@ -193,7 +198,7 @@ def share_mixture_fit(
     )
     return ShareFit(
         share, mean, True, message, len(weighed), np.nan if alone is None else alone, total,
-        weighed,
+        weighed, fits,
     )  # fmt: skip
 
 

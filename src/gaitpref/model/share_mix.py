@@ -39,6 +39,7 @@ from scipy.linalg import LinAlgError
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hypermix import normalised
+from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.population import check_rho, population_evidence
 from gaitpref.model.posterior import Posterior, check_sample_size
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
@@ -118,34 +119,43 @@ def weigh_shares(
     hypotheses: Sequence[tuple[float, float]],
     data: PairData,
     singles: SingleData | None = None,
+    *,
+    fits: dict[float, LaplaceMode] | None = None,
 ) -> tuple[ShareHypothesis, ...]:
     """The hypotheses ``(share, prior mass)`` weighted by Laplace evidence x prior mass, given
     population data (node codes; the new subject is subject 0), ``rho`` and ``hyper`` held
-    (fitted thresholds are dropped: the evidence holds them)."""
+    (fitted thresholds are dropped: the evidence holds them).  ``fits``, when given, receives
+    each evaluated hypothesis' Laplace fit by its share (the posterior under that share is built
+    on it: ``loop/cospar.py`` reuses them rather than fitting each again)."""
     if not hypotheses:
         raise ValueError("weigh_shares needs at least one hypothesis")
     if hyper.thresholds is not None:
         hyper = Hyperparameters(hyper.lengthscale, hyper.variance, hyper.jitter, hyper.band)
     observations = data.size + (singles.size if singles else 0)
 
-    def objective(share: float, prior: float) -> float | None:
+    def objective(share: float, prior: float) -> tuple[float | None, LaplaceMode | None]:
         if prior <= 0:
-            return None
+            return None, None
         if observations == 0:
-            return math.log(prior)
+            return math.log(prior), None
         try:
             ev = population_evidence(
                 space, hyper, rho, data, singles=singles, share=share, gradient=False
             )
         except _FAILURES:
-            return None
+            return None, None
         value = float(ev.value)
-        return value + math.log(prior) if math.isfinite(value) else None
+        return (value + math.log(prior) if math.isfinite(value) else None), ev.fit
 
-    objectives = in_threads(
+    results = in_threads(
         [functools.partial(objective, s, p) for s, p in hypotheses],
         parallel=observations >= PARALLEL_OBSERVATIONS,
     )
+    objectives = [o for o, _ in results]
+    if fits is not None:
+        for (share, _), (_, fit) in zip(hypotheses, results, strict=True):
+            if fit is not None:
+                fits[share] = fit
     shares = [s for s, _ in hypotheses]
     weights = normalised(objectives, shares.index(0.0) if 0.0 in shares else 0)
     return tuple(
