@@ -137,11 +137,11 @@ def test_posteriors_under_the_weighed_shares_are_the_weighing_fits_to_the_bit() 
         assert np.array_equal(posterior.mean, fresh.mean)
     mixture = loop.share_mixture()
     assert mixture is not None
-    stated = confidence(mixture, np.random.default_rng(3), samples=200)
+    stated = confidence(loop.posterior, np.random.default_rng(3), samples=200, draws=mixture)
     loop._shared = (None, {})  # every hypothesis fitted again, as before the reuse
     again = loop.share_mixture()
     assert again is not None
-    assert confidence(again, np.random.default_rng(3), samples=200) == stated
+    assert confidence(loop.posterior, np.random.default_rng(3), samples=200, draws=again) == stated
 
 
 def test_a_fit_of_other_data_is_refused() -> None:
