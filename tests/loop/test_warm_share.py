@@ -114,14 +114,23 @@ def test_one_share_hypothesis_runs_as_the_share_held_there(monkeypatch: pytest.M
     assert a == b
 
 
+def _like_the_others(
+    loop: CoSpar, answers: int, user: SimulatedUser | None = None
+) -> SimulatedUser:
+    """``answers`` answers of a subject who orders the gaits as the others do (``user``, else a
+    new one); returns the subject."""
+    user = user or SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
+    for _ in range(answers):
+        q = loop.ask()
+        loop.tell(q, user.answer(q))
+    return user
+
+
 def test_posteriors_under_the_weighed_shares_are_the_weighing_fits_to_the_bit() -> None:
     """An answer's weighing fits every share hypothesis; the posteriors the ask and the
     confidence read under them are built on those fits, equal to fitting each again."""
     loop = _averaging()
-    user = SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
-    for _ in range(4):
-        q = loop.ask()
-        loop.tell(q, user.answer(q))
+    _like_the_others(loop, 4)
     refit = loop.answers[-1].share_refit
     assert refit is not None and loop.warm is not None
     key, reused = loop._shared
@@ -146,14 +155,10 @@ def test_posteriors_under_the_weighed_shares_are_the_weighing_fits_to_the_bit() 
 
 def test_a_fit_of_other_data_is_refused() -> None:
     loop = _averaging()
-    user = SimulatedUser(SPACE, 10 * UTILITY, np.random.default_rng(1), noise=0.0)
-    for _ in range(3):
-        q = loop.ask()
-        loop.tell(q, user.answer(q))
+    user = _like_the_others(loop, 3)
     first = loop.answers[-1].share_refit
     assert first is not None and first.fits
-    q = loop.ask()
-    loop.tell(q, user.answer(q))
+    _like_the_others(loop, 1, user)
     assert loop.warm is not None
     old = next(iter(first.fits.values()))
     with pytest.raises(ValueError, match="visited nodes differ"):
