@@ -63,8 +63,9 @@ if TYPE_CHECKING:
 
 #: The most distinct (gait, earlier subject) pairs a new warm start's earlier sessions may visit:
 #: each answer of the new session refits the population model over them (and the share's
-#: hypotheses), dense in their number; about 1,000 took 6 s an answer on two cores, 3,000 about
-#: 150 s.  Checked when a session is created; sessions recorded with more replay as they were.
+#: hypotheses), dense in their number; 1,501 took 10 s an answer (and 2.4 s for the confidence
+#: after it) on two cores (``benchmarks/results/warm.md``).  Checked when a session is created;
+#: sessions recorded with more replay as they were.
 MAX_PRIOR_NODES = 2000
 #: The most earlier sessions a new warm start may read (a subject code counts each of the
 #: subject's sessions): every opening of the new session replays each of them from its log.
