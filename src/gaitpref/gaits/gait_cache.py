@@ -17,12 +17,18 @@ Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",
      "warm_start": key | null, "gait": {"step_length", the fields of a gait in a library file}}
+
+The generator's document (``generator``, ``settings``, ``parameters`` and any field a generator
+of one's own adds) is written among the file's own fields (:data:`FILE_FIELDS`), so a document
+that uses one of them is refused (:meth:`GaitCache.put`; ``on_demand.py`` says so as the
+generator's fault before anything is made).
 """
 
 from __future__ import annotations
 
 import json
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,6 +42,9 @@ from gaitpref.gaits.library_io import Reader, gait_entry, read_gait_entry
 
 FORMAT = "gaitpref-gait"
 SCHEMA_VERSION = 1
+#: the cache file's own fields: a gait's document (generator, settings, parameters and any field
+#: a generator of one's own adds) is written among them, so it may use none of them
+FILE_FIELDS = ("format", "schema_version", "key", "warm_start", "gait")
 
 
 class GaitCacheWarning(UserWarning):
@@ -81,7 +90,14 @@ class GaitCache:
         A folder that cannot be written (read-only, or a file in its place) keeps the entry in
         memory only, with a :class:`GaitCacheWarning` naming it (once per cache): the cache is
         derived data, the session's log carries the gait, so reading or continuing a session
-        never fails for it."""
+        never fails for it.  A ``document`` that uses one of the file's own fields
+        (:data:`FILE_FIELDS`) is a ``ValueError`` naming it, and nothing is kept."""
+        field = file_field_in(document)
+        if field is not None:
+            raise ValueError(
+                f"gait {entry.key}: its document has the field {field!r}, one of the gait cache "
+                f"file's own ({', '.join(FILE_FIELDS)}); nothing is cached"
+            )
         self._memory[entry.key] = entry
         target = self.path(entry.key)
         if target is None:
@@ -121,6 +137,13 @@ class GaitCache:
             return read_entry(path, key)[0]
         except GaitLibraryError:
             return None
+
+
+def file_field_in(document: Mapping[str, Any]) -> str | None:
+    """The first of the cache file's own fields (:data:`FILE_FIELDS`) that ``document`` uses,
+    or None: written among them, it would replace the file's (its key, its format) or be
+    replaced by them (the warm start, the gait)."""
+    return next((name for name in FILE_FIELDS if name in document), None)
 
 
 def gait_document(gait: Gait) -> dict[str, Any]:
@@ -184,11 +207,13 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
 
 
 __all__ = [
+    "FILE_FIELDS",
     "FORMAT",
     "SCHEMA_VERSION",
     "CachedGait",
     "GaitCache",
     "GaitCacheWarning",
+    "file_field_in",
     "gait_document",
     "read_entry",
     "read_gait",
