@@ -87,33 +87,44 @@ class GaitCache:
     def put(self, entry: CachedGait, document: dict[str, Any]) -> None:
         """Keep ``entry``; ``document`` (generator, settings, parameters) goes into its file.
 
-        A folder that cannot be written (read-only, or a file in its place) keeps the entry in
+        The file is written first and the entry remembered after.  A folder that cannot be
+        written (an ``OSError``: read-only, a file in its place, a full disk) keeps the entry in
         memory only, with a :class:`GaitCacheWarning` naming it (once per cache): the cache is
         derived data, the session's log carries the gait, so reading or continuing a session
-        never fails for it.  A ``document`` that uses one of the file's own fields
-        (:data:`FILE_FIELDS`) is a ``ValueError`` naming it, and nothing is kept."""
+        never fails for it.  Any other failure of the write (an entry that cannot be written as
+        JSON) is a ``ValueError`` naming the file, and nothing is kept.  A ``document`` that
+        uses one of the file's own fields (:data:`FILE_FIELDS`) is a ``ValueError`` naming it,
+        and nothing is kept."""
         field = file_field_in(document)
         if field is not None:
             raise ValueError(
                 f"gait {entry.key}: its document has the field {field!r}, one of the gait cache "
                 f"file's own ({', '.join(FILE_FIELDS)}); nothing is cached"
             )
-        self._memory[entry.key] = entry
         target = self.path(entry.key)
-        if target is None:
-            return
-        try:
-            self._write(target, entry, document)
-        except OSError as exc:
-            if not self.unwritable:
-                warnings.warn(
-                    f"gait cache {self.folder}: cannot write {target.name} "
-                    f"({exc.strerror or exc}); gaits are kept in memory and in the session's "
-                    "log, and other sessions will make them again",
-                    GaitCacheWarning,
-                    stacklevel=2,
-                )
-            self.unwritable = str(exc)
+        if target is not None:
+            try:
+                self._write(target, entry, document)
+            except OSError as exc:
+                self._keep_in_memory(target, exc)
+            except Exception as exc:
+                raise ValueError(
+                    f"gait cache file {target}: cannot be written ({type(exc).__name__}: {exc}); "
+                    "nothing is cached"
+                ) from exc
+        self._memory[entry.key] = entry
+
+    def _keep_in_memory(self, target: Path, exc: OSError) -> None:
+        """The folder cannot be written: say so once (the entry is kept in memory only)."""
+        if not self.unwritable:
+            warnings.warn(
+                f"gait cache {self.folder}: cannot write {target.name} "
+                f"({exc.strerror or exc}); gaits are kept in memory and in the session's "
+                "log, and other sessions will make them again",
+                GaitCacheWarning,
+                stacklevel=3,
+            )
+        self.unwritable = str(exc)
 
     def _write(self, target: Path, entry: CachedGait, document: dict[str, Any]) -> None:
         doc = {
