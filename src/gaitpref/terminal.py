@@ -300,8 +300,8 @@ class Terminal:
             raise _QuitError from None
         if pending is None or (answered and pending.id != answered[-1].query):
             self.console.print(
-                "Undone; its query proposed a gait flagged unsafe since and was withdrawn: "
-                "a new query is proposed in its place.",
+                "Undone; its query proposed a gait flagged unsafe since, or in the region of "
+                "avoidance now, and was withdrawn: a new query is proposed in its place.",
                 markup=False,
             )
             return

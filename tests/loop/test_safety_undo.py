@@ -1,19 +1,24 @@
 """An undo brings its query back only while that query proposes no gait flagged unsafe (or
-avoided) after it was asked: otherwise the query is withdrawn, the generator goes back to before
+avoided) after it was asked, nor one in the region of avoidance as the undo leaves the model (an
+exclusion since moves it): otherwise the query is withdrawn, the generator goes back to before
 it was drawn, and the next ask proposes under the flags, on the grid and on the line path."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from gaitpref import CoSpar, Feature, Space, SquaredExponential
 from gaitpref.errors import NoSafeGaitError, QueryError
-from gaitpref.feedback import Comparison
+from gaitpref.feedback import Comparison, Rating
 from gaitpref.loop import Safety
+from gaitpref.loop.cospar import Query
 from gaitpref.loop.line import LineCoSpar
+from gaitpref.loop.lines import LineSettings
 from gaitpref.loop.safety import near
+from gaitpref.model.ordinal import Ordinal
 
 GRID = Space([Feature.linspace("x", 0.0, 1.0, 21), Feature.linspace("y", 0.0, 1.0, 5)])
 UNIT = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 1.0)])
@@ -137,3 +142,80 @@ def test_on_the_line_path_a_flag_on_a_point_the_undone_query_added_is_refused() 
     loop.unflag_unsafe(added)
     loop.undo()
     assert loop.pending is not None
+
+
+RATED = """
+name = "rated-undo-region"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+fit = "fixed"
+[cospar]
+strategy = "self-sparring"
+[feedback.rating]
+labels = ["very bad", "bad", "okay", "good"]
+[safety]
+avoid = ["very bad"]
+lambda = 1.0
+"""
+
+
+def _rated_then_excluded(region: bool) -> tuple[CoSpar, Query]:
+    """Seed 2 runs gaits 2, 4, 0, 14, 14, 1; gait 2 rated "good" (so gait 1 may be proposed),
+    the others below 5 "very bad"; then the good rating excluded and the last answer undone."""
+    from gaitpref.config import parse_config
+
+    loop = parse_config(RATED).make_loop(seed=2)
+    for trial in range(1, 7):
+        q = loop.ask()
+        a = q.actions[0]
+        loop.tell(q, [Rating(a, "good" if trial == 1 else "very bad" if a < 5 else "okay")])
+    assert loop.executed == [2, 4, 0, 14, 14, 1]  # the case under test
+    last = loop.answers[-1].query
+    loop.exclude({}, {loop.answers[0].query.id: [0]})
+    loop.undo(region=region)
+    return loop, last
+
+
+def test_an_undo_withdraws_its_query_when_an_exclusion_since_puts_its_gait_in_the_region() -> None:
+    loop, last = _rated_then_excluded(region=True)
+    assert loop.pending is None, "the restored query proposes a gait in the region"
+    assert not loop.proposable()[last.actions[0]]
+    again = loop.ask()
+    assert again.actions != last.actions and loop.proposable()[list(again.actions)].all()
+    # the flags alone (a session's undo of payload version 1): restored as it was
+    old, last = _rated_then_excluded(region=False)
+    assert old.pending == last
+
+
+@pytest.mark.parametrize("line", [False, True])
+def test_an_undo_with_nothing_between_restores_its_query_under_a_cautious_region(
+    line: bool,
+) -> None:
+    """The region an ask reads (on the line path: along its line, whose known-safe gaits the
+    cautious level weighs) is the one an undo reads when nothing moved the model since."""
+    scale = Ordinal(["very bad", "bad", "okay", "good"], noise=0.01)
+    safety = Safety(avoid=1, risk=0.35, cautious=0.6)
+    kernel = SquaredExponential(0.2, 1e-4, 1e-8)
+    for seed in range(4):
+        if line:
+            loop: CoSpar = LineCoSpar(
+                UNIT, kernel, 0.01, n=1, buffer=1, seed=seed, ordinal=scale, safety=safety,
+                line=LineSettings(40),
+            )  # fmt: skip
+        else:
+            loop = CoSpar(
+                GRID, kernel, 0.01, n=1, buffer=1, seed=seed, ordinal=scale, safety=safety
+            )
+        for trial in range(6):
+            q = loop.ask()
+            rating = Rating(q.actions[0], ("okay", "good", "very bad")[trial % 3])
+            loop.tell(q, [rating])
+            loop.undo()
+            assert loop.pending == q and loop.pending.points == q.points, (seed, trial)
+            loop.tell(q, [rating])

@@ -118,3 +118,30 @@ def test_a_document_that_is_not_json_is_named_and_nothing_is_cached_or_logged(
     q = s.next_query()
     assert logged(s) == logged(reference)
     assert (q.actions, q.points) == (expected.actions, expected.points)
+
+
+@pytest.mark.parametrize("field", ["format", "schema_version", "key", "warm_start", "gait"])
+def test_a_document_with_a_field_of_the_cache_file_is_named_and_nothing_is_cached_or_logged(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, field: str
+) -> None:
+    """The cache file spreads the document among its own fields: a document's ``key`` or
+    ``format`` replaced the file's (an entry that never read back), its ``gait`` or
+    ``warm_start`` was replaced by them (the document read back was not the one given)."""
+
+    def own(doc: dict[str, Any]) -> None:
+        doc[field] = "mine"
+
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    s = Session.create(url, parse_config(CONFIG), subject="S01")
+    _describe_with(monkeypatch, own)
+    with pytest.raises(GaitGeneratorFaultError) as caught:
+        s.next_query()
+    message = str(caught.value)
+    named = re.match(rf"the gait generator {NAME!r} described gait (S[\d.]+-S[\d.]+) \(", message)
+    assert named is not None, message
+    assert f"field {field!r}" in message and "the gait cache's own" in message, message
+    assert [e.kind for e in s.events()] == ["created"] and s.pending is None
+    cache = tmp_path / "lab.db.gaits"
+    assert not cache.exists() or list(cache.iterdir()) == []
+    monkeypatch.undo()
+    assert s.next_query().actions

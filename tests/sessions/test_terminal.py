@@ -167,7 +167,7 @@ def test_an_undo_whose_query_a_flag_withdrew_says_so(tmp_path: Path) -> None:
     child.sendline("u")
     child.expect(r"Undo the last answer \(trial 2\)\?  y yes, n no")
     child.sendline("y")
-    child.expect("Undone; its query proposed a gait flagged unsafe since and was withdrawn")
+    child.expect("Undone; its query proposed a gait flagged unsafe since, or in the region of")
     child.expect(r"Trial 2: run")
     child.expect(r"Trial 2 against trial 1")
     child.sendline("q")

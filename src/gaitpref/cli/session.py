@@ -380,8 +380,8 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
         console.print(f"undone: the answer to trial {trials}")
         if pending is None or pending.id != last:
             console.print(
-                "its query proposed a gait flagged unsafe since and was withdrawn: "
-                "a new query is proposed in its place"
+                "its query proposed a gait flagged unsafe since, or in the region of avoidance "
+                "now, and was withdrawn: a new query is proposed in its place"
             )
 
 

@@ -159,7 +159,8 @@ def undo(
     request: Request, session_id: SessionId, body: Annotated[UndoIn | None, Body()] = None
 ) -> UndoneOut:
     """Take back the last answer; its query is pending again (or, where it proposed a gait
-    flagged unsafe since, a new query in its place: ``withdrawn``; should none be proposed, as
+    flagged unsafe since or in the region of avoidance now, a new query in its place:
+    ``withdrawn``; should none be proposed, as
     the gait generator failed or no gait may be proposed, the undo stands and
     ``next_query_error`` says why).  With ``query_id``, refused (409) unless that query is the
     pending one (so two clients cannot undo twice)."""

@@ -222,13 +222,14 @@ def _flash(
         if replaced and context["reason"] in ("no-gait", "no-safe"):  # said below it
             return (
                 f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
-                "flagged unsafe since and was withdrawn, but no new query could be proposed in "
-                "its place."
+                "flagged unsafe since, or in the region of avoidance now, and was withdrawn, but "
+                "no new query could be proposed in its place."
             )
         if replaced:
             return (
                 f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
-                "flagged unsafe since, so a new query is proposed in its place."
+                "flagged unsafe since, or in the region of avoidance now, so a new query is "
+                "proposed in its place."
             )
         return f"Undone: the answer to trial {names} was taken back; run it again."
     if flagged and flagged in unsafe:

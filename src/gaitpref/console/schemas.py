@@ -144,7 +144,8 @@ class UndoIn(_Request):
 class UndoneOut(BaseModel):
     pending_query_id: int | None = Field(
         description="the query pending now: the one whose answer was taken back, or, when it "
-        "proposed a gait flagged unsafe since, a new one in its place (null while the session is "
+        "proposed a gait flagged unsafe since or in the region of avoidance now, a new one in "
+        "its place (null while the session is "
         "paused or a validation round is open: GET /query proposes it)"
     )
     trials: list[int] = Field(description="its trial numbers (they will be given again)")
@@ -153,8 +154,9 @@ class UndoneOut(BaseModel):
     )
     undone_query_id: int = Field(description="the query whose answer was taken back")
     withdrawn: bool = Field(
-        description="the undone query proposed a gait flagged unsafe after it was asked, so it "
-        "was withdrawn rather than asked again"
+        description="the undone query proposed a gait flagged unsafe after it was asked, or "
+        "one in the region of avoidance as the undo left the model (an exclusion since moved "
+        "it), so it was withdrawn rather than asked again"
     )
     next_query_error: str | None = Field(
         default=None,

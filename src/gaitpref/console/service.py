@@ -62,7 +62,8 @@ class Pending:
 class Undone:
     """An undo, read under the session's lock: the query whose answer was taken back (its
     ``trials``), the query pending now (the same one, or a new one where it was withdrawn for
-    proposing a gait flagged unsafe since; None while none may be proposed yet), and the query
+    proposing a gait flagged unsafe since or in the region of avoidance now; None while none
+    may be proposed yet), and the query
     that was pending before the undo."""
 
     undone_query: int

@@ -17,12 +17,18 @@ Document (``format = "gaitpref-gait"``, schema version 1)::
 
     {"format", "schema_version", "key", "generator", "settings", "parameters",
      "warm_start": key | null, "gait": {"step_length", the fields of a gait in a library file}}
+
+The generator's document (``generator``, ``settings``, ``parameters`` and any field a generator
+of one's own adds) is written among the file's own fields (:data:`FILE_FIELDS`), so a document
+that uses one of them is refused (:meth:`GaitCache.put`; ``on_demand.py`` says so as the
+generator's fault before anything is made).
 """
 
 from __future__ import annotations
 
 import json
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,6 +42,9 @@ from gaitpref.gaits.library_io import Reader, gait_entry, read_gait_entry
 
 FORMAT = "gaitpref-gait"
 SCHEMA_VERSION = 1
+#: the cache file's own fields: a gait's document (generator, settings, parameters and any field
+#: a generator of one's own adds) is written among them, so it may use none of them
+FILE_FIELDS = ("format", "schema_version", "key", "warm_start", "gait")
 
 
 class GaitCacheWarning(UserWarning):
@@ -78,26 +87,44 @@ class GaitCache:
     def put(self, entry: CachedGait, document: dict[str, Any]) -> None:
         """Keep ``entry``; ``document`` (generator, settings, parameters) goes into its file.
 
-        A folder that cannot be written (read-only, or a file in its place) keeps the entry in
+        The file is written first and the entry remembered after.  A folder that cannot be
+        written (an ``OSError``: read-only, a file in its place, a full disk) keeps the entry in
         memory only, with a :class:`GaitCacheWarning` naming it (once per cache): the cache is
         derived data, the session's log carries the gait, so reading or continuing a session
-        never fails for it."""
-        self._memory[entry.key] = entry
+        never fails for it.  Any other failure of the write (an entry that cannot be written as
+        JSON) is a ``ValueError`` naming the file, and nothing is kept.  A ``document`` that
+        uses one of the file's own fields (:data:`FILE_FIELDS`) is a ``ValueError`` naming it,
+        and nothing is kept."""
+        field = file_field_in(document)
+        if field is not None:
+            raise ValueError(
+                f"gait {entry.key}: its document has the field {field!r}, one of the gait cache "
+                f"file's own ({', '.join(FILE_FIELDS)}); nothing is cached"
+            )
         target = self.path(entry.key)
-        if target is None:
-            return
-        try:
-            self._write(target, entry, document)
-        except OSError as exc:
-            if not self.unwritable:
-                warnings.warn(
-                    f"gait cache {self.folder}: cannot write {target.name} "
-                    f"({exc.strerror or exc}); gaits are kept in memory and in the session's "
-                    "log, and other sessions will make them again",
-                    GaitCacheWarning,
-                    stacklevel=2,
-                )
-            self.unwritable = str(exc)
+        if target is not None:
+            try:
+                self._write(target, entry, document)
+            except OSError as exc:
+                self._keep_in_memory(target, exc)
+            except Exception as exc:
+                raise ValueError(
+                    f"gait cache file {target}: cannot be written ({type(exc).__name__}: {exc}); "
+                    "nothing is cached"
+                ) from exc
+        self._memory[entry.key] = entry
+
+    def _keep_in_memory(self, target: Path, exc: OSError) -> None:
+        """The folder cannot be written: say so once (the entry is kept in memory only)."""
+        if not self.unwritable:
+            warnings.warn(
+                f"gait cache {self.folder}: cannot write {target.name} "
+                f"({exc.strerror or exc}); gaits are kept in memory and in the session's "
+                "log, and other sessions will make them again",
+                GaitCacheWarning,
+                stacklevel=3,
+            )
+        self.unwritable = str(exc)
 
     def _write(self, target: Path, entry: CachedGait, document: dict[str, Any]) -> None:
         doc = {
@@ -121,6 +148,13 @@ class GaitCache:
             return read_entry(path, key)[0]
         except GaitLibraryError:
             return None
+
+
+def file_field_in(document: Mapping[str, Any]) -> str | None:
+    """The first of the cache file's own fields (:data:`FILE_FIELDS`) that ``document`` uses,
+    or None: written among them, it would replace the file's (its key, its format) or be
+    replaced by them (the warm start, the gait)."""
+    return next((name for name in FILE_FIELDS if name in document), None)
 
 
 def gait_document(gait: Gait) -> dict[str, Any]:
@@ -184,11 +218,13 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
 
 
 __all__ = [
+    "FILE_FIELDS",
     "FORMAT",
     "SCHEMA_VERSION",
     "CachedGait",
     "GaitCache",
     "GaitCacheWarning",
+    "file_field_in",
     "gait_document",
     "read_entry",
     "read_gait",

@@ -17,8 +17,10 @@ them.  The gait of a parameter vector is, in turn,
    is cached or remembered, so the same gait is made again when next asked for.  So is a
    generator's document (:meth:`~gaitpref.gaits.generator.GaitGenerator.document`) that is not
    JSON (a numpy array, a set, NaN, a key that is not text:
-   :func:`~gaitpref.gaits.json_document.document_problem`), checked when the gait is named,
-   before its key is hashed or anything is cached.
+   :func:`~gaitpref.gaits.json_document.document_problem`), or one that uses a field of the
+   gait cache's files (``format``, ``key``, ``gait``...: ``gait_cache.FILE_FIELDS``, among which
+   the document is written), checked when the gait is named, before its key is hashed or
+   anything is cached.
 
 On a space with continuous features two proposed points may agree to the generator's displayed
 digits (``compass-hzd`` rounds to 3 decimals), so there the id is the generator's followed by
@@ -44,7 +46,7 @@ import numpy as np
 
 from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
-from gaitpref.gaits.gait_cache import CachedGait, GaitCache
+from gaitpref.gaits.gait_cache import FILE_FIELDS, CachedGait, GaitCache, file_field_in
 from gaitpref.gaits.generator import GaitGenerator
 from gaitpref.gaits.json_document import document_problem
 from gaitpref.space import FloatArray
@@ -154,7 +156,8 @@ class OnDemandGaits:
     def _check_document(self, document: Any, name: str, vec: FloatArray) -> None:
         """A :class:`~gaitpref.errors.GaitGeneratorFaultError` when the generator's ``document``
         of gait ``name`` (at ``vec``) is not JSON that reads back as it is
-        (:func:`~gaitpref.gaits.json_document.document_problem`), naming where."""
+        (:func:`~gaitpref.gaits.json_document.document_problem`), naming where, or uses one
+        of the gait cache file's own fields (``gait_cache.FILE_FIELDS``), naming it."""
         problem = document_problem(document)
         if problem is not None:
             raise GaitGeneratorFaultError(
@@ -163,6 +166,15 @@ class OnDemandGaits:
                 "holds only text, finite numbers, true, false, null, lists and objects with text "
                 "keys); nothing of that gait is cached (an error in the generator, not a gait "
                 "found infeasible)"
+            )
+        field = file_field_in(document)
+        if field is not None:
+            raise GaitGeneratorFaultError(
+                f"the gait generator {self.generator.name!r} described gait {name} "
+                f"{_shown(vec)} with a document that has the field {field!r}, one of the gait "
+                f"cache's own ({', '.join(FILE_FIELDS)}): a generator's document may add fields "
+                "of its own, but none of those; nothing of that gait is cached (an error in the "
+                "generator, not a gait found infeasible)"
             )
 
     @contextmanager

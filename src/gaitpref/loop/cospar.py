@@ -630,13 +630,23 @@ class CoSpar:
             out += [(kind, r) for r in parsed]
         return out
 
-    def undo(self) -> Answer:
+    def undo(self, *, region: bool = True) -> Answer:
         """Take back the last answer: its query is pending again, as it was before the answer;
-        unless it proposes a gait flagged unsafe or avoided since it was asked, when it is
-        withdrawn as by :meth:`flag_unsafe` (``pending`` is None and the next :meth:`ask`
-        proposes under the flags)."""
+        unless one of the gaits it proposes (its ``actions``, not the buffered gaits already
+        walked) may not be proposed now, when it is withdrawn as by :meth:`flag_unsafe`
+        (``pending`` is None and the next :meth:`ask` proposes anew): a gait flagged unsafe or
+        avoided since it was asked, or in the region of avoidance of the model as the undo
+        leaves it (an :meth:`exclude` made after the answer changes that model, and so the
+        region).  The rule is the one every ask keeps (:meth:`allowed`).
+
+        ``region=False`` checks the flags and avoided gaits only, as undo did before the region
+        was checked: what a session's undo events of payload version 1 replay with, and what
+        taking back a tell that was never recorded needs (its query pending again as it was)."""
         answer = self._take_back()
-        self._withdraw_if(self._hard_banned)
+        if region:
+            self._withdraw_if(self._not_proposable_now)
+        else:
+            self._withdraw_if(self._hard_banned)
         return answer
 
     def proposable(self) -> NDArray[np.bool_]:
@@ -646,6 +656,11 @@ class CoSpar:
             allowed = self.allowed()
         banned = self._hard_banned()
         return ~banned if allowed is None else allowed & ~banned
+
+    def _not_proposable_now(self) -> NDArray[np.bool_]:
+        """The actions the pending query (restored by :meth:`undo`) may not propose now: what
+        an ask now could not propose (:meth:`proposable`)."""
+        return ~self.proposable()
 
     def _hard_banned(self) -> NDArray[np.bool_]:
         """The actions an unsafe flag (with its radius) or :meth:`avoid` bans now."""

@@ -262,6 +262,19 @@ class LineCoSpar(CoSpar):
             banned |= self._avoided_on(self.space)
         return banned
 
+    def _not_proposable_now(self) -> NDArray[np.bool_]:
+        """As :meth:`CoSpar._not_proposable_now`, read along the line the pending query was
+        chosen on, as its ask read it (``_on_line``: the table with the line's points; the
+        cautious level weighs a gait against the known-safe gaits of that line): the table's
+        rows its ask could not propose now."""
+        pending = self.pending
+        if pending is None or pending.line is None:
+            return super()._not_proposable_now()
+        with one_blas_thread():
+            _, allowed = self._on_line(pending.line)
+        out: NDArray[np.bool_] = ~allowed[: len(self.space)] | self._hard_banned()
+        return out
+
     def _withdraw_if(self, banned_now: Callable[[], NDArray[np.bool_]]) -> bool:
         """As :meth:`CoSpar._withdraw_if`; a withdrawn query's points leave the table."""
         withdrawn = super()._withdraw_if(banned_now)

@@ -311,12 +311,22 @@ class ShareRefit(EventPayload):
         return _without_none(handler(self), "hypotheses")
 
 
-class Undo(EventPayload):
-    """``undo``: the answer to ``query`` (its trials) is taken back."""
+class UndoV1(EventPayload):
+    """``undo`` as first written (payload version 1): the query it restores is withdrawn only
+    when it proposes a gait flagged unsafe or avoided since it was asked."""
 
     kind: ClassVar[str] = "undo"
     query: int
     trials: list[int]
+
+
+class Undo(UndoV1):
+    """``undo``: the answer to ``query`` (its trials) is taken back.  Version 2 also withdraws
+    the query it restores when one of its gaits lies in the region of avoidance of the model as
+    the undo leaves it (an exclusion made after the answer moves the region; ``CoSpar.undo``);
+    the payload is unchanged."""
+
+    version: ClassVar[int] = 2
 
 
 class TrialExcluded(EventPayload):
@@ -431,7 +441,7 @@ _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
 #: earlier payload versions still read, because events of them exist and are never rewritten
 #: (new events are written in the newest): (kind, version) -> class
 OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
-    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1, ValidationStartedV1)
+    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1, ValidationStartedV1, UndoV1)
 }
 
 CREATED = Created.kind

@@ -99,6 +99,11 @@ from gaitpref.storage.base import check_subject
 
 T = TypeVar("T")
 R = TypeVar("R")
+#: why an undo proposed anew, before the error that stopped it proposing
+_WITHDRAWN = (
+    "the answer was undone, but its query proposed a gait flagged unsafe since, or in the "
+    "region of avoidance now, and was withdrawn"
+)
 
 
 class Session:
@@ -422,8 +427,10 @@ class Session:
         """Take back the last answer: its query is pending again, the model as it was before.
 
         When that query proposes a gait flagged unsafe (or within the flag's radius) after it
-        was asked, it is withdrawn, as a flag withdraws the pending query, and a new query is
-        proposed and logged in its place; None when none may be proposed yet (the session is
+        was asked, or a gait in the region of avoidance of the model as the undo leaves it (an
+        exclusion made after the answer changes the model, and so the region), it is withdrawn,
+        as a flag withdraws the pending query, and a new query is proposed and logged in its
+        place; None when none may be proposed yet (the session is
         paused, or a blind validation round is open: the next :meth:`next_query` proposes).
         Should no gait be left to propose at all, the undo stands and
         :class:`~gaitpref.errors.NoSafeGaitError` says so.
@@ -442,16 +449,12 @@ class Session:
                 return self._next_query()
             except InfeasibleProposalsError as e:
                 raise InfeasibleProposalsError(
-                    "the answer was undone, but its query proposed a gait flagged unsafe since "
-                    f"and was withdrawn; {e}",
+                    f"{_WITHDRAWN}; {e}",
                     infeasible=e.infeasible,
                     limit=e.limit,
                 ) from e
             except NoSafeGaitError as e:
-                raise NoSafeGaitError(
-                    "the answer was undone, but its query proposed a gait flagged unsafe since "
-                    f"and was withdrawn; {e}"
-                ) from e
+                raise NoSafeGaitError(f"{_WITHDRAWN}; {e}") from e
 
         return self._locked(run)
 

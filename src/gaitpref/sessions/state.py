@@ -220,7 +220,7 @@ class SessionState:
             try:
                 self.loop.exclude({query.loop_id: drops}, {query.loop_id: single_drops})
             except Exception:
-                self.loop.undo()
+                self.loop.undo(region=False)  # its query pending again, as it was
                 raise
         return answer
 
@@ -267,8 +267,9 @@ class SessionState:
         return events
 
     def revert_tell(self) -> None:
-        """Take back a :meth:`tell` whose events could not be written."""
-        self.loop.undo()
+        """Take back a :meth:`tell` whose events could not be written: its query pending
+        again as it was (nothing logged moved the region since)."""
+        self.loop.undo(region=False)
 
     # -- derive: undo and exclusion ------------------------------------------------------------
     def undo_event(self) -> NewEvent:
@@ -496,7 +497,8 @@ class SessionState:
         if r.kind == log.QUERY:
             self.pending = self._query_of(r.seq, p)
         elif r.kind == log.UNDO:
-            self.loop.undo()
+            # version 1 (written before the region was checked) replays by its own rule
+            self.loop.undo(region=r.version > log.UndoV1.version)
             told = self.told.pop()
             for rows, name in (
                 (told.trial_rows, "trials_log"),
@@ -507,7 +509,8 @@ class SessionState:
                 records: list[Any] = getattr(self, name)
                 for k in rows:
                     records[k] = replace(records[k], undone=True)
-            # withdrawn when it proposes a gait flagged unsafe since it was asked
+            # withdrawn when it proposes a gait flagged unsafe since it was asked, or one in
+            # the region of avoidance now
             self.pending = told.query if self.loop.pending is not None else None
         elif r.kind == log.EXCLUDED:
             pass  # applied to the model before it was written (apply_exclusion)
