@@ -589,6 +589,8 @@ class CoSpar:
                 warm = dataclasses.replace(warm, share=share.after)
             new_posterior = self._fit(answers_now, gp, hyper, warm)
             sharing = self._weighed_posteriors(share, answers_now, gp, hyper, warm)
+        if share is not None and share.fits:  # held by the posteriors above while they are
+            share = dataclasses.replace(share, fits={})  # current, never by the answers: m x m
         self.warm = warm
         if refit is not None or share is not None:
             answer = dataclasses.replace(answer, refit=refit, share_refit=share)
