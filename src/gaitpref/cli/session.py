@@ -398,10 +398,27 @@ def exclude(
     detail: Annotated[str, typer.Option(help="What happened.")] = "",
     db: DbOption = None,
 ) -> None:
-    """Exclude a trial (device fault, stumble, ...): its comparisons leave the model."""
+    """Exclude a trial (device fault, stumble, ...): its comparisons leave the model; a
+    pending query proposing a gait in the region of avoidance now is withdrawn."""
     with _opened(db, session_id) as session:
+        pending, shown = session.pending, session.validation_plan
         guard(lambda: session.exclude(trial, reason.replace("-", "_"), detail))
         console.print(f"trial {trial} excluded ({reason}); the record stays")
+        if pending is not None and session.pending is None:
+            console.print(
+                f"the pending query {pending.id} proposed a gait in the region of avoidance "
+                "of the model without it and was withdrawn: the next query is proposed anew"
+            )
+        if shown is not None and session.validation_plan != shown:
+            again = (
+                "it is drawn again among the gaits still allowed"
+                if session.validation_plan is not None
+                else "fewer than three gaits may be shown now, so none is open"
+            )
+            console.print(
+                "the blind validation round showed a gait in the region of avoidance now and "
+                f"was withdrawn: {again}"
+            )
 
 
 @session_app.command("unsafe")

@@ -209,7 +209,10 @@ def exclude(
     trial: Annotated[int, Path(ge=1, le=MAX_ID)],
     body: ExcludeIn,
 ) -> list[TrialOut]:
-    """Exclude an answered trial (device fault, stumble...): its answers leave the model."""
+    """Exclude an answered trial (device fault, stumble...): its answers leave the model.  A
+    pending query that proposes a gait in the region of avoidance of the model without them is
+    withdrawn (read ``GET .../query`` again for the next one); an open validation round that
+    shows one is drawn again."""
     service = service_of(request)
     service.exclude(session_id, trial, body.reason, body.detail)
     return service.read(session_id, present.trials_out)

@@ -660,8 +660,9 @@ class CoSpar:
         return ~banned if allowed is None else allowed & ~banned
 
     def _not_proposable_now(self) -> NDArray[np.bool_]:
-        """The actions the pending query (restored by :meth:`undo`) may not propose now: what
-        an ask now could not propose (:meth:`proposable`)."""
+        """The actions the pending query (restored by :meth:`undo`, or kept through an
+        :meth:`exclude`) may not propose now: what an ask now could not propose
+        (:meth:`proposable`)."""
         return ~self.proposable()
 
     def _hard_banned(self) -> NDArray[np.bool_]:
@@ -745,6 +746,8 @@ class CoSpar:
         self,
         drops: Mapping[int, Collection[int]],
         singles: Mapping[int, Collection[int]] | None = None,
+        *,
+        region: bool = True,
     ) -> Posterior:
         """Take preferences out of the model and refit; the answers themselves stay recorded.
 
@@ -753,6 +756,13 @@ class CoSpar:
         Exclusions add up (excluding twice is harmless) and are dropped with their answer by
         :meth:`undo`.  Raises :class:`QueryError` / ``IndexError`` and changes nothing on bad
         input.
+
+        The refit moves the region of avoidance: a pending query one of whose gaits (its
+        ``actions``, not the buffered gaits already walked) may not be proposed now is
+        withdrawn as by :meth:`flag_unsafe` (``pending`` is None and the next :meth:`ask`
+        proposes anew), the rule :meth:`undo` and every ask keep (:meth:`proposable`).
+        ``region=False`` keeps the pending query as it is, as exclusions did before: what a
+        session's exclusion events of payload version 1 replay with.
         """
         position = {a.query.id: k for k, a in enumerate(self.answers)}
         new = _merged(self._dropped, drops, position, self.answers, "preferences")
@@ -762,14 +772,18 @@ class CoSpar:
         if new == self._dropped and new_singles == self._dropped_singles:
             return self.posterior
         old, old_singles = self._dropped, self._dropped_singles
+        old_posterior = self.posterior
         self._dropped, self._dropped_singles = new, new_singles
         try:
             with one_blas_thread():
                 posterior = self._fit(self.answers)
+            self.posterior = posterior
+            # read before anything else moves, so that nothing changes should it fail
+            banned = self._not_proposable_now() if region and self.pending is not None else None
         except Exception:
             self._dropped, self._dropped_singles = old, old_singles
+            self.posterior = old_posterior
             raise
-        self.posterior = posterior
         touched = [
             position[q]
             for q in {*drops, *(singles or {})}
@@ -777,6 +791,8 @@ class CoSpar:
         ]
         if touched:
             self._stale_before.update(a.query.id for a in self.answers[min(touched) + 1 :])
+        if banned is not None:
+            self._withdraw_if(lambda: banned)
         return posterior
 
     # -- internals ---------------------------------------------------------------------------

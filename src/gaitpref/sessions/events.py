@@ -329,8 +329,9 @@ class Undo(UndoV1):
     version: ClassVar[int] = 2
 
 
-class TrialExcluded(EventPayload):
-    """``trial_excluded``: a trial's answers leave the model; the records stay, flagged."""
+class TrialExcludedV1(EventPayload):
+    """``trial_excluded`` as first written (payload version 1): the query pending when it was
+    made stays pending, whatever the exclusion does to the region of avoidance."""
 
     kind: ClassVar[str] = "trial_excluded"
     trial: int
@@ -338,6 +339,16 @@ class TrialExcluded(EventPayload):
     action: int
     reason: Reason
     detail: Annotated[str, Recorded] = ""
+
+
+class TrialExcluded(TrialExcludedV1):
+    """``trial_excluded``: a trial's answers leave the model; the records stay, flagged.
+    Version 2 also withdraws the pending query when one of its gaits lies in the region of
+    avoidance of the model as the exclusion leaves it (``CoSpar.exclude``), and an open
+    version-2 blind validation round that shows a gait no query may propose now; the payload
+    is unchanged."""
+
+    version: ClassVar[int] = 2
 
 
 class TrialFlaggedUnsafe(EventPayload):
@@ -441,7 +452,14 @@ _BY_KIND = {p.kind: p for p in SESSION_PAYLOADS}
 #: earlier payload versions still read, because events of them exist and are never rewritten
 #: (new events are written in the newest): (kind, version) -> class
 OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
-    (p.kind, p.version): p for p in (GaitMadeV1, GaitInfeasibleV1, ValidationStartedV1, UndoV1)
+    (p.kind, p.version): p
+    for p in (
+        GaitMadeV1,
+        GaitInfeasibleV1,
+        ValidationStartedV1,
+        UndoV1,
+        TrialExcludedV1,
+    )
 }
 
 CREATED = Created.kind
@@ -602,12 +620,15 @@ __all__ = [
     "Resumed",
     "ShareRefit",
     "TrialExcluded",
+    "TrialExcludedV1",
     "TrialExecuted",
     "TrialFlaggedUnsafe",
     "Undo",
+    "UndoV1",
     "UnsafeFlagWithdrawn",
     "ValidationAnswered",
     "ValidationStarted",
+    "ValidationStartedV1",
     "check_new",
     "describe_mismatch",
     "is_answer_part",

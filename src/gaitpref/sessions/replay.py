@@ -90,7 +90,7 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
             _check(r, state.undo_event())
         elif r.kind == log.EXCLUDED:
             _check(r, state.exclude_event(p["trial"], p["reason"], p.get("detail", "")))
-            state.apply_exclusion(p)
+            state.apply_exclusion(p, r.version)
         elif r.kind == log.UNSAFE:
             _check(r, state.unsafe_event(p["trial"], p["reason"]))
         elif r.kind == log.UNSAFE_WITHDRAWN:

@@ -460,7 +460,13 @@ class Session:
 
     def exclude(self, trial: int, reason: str, detail: str = "") -> Trial:
         """Exclude an answered trial (``reason`` in ``REASONS``): its comparisons and
-        suggestions leave the model; the records stay, flagged."""
+        suggestions leave the model; the records stay, flagged.
+
+        The model without them has its own region of avoidance (``[safety]``): a pending query
+        that proposes a gait in it now is withdrawn, as an unsafe flag withdraws one, and the
+        next :meth:`next_query` proposes anew (:attr:`pending` is None meanwhile); an open
+        blind validation round that shows such a gait is withdrawn and drawn again at once
+        among the gaits still allowed (none is open after it when fewer than three are)."""
 
         if isinstance(detail, str):
             check_printable(
@@ -470,14 +476,18 @@ class Session:
         def run() -> Trial:
             st = self._state
             st.check_open("exclusions")
+            before = st.open_round
             event = st.exclude_event(trial, reason, detail)
-            st.apply_exclusion(event.payload)
+            st.apply_exclusion(event.payload, event.version)
             try:
                 records = self._write([event])
             except BaseException:
                 self._broken = True  # the model already moved: rebuild from the log
                 raise
             st.commit(records)
+            if before is not None and st.open_round is None:  # it showed a gait in the region
+                with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
+                    self._append([st.validation_event()])
             return next(t for t in self.trials() if t.number == trial)
 
         return self._locked(run)

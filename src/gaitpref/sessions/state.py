@@ -347,8 +347,12 @@ class SessionState:
             )
         )
 
-    def apply_exclusion(self, payload: dict[str, Any]) -> None:
-        """Take the trial's answers out of the model (before writing)."""
+    def apply_exclusion(self, payload: dict[str, Any], version: int) -> None:
+        """Take the trial's answers out of the model (before writing).
+
+        As payload ``version`` 2 (and later) does, the loop then withdraws the pending query
+        when one of its gaits lies in the region of avoidance the exclusion leaves
+        (``CoSpar.exclude``; :meth:`commit` books it); version 1, written before, kept it."""
         trial = payload["trial"]
         self.excluded[trial] = (payload["reason"], payload.get("detail", ""))
         drops: dict[int, list[int]] = {}
@@ -359,7 +363,7 @@ class SessionState:
                 drops[told.query.loop_id] = pairs
                 single_drops[told.query.loop_id] = singles
         try:
-            self.loop.exclude(drops, single_drops)
+            self.loop.exclude(drops, single_drops, region=version > log.TrialExcludedV1.version)
         except Exception:
             del self.excluded[trial]
             raise
@@ -513,7 +517,18 @@ class SessionState:
             # the region of avoidance now
             self.pending = told.query if self.loop.pending is not None else None
         elif r.kind == log.EXCLUDED:
-            pass  # applied to the model before it was written (apply_exclusion)
+            # applied to the model before it was written (apply_exclusion), which withdrew the
+            # pending query from the loop when one of its gaits lies in the region now
+            if self.loop.pending is None:
+                self.pending = None
+            current = self.open_round
+            if (
+                r.version > log.TrialExcludedV1.version
+                and current is not None
+                and current.version >= 2
+                and self._shows_banned(current)
+            ):
+                self.rounds.pop()  # an open round showing a gait in the region now: withdrawn
         elif r.kind == log.UNSAFE:
             self.unsafe[p["trial"]] = (p["action"], p["reason"])
             if self.loop.flag_unsafe(p["action"]):
