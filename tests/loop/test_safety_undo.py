@@ -19,6 +19,7 @@ from gaitpref.loop.line import LineCoSpar
 from gaitpref.loop.lines import LineSettings
 from gaitpref.loop.safety import near
 from gaitpref.model.ordinal import Ordinal
+from tests.sessions import regionkit
 
 GRID = Space([Feature.linspace("x", 0.0, 1.0, 21), Feature.linspace("y", 0.0, 1.0, 5)])
 UNIT = Space([Feature.interval("x", 0.0, 1.0), Feature.interval("y", 0.0, 1.0)])
@@ -144,25 +145,7 @@ def test_on_the_line_path_a_flag_on_a_point_the_undone_query_added_is_refused() 
     assert loop.pending is not None
 
 
-RATED = """
-name = "rated-undo-region"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 15
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-fit = "fixed"
-[cospar]
-strategy = "self-sparring"
-[feedback.rating]
-labels = ["very bad", "bad", "okay", "good"]
-[safety]
-avoid = ["very bad"]
-lambda = 1.0
-"""
+RATED = regionkit.CONFIG  # the sessions' scenario, run on the loop (seed 2)
 
 
 def _rated_then_excluded(region: bool) -> tuple[CoSpar, Query]:

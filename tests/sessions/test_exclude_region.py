@@ -16,44 +16,17 @@ import numpy as np
 import pytest
 
 from gaitpref import Rating, Session
-from gaitpref.config import parse_config
+from tests.sessions import regionkit
 
-# the scenario of test_undo_region.py: seed 2 runs gaits 2, 4, 0, 14, 14, then proposes 1; trial
-# 1 (gait 2) rated "good" makes gait 1, next to it, look safe enough for query 6 to propose,
-# though its other neighbours are "very bad"
-CONFIG = """
-name = "rated-exclude-region"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 15
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-fit = "fixed"
-[cospar]
-seed = 2
-strategy = "self-sparring"
-[feedback.rating]
-labels = ["very bad", "bad", "okay", "good"]
-[safety]
-avoid = ["very bad"]
-lambda = 1.0
-"""
-GAITS = [2, 4, 0, 14, 14]
-NEXT = 1  # what query 6 proposes while trial 1's "good" rating is in the model
+GAITS = list(regionkit.GAITS[:5])
+NEXT = regionkit.GAITS[5]  # what query 6 proposes while trial 1's "good" rating is in the model
 
 
 def _pending(url: str) -> tuple[Session, int]:
     """Five answers: trial 1 "good", the gaits below 5 "very bad", the others "okay"; query 6
     pending (it proposes gait 1); returns the session and query 6's id."""
-    s = Session.create(url, parse_config(CONFIG), "S01")
-    for trial in range(1, 6):
-        q = s.next_query()
-        a = q.actions[0]
-        label = "good" if trial == 1 else "very bad" if a < 5 else "okay"
-        s.answer(q.id, [Rating(a, label)])
+    s = Session.create(url, regionkit.config(), "S01")
+    regionkit.rate_trials(s, 5)
     assert [t.action for t in s.trials()] == GAITS
     q = s.next_query()
     assert q.actions == (NEXT,) and q.trials == (6,)  # the case under test
@@ -127,7 +100,7 @@ def _round(url: str) -> Session:
     then a blind validation round showing gait 7 (proposable while trials 2 and 3, "good"
     at its neighbours 5 and 8, are in the model), and trial 2 excluded (gait 7 stays
     proposable)."""
-    s = Session.create(url, parse_config(CONFIG), "S01")
+    s = Session.create(url, regionkit.config(), "S01")
     for label in ("okay", "good", "good", "very bad", "very bad"):
         q = s.next_query()
         s.answer(q.id, [Rating(q.actions[0], label)])

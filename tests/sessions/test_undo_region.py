@@ -15,42 +15,16 @@ import numpy as np
 import pytest
 
 from gaitpref import Rating, Session
-from gaitpref.config import parse_config
+from tests.sessions import regionkit
 
-# seed 2 runs gaits 2, 4, 0, 14, 14, then 1: trial 1 (gait 2) rated "good" makes gait 1, next
-# to it, look safe enough for query 6 to propose, though its other neighbours are "very bad"
-CONFIG = """
-name = "rated-undo-region"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 15
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-fit = "fixed"
-[cospar]
-seed = 2
-strategy = "self-sparring"
-[feedback.rating]
-labels = ["very bad", "bad", "okay", "good"]
-[safety]
-avoid = ["very bad"]
-lambda = 1.0
-"""
-GAITS = [2, 4, 0, 14, 14, 1]
+GAITS = list(regionkit.GAITS)
 
 
 def _rated(url: str) -> Session:
     """Six answers: trial 1 "good", the gaits below 5 "very bad", the others "okay"; the
     seventh query pending; then trial 1 excluded (the good rating leaves the model)."""
-    s = Session.create(url, parse_config(CONFIG), "S01")
-    for trial in range(1, 7):
-        q = s.next_query()
-        a = q.actions[0]
-        label = "good" if trial == 1 else "very bad" if a < 5 else "okay"
-        s.answer(q.id, [Rating(a, label)])
+    s = Session.create(url, regionkit.config(), "S01")
+    regionkit.rate_trials(s, 6)
     assert [t.action for t in s.trials()] == GAITS  # the case under test
     s.next_query()
     s.exclude(1, "device_fault", "the treadmill belt slipped")
