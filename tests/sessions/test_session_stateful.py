@@ -12,8 +12,9 @@ into another database.  After every step it checks that
 - the log only grows: every event read before is still there, unchanged (seq, kind, version,
   payload, time), the sequence numbers run 1..n and the session's ``last_seq`` is the last one;
 - no pending query proposes a gait flagged unsafe or within ``unsafe_radius`` of one, nor does
-  an open validation round show one; a query, when it is issued, and a round, when it is drawn,
-  propose no gait in the region of avoidance (``loop/safety.py``, written out here as
+  an open validation round show one; a query, when it is issued, restored by an undo or kept
+  through an exclusion, and a round, when it is drawn, propose no gait in the region of
+  avoidance (``loop/safety.py``, written out here as
   ``tests/loop/test_safety.py`` writes it, with a margin of rounding: an unexplored gait whose
   upper bound ties the known-safe gaits' best is not counted as avoided);
 - a refused call (an undo of an excluded or flagged trial's answer, a trial excluded or flagged
@@ -215,6 +216,11 @@ class SessionMachine(RuleBasedStateMachine):
         if query.id in self.checked:
             return
         self.checked.add(query.id)
+        self._proposable_now(query)
+
+    def _proposable_now(self, query: SessionQuery) -> None:
+        """A query pending after the model moved under it (an undo restored it, an exclusion
+        kept it): none of its gaits avoided under the posterior now, nor near a flag."""
         banned = self._banned()
         avoided = _avoided(self.s, banned)
         for a in query.actions:
@@ -334,7 +340,7 @@ class SessionMachine(RuleBasedStateMachine):
         assert [t.number for t in s.trials()] == [t.number for t in trials[: -len(last)]]
         if pending is not None:
             assert pending == s.pending and pending.trials == tuple(last)
-            self._issued(pending)
+            self._proposable_now(pending)  # restored or new: either way, allowed now
 
     @rule(data=st.data())
     def exclude(self, data: st.DataObject) -> None:
@@ -352,6 +358,8 @@ class SessionMachine(RuleBasedStateMachine):
             self._unchanged(before)
             return
         assert not already and done.number == trial and done.excluded == reason
+        if self.s.pending is not None:  # kept through the exclusion: allowed by the model now
+            self._proposable_now(self.s.pending)
 
     @rule(data=st.data())
     def flag_unsafe(self, data: st.DataObject) -> None:
