@@ -226,7 +226,7 @@ def test_flag_from_the_page_needs_a_reason_and_a_confirmation(client: TestClient
     assert ask.status_code == 200 and "Flag this trial unsafe?" in ask.text
     assert client.get(f"/api/sessions/{sid}").json()["unsafe"] == {}  # not yet
     done = post(client, flag.action, forms_of(ask.text)["form1"].fields)
-    assert done.status_code == 303 and done.headers["location"].endswith("?flagged=1")
+    assert done.status_code == 303 and done.headers["location"].endswith("?flagged=1&replaced=0")
     shown = client.get(done.headers["location"]).text
     assert "Trial 1 flagged unsafe" in shown and "unsafe: hip pain" in shown
     assert 'id="unsafe-last"' not in shown

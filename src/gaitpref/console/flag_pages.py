@@ -49,8 +49,8 @@ async def post_unsafe(
 
         lines = await run_in_threadpool(service.read, session_id, summary)
         return _confirm(request, session_id, "unsafe", lines, fields, f"trials/{trial}/unsafe")
-    await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
-    return see_other(f"/sessions/{session_id}?flagged={trial}")
+    replaced = await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
+    return see_other(f"/sessions/{session_id}?flagged={trial}&replaced={int(replaced)}")
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw")

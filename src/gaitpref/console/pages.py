@@ -186,11 +186,12 @@ async def trial_page(
     flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
+    excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
-    flash = _flash(context, answered, undone, replaced, flagged, withdrawn)
+    flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded)
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 
 
@@ -208,6 +209,7 @@ def _flash(
     replaced: int | None,
     flagged: int | None,
     withdrawn: int | None,
+    excluded: int | None = None,
 ) -> str:
     """What the redirect after a post says, if it is still so: a page reloaded after another
     tab undid the answer, withdrew the flag (...) says nothing rather than what is no longer
@@ -232,8 +234,18 @@ def _flash(
                 "proposed in its place."
             )
         return f"Undone: the answer to trial {names} was taken back; run it again."
+    # a query withdrawn by the flag or the exclusion: the device must be set to the new one
+    anew = (
+        " The pending query proposed a gait {why} and was withdrawn: the query below is a new "
+        "one; set the device to it."
+    )
     if flagged and flagged in unsafe:
-        return f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
+        said = f"Trial {flagged} flagged unsafe: its gait (and those near it) will not be proposed."
+        return said + (anew.format(why="near it") if replaced else "")
+    if excluded and any(r.trial == excluded and r.excluded for r in context["chronology"]):
+        said = f"Trial {excluded} excluded: its answers left the model."
+        why = "in the region of avoidance of the model without them"
+        return said + (anew.format(why=why) if replaced else "")
     if withdrawn and withdrawn in done and withdrawn not in unsafe:
         return f"The unsafe flag of trial {withdrawn} was withdrawn."
     return ""
@@ -342,8 +354,9 @@ async def post_exclude(
     detail = fields.get("detail", "").strip()
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")
-    await run_in_threadpool(service_of(request).exclude, session_id, trial, reason, detail)
-    return see_other(f"/sessions/{session_id}")
+    service = service_of(request)
+    replaced = await run_in_threadpool(service.exclude, session_id, trial, reason, detail)
+    return see_other(f"/sessions/{session_id}?excluded={trial}&replaced={int(replaced)}")
 
 
 @router.get("/sessions/{session_id}/posterior.png")

@@ -251,15 +251,18 @@ class SessionService:
             session.note(text)
             return True
 
-    def flag_unsafe(self, session_id: int, trial: int, reason: str) -> None:
-        """The operator's hard stop on an answered trial (``reason`` required)."""
+    def flag_unsafe(self, session_id: int, trial: int, reason: str) -> bool:
+        """The operator's hard stop on an answered trial (``reason`` required); whether it
+        withdrew the pending query (it proposed a gait near the flag)."""
         text = reason.strip()
         if not text:
             raise InputError("reason", "say why the trial was unsafe (the reason is required)")
         if len(text) > 2000:
             raise InputError("reason", "a reason has at most 2000 characters")
         with self.locked(session_id) as session:
+            pending = session.pending
             session.flag_unsafe(trial, text)
+            return pending is not None and session.pending is None
 
     def withdraw_unsafe(self, session_id: int, trial: int) -> None:
         with self.locked(session_id) as session:
@@ -269,9 +272,13 @@ class SessionService:
         with self.locked(session_id) as session:
             return session.note(text)
 
-    def exclude(self, session_id: int, trial: int, reason: str, detail: str = "") -> None:
+    def exclude(self, session_id: int, trial: int, reason: str, detail: str = "") -> bool:
+        """Exclude an answered trial; whether that withdrew the pending query (it proposed a
+        gait in the region of avoidance of the model without the trial)."""
         with self.locked(session_id) as session:
+            pending = session.pending
             session.exclude(trial, reason, detail)
+            return pending is not None and session.pending is None
 
     def set_status(self, session_id: int, status: str) -> None:
         with self.locked(session_id) as session:
