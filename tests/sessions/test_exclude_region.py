@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from gaitpref import Rating, Session
+from gaitpref.config import parse_config
 from tests.sessions import regionkit
 
 GAITS = list(regionkit.GAITS[:5])
@@ -165,3 +166,23 @@ def test_the_cli_says_when_an_exclusion_withdrew_the_pending_query(tmp_path: Pat
     assert f"pending query {asked} proposed a gait in the region of avoidance" in result.output
     with Session.open(f"sqlite:///{db}", s.id) as again:
         assert again.pending is None
+
+
+def test_the_cli_says_when_an_unsafe_flag_withdrew_the_pending_query(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    db = tmp_path / "f.db"
+    with Session.create(
+        f"sqlite:///{db}", parse_config(regionkit.CONFIG + "unsafe_radius = 0.1\n"), "S01"
+    ) as s:
+        regionkit.rate_trials(s, 5)
+        asked = s.next_query()  # gait 1, within 0.1 of the range of trial 1's gait 2
+    args = ["session", "unsafe", str(s.id), "1", "--reason", "knee", "--db", str(db)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    assert f"pending query {asked.id} proposed a gait near it and was withdrawn" in result.output
+    args = ["session", "unsafe", str(s.id), "2", "--reason", "hip", "--db", str(db)]
+    result = CliRunner().invoke(app, args)  # nothing pending now: nothing withdrawn
+    assert result.exit_code == 0 and "withdrawn" not in result.output

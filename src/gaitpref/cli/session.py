@@ -442,10 +442,16 @@ def unsafe(
             return
         if not reason.strip():
             fail("give --reason: what made the trial unsafe")
+        pending = session.pending
         guard(lambda: session.flag_unsafe(trial, reason))
         console.print(
             f"trial {trial} flagged unsafe ({reason}); {session.config.safety.flag_effect()}"
         )
+        if pending is not None and session.pending is None:
+            console.print(
+                f"the pending query {pending.id} proposed a gait near it and was withdrawn: the "
+                "next query is proposed anew"
+            )
 
 
 @session_app.command("note")
