@@ -521,21 +521,13 @@ class SessionState:
             # pending query from the loop when one of its gaits lies in the region now
             if self.loop.pending is None:
                 self.pending = None
-            current = self.open_round
-            if (
-                r.version > log.TrialExcludedV1.version
-                and current is not None
-                and current.version >= 2
-                and self._shows_banned(current)
-            ):
-                self.rounds.pop()  # an open round showing a gait in the region now: withdrawn
+            if r.version > log.TrialExcludedV1.version:
+                self._withdraw_banned_round()  # showing a gait in the region now
         elif r.kind == log.UNSAFE:
             self.unsafe[p["trial"]] = (p["action"], p["reason"])
             if self.loop.flag_unsafe(p["action"]):
                 self.pending = None  # the pending query proposed a gait it now avoids
-            current = self.open_round
-            if current is not None and current.version >= 2 and self._shows_banned(current):
-                self.rounds.pop()  # an open round showing a gait near the flag: withdrawn
+            self._withdraw_banned_round()  # showing a gait near the flag
         elif r.kind == log.UNSAFE_WITHDRAWN:
             action = self.unsafe.pop(p["trial"])[0]
             if all(a != action for a, _ in self.unsafe.values()):
@@ -636,6 +628,13 @@ class SessionState:
         if self.on_demand is not None:
             return self.on_demand.gait_id(self.loop.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]
+
+    def _withdraw_banned_round(self) -> None:
+        """Withdraw the open blind validation round (version 2 and later: drawn from the gaits
+        a query may propose) when it shows a gait no query may propose now."""
+        current = self.open_round
+        if current is not None and current.version >= 2 and self._shows_banned(current):
+            self.rounds.pop()
 
     def _shows_banned(self, current: _Round) -> bool:
         """Whether ``current`` shows a gait no query may propose now.  On the line path a flag
