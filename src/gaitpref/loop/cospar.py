@@ -311,7 +311,7 @@ class CoSpar:
         if share is None or not share.fits or warm is None:
             return {}
         single, _ = self._singles(answers, hyper.thresholds)
-        if single is not None or not _same_kernel(gp.kernel, hyper.kernel(), self.space.ndim):
+        if single is not None or not gp.kernel.same_covariances(hyper.kernel(), self.space.ndim):
             return {}
         return {
             s: self._fit(answers, gp, hyper, dataclasses.replace(warm, share=s), fit)
@@ -1022,16 +1022,6 @@ GRID_LIMIT_ACTIONS = MODEL_GRID_LIMIT
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000
-
-
-def _same_kernel(a: SquaredExponential, b: SquaredExponential, ndim: int) -> bool:
-    """Whether two kernels compute the same covariances (a scalar lengthscale is shared by every
-    feature: ``0.15`` and ``(0.15,)`` are one kernel in 1-D)."""
-    return (a.lengthscales(ndim), a.variance, a.jitter) == (
-        b.lengthscales(ndim),
-        b.variance,
-        b.jitter,
-    )
 
 
 def check_radius(radius: object) -> None:

@@ -64,6 +64,16 @@ class SquaredExponential:
             )
         return self.lengthscale
 
+    def same_covariances(self, other: SquaredExponential, ndim: int) -> bool:
+        """Whether ``other`` computes the same covariances over ``ndim`` features: the same
+        lengthscales, variance and jitter (a scalar lengthscale is every feature's, so ``0.15``
+        and ``(0.15,)`` are one kernel in 1-D, though not equal as dataclasses)."""
+        return (self.lengthscales(ndim), self.variance, self.jitter) == (
+            other.lengthscales(ndim),
+            other.variance,
+            other.jitter,
+        )
+
     def factors(self, space: Space) -> list[FloatArray]:
         """Per-feature correlation matrices ``K_f`` (``n_f x n_f``, unit diagonal)."""
         out = []
