@@ -404,11 +404,7 @@ def exclude(
         pending, shown = session.pending, session.validation_plan
         guard(lambda: session.exclude(trial, reason.replace("-", "_"), detail))
         console.print(f"trial {trial} excluded ({reason}); the record stays")
-        if pending is not None and session.pending is None:
-            console.print(
-                f"the pending query {pending.id} proposed a gait in the region of avoidance "
-                "of the model without it and was withdrawn: the next query is proposed anew"
-            )
+        _say_withdrawn(pending, session, "in the region of avoidance of the model without it")
         if shown is not None and session.validation_plan != shown:
             again = (
                 "it is drawn again among the gaits still allowed"
@@ -419,6 +415,15 @@ def exclude(
                 "the blind validation round showed a gait in the region of avoidance now and "
                 f"was withdrawn: {again}"
             )
+
+
+def _say_withdrawn(pending: SessionQuery | None, session: Session, where: str) -> None:
+    """Say so when the flag or exclusion just made withdrew ``pending`` (a gait ``where``)."""
+    if pending is not None and session.pending is None:
+        console.print(
+            f"the pending query {pending.id} proposed a gait {where} and was withdrawn: the "
+            "next query is proposed anew"
+        )
 
 
 @session_app.command("unsafe")
@@ -447,11 +452,7 @@ def unsafe(
         console.print(
             f"trial {trial} flagged unsafe ({reason}); {session.config.safety.flag_effect()}"
         )
-        if pending is not None and session.pending is None:
-            console.print(
-                f"the pending query {pending.id} proposed a gait near it and was withdrawn: the "
-                "next query is proposed anew"
-            )
+        _say_withdrawn(pending, session, "near it")
 
 
 @session_app.command("note")

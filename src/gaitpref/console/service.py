@@ -260,9 +260,7 @@ class SessionService:
         if len(text) > 2000:
             raise InputError("reason", "a reason has at most 2000 characters")
         with self.locked(session_id) as session:
-            pending = session.pending
-            session.flag_unsafe(trial, text)
-            return pending is not None and session.pending is None
+            return _withdrew(session, lambda: session.flag_unsafe(trial, text))
 
     def withdraw_unsafe(self, session_id: int, trial: int) -> None:
         with self.locked(session_id) as session:
@@ -276,9 +274,7 @@ class SessionService:
         """Exclude an answered trial; whether that withdrew the pending query (it proposed a
         gait in the region of avoidance of the model without the trial)."""
         with self.locked(session_id) as session:
-            pending = session.pending
-            session.exclude(trial, reason, detail)
-            return pending is not None and session.pending is None
+            return _withdrew(session, lambda: session.exclude(trial, reason, detail))
 
     def set_status(self, session_id: int, status: str) -> None:
         with self.locked(session_id) as session:
@@ -343,6 +339,13 @@ class SessionService:
                 for path in sorted(p for p in folder.rglob("*") if p.is_file()):
                     zf.write(path, f"{folder.name}/{path.relative_to(folder).as_posix()}")
             return buf.getvalue()
+
+
+def _withdrew(session: Session, act: Callable[[], object]) -> bool:
+    """Do ``act`` (a flag, an exclusion); whether it withdrew the pending query."""
+    pending = session.pending
+    act()
+    return pending is not None and session.pending is None
 
 
 def pending_of(session: Session) -> Pending:
