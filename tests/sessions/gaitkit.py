@@ -10,7 +10,9 @@ one with its events edited.
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -130,6 +132,16 @@ def copied(
         edit(e) or NewEvent(e.kind, e.payload, e.at, e.version) for e in storage.events(session_id)
     ]
     return storage.create_session(spec, events, rec.status).id
+
+
+def from_the_log_alone(
+    monkeypatch: pytest.MonkeyPatch, url: str, folder: Path, session_id: int
+) -> Session:
+    """The session reopened with no gait cache (``lab.db.gaits`` in ``folder`` removed) and a
+    generator that makes nothing (:func:`never_made`): every gait must come from the log."""
+    monkeypatch.setattr(FakeSteps, "make", never_made)
+    shutil.rmtree(folder / "lab.db.gaits")
+    return Session.open(url, session_id)
 
 
 def logged_as_version_1(storage: Storage, session_id: int) -> int:

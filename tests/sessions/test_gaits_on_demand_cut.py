@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import shutil
 from pathlib import Path
 
 import pytest
@@ -32,8 +31,8 @@ from tests.sessions.gaitkit import (
     NAME,
     FakeSteps,
     fail_once,
+    from_the_log_alone,
     logged,
-    never_made,
     reference_ask,
 )
 
@@ -78,9 +77,7 @@ def test_an_ask_the_generator_cuts_short_is_not_logged_and_asking_again_logs_the
     assert logged(s) == logged(reference)
     assert (q.loop_id, q.actions, q.points) == (expected.loop_id, expected.actions, expected.points)
     # and the log alone gives the same state, with no gait made again
-    monkeypatch.setattr(FakeSteps, "make", never_made)
-    shutil.rmtree(tmp_path / "lab.db.gaits")
-    again = Session.open(url, s.id)
+    again = from_the_log_alone(monkeypatch, url, tmp_path, s.id)
     assert again.pending == q and again.infeasible_gaits() == s.infeasible_gaits()
 
 
@@ -173,9 +170,7 @@ def test_an_ask_left_with_only_short_lines_logs_the_gaits_it_found(
     with pytest.raises(NoSafeGaitError, match="holds fewer than the query's n = 4"):
         s.next_query(retry=False)
     # the log alone gives the same state (no gait made again); replay checks the stop
-    monkeypatch.setattr(FakeSteps, "make", never_made)
-    shutil.rmtree(tmp_path / "lab.db.gaits")
-    again = Session.open(url, s.id)
+    again = from_the_log_alone(monkeypatch, url, tmp_path, s.id)
     assert again.infeasible_gaits() == s.infeasible_gaits() and again.pending is None
     with pytest.raises(NoSafeGaitError, match="holds fewer than the query's n = 4"):
         again.next_query(retry=False)

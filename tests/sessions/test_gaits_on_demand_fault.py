@@ -13,7 +13,6 @@ what became of the ask, and the terminal runner crashed leaving the session acti
 
 from __future__ import annotations
 
-import shutil
 from io import StringIO
 from pathlib import Path
 
@@ -31,8 +30,8 @@ from tests.sessions.gaitkit import (
     NAME,
     FakeSteps,
     fail_once,
+    from_the_log_alone,
     logged,
-    never_made,
     reference_ask,
 )
 
@@ -86,9 +85,7 @@ def test_a_generator_fault_part_way_is_named_nothing_is_logged_and_asking_again_
     assert logged(s) == logged(reference)
     assert (q.loop_id, q.actions, q.points) == (expected.loop_id, expected.actions, expected.points)
     # and the log alone gives the same state, with no gait made again
-    monkeypatch.setattr(FakeSteps, "make", never_made)
-    shutil.rmtree(tmp_path / "lab.db.gaits")
-    again = Session.open(url, s.id)
+    again = from_the_log_alone(monkeypatch, url, tmp_path, s.id)
     assert again.pending == q and again.infeasible_gaits() == s.infeasible_gaits()
 
 
