@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from gaitpref import Session, load_config
+from gaitpref import GaitLibrary, Session, load_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.gaitkit import fresh_fake_steps
@@ -50,3 +50,11 @@ def drive(subject: SimulatedSubject) -> Drive:
 def _fresh_fake_steps() -> Iterator[None]:
     """Every test starts with the fake gait generator as :mod:`tests.sessions.gaitkit` makes it."""
     yield from fresh_fake_steps()
+
+
+@pytest.fixture(scope="module")
+def library() -> GaitLibrary:
+    """A small gait library (four step lengths at 0.2 m/s), built once per module."""
+    from gaitpref.gaits.build import build_library
+
+    return build_library([0.10, 0.12, 0.14, 0.16], speed=0.2, n_jobs=1)

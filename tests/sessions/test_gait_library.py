@@ -30,13 +30,6 @@ seed = 4
 """
 
 
-@pytest.fixture(scope="module")
-def library() -> GaitLibrary:
-    from gaitpref.gaits.build import build_library
-
-    return build_library([0.10, 0.12, 0.14, 0.16], speed=0.2, n_jobs=1)
-
-
 @pytest.fixture
 def study(tmp_path: Path, library: GaitLibrary) -> Path:
     folder = tmp_path / "study"

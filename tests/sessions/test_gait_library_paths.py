@@ -28,29 +28,10 @@ from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.storage import MemoryStorage, open_storage
 from gaitpref.storage.sql import SQLStorage
+from tests.sessions import test_gait_library as gait_library_test
 
-CONFIG = """
-[gaits]
-library = "{library}"
-
-[model]
-lengthscale = {{ step_length = 0.03 }}
-signal_variance = 0.005
-jitter = 1e-7
-noise = 0.02
-
-[cospar]
-n = 1
-buffer = 1
-seed = 4
-"""
-
-
-@pytest.fixture(scope="module")
-def library() -> GaitLibrary:
-    from gaitpref.gaits.build import build_library
-
-    return build_library([0.10, 0.12, 0.14, 0.16], speed=0.2, n_jobs=1)
+#: test_gait_library.py's config, its library named by the test
+CONFIG = gait_library_test.CONFIG.replace('library = "lib/gaits.json"', 'library = "{library}"')
 
 
 def lab(root: Path, library: GaitLibrary, named: str | None = None) -> Path:
@@ -60,7 +41,7 @@ def lab(root: Path, library: GaitLibrary, named: str | None = None) -> Path:
     (root / "libs").mkdir()
     library.save(root / "libs" / "x.json")
     given = (named or "../libs/x.json").replace("{abs}", str(root / "libs" / "x.json"))
-    (root / "configs" / "c.toml").write_text(CONFIG.format(library=given))
+    (root / "configs" / "c.toml").write_text(CONFIG.replace("{library}", str(given)))
     return root / "configs" / "c.toml"
 
 
