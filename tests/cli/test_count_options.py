@@ -27,32 +27,16 @@ from gaitpref.limits import (
     MAX_STUDY_TRIALS,
     MAX_TRIALS,
 )
+from tests.simulate.test_bench_failures import CONTINUOUS
 
 #: every ask fails the test (``no_trial``, tests/conftest.py)
 pytestmark = pytest.mark.usefixtures("no_trial")
 
 HUGE = str(10**12)
-CONTINUOUS = """\
-[space.a]
-min = 0.0
-max = 2.0
-[model]
-lengthscale = 0.4
-signal_variance = 1.0
-noise = 0.05
-fit = "fixed"
-"""
 
 
 def _text(output: str) -> str:
     return " ".join(output.split())  # Rich wraps long lines
-
-
-@pytest.fixture
-def grid_file(tmp_path: Path) -> Path:
-    path = tmp_path / "objective.npy"
-    np.save(path, paper_objectives()[5])
-    return path
 
 
 @pytest.fixture

@@ -12,23 +12,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
-from gaitpref.data import paper_objectives
 
 runner = CliRunner()
 
 POINTS = "def f(x):\n    return -((x - 0.3) ** 2).sum(axis=1)\n"
-
-
-@pytest.fixture
-def grid_file(tmp_path: Path) -> Path:
-    path = tmp_path / "objective.npy"
-    np.save(path, paper_objectives()[5])
-    return path
 
 
 @pytest.fixture
