@@ -7,7 +7,9 @@ of them (``prior_from``) and answers ``NEW`` queries.  Timed, wall clock: the cr
 earlier sessions replayed, ``rho`` fitted), each answer with the next query (the share
 hypotheses weighed, the posterior refitted, a query proposed), the confidence the terminal and
 the console show after each answer (``session_confidence``), and reopening the new session
-(every earlier session and every answer replayed).  ``nodes``: the distinct (gait, subject)
+(every earlier session and every answer replayed); and the memory each further answer leaves
+held (``tracemalloc``, after the timed answers, over ``MEMORY_ANSWERS`` more: what the
+session keeps per answer for undo and its history).  ``nodes``: the distinct (gait, subject)
 pairs of the earlier sessions' answers, what the warm fit's cost grows with
 (``MAX_PRIOR_NODES`` caps it).
 
@@ -25,9 +27,11 @@ recorded one from before the share hypotheses were weighed in threads: ``before-
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import tempfile
 import time
+import tracemalloc
 from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
@@ -47,6 +51,7 @@ RUNS = RESULT.with_suffix("")  # results/warm/: the runs the report tabulates
 CONFIG = "exo-2d-length-duration"
 CLINICS = ((4, 30), (12, 30), (24, 30), (40, 60))  # (subjects, answers each)
 NEW = 5
+MEMORY_ANSWERS = 3
 _T = TypeVar("_T")
 
 
@@ -84,10 +89,27 @@ def _clinic(url: str, subjects: int, answers: int) -> dict[str, float]:
     for _ in range(NEW):
         clock.time("answer", lambda: _answer(session, subject))
         clock.time("confidence", lambda: session_confidence(session._state, StopRule()))
+    held = _held_per_answer(session, subject)
     sid = session.id
     session.close()
     clock.time("reopen", lambda: Session.open(url, sid).close())
-    return {"subjects": subjects, "answers": answers, "nodes": nodes, **clock.medians()}
+    return {"subjects": subjects, "answers": answers, "nodes": nodes, "held_mib": held,
+            **clock.medians()}  # fmt: skip
+
+
+def _held_per_answer(session: Session, subject: SimulatedSubject) -> float:
+    """MiB that each of ``MEMORY_ANSWERS`` further answers leaves allocated (Python and NumPy
+    allocations, ``tracemalloc``), on average."""
+    gc.collect()
+    tracemalloc.start()
+    try:
+        start = tracemalloc.get_traced_memory()[0]
+        for _ in range(MEMORY_ANSWERS):
+            _answer(session, subject)
+        gc.collect()
+        return (tracemalloc.get_traced_memory()[0] - start) / MEMORY_ANSWERS / 2**20
+    finally:
+        tracemalloc.stop()
 
 
 class _Clock:
@@ -127,15 +149,18 @@ def report(paths: list[Path]) -> None:
     head = "| earlier subjects x answers | nodes |"
     rule = "|---|---|"
     for r in runs:
-        head += f" create ({r['label']}) | answer + next query | confidence | reopen |"
-        rule += "---|---|---|---|"
+        head += (
+            f" create ({r['label']}) | answer + next query | confidence | reopen | MiB an answer |"
+        )
+        rule += "---|---|---|---|---|"
     lines = [
         "# Warm starts: time per answer against the clinic's size",
         "",
         "`python benchmarks/bench_warm.py` (module docstring): the paper's 2-D grid "
         f"(`{CONFIG}`), a new subject warm-started from every earlier one; seconds, wall clock "
         "(CPU time of every thread in brackets); answer and confidence: the median of the new "
-        f"subject's first {NEW} answers.",
+        f"subject's first {NEW} answers; MiB an answer: what each of {MEMORY_ANSWERS} answers "
+        "after them leaves allocated (`tracemalloc`; not recorded before 2026-12-05).",
         "",
         "A run labelled by a commit ran that checkout's `src` (`PYTHONPATH`) with this script.  "
         "On a loaded machine the CPU time is the fairer comparison; where threads ran side by "
@@ -152,6 +177,8 @@ def report(paths: list[Path]) -> None:
             row = k.get((subjects, answers))
             cells = ("create_s", "answer_s", "confidence_s", "reopen_s")
             line += "".join(" - |" if row is None else f" {_cell(row, c)} |" for c in cells)
+            held = None if row is None else row.get("held_mib")
+            line += " - |" if held is None else f" {held:.1f} |"
         lines.append(line)
     for r in runs:
         lines += ["", f"Machine ({r['label']}, gaitpref {r['version']}):", "",

@@ -22,7 +22,7 @@ from gaitpref.model.laplace import fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
 from gaitpref.model.ordinal import Ordinal, rating_likelihood
 from gaitpref.model.posterior import Posterior
-from gaitpref.space import IntArray, Space
+from gaitpref.space import FloatArray, IntArray, Space
 
 
 class PreferenceGP:
@@ -157,11 +157,17 @@ class PreferenceGP:
         visited = visited.astype(np.intp)
         a, b = inverse[:n_first].astype(np.intp), inverse[n_first : 2 * n_first].astype(np.intp)
         s = None if single is None else inverse[2 * n_first :].astype(np.intp)
-        k_vv = self.kernel.cross(self.space, visited, rows=visited)
+        kernel, space = self.kernel, self.space
+
+        def prior() -> FloatArray:
+            k_vv: FloatArray = kernel.cross(space, visited, rows=visited)
+            return k_vv
+
         start = None if init is None else init.mean_at(visited)
         fit = fit_laplace(
-            k_vv, visited, a, b, likelihood, start, single=s, single_likelihood=single_likelihood
-        )
+            prior(), visited, a, b, likelihood, start, single=s,
+            single_likelihood=single_likelihood, prior=prior,
+        )  # fmt: skip
         return Posterior(self.space, self.kernel, fit, self.engine, self.noise, self.ordinal)
 
 

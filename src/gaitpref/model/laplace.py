@@ -27,7 +27,7 @@ Notation: ``N`` observations, ``m`` visited actions, ``u`` and ``f_V`` length ``
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -39,16 +39,84 @@ from gaitpref.space import FloatArray, IntArray
 
 
 @dataclass(frozen=True)
+class Recipe:
+    """What remakes a fit's two ``m x m`` factors from its mode, bit for bit: the prior
+    covariance of the visited set (``prior``, a function that builds it as the fit's caller
+    did), the observations' indices into it and their likelihoods.  ``O(N + m)`` to hold, where
+    the factors take ``2 m^2`` numbers: a session keeps one fit per answer for undo.
+    """
+
+    prior: Callable[[], FloatArray]
+    first: IntArray
+    second: IntArray
+    likelihood: PairLikelihood
+    single: IntArray | None = None
+    single_likelihood: ActionLikelihood | None = None
+
+    def chol_prior(self) -> FloatArray:
+        """``L`` with ``K_VV = L L^T``, as the fit factorised it."""
+        return _factor_prior(self.prior())
+
+    def factors(self, u: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """``(L, R)`` at the whitened mode ``u``: the arithmetic of :func:`fit_laplace`'s last
+        iteration, operation for operation (the same BLAS threads give the same bits)."""
+        L = self.chol_prior()
+        rows = _rows(L, self.first, self.second, self.single)
+        _, _, c = _terms(L @ u, self.first, self.second, self.likelihood, self.single,
+                         self.single_likelihood)  # fmt: skip
+        return L, _hessian_factor(c, rows, 0, rows.shape[0])
+
+
+@dataclass(frozen=True)
 class LaplaceMode:
-    """The Laplace fit on the visited set: everything the posterior needs, nothing over ``A``."""
+    """The Laplace fit on the visited set: everything the posterior needs, nothing over ``A``.
+
+    ``factors`` is ``(L, R)``: ``K_VV = L L^T`` and ``I + H^T H = R R^T`` at the mode, two
+    ``m x m`` lower factors.  A fit made with a :class:`Recipe` can drop them
+    (:meth:`stripped`, what a session keeps for each answer's undo) and remake them, the same to
+    the bit under the same BLAS threads, when they are read (:meth:`restored` keeps them).
+    """
 
     visited: IntArray  # (m,) sorted grid indices
-    chol_prior: FloatArray  # (m, m) lower L, K_VV = L L^T
-    chol_hessian: FloatArray  # (m, m) lower R, I + H^T H = R R^T at the mode
     whitened_mode: FloatArray  # (m,) u_hat, f_V = L u_hat
     iterations: int
     gradient_norm: float
     log_likelihood: float  # sum_k log p_k at the mode
+    factors: tuple[FloatArray, FloatArray] | None = field(default=None, repr=False)
+    recipe: Recipe | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.factors is None and self.recipe is None:
+            raise ValueError("a Laplace fit needs its factors or a recipe to remake them")
+
+    @property
+    def chol_prior(self) -> FloatArray:
+        """``L``, lower, ``K_VV = L L^T`` (remade when stripped: one ``m x m`` Cholesky)."""
+        if self.factors is not None:
+            return self.factors[0]
+        assert self.recipe is not None
+        return self.recipe.chol_prior()
+
+    @property
+    def chol_hessian(self) -> FloatArray:
+        """``R``, lower, ``I + H^T H = R R^T`` at the mode (remade when stripped)."""
+        return self._factors()[1]
+
+    def _factors(self) -> tuple[FloatArray, FloatArray]:
+        if self.factors is not None:
+            return self.factors
+        assert self.recipe is not None
+        return self.recipe.factors(self.whitened_mode)
+
+    @property
+    def stripped(self) -> LaplaceMode:
+        """The same fit without its factors, if it can remake them (else itself)."""
+        return self if self.recipe is None else replace(self, factors=None)
+
+    @property
+    def restored(self) -> LaplaceMode:
+        """The same fit holding its factors (remade once if stripped)."""
+        return self if self.factors is not None else replace(self, factors=self._factors())
 
     @property
     def mode(self) -> FloatArray:
@@ -101,6 +169,40 @@ def _factor_hessian(hess: FloatArray, iteration: int, observations: int) -> Floa
         ) from None
 
 
+def _rows(L: FloatArray, first: IntArray, second: IntArray, single: IntArray | None) -> FloatArray:
+    """``G L``: the pair rows ``L[a] - L[b]``, then the single rows ``L[s]``."""
+    rows: FloatArray = L[first] - L[second]
+    if single is not None:
+        rows = np.vstack([rows, L[single]])
+    return rows
+
+
+def _terms(
+    f: FloatArray,
+    first: IntArray,
+    second: IntArray,
+    likelihood: PairLikelihood,
+    single: IntArray | None,
+    single_likelihood: ActionLikelihood | None,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Every observation's ``(log p, g, c)`` at ``f_V``: the pairs', then the single actions'."""
+    logp, g, c = likelihood.terms(f[first] - f[second])
+    if single is not None and single_likelihood is not None:
+        s_logp, s_g, s_c = single_likelihood.terms(f[single])
+        logp, g, c = (np.concatenate(p) for p in ((logp, s_logp), (g, s_g), (c, s_c)))
+    return logp, g, c
+
+
+def _hessian_factor(
+    c: FloatArray, rows: FloatArray, iteration: int, observations: int
+) -> FloatArray:
+    """``R`` with ``R R^T = I + H^T H``, ``H = diag(sqrt(c)) G L``."""
+    H = np.sqrt(c)[:, None] * rows
+    hess = H.T @ H
+    hess[np.diag_indices_from(hess)] += 1.0
+    return _factor_hessian(hess, iteration, observations)
+
+
 _Objective = Callable[[FloatArray], tuple[float, FloatArray, FloatArray, FloatArray]]
 
 
@@ -130,13 +232,16 @@ def fit_laplace(
     single_likelihood: ActionLikelihood | None = None,
     tol: float = 1e-11,
     max_iter: int = 100,
+    prior: Callable[[], FloatArray] | None = None,
 ) -> LaplaceMode:
     """Newton's method for ``u_hat``; observations are ``d_k = f[first_k] - f[second_k]``.
 
     ``k_vv`` is the prior covariance of the grid actions ``visited``; ``first``/``second`` index
     into the visited set (``0..m-1``); ``init`` is a starting ``f_V`` (the previous posterior's
     mean there).  ``single`` (indices into the visited set) with ``single_likelihood`` adds
-    observations of single utilities ``f[single_k]``.
+    observations of single utilities ``f[single_k]``.  ``prior``: a function that builds
+    ``k_vv`` again, as the caller built it; with it the fit can drop its factors and remake
+    them (:attr:`LaplaceMode.stripped`).
     """
     if (single is None) != (single_likelihood is None):
         raise ValueError("single and single_likelihood go together")
@@ -159,16 +264,18 @@ def fit_laplace(
     n_pairs = first.shape[0]
     # every observation, pairs and single actions, for the error messages
     n_obs = n_pairs + (0 if single is None else single.shape[0])
-    rows = L[first] - L[second]
-    if single is not None:
-        rows = np.vstack([rows, L[single]])
+    rows = _rows(L, first, second, single)
+    recipe = (
+        None
+        if prior is None
+        else Recipe(prior, first, second, likelihood, single, single_likelihood)
+    )
+
+    def done(iteration: int, R: FloatArray, logp: FloatArray) -> LaplaceMode:
+        return LaplaceMode(visited, u, iteration, gnorm, float(np.sum(logp)), (L, R), recipe)
 
     def objective(u_: FloatArray) -> tuple[float, FloatArray, FloatArray, FloatArray]:
-        f = L @ u_
-        logp, g, c = likelihood.terms(f[first] - f[second])
-        if single is not None and single_likelihood is not None:
-            s_logp, s_g, s_c = single_likelihood.terms(f[single])
-            logp, g, c = (np.concatenate(p) for p in ((logp, s_logp), (g, s_g), (c, s_c)))
+        logp, g, c = _terms(L @ u_, first, second, likelihood, single, single_likelihood)
         return 0.5 * float(u_ @ u_) - float(np.sum(logp)), logp, g, c
 
     value, logp, g, c = objective(u)
@@ -180,13 +287,10 @@ def fit_laplace(
             grad_f = grad_f + np.bincount(single, g[n_pairs:], m)
         grad = u - L.T @ grad_f
         gnorm = float(np.max(np.abs(grad))) if m else 0.0
-        H = np.sqrt(c)[:, None] * rows
-        hess = H.T @ H
-        hess[np.diag_indices_from(hess)] += 1.0
-        R = _factor_hessian(hess, iteration, n_obs)
+        R = _hessian_factor(c, rows, iteration, n_obs)
         scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
         if gnorm <= tol * scale:
-            return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
+            return done(iteration, R, logp)
         step = -cho_solve((R, True), grad, check_finite=False)
         slope = float(grad @ step)
         # Once the predicted decrease is below the objective's rounding, a line search cannot
@@ -194,7 +298,7 @@ def fit_laplace(
         if -slope <= 64 * np.finfo(float).eps * max(1.0, abs(value)):
             if gnorm >= last_full_step_gnorm:
                 if gnorm <= 1e3 * tol * scale:  # at the mode to rounding
-                    return LaplaceMode(visited, L, R, u, iteration, gnorm, float(np.sum(logp)))
+                    return done(iteration, R, logp)
                 raise ConvergenceError(
                     f"Laplace fit stalled at Newton iteration {iteration} (gradient "
                     f"{gnorm:.3e}; {n_obs} observations over {m} actions)"

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -315,10 +315,15 @@ class PopulationModel:
             if not np.array_equal(fit.visited, visited):
                 raise ValueError("the fit given is not of these data: its visited nodes differ")
         else:
-            k_vv = population_prior(self.space, self.kernel, self.rho, visited, visited, self.share)
+            space, kernel, rho, share = self.space, self.kernel, self.rho, self.share
+
+            def prior() -> FloatArray:
+                return population_prior(space, kernel, rho, visited, visited, share)
+
             fit = fit_laplace(
-                k_vv, visited, a, b, likelihood, init, single=s, single_likelihood=single_likelihood
-            )
+                prior(), visited, a, b, likelihood, init, single=s,
+                single_likelihood=single_likelihood, prior=prior,
+            )  # fmt: skip
         target = 0 if self.rho >= 1.0 else int(target)
         return PopulationPosterior(
             self.space, self.kernel, fit, engine, self.noise, self.ordinal, self.rho, target,
@@ -340,6 +345,21 @@ class PopulationModel:
 
 def logit(p: float) -> float:
     return float(np.log(p) - np.log1p(-p))
+
+
+def _population_k(
+    space: Space,
+    kernel: SquaredExponential,
+    gaits: IntArray,
+    subjects: IntArray,
+    rho: float,
+    share: float | None,
+) -> FloatArray:
+    """:func:`population_evidence`'s prior covariance of the visited nodes, the same product."""
+    out: FloatArray = kernel.cross(space, gaits, rows=gaits) * subject_weights(
+        subjects, subjects, rho, share
+    )
+    return out
 
 
 def population_evidence(
@@ -382,7 +402,7 @@ def population_evidence(
     full = kernel.cross(space, gaits, rows=gaits)
     same = subjects[:, None] == subjects[None, :]
     weights = subject_weights(subjects, subjects, rho, share)
-    K = full * weights
+    K = full * weights  # _population_k's product, kept apart for the gradient
     d = space.ndim
     points = space.points_of(gaits)  # not every grid point (A x d) for the gaits in the data
 
@@ -401,7 +421,10 @@ def population_evidence(
     if not gradient:
         lik = data.likelihood(hyper.band)
         single_lik = None if singles is None else singles.likelihood
-        fit = fit_laplace(K, visited, a, b, lik, init, single=s, single_likelihood=single_lik)
+        fit = fit_laplace(
+            K, visited, a, b, lik, init, single=s, single_likelihood=single_lik,
+            prior=partial(_population_k, space, kernel, gaits, subjects, rho, share),
+        )  # fmt: skip
         return Evidence(fit.log_evidence, np.full(d + 3, np.nan), fit)
     ev = evidence_from_prior(K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init)
     g = ev.gradient  # (l..., s^2, logit rho, band) -> (l..., s^2, band, logit rho)
