@@ -11,6 +11,7 @@ before any trial (here a trial would fail the test: ``ask`` raises), naming the 
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 
 import numpy as np
@@ -198,3 +199,22 @@ def test_jobs_below_minus_one_are_refused(
                 "--out", str(out)]  # fmt: skip
     _refused([*args, "--jobs", jobs], "Invalid value for '--jobs'", jobs, "-1")
     assert not out.exists()
+
+
+def test_bench_continuous_refuses_before_its_progress_bar(
+    continuous_config: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    main = importlib.import_module("gaitpref.cli.main")  # the package's ``main`` is a function
+    bars: list[bool] = []
+    real = main.progress_bar
+
+    def counted(**settings: bool) -> object:
+        bars.append(True)
+        return real(**settings)
+
+    monkeypatch.setattr(main, "progress_bar", counted)
+    missing = tmp_path / "nowhere.py"
+    args = ["bench", "continuous", continuous_config, "--runs", "2"]
+    _refused([*args, "--objective", f"{missing}:f"], "nowhere.py")
+    _refused([*args, "--objective", "random-gp", "--noise", "-1"], "noise")
+    assert bars == []

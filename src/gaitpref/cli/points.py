@@ -64,33 +64,18 @@ def run_record(seed: int, result: PointsResult) -> dict[str, object]:
     return {"seed": seed, **result.to_json()}
 
 
-def bench_points(
-    cfg: ExperimentConfig,
-    spec: str,
-    runs: int,
-    *,
-    trials: int,
-    coactive: bool = False,
-    noise: float = 0.0,
-    progress: Callable[[int], None] | None = None,
-    partial: Path | None = None,
-) -> list[PointsResult]:
-    """``gaitpref bench continuous``'s runs, seeds ``0 .. runs - 1`` (``random-gp`` alone: run
-    ``k`` against ``random-gp:k``); ``progress`` is called with the trials done in all runs.
-
-    The runs (at most :data:`~gaitpref.simulate.study.MAX_RUNS`, as a study's), the trials (at
-    most :data:`~gaitpref.limits.MAX_TRIALS`, and runs x trials at most
-    :data:`~gaitpref.limits.MAX_STUDY_TRIALS`), the noise and
-    the first run's objective are checked before any run (a ValueError); a run
-    that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
-    (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
-    ``partial`` (JSON lines, written as each run finishes, removed once every run has).
-    """
+def check_bench_points(
+    cfg: ExperimentConfig, spec: str, runs: int, *, trials: int, noise: float = 0.0
+) -> tuple[list[str], PointObjective]:
+    """What :func:`bench_points` refuses before any run, checked on its own (so that the
+    command line refuses before it shows a progress bar): the runs (at most
+    :data:`~gaitpref.simulate.study.MAX_RUNS`, as a study's), the trials (at most
+    :data:`~gaitpref.limits.MAX_TRIALS`, and runs x trials at most
+    :data:`~gaitpref.limits.MAX_STUDY_TRIALS`), the noise and the first run's objective, each a
+    ValueError.  Returns every run's objective spec and the first run's objective."""
     from gaitpref.limits import MAX_STUDY_TRIALS, MAX_TRIALS
     from gaitpref.simulate.continuous import objective_from
-    from gaitpref.simulate.partial import JsonLines, partial_file, run_error
     from gaitpref.simulate.study import MAX_RUNS
-    from gaitpref.simulate.sweep import run_tasks
     from gaitpref.simulate.users import check_user_noise
 
     if not 1 <= runs <= MAX_RUNS:  # the runs' list is made first: 10**12 was a MemoryError
@@ -104,7 +89,40 @@ def bench_points(
         )
     check_user_noise(noise)  # refused here, not as every run's failure
     specs = [f"random-gp:{k}" if spec == "random-gp" else spec for k in range(runs)]
-    first = objective_from(specs[0], cfg.space, cfg.seed)
+    return specs, objective_from(specs[0], cfg.space, cfg.seed)
+
+
+def bench_points(
+    cfg: ExperimentConfig,
+    spec: str,
+    runs: int,
+    *,
+    trials: int,
+    coactive: bool = False,
+    noise: float = 0.0,
+    progress: Callable[[int], None] | None = None,
+    partial: Path | None = None,
+    checked: tuple[list[str], PointObjective] | None = None,
+) -> list[PointsResult]:
+    """``gaitpref bench continuous``'s runs, seeds ``0 .. runs - 1`` (``random-gp`` alone: run
+    ``k`` against ``random-gp:k``); ``progress`` is called with the trials done in all runs.
+
+    Everything :func:`check_bench_points` checks is checked before any run (a ValueError); a run
+    that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
+    (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
+    ``partial`` (JSON lines, written as each run finishes, removed once every run has).
+    ``checked``: what :func:`check_bench_points` returned for the same arguments (not checked
+    again, the first objective not made again).
+    """
+    from gaitpref.simulate.continuous import objective_from
+    from gaitpref.simulate.partial import JsonLines, partial_file, run_error
+    from gaitpref.simulate.sweep import run_tasks
+
+    specs, first = (
+        check_bench_points(cfg, spec, runs, trials=trials, noise=noise)
+        if checked is None
+        else checked
+    )
 
     def one(seed: int) -> PointsResult:
         fn = first if seed == 0 else objective_from(specs[seed], cfg.space, cfg.seed)
@@ -176,6 +194,7 @@ def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coacti
 
 __all__ = [
     "bench_points",
+    "check_bench_points",
     "is_grid_objective",
     "load_point_objective",
     "report",

@@ -445,17 +445,19 @@ def continuous(
     import numpy as np
 
     from gaitpref.cli.main import progress_bar
-    from gaitpref.cli.points import bench_points, run_record
+    from gaitpref.cli.points import bench_points, check_bench_points, run_record
 
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "continuous")
+    # refused before the bar shows
+    checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
     with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
-                partial=kept,
+                partial=kept, checked=checked,
             )
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
