@@ -99,10 +99,15 @@ def _clinic(url: str, subjects: int, answers: int) -> dict[str, float]:
 
 def _held_per_answer(session: Session, subject: SimulatedSubject) -> float:
     """MiB that each of ``MEMORY_ANSWERS`` further answers leaves allocated (Python and NumPy
-    allocations, ``tracemalloc``), on average."""
+    allocations, ``tracemalloc``), on average.  One answer first, traced but not counted: the
+    session's current model is then allocated under tracing, and its replacement by the next
+    answer's is not counted as growth (what was allocated before tracing started is never
+    counted as freed)."""
     gc.collect()
     tracemalloc.start()
     try:
+        _answer(session, subject)
+        gc.collect()
         start = tracemalloc.get_traced_memory()[0]
         for _ in range(MEMORY_ANSWERS):
             _answer(session, subject)
@@ -160,7 +165,7 @@ def report(paths: list[Path]) -> None:
         f"(`{CONFIG}`), a new subject warm-started from every earlier one; seconds, wall clock "
         "(CPU time of every thread in brackets); answer and confidence: the median of the new "
         f"subject's first {NEW} answers; MiB an answer: what each of {MEMORY_ANSWERS} answers "
-        "after them leaves allocated (`tracemalloc`; not recorded before 2026-12-05).",
+        "after one more leaves allocated (`tracemalloc`; not recorded before 2026-12-05).",
         "",
         "A run labelled by a commit ran that checkout's `src` (`PYTHONPATH`) with this script.  "
         "On a loaded machine the CPU time is the fairer comparison; where threads ran side by "
