@@ -4,17 +4,24 @@ from a path a client names outside the console's library folder."""
 from __future__ import annotations
 
 import io
+import shutil
+import threading
 import zipfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
 from fastapi.testclient import TestClient
 
+from gaitpref import Session
 from gaitpref.console import create_app
+from gaitpref.console.service import SessionService
+from gaitpref.errors import StorageError
 from gaitpref.gaits import GaitLibrary, build_library
 from tests.console.htmlforms import forms_of
+from tests.lockwatch import Other, watch_locks
 
 NAMED = """
 [gaits]
@@ -142,7 +149,11 @@ def test_an_upload_past_the_json_parsers_limits_is_refused(
 
 
 def _files_under(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.rglob("*")) if folder.exists() else []
+    """What is under ``folder``, less the uploads' lock files (``.<sha256 prefix>.lock``: left
+    there, as removing one races)."""
+    if not folder.exists():
+        return []
+    return sorted(p for p in folder.rglob("*") if not p.name.endswith(".lock"))
 
 
 def test_a_refused_upload_writes_nothing(
@@ -177,3 +188,47 @@ def test_a_refused_upload_keeps_a_library_another_session_uses(
     assert r.status_code == 422
     assert [p for p in _files_under(tmp_path / "libs") if p.is_file()] == kept
     assert console.get("/api/sessions/1/query").status_code == 200
+
+
+def test_a_refused_upload_keeps_the_library_a_concurrent_upload_found(
+    db_url: str,
+    library_bytes: tuple[bytes, GaitLibrary],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two uploads of one library at once: A writes the file, its session is then refused.
+    Before, B (which found A's file there, so did not write it) could create its session
+    reading the file, and A then removed it: B's session had lost its gait library.  Now B waits
+    for the library's lock until A has removed the file, then writes it again."""
+    data, _ = library_bytes
+    libs = tmp_path / "libs"
+    service = SessionService(db_url, library_dir=libs)
+    other = Other(lambda: service.create(NAMED, "S02", library=(data, "lib.json")))
+    watch_locks(monkeypatch, other)
+    create = Session.create
+
+    def refused(*args: Any, **kwargs: Any) -> Session:
+        if threading.current_thread() is other.thread:
+            return create(*args, **kwargs)
+        other.start_and_settle()  # B has created its session, or waits for the lock
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(Session, "create", refused)
+    with pytest.raises(StorageError, match="database is locked"):
+        service.create(NAMED, "S01", library=(data, "lib.json"))
+    made: Session = other.join()
+    monkeypatch.undo()
+    (kept,) = [p for p in _files_under(libs) if p.is_file()]
+    assert kept.read_bytes() == data
+    again = Session.open(db_url, made.id)  # reads its library from the file
+    assert again.gait_ids == made.gait_ids
+    assert [s.id for s in service.list_sessions()] == [made.id]
+    again.close()
+    service.close()
+    # alone, a refused upload still removes the file it wrote (and leaves only lock files)
+    shutil.rmtree(libs / kept.parent.name)
+    other_db = SessionService(f"sqlite:///{tmp_path / 'other.db'}", library_dir=libs)
+    with pytest.raises(Exception, match="seed"):
+        other_db.create(NAMED, "S03", seed=2**64, library=(data, "lib.json"))
+    assert _files_under(libs) == []
+    other_db.close()

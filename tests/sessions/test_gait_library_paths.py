@@ -13,6 +13,7 @@ import hashlib
 import json
 import os
 import shutil
+import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,7 @@ from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.storage import MemoryStorage, open_storage
 from gaitpref.storage.sql import SQLStorage
+from tests.lockwatch import BOUND_S, Other, watch_locks
 from tests.sessions import test_gait_library as gait_library_test
 
 #: test_gait_library.py's config, its library named by the test
@@ -43,6 +45,11 @@ def lab(root: Path, library: GaitLibrary, named: str | None = None) -> Path:
     given = (named or "../libs/x.json").replace("{abs}", str(root / "libs" / "x.json"))
     (root / "configs" / "c.toml").write_text(CONFIG.replace("{library}", str(given)))
     return root / "configs" / "c.toml"
+
+
+def library_files(folder: Path) -> list[str]:
+    """The names in a library folder, less its lock files (``.<sha256>.lock``: left there)."""
+    return sorted(p.name for p in folder.iterdir() if not p.name.endswith(".lock"))
 
 
 def drive(s: Session, n: int) -> None:
@@ -229,7 +236,7 @@ def test_an_import_into_sqlite_keeps_its_library_beside_the_database(
     export_session(again, tmp_path / "export2", "json")
     twice = import_session(url, tmp_path / "export2", as_new=True)
     assert twice.record.meta["library_path"] == str(kept.resolve())
-    assert [p.name for p in kept.parent.iterdir()] == [kept.name]
+    assert library_files(kept.parent) == [kept.name]
 
 
 def test_an_import_into_a_server_database_reads_the_export_folder(
@@ -277,7 +284,7 @@ def test_a_refused_import_removes_the_library_copy_it_made(
     shutil.rmtree(tmp_path / "study")  # so the import needs its own copy
     with pytest.raises(ExportError, match=r"the exported session itself.*nothing was written"):
         import_session(f"sqlite:///{tmp_path / 'lab.db'}", out)
-    assert not (tmp_path / "lab.db.libraries").exists()
+    assert library_files(tmp_path / "lab.db.libraries") == []  # its lock file stays
 
 
 def test_an_import_refused_by_the_database_removes_the_library_copy_it_made(
@@ -296,7 +303,7 @@ def test_an_import_refused_by_the_database_removes_the_library_copy_it_made(
     monkeypatch.setattr(SQLStorage, "_create", locked)  # the transaction creating the session
     with pytest.raises(StorageError, match="database is locked"):
         import_session(f"sqlite:///{tmp_path / 'other.db'}", out)
-    assert [p.name for p in kept.iterdir()] == ["earlier.json"]
+    assert library_files(kept) == ["earlier.json"]
 
 
 def test_a_refused_import_keeps_a_library_copy_that_was_there(
@@ -333,7 +340,7 @@ def test_a_refused_import_keeps_a_library_copy_that_was_there(
     monkeypatch.undo()
     again = Session.open(url, first.id)
     assert again.gait_ids == s.gait_ids
-    assert [p.name for p in kept.parent.iterdir()] == [kept.name]
+    assert library_files(kept.parent) == [kept.name]
 
 
 def test_a_refused_import_keeps_the_copy_it_made_once_another_session_reads_it(
@@ -361,3 +368,49 @@ def test_a_refused_import_keeps_the_copy_it_made_once_another_session_reads_it(
         (record,) = storage.list_sessions()
     assert record.meta["library_path"] == str(kept.resolve())
     assert Session.open(url, record.id).gait_ids == s.gait_ids
+
+
+def test_a_refused_import_keeps_the_copy_a_concurrent_import_found(
+    tmp_path: Path, library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two imports of one library at once: A writes the copy, B finds it there (so does not
+    write it) and is about to commit its session when A is refused.  Before, A's ``_unmake``
+    saw no session reading the copy yet and removed it: B's committed session had lost its
+    gait library.  Now B waits for the copy's lock until A has removed it, then writes it again
+    (the test lets B commit only once A is done, as the window was)."""
+    s, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")
+    url = f"sqlite:///{tmp_path / 'other.db'}"
+    a_done = threading.Event()
+    other = Other(lambda: import_session(url, out, as_new=True))
+    watch_locks(monkeypatch, other)
+    create = SQLStorage._create
+
+    def refused(self: SQLStorage, spec: Any, events: Any, status: Any, check: Any) -> Any:
+        if threading.current_thread() is other.thread:  # B, its copy found (or written)
+            other.settled.set()
+            assert a_done.wait(BOUND_S)
+            return create(self, spec, events, status, check)
+        other.start_and_settle()  # B waits to commit, or waits for the lock
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(SQLStorage, "_create", refused)
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(url, out)
+    a_done.set()
+    imported: Session = other.join()
+    monkeypatch.undo()
+    kept = tmp_path / "other.db.libraries" / f"{s.record.meta['library_sha256']}.json"
+    assert kept.is_file()
+    assert imported.record.meta["library_path"] == str(kept.resolve())
+    imported.close()
+    assert Session.open(url, imported.id).gait_ids == s.gait_ids
+    # alone, a refused import still removes the copy it made
+
+    def locked(*args: object, **kwargs: object) -> None:
+        raise StorageError("database is locked")
+
+    monkeypatch.setattr(SQLStorage, "_create", locked)
+    with pytest.raises(StorageError, match="database is locked"):
+        import_session(f"sqlite:///{tmp_path / 'third.db'}", out)
+    assert library_files(tmp_path / "third.db.libraries") == []

@@ -9,6 +9,12 @@
   it again when it is reopened.  A config that names a library must name the uploaded file; a
   config with its own ``[space]`` must have exactly the library's grid (the library then only
   names the gait of every action).
+
+Sessions share an uploaded library file (it is named by its content); a refused creation removes
+the file it wrote (:func:`discard`).  So that it never removes one a concurrent creation has
+found there and reads, each creation holds the content's lock
+(:func:`gaitpref.content_lock.content_lock`, ``<libraries>/.<sha256 prefix>.lock``) from finding
+or writing the file until its session is committed or the file removed: :meth:`Chosen.release`.
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ import contextlib
 import hashlib
 import re
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +40,7 @@ from gaitpref.config import (
 from gaitpref.config.schema import MAX_ACTIONS as LIBRARY_ACTIONS
 from gaitpref.console.errors import InputError
 from gaitpref.console.limits import MAX_LIBRARY_BYTES
+from gaitpref.content_lock import content_lock
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
 
 #: grids larger than this are refused at creation (the console draws and sends every action)
@@ -64,6 +71,14 @@ class Chosen:
     library: GaitLibrary | None
     #: the library file this choice wrote (None: none, or it was there before); see :func:`discard`
     written: Path | None = None
+    #: the uploaded library's content lock, held until :meth:`release`
+    held: contextlib.ExitStack | None = field(default=None, compare=False, repr=False)
+
+    def release(self) -> None:
+        """Release the uploaded library's lock: call it once the session reading the library is
+        committed, or after :func:`discard` ing ``written`` (calling it again does nothing)."""
+        if self.held is not None:
+            self.held.close()
 
 
 def discard(written: Path | None) -> None:
@@ -76,11 +91,13 @@ def discard(written: Path | None) -> None:
 
 
 def store_library(
-    folder: Path, data: bytes, filename: str | None
+    folder: Path, data: bytes, filename: str | None, held: contextlib.ExitStack
 ) -> tuple[Path, GaitLibrary, bool]:
     """Check an uploaded gait library and keep it under ``folder`` (content-addressed).
 
-    Returns its path, the library, and whether this call wrote the file (it was not there).
+    Returns its path, the library, and whether this call wrote the file (it was not there).  The
+    content's lock is entered into ``held`` before the file is looked for, for the caller to
+    hold until a session reading it is committed or the file it wrote is removed.
     """
     if len(data) > MAX_LIBRARY_BYTES:
         raise InputError("library_file", f"larger than {MAX_LIBRARY_BYTES // 1_000_000} MB")
@@ -92,7 +109,10 @@ def store_library(
             GaitLibrary.load(probe)
         except (GaitLibraryError, ValueError, OSError) as exc:
             raise InputError("library_file", f"not a usable gait library: {exc}") from None
-    target = folder / hashlib.sha256(data).hexdigest()[:16] / name
+    prefix = hashlib.sha256(data).hexdigest()[:16]
+    target = folder / prefix / name
+    folder.mkdir(parents=True, exist_ok=True)
+    held.enter_context(content_lock(folder, prefix))
     wrote = not target.exists()
     if wrote:
         target.parent.mkdir(parents=True, exist_ok=True)
@@ -174,17 +194,23 @@ def choose_config(
     """The config (and library) for a new session; :class:`InputError` names what is wrong.
 
     An uploaded library is kept only if the choice succeeds; the caller :func:`discard` s
-    ``Chosen.written`` if the session is then not created, so a refused upload leaves nothing.
+    ``Chosen.written`` if the session is then not created, so a refused upload leaves nothing,
+    and in either case then calls :meth:`Chosen.release` (the library's lock is held till then).
     """
     if library is None:
         return _choose(source, library_dir, name, None)
-    path, lib, wrote = store_library(library_dir, *library)
+    held = contextlib.ExitStack()
     try:
-        chosen = _choose(source, library_dir, name, (path, lib))
+        path, lib, wrote = store_library(library_dir, *library, held)
+        try:
+            chosen = _choose(source, library_dir, name, (path, lib))
+        except BaseException:
+            discard(path if wrote else None)
+            raise
     except BaseException:
-        discard(path if wrote else None)
+        held.close()
         raise
-    return Chosen(chosen.config, chosen.library, path if wrote else None)
+    return Chosen(chosen.config, chosen.library, path if wrote else None, held)
 
 
 def _choose(

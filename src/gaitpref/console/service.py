@@ -171,6 +171,8 @@ class SessionService:
         except BaseException:
             discard(chosen.written)  # a refused upload leaves no file behind
             raise
+        finally:  # committed or removed: a concurrent upload of the library may go on
+            chosen.release()
         self._keep(session)
         return session
 

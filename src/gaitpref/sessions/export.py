@@ -33,7 +33,11 @@ The imported session reads its gait library where the exported one did when that
 same, else the export's copy: copied again beside a SQLite database (``lab.db.libraries/``), read
 from the export's folder for a database that is not a local file.  An import refused after it
 wrote that copy (already imported, a database error) removes it, never a copy that was there
-before (an earlier import's) nor one a session in the database reads by then.
+before (an earlier import's) nor one a session in the database reads by then.  An import holds
+the copy's lock (:func:`gaitpref.content_lock.content_lock`,
+``lab.db.libraries/.<sha256>.lock``, left there) from finding or writing it until its session is
+committed or the copy removed, so that two imports of one library at once (two processes) take
+turns: the second finds a copy that stays, or writes it anew.
 """
 
 from __future__ import annotations
@@ -55,6 +59,7 @@ from typing import Any, Final, Literal
 import numpy as np
 
 from gaitpref.atomic import write_bytes_atomic
+from gaitpref.content_lock import content_lock
 from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
 from gaitpref.sessions import events as log
@@ -532,23 +537,25 @@ def import_session(
     owns = not isinstance(db, Storage)
     made: list[Path] = []  # what this import wrote beside the database, in order
     try:
-        if library is not None:
-            spec = _keep_library(storage, spec, *library, made)
-        try:
-            if as_new:
-                record = storage.create_session(spec, events, status)
-            else:  # checked in the transaction that creates it: two imports cannot both pass
-                record = storage.create_session_checked(
-                    spec,
-                    events,
-                    status,
-                    check=functools.partial(
-                        _check_not_imported, storage.url, spec, info, events[0].at
-                    ),
-                )
-        except BaseException:  # refused (already there, a database error): no session reads it
-            _unmake(storage, made)
-            raise
+        # the copy's lock, held until the session reading it is committed or the copy removed
+        with contextlib.ExitStack() as held:
+            if library is not None:
+                spec = _keep_library(storage, spec, *library, made, held)
+            try:
+                if as_new:
+                    record = storage.create_session(spec, events, status)
+                else:  # checked in the transaction that creates it: two imports cannot both pass
+                    record = storage.create_session_checked(
+                        spec,
+                        events,
+                        status,
+                        check=functools.partial(
+                            _check_not_imported, storage.url, spec, info, events[0].at
+                        ),
+                    )
+            except BaseException:  # refused (already there, a database error): no session reads
+                _unmake(storage, made)
+                raise
         session = Session.open(storage, record.id)
     except BaseException:
         if owns:
@@ -764,29 +771,36 @@ LIBRARY_COPY_SUFFIX: Final = ".libraries"
 
 
 def _keep_library(
-    storage: Storage, spec: SessionSpec, copy: Path, original: str, made: list[Path]
+    storage: Storage,
+    spec: SessionSpec,
+    copy: Path,
+    original: str,
+    made: list[Path],
+    held: contextlib.ExitStack,
 ) -> SessionSpec:
     """``spec`` reading its gait library from a copy of the export's ``copy`` next to a SQLite
     database (``lab.db.libraries/<sha256>.json``, shared by every session of that library), so
     that the imported session does not need the export's folder; ``spec`` as it is for a
     database that is not a local file (memory, PostgreSQL): it reads the export's copy.
 
-    The folder and the file, when this call creates them (not when they were there: a copy is
-    an earlier import's, whose session reads it), are appended to ``made``, for
-    :func:`_unmake` to remove if the import is then refused."""
+    The file, when this call creates it (not when it was there: a copy is an earlier import's,
+    whose session reads it), is appended to ``made``, for :func:`_unmake` to remove if the
+    import is then refused.  The copy's lock (``.<sha256>.lock`` in the folder) is entered into
+    ``held`` before the copy is looked for: the caller holds it until the session reading the
+    copy is committed or :func:`_unmake` has run.  The folder, once made, stays (it holds the
+    lock file, which is never removed: that would race)."""
     folder = storage.folder_beside(LIBRARY_COPY_SUFFIX)
     if folder is None:
         return spec
     sha = str(spec.meta["library_sha256"])
     target = folder / f"{sha}.json"
     try:
+        folder.mkdir(parents=True, exist_ok=True)
+        held.enter_context(content_lock(folder, sha))
         if not (target.is_file() and _sha256(target) == sha):
             data = copy.read_bytes()
             if hashlib.sha256(data).hexdigest() != sha:
                 raise OSError(f"{copy} changed after it was checked")
-            if not folder.is_dir():
-                folder.mkdir(parents=True, exist_ok=True)
-                made.append(folder)
             new = not target.exists()  # a damaged copy replaced is not this import's own
             # whole, or not there: a concurrent import of the same library writes alike
             write_bytes_atomic(target, data, prefix=f".{sha[:16]}.")
@@ -804,18 +818,15 @@ def _keep_library(
 
 def _unmake(storage: Storage, made: Sequence[Path]) -> None:
     """Remove what a refused import wrote beside the database (``made``, by
-    :func:`_keep_library`): its library copy, unless a session in the database already reads
-    it (a concurrent import of the same library that found it there; kept too when the database
-    cannot say), then its folder if empty.  Best effort: the refusal is what the caller sees."""
+    :func:`_keep_library`), with the copy's lock held: its library copy, unless a session in the
+    database already reads it (kept too when the database cannot say; a concurrent import of the
+    same library waits for the lock, so none has found the copy and not yet committed).  Best
+    effort: the refusal is what the caller sees."""
     for path in reversed(made):
-        if path.is_dir():
-            with contextlib.suppress(OSError):  # not empty: another import's copy is in it
-                path.rmdir()
-            continue
         try:
             where = str(path.resolve())
             if any(r.meta.get("library_path") == where for r in storage.list_sessions()):
-                return  # read by a session: keep it, and its folder
+                return  # read by a session: keep it
         except Exception:  # the database cannot say: keep the copy
             return
         with contextlib.suppress(OSError):
