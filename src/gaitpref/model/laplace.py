@@ -34,6 +34,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
 
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
+from gaitpref.model import fit_memo
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
 from gaitpref.space import FloatArray, IntArray
 
@@ -193,6 +194,24 @@ def _terms(
     return logp, g, c
 
 
+def _gradient(
+    u: FloatArray,
+    g: FloatArray,
+    L: FloatArray,
+    first: IntArray,
+    second: IntArray,
+    single: IntArray | None,
+) -> FloatArray:
+    """``u - L^T G^T g``: the objective's gradient in whitened coordinates."""
+    m, n_pairs = u.shape[0], first.shape[0]
+    g_pair = g[:n_pairs]
+    grad_f = np.bincount(first, g_pair, m) - np.bincount(second, g_pair, m)
+    if single is not None:
+        grad_f = grad_f + np.bincount(single, g[n_pairs:], m)
+    out: FloatArray = u - L.T @ grad_f
+    return out
+
+
 def _hessian_factor(
     c: FloatArray, rows: FloatArray, iteration: int, observations: int
 ) -> FloatArray:
@@ -271,26 +290,62 @@ def fit_laplace(
         else Recipe(prior, first, second, likelihood, single, single_likelihood)
     )
 
-    def done(iteration: int, R: FloatArray, logp: FloatArray) -> LaplaceMode:
-        return LaplaceMode(visited, u, iteration, gnorm, float(np.sum(logp)), (L, R), recipe)
-
     def objective(u_: FloatArray) -> tuple[float, FloatArray, FloatArray, FloatArray]:
         logp, g, c = _terms(L @ u_, first, second, likelihood, single, single_likelihood)
         return 0.5 * float(u_ @ u_) - float(np.sum(logp)), logp, g, c
 
+    memo = fit_memo.active() if m >= fit_memo.MEMO_FROM else None
+    key = None
+    if memo is not None:
+        key = fit_memo.problem_key(
+            k_vv, first, second, single, init, likelihood, single_likelihood,
+            np.float64(tol), np.int64(max_iter),
+        )  # fmt: skip
+        remembered = None if key is None else memo.get(key)
+        if remembered is not None and remembered.mode.shape == (m,):
+            # the fit's last iteration at the remembered mode: its numbers, if it is the mode
+            at = remembered.mode.copy()
+            _, r_logp, r_g, r_c = objective(at)
+            r_gnorm = float(np.max(np.abs(_gradient(at, r_g, L, first, second, single))))
+            r_scale = max(1.0, float(np.max(np.abs(at))))
+            if r_gnorm <= tol * r_scale or (
+                r_gnorm == remembered.gradient_norm and r_gnorm <= 1e3 * tol * r_scale
+            ):
+                R = _hessian_factor(r_c, rows, 1, n_obs)
+                return LaplaceMode(visited, at, 1, r_gnorm, float(np.sum(r_logp)), (L, R), recipe)
+    mode = _newton(u, objective, L, rows, first, second, single, n_obs, tol, max_iter,
+                   lambda it, u_, gnorm_, R, logp_: LaplaceMode(
+                       visited, u_, it, gnorm_, float(np.sum(logp_)), (L, R), recipe))  # fmt: skip
+    if memo is not None and key is not None:
+        memo.put(key, fit_memo.Remembered(mode.whitened_mode, mode.gradient_norm))
+    return mode
+
+
+def _newton(
+    u: FloatArray,
+    objective: _Objective,
+    L: FloatArray,
+    rows: FloatArray,
+    first: IntArray,
+    second: IntArray,
+    single: IntArray | None,
+    n_obs: int,
+    tol: float,
+    max_iter: int,
+    done: Callable[[int, FloatArray, float, FloatArray, FloatArray], LaplaceMode],
+) -> LaplaceMode:
+    """:func:`fit_laplace`'s Newton iterations from ``u``; ``done(iteration, u, gnorm, R, logp)``
+    makes the result."""
+    m = u.shape[0]
     value, logp, g, c = objective(u)
     gnorm = last_full_step_gnorm = np.inf
     for iteration in range(1, max_iter + 1):
-        g_pair = g[:n_pairs]
-        grad_f = np.bincount(first, g_pair, m) - np.bincount(second, g_pair, m)
-        if single is not None:
-            grad_f = grad_f + np.bincount(single, g[n_pairs:], m)
-        grad = u - L.T @ grad_f
+        grad = _gradient(u, g, L, first, second, single)
         gnorm = float(np.max(np.abs(grad))) if m else 0.0
         R = _hessian_factor(c, rows, iteration, n_obs)
         scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
         if gnorm <= tol * scale:
-            return done(iteration, R, logp)
+            return done(iteration, u, gnorm, R, logp)
         step = -cho_solve((R, True), grad, check_finite=False)
         slope = float(grad @ step)
         # Once the predicted decrease is below the objective's rounding, a line search cannot
@@ -298,7 +353,7 @@ def fit_laplace(
         if -slope <= 64 * np.finfo(float).eps * max(1.0, abs(value)):
             if gnorm >= last_full_step_gnorm:
                 if gnorm <= 1e3 * tol * scale:  # at the mode to rounding
-                    return done(iteration, R, logp)
+                    return done(iteration, u, gnorm, R, logp)
                 raise ConvergenceError(
                     f"Laplace fit stalled at Newton iteration {iteration} (gradient "
                     f"{gnorm:.3e}; {n_obs} observations over {m} actions)"

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -47,9 +47,11 @@ from gaitpref.errors import (
 )
 from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
+from gaitpref.model.fit_memo import FitMemo, remembering
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
 from gaitpref.sessions.confidence import confidence_history, session_confidence, stop_reason
+from gaitpref.sessions.fit_cache import load_memo, memo_path, save_memo
 from gaitpref.sessions.gaits import stopped_error
 from gaitpref.sessions.records import (
     Answered,
@@ -116,6 +118,8 @@ class Session:
         self._lock = threading.RLock()
         self.config = config_of(record)
         self._gait_cache = gait_cache_of(storage, self.config)
+        self._memo_path = memo_path(storage, record.id)
+        self._memo = FitMemo() if self._memo_path is None else load_memo(self._memo_path)
         self._state = self._fresh_state()
         self._broken = False
         self._in_turn = False
@@ -842,7 +846,7 @@ class Session:
         with self._lock:
             if self._in_turn:  # an operation inside an operation: the turn is held already
                 return fn()
-            with self.storage.writer_turn(self.id):
+            with self.storage.writer_turn(self.id), self._remembering():
                 self._in_turn = True
                 try:
                     if self._broken:
@@ -857,18 +861,32 @@ class Session:
         return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
-        return prepare_state(self.storage, self._record, self.config, self._gait_cache)
+        with self._remembering():
+            return prepare_state(self.storage, self._record, self.config, self._gait_cache)
 
     def _catch_up(self) -> None:
         """Replay the events this object has not seen."""
         records = self.storage.events(self.id, after=self._state.last_seq)
         try:
-            replay(self._state, records)
+            with self._remembering():
+                replay(self._state, records)
         except ReplayError as exc:
             raise ReplayError(
                 f"session {self.id} cannot be rebuilt exactly from its log; stopped instead of "
                 f"going on along a different path.\n{exc}\n{self._provenance()}"
             ) from None
+
+    @contextlib.contextmanager
+    def _remembering(self) -> Iterator[None]:
+        """The session's large Laplace fits remembered (``model/fit_memo.py``: a replay checks
+        each at its mode instead of making it again, the same numbers), and the memo saved
+        beside a SQLite database when something was added (a cache: never an error)."""
+        with remembering(self._memo):
+            try:
+                yield
+            finally:
+                if self._memo.dirty and self._memo_path is not None:
+                    save_memo(self._memo, self._memo_path)
 
     def _rebuild(self) -> None:
         self._record = self.storage.get_session(self.id)
