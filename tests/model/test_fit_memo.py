@@ -131,3 +131,17 @@ def test_a_likelihood_that_cannot_be_pickled_is_not_remembered() -> None:
     with remembering(memo):
         fit_laplace(k_vv, visited, first, second, Local(np.full(40, 0.2)))  # type: ignore[arg-type]
     assert len(memo) == 0
+
+
+def test_an_entry_whose_arithmetic_overflows_is_refitted_even_where_numpy_raises() -> None:
+    problem = _problem(3, False)
+    k_vv, _, first, second, likelihood, single, single_likelihood = problem
+    key = problem_key(k_vv, first, second, single, None, likelihood, single_likelihood,
+                      np.float64(1e-11), np.int64(100))  # fmt: skip
+    assert key is not None
+    right = _fit(problem)
+    memo = FitMemo()
+    memo.put(key, fit_memo.Remembered(np.full(30, 1e308), 0.0))
+    with remembering(memo), np.errstate(all="raise"):
+        checked = _fit(problem)
+    _same(checked, right)

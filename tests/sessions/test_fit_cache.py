@@ -117,3 +117,10 @@ def test_a_database_that_is_not_a_local_file_keeps_the_memo_in_the_process() -> 
     with Session.create(storage, CONFIG, "S01", seed=1) as s:
         _answer(s, SimulatedSubject(space, bump_utility(space), seed=1), 3)
         assert len(s._memo) > 0
+
+
+def test_a_memo_with_values_that_are_not_finite_is_ignored(tmp_path: Path) -> None:
+    path = tmp_path / "x.npz"
+    np.savez(path, keys=np.zeros((1, 32), np.uint8), norms=np.zeros(1),
+             offsets=np.array([0, 2]), modes=np.array([0.0, np.nan]))  # fmt: skip
+    assert len(load_memo(path)) == 0

@@ -303,22 +303,44 @@ def fit_laplace(
         )  # fmt: skip
         remembered = None if key is None else memo.get(key)
         if remembered is not None and remembered.mode.shape == (m,):
-            # the fit's last iteration at the remembered mode: its numbers, if it is the mode
-            at = remembered.mode.copy()
-            _, r_logp, r_g, r_c = objective(at)
-            r_gnorm = float(np.max(np.abs(_gradient(at, r_g, L, first, second, single))))
-            r_scale = max(1.0, float(np.max(np.abs(at))))
-            if r_gnorm <= tol * r_scale or (
-                r_gnorm == remembered.gradient_norm and r_gnorm <= 1e3 * tol * r_scale
-            ):
-                R = _hessian_factor(r_c, rows, 1, n_obs)
-                return LaplaceMode(visited, at, 1, r_gnorm, float(np.sum(r_logp)), (L, R), recipe)
+            checked = _at_remembered(remembered, objective, L, rows, first, second, single, tol)
+            if checked is not None:
+                at, gnorm, R, logp = checked
+                return LaplaceMode(visited, at, 1, gnorm, float(np.sum(logp)), (L, R), recipe)
     mode = _newton(u, objective, L, rows, first, second, single, n_obs, tol, max_iter,
                    lambda it, u_, gnorm_, R, logp_: LaplaceMode(
                        visited, u_, it, gnorm_, float(np.sum(logp_)), (L, R), recipe))  # fmt: skip
     if memo is not None and key is not None:
         memo.put(key, fit_memo.Remembered(mode.whitened_mode, mode.gradient_norm))
     return mode
+
+
+def _at_remembered(
+    remembered: fit_memo.Remembered,
+    objective: _Objective,
+    L: FloatArray,
+    rows: FloatArray,
+    first: IntArray,
+    second: IntArray,
+    single: IntArray | None,
+    tol: float,
+) -> tuple[FloatArray, float, FloatArray, FloatArray] | None:
+    """The fit's last iteration at a remembered mode, ``(u, gnorm, R, logp)``: its numbers, if
+    the gradient there passes :func:`_newton`'s test (or is the remembered norm exactly, within
+    its rounding allowance); None otherwise, or if the entry's arithmetic fails (a damaged
+    cache under a raising NumPy error state): the caller fits from its start."""
+    at = remembered.mode.copy()
+    try:
+        _, logp, g, c = objective(at)
+        gnorm = float(np.max(np.abs(_gradient(at, g, L, first, second, single))))
+        scale = max(1.0, float(np.max(np.abs(at))))
+        if gnorm <= tol * scale or (
+            gnorm == remembered.gradient_norm and gnorm <= 1e3 * tol * scale
+        ):
+            return at, gnorm, _hessian_factor(c, rows, 1, rows.shape[0]), logp
+    except (ArithmeticError, ConvergenceError):
+        return None
+    return None
 
 
 def _newton(

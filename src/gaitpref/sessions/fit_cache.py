@@ -49,6 +49,7 @@ def load_memo(path: Path) -> FitMemo:
                 and modes.dtype == np.float64 and norms.dtype == np.float64
                 and offsets.dtype.kind == "i" and n >= 0 and offsets[0] == 0
                 and bool(np.all(np.diff(offsets) >= 0)) and offsets[-1] == modes.shape[0]
+                and bool(np.all(np.isfinite(modes))) and bool(np.all(np.isfinite(norms)))
             )  # fmt: skip
             if not valid:
                 return memo
