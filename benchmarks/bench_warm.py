@@ -165,7 +165,9 @@ def report(paths: list[Path]) -> None:
         f"(`{CONFIG}`), a new subject warm-started from every earlier one; seconds, wall clock "
         "(CPU time of every thread in brackets); answer and confidence: the median of the new "
         f"subject's first {NEW} answers; MiB an answer: what each of {MEMORY_ANSWERS} answers "
-        "after one more leaves allocated (`tracemalloc`; not recorded before 2026-12-05).",
+        "after one more leaves allocated (`tracemalloc`; not recorded before 2026-12-05).  "
+        "Reopening replays every answer of the new session: 5 in runs without the memory "
+        f"column, {NEW + 1 + MEMORY_ANSWERS} in runs with it.",
         "",
         "A run labelled by a commit ran that checkout's `src` (`PYTHONPATH`) with this script.  "
         "On a loaded machine the CPU time is the fairer comparison; where threads ran side by "
