@@ -124,3 +124,24 @@ def test_a_memo_with_values_that_are_not_finite_is_ignored(tmp_path: Path) -> No
     np.savez(path, keys=np.zeros((1, 32), np.uint8), norms=np.zeros(1),
              offsets=np.array([0, 2]), modes=np.array([0.0, np.nan]))  # fmt: skip
     assert len(load_memo(path)) == 0
+
+
+def test_undo_with_the_factors_dropped_and_the_fits_remembered_reopens_as_it_ran(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from gaitpref.loop import cospar
+
+    monkeypatch.setattr(cospar, "STRIP_FROM_VISITED", 0)  # every answer keeps no factors
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    sid = _warm_session(url)
+    space = load_config(CONFIG).space
+    with Session.open(url, sid) as s:
+        s.undo()
+        s.undo()
+        _answer(s, SimulatedSubject(space, bump_utility(space), seed=9), 2)
+        s.undo()
+        live = state_of(s)
+    with Session.open(url, sid) as s:  # replayed with the remembered fits
+        again = state_of(s)
+    assert np.array_equal(live[0], again[0]) and np.array_equal(live[1], again[1])
+    assert live[2:] == again[2:]
