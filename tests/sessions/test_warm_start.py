@@ -219,6 +219,36 @@ def test_a_subjects_chain_of_warm_started_sessions_replays_each_earlier_one_once
     assert len(calls) == 5
 
 
+def test_creating_a_warm_start_replays_each_earlier_session_once(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Creating replayed every earlier session twice (once to learn rho, once more to build the
+    new session's state): at 40 subjects of 60 answers, 5 of its 25 s.  Now once; the state built
+    from them is the one a reopening builds."""
+    from gaitpref.sessions import warm
+    from gaitpref.sessions.replay import replay
+    from gaitpref.sessions.state import SessionState
+    from gaitpref.storage import EventRecord
+
+    db = MemoryStorage()
+    ids = _earlier(db)
+    calls: list[EventRecord] = []
+
+    def counted(state: SessionState, events: Sequence[EventRecord]) -> None:
+        calls.append(events[0])
+        replay(state, events)
+
+    monkeypatch.setattr(warm, "replay", counted)
+    with Session.create(db, CONFIG, "S03", seed=5, prior_from=["S01", ids[2]]) as s:
+        created = state_of(s)
+        sid = s.id
+    assert len(calls) == 3
+    with Session.open(db, sid) as again:
+        reopened = state_of(again)
+    assert len(calls) == 6  # a reopening replays them all again, as always
+    assert np.array_equal(created[0], reopened[0]) and created[2:] == reopened[2:]
+
+
 def test_a_warm_start_past_the_node_limit_is_refused_by_count_before_anything_is_written(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

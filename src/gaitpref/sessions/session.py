@@ -80,6 +80,7 @@ from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.sessions.warm import (
     RELEARN_EVERY,
     SHARE_GATE,
+    Replayed,
     check_prior_from,
     new_warm_start,
     prepare_state,
@@ -111,8 +112,18 @@ _WITHDRAWN = (
 class Session:
     """One subject's session.  Make one with :meth:`create` or :meth:`open`."""
 
-    def __init__(self, storage: Storage, record: SessionRecord, owns_storage: bool) -> None:
+    def __init__(
+        self,
+        storage: Storage,
+        record: SessionRecord,
+        owns_storage: bool,
+        replayed: Replayed | None = None,
+    ) -> None:
+        """``replayed``: the earlier sessions :meth:`create` replayed for the warm start a
+        moment ago (keyed by the hashes it recorded), read by the first build instead of
+        replaying them again; every later build (:meth:`_rebuild`) replays them."""
         self.storage = storage
+        self._replayed_at_creation = replayed
         self._record = record
         self._owns = owns_storage
         self._lock = threading.RLock()
@@ -171,8 +182,9 @@ class Session:
         storage = open_storage(db)
         prior: list[log.PriorSession] = []
         rho: float | None = None
+        replayed: Replayed = {}
         if named:
-            prior, rho = new_warm_start(storage, cfg, named, use_seed)
+            prior, rho = new_warm_start(storage, cfg, named, use_seed, replayed)
             meta["prior_from"] = [p.model_dump() for p in prior]
             meta["prior_rho"] = rho
             meta["prior_terms"] = "all"
@@ -204,7 +216,7 @@ class Session:
             )
         )
         record = storage.create_session(spec, [created])
-        session = cls(storage, record, owns_storage=not isinstance(db, Storage))
+        session = cls(storage, record, owns_storage=not isinstance(db, Storage), replayed=replayed)
         session._catch_up()
         return session
 
@@ -861,8 +873,11 @@ class Session:
         return self.storage.get_session(self.id).last_seq != self._state.last_seq
 
     def _fresh_state(self) -> SessionState:
+        replayed, self._replayed_at_creation = self._replayed_at_creation, None
         with self._remembering():
-            return prepare_state(self.storage, self._record, self.config, self._gait_cache)
+            return prepare_state(
+                self.storage, self._record, self.config, self._gait_cache, memo=replayed
+            )
 
     def _catch_up(self) -> None:
         """Replay the events this object has not seen."""

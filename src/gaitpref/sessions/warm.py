@@ -200,10 +200,16 @@ def recorded_prior(record: SessionRecord) -> list[PriorSession]:
 
 
 def new_warm_start(
-    storage: Storage, config: ExperimentConfig, prior_from: Sequence[int | str], seed: int
+    storage: Storage,
+    config: ExperimentConfig,
+    prior_from: Sequence[int | str],
+    seed: int,
+    memo: Replayed | None = None,
 ) -> tuple[list[PriorSession], float]:
     """What a new session's warm start from ``prior_from`` records: the earlier sessions
     (:func:`resolve_prior`, :func:`describe_prior`) and ``rho`` (:func:`make_warm_start`).
+    ``memo`` receives the earlier sessions replayed (:data:`Replayed`), so that building the
+    new session's state right after reads them from it instead of replaying them again.
 
     :class:`~gaitpref.errors.PriorFromError` also when an earlier session, or one its own warm
     start read, cannot be rebuilt from the database (its log or row altered, its config no longer
@@ -212,7 +218,7 @@ def new_warm_start(
     """
     try:
         prior = describe_prior(storage, resolve_prior(storage, config, prior_from))
-        return prior, make_warm_start(storage, config, prior, seed).rho
+        return prior, make_warm_start(storage, config, prior, seed, memo).rho
     except ReplayError as exc:
         raise PriorFromError(
             "prior_from: an earlier session cannot be rebuilt from the database, so no warm "
@@ -340,13 +346,17 @@ def earlier_subjects(
 
 
 def make_warm_start(
-    storage: Storage, config: ExperimentConfig, prior: Sequence[PriorSession], seed: int
+    storage: Storage,
+    config: ExperimentConfig,
+    prior: Sequence[PriorSession],
+    seed: int,
+    memo: Replayed | None = None,
 ) -> WarmStart:
     """The warm start of a new session, every term carried, ``rho`` learned from the earlier
     subjects; :class:`~gaitpref.errors.PriorFromError` when their terms visit more than
-    :data:`MAX_PRIOR_NODES` (gait, subject) pairs."""
+    :data:`MAX_PRIOR_NODES` (gait, subject) pairs.  ``memo``: :data:`Replayed`."""
     loop = config.make_loop(seed=seed)
-    groups = earlier_subjects(storage, prior, config)
+    groups = earlier_subjects(storage, prior, config, memo)
     model_ties = loop.learning.ties == "model"
     data, singles = warm_terms(loop.context(), model_ties, groups)
     parts = [data.first, data.second] + ([] if singles is None else [singles.actions])
