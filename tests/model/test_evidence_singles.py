@@ -259,3 +259,32 @@ def test_thresholds_vector_round_trips_and_stays_increasing() -> None:
     t = np.array(hyper.with_log_vector(theta).thresholds)
     assert np.all(np.diff(t) > 0)
     assert Hyperparameters((0.1,), 0.5, 1e-6).log_vector().shape == (3,)
+
+
+@pytest.mark.parametrize(("seed", "band"), [(0, 0.01), (2, 0.0)])
+def test_the_sparse_incidence_gives_the_dense_evidence_and_gradient(
+    small_space: Space, seed: int, band: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``evidence_from_prior(..., sparse=True)`` (a warm start's rho fit) against the dense
+    ``G``: ties, the band, ratings and fitted thresholds, every entry of the gradient."""
+    from gaitpref.model import evidence
+
+    rng = np.random.default_rng(500 + seed)
+    pairs = _pairs(rng, len(small_space), 40)
+    if band == 0.0:
+        keep = ~pairs.tie
+        pairs = PairData(pairs.first[keep], pairs.second[keep], pairs.sigma[keep],
+                         pairs.banded[keep] & False, pairs.tie[keep])  # fmt: skip
+    singles = _ratings(rng, len(small_space), 25)
+    hyper = Hyperparameters((0.025, 0.1), 0.004, 4e-7, band, (-0.045, -0.005, 0.03))
+    dense = laplace_evidence(small_space, hyper, pairs, singles=singles)
+    real = evidence.evidence_from_prior
+
+    def sparse(*args: object, **kwargs: object) -> evidence.Evidence:
+        return real(*args, **kwargs, sparse=True)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(evidence, "evidence_from_prior", sparse)
+    got = laplace_evidence(small_space, hyper, pairs, singles=singles)
+    assert got.value == dense.value  # the same fit
+    assert np.all(np.isfinite(dense.gradient))
+    np.testing.assert_allclose(got.gradient, dense.gradient, rtol=1e-9, atol=1e-12)

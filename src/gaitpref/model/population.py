@@ -426,7 +426,9 @@ def population_evidence(
             prior=partial(_population_k, space, kernel, gaits, subjects, rho, share),
         )  # fmt: skip
         return Evidence(fit.log_evidence, np.full(d + 3, np.nan), fit)
-    ev = evidence_from_prior(K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init)
+    ev = evidence_from_prior(
+        K, visited, (a, b, s), data, singles, hyper, kernel_gradient, init, sparse=True
+    )
     g = ev.gradient  # (l..., s^2, logit rho, band) -> (l..., s^2, band, logit rho)
     order = np.array([*range(d + 1), d + 2, d + 1])
     return Evidence(ev.value, g[order], ev.fit)
