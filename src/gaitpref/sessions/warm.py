@@ -63,7 +63,7 @@ if TYPE_CHECKING:
 
 #: The most distinct (gait, earlier subject) pairs a new warm start's earlier sessions may visit:
 #: each answer of the new session refits the population model over them (and the share's
-#: hypotheses), dense in their number; 1,501 took 6.2 s an answer (and 1.1 s for the confidence
+#: hypotheses), dense in their number; 1,501 took 6.1 s an answer (and 1.0 s for the confidence
 #: after it) on two cores (``benchmarks/results/warm.md``).  Checked when a session is created;
 #: sessions recorded with more replay as they were.
 MAX_PRIOR_NODES = 2000
