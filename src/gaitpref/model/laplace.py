@@ -28,7 +28,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
@@ -225,6 +225,20 @@ def _hessian_factor(
 _Objective = Callable[[FloatArray], tuple[float, FloatArray, FloatArray, FloatArray]]
 
 
+class _Problem(NamedTuple):
+    """What each iteration reads: the objective, ``L``, the rows ``G L`` and ``G``'s indices."""
+
+    objective: _Objective
+    L: FloatArray
+    rows: FloatArray
+    first: IntArray
+    second: IntArray
+    single: IntArray | None
+
+    def gradient(self, u: FloatArray, g: FloatArray) -> FloatArray:
+        return _gradient(u, g, self.L, self.first, self.second, self.single)
+
+
 def _line_search(
     objective: _Objective, u: FloatArray, value: float, step: FloatArray, slope: float
 ) -> tuple[Any, float, Any, Any, Any]:
@@ -301,13 +315,15 @@ def fit_laplace(
             k_vv, first, second, single, init, likelihood, single_likelihood,
             np.float64(tol), np.int64(max_iter),
         )  # fmt: skip
+    problem = _Problem(objective, L, rows, first, second, single)
+    if memo is not None:
         remembered = None if key is None else memo.get(key)
         if remembered is not None and remembered.mode.shape == (m,):
-            checked = _at_remembered(remembered, objective, L, rows, first, second, single, tol)
+            checked = _at_remembered(remembered, problem, tol)
             if checked is not None:
                 at, gnorm, R, logp = checked
                 return LaplaceMode(visited, at, 1, gnorm, float(np.sum(logp)), (L, R), recipe)
-    mode = _newton(u, objective, L, rows, first, second, single, n_obs, tol, max_iter,
+    mode = _newton(u, problem, n_obs, tol, max_iter,
                    lambda it, u_, gnorm_, R, logp_: LaplaceMode(
                        visited, u_, it, gnorm_, float(np.sum(logp_)), (L, R), recipe))  # fmt: skip
     if memo is not None and key is not None:
@@ -316,14 +332,7 @@ def fit_laplace(
 
 
 def _at_remembered(
-    remembered: fit_memo.Remembered,
-    objective: _Objective,
-    L: FloatArray,
-    rows: FloatArray,
-    first: IntArray,
-    second: IntArray,
-    single: IntArray | None,
-    tol: float,
+    remembered: fit_memo.Remembered, problem: _Problem, tol: float
 ) -> tuple[FloatArray, float, FloatArray, FloatArray] | None:
     """The fit's last iteration at a remembered mode, ``(u, gnorm, R, logp)``: its numbers, if
     the gradient there passes :func:`_newton`'s test (or is the remembered norm exactly, within
@@ -331,13 +340,13 @@ def _at_remembered(
     cache under a raising NumPy error state): the caller fits from its start."""
     at = remembered.mode.copy()
     try:
-        _, logp, g, c = objective(at)
-        gnorm = float(np.max(np.abs(_gradient(at, g, L, first, second, single))))
+        _, logp, g, c = problem.objective(at)
+        gnorm = float(np.max(np.abs(problem.gradient(at, g))))
         scale = max(1.0, float(np.max(np.abs(at))))
         if gnorm <= tol * scale or (
             gnorm == remembered.gradient_norm and gnorm <= 1e3 * tol * scale
         ):
-            return at, gnorm, _hessian_factor(c, rows, 1, rows.shape[0]), logp
+            return at, gnorm, _hessian_factor(c, problem.rows, 1, problem.rows.shape[0]), logp
     except (ArithmeticError, ConvergenceError):
         return None
     return None
@@ -345,12 +354,7 @@ def _at_remembered(
 
 def _newton(
     u: FloatArray,
-    objective: _Objective,
-    L: FloatArray,
-    rows: FloatArray,
-    first: IntArray,
-    second: IntArray,
-    single: IntArray | None,
+    problem: _Problem,
     n_obs: int,
     tol: float,
     max_iter: int,
@@ -359,10 +363,11 @@ def _newton(
     """:func:`fit_laplace`'s Newton iterations from ``u``; ``done(iteration, u, gnorm, R, logp)``
     makes the result."""
     m = u.shape[0]
+    objective, rows = problem.objective, problem.rows
     value, logp, g, c = objective(u)
     gnorm = last_full_step_gnorm = np.inf
     for iteration in range(1, max_iter + 1):
-        grad = _gradient(u, g, L, first, second, single)
+        grad = problem.gradient(u, g)
         gnorm = float(np.max(np.abs(grad))) if m else 0.0
         R = _hessian_factor(c, rows, iteration, n_obs)
         scale = max(1.0, float(np.max(np.abs(u)))) if m else 1.0
