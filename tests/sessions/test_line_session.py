@@ -60,14 +60,19 @@ LOCAL = "[cospar.strategy_settings]\nearly_scale = 0.5\n"  # a local challenger 
 ONE_LINE = "line_count = 1\n"  # LineCoSpar's one line per query (the default is a star of 4)
 
 
+CLOUD = "line_cloud = 40\n"  # 40 points around the best point besides the star
+
+
 @pytest.mark.parametrize(
-    "extra", ["", ONE_LINE, LOCAL], ids=["star", "one-line", "local-challenger"]
+    "extra", ["", ONE_LINE, LOCAL, CLOUD], ids=["star", "one-line", "local-challenger", "cloud"]
 )
 def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> None:
     url = f"sqlite:///{tmp_path / 's.db'}"
+    in_cospar = extra in (ONE_LINE, CLOUD)
     cfg = parse_config(
-        TEXT.replace("[cospar]\n", "[cospar]\n" + ONE_LINE) if extra == ONE_LINE else TEXT + extra
+        TEXT.replace("[cospar]\n", "[cospar]\n" + extra) if in_cospar else TEXT + extra
     )
+    assert cfg.line.cloud == (40 if extra == CLOUD else 0)
     lines = 1 if extra == ONE_LINE else 4
     assert cfg.line.lines == lines
     assert cfg.subspace == "line" and cfg.space.continuous
@@ -95,7 +100,7 @@ def test_a_continuous_session_replays_exactly(tmp_path: Path, extra: str) -> Non
         directions = np.array([line["direction"], *line["others"]])
         assert directions.shape == (lines, 3)
         np.testing.assert_allclose(np.linalg.norm(directions, axis=1), 1.0)
-        assert len(line["points"]) > 31  # more than one line's 30 points and the origin
+        assert len(line["points"]) > (31 + 40 if extra == CLOUD else 31)  # 30 a line, origin
     assert events[-1].payload["points"][0] in line["points"]
     reopened.close()
     s.close()

@@ -122,7 +122,7 @@ DEFAULT_REFIT_EVERY: int = DEFAULTS["model"]["refit_every"]
 DEFAULT_STRATEGY: str = DEFAULTS["cospar"]["strategy"]
 DEFAULT_BUFFER: int = DEFAULTS["cospar"]["buffer"]
 #: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
-LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count"})
+LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count", "line_cloud"})
 
 
 def shipped_configs() -> list[str]:
@@ -373,6 +373,13 @@ def _cospar(
                 f"{star} points a query, more than {MAX_STAR_POINTS}: lower line_count "
                 "(1: one line, as before defaults 0.10) or line_points",
             )
+        if star + cospar["line_cloud"] > MAX_STAR_POINTS:
+            fail(
+                "cospar",
+                "line_cloud",
+                f"is {cospar['line_cloud']} points besides {star} on the lines, more than "
+                f"{MAX_STAR_POINTS} a query: lower line_cloud, line_count or line_points",
+            )
         if all(f.span == 0 for f in space.features):
             fail(
                 "cospar",
@@ -390,8 +397,8 @@ def _cospar(
                 + (f", a grid of {space.grid_size}" if space.grid_size is not None else "")
                 + f"), got {cospar['n']}",
             )
-        lines = cospar["line_count"]
-        cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"], lines)
+        lines, cloud = cospar["line_count"], cospar["line_cloud"]
+        cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"], lines, cloud)
         return cospar, defaulted
     cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"])
     size = len(space)

@@ -199,6 +199,8 @@ COSPAR: Final[dict[str, Key]] = {
     "line_direction": Key(Choice(DIRECTIONS), "random"),
     # lines per query, all through the best point (a star; 1: LineCoSpar's one line)
     "line_count": Key(Integer(1, MAX_LINES), 4),
+    # points around the best point besides the lines (loop/lines.py; 0: none)
+    "line_cloud": Key(Integer(0, MAX_STAR_POINTS), 0),
 }
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.

@@ -19,6 +19,13 @@ rule, the others random directions, the query chosen among all their points (a u
 one-dimensional subspaces, as LineBO's Algorithm 1 allows any low-dimensional subspace; the
 posterior on it is the same restriction of the full model).  One line is LineCoSpar's rule.
 
+``cloud`` > 0 adds that many points around the origin to the query's candidates (a *cloud*):
+Gaussian steps in normalised coordinates with standard deviations :data:`CLOUD_SCALES` (the
+points split evenly among them), clipped to the box and snapped, drawn from the line's seed
+after the star's directions.  Lines through the best point reach far along few directions; the
+cloud looks a short way in many (a screen on issue 13's 12-D random-GP cells,
+``docs/results/continuous/notes.md``).
+
 Every line takes its own seed, drawn from the loop's generator, so the log can name it.  When
 every point of a line is excluded (avoided, near a gait flagged unsafe, in the region of
 avoidance) the loop draws another, at most :data:`LINE_DRAWS` lines per query in all
@@ -27,7 +34,7 @@ avoidance) the loop draws another, at most :data:`LINE_DRAWS` lines per query in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal, get_args
 
 import numpy as np
@@ -50,6 +57,8 @@ MAX_LINES = 64
 #: the most points a query's lines hold together (``lines x points``): the posterior over the
 #: table and the star is a dense matrix over them (one line of 4096 points, as before stars)
 MAX_STAR_POINTS = 4096
+#: the standard deviations of a cloud's steps around the origin (normalised coordinates)
+CLOUD_SCALES = (0.05, 0.1, 0.2)
 
 
 @dataclass(frozen=True)
@@ -59,8 +68,14 @@ class LineSettings:
     points: int = 50
     direction: Direction = "random"
     lines: int = 1
+    cloud: int = 0
 
     def __post_init__(self) -> None:
+        if not is_count(self.cloud) or not 0 <= self.cloud <= MAX_STAR_POINTS:
+            raise ValueError(
+                f"a query's cloud holds 0 to {MAX_STAR_POINTS} points, got cloud = {self.cloud!r}"
+            )
+        object.__setattr__(self, "cloud", int(self.cloud))
         if not is_count(self.points) or self.points < 2:
             raise ValueError(f"a line needs at least 2 points, got points = {self.points!r}")
         if not is_count(self.lines) or not 1 <= self.lines <= MAX_LINES:
@@ -69,10 +84,13 @@ class LineSettings:
             )
         object.__setattr__(self, "points", int(self.points))  # a NumPy integer as an int
         object.__setattr__(self, "lines", int(self.lines))
-        if self.lines * self.points > MAX_STAR_POINTS:
+        total = self.lines * self.points + self.cloud
+        if total > MAX_STAR_POINTS:
+            cloud = f" and a cloud of {self.cloud}" if self.cloud else ""
             raise ValueError(
-                f"{self.lines} lines of {self.points} points are {self.lines * self.points} "
-                f"points a query, more than {MAX_STAR_POINTS}: fewer lines or fewer points"
+                f"{self.lines} lines of {self.points} points{cloud} are {total} points a query, "
+                f"more than {MAX_STAR_POINTS}: fewer lines or fewer points"
+                + (" or cloud points" if self.cloud else "")
             )
         if self.direction not in DIRECTIONS:
             raise ValueError(
@@ -162,6 +180,28 @@ def line_points(space: Space, origin: FloatArray, v: FloatArray, count: int) -> 
     return _distinct(snapped)
 
 
+def cloud_points(
+    space: Space, origin: FloatArray, count: int, rng: np.random.Generator
+) -> FloatArray:
+    """``count`` points around ``origin``: steps of :data:`CLOUD_SCALES` (normalised), clipped
+    to the box and snapped; none on single-valued features."""
+    lo, span = _spans(space)
+    u0 = (origin - lo) / np.where(span > 0, span, 1.0)
+    k = len(CLOUD_SCALES)
+    sizes = [count // k + (j < count % k) for j in range(k)]
+    steps = np.vstack(
+        [
+            rng.normal(0.0, scale, (n, space.ndim))
+            for scale, n in zip(CLOUD_SCALES, sizes, strict=True)
+        ]
+    )
+    raw = lo + np.clip(u0 + np.where(span > 0, steps, 0.0), 0.0, 1.0) * span
+    out: FloatArray = np.array(
+        [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
+    ).reshape(count, space.ndim)
+    return out
+
+
 def _distinct(rows: FloatArray) -> FloatArray:
     """``rows`` without repeats, each kept where it first appears."""
     _, first = np.unique(rows, axis=0, return_index=True)
@@ -178,7 +218,8 @@ def draw_line(
 ) -> Line:
     """The line of seed ``seed`` through ``origin`` (a random point when None); with
     ``settings.lines`` > 1, the star of that many lines through it (the others random
-    directions, drawn after the first from the same seed)."""
+    directions, drawn after the first from the same seed); with ``settings.cloud``, that many
+    points around it too (:func:`cloud_points`, drawn last)."""
     rng = np.random.default_rng(seed)
     start = random_point(space, rng) if origin is None else np.asarray(origin, dtype=np.float64)
     v = direction(space, settings.direction, rng, towards)
@@ -187,6 +228,8 @@ def draw_line(
     if others:
         rest = (line_points(space, start, w, settings.points) for w in others)
         points = _distinct(np.vstack([points, *rest]))
+    if settings.cloud:
+        points = _distinct(np.vstack([points, cloud_points(space, start, settings.cloud, rng)]))
     points.setflags(write=False)
     return Line(
         seed,
@@ -202,7 +245,7 @@ def redraw_rule(settings: LineSettings, draw: int) -> tuple[LineSettings, bool]:
     :data:`LINE_DRAWS`), and whether it passes through the best point (else a random point)."""
     if draw < LINE_DRAWS // 3:
         return settings, True
-    return LineSettings(settings.points, "random", settings.lines), draw < 2 * LINE_DRAWS // 3
+    return replace(settings, direction="random"), draw < 2 * LINE_DRAWS // 3
 
 
 def normalised(space: Space, delta: FloatArray) -> FloatArray:
@@ -213,6 +256,7 @@ def normalised(space: Space, delta: FloatArray) -> FloatArray:
 
 
 __all__ = [
+    "CLOUD_SCALES",
     "DIRECTIONS",
     "LINE_DRAWS",
     "MAX_LINES",
@@ -220,6 +264,7 @@ __all__ = [
     "Direction",
     "Line",
     "LineSettings",
+    "cloud_points",
     "direction",
     "draw_line",
     "line_points",
