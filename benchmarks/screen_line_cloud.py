@@ -9,7 +9,7 @@ origin, clipped to the box) from the query's second query on: the screen that pr
 too).  Prints the best@60 fraction of each seed.
 
     python benchmarks/screen_line_cloud.py base
-    python benchmarks/screen_line_cloud.py cloud 0.05,0.1,0.2 60 [FIRST_SEED]
+    python benchmarks/screen_line_cloud.py cloud 0.05,0.1,0.2 60 [FIRST_SEED [LINES [SEEDS]]]
 """
 
 from __future__ import annotations
@@ -28,6 +28,8 @@ real = line_mod.draw_line
 SCALES = [float(x) for x in sys.argv[2].split(",")] if len(sys.argv) > 2 else [0.05, 0.1, 0.2]
 PER = int(sys.argv[3]) if len(sys.argv) > 3 else 60
 FIRST = int(sys.argv[4]) if len(sys.argv) > 4 else 0
+LINES = int(sys.argv[5]) if len(sys.argv) > 5 else 4
+SEEDS = int(sys.argv[6]) if len(sys.argv) > 6 else 12
 
 
 def cloud(space, settings, seed, origin, towards=None):
@@ -49,9 +51,9 @@ if variant == "cloud":
     line_mod.draw_line = cloud
 for noise in (0.0, 0.2):
     fr = []
-    for seed in range(FIRST, FIRST + 12):
+    for seed in range(FIRST, FIRST + SEEDS):
         r = sc.one_run(
-            "line", "random-gp", 12, False, noise, seed, None, "gated-eubo", "evidence", 4, 50
+            "line", "random-gp", 12, False, noise, seed, None, "gated-eubo", "evidence", LINES, 50
         )
         v = r["best_at"]["60"]
         fr.append((v - r["random_mean"]) / (r["optimum"] - r["random_mean"]))
@@ -62,7 +64,7 @@ for noise in (0.0, 0.2):
         PER,
         noise,
         round(fr.mean(), 3),
-        round(fr.std(ddof=1) / np.sqrt(12), 3),
+        round(fr.std(ddof=1) / np.sqrt(SEEDS), 3),
         np.round(fr, 3).tolist(),
         flush=True,
     )
