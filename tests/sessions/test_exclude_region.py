@@ -72,19 +72,27 @@ def test_an_exclusion_keeps_a_pending_query_it_leaves_proposable(tmp_path: Path)
         assert again.pending == pending
 
 
+def _exclude_as_version_1(
+    s: Session, monkeypatch: pytest.MonkeyPatch, trial: int, reason: str, detail: str = ""
+) -> None:
+    """Exclude ``trial`` as a release before the region check logged it (``trial_excluded``
+    payload version 1)."""
+    from gaitpref.sessions import events
+
+    monkeypatch.setattr(events.TrialExcluded, "version", 1)
+    s.exclude(trial, reason, detail)
+    monkeypatch.undo()
+
+
 def test_an_exclusion_logged_as_version_1_keeps_the_pending_query_as_it_did(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A log written before the region check (``trial_excluded`` payload version 1) replays as
     it ran: the pending query kept, though its gait is in the region now, and its answer
     follows."""
-    from gaitpref.sessions import events
-
     url = f"sqlite:///{tmp_path / 'e.db'}"
     s, asked = _pending(url)
-    monkeypatch.setattr(events.TrialExcluded, "version", 1)
-    s.exclude(1, "device_fault", "the treadmill belt slipped")
-    monkeypatch.undo()
+    _exclude_as_version_1(s, monkeypatch, 1, "device_fault", "the treadmill belt slipped")
     kept = s.pending
     assert kept is not None and kept.id == asked and kept.actions == (NEXT,)
     s.answer(asked, [Rating(NEXT, "very bad")])
@@ -137,14 +145,10 @@ def test_an_exclusion_withdraws_an_open_round_showing_a_gait_in_the_region_now(
 def test_an_exclusion_logged_as_version_1_keeps_the_open_round(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    from gaitpref.sessions import events
-
     url = f"sqlite:///{tmp_path / 'e.db'}"
     s = _round(url)
     plan = s.validation_plan
-    monkeypatch.setattr(events.TrialExcluded, "version", 1)
-    s.exclude(3, "stumble")
-    monkeypatch.undo()
+    _exclude_as_version_1(s, monkeypatch, 3, "stumble")
     assert s.validation_plan == plan
     s.close()
     with Session.open(url, s.id) as again:
