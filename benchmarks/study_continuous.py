@@ -64,7 +64,7 @@ def kernel(objective: str, d: int) -> SquaredExponential:
 def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, seed: int,
             optimum: float | None, line_strategy: str = "self-sparring",
             line_fit: str = "fixed", line_count: int = 1,
-            line_points: int = 50) -> dict[str, Any]:  # fmt: skip
+            line_points: int = 50, line_cloud: int = 0) -> dict[str, Any]:  # fmt: skip
     domain = box(d) if path == "line" else grid6()
     fn = builtin(objective, domain, seed)
     if optimum is None:  # the objective's best over the domain
@@ -79,7 +79,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
     else:
         strategy = make_strategy(line_strategy)
         learning = Learning(fit="evidence" if line_fit == "evidence" else "fixed")
-        line = LineSettings(line_points, "random", line_count)
+        line = LineSettings(line_points, "random", line_count, line_cloud)
         loop = LineCoSpar(domain, k, PREF_NOISE, line=line, strategy=strategy,
                           learning=learning, **settings)  # fmt: skip
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
@@ -93,6 +93,7 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
         "strategy": strategy.name, "fit": loop.learning.fit,
         **({"lines": line_count} if path not in GRID_STRATEGY and line_count != 1 else {}),
         **({"points": line_points} if path not in GRID_STRATEGY and line_points != 50 else {}),
+        **({"cloud": line_cloud} if path not in GRID_STRATEGY and line_cloud else {}),
         "random_mean": float(rand.mean()), "worst": float(fn(domain.points).min())
         if path != "line" else float(rand.min()),
         "curve": res.curve.tolist(), "best_at": {str(k): v for k, v in res.best_at.items()},
@@ -128,6 +129,9 @@ def main() -> None:
     parser.add_argument("--line-fit", choices=("fixed", "evidence"), default="fixed")
     parser.add_argument("--line-count", type=int, default=1, help="lines per query")
     parser.add_argument("--line-points", type=int, default=50, help="points per line")
+    parser.add_argument(
+        "--line-cloud", type=int, default=0, help="points around the best point besides the lines"
+    )
     args = parser.parse_args()
     if args.report:
         report(args.out / "results.json", args.out)
@@ -141,6 +145,7 @@ def main() -> None:
             r = one_run(
                 path, objective, d, coactive, noise, seed, known,
                 args.line_strategy, args.line_fit, args.line_count, args.line_points,
+                args.line_cloud,
             )  # fmt: skip
             runs.append(r)
             print(
@@ -225,6 +230,8 @@ def report(results: Path, out: Path) -> None:
             setting += f", {r['lines']} lines per query"
         if r.get("points", 50) != 50:
             setting += f" of {r['points']} points"
+        if r.get("cloud", 0):
+            setting += f", a cloud of {r['cloud']} points around the best"
         used.setdefault(r["path"], set()).add(setting)
     how = "; ".join(f"{p}: {' / '.join(sorted(used[p]))}" for p in PATHS if p in used)
     lines = [
