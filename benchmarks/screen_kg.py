@@ -18,9 +18,12 @@ the few gaits near the top.  Candidates: the ``cands`` gaits of largest ``mu + 2
 excluded).  When no candidate has KG above ``1e-12`` of the signal sd, the EUBO challenger.
 Variant keys: ``kg_from`` (trial; default 20), ``cands`` (default 100), ``subject``
 (``noiseless``, ``noisy``), ``ls`` (the configured lengthscale), ``early`` (``early_scale``;
-default 0.5; 1 for none), ``gate`` (0: no gate, always a challenger).
+default 0.5; 1 for none), ``gate`` (0: no gate, always a challenger), ``star`` (1: KG*, each
+candidate's best KG per answer over the comparison answered 1, 2, 4, ..., 64 times, as a
+Gaussian observation with the probit noise over the square root of that count: the plain KG is
+zero wherever no single answer can change the recommendation).  Results: ``docs/learning.md``.
 
-    python benchmarks/screen_kg.py --objectives 100 "kg_from=20" "kg_from=40"
+    python benchmarks/screen_kg.py --objectives 100 "kg_from=1000" "kg_from=20" "kg_from=20,star=1"
 """
 
 from __future__ import annotations
