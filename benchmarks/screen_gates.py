@@ -136,13 +136,26 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
         loop.strategy = GatedEubo(early_scale=halve, early_trials=until)
     else:
         raise SystemExit(f"unknown strategy {strategy!r}")
+    out, user = walk(loop, cfg.space, variant, objective, user_seed, k)
+    if variant.get("exact") == "1":
+        out["exact_argmax"] = exact_argmax(loop, user, k)
+    return out
+
+
+def walk(
+    loop: Any, space: Any, variant: dict[str, str], objective: np.ndarray,
+    user_seed: np.random.SeedSequence, k: int,
+) -> tuple[dict[str, Any], SimulatedUser]:  # fmt: skip
+    """Run ``loop`` for the study's trials with its subject (``variant["subject"]``) and the
+    gradient user's coactive suggestions: the executed gaits' scores and the final argmax's
+    (normalised), and the subject."""
     rng = np.random.default_rng(user_seed)
     user: SimulatedUser
     if variant.get("subject", "noiseless") == "noisy":
-        user = IndifferentUser(cfg.space, objective, rng, noise=NOISE, band=BAND)
+        user = IndifferentUser(space, objective, rng, noise=NOISE, band=BAND)
     else:
-        user = SimulatedUser(cfg.space, objective, rng)
-    coactive = GradientCoactive(cfg.space, objective)
+        user = SimulatedUser(space, objective, rng)
+    coactive = GradientCoactive(space, objective)
     executed: list[int] = []
     repeats = 0
     start = time.perf_counter()
@@ -159,9 +172,7 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
         "repeats": repeats,
         "seconds": time.perf_counter() - start,
     }
-    if variant.get("exact") == "1":
-        out["exact_argmax"] = exact_argmax(loop, user, k)
-    return out
+    return out, user
 
 
 def exact_argmax(loop: Any, user: SimulatedUser, k: int) -> float:

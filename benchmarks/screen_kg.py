@@ -30,21 +30,18 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from joblib import Parallel, delayed
 from scipy.stats import norm
-from screen_gates import summary
-from study_learning import BAND, NOISE, STUDY_SEED, TRIALS, config_text
+from screen_gates import summary, walk
+from study_learning import STUDY_SEED, config_text
 
 from gaitpref.config import parse_config
 from gaitpref.data import paper_objectives
 from gaitpref.model.posterior import random_argmax
-from gaitpref.simulate.noisy import IndifferentUser
-from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.strategies.base import AskContext
 from gaitpref.strategies.hybrid import GatedEubo
 
@@ -114,29 +111,7 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
         float(variant.get("early", 0.5)), variant.get("gate", "1") == "1",
         variant.get("star", "0") == "1",
     )  # fmt: skip
-    rng = np.random.default_rng(user_seed)
-    user: SimulatedUser
-    if variant.get("subject", "noiseless") == "noisy":
-        user = IndifferentUser(cfg.space, objective, rng, noise=NOISE, band=BAND)
-    else:
-        user = SimulatedUser(cfg.space, objective, rng)
-    coactive = GradientCoactive(cfg.space, objective)
-    executed: list[int] = []
-    repeats = 0
-    start = time.perf_counter()
-    while len(executed) < TRIALS:
-        query = loop.ask()
-        repeats += sum(1 for a in query.actions if a in query.buffer)
-        loop.tell(query, list(user.answer(query)), coactive.suggest_all(query.actions))
-        executed.extend(query.actions)
-    scores = user.normalized(np.asarray(executed[:TRIALS], dtype=np.intp))
-    return {
-        "objective": k,
-        "scores": [float(s) for s in scores],
-        "argmax": float(user.normalized([int(loop.posterior.argmax)])[0]),
-        "repeats": repeats,
-        "seconds": time.perf_counter() - start,
-    }
+    return walk(loop, cfg.space, variant, objective, user_seed, k)[0]
 
 
 def main() -> None:
