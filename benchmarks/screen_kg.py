@@ -21,7 +21,8 @@ Variant keys: ``kg_from`` (trial; default 20), ``cands`` (default 100), ``subjec
 default 0.5; 1 for none), ``gate`` (0: no gate, always a challenger), ``star`` (1: KG*, each
 candidate's best KG per answer over the comparison answered 1, 2, 4, ..., 64 times, as a
 Gaussian observation with the probit noise over the square root of that count: the plain KG is
-zero wherever no single answer can change the recommendation).  Results: ``docs/learning.md``.
+zero wherever no single answer can change the recommendation), ``late`` (``runnerup``: instead
+of KG, the gait of largest posterior mean but the buffered one).  Results: ``docs/learning.md``.
 
     python benchmarks/screen_kg.py --objectives 100 "kg_from=1000" "kg_from=20" "kg_from=20,star=1"
 """
@@ -73,6 +74,7 @@ class KgGated:
     ) -> None:
         self.kg_from, self.cands, self.noise, self.gate = kg_from, cands, noise, gate
         self.star = star
+        self.late = "kg"
         self.eubo = GatedEubo(early_scale=early, early_trials=20)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
@@ -84,6 +86,10 @@ class KgGated:
             if pick == b:
                 return (b,)
         mu = np.asarray(post.mean)
+        if self.late == "runnerup":  # the best mean but the buffered gait's
+            values = mu.copy()
+            values[b] = -np.inf
+            return (random_argmax(values, rng),)
         cov = post.covariance()
         sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
         ucb = mu + 2.0 * sd
@@ -111,6 +117,7 @@ def one_run(variant: dict[str, str], k: int) -> dict[str, Any]:
         float(variant.get("early", 0.5)), variant.get("gate", "1") == "1",
         variant.get("star", "0") == "1",
     )  # fmt: skip
+    loop.strategy.late = variant.get("late", "kg")
     return walk(loop, cfg.space, variant, objective, user_seed, k)[0]
 
 
