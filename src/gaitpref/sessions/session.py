@@ -403,8 +403,8 @@ class Session:
             raise st.pending_query_error(query_id)
         self._check_no_open_round(query)
         answer = st.tell(query, comps, suggs)
-        events = st.answer_events(query, answer)
-        try:
+        try:  # told, not written: taken back if anything (Ctrl-C too) stops it being written
+            events = st.answer_events(query, answer)
             records = self._write(events)
         except ConflictError:
             st.revert_tell()
