@@ -103,7 +103,9 @@ def export_session(
 
     The files are written into a folder in a hidden one beside ``out``, renamed to ``out`` once
     all are written: an export that fails (a full disk, text that cannot be written) leaves no
-    half-written folder behind, and may be run again.  The session is brought up to date first
+    half-written folder behind, and may be run again.  An empty ``out`` that is there (a link
+    to a folder, a mount point) is kept: the hidden folder is made in it and its files moved up,
+    ``manifest.json`` last.  The session is brought up to date first
     and every file is of the same event, however other writers move it on meanwhile.
     """
     if fmt not in ("csv", "json"):
@@ -114,19 +116,25 @@ def export_session(
     if out.name in ("", ".", "..") or out.resolve() == Path.cwd().resolve():
         # the export replaces the folder: not the one the command runs in
         raise ExportError(f"{str(out)!r} is the working folder; give a new folder's name")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    # an empty folder that is there (a symbolic link to one, a mount point such as a USB
+    # drive's) is kept and filled: the export is written in a hidden folder inside it and moved
+    # up, manifest.json last; a new folder is written beside it and renamed
+    there = out.is_dir()
+    if not there:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out if there else out.parent))
     try:
         partial = work / "export"
         partial.mkdir()  # its mode by the umask, as out's would be (mkdtemp's is 0700)
-        if out.exists():
-            shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
         session.read(lambda s: _write_export(s, partial, fmt, progress))
-        if out.exists():
-            out.rmdir()  # empty, checked above
-        partial.rename(out)
+        if there:
+            names = sorted(p.name for p in partial.iterdir() if p.name != "manifest.json")
+            for name in [*names, "manifest.json"]:
+                (partial / name).rename(out / name)
+        else:
+            partial.rename(out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return out / "manifest.json"
