@@ -85,6 +85,8 @@ TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "co
 MAX_EVENTS_BYTES = 256 * 2**20
 MAX_EVENTS = 1_000_000  # and events (about 600 in a 150-trial log)
 MAX_TEXT_BYTES = 64 * 2**20
+#: and the export's copy of the gait library, which the import reads whole (about 1 kB a gait)
+MAX_LIBRARY_BYTES = 256 * 2**20
 #: the keys of an ``events.jsonl`` line (``version`` is absent from 0.1.0's exports: 1)
 EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 
@@ -751,6 +753,7 @@ def _find_library(
             f"the session's gait library {original} is missing or changed, and the export "
             "holds no copy of it"
         )
+    _check_size(folder / copy["file"], copy["file"], MAX_LIBRARY_BYTES)
     if _sha256(folder / copy["file"]) != sha:
         raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
     where = (folder / copy["file"]).resolve()
