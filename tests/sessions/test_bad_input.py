@@ -6,6 +6,7 @@ import json
 import sqlite3
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -293,4 +294,45 @@ def test_an_answer_interrupted_before_it_is_written_is_taken_back(
     mean = s.posterior().mean.copy()
     s.close()
     with Session.open(sqlite_url, s.id) as again:
+        assert again.posterior().mean.tolist() == mean.tolist()
+
+
+@pytest.mark.parametrize("where", ["exclusion refit", "undo booked"])
+def test_an_interrupted_exclusion_or_undo_leaves_a_log_that_replays(
+    sqlite_url: str, drive: Drive, monkeypatch: pytest.MonkeyPatch, where: str
+) -> None:
+    """Ctrl-C while an exclusion refits the model (before it is written), or while an undo
+    written is being booked, left the live Session's model off its log (the exclusion in
+    memory, not logged; the undo applied twice on catching up): the queries it then logged
+    were not the log's, and the session no longer opened ("cannot be rebuilt exactly")."""
+    from gaitpref.loop.cospar import CoSpar
+
+    s = Session.create(sqlite_url, CONFIG, "S01")
+    drive(s, 4)
+    q = s.next_query()
+    if where == "exclusion refit":
+
+        def interrupted(*args: object, **kwargs: object) -> None:
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(CoSpar, "exclude", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            s.exclude(q.buffer_trials[0], "stumble")
+    else:
+        undo = CoSpar.undo
+
+        def booked_then_interrupted(self: CoSpar, *args: Any, **kwargs: Any) -> Any:
+            undo(self, *args, **kwargs)
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(CoSpar, "undo", booked_then_interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            s.undo()
+    monkeypatch.undo()
+    drive(s, 3)
+    mean = s.posterior().mean.copy()
+    query = s.next_query()
+    s.close()
+    with Session.open(sqlite_url, s.id) as again:
+        assert again.next_query() == query
         assert again.posterior().mean.tolist() == mean.tolist()
