@@ -49,6 +49,7 @@ import functools
 import hashlib
 import io
 import json
+import os
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
@@ -118,24 +119,30 @@ def export_session(
     if out.name in ("", ".", "..") or out.resolve() == Path.cwd().resolve():
         # the export replaces the folder: not the one the command runs in
         raise ExportError(f"{str(out)!r} is the working folder; give a new folder's name")
-    # an empty folder that is there (a symbolic link to one, a mount point such as a USB
-    # drive's) is kept and filled: the export is written in a hidden folder inside it and moved
-    # up, manifest.json last; a new folder is written beside it and renamed
-    there = out.is_dir()
-    if not there:
+    # an empty folder that cannot be replaced (a symbolic link to one, a mount point such as a
+    # USB drive's) is filled: the export is written in a hidden folder inside it and moved up,
+    # manifest.json last; otherwise it is written beside ``out`` and renamed to it
+    fill = out.is_dir() and (out.is_symlink() or os.path.ismount(out))
+    if not out.exists():
         out.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out if there else out.parent))
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out if fill else out.parent))
     try:
         partial = work / "export"
         partial.mkdir()  # its mode by the umask, as out's would be (mkdtemp's is 0700)
+        if out.exists() and not fill:
+            shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
         session.read(lambda s: _write_export(s, partial, fmt, progress))
-        if there:
+        if fill:
             names = sorted(p.name for p in partial.iterdir() if p.name != "manifest.json")
             for name in [*names, "manifest.json"]:
+                if (out / name).exists():  # another export into it meanwhile
+                    raise ExportError(f"{str(out)!r} is no longer empty; choose a new folder")
                 (partial / name).rename(out / name)
         else:
+            if out.exists():
+                out.rmdir()  # empty, checked above
             partial.rename(out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
