@@ -6,6 +6,7 @@ import json
 import sqlite3
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -256,3 +257,82 @@ def test_a_session_stored_with_a_blank_config_name_reopens_and_replays(
         assert again.config.name == "   " and again.record.config_name == "   "
         assert (again.posterior().mean == mean).all() and len(again.trials()) == 3
         drive(again, 1)  # and it goes on
+
+
+@pytest.mark.parametrize("where", ["answer_events", "exclude"])
+def test_an_answer_interrupted_before_it_is_written_is_taken_back(
+    sqlite_url: str, drive: Drive, monkeypatch: pytest.MonkeyPatch, where: str
+) -> None:
+    """Ctrl-C after CoSpar took the answer but before it was written (building its events, or
+    the refit without an excluded buffered trial) writes nothing and leaves the session object
+    as it was: the same query can be answered, and the log replays."""
+    from gaitpref.loop.cospar import CoSpar
+    from gaitpref.sessions.state import SessionState
+
+    s = Session.create(sqlite_url, CONFIG, "S01")
+    drive(s, 3)
+    q = s.next_query()
+    assert q.buffer and q.buffer[0] != q.actions[0]
+    if where == "exclude":
+        s.exclude(q.buffer_trials[0], "stumble")  # the answer's comparison is then dropped
+        q = s.next_query()
+    n = s.last_seq
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    if where == "answer_events":
+        monkeypatch.setattr(SessionState, "answer_events", interrupted)
+    else:
+        monkeypatch.setattr(CoSpar, "exclude", interrupted)
+    given = [(q.actions[0], q.buffer[0], "first")]
+    with pytest.raises(KeyboardInterrupt):
+        s.answer(q.id, given)
+    monkeypatch.undo()
+    assert s.last_seq == n
+    s.answer(q.id, given)  # before: "query N was already answered", until reopened
+    mean = s.posterior().mean.copy()
+    s.close()
+    with Session.open(sqlite_url, s.id) as again:
+        assert again.posterior().mean.tolist() == mean.tolist()
+
+
+@pytest.mark.parametrize("where", ["exclusion refit", "undo booked"])
+def test_an_interrupted_exclusion_or_undo_leaves_a_log_that_replays(
+    sqlite_url: str, drive: Drive, monkeypatch: pytest.MonkeyPatch, where: str
+) -> None:
+    """Ctrl-C while an exclusion refits the model (before it is written), or while an undo
+    written is being booked, left the live Session's model off its log (the exclusion in
+    memory, not logged; the undo applied twice on catching up): the queries it then logged
+    were not the log's, and the session no longer opened ("cannot be rebuilt exactly")."""
+    from gaitpref.loop.cospar import CoSpar
+
+    s = Session.create(sqlite_url, CONFIG, "S01")
+    drive(s, 4)
+    q = s.next_query()
+    if where == "exclusion refit":
+
+        def interrupted(*args: object, **kwargs: object) -> None:
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(CoSpar, "exclude", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            s.exclude(q.buffer_trials[0], "stumble")
+    else:
+        undo = CoSpar.undo
+
+        def booked_then_interrupted(self: CoSpar, *args: Any, **kwargs: Any) -> Any:
+            undo(self, *args, **kwargs)
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(CoSpar, "undo", booked_then_interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            s.undo()
+    monkeypatch.undo()
+    drive(s, 3)
+    mean = s.posterior().mean.copy()
+    query = s.next_query()
+    s.close()
+    with Session.open(sqlite_url, s.id) as again:
+        assert again.next_query() == query
+        assert again.posterior().mean.tolist() == mean.tolist()

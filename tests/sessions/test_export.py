@@ -519,3 +519,25 @@ def test_paths_may_be_given_as_text(tmp_path: Path, sqlite_url: str, drive: Driv
     assert manifest == tmp_path / "out" / "manifest.json" and manifest.is_file()
     again = import_session(MemoryStorage(), str(tmp_path / "out"))
     assert [e.payload for e in again.events()] == [e.payload for e in s.events()]
+
+
+def test_an_export_into_a_link_to_an_empty_folder_fills_that_folder(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """An --out that is a symbolic link to an empty folder (or a mount point: neither can be
+    removed and replaced) is filled; before, it failed with '[Errno 20] Not a directory'."""
+    s = Session.create(sqlite_url, CONFIG, "S01")
+    drive(s, 3)
+    target = tmp_path / "usb"
+    target.mkdir()
+    link = tmp_path / "today"
+    link.symlink_to(target, target_is_directory=True)
+    export_session(s, link, "csv")
+    n = s.last_seq
+    s.close()
+    assert link.is_symlink()
+    assert sorted(p.name for p in target.iterdir() if p.name.startswith(".")) == []
+    assert (target / "manifest.json").is_file()
+    imported = import_session(MemoryStorage(), target)
+    assert imported.last_seq == n
+    imported.close()

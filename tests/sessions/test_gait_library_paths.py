@@ -414,3 +414,23 @@ def test_a_refused_import_keeps_the_copy_a_concurrent_import_found(
     with pytest.raises(StorageError, match="database is locked"):
         import_session(f"sqlite:///{tmp_path / 'third.db'}", out)
     assert library_files(tmp_path / "third.db.libraries") == []
+
+
+def test_a_library_copy_past_the_import_limit_is_refused_before_it_is_read(
+    tmp_path: Path, library: GaitLibrary, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The import reads the export's copy of the library whole (to keep it, and its replay
+    parses it): before, a copy of any size was read (only events.jsonl, manifest.json and
+    config.toml were bounded), so an enormous one made the import allocate without bound."""
+    from gaitpref.sessions import export as export_module
+
+    _, out = exported(tmp_path, library)
+    shutil.rmtree(tmp_path / "study")  # the original is not there: the copy is used
+    size = (out / "gait_library" / "x.json").stat().st_size
+    monkeypatch.setattr(export_module, "MAX_LIBRARY_BYTES", size - 1, raising=False)
+    target = tmp_path / "target.db"
+    with pytest.raises(ExportError, match=rf"gait_library/x\.json holds {size:,} bytes, more than"):
+        import_session(f"sqlite:///{target}", out)
+    assert not target.exists()
+    monkeypatch.setattr(export_module, "MAX_LIBRARY_BYTES", size)
+    import_session(MemoryStorage(), out).close()

@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 
 from gaitpref import Session
-from gaitpref.errors import ExportError
+from gaitpref.errors import ExportError, ReplayError
 from gaitpref.sessions import export as export_module
 from gaitpref.sessions.export import export_session, import_session
 from gaitpref.storage import MemoryStorage
@@ -245,3 +245,24 @@ def test_gait_ids_that_disagree_with_the_log_are_refused(
     _refused(out, tmp_path, r"events.jsonl line 3: trial 1 walked gait 'g\d+' \(action \d+\), but")
     _edit_manifest(out, lambda m: m["session"]["meta"].pop("gait_ids"))
     _refused(out, tmp_path, "names no gait library .*, but the session's created event")
+
+
+@pytest.mark.parametrize(
+    ("meta", "match"),
+    [
+        ({"library_copied_from": "/lab/gaits.json"}, "library_copied_from but no library_path"),
+        ({"config_defaults": [1]}, r"meta's config_defaults must be a text, got \[1\]"),
+        ({"config_dir": 5}, "meta's config_dir must be a text, got 5"),
+    ],
+)
+def test_session_meta_of_the_wrong_shape_is_refused_by_name(
+    exported: Path, tmp_path: Path, meta: dict[str, object], match: str
+) -> None:
+    """An export's session.meta is the imported session's: a key the config is read with that
+    is not a text (or a library copy with no path) is refused naming it, not a KeyError or a
+    TypeError, and nothing is written."""
+    _edit_manifest(exported, lambda m: m["session"]["meta"].update(meta))
+    target = MemoryStorage()
+    with pytest.raises(ReplayError, match=match):
+        import_session(target, exported)
+    assert target.list_sessions() == []

@@ -320,3 +320,20 @@ def test_a_damaged_session_row_is_named(tmp_path: Path, change: str, problem: st
             read()
         assert "altered or damaged outside gaitpref" in str(info.value)
     store.close()
+
+
+@pytest.mark.parametrize("name", ["lab?.db", "run%41.db", "S01#2.db", "my lab.db"])
+def test_a_bare_path_is_the_file_of_that_name(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, name: str
+) -> None:
+    """``--db lab?.db`` (a bare path: a SQLite file) was pasted into a URL as it was, so the
+    session went to another file: ``lab`` (the rest read as a query), ``runA.db`` (``%41``
+    decoded)."""
+    monkeypatch.chdir(tmp_path)
+    storage = open_storage(name)
+    try:
+        storage.create_session(SPEC, [NewEvent("note", {"text": "hi"})])
+    finally:
+        storage.close()
+    assert (tmp_path / name).is_file()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == [name]

@@ -49,6 +49,7 @@ import functools
 import hashlib
 import io
 import json
+import os
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
@@ -85,6 +86,8 @@ TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "co
 MAX_EVENTS_BYTES = 256 * 2**20
 MAX_EVENTS = 1_000_000  # and events (about 600 in a 150-trial log)
 MAX_TEXT_BYTES = 64 * 2**20
+#: and the export's copy of the gait library, which the import reads whole (about 1 kB a gait)
+MAX_LIBRARY_BYTES = 256 * 2**20
 #: the keys of an ``events.jsonl`` line (``version`` is absent from 0.1.0's exports: 1)
 EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 
@@ -103,7 +106,9 @@ def export_session(
 
     The files are written into a folder in a hidden one beside ``out``, renamed to ``out`` once
     all are written: an export that fails (a full disk, text that cannot be written) leaves no
-    half-written folder behind, and may be run again.  The session is brought up to date first
+    half-written folder behind, and may be run again.  An empty ``out`` that is there (a link
+    to a folder, a mount point) is kept: the hidden folder is made in it and its files moved up,
+    ``manifest.json`` last.  The session is brought up to date first
     and every file is of the same event, however other writers move it on meanwhile.
     """
     if fmt not in ("csv", "json"):
@@ -114,19 +119,31 @@ def export_session(
     if out.name in ("", ".", "..") or out.resolve() == Path.cwd().resolve():
         # the export replaces the folder: not the one the command runs in
         raise ExportError(f"{str(out)!r} is the working folder; give a new folder's name")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    # an empty folder that cannot be replaced (a symbolic link to one, a mount point such as a
+    # USB drive's) is filled: the export is written in a hidden folder inside it and moved up,
+    # manifest.json last; otherwise it is written beside ``out`` and renamed to it
+    fill = out.is_dir() and (out.is_symlink() or os.path.ismount(out))
+    if not out.exists():
+        out.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out if fill else out.parent))
     try:
         partial = work / "export"
         partial.mkdir()  # its mode by the umask, as out's would be (mkdtemp's is 0700)
-        if out.exists():
+        if out.exists() and not fill:
             shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
         session.read(lambda s: _write_export(s, partial, fmt, progress))
-        if out.exists():
-            out.rmdir()  # empty, checked above
-        partial.rename(out)
+        if fill:
+            names = sorted(p.name for p in partial.iterdir() if p.name != "manifest.json")
+            for name in [*names, "manifest.json"]:
+                if (out / name).exists():  # another export into it meanwhile
+                    raise ExportError(f"{str(out)!r} is no longer empty; choose a new folder")
+                (partial / name).rename(out / name)
+        else:
+            if out.exists():
+                out.rmdir()  # empty, checked above
+            partial.rename(out)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return out / "manifest.json"
@@ -743,6 +760,7 @@ def _find_library(
             f"the session's gait library {original} is missing or changed, and the export "
             "holds no copy of it"
         )
+    _check_size(folder / copy["file"], copy["file"], MAX_LIBRARY_BYTES)
     if _sha256(folder / copy["file"]) != sha:
         raise ExportError(f"the exported gait library {copy['file']} does not match its SHA-256")
     where = (folder / copy["file"]).resolve()

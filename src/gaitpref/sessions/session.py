@@ -403,8 +403,8 @@ class Session:
             raise st.pending_query_error(query_id)
         self._check_no_open_round(query)
         answer = st.tell(query, comps, suggs)
-        events = st.answer_events(query, answer)
-        try:
+        try:  # told, not written: taken back if anything (Ctrl-C too) stops it being written
+            events = st.answer_events(query, answer)
             records = self._write(events)
         except ConflictError:
             st.revert_tell()
@@ -415,7 +415,11 @@ class Session:
         except BaseException:
             st.revert_tell()
             raise
-        st.commit(records, answer)
+        try:
+            st.commit(records, answer)
+        except BaseException:  # written, booked in part (Ctrl-C): rebuilt from the log next
+            self._broken = True
+            raise
         self._stop_if_sure()
         loop = self._state.loop
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
@@ -494,13 +498,13 @@ class Session:
             st.check_open("exclusions")
             before = st.open_round
             event = st.exclude_event(trial, reason, detail)
-            st.apply_exclusion(event.payload, event.version)
-            try:
+            try:  # Ctrl-C during the refit too: the state may have moved, the log has not
+                st.apply_exclusion(event.payload, event.version)
                 records = self._write([event])
+                st.commit(records)
             except BaseException:
                 self._broken = True  # the model already moved: rebuild from the log
                 raise
-            st.commit(records)
             if before is not None and st.open_round is None:  # it showed a gait in the region
                 with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
                     self._append([st.validation_event()])
@@ -931,7 +935,11 @@ class Session:
         except ConflictError:
             self._rebuild()
             raise
-        self._state.commit(records)
+        try:
+            self._state.commit(records)
+        except BaseException:  # written, booked in part (Ctrl-C): rebuilt from the log next
+            self._broken = True
+            raise
         return records
 
 

@@ -219,7 +219,7 @@ class SessionState:
         if drops or single_drops:
             try:
                 self.loop.exclude({query.loop_id: drops}, {query.loop_id: single_drops})
-            except Exception:
+            except BaseException:  # Ctrl-C during the refit too
                 self.loop.undo(region=False)  # its query pending again, as it was
                 raise
         return answer

@@ -46,6 +46,18 @@ def config_of(record: SessionRecord) -> ExperimentConfig:
             f"({digest[:12]} != {record.config_sha256[:12]}); the database was altered"
         )
     meta = record.meta
+    for key in ("config_dir", "config_defaults", "library_path", "library_copied_from"):
+        value = meta.get(key)
+        if value is not None and not isinstance(value, str):
+            raise ReplayError(
+                f"session {record.id}: its meta's {key} must be a text, got {value!r}; the "
+                "database (or the export it was imported from) was altered"
+            )
+    if meta.get("library_copied_from") and not meta.get("library_path"):
+        raise ReplayError(
+            f"session {record.id}: its meta names library_copied_from but no library_path; the "
+            "database (or the export it was imported from) was altered"
+        )
     try:
         cfg = parse_config(
             record.config_text,

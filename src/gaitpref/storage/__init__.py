@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import os
 
+from sqlalchemy.engine import URL
+
 from gaitpref.errors import StorageError
 from gaitpref.storage.base import (
     STATUSES,
@@ -42,8 +44,8 @@ ENV_VAR = "GAITPREF_DB"
 def resolve_url(url: str | None = None) -> str:
     """The database URL to use: ``url``, else ``$GAITPREF_DB``, else ``sqlite:///gaitpref.db``."""
     chosen = url or os.environ.get(ENV_VAR) or DEFAULT_URL
-    if "://" not in chosen:
-        chosen = f"sqlite:///{chosen}"
+    if "://" not in chosen:  # the file of that name: "?", "#" and "%" quoted, not read as a URL's
+        chosen = URL.create("sqlite", database=chosen).render_as_string(hide_password=False)
     return chosen
 
 
