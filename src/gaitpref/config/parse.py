@@ -141,6 +141,8 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
                 f"config {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})"
             ) from None
     name = str(source)
+    if path.is_dir():  # was reported as "no such file"
+        raise ConfigError(f"config {name!r} is a folder; give a TOML file or a shipped config name")
     if path.suffix == "" and "/" not in name and name in shipped_configs():
         text = (resources.files("gaitpref.config") / "shipped" / f"{name}.toml").read_text("utf-8")
         return text, name, None
