@@ -168,6 +168,11 @@ def read_toml(text: str) -> dict[str, Any]:
 def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> ExperimentConfig:
     """Load a config file, or a shipped config by name."""
     text, stem, folder = _read(source)
+    if folder is not None:  # a file: a syntax error named neither it nor a key
+        try:
+            read_toml(text)
+        except ConfigError as exc:
+            raise ConfigError(f"config {str(source)!r}{str(exc).removeprefix('config')}") from None
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
