@@ -135,6 +135,20 @@ def test_missing_config_file_names_it() -> None:
         load_config("nope.toml")
 
 
+def test_a_folder_for_a_config_is_named_a_folder(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="is a folder") as info:
+        load_config(tmp_path)
+    assert str(tmp_path) in str(info.value) and "no such file" not in str(info.value)
+
+
+def test_a_config_file_that_is_not_toml_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "exo.toml"
+    path.write_text("x = [\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="is not valid TOML") as info:
+        load_config(path)
+    assert str(info.value).startswith(f"config {str(path)!r} is not valid TOML: ")
+
+
 def test_n1_b0_is_allowed_and_learns_from_suggestions_only() -> None:
     cfg = parse_config(GOOD.replace("buffer = 1", "buffer = 0"))
     loop = cfg.make_loop(seed=0)

@@ -141,6 +141,8 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
                 f"config {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})"
             ) from None
     name = str(source)
+    if path.is_dir():  # was reported as "no such file"
+        raise ConfigError(f"config {name!r} is a folder; give a TOML file or a shipped config name")
     if path.suffix == "" and "/" not in name and name in shipped_configs():
         text = (resources.files("gaitpref.config") / "shipped" / f"{name}.toml").read_text("utf-8")
         return text, name, None
@@ -166,6 +168,11 @@ def read_toml(text: str) -> dict[str, Any]:
 def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> ExperimentConfig:
     """Load a config file, or a shipped config by name."""
     text, stem, folder = _read(source)
+    if folder is not None:  # a file: a syntax error named neither it nor a key
+        try:
+            read_toml(text)
+        except ConfigError as exc:
+            raise ConfigError(f"config {str(source)!r}{str(exc).removeprefix('config')}") from None
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
