@@ -19,7 +19,7 @@ from gaitpref.errors import ReplayError
 from gaitpref.sessions import ExportError
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.export import export_session, import_session
-from gaitpref.sessions.warm import log_sha256, prepare_state
+from gaitpref.sessions.warm import log_sha256, prepare_state, read_prior_from
 from gaitpref.storage import MemoryStorage, Storage
 from tests.sessions.sessionkit import CONFIG, state_of
 
@@ -453,3 +453,33 @@ def test_prior_from_naming_a_session_many_times_reads_it_once() -> None:
     with Session.create(db, CONFIG, "S03", prior_from=[ids[2], "S01"] * 50_000) as s:
         assert [p["session"] for p in s.record.meta["prior_from"]] == ids
     assert reads.count("S01") == 1 and len(reads) < 50, len(reads)  # not one per item
+
+
+def test_typed_digits_that_are_also_a_subjects_code_are_refused_not_read_as_a_session_id() -> None:
+    """Subjects coded by number: ``--prior-from 1`` read as session 1 warm-started from whoever
+    ran session 1, silently, though subject ``1`` was meant.  Digits that are also a code are
+    refused, naming both; ``session:N`` and ``subject:CODE`` say which."""
+    db = MemoryStorage()
+    space = load_config(CONFIG).space
+    ids = []
+    for code, seed in (("S01", 1), ("1", 2)):  # session 1 is S01's, subject "1" ran session 2
+        with Session.create(db, CONFIG, code, seed=seed) as s:
+            _run(s, SimulatedSubject(space, bump_utility(space), seed=seed), 4)
+            ids.append(s.id)
+    assert ids == [1, 2]
+    with pytest.raises(ValueError, match="'1' is both session id 1 and a subject's code; write"):
+        Session.create(db, CONFIG, "S03", prior_from=read_prior_from(["1"]))
+    assert [r.id for r in db.list_sessions()] == ids  # nothing created
+    as_id = Session.create(db, CONFIG, "S03", prior_from=read_prior_from(["session:1"]))
+    as_code = Session.create(db, CONFIG, "S04", prior_from=read_prior_from(["subject:1"]))
+    assert [p["session"] for p in as_id.record.meta["prior_from"]] == [1]
+    assert [p["session"] for p in as_code.record.meta["prior_from"]] == [2]
+    # digits no subject uses stay a session id, and an API caller's int is never ambiguous
+    assert read_prior_from(["2, S01"]) == [2, "S01"]
+    Session.create(db, CONFIG, "S05", prior_from=[1]).close()
+    with pytest.raises(ValueError, match=r"'session:x1': a session id is digits"):
+        read_prior_from(["session:x1"])
+    long = "é" * 5000
+    with pytest.raises(ValueError) as refused:
+        read_prior_from([long])
+    assert len(str(refused.value)) < 300  # a pasted megabyte is not echoed back whole

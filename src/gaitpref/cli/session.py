@@ -136,7 +136,8 @@ def new(
         list[str] | None,
         typer.Option(
             "--prior-from",
-            help="Warm start from an earlier session id or subject code (repeat for more).",
+            help="Warm start from an earlier session id or subject code (repeat for more; "
+            "'session:7' or 'subject:07' where digits could be either).",
         ),
     ] = None,
     db: DbOption = None,

@@ -79,26 +79,54 @@ def log_sha256(events: Sequence[EventRecord]) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+class TypedId(int):
+    """A session id typed as bare digits (``--prior-from 7``, the console's field): it keeps the
+    text, so that :func:`resolve_prior` can refuse digits that are also a subject's code
+    (``01``: session 1 or subject ``01``?) instead of warm-starting from the wrong data."""
+
+    text: str
+
+    def __new__(cls, text: str) -> TypedId:
+        made = super().__new__(cls, int(text))
+        made.text = text
+        return made
+
+
 def read_prior_from(items: Iterable[str]) -> list[int | str]:
     """Typed ``prior_from`` items (the CLI's repeated ``--prior-from``, the console's field):
-    each item may hold several, separated by commas or spaces; digits (0-9) are a session id,
-    anything else a subject code.  ValueError names an item that is neither."""
+    each item may hold several, separated by commas or spaces; ``session:7`` is a session id and
+    ``subject:01`` a subject code, whatever they look like; bare digits (0-9) are a session id
+    (refused by :func:`resolve_prior` where they are also a subject's code), anything else a
+    subject code.  ValueError names an item that is none of these."""
     out: list[int | str] = []
     for item in items:
         for token in re.split(r"[,\s]+", item.strip()):
             if not token:
                 continue
-            if token.isascii() and token.isdigit():  # not another script's digits
-                out.append(int(token))
+            kind, colon, rest = token.partition(":")
+            if colon and kind.lower() == "session":
+                if not (rest.isascii() and rest.isdigit()):
+                    raise ValueError(f"prior_from: {_shown(token)}: a session id is digits (0-9)")
+                out.append(int(rest))
+                continue
+            if colon and kind.lower() == "subject":
+                token = rest
+            elif token.isascii() and token.isdigit():  # not another script's digits
+                out.append(TypedId(token))
                 continue
             try:
                 out.append(check_subject(token))
             except StorageError:
                 raise ValueError(
-                    f"prior_from: {token!r} is neither a session id nor a subject code "
+                    f"prior_from: {_shown(token)} is neither a session id nor a subject code "
                     "(letters, digits, '-', '_' and '.')"
                 ) from None
     return out
+
+
+def _shown(text: str) -> str:
+    """``text`` quoted for a message, cut to 80 characters (a field may hold megabytes)."""
+    return repr(text) if len(text) <= 80 else repr(text[:80]) + "..."
 
 
 def check_prior_from(prior_from: object) -> list[int | str]:
@@ -151,6 +179,11 @@ def resolve_prior(
     for item in dict.fromkeys(prior_from):
         if isinstance(item, bool) or not isinstance(item, int | str):
             raise PriorFromError(f"prior_from: expected session ids or subject codes, got {item!r}")
+        if isinstance(item, TypedId) and storage.list_sessions(item.text):
+            raise PriorFromError(
+                f"prior_from: {item.text!r} is both session id {int(item)} and a subject's code; "
+                f"write session:{int(item)} or subject:{item.text}"
+            )
         if isinstance(item, int):
             try:
                 records = [storage.get_session(item)]
