@@ -13,6 +13,7 @@ import pytest
 from gaitpref import Session, load_config
 from gaitpref.model import fit_memo
 from gaitpref.model.fit_memo import FitMemo
+from gaitpref.sessions import fit_cache
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
 from gaitpref.sessions.fit_cache import FITS_SUFFIX, load_memo, memo_path
 from gaitpref.storage import MemoryStorage, open_storage
@@ -145,3 +146,20 @@ def test_undo_with_the_factors_dropped_and_the_fits_remembered_reopens_as_it_ran
         again = state_of(s)
     assert np.array_equal(live[0], again[0]) and np.array_equal(live[1], again[1])
     assert live[2:] == again[2:]
+
+
+def test_a_memo_that_unpacks_past_the_limit_is_ignored_before_it_is_unpacked(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A compressed memo is small on disk and large unpacked: only its file size was checked,
+    so a 256 MiB file could unpack to far more.  Its members' unpacked sizes count now."""
+    monkeypatch.setattr(fit_cache, "MAX_FILE_BYTES", 1_000_000)
+    path = tmp_path / "x.npz"
+    n = 200_000  # 1.6 MB of modes, a few kB compressed
+    np.savez_compressed(path, keys=np.zeros((1, 32), np.uint8), norms=np.zeros(1),
+                        offsets=np.array([0, n]), modes=np.zeros(n))  # fmt: skip
+    assert path.stat().st_size < 100_000
+    assert len(load_memo(path)) == 0
+    np.savez_compressed(path, keys=np.zeros((1, 32), np.uint8), norms=np.zeros(1),
+                        offsets=np.array([0, 1000]), modes=np.zeros(1000))  # fmt: skip
+    assert len(load_memo(path)) == 1  # within the limit, compressed or not

@@ -40,6 +40,8 @@ def load_memo(path: Path) -> FitMemo:
         if not path.is_file() or path.stat().st_size > MAX_FILE_BYTES:
             return memo
         with np.load(path, allow_pickle=False) as data:
+            if not _sizes_fit(data):
+                return memo
             keys, norms = data["keys"], data["norms"]
             offsets, modes = data["offsets"], data["modes"]
             n = keys.shape[0]
@@ -60,6 +62,30 @@ def load_memo(path: Path) -> FitMemo:
         return FitMemo()
     memo.dirty = False
     return memo
+
+
+def _sizes_fit(data: np.lib.npyio.NpzFile) -> bool:
+    """Whether the arrays in ``data`` hold at most :data:`MAX_FILE_BYTES` unpacked, each no more
+    than its stored bytes: a small compressed file (a "zip bomb") or a header claiming a huge
+    shape would otherwise be unpacked, or allocated, whole before it failed."""
+    archive = data.zip
+    if archive is None:  # closed
+        return False
+    infos = archive.infolist()
+    if sum(info.file_size for info in infos) > MAX_FILE_BYTES:
+        return False
+    for info in infos:
+        with archive.open(info) as member:
+            version = np.lib.format.read_magic(member)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(member)
+            elif version == (2, 0):
+                shape, _, dtype = np.lib.format.read_array_header_2_0(member)
+            else:  # 3.0 (never written here)
+                return False
+            if int(np.prod(shape, dtype=object)) * dtype.itemsize > info.file_size:
+                return False
+    return True
 
 
 def save_memo(memo: FitMemo, path: Path) -> None:
