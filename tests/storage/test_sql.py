@@ -203,6 +203,20 @@ def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:
     assert not (tmp_path / "g.db").exists()
 
 
+def test_sqlite_url_parameters_are_refused_by_name_not_ignored(tmp_path: Path) -> None:
+    """``sqlite:///g.db?mode=ro`` opened the file read-write: the driver ignored ``mode``."""
+    SQLStorage(_sqlite(tmp_path)).close()
+    before = (tmp_path / "g.db").read_bytes()
+    for call in (open_storage, upgrade_database):
+        with pytest.raises(StorageConnectError, match=r"SQLite URL parameters \(mode\)"):
+            call(_sqlite(tmp_path) + "?mode=ro")
+    assert (tmp_path / "g.db").read_bytes() == before
+    with pytest.raises(StorageConnectError, match=r"parameters \(cache, uri\)"):
+        open_storage(f"sqlite:///file:{tmp_path / 'g.db'}?uri=true&cache=shared")
+    open_storage(resolve_url(str(tmp_path / "a?b.db"))).close()  # a '?' in a name is quoted
+    assert (tmp_path / "a?b.db").is_file()
+
+
 def test_url_resolution(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("GAITPREF_DB", raising=False)
     assert resolve_url() == "sqlite:///gaitpref.db"

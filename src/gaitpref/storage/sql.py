@@ -88,6 +88,14 @@ def parse_url(url: str) -> URL:
             f"unsupported database {parsed.get_backend_name()!r} in {_masked(parsed)}: "
             "gaitpref stores sessions in SQLite or PostgreSQL"
         )
+    if parsed.get_backend_name() == "sqlite" and parsed.query:
+        # the driver ignores most of them silently (``?mode=ro`` still wrote), and the file's
+        # lock files, fit cache and turns are found by its path
+        raise StorageConnectError(
+            f"{_masked(parsed)}: gaitpref does not apply SQLite URL parameters "
+            f"({', '.join(sorted(parsed.query))}); give the file alone, e.g. sqlite:///lab.db "
+            "(to read a database without writing to it, export its sessions or copy the file)"
+        )
     return parsed
 
 
