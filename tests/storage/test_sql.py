@@ -21,6 +21,7 @@ from gaitpref.storage import (
     open_storage,
     resolve_url,
 )
+from gaitpref.storage.base import check_subject
 from gaitpref.storage.migrate import head_revision, known_revisions
 from gaitpref.storage.schema import metadata
 from gaitpref.storage.sql import upgrade_database
@@ -351,3 +352,11 @@ def test_a_bare_path_is_the_file_of_that_name(
         storage.close()
     assert (tmp_path / name).is_file()
     assert sorted(p.name for p in tmp_path.iterdir() if p.is_file()) == [name]
+
+
+@pytest.mark.parametrize("code", ["", "S" * 65, "S 01", "é" * 1_000_000, 7])
+def test_a_refused_subject_code_is_named_in_a_short_message(code: object) -> None:
+    """A pasted megabyte (the console's form, the API) was echoed back whole in the error."""
+    with pytest.raises(StorageError, match="subject code") as refused:
+        check_subject(code)
+    assert len(str(refused.value)) < 200

@@ -314,11 +314,12 @@ def check_spec(spec: SessionSpec) -> SessionSpec:
 
 def check_subject(code: object) -> str:
     """A subject code: 1-64 characters of letters, digits, ``-``, ``_`` and ``.``."""
+    shown = repr(code) if len(repr(code)) <= 80 else repr(code)[:80] + "..."  # not megabytes
     if not isinstance(code, str) or not 0 < len(code) <= 64:
-        raise StorageError(f"subject code must be 1 to 64 characters, got {code!r}")
+        raise StorageError(f"subject code must be 1 to 64 characters, got {shown}")
     if not all(c.isascii() and (c.isalnum() or c in "-_.") for c in code):
         raise StorageError(
-            f"subject code {code!r}: use letters, digits, '-', '_' and '.' only "
+            f"subject code {shown}: use letters, digits, '-', '_' and '.' only "
             "(a pseudonymous code such as S01, never a name)"
         )
     return code
