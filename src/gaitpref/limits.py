@@ -19,8 +19,12 @@ from __future__ import annotations
 #: answers so far, so 10**12 ran until the memory was full (a random-selection arm asked NumPy
 #: for 7.28 TiB at once).
 MAX_TRIALS = 100_000
+#: The most runs a study holds (settings x objectives x seeds), and a bench's ``--runs``: its
+#: tasks and results are kept in memory (``bench compass-gait --runs 100000000`` filled the
+#: memory before its first run).
+MAX_RUNS = 100_000
 #: Trials in all of a study's runs together (runs x trials; its runs are at most
-#: ``gaitpref.simulate.study.MAX_RUNS``): each is a row of the run table,
+#: :data:`MAX_RUNS`): each is a row of the run table,
 #: held in memory (about 100 bytes a row: 1 GB at this bound) before it is written.
 MAX_STUDY_TRIALS = 10_000_000
 #: The largest seed: what a config's ``[cospar] seed`` and a session's seed hold (a signed
@@ -41,6 +45,7 @@ MAX_POPULATION_NODES = 10_000
 __all__ = [
     "MAX_JOBS",
     "MAX_POPULATION_NODES",
+    "MAX_RUNS",
     "MAX_SEED",
     "MAX_SNAPSHOTS",
     "MAX_STUDY_TRIALS",

@@ -280,19 +280,21 @@ def test_a_bench_refuses_a_config_over_the_sampling_budget_before_any_run(
 
 
 def test_bench_continuous_refuses_more_runs_than_a_study_holds(
-    continuous_args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    continuous_args: list[str], tmp_path: Path
 ) -> None:
     """``--runs 1000000000000`` made the list of its runs first: a MemoryError traceback.  At
-    most MAX_RUNS (a study's limit), refused before any run (here lowered to 3)."""
-    import gaitpref.simulate.study
+    most MAX_RUNS (a study's limit), refused before any run, and the help says so (it said
+    ``x>=1``)."""
+    from gaitpref.limits import MAX_RUNS
 
-    monkeypatch.setattr(gaitpref.simulate.study, "MAX_RUNS", 3)
     partial = tmp_path / "kept.jsonl"
     args = [*continuous_args, "--partial", str(partial)]
-    args[args.index("--runs") + 1] = "4"
+    args[args.index("--runs") + 1] = str(MAX_RUNS + 1)
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 2, result.output
-    assert "--runs must be 1 to 3, got 4" in _text(result.stderr)
+    assert f"--runs': Input should be less than or equal to {MAX_RUNS}" in _text(result.stderr)
+    helped = CliRunner().invoke(app, ["bench", "continuous", "--help"])
+    assert f"1<=x<={MAX_RUNS}" in _text(helped.output)
     assert not partial.exists()
 
 

@@ -194,7 +194,7 @@ def test_a_study_holds_at_most_max_runs(small_study: Study) -> None:
     from typer.testing import CliRunner
 
     from gaitpref.cli.main import app
-    from gaitpref.simulate.study import MAX_RUNS
+    from gaitpref.limits import MAX_RUNS
 
     with pytest.raises(ValueError, match=f"is more than {MAX_RUNS}; split it"):
         _replaced(small_study, seeds=range(MAX_RUNS))

@@ -73,9 +73,8 @@ def check_bench_points(
     :data:`~gaitpref.limits.MAX_TRIALS`, and runs x trials at most
     :data:`~gaitpref.limits.MAX_STUDY_TRIALS`), the noise and the first run's objective, each a
     ValueError.  Returns every run's objective spec and the first run's objective."""
-    from gaitpref.limits import MAX_STUDY_TRIALS, MAX_TRIALS
+    from gaitpref.limits import MAX_RUNS, MAX_STUDY_TRIALS, MAX_TRIALS
     from gaitpref.simulate.continuous import objective_from
-    from gaitpref.simulate.study import MAX_RUNS
     from gaitpref.simulate.users import check_user_noise
 
     if not 1 <= runs <= MAX_RUNS:  # the runs' list is made first: 10**12 was a MemoryError

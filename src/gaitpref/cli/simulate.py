@@ -26,7 +26,14 @@ import typer
 
 from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
-from gaitpref.limits import MAX_JOBS, MAX_SEED, MAX_SNAPSHOTS, MAX_STUDY_TRIALS, MAX_TRIALS
+from gaitpref.limits import (
+    MAX_JOBS,
+    MAX_RUNS,
+    MAX_SEED,
+    MAX_SNAPSHOTS,
+    MAX_STUDY_TRIALS,
+    MAX_TRIALS,
+)
 
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
@@ -302,12 +309,12 @@ def compass_gait(
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     from rich.markup import escape
 
+    from gaitpref.limits import MAX_RUNS
     from gaitpref.simulate.compass import (
         compass_gait_study,
         compass_objective,
         posterior_snapshots,
     )
-    from gaitpref.simulate.study import MAX_RUNS
     from gaitpref.simulate.sweep import resolve_jobs
     from gaitpref.simulate.tables import write_curves, write_table
 
@@ -429,7 +436,7 @@ def continuous(
             "hartmann6 or random-gp[:SEED] (random-gp alone: run k draws objective k)"
         ),
     ],
-    runs: Annotated[int, typer.Option(min=1, help="runs (seeds 0..runs-1)")] = 5,
+    runs: Annotated[int, typer.Option(min=1, max=MAX_RUNS, help="runs (seeds 0..runs-1)")] = 5,
     trials: Annotated[
         int, typer.Option(min=1, max=MAX_TRIALS, help="executed trials per run")
     ] = 150,

@@ -24,11 +24,11 @@ from typing import Literal
 import numpy as np
 
 from gaitpref.config import ExperimentConfig, load_config
-from gaitpref.limits import MAX_SNAPSHOTS, MAX_TRIALS
+from gaitpref.limits import MAX_RUNS, MAX_SNAPSHOTS, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.simulate.hzd import build_cot_curve, library_objective, read_cot_curve
 from gaitpref.simulate.objectives import cot_polynomial
-from gaitpref.simulate.study import MAX_RUNS, RunTask, Setting, Study, run_seed_sequence
+from gaitpref.simulate.study import RunTask, Setting, Study, run_seed_sequence
 from gaitpref.simulate.users import SimulatedUser
 from gaitpref.space import FloatArray, IntArray, Space
 

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 from gaitpref.config import ExperimentConfig, read_toml
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.errors import ConfigError, NoSafeGaitError
-from gaitpref.limits import MAX_SEED, MAX_STUDY_TRIALS, MAX_TRIALS
+from gaitpref.limits import MAX_RUNS, MAX_SEED, MAX_STUDY_TRIALS, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.safety import Safety
 from gaitpref.model.kernels import SquaredExponential
@@ -52,10 +52,6 @@ Strategy = Literal["cospar", "random"]
 
 
 _CONFIG_TABLES = ("feedback", "safety")
-
-#: The most runs a study holds (settings x objectives x seeds): its tasks and results are kept
-#: in memory (``bench compass-gait --runs 100000000`` filled the memory before its first run).
-MAX_RUNS = 100_000
 
 
 def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal | None, Safety]:
