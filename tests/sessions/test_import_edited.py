@@ -266,3 +266,23 @@ def test_session_meta_of_the_wrong_shape_is_refused_by_name(
     with pytest.raises(ReplayError, match=match):
         import_session(target, exported)
     assert target.list_sessions() == []
+
+
+def test_a_file_listed_under_many_names_is_hashed_once(
+    exported: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``./events.jsonl``, ``.//events.jsonl``, ...: a manifest (up to 64 MiB) could list one
+    large file a million times, and the import hashed it every time."""
+    sha = _sha((exported / "events.jsonl").read_bytes())
+    aliases = {"./" * k + "events.jsonl": sha for k in range(1, 200)}
+    _edit_manifest(exported, lambda m: m["files"].update(aliases))
+    hashed: list[Path] = []
+    real = export_module._sha256
+
+    def counting(path: Path) -> str:
+        hashed.append(path)
+        return real(path)
+
+    monkeypatch.setattr(export_module, "_sha256", counting)
+    import_session(MemoryStorage(), exported).close()
+    assert len(hashed) == len(set(hashed)) and len(hashed) < 10

@@ -710,6 +710,7 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
         if name not in files:
             raise ExportError(f"manifest.json lists no {name}")
     root = folder.resolve()
+    hashed: dict[Path, str] = {}  # each file once, however many names (``./a``, ``a``) list it
     for name, expected in sorted(files.items()):
         path = (folder / str(name)).resolve()
         given = Path(str(name))
@@ -719,7 +720,9 @@ def _check_files(folder: Path, manifest: dict[str, Any]) -> None:
             raise ExportError(f"{name}, which manifest.json lists, is a folder, not a file")
         if not path.is_file():
             raise ExportError(f"the export lacks {name}, which manifest.json lists")
-        if _sha256(path) != expected:
+        if path not in hashed:
+            hashed[path] = _sha256(path)
+        if hashed[path] != expected:
             raise ExportError(
                 f"{name} does not match its SHA-256 in manifest.json (was it edited?); "
                 "nothing was written"
