@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from gaitpref import ConfigError, FeedbackError, QueryError, Session, SessionStateError
+from gaitpref.errors import ExportError
 from gaitpref.feedback import Comparison, Suggestion
 from gaitpref.storage import (
     MemoryStorage,
@@ -199,12 +200,16 @@ def test_an_export_that_fails_leaves_no_folder_and_can_run_again(
         out = tmp_path / "export"
 
         def disk_full(rows: object) -> str:
-            raise OSError(28, "No space left on device")
+            hidden = tmp_path / ".export.partial-x1y2" / "export" / "trials.csv"
+            raise OSError(28, "No space left on device", str(hidden))
 
         with monkeypatch.context() as m:
             m.setattr(export, "_csv", disk_full)
-            with pytest.raises(OSError, match="No space left"):
+            # named by the export asked for, not the hidden folder it was written in
+            with pytest.raises(ExportError, match="could not write the export") as failed:
                 export_session(s, out)
+            assert str(out) in str(failed.value) and "partial" not in str(failed.value)
+            assert "trials.csv: No space left on device" in str(failed.value)
         left = [p.name for p in tmp_path.iterdir() if not p.name.startswith("a.db")]
         assert left == []  # nothing half-written, not even the hidden folder
         manifest = export_session(s, out)

@@ -133,7 +133,14 @@ def export_session(
             shutil.copymode(out, partial)
         # one consistent view: the log, tables and manifest of the same event, however other
         # writers move the session on meanwhile
-        session.read(lambda s: _write_export(s, partial, fmt, progress))
+        try:
+            session.read(lambda s: _write_export(s, partial, fmt, progress))
+        except OSError as exc:  # a full disk, a quota: named by the export, not the hidden folder
+            written = Path(exc.filename).name if exc.filename else "its files"
+            raise ExportError(
+                f"could not write the export {str(out)!r} ({written}: "
+                f"{exc.strerror or exc}); nothing was left there"
+            ) from None
         if fill:
             names = sorted(p.name for p in partial.iterdir() if p.name != "manifest.json")
             for name in [*names, "manifest.json"]:
