@@ -309,7 +309,6 @@ def compass_gait(
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     from rich.markup import escape
 
-    from gaitpref.limits import MAX_RUNS
     from gaitpref.simulate.compass import (
         compass_gait_study,
         compass_objective,
@@ -328,7 +327,7 @@ def compass_gait(
                 f"got {iterations!r}"
             )
         if not 1 <= runs <= MAX_RUNS:  # as compass_gait_study says, but before a build
-            raise ValueError(f"runs must be 1 to {MAX_RUNS}, got {runs}")
+            raise ValueError(f"--runs must be 1 to {MAX_RUNS}, got {runs}")
         arms = 2 if baseline else 1  # the study's settings; refused before a library is built
         if arms * runs * trials > MAX_STUDY_TRIALS:
             raise ValueError(
