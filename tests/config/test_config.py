@@ -149,6 +149,16 @@ def test_a_config_file_that_is_not_toml_is_named(tmp_path: Path) -> None:
     assert str(info.value).startswith(f"config {str(path)!r} is not valid TOML: ")
 
 
+def test_a_config_file_with_a_bad_key_is_named_with_the_key(tmp_path: Path) -> None:
+    """A sweep or a session names several configs: '[model]: unknown key' did not say whose."""
+    path = tmp_path / "exo.toml"
+    path.write_text(GOOD.replace("[model]", "[model]\njiter = 1"), encoding="utf-8")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    assert str(info.value).startswith(f"config {str(path)!r}: [model]: unknown key 'jiter'")
+    assert info.value.table == "model"  # where, as parse_config says it
+
+
 def test_n1_b0_is_allowed_and_learns_from_suggestions_only() -> None:
     cfg = parse_config(GOOD.replace("buffer = 1", "buffer = 0"))
     loop = cfg.make_loop(seed=0)

@@ -173,6 +173,12 @@ def load_config(source: str | Path, *, max_actions: int = MAX_ACTIONS) -> Experi
             read_toml(text)
         except ConfigError as exc:
             raise ConfigError(f"config {str(source)!r}{str(exc).removeprefix('config')}") from None
+        try:  # which file, where several are in play (a sweep's, a session's)
+            return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
+        except ConfigError as exc:
+            raise ConfigError(
+                f"config {str(source)!r}: {exc}", table=exc.table, key=exc.key
+            ) from None
     return parse_config(text, default_name=stem, base_dir=folder, max_actions=max_actions)
 
 
