@@ -41,6 +41,9 @@ MAX_SNAPSHOTS = 16
 #: them (``model/population.py``), an ``m x m`` matrix (10,000 nodes: 800 MB) refitted after
 #: every answer; the studies in ``docs/results/population`` hold under 1,000.
 MAX_POPULATION_NODES = 10_000
+#: The authors' objectives of the paper's Fig. 4 (``gaitpref.data.paper_objectives``): ``bench
+#: paper-2d --runs`` runs objective k in run k, so it takes at most this many.
+PAPER_OBJECTIVES = 100
 
 __all__ = [
     "MAX_JOBS",
@@ -50,4 +53,5 @@ __all__ = [
     "MAX_SNAPSHOTS",
     "MAX_STUDY_TRIALS",
     "MAX_TRIALS",
+    "PAPER_OBJECTIVES",
 ]

@@ -27,6 +27,7 @@ from gaitpref.limits import (
     MAX_SNAPSHOTS,
     MAX_STUDY_TRIALS,
     MAX_TRIALS,
+    PAPER_OBJECTIVES,
 )
 from tests.simulate.test_bench_failures import CONTINUOUS
 
@@ -140,6 +141,17 @@ def test_compass_gait_refuses_runs_x_trials_past_the_maximum_before_a_build(
     args = ["bench", "compass-gait", "--objective", "hzd", "--runs", str(runs), "--trials",
             "100", "--out", str(out)]  # fmt: skip
     _refused(args, f"2 settings x --runs {runs} x --trials 100", f"more than {MAX_STUDY_TRIALS}")
+    assert not out.exists()
+
+
+def test_bench_paper_2d_refuses_runs_past_the_objectives(tmp_path: Path) -> None:
+    """Run k uses objective k: more runs than the paper's objectives is refused naming the
+    option (the message said ``runs must be 1..100``, not which option)."""
+    assert paper_objectives().shape[0] == PAPER_OBJECTIVES
+    out = tmp_path / "out"
+    args = ["bench", "paper-2d", "--trials", "2", "--jobs", "1", "--out", str(out)]
+    _refused([*args, "--runs", str(PAPER_OBJECTIVES + 1)], *_past("--runs", PAPER_OBJECTIVES))
+    _refused([*args, "--runs", "0"], "Invalid value for '--runs'")
     assert not out.exists()
 
 

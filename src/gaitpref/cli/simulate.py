@@ -33,6 +33,7 @@ from gaitpref.limits import (
     MAX_SNAPSHOTS,
     MAX_STUDY_TRIALS,
     MAX_TRIALS,
+    PAPER_OBJECTIVES,
 )
 
 if TYPE_CHECKING:
@@ -236,7 +237,10 @@ def _bench_config(source: str) -> ExperimentConfig:
 
 @bench_app.command("paper-2d")
 def paper_2d(
-    runs: Annotated[int, typer.Option(help="runs per setting; run k uses objective k")] = 100,
+    runs: Annotated[
+        int,
+        typer.Option(min=1, max=PAPER_OBJECTIVES, help="runs per setting; run k uses objective k"),
+    ] = PAPER_OBJECTIVES,
     trials: Annotated[int, Trials] = 150,
     settings: Annotated[
         list[str] | None,
