@@ -17,7 +17,7 @@ from gaitpref.cli import app
 
 BAD = [
     (["--backend", "foo"], "--backend must be one of"),
-    (["--jobs", "0"], "jobs must be a positive count"),
+    (["--jobs", "0"], "Invalid value for '--jobs': 0 is neither a count"),
     (["--address", "localhost:1"], "address is for the Ray backend"),
     (["--table", "xls"], "--table must be csv"),
 ]

@@ -59,8 +59,9 @@ Address = Annotated[
 
 def _jobs(value: int) -> int:
     """``--jobs``: a count, or -1 for every core.  Below -1, joblib would count back from the
-    cores (-2: all but one) and past them give 1, silently: refused, with status 2."""
-    if value < -1:
+    cores (-2: all but one) and past them give 1, silently: refused, with status 2, as is 0
+    (refused later by the run as 'jobs must be ...', not naming the option)."""
+    if value < -1 or value == 0:
         raise typer.BadParameter(
             f"{value} is neither a count of processes (1 to {MAX_JOBS}) nor -1 (every core); "
             "give the count you mean",
