@@ -12,7 +12,7 @@ from importlib import resources
 import pytest
 from fastapi.testclient import TestClient
 
-from tests.console.conftest import answer_once
+from tests.console.conftest import answer_once, csrf_of
 
 EXO_1D = (resources.files("gaitpref.config") / "shipped" / "exo-1d-step-length.toml").read_text(
     encoding="utf-8"
@@ -33,3 +33,25 @@ def test_a_unit_with_dollar_signs_is_drawn_as_text(client: TestClient, unit: str
         r = client.get(f"/sessions/{sid}/{figure}")
         assert r.status_code == 200, r.text
         assert r.content.startswith(b"\x89PNG")
+
+
+@pytest.mark.parametrize("name", ["Schrittlänge", "μ"])
+def test_a_non_ascii_feature_takes_suggestions_and_downloads(client: TestClient, name: str) -> None:
+    config = EXO_1D.replace("[space.step_length]", f'[space."{name}"]')
+    sid = _session(client, config.replace("step_length =", f'"{name}" ='))
+    page = client.get(f"/sessions/{sid}")
+    assert page.status_code == 200
+    query = client.get(f"/api/sessions/{sid}/query").json()
+    data = {"csrf_token": csrf_of(page.text), "query_id": str(query["query_id"]), "confirmed": "1"}
+    data |= {f"cmp-{i}-{j}": "first" for i, j in query["comparisons"]}
+    data[f"sug-{query['actions'][0]['index']}-{name}"] = "+small"
+    r = client.post(f"/sessions/{sid}/answer", data=data, follow_redirects=False)
+    assert r.status_code == 303, r.text
+    answers = [
+        e
+        for e in client.get(f"/api/sessions/{sid}/events").json()
+        if e["kind"] == "suggestion_given"
+    ]
+    assert name in str(answers[-1])
+    for path in ("figure.png", "posterior.png", "export.zip", "export.zip?format=json"):
+        assert client.get(f"/sessions/{sid}/{path}").status_code == 200, path

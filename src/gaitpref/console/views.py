@@ -33,7 +33,8 @@ COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
 SUGGESTION_ROWS = ("qwert", "asdfg", "zxcvb", "yuiop", "hjkl;")
 _BUTTON_MOVES: tuple[str, ...] = ("+big", "+small", "", "-small", "-big")
 _CMP = re.compile(r"^cmp-(\d{1,10})-(\d{1,10})$")
-_SUG = re.compile(r"^sug-(\d{1,10})-([A-Za-z_][A-Za-z0-9_]{0,99})$")
+#: a feature is named by an identifier, which may be non-ASCII (``Schrittlänge``, ``μ``)
+_SUG = re.compile(r"^sug-(\d{1,10})-([^\W\d]\w{0,99})$")
 FORM_FIELDS = ("query_id", "csrf_token", "confirmed", "note")
 
 
