@@ -28,6 +28,9 @@ error                                       status  meaning
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
 ``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is
+``StorageFailureError``                     503     the database failed while in use (disk
+                                                    I/O error, a locked, removed or replaced
+                                                    SQLite file): the message names it
 ``GaitError`` (not ``GaitLibraryError``)    503     the gait generator failed to make a
                                                     proposed gait: nothing proposed
 ``ReplayError``                             500     the stored log does not replay: see message
@@ -67,6 +70,7 @@ from gaitpref.storage import (
     SessionNotFoundError,
     StorageConnectError,
     StorageError,
+    StorageFailureError,
 )
 
 
@@ -104,6 +108,7 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (NoSafeGaitError, 409, "no safe gait"),
     (SchemaError, 503, "database schema"),
     (StorageConnectError, 503, "database unreachable"),
+    (StorageFailureError, 503, "database failed"),
     (GaitLibraryError, 422, "refused gait library"),
     (GaitError, 503, "gait not made"),
     (FeedbackError, 422, "refused answer"),
