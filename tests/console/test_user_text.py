@@ -55,3 +55,31 @@ def test_a_non_ascii_feature_takes_suggestions_and_downloads(client: TestClient,
     assert name in str(answers[-1])
     for path in ("figure.png", "posterior.png", "export.zip", "export.zip?format=json"):
         assert client.get(f"/sessions/{sid}/{path}").status_code == 200, path
+
+
+@pytest.mark.parametrize(
+    ("path", "field"),
+    [("status", "status"), ("trials/1/exclude", "reason"), ("answer", "query_id")],
+)
+def test_a_refused_value_is_quoted_by_its_start_and_length(
+    client: TestClient, path: str, field: str
+) -> None:
+    sid = _session(client, "exo-1d-step-length")
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    data = {"csrf_token": csrf, "status": "active", "reason": "other", "query_id": "1"}
+    data[field] = "x" * 500_000
+    r = client.post(f"/sessions/{sid}/{path}", data=data, follow_redirects=False)
+    assert r.status_code == 422, r.text
+    assert "x" * 61 not in r.text
+    assert "(500,000 characters)" in r.text and f"<code>{field}</code>" in r.text
+    assert len(r.content) < 20_000
+
+
+def test_a_long_field_name_is_not_echoed(client: TestClient) -> None:
+    sid = _session(client, "exo-1d-step-length")
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    query = client.get(f"/api/sessions/{sid}/query").json()
+    data = {"csrf_token": csrf, "query_id": str(query["query_id"]), "y" * 100_000: "first"}
+    r = client.post(f"/sessions/{sid}/answer", data=data, follow_redirects=False)
+    assert r.status_code == 422 and "unknown field" in r.text
+    assert "y" * 61 not in r.text

@@ -17,7 +17,7 @@ import dataclasses
 import re
 from collections.abc import Mapping, Sequence
 
-from gaitpref.console.errors import InputError
+from gaitpref.console.errors import InputError, quoted
 from gaitpref.feedback import Rating, kind_named
 
 _RATE = re.compile(r"^rate-(\d{1,10})$")
@@ -63,7 +63,7 @@ def read_rating_fields(form: Mapping[str, str], size: int) -> list[Rating]:
         if m is None or value == "":
             continue
         if not re.fullmatch(r"\d{1,3}", value) or not 1 <= int(value) <= size:
-            raise InputError(name, f"a rating is a number 1..{size} or empty; got {value!r}")
+            raise InputError(name, f"a rating is a number 1..{size} or empty; got {quoted(value)}")
         out.append(Rating(int(m.group(1)), int(value)))
     return out
 

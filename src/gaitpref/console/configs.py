@@ -38,7 +38,7 @@ from gaitpref.config import (
     shipped_configs,
 )
 from gaitpref.config.schema import MAX_ACTIONS as LIBRARY_ACTIONS
-from gaitpref.console.errors import InputError
+from gaitpref.console.errors import InputError, quoted
 from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.content_lock import content_lock
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
@@ -222,7 +222,7 @@ def _choose(
         if "\n" not in source and "=" not in source:
             raise InputError(
                 "config",
-                f"{source[:80]!r} is neither a shipped config ({', '.join(shipped_configs())}) "
+                f"{quoted(source)} is neither a shipped config ({', '.join(shipped_configs())}) "
                 "nor TOML config text",
             )
         stem = _safe_name(name, "uploaded")

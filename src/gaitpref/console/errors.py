@@ -73,13 +73,24 @@ from gaitpref.storage import (
     StorageFailureError,
 )
 
+#: the most characters of a refused value an error message quotes (then its length)
+QUOTE_CHARS = 60
+
+
+def quoted(value: str, limit: int = QUOTE_CHARS) -> str:
+    """``value`` as an error message quotes it: whole (``repr``) up to ``limit`` characters, else
+    its start and its length, so that a refused megabyte is not echoed back."""
+    if len(value) <= limit:
+        return repr(value)
+    return f"{value[:limit]!r}... ({len(value):,} characters)"
+
 
 class InputError(ValueError):
     """A request field the console refuses before calling the session API."""
 
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
-        self.field = field
+        self.field = field if len(field) <= QUOTE_CHARS else f"{field[:QUOTE_CHARS]}..."
 
 
 class CsrfError(PermissionError):

@@ -21,7 +21,7 @@ from starlette.exceptions import HTTPException
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
 from gaitpref.console.answers import read_rating_fields
-from gaitpref.console.errors import CsrfError, InputError
+from gaitpref.console.errors import CsrfError, InputError, quoted
 from gaitpref.console.limits import (
     MAX_FORM_FIELD,
     MAX_FORM_FIELDS,
@@ -74,7 +74,7 @@ async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadF
     files: dict[str, UploadFile] = {}
     for key, value in form.multi_items():
         if key in fields or key in files:
-            raise InputError(key, f"the field {key!r} was given twice")
+            raise InputError(key, f"the field {quoted(key)} was given twice")
         if isinstance(value, UploadFile):
             files[key] = value
         else:
@@ -133,7 +133,7 @@ async def create_session(request: Request) -> Response:
     if not re.fullmatch(SUBJECT_PATTERN, subject):
         raise InputError(
             "subject",
-            f"{subject!r} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
+            f"{quoted(subject)} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
             "(a pseudonymous code such as S01, never a name)",
         )
     seed_text = fields.get("seed", "").strip()
@@ -168,7 +168,7 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
     status = fields.get("status", "")
     if status not in ("active", "paused", "finished"):
-        raise InputError("status", f"must be active, paused or finished; got {status!r}")
+        raise InputError("status", f"must be active, paused or finished; got {quoted(status)}")
     await run_in_threadpool(service_of(request).set_status, session_id, status)
     back = fields.get("back", "")
     return see_other(
@@ -350,7 +350,7 @@ async def post_exclude(
     fields, _ = await read_form(request)
     reason = fields.get("reason", "")
     if reason not in REASONS:
-        raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {reason!r}")
+        raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {quoted(reason)}")
     detail = fields.get("detail", "").strip()
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")

@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gaitpref.console.answers import is_rating_field
-from gaitpref.console.errors import InputError
+from gaitpref.console.errors import InputError, quoted
 from gaitpref.sessions.records import SessionQuery, ShownGait
 from gaitpref.space import MOVES, Feature, Space
 
@@ -237,13 +237,14 @@ def read_answer_form(
             continue
         if m := _CMP.match(name):
             if value not in COMPARISON_KEYS:
-                raise InputError(name, f"must be one of first, second, none; got {value!r}")
+                raise InputError(name, f"must be one of first, second, none; got {quoted(value)}")
             comparisons.append((int(m.group(1)), int(m.group(2)), value))
         elif m := _SUG.match(name):
             if value == "":
                 continue
             if value not in MOVES:
-                raise InputError(name, f"must be one of {', '.join(MOVES)} or empty; got {value!r}")
+                said = f"must be one of {', '.join(MOVES)} or empty; got {quoted(value)}"
+                raise InputError(name, said)
             suggestions.append((int(m.group(1)), m.group(2), value))
         else:
             raise InputError(name, "unknown field in an answer form")
@@ -256,7 +257,7 @@ def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
     if raw is None or raw == "":
         raise InputError(field, "missing")
     if not re.fullmatch(r"\d{1,18}", raw.strip()):
-        raise InputError(field, f"must be an integer, got {raw!r}")
+        raise InputError(field, f"must be an integer, got {quoted(raw)}")
     value = int(raw)
     if value < minimum:
         raise InputError(field, f"must be >= {minimum}, got {value}")
