@@ -83,3 +83,18 @@ def test_a_long_field_name_is_not_echoed(client: TestClient) -> None:
     r = client.post(f"/sessions/{sid}/answer", data=data, follow_redirects=False)
     assert r.status_code == 422 and "unknown field" in r.text
     assert "y" * 61 not in r.text
+
+
+def test_a_rating_posted_to_an_unrated_session_says_it_is_not_rated(client: TestClient) -> None:
+    sid = _session(client, "exo-1d-step-length")
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    query = client.get(f"/api/sessions/{sid}/query").json()
+    action = query["actions"][0]["index"]
+    data = {"csrf_token": csrf, "query_id": str(query["query_id"]), f"rate-{action}": "2"}
+    data |= {f"cmp-{i}-{j}": "first" for i, j in query["comparisons"]}
+    for confirmed in ("", "1"):
+        r = client.post(f"/sessions/{sid}/answer", data=data | {"confirmed": confirmed})
+        assert r.status_code == 422, r.text
+        assert "this session is not rated" in r.text and "[feedback.rating]" in r.text
+        assert f"<code>rate-{action}</code>" in r.text
+    assert client.get(f"/api/sessions/{sid}/trials").json() == []
