@@ -272,3 +272,21 @@ def test_a_ranking_forms_shown_field_is_read_within_bounds(client: TestClient) -
         assert r.status_code == 422 and "<code>shown</code>" in r.text, r.text[:300]
     assert event_count(client, sid) == before
     assert post(client, rank.action, ranked).status_code == 303
+
+
+def test_a_ranking_label_past_four_characters_is_refused_naming_its_place(
+    client: TestClient,
+) -> None:
+    """The page's ranking labels were not bounded (the JSON API's are: 4 characters): a long
+    one reached the session and was refused there as a stale round (409), quoted whole."""
+    sid = new_session(client)
+    for outcome in ("first", "second", "first"):
+        answer_once(client, sid, outcome)
+    assert client.post(f"/api/sessions/{sid}/validation").status_code == 200
+    rank = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
+    before = event_count(client, sid)
+    for label in ("ABCDE", "A" * 100_000):
+        r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": label, "rank3": "A"})
+        assert r.status_code == 422 and "<code>rank2</code>" in r.text, r.text[:300]
+        assert "at most 4 characters" in r.text and "A" * 61 not in r.text
+    assert event_count(client, sid) == before

@@ -431,11 +431,18 @@ async def post_ranking(
     for k, label in enumerate(ranking, start=1):
         if not label:
             raise InputError(f"rank{k}", "choose a gait for every place")
+        if len(label) > MAX_LABEL:
+            raise InputError(
+                f"rank{k}",
+                f"a gait's label has at most {MAX_LABEL} characters (A, B, C); got {quoted(label)}",
+            )
     shown = _shown(fields.get("shown"))
     await run_in_threadpool(service_of(request).rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
 
 
+#: the most characters of a validation label (the JSON API's bound too: A, B, C are drawn)
+MAX_LABEL = 4
 #: the most gaits ``shown`` may name (a validation round shows three), and the most characters of
 #: its text, measured before it is parsed (gait ids are a library's: no shorter bound is theirs)
 MAX_SHOWN, MAX_SHOWN_TEXT = 8, 64_000
