@@ -98,3 +98,49 @@ def test_a_rating_posted_to_an_unrated_session_says_it_is_not_rated(client: Test
         assert "this session is not rated" in r.text and "[feedback.rating]" in r.text
         assert f"<code>rate-{action}</code>" in r.text
     assert client.get(f"/api/sessions/{sid}/trials").json() == []
+
+
+CONTROL = ["a\x07b", "ring\x1b[31m", "nul\x00", "cr\rhere", "bidi\u202eevil"]
+
+
+@pytest.mark.parametrize("text", CONTROL)
+def test_control_characters_in_free_text_are_refused_naming_the_field(
+    client: TestClient, text: str
+) -> None:
+    sid = _session(client, "exo-1d-step-length")
+    answer_once(client, sid)
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    before = client.get(f"/api/sessions/{sid}/events").json()
+    query = client.get(f"/api/sessions/{sid}/query").json()
+    answer = {"csrf_token": csrf, "query_id": str(query["query_id"])}
+    answer |= {f"cmp-{i}-{j}": "first" for i, j in query["comparisons"]}
+    posts = [  # the review steps (no "confirmed") first: refused there already
+        ("answer", "note", answer | {"note": text}),
+        ("answer", "note", answer | {"note": text, "confirmed": "1"}),
+        ("trials/1/unsafe", "reason", {"csrf_token": csrf, "reason": text}),
+        ("trials/1/unsafe", "reason", {"csrf_token": csrf, "reason": text, "confirmed": "1"}),
+        ("note", "text", {"csrf_token": csrf, "text": text}),
+        ("trials/1/exclude", "detail", {"csrf_token": csrf, "reason": "other", "detail": text}),
+    ]
+    for path, field, data in posts:
+        r = client.post(f"/sessions/{sid}/{path}", data=data, follow_redirects=False)
+        assert r.status_code == 422, (path, r.text)
+        assert f"<code>{field}</code>" in r.text and "holds U+" in r.text, (path, r.text)
+    compared = [[i, j, "first"] for i, j in query["comparisons"]]
+    api = [
+        ("notes", "text", {"text": text}),
+        ("trials/1/unsafe", "reason", {"reason": text}),
+        ("trials/1/exclude", "detail", {"reason": "other", "detail": text}),
+        ("answers", "note", {"query_id": query["query_id"], "comparisons": compared, "note": text}),
+    ]
+    for path, field, body in api:
+        r = client.post(f"/api/sessions/{sid}/{path}", json=body)
+        assert r.status_code == 422, (path, r.text)
+        assert r.json()["detail"][0]["loc"] == ["body", field], (path, r.text)
+    assert client.get(f"/api/sessions/{sid}/events").json() == before
+
+
+def test_tabs_and_newlines_pass_in_a_note(client: TestClient) -> None:
+    sid = _session(client, "exo-1d-step-length")
+    r = client.post(f"/api/sessions/{sid}/notes", json={"text": "two\tcolumns\nand a line"})
+    assert r.status_code == 200, r.text

@@ -19,6 +19,7 @@ from gaitpref.console.errors import InputError
 from gaitpref.console.pages import SessionId, read_form, see_other, service_of
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.templating import render
+from gaitpref.console.views import free_text
 from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
@@ -33,6 +34,7 @@ async def post_unsafe(
     reason = fields.get("reason", "").strip()
     if not reason:
         raise InputError("reason", "say why the trial was unsafe (the reason is required)")
+    free_text(reason, "reason", "the reason")
     service = service_of(request)
     if fields.get("confirmed") != "1":
 

@@ -256,7 +256,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
     query_id = views.read_int(fields, "query_id")
     comparisons, suggestions = views.read_answer_form(fields)
-    note = fields.get("note", "").strip()
+    note = views.free_text(fields.get("note", "").strip(), "note", "the note")
     service = service_of(request)
     ordinal = await run_in_threadpool(lambda: service.get(session_id).config.ordinal)
     categories = ordinal.categories if ordinal is not None else ()
@@ -334,7 +334,7 @@ async def post_ask(request: Request, session_id: SessionId) -> Response:
 @router.post("/sessions/{session_id}/note")
 async def post_note(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
-    text = fields.get("text", "").strip()
+    text = views.free_text(fields.get("text", "").strip(), "text", "the note")
     if not text:
         raise InputError("text", "the note is empty")
     if len(text) > 2000:
@@ -351,7 +351,7 @@ async def post_exclude(
     reason = fields.get("reason", "")
     if reason not in REASONS:
         raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {quoted(reason)}")
-    detail = fields.get("detail", "").strip()
+    detail = views.free_text(fields.get("detail", "").strip(), "detail", "the detail")
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")
     service = service_of(request)

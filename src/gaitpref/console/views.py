@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 from gaitpref.console.answers import is_rating_field
 from gaitpref.console.errors import InputError, quoted
-from gaitpref.sessions.records import SessionQuery, ShownGait
+from gaitpref.sessions.records import SessionQuery, ShownGait, check_printable, check_storable
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
@@ -249,6 +249,17 @@ def read_answer_form(
         else:
             raise InputError(name, "unknown field in an answer form")
     return comparisons, suggestions
+
+
+def free_text(text: str, field: str, what: str) -> str:
+    """A note, reason or detail as the session will take it: no control character but a
+    newline or a tab, no line separator or bidirectional override, no lone surrogate; else an
+    :class:`InputError` naming ``field`` (checked at the confirm step too, not only when it is
+    written)."""
+    try:
+        return check_printable(check_storable(text, what), what)
+    except ValueError as exc:
+        raise InputError(field, str(exc)) from None
 
 
 def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
