@@ -36,6 +36,7 @@ from gaitpref.console.service import (
     ExportFormat,
     SessionService,
     ask_again,
+    check_undo_query,
     pending_of,
     session_query_error,
 )
@@ -299,10 +300,9 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
-            trials = session.trials()
-            if not trials:
-                raise InputError("query_id", "nothing to undo: no trial has been answered")
-            last = trials[-1]
+            check_undo_query(session, query_id)  # stale (another tab moved on): 409 now
+            session.check_change("undo")  # nothing to undo, a flagged or excluded trial: 409
+            last = session.trials()[-1]
             return [
                 f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
             ]

@@ -207,13 +207,7 @@ class SessionService:
         """Take back the last answer; with ``expected_query``, only if that query is pending."""
         with self.locked(session_id) as session:
             if expected_query is not None:
-                pending = session.pending
-                if pending is None or pending.id != expected_query:
-                    now = "no query is" if pending is None else f"query {pending.id} is"
-                    raise SessionStateError(
-                        f"the undo was asked while query {expected_query} was pending, but now "
-                        f"{now} pending (another tab answered or undid first); nothing was undone"
-                    )
+                check_undo_query(session, expected_query)
             before = session.pending
             done = session.trials()
             undone = done[-1].query if done else None
@@ -395,6 +389,17 @@ def no_query(exc: NoSafeGaitError | GaitError) -> Pending:
 def ack_text(session: Session, query: SessionQuery) -> str:
     gaits = ", ".join(session.gait_name(a) for a in query.actions)
     return f"device acknowledged query {query.id} (gaits {gaits})"
+
+
+def check_undo_query(session: Session, expected_query: int) -> None:
+    """Refuse (409) an undo asked while ``expected_query`` was pending if another is now."""
+    pending = session.pending
+    if pending is None or pending.id != expected_query:
+        now = "no query is" if pending is None else f"query {pending.id} is"
+        raise SessionStateError(
+            f"the undo was asked while query {expected_query} was pending, but now "
+            f"{now} pending (another tab answered or undid first); nothing was undone"
+        )
 
 
 def session_query_error(session: Session, query_id: int) -> Exception:

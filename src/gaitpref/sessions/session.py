@@ -28,7 +28,7 @@ import contextlib
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from gaitpref.checks import is_count
 from gaitpref.config import (
@@ -545,6 +545,27 @@ class Session:
             st = self._state
             st.check_open("unsafe flags")
             self._append([st.withdraw_unsafe_event(trial)])
+
+        self._locked(run)
+
+    def check_change(self, change: Literal["undo", "unsafe", "withdraw"], trial: int = 0) -> None:
+        """Refuse, writing nothing, as :meth:`undo`, :meth:`flag_unsafe` (of ``trial``) or
+        :meth:`withdraw_unsafe` (of ``trial``) would now: the :class:`SessionStateError` of a
+        finished session, of nothing to undo, of a trial not answered (or undone since), already
+        flagged or not flagged.  For a confirm step, so that a stale one is refused before the
+        operator confirms it."""
+
+        def run() -> None:
+            st = self._state
+            if change == "undo":
+                st.check_open("undo")
+                st.undo_event()
+            elif change == "unsafe":
+                st.check_open("unsafe flags")
+                st.unsafe_event(trial, "(checked)")
+            else:
+                st.check_open("unsafe flags")
+                st.withdraw_unsafe_event(trial)
 
         self._locked(run)
 
