@@ -100,3 +100,22 @@ def test_the_api_still_answers_json(client: TestClient) -> None:
     )
     assert r.status_code == 413 and r.headers["content-type"] == "application/json"
     assert f"{MAX_JSON_BODY:,} bytes" in r.json()["detail"]
+
+
+def test_a_config_text_past_200000_characters_is_refused_naming_config(
+    client: TestClient,
+) -> None:
+    """A pasted config was parsed whatever its length (the form field's 1 MiB, the API's
+    100,000 characters); both now take 200,000 characters, as an uploaded config file."""
+    csrf = csrf_of(client.get("/").text)
+    text = "# a long comment\n" * (limits.MAX_CONFIG_TEXT // 17 + 1)
+    assert len(text) > limits.MAX_CONFIG_TEXT
+    r = client.post("/sessions", data={"csrf_token": csrf, "subject": "S1", "config": text})
+    page = _html_error(r, 422)
+    assert "<code>config</code>" in page and "at most 200,000 are taken" in page
+    api = client.post("/api/sessions", json={"config": text, "subject": "S1"})
+    assert api.status_code == 422 and api.json()["detail"][0]["loc"] == ["body", "config"]
+    assert "200000 characters" in api.json()["detail"][0]["msg"]
+    ok = client.post("/api/sessions", json={"config": "# c\n" * 40_000, "subject": "S1"})
+    assert ok.status_code == 422 and "at most" not in ok.text  # parsed: 160,000 characters pass
+    assert client.get("/api/sessions").json() == []

@@ -8,6 +8,7 @@ a form body (pages)         66 MB           413 (a config upload and a gait libr
 a form field (not a file)   1 MiB           413 saying so (a note, a reason, ...)
 a form's fields; its files  1000 each       413 saying so
 an uploaded config          200 kB          422 naming ``config_file``
+a pasted config's text      200,000 chars   422 naming ``config``
 an uploaded gait library    64 MB           422 naming ``library_file``
 a list in a JSON body       256 items       413 naming the field (``comparisons``, ...)
 ==========================  ==============  ==================================================
@@ -37,6 +38,9 @@ MAX_JSON_BODY = 1_000_000
 MAX_LIST = 256
 #: the most bytes of an uploaded config file
 MAX_UPLOAD = 200_000
+#: the most characters of a config's text given in a field (a page's ``config``, the API's
+#: ``config``), checked before it is parsed: as much as an uploaded config holds
+MAX_CONFIG_TEXT = 200_000
 #: the most bytes of an uploaded gait library
 MAX_LIBRARY_BYTES = 64_000_000
 #: the most bytes of a form body (a config and a library upload, with room for the fields)

@@ -23,6 +23,7 @@ from gaitpref.console import figures, views
 from gaitpref.console.answers import read_rating_fields
 from gaitpref.console.errors import CsrfError, InputError, quoted
 from gaitpref.console.limits import (
+    MAX_CONFIG_TEXT,
     MAX_FORM_FIELD,
     MAX_FORM_FIELDS,
     MAX_FORM_FILES,
@@ -144,6 +145,12 @@ async def create_session(request: Request) -> Response:
     source = uploaded if uploaded is not None else fields.get("config", "")
     if not source:
         raise InputError("config", "choose a shipped config or upload a TOML config")
+    if len(source) > MAX_CONFIG_TEXT:
+        raise InputError(
+            "config",
+            f"the config text has {len(source):,} characters; at most {MAX_CONFIG_TEXT:,} are "
+            "taken (as many as an uploaded config file holds)",
+        )
     library = None
     lib_file = files.get("library_file")
     if lib_file is not None and lib_file.filename:
