@@ -37,6 +37,7 @@ from gaitpref.console.service import (
     ExportFormat,
     SessionService,
     ask_again,
+    check_ranking_labels,
     check_undo_query,
     pending_of,
     session_query_error,
@@ -177,6 +178,22 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
     status = fields.get("status", "")
     if status not in ("active", "paused", "finished"):
         raise InputError("status", f"must be active, paused or finished; got {quoted(status)}")
+    if status == "finished" and fields.get("confirmed") != "1":  # no undo: confirmed first
+        session = await run_in_threadpool(service_of(request).get, session_id)
+        if session.status != "finished":
+            return render(
+                request,
+                "confirm.html",
+                session_id=session_id,
+                what="finish",
+                lines=[
+                    f"Finish session {session_id}: it will take no more answers, undos or "
+                    "unsafe flags (its data stay, for export)"
+                ],
+                fields=fields,
+                note="",
+                action=f"/sessions/{session_id}/status",
+            )
     await run_in_threadpool(service_of(request).set_status, session_id, status)
     back = fields.get("back", "")
     return see_other(
@@ -444,7 +461,28 @@ async def post_ranking(
                 f"a gait's label has at most {MAX_LABEL} characters (A, B, C); got {quoted(label)}",
             )
     shown = _shown(fields.get("shown"))
-    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking, shown)
+    service = service_of(request)
+    if fields.get("confirmed") != "1":  # a ranking cannot be taken back: confirmed first
+
+        def summary(session: Session) -> list[str]:
+            check_ranking_labels(session, round_, ranking)
+            session.check_validation_answer(round_, ranking, shown=shown)  # stale: 409 now
+            places = ", ".join(f"{k}. {label}" for k, label in enumerate(ranking, start=1))
+            return [f"Record the subject's ranking of round {round_}, best first: {places}"]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return render(
+            request,
+            "confirm.html",
+            session_id=session_id,
+            what="ranking",
+            lines=lines,
+            fields=fields,
+            note="",
+            action=f"/sessions/{session_id}/validation/{round_}",
+            back=f"/sessions/{session_id}/validation",
+        )
+    await run_in_threadpool(service.rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
 
 

@@ -302,15 +302,7 @@ class SessionService:
         still shows those gaits: a flag on a gait it showed draws it again with the same number,
         and a ranking of the gaits walked before must not be booked against the new ones."""
         with self.locked(session_id) as session:
-            plan = session.validation_plan
-            if plan is not None and plan.round == round_:
-                labels = [str(r).upper() for r in ranking]
-                if sorted(labels) != sorted(plan.labels):
-                    raise InputError(
-                        "ranking",
-                        f"name each of {', '.join(plan.labels)} exactly once, best first; "
-                        f"got {', '.join(labels) or 'nothing'}",
-                    )
+            check_ranking_labels(session, round_, ranking)
             # shown: checked by the session in the turn of the write (Session.answer_validation)
             return session.answer_validation(round_, list(ranking), shown=shown)
 
@@ -389,6 +381,20 @@ def no_query(exc: NoSafeGaitError | GaitError) -> Pending:
 def ack_text(session: Session, query: SessionQuery) -> str:
     gaits = ", ".join(session.gait_name(a) for a in query.actions)
     return f"device acknowledged query {query.id} (gaits {gaits})"
+
+
+def check_ranking_labels(session: Session, round_: int, ranking: Sequence[str]) -> None:
+    """Refuse (422 naming ``ranking``) a ranking of the open round ``round_`` that does not name
+    each of its labels once."""
+    plan = session.validation_plan
+    if plan is not None and plan.round == round_:
+        labels = [str(r).upper() for r in ranking]
+        if sorted(labels) != sorted(plan.labels):
+            raise InputError(
+                "ranking",
+                f"name each of {', '.join(plan.labels)} exactly once, best first; "
+                f"got {', '.join(labels) or 'nothing'}",
+            )
 
 
 def check_undo_query(session: Session, expected_query: int) -> None:

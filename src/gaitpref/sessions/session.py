@@ -726,24 +726,41 @@ class Session:
         write, so another writer's flag cannot come in between."""
 
         def run() -> ValidationResult:
-            st = self._state
-            st.check_open("validation")
-            current = st.open_round
-            if shown is not None and current is not None and current.plan.round == round_:
-                now = [current.shown[g.label].gait for g in current.plan.gaits]
-                if [str(g) for g in shown] != now:
-                    raise SessionStateError(
-                        f"validation round {round_} was drawn again since its gaits were shown "
-                        "(an unsafe flag withdrew a gait it showed): it now shows "
-                        f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
-                        "written, run the round's gaits as shown now"
-                    )
-            self._append([st.validation_answer_event(round_, ranking)])
+            self._append([self._validation_answer(round_, ranking, shown)])
             result = self._state.rounds[-1].result
             assert result is not None
             return result
 
         return self._locked(run)
+
+    def check_validation_answer(
+        self, round_: int, ranking: Sequence[str] | str, *, shown: Sequence[str] | None = None
+    ) -> None:
+        """Refuse, writing nothing, as :meth:`answer_validation` would now (a round not open,
+        drawn again since ``shown``, a ranking that is not one of its labels): for a confirm
+        step, so that a stale ranking is refused before the operator confirms it."""
+
+        def run() -> None:
+            self._validation_answer(round_, ranking, shown)
+
+        self._locked(run)
+
+    def _validation_answer(
+        self, round_: int, ranking: Sequence[str] | str, shown: Sequence[str] | None
+    ) -> NewEvent:
+        st = self._state
+        st.check_open("validation")
+        current = st.open_round
+        if shown is not None and current is not None and current.plan.round == round_:
+            now = [current.shown[g.label].gait for g in current.plan.gaits]
+            if [str(g) for g in shown] != now:
+                raise SessionStateError(
+                    f"validation round {round_} was drawn again since its gaits were shown "
+                    "(an unsafe flag withdrew a gait it showed): it now shows "
+                    f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
+                    "written, run the round's gaits as shown now"
+                )
+        return st.validation_answer_event(round_, ranking)
 
     def validations(self) -> list[ValidationResult]:
         """The answered validation rounds, unblinded."""
