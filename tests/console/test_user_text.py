@@ -144,3 +144,18 @@ def test_tabs_and_newlines_pass_in_a_note(client: TestClient) -> None:
     sid = _session(client, "exo-1d-step-length")
     r = client.post(f"/api/sessions/{sid}/notes", json={"text": "two\tcolumns\nand a line"})
     assert r.status_code == 200, r.text
+
+
+def test_a_redirect_naming_a_queries_trials_is_answered_up_to_64_of_them(
+    client: TestClient,
+) -> None:
+    """The flash of the redirect after an answer names its trials (``?answered=1001,...``):
+    cut at 200 characters, the page after an answer of 40 gaits from trial 1000 on was a 422;
+    up to 64 trials (``[cospar] n`` is at most 64) are taken, more are refused naming it."""
+    sid = _session(client, "exo-1d-step-length")
+    many = ",".join(str(t) for t in range(10**16, 10**16 + 64))
+    for name in ("answered", "undone"):
+        assert client.get(f"/sessions/{sid}", params={name: many}).status_code == 200
+        r = client.get(f"/sessions/{sid}", params={name: many + ",7"})
+        assert r.status_code == 422 and "names 65 trials" in r.text, r.text
+        assert f"<code>{name}</code>" in r.text

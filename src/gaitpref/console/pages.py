@@ -50,6 +50,12 @@ from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
+#: the most trials the flash of a redirect names (``?answered=3,4``): an answer's or an undo's
+#: trials, at most a query's gaits (``[cospar] n`` is at most 64); and its most characters, as
+#: many trial numbers of 18 digits with their commas (the text was cut at 200 characters, so
+#: that the redirect after an answer of n = 40 gaits from trial 1000 on was a 422)
+MAX_FLASH_TRIALS = 64
+MAX_FLASH_TEXT = MAX_FLASH_TRIALS * 19
 
 
 def service_of(request: Request) -> SessionService:
@@ -206,13 +212,20 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
 async def trial_page(
     request: Request,
     session_id: SessionId,
-    answered: Annotated[str | None, Query(max_length=200)] = None,
-    undone: Annotated[str | None, Query(max_length=200)] = None,
+    answered: Annotated[str | None, Query(max_length=MAX_FLASH_TEXT)] = None,
+    undone: Annotated[str | None, Query(max_length=MAX_FLASH_TEXT)] = None,
     flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
     excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
+    for name, text in (("answered", answered), ("undone", undone)):
+        if text is not None and text.count(",") >= MAX_FLASH_TRIALS:
+            raise InputError(
+                name,
+                f"names {text.count(',') + 1:,} trials; a query runs at most "
+                f"{MAX_FLASH_TRIALS} gaits ([cospar] n), so a redirect names at most as many",
+            )
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
