@@ -119,3 +119,18 @@ def test_a_config_text_past_200000_characters_is_refused_naming_config(
     ok = client.post("/api/sessions", json={"config": "# c\n" * 40_000, "subject": "S1"})
     assert ok.status_code == 422 and "at most" not in ok.text  # parsed: 160,000 characters pass
     assert client.get("/api/sessions").json() == []
+
+
+def test_a_text_field_sent_as_a_file_is_refused_naming_it(client: TestClient) -> None:
+    """A note sent as a file part was read as missing: "the note is empty"."""
+    sid = new_session(client)
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    before = event_count(client, sid)
+    files = {"text": ("note.txt", b"the knee felt loose")}
+    r = client.post(f"/sessions/{sid}/note", data={"csrf_token": csrf}, files=files)
+    assert r.status_code == 422 and "<code>text</code>" in r.text, r.text
+    assert "was sent as a file; this field is text" in r.text
+    assert event_count(client, sid) == before
+    as_text = {"text": (None, b"the knee felt loose")}  # a plain multipart field: taken
+    r = client.post(f"/sessions/{sid}/note", data={"csrf_token": csrf}, files=as_text)
+    assert r.status_code == 200 and event_count(client, sid) == before + 1

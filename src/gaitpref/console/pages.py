@@ -63,6 +63,10 @@ def service_of(request: Request) -> SessionService:
     return service
 
 
+#: the fields of the console's forms that take a file (the create form's uploads)
+FILE_FIELDS = frozenset({"config_file", "library_file"})
+
+
 def see_other(url: str) -> RedirectResponse:
     return RedirectResponse(url, status_code=303)
 
@@ -93,6 +97,12 @@ async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadF
         raise CsrfError(
             "this form has no valid CSRF token (it was not made by this console, or the console "
             "restarted since the page was loaded): reload the page and try again"
+        )
+    stray = sorted(files.keys() - FILE_FIELDS)  # were read as missing: "the note is empty"
+    if stray:
+        raise InputError(
+            stray[0],
+            "was sent as a file; this field is text (only config_file and library_file take files)",
         )
     return fields, files
 
