@@ -31,6 +31,7 @@ from gaitpref.console.limits import (
     MAX_UPLOAD,
     form_error,
 )
+from gaitpref.console.once import ONCE_FIELD, OncePosts
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
@@ -65,6 +66,11 @@ def service_of(request: Request) -> SessionService:
 
 #: the fields of the console's forms that take a file (the create form's uploads)
 FILE_FIELDS = frozenset({"config_file", "library_file"})
+
+
+def once_posts(request: Request) -> OncePosts:
+    posts: OncePosts = request.app.state.once
+    return posts
 
 
 def see_other(url: str) -> RedirectResponse:
@@ -180,12 +186,16 @@ async def create_session(request: Request) -> Response:
         prior = read_prior_from([fields.get("prior_from", "")])
     except ValueError as exc:
         raise InputError("prior_from", str(exc)) from None
-    session = await run_in_threadpool(
-        lambda: service_of(request).create(
-            source, subject, seed, config_name=name, library=library, prior_from=prior
+
+    async def post() -> str:
+        session = await run_in_threadpool(
+            lambda: service_of(request).create(
+                source, subject, seed, config_name=name, library=library, prior_from=prior
+            )
         )
-    )
-    return see_other(f"/sessions/{session.id}")
+        return f"/sessions/{session.id}"
+
+    return see_other(await once_posts(request).run(fields.get(ONCE_FIELD), post))
 
 
 @router.post("/sessions/{session_id}/status")
@@ -386,8 +396,12 @@ async def post_note(request: Request, session_id: SessionId) -> Response:
         raise InputError("text", "the note is empty")
     if len(text) > 2000:
         raise InputError("text", "a note has at most 2000 characters")
-    await run_in_threadpool(service_of(request).note, session_id, text)
-    return see_other(f"/sessions/{session_id}")
+
+    async def post() -> str:
+        await run_in_threadpool(service_of(request).note, session_id, text)
+        return f"/sessions/{session_id}"
+
+    return see_other(await once_posts(request).run(fields.get(ONCE_FIELD), post))
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/exclude")
