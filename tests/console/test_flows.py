@@ -111,8 +111,9 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     assert again["round"] == plan["round"] and again["gaits"] != plan["gaits"]
     before = event_count(client, sid)
     data = {**stale.fields, "rank1": "A", "rank2": "B", "rank3": "C"}
-    r = client.post(stale.action, data=data, follow_redirects=False)
-    assert r.status_code == 409 and "was drawn again since its gaits were shown" in r.text
+    for confirmed in ("", "1"):  # refused at the confirm step already
+        r = client.post(stale.action, data=data | {"confirmed": confirmed}, follow_redirects=False)
+        assert r.status_code == 409 and "was drawn again since its gaits were shown" in r.text
     assert event_count(client, sid) == before
     old_ids = [g["gait"]["gait_id"] for g in plan["gaits"]]
     rank_url = f"/api/sessions/{sid}/validation/{plan['round']}/ranking"
@@ -120,7 +121,8 @@ def test_a_ranking_of_a_round_drawn_again_since_the_page_loaded_is_refused(
     assert r.status_code == 409 and "drawn again" in r.json()["detail"]
     assert event_count(client, sid) == before
     fresh = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
-    r = client.post(fresh.action, data={**fresh.fields, "rank1": "A", "rank2": "B", "rank3": "C"})
+    ranked = {**fresh.fields, "rank1": "A", "rank2": "B", "rank3": "C", "confirmed": "1"}
+    r = client.post(fresh.action, data=ranked)
     assert r.status_code == 200 and f'id="round-{plan["round"]}"' in r.text
 
 

@@ -100,3 +100,37 @@ def test_the_api_still_answers_json(client: TestClient) -> None:
     )
     assert r.status_code == 413 and r.headers["content-type"] == "application/json"
     assert f"{MAX_JSON_BODY:,} bytes" in r.json()["detail"]
+
+
+def test_a_config_text_past_200000_characters_is_refused_naming_config(
+    client: TestClient,
+) -> None:
+    """A pasted config was parsed whatever its length (the form field's 1 MiB, the API's
+    100,000 characters); both now take 200,000 characters, as an uploaded config file."""
+    csrf = csrf_of(client.get("/").text)
+    text = "# a long comment\n" * (limits.MAX_CONFIG_TEXT // 17 + 1)
+    assert len(text) > limits.MAX_CONFIG_TEXT
+    r = client.post("/sessions", data={"csrf_token": csrf, "subject": "S1", "config": text})
+    page = _html_error(r, 422)
+    assert "<code>config</code>" in page and "at most 200,000 are taken" in page
+    api = client.post("/api/sessions", json={"config": text, "subject": "S1"})
+    assert api.status_code == 422 and api.json()["detail"][0]["loc"] == ["body", "config"]
+    assert "200000 characters" in api.json()["detail"][0]["msg"]
+    ok = client.post("/api/sessions", json={"config": "# c\n" * 40_000, "subject": "S1"})
+    assert ok.status_code == 422 and "at most" not in ok.text  # parsed: 160,000 characters pass
+    assert client.get("/api/sessions").json() == []
+
+
+def test_a_text_field_sent_as_a_file_is_refused_naming_it(client: TestClient) -> None:
+    """A note sent as a file part was read as missing: "the note is empty"."""
+    sid = new_session(client)
+    csrf = csrf_of(client.get(f"/sessions/{sid}").text)
+    before = event_count(client, sid)
+    files = {"text": ("note.txt", b"the knee felt loose")}
+    r = client.post(f"/sessions/{sid}/note", data={"csrf_token": csrf}, files=files)
+    assert r.status_code == 422 and "<code>text</code>" in r.text, r.text
+    assert "was sent as a file; this field is text" in r.text
+    assert event_count(client, sid) == before
+    as_text = {"text": (None, b"the knee felt loose")}  # a plain multipart field: taken
+    r = client.post(f"/sessions/{sid}/note", data={"csrf_token": csrf}, files=as_text)
+    assert r.status_code == 200 and event_count(client, sid) == before + 1

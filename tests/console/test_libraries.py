@@ -16,6 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from gaitpref import Session
+from gaitpref.config import ConfigError, load_config
 from gaitpref.console import create_app
 from gaitpref.console.service import SessionService
 from gaitpref.errors import StorageError
@@ -232,3 +233,22 @@ def test_a_refused_upload_keeps_the_library_a_concurrent_upload_found(
         other_db.create(NAMED, "S03", seed=2**64, library=(data, "lib.json"))
     assert _files_under(libs) == []
     other_db.close()
+
+
+def test_a_library_path_with_a_nul_is_refused_naming_config(
+    console: TestClient, tmp_path: Path
+) -> None:
+    """A NUL in ``[gaits].library`` was a 422 saying only "embedded null byte" (Path.resolve's
+    ValueError), naming no field; from a config file (the CLI) it was an unnamed ValueError."""
+    config = NAMED.replace('"lib.json"', '"lib\\u0000.json"')
+    r = console.post("/api/sessions", json={"config": config, "subject": "S01"})
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"][0]["loc"] == ["body", "config"]
+    assert "NUL" in r.json()["detail"][0]["msg"]
+    page = upload(console, config, None)
+    assert page.status_code == 422 and "<code>config</code>" in page.text and "NUL" in page.text
+    assert console.get("/api/sessions").json() == []
+    file = tmp_path / "study.toml"
+    file.write_text(config, encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"\[gaits\].*library.*NUL"):
+        load_config(file)

@@ -70,3 +70,19 @@ def test_the_limits_are_documented() -> None:
 
     doc = (Path(__file__).parents[2] / "docs" / "console.md").read_text()
     assert "413" in doc and f"{MAX_LIST}" in doc and "1 MB" in doc
+
+
+def test_a_content_length_that_is_not_a_number_is_a_400_saying_so(client: TestClient) -> None:
+    """It was a 413 "larger than 1,000,000 bytes", which the body was not."""
+    sid = new_session(client)
+    before = event_count(client, sid)
+    for value in ("abc", "12x", "-5", "1e3"):
+        headers = {"content-type": "application/json", "content-length": value}
+        r = client.post(f"/api/sessions/{sid}/notes", content=b'{"text": "x"}', headers=headers)
+        assert r.status_code == 400, (value, r.text)
+        assert r.json() == {"detail": "the Content-Length header is not a number of bytes"}
+        form = {"content-type": "application/x-www-form-urlencoded", "content-length": value}
+        r = client.post(f"/sessions/{sid}/note", content=b"text=x", headers=form)
+        assert r.status_code == 400 and "Content-Length header is not a number" in r.text
+        assert 'id="back-to-trial"' in r.text
+    assert event_count(client, sid) == before

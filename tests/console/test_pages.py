@@ -165,8 +165,11 @@ def test_notes_exclusion_pause_resume_finish_from_the_page(client: TestClient) -
         post(
             client, f"/sessions/{sid}/status", {"csrf_token": csrf, "status": "finished"}
         ).status_code
-        == 303
+        == 200  # the confirm step (without JavaScript)
     )
+    assert "Paused" not in client.get(f"/sessions/{sid}").text
+    finish = {"csrf_token": csrf, "status": "finished", "confirmed": "1"}
+    assert post(client, f"/sessions/{sid}/status", finish).status_code == 303
     html = client.get(f"/sessions/{sid}").text
     assert "Finished" in html and "answer-form" not in html and "Export CSV" in html
 
@@ -196,7 +199,14 @@ def test_validation_pages(client: TestClient) -> None:
     assert rank.selects["rank1"] == ["", "A", "B", "C"]
     r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": "", "rank3": "A"})
     assert r.status_code == 422 and "<code>rank2</code>" in r.text
-    r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": "B", "rank3": "A"})
+    ranked = {**rank.fields, "rank1": "C", "rank2": "B", "rank3": "A"}
+    review = post(client, rank.action, ranked)  # the confirm step (without JavaScript)
+    assert review.status_code == 200 and "Record this ranking?" in review.text
+    assert "best first: 1. C, 2. B, 3. A" in review.text
+    assert client.get(f"/api/sessions/{sid}/validation").json()[-1]["ranking"] is None
+    confirm = forms_of(review.text)["form1"]
+    assert confirm.fields["confirmed"] == "1" and confirm.fields["rank1"] == "C"
+    r = post(client, confirm.action, confirm.fields)
     assert r.status_code == 303
     page = client.get(f"/sessions/{sid}/validation").text
     assert "Kendall" in page and 'id="round-1"' in page
@@ -271,4 +281,22 @@ def test_a_ranking_forms_shown_field_is_read_within_bounds(client: TestClient) -
         r = post(client, rank.action, {**ranked, "shown": shown})
         assert r.status_code == 422 and "<code>shown</code>" in r.text, r.text[:300]
     assert event_count(client, sid) == before
-    assert post(client, rank.action, ranked).status_code == 303
+    assert post(client, rank.action, ranked | {"confirmed": "1"}).status_code == 303
+
+
+def test_a_ranking_label_past_four_characters_is_refused_naming_its_place(
+    client: TestClient,
+) -> None:
+    """The page's ranking labels were not bounded (the JSON API's are: 4 characters): a long
+    one reached the session and was refused there as a stale round (409), quoted whole."""
+    sid = new_session(client)
+    for outcome in ("first", "second", "first"):
+        answer_once(client, sid, outcome)
+    assert client.post(f"/api/sessions/{sid}/validation").status_code == 200
+    rank = forms_of(client.get(f"/sessions/{sid}/validation").text)["ranking-form"]
+    before = event_count(client, sid)
+    for label in ("ABCDE", "A" * 100_000):
+        r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": label, "rank3": "A"})
+        assert r.status_code == 422 and "<code>rank2</code>" in r.text, r.text[:300]
+        assert "at most 4 characters" in r.text and "A" * 61 not in r.text
+    assert event_count(client, sid) == before

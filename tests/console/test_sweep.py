@@ -192,7 +192,13 @@ FORMS = [
     Route(
         "ranking",
         "/sessions/{sid}/validation/1",
-        lambda q: {"rank1": "A", "rank2": "B", "rank3": "C", "shown": '["G1", "G2", "G3"]'},
+        lambda q: {
+            "rank1": "A",
+            "rank2": "B",
+            "rank3": "C",
+            "shown": '["G1", "G2", "G3"]',
+            "confirmed": "1",
+        },
     ),
 ]
 

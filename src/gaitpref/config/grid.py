@@ -30,6 +30,8 @@ def parse_gaits(
     name = gaits["library"]
     if not name:
         fail("gaits", "library", "must be the path of a gait library file")
+    if "\x00" in name:  # open() raised ValueError "embedded null byte", naming no key
+        fail("gaits", "library", "a path holds no NUL character (U+0000)")
     path = Path(name) if library_file is None else Path(library_file)
     if not path.is_absolute():
         path = Path(base_dir if base_dir is not None else ".") / path

@@ -17,7 +17,7 @@ import dataclasses
 import re
 from collections.abc import Mapping, Sequence
 
-from gaitpref.console.errors import InputError
+from gaitpref.console.errors import InputError, quoted
 from gaitpref.feedback import Rating, kind_named
 
 _RATE = re.compile(r"^rate-(\d{1,10})$")
@@ -56,14 +56,21 @@ def feedback_records(items: Sequence[tuple[str, Mapping[str, object]]]) -> list[
 
 
 def read_rating_fields(form: Mapping[str, str], size: int) -> list[Rating]:
-    """Ratings of a trial page's ``rate-<action>`` fields (``1..size``; empty: not rated)."""
+    """Ratings of a trial page's ``rate-<action>`` fields (``1..size``; empty: not rated); a
+    rating given to a session without a rating scale (``size`` 0) is refused saying so."""
     out: list[Rating] = []
     for name, value in form.items():
         m = _RATE.match(name)
         if m is None or value == "":
             continue
+        if size == 0:
+            raise InputError(
+                name,
+                "this session is not rated: its config has no [feedback.rating] table, so a "
+                "trial takes no rating (leave it empty, or start a session whose config has one)",
+            )
         if not re.fullmatch(r"\d{1,3}", value) or not 1 <= int(value) <= size:
-            raise InputError(name, f"a rating is a number 1..{size} or empty; got {value!r}")
+            raise InputError(name, f"a rating is a number 1..{size} or empty; got {quoted(value)}")
         out.append(Rating(int(m.group(1)), int(value)))
     return out
 

@@ -18,7 +18,7 @@ from fastapi import APIRouter, Body, Path, Query, Request, Response, status
 from fastapi.concurrency import run_in_threadpool
 
 from gaitpref.config import load_config, shipped_configs
-from gaitpref.console import present
+from gaitpref.console import present, views
 from gaitpref.console.answers import feedback_records
 from gaitpref.console.schemas import (
     MAX_ID,
@@ -148,7 +148,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         body.query_id,
         [list(c) for c in body.comparisons],
         [list(s) for s in body.suggestions],
-        body.note,
+        None if body.note is None else views.free_text(body.note, "note", "the note"),
         records,
     )
     return AnsweredOut(query_id=answered.query, trials=list(answered.trials), next_query_id=pending)
@@ -199,7 +199,8 @@ def events(request: Request, session_id: SessionId) -> list[EventOut]:
 
 @router.post("/sessions/{session_id}/notes", response_model=NoteOut)
 def add_note(request: Request, session_id: SessionId, body: NoteIn) -> NoteOut:
-    return NoteOut(seq=service_of(request).note(session_id, body.text))
+    text = views.free_text(body.text, "text", "the note")
+    return NoteOut(seq=service_of(request).note(session_id, text))
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/exclude", response_model=list[TrialOut])
@@ -214,7 +215,8 @@ def exclude(
     withdrawn (read ``GET .../query`` again for the next one); an open validation round that
     shows one is drawn again."""
     service = service_of(request)
-    service.exclude(session_id, trial, body.reason, body.detail)
+    detail = views.free_text(body.detail, "detail", "the detail")
+    service.exclude(session_id, trial, body.reason, detail)
     return service.read(session_id, present.trials_out)
 
 
@@ -229,7 +231,7 @@ def flag_unsafe(
     config's ``[safety] unsafe_radius``, are never proposed again.  A pending query that proposes
     one of them is withdrawn: read ``GET .../query`` again for the next one."""
     service = service_of(request)
-    service.flag_unsafe(session_id, trial, body.reason)
+    service.flag_unsafe(session_id, trial, views.free_text(body.reason, "reason", "the reason"))
     return service.read(session_id, present.trials_out)
 
 

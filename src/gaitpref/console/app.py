@@ -23,6 +23,7 @@ from gaitpref.console import api, flag_pages, pages
 from gaitpref.console.errors import HANDLED, refusal
 from gaitpref.console.figures import FigureRenderer
 from gaitpref.console.limits import MAX_LIST, BodyLimitMiddleware
+from gaitpref.console.once import OncePosts
 from gaitpref.console.security import AccessMiddleware, Csrf
 from gaitpref.console.service import SessionService
 from gaitpref.console.templating import page_error
@@ -81,6 +82,7 @@ def create_app(
     app.state.service = service
     app.state.csrf = Csrf(csrf_secret)
     app.state.figures = FigureRenderer()
+    app.state.once = OncePosts()
     app.state.token_required = token is not None
     app.include_router(api.router)
     app.include_router(pages.router)

@@ -38,7 +38,7 @@ from gaitpref.config import (
     shipped_configs,
 )
 from gaitpref.config.schema import MAX_ACTIONS as LIBRARY_ACTIONS
-from gaitpref.console.errors import InputError
+from gaitpref.console.errors import InputError, quoted
 from gaitpref.console.limits import MAX_LIBRARY_BYTES
 from gaitpref.content_lock import content_lock
 from gaitpref.gaits import GaitLibrary, GaitLibraryError
@@ -156,13 +156,20 @@ def _too_many_values(total: int) -> InputError:
 
 
 def _inside(base: Path, name: str) -> Path:
+    if "\x00" in name:  # no file has one: Path.resolve raised "embedded null byte" (unnamed)
+        raise InputError(
+            "config",
+            f"[gaits].library {quoted(name)}: a path holds no NUL character (U+0000 at "
+            f"character {name.index(chr(0)) + 1})",
+        )
     given = Path(name)
     where = (base / given).resolve()
     if given.is_absolute() or not where.is_relative_to(base.resolve()):
         raise InputError(
             "config",
-            f"[gaits].library {name!r}: a config given to the console names a library inside its "
-            f"library folder ({base}) by a relative path, or comes with the library uploaded",
+            f"[gaits].library {quoted(name)}: a config given to the console names a library "
+            f"inside its library folder ({base}) by a relative path, or comes with the library "
+            "uploaded",
         )
     return where
 
@@ -222,7 +229,7 @@ def _choose(
         if "\n" not in source and "=" not in source:
             raise InputError(
                 "config",
-                f"{source[:80]!r} is neither a shipped config ({', '.join(shipped_configs())}) "
+                f"{quoted(source)} is neither a shipped config ({', '.join(shipped_configs())}) "
                 "nor TOML config text",
             )
         stem = _safe_name(name, "uploaded")

@@ -28,6 +28,9 @@ error                                       status  meaning
 ``InputError`` (console) / ``ValueError``   422     any other refused input
 ``ConvergenceError``                        422     the model could not take this answer
 ``SchemaError`` / ``StorageConnectError``   503     the database cannot be used as it is
+``StorageFailureError``                     503     the database failed while in use (disk
+                                                    I/O error, a locked, removed or replaced
+                                                    SQLite file): the message names it
 ``GaitError`` (not ``GaitLibraryError``)    503     the gait generator failed to make a
                                                     proposed gait: nothing proposed
 ``ReplayError``                             500     the stored log does not replay: see message
@@ -67,7 +70,19 @@ from gaitpref.storage import (
     SessionNotFoundError,
     StorageConnectError,
     StorageError,
+    StorageFailureError,
 )
+
+#: the most characters of a refused value an error message quotes (then its length)
+QUOTE_CHARS = 60
+
+
+def quoted(value: str, limit: int = QUOTE_CHARS) -> str:
+    """``value`` as an error message quotes it: whole (``repr``) up to ``limit`` characters, else
+    its start and its length, so that a refused megabyte is not echoed back."""
+    if len(value) <= limit:
+        return repr(value)
+    return f"{value[:limit]!r}... ({len(value):,} characters)"
 
 
 class InputError(ValueError):
@@ -75,7 +90,7 @@ class InputError(ValueError):
 
     def __init__(self, field: str, message: str) -> None:
         super().__init__(message)
-        self.field = field
+        self.field = field if len(field) <= QUOTE_CHARS else f"{field[:QUOTE_CHARS]}..."
 
 
 class CsrfError(PermissionError):
@@ -104,6 +119,7 @@ STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (NoSafeGaitError, 409, "no safe gait"),
     (SchemaError, 503, "database schema"),
     (StorageConnectError, 503, "database unreachable"),
+    (StorageFailureError, 503, "database failed"),
     (GaitLibraryError, 422, "refused gait library"),
     (GaitError, 503, "gait not made"),
     (FeedbackError, 422, "refused answer"),

@@ -19,6 +19,7 @@ from gaitpref.console.errors import InputError
 from gaitpref.console.pages import SessionId, read_form, see_other, service_of
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.templating import render
+from gaitpref.console.views import free_text
 from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
@@ -33,13 +34,13 @@ async def post_unsafe(
     reason = fields.get("reason", "").strip()
     if not reason:
         raise InputError("reason", "say why the trial was unsafe (the reason is required)")
+    free_text(reason, "reason", "the reason")
     service = service_of(request)
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
-            gait = next((t.action for t in session.trials() if t.number == trial), None)
-            if gait is None:
-                raise InputError("trial", f"trial {trial} has not been answered")
+            session.check_change("unsafe", trial)  # undone, flagged since, finished: 409 now
+            gait = next(t.action for t in session.trials() if t.number == trial)
             radius = session.config.safety.unsafe_radius
             near = f" and the gaits within {radius:g} of its range" if radius else ""
             return [
@@ -60,6 +61,9 @@ async def post_withdraw_unsafe(
     """Withdraw the unsafe flag of a trial (confirmed first)."""
     fields, _ = await read_form(request)
     if fields.get("confirmed") != "1":
+        await run_in_threadpool(  # withdrawn since (another tab), finished: 409 now
+            service_of(request).read, session_id, lambda s: s.check_change("withdraw", trial)
+        )
         lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
         return _confirm(
             request, session_id, "withdraw", lines, fields, f"trials/{trial}/unsafe/withdraw"

@@ -8,13 +8,15 @@ a form body (pages)         66 MB           413 (a config upload and a gait libr
 a form field (not a file)   1 MiB           413 saying so (a note, a reason, ...)
 a form's fields; its files  1000 each       413 saying so
 an uploaded config          200 kB          422 naming ``config_file``
+a pasted config's text      200,000 chars   422 naming ``config``
 an uploaded gait library    64 MB           422 naming ``library_file``
 a list in a JSON body       256 items       413 naming the field (``comparisons``, ...)
 ==========================  ==============  ==================================================
 
-The byte limits are checked on ``Content-Length`` when the client sends one and on the bytes
-actually received otherwise (a chunked body is cut off as soon as it passes the limit), so a
-50 MB body costs the server the time to read 1 MB, not to parse 50 MB.  The form limits are
+A ``Content-Length`` that is not a number is a 400 saying so, not a 413.  The byte limits are
+checked on ``Content-Length`` when the client sends one and on the bytes actually received
+otherwise (a chunked body is cut off as soon as it passes the limit), so a 50 MB
+body costs the server the time to read 1 MB, not to parse 50 MB.  The form limits are
 Starlette's form parser's, given to it here (:func:`form_error` reads its refusals); they were
 its defaults, and its refusal a bare JSON 400.  The API answers JSON; a page answers with the
 console's HTML error page, which says what was too large.
@@ -37,6 +39,9 @@ MAX_JSON_BODY = 1_000_000
 MAX_LIST = 256
 #: the most bytes of an uploaded config file
 MAX_UPLOAD = 200_000
+#: the most characters of a config's text given in a field (a page's ``config``, the API's
+#: ``config``), checked before it is parsed: as much as an uploaded config holds
+MAX_CONFIG_TEXT = 200_000
 #: the most bytes of an uploaded gait library
 MAX_LIBRARY_BYTES = 64_000_000
 #: the most bytes of a form body (a config and a library upload, with room for the fields)
@@ -104,7 +109,10 @@ class BodyLimitMiddleware:
             return
         limit = body_limit(scope)
         declared = dict(scope["headers"]).get(b"content-length")
-        if declared is not None and (not declared.isdigit() or int(declared) > limit):
+        if declared is not None and not declared.isdigit():  # not a size: not "too large"
+            await _send_400(scope, send, "the Content-Length header is not a number of bytes")
+            return
+        if declared is not None and int(declared) > limit:
             await _send_413(scope, send, limit)
             return
         received = 0
@@ -144,11 +152,22 @@ class BodyLimitMiddleware:
 
 async def _send_413(scope: Scope, send: Send, limit: int) -> None:
     """The 413: JSON for the API, the console's HTML error page for a page."""
+    ref = Refusal(413, "form too large", form_too_large(limit), None)
+    await _send_refusal(scope, send, ref, too_large(limit))
+
+
+async def _send_400(scope: Scope, send: Send, detail: str) -> None:
+    """A 400 for a request whose headers are not HTTP's (a Content-Length that is no number)."""
+    await _send_refusal(scope, send, Refusal(400, "request not readable", detail, None), detail)
+
+
+async def _send_refusal(scope: Scope, send: Send, ref: Refusal, api_detail: str) -> None:
+    """``ref`` as JSON (``api_detail``) for the API, as the console's HTML error page else."""
     if scope["path"].startswith("/api/"):
-        data = json.dumps({"detail": too_large(limit)}).encode()
+        data = json.dumps({"detail": api_detail}).encode()
         content_type = b"application/json"
     else:
-        data = _error_page(scope, limit)
+        data = _error_page(scope, ref)
         content_type = b"text/html; charset=utf-8"
     headers = [
         (b"content-type", content_type),
@@ -156,13 +175,13 @@ async def _send_413(scope: Scope, send: Send, limit: int) -> None:
         (b"connection", b"close"),
         (b"cache-control", b"no-store"),
     ]
-    await send({"type": "http.response.start", "status": 413, "headers": headers})
+    await send({"type": "http.response.start", "status": ref.status, "headers": headers})
     await send({"type": "http.response.body", "body": data})
 
 
-def _error_page(scope: Scope, limit: int) -> bytes:
-    """The error page of a form past ``limit`` bytes (before routing: the session, if the path
-    names one, is read from it for the page's link back to the trial)."""
+def _error_page(scope: Scope, ref: Refusal) -> bytes:
+    """The error page of ``ref`` (before routing: the session, if the path names one, is read
+    from it for the page's link back to the trial)."""
     from starlette.requests import Request
 
     from gaitpref.console.templating import page_error
@@ -170,5 +189,4 @@ def _error_page(scope: Scope, limit: int) -> bytes:
     named = re.match(r"/sessions/(\d+)(/|$)", scope["path"])
     params = {"session_id": named.group(1)} if named else {}
     request = Request({**scope, "path_params": params})
-    ref = Refusal(413, "form too large", form_too_large(limit), None)
     return bytes(page_error(request, ref).body)

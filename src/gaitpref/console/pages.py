@@ -21,8 +21,9 @@ from starlette.exceptions import HTTPException
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
 from gaitpref.console.answers import read_rating_fields
-from gaitpref.console.errors import CsrfError, InputError
+from gaitpref.console.errors import CsrfError, InputError, quoted
 from gaitpref.console.limits import (
+    MAX_CONFIG_TEXT,
     MAX_FORM_FIELD,
     MAX_FORM_FIELDS,
     MAX_FORM_FILES,
@@ -30,12 +31,15 @@ from gaitpref.console.limits import (
     MAX_UPLOAD,
     form_error,
 )
+from gaitpref.console.once import ONCE_FIELD, OncePosts
 from gaitpref.console.schemas import MAX_ID, SUBJECT_PATTERN
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 from gaitpref.console.service import (
     ExportFormat,
     SessionService,
     ask_again,
+    check_ranking_labels,
+    check_undo_query,
     pending_of,
     session_query_error,
 )
@@ -47,11 +51,26 @@ from gaitpref.sessions.session import Session
 
 router = APIRouter(include_in_schema=False)
 SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
+#: the most trials the flash of a redirect names (``?answered=3,4``): an answer's or an undo's
+#: trials, at most a query's gaits (``[cospar] n`` is at most 64); and its most characters, as
+#: many trial numbers of 18 digits with their commas (the text was cut at 200 characters, so
+#: that the redirect after an answer of n = 40 gaits from trial 1000 on was a 422)
+MAX_FLASH_TRIALS = 64
+MAX_FLASH_TEXT = MAX_FLASH_TRIALS * 19
 
 
 def service_of(request: Request) -> SessionService:
     service: SessionService = request.app.state.service
     return service
+
+
+#: the fields of the console's forms that take a file (the create form's uploads)
+FILE_FIELDS = frozenset({"config_file", "library_file"})
+
+
+def once_posts(request: Request) -> OncePosts:
+    posts: OncePosts = request.app.state.once
+    return posts
 
 
 def see_other(url: str) -> RedirectResponse:
@@ -74,7 +93,7 @@ async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadF
     files: dict[str, UploadFile] = {}
     for key, value in form.multi_items():
         if key in fields or key in files:
-            raise InputError(key, f"the field {key!r} was given twice")
+            raise InputError(key, f"the field {quoted(key)} was given twice")
         if isinstance(value, UploadFile):
             files[key] = value
         else:
@@ -84,6 +103,12 @@ async def read_form(request: Request) -> tuple[dict[str, str], dict[str, UploadF
         raise CsrfError(
             "this form has no valid CSRF token (it was not made by this console, or the console "
             "restarted since the page was loaded): reload the page and try again"
+        )
+    stray = sorted(files.keys() - FILE_FIELDS)  # were read as missing: "the note is empty"
+    if stray:
+        raise InputError(
+            stray[0],
+            "was sent as a file; this field is text (only config_file and library_file take files)",
         )
     return fields, files
 
@@ -133,7 +158,7 @@ async def create_session(request: Request) -> Response:
     if not re.fullmatch(SUBJECT_PATTERN, subject):
         raise InputError(
             "subject",
-            f"{subject!r} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
+            f"{quoted(subject)} is not a subject code: 1 to 64 letters, digits, '-', '_' or '.' "
             "(a pseudonymous code such as S01, never a name)",
         )
     seed_text = fields.get("seed", "").strip()
@@ -143,6 +168,12 @@ async def create_session(request: Request) -> Response:
     source = uploaded if uploaded is not None else fields.get("config", "")
     if not source:
         raise InputError("config", "choose a shipped config or upload a TOML config")
+    if len(source) > MAX_CONFIG_TEXT:
+        raise InputError(
+            "config",
+            f"the config text has {len(source):,} characters; at most {MAX_CONFIG_TEXT:,} are "
+            "taken (as many as an uploaded config file holds)",
+        )
     library = None
     lib_file = files.get("library_file")
     if lib_file is not None and lib_file.filename:
@@ -155,12 +186,16 @@ async def create_session(request: Request) -> Response:
         prior = read_prior_from([fields.get("prior_from", "")])
     except ValueError as exc:
         raise InputError("prior_from", str(exc)) from None
-    session = await run_in_threadpool(
-        lambda: service_of(request).create(
-            source, subject, seed, config_name=name, library=library, prior_from=prior
+
+    async def post() -> str:
+        session = await run_in_threadpool(
+            lambda: service_of(request).create(
+                source, subject, seed, config_name=name, library=library, prior_from=prior
+            )
         )
-    )
-    return see_other(f"/sessions/{session.id}")
+        return f"/sessions/{session.id}"
+
+    return see_other(await once_posts(request).run(fields.get(ONCE_FIELD), post))
 
 
 @router.post("/sessions/{session_id}/status")
@@ -168,7 +203,23 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
     status = fields.get("status", "")
     if status not in ("active", "paused", "finished"):
-        raise InputError("status", f"must be active, paused or finished; got {status!r}")
+        raise InputError("status", f"must be active, paused or finished; got {quoted(status)}")
+    if status == "finished" and fields.get("confirmed") != "1":  # no undo: confirmed first
+        session = await run_in_threadpool(service_of(request).get, session_id)
+        if session.status != "finished":
+            return render(
+                request,
+                "confirm.html",
+                session_id=session_id,
+                what="finish",
+                lines=[
+                    f"Finish session {session_id}: it will take no more answers, undos or "
+                    "unsafe flags (its data stay, for export)"
+                ],
+                fields=fields,
+                note="",
+                action=f"/sessions/{session_id}/status",
+            )
     await run_in_threadpool(service_of(request).set_status, session_id, status)
     back = fields.get("back", "")
     return see_other(
@@ -181,13 +232,20 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
 async def trial_page(
     request: Request,
     session_id: SessionId,
-    answered: Annotated[str | None, Query(max_length=200)] = None,
-    undone: Annotated[str | None, Query(max_length=200)] = None,
+    answered: Annotated[str | None, Query(max_length=MAX_FLASH_TEXT)] = None,
+    undone: Annotated[str | None, Query(max_length=MAX_FLASH_TEXT)] = None,
     flagged: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
     excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
 ) -> Response:
+    for name, text in (("answered", answered), ("undone", undone)):
+        if text is not None and text.count(",") >= MAX_FLASH_TRIALS:
+            raise InputError(
+                name,
+                f"names {text.count(',') + 1:,} trials; a query runs at most "
+                f"{MAX_FLASH_TRIALS} gaits ([cospar] n), so a redirect names at most as many",
+            )
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
@@ -256,7 +314,7 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
     query_id = views.read_int(fields, "query_id")
     comparisons, suggestions = views.read_answer_form(fields)
-    note = fields.get("note", "").strip()
+    note = views.free_text(fields.get("note", "").strip(), "note", "the note")
     service = service_of(request)
     ordinal = await run_in_threadpool(lambda: service.get(session_id).config.ordinal)
     categories = ordinal.categories if ordinal is not None else ()
@@ -299,10 +357,9 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
     if fields.get("confirmed") != "1":
 
         def summary(session: Session) -> list[str]:
-            trials = session.trials()
-            if not trials:
-                raise InputError("query_id", "nothing to undo: no trial has been answered")
-            last = trials[-1]
+            check_undo_query(session, query_id)  # stale (another tab moved on): 409 now
+            session.check_change("undo")  # nothing to undo, a flagged or excluded trial: 409
+            last = session.trials()[-1]
             return [
                 f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
             ]
@@ -334,13 +391,17 @@ async def post_ask(request: Request, session_id: SessionId) -> Response:
 @router.post("/sessions/{session_id}/note")
 async def post_note(request: Request, session_id: SessionId) -> Response:
     fields, _ = await read_form(request)
-    text = fields.get("text", "").strip()
+    text = views.free_text(fields.get("text", "").strip(), "text", "the note")
     if not text:
         raise InputError("text", "the note is empty")
     if len(text) > 2000:
         raise InputError("text", "a note has at most 2000 characters")
-    await run_in_threadpool(service_of(request).note, session_id, text)
-    return see_other(f"/sessions/{session_id}")
+
+    async def post() -> str:
+        await run_in_threadpool(service_of(request).note, session_id, text)
+        return f"/sessions/{session_id}"
+
+    return see_other(await once_posts(request).run(fields.get(ONCE_FIELD), post))
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/exclude")
@@ -350,8 +411,8 @@ async def post_exclude(
     fields, _ = await read_form(request)
     reason = fields.get("reason", "")
     if reason not in REASONS:
-        raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {reason!r}")
-    detail = fields.get("detail", "").strip()
+        raise InputError("reason", f"must be one of {', '.join(REASONS)}; got {quoted(reason)}")
+    detail = views.free_text(fields.get("detail", "").strip(), "detail", "the detail")
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")
     service = service_of(request)
@@ -431,11 +492,39 @@ async def post_ranking(
     for k, label in enumerate(ranking, start=1):
         if not label:
             raise InputError(f"rank{k}", "choose a gait for every place")
+        if len(label) > MAX_LABEL:
+            raise InputError(
+                f"rank{k}",
+                f"a gait's label has at most {MAX_LABEL} characters (A, B, C); got {quoted(label)}",
+            )
     shown = _shown(fields.get("shown"))
-    await run_in_threadpool(service_of(request).rank, session_id, round_, ranking, shown)
+    service = service_of(request)
+    if fields.get("confirmed") != "1":  # a ranking cannot be taken back: confirmed first
+
+        def summary(session: Session) -> list[str]:
+            check_ranking_labels(session, round_, ranking)
+            session.check_validation_answer(round_, ranking, shown=shown)  # stale: 409 now
+            places = ", ".join(f"{k}. {label}" for k, label in enumerate(ranking, start=1))
+            return [f"Record the subject's ranking of round {round_}, best first: {places}"]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return render(
+            request,
+            "confirm.html",
+            session_id=session_id,
+            what="ranking",
+            lines=lines,
+            fields=fields,
+            note="",
+            action=f"/sessions/{session_id}/validation/{round_}",
+            back=f"/sessions/{session_id}/validation",
+        )
+    await run_in_threadpool(service.rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
 
 
+#: the most characters of a validation label (the JSON API's bound too: A, B, C are drawn)
+MAX_LABEL = 4
 #: the most gaits ``shown`` may name (a validation round shows three), and the most characters of
 #: its text, measured before it is parsed (gait ids are a library's: no shorter bound is theirs)
 MAX_SHOWN, MAX_SHOWN_TEXT = 8, 64_000

@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr, field_validator
 
-from gaitpref.console.limits import MAX_LIST
+from gaitpref.console.limits import MAX_CONFIG_TEXT, MAX_LIST
 from gaitpref.feedback import Outcome
 from gaitpref.space import Move
 
@@ -37,7 +37,7 @@ class CreateSessionIn(_Request):
 
     config: StrictStr = Field(
         min_length=1,
-        max_length=100_000,
+        max_length=MAX_CONFIG_TEXT,
         description="a shipped config name (GET /api/configs) or TOML config text",
         examples=["exo-1d-step-length"],
     )

@@ -207,13 +207,7 @@ class SessionService:
         """Take back the last answer; with ``expected_query``, only if that query is pending."""
         with self.locked(session_id) as session:
             if expected_query is not None:
-                pending = session.pending
-                if pending is None or pending.id != expected_query:
-                    now = "no query is" if pending is None else f"query {pending.id} is"
-                    raise SessionStateError(
-                        f"the undo was asked while query {expected_query} was pending, but now "
-                        f"{now} pending (another tab answered or undid first); nothing was undone"
-                    )
+                check_undo_query(session, expected_query)
             before = session.pending
             done = session.trials()
             undone = done[-1].query if done else None
@@ -308,15 +302,7 @@ class SessionService:
         still shows those gaits: a flag on a gait it showed draws it again with the same number,
         and a ranking of the gaits walked before must not be booked against the new ones."""
         with self.locked(session_id) as session:
-            plan = session.validation_plan
-            if plan is not None and plan.round == round_:
-                labels = [str(r).upper() for r in ranking]
-                if sorted(labels) != sorted(plan.labels):
-                    raise InputError(
-                        "ranking",
-                        f"name each of {', '.join(plan.labels)} exactly once, best first; "
-                        f"got {', '.join(labels) or 'nothing'}",
-                    )
+            check_ranking_labels(session, round_, ranking)
             # shown: checked by the session in the turn of the write (Session.answer_validation)
             return session.answer_validation(round_, list(ranking), shown=shown)
 
@@ -395,6 +381,31 @@ def no_query(exc: NoSafeGaitError | GaitError) -> Pending:
 def ack_text(session: Session, query: SessionQuery) -> str:
     gaits = ", ".join(session.gait_name(a) for a in query.actions)
     return f"device acknowledged query {query.id} (gaits {gaits})"
+
+
+def check_ranking_labels(session: Session, round_: int, ranking: Sequence[str]) -> None:
+    """Refuse (422 naming ``ranking``) a ranking of the open round ``round_`` that does not name
+    each of its labels once."""
+    plan = session.validation_plan
+    if plan is not None and plan.round == round_:
+        labels = [str(r).upper() for r in ranking]
+        if sorted(labels) != sorted(plan.labels):
+            raise InputError(
+                "ranking",
+                f"name each of {', '.join(plan.labels)} exactly once, best first; "
+                f"got {', '.join(labels) or 'nothing'}",
+            )
+
+
+def check_undo_query(session: Session, expected_query: int) -> None:
+    """Refuse (409) an undo asked while ``expected_query`` was pending if another is now."""
+    pending = session.pending
+    if pending is None or pending.id != expected_query:
+        now = "no query is" if pending is None else f"query {pending.id} is"
+        raise SessionStateError(
+            f"the undo was asked while query {expected_query} was pending, but now "
+            f"{now} pending (another tab answered or undid first); nothing was undone"
+        )
 
 
 def session_query_error(session: Session, query_id: int) -> Exception:

@@ -11,6 +11,7 @@ from jinja2 import Environment, FileSystemLoader, select_autoescape
 
 from gaitpref import __version__
 from gaitpref.console.errors import Refusal
+from gaitpref.console.once import ONCE_FIELD, new_token
 from gaitpref.console.security import CSRF_COOKIE, CSRF_FIELD, Csrf
 
 _ENV = Environment(
@@ -32,6 +33,8 @@ def render(request: Request, template: str, status_code: int = 200, **context: A
         request=request,
         csrf_field=CSRF_FIELD,
         csrf_token=token,
+        once_field=ONCE_FIELD,
+        once=new_token,
         version=__version__,
         **context,
     )

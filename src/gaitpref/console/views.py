@@ -25,15 +25,16 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from gaitpref.console.answers import is_rating_field
-from gaitpref.console.errors import InputError
-from gaitpref.sessions.records import SessionQuery, ShownGait
+from gaitpref.console.errors import InputError, quoted
+from gaitpref.sessions.records import SessionQuery, ShownGait, check_printable, check_storable
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
 SUGGESTION_ROWS = ("qwert", "asdfg", "zxcvb", "yuiop", "hjkl;")
 _BUTTON_MOVES: tuple[str, ...] = ("+big", "+small", "", "-small", "-big")
 _CMP = re.compile(r"^cmp-(\d{1,10})-(\d{1,10})$")
-_SUG = re.compile(r"^sug-(\d{1,10})-([A-Za-z_][A-Za-z0-9_]{0,99})$")
+#: a feature is named by an identifier, which may be non-ASCII (``Schrittlänge``, ``μ``)
+_SUG = re.compile(r"^sug-(\d{1,10})-([^\W\d]\w{0,99})$")
 FORM_FIELDS = ("query_id", "csrf_token", "confirmed", "note")
 
 
@@ -236,17 +237,29 @@ def read_answer_form(
             continue
         if m := _CMP.match(name):
             if value not in COMPARISON_KEYS:
-                raise InputError(name, f"must be one of first, second, none; got {value!r}")
+                raise InputError(name, f"must be one of first, second, none; got {quoted(value)}")
             comparisons.append((int(m.group(1)), int(m.group(2)), value))
         elif m := _SUG.match(name):
             if value == "":
                 continue
             if value not in MOVES:
-                raise InputError(name, f"must be one of {', '.join(MOVES)} or empty; got {value!r}")
+                said = f"must be one of {', '.join(MOVES)} or empty; got {quoted(value)}"
+                raise InputError(name, said)
             suggestions.append((int(m.group(1)), m.group(2), value))
         else:
             raise InputError(name, "unknown field in an answer form")
     return comparisons, suggestions
+
+
+def free_text(text: str, field: str, what: str) -> str:
+    """A note, reason or detail as the session will take it: no control character but a
+    newline or a tab, no line separator or bidirectional override, no lone surrogate; else an
+    :class:`InputError` naming ``field`` (checked at the confirm step too, not only when it is
+    written)."""
+    try:
+        return check_printable(check_storable(text, what), what)
+    except ValueError as exc:
+        raise InputError(field, str(exc)) from None
 
 
 def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
@@ -255,7 +268,7 @@ def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
     if raw is None or raw == "":
         raise InputError(field, "missing")
     if not re.fullmatch(r"\d{1,18}", raw.strip()):
-        raise InputError(field, f"must be an integer, got {raw!r}")
+        raise InputError(field, f"must be an integer, got {quoted(raw)}")
     value = int(raw)
     if value < minimum:
         raise InputError(field, f"must be >= {minimum}, got {value}")

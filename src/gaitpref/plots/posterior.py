@@ -29,7 +29,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from gaitpref.model.posterior import Posterior
-from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots import BAND_LABEL, BAND_SD, plain
 from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -78,7 +78,7 @@ def posterior_picture(
 
 def _axis_label(space: Space, k: int) -> str:
     f = space.features[k]
-    return f"{f.name} [{f.unit}]" if f.unit else f.name
+    return plain(f"{f.name} [{f.unit}]" if f.unit else f.name)
 
 
 def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
@@ -167,7 +167,7 @@ def render(pic: PosteriorPicture) -> Figure:
     else:
         _draw_2d(pic, fig)
     if pic.title:
-        fig.suptitle(pic.title)
+        fig.suptitle(plain(pic.title))
     fig.tight_layout()
     return fig
 

@@ -32,7 +32,7 @@ from matplotlib.figure import Figure
 from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
-from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots import BAND_LABEL, BAND_SD, plain
 from gaitpref.plots.trials import on_a_grid, render_trials, trials_picture
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -87,7 +87,7 @@ def session_picture(session: Session, samples: int = 3, seed: int = 0) -> Sessio
 
 def _label(space: Space, k: int) -> str:
     f = space.features[k]
-    return f"{f.name} [{f.unit}]" if f.unit else f.name
+    return plain(f"{f.name} [{f.unit}]" if f.unit else f.name)
 
 
 def _posterior_1d(ax: Axes, pic: SessionPicture) -> None:
@@ -164,7 +164,7 @@ def trial_numbers(pic: SessionPicture) -> dict[int, str]:
 
 
 def _validation(ax: Axes, pic: SessionPicture) -> None:
-    labels = [v[0] for v in pic.validation]
+    labels = [plain(v[0]) for v in pic.validation]
     ax.bar(labels, [v[3] for v in pic.validation], color="0.7")
     for k, v in enumerate(pic.validation):
         ax.annotate(f"rank {v[2]}", (k, v[3]), ha="center", va="bottom", fontsize=8)
@@ -184,7 +184,7 @@ def render_session(pic: SessionPicture) -> Figure:
         _heat_2d(axes[0], pic)
     if pic.validation:
         _validation(axes[-1], pic)
-    fig.suptitle(pic.title, fontsize=10)
+    fig.suptitle(plain(pic.title), fontsize=10)
     fig.tight_layout()
     return fig
 

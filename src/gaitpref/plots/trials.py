@@ -22,7 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
 from gaitpref.model.posterior import Posterior
-from gaitpref.plots import BAND_LABEL, BAND_SD
+from gaitpref.plots import BAND_LABEL, BAND_SD, plain
 from gaitpref.pointset import PointSet
 from gaitpref.space import FloatArray, Space
 
@@ -84,11 +84,11 @@ def render_trials(pic: TrialsPicture) -> Figure:
         ax.axhline(pic.best_mean, color="k", lw=1, ls="--", label="best posterior mean")
     ax.set_xlabel(f"trial ({pic.why}; the posterior at each trial's point)")
     ax.set_ylabel("utility")
-    ax.set_title(f"best: {pic.best}", fontsize=9)
+    ax.set_title(plain(f"best: {pic.best}"), fontsize=9)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="best", fontsize=8)
     if pic.title:
-        fig.suptitle(pic.title)
+        fig.suptitle(plain(pic.title))
     fig.tight_layout()
     return fig
 

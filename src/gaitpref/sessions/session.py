@@ -28,7 +28,7 @@ import contextlib
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from gaitpref.checks import is_count
 from gaitpref.config import (
@@ -548,6 +548,27 @@ class Session:
 
         self._locked(run)
 
+    def check_change(self, change: Literal["undo", "unsafe", "withdraw"], trial: int = 0) -> None:
+        """Refuse, writing nothing, as :meth:`undo`, :meth:`flag_unsafe` (of ``trial``) or
+        :meth:`withdraw_unsafe` (of ``trial``) would now: the :class:`SessionStateError` of a
+        finished session, of nothing to undo, of a trial not answered (or undone since), already
+        flagged or not flagged.  For a confirm step, so that a stale one is refused before the
+        operator confirms it."""
+
+        def run() -> None:
+            st = self._state
+            if change == "undo":
+                st.check_open("undo")
+                st.undo_event()
+            elif change == "unsafe":
+                st.check_open("unsafe flags")
+                st.unsafe_event(trial, "(checked)")
+            else:
+                st.check_open("unsafe flags")
+                st.withdraw_unsafe_event(trial)
+
+        self._locked(run)
+
     def infeasible_gaits(self) -> list[InfeasibleGait]:
         """Proposals whose gait could not be made (gaits on demand): never shown as trials."""
         return list(self._state.infeasible)
@@ -705,24 +726,41 @@ class Session:
         write, so another writer's flag cannot come in between."""
 
         def run() -> ValidationResult:
-            st = self._state
-            st.check_open("validation")
-            current = st.open_round
-            if shown is not None and current is not None and current.plan.round == round_:
-                now = [current.shown[g.label].gait for g in current.plan.gaits]
-                if [str(g) for g in shown] != now:
-                    raise SessionStateError(
-                        f"validation round {round_} was drawn again since its gaits were shown "
-                        "(an unsafe flag withdrew a gait it showed): it now shows "
-                        f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
-                        "written, run the round's gaits as shown now"
-                    )
-            self._append([st.validation_answer_event(round_, ranking)])
+            self._append([self._validation_answer(round_, ranking, shown)])
             result = self._state.rounds[-1].result
             assert result is not None
             return result
 
         return self._locked(run)
+
+    def check_validation_answer(
+        self, round_: int, ranking: Sequence[str] | str, *, shown: Sequence[str] | None = None
+    ) -> None:
+        """Refuse, writing nothing, as :meth:`answer_validation` would now (a round not open,
+        drawn again since ``shown``, a ranking that is not one of its labels): for a confirm
+        step, so that a stale ranking is refused before the operator confirms it."""
+
+        def run() -> None:
+            self._validation_answer(round_, ranking, shown)
+
+        self._locked(run)
+
+    def _validation_answer(
+        self, round_: int, ranking: Sequence[str] | str, shown: Sequence[str] | None
+    ) -> NewEvent:
+        st = self._state
+        st.check_open("validation")
+        current = st.open_round
+        if shown is not None and current is not None and current.plan.round == round_:
+            now = [current.shown[g.label].gait for g in current.plan.gaits]
+            if [str(g) for g in shown] != now:
+                raise SessionStateError(
+                    f"validation round {round_} was drawn again since its gaits were shown "
+                    "(an unsafe flag withdrew a gait it showed): it now shows "
+                    f"{', '.join(now)}, not {', '.join(map(str, shown))}; nothing was "
+                    "written, run the round's gaits as shown now"
+                )
+        return st.validation_answer_event(round_, ranking)
 
     def validations(self) -> list[ValidationResult]:
         """The answered validation rounds, unblinded."""

@@ -32,6 +32,7 @@ from gaitpref.storage.base import (
     Status,
     Storage,
     StorageConnectError,
+    StorageFailureError,
     SubjectRecord,
 )
 from gaitpref.storage.memory import MemoryStorage
@@ -82,6 +83,7 @@ __all__ = [
     "Storage",
     "StorageConnectError",
     "StorageError",
+    "StorageFailureError",
     "SubjectRecord",
     "open_storage",
     "resolve_url",

@@ -75,6 +75,11 @@ class StorageConnectError(StorageError):
     """The database could not be reached or opened."""
 
 
+class StorageFailureError(StorageError):
+    """The database failed while it was in use (a disk I/O error, a locked, damaged, removed or
+    replaced SQLite file, ...): the storage's fault, not the request's; nothing was written."""
+
+
 @dataclass(frozen=True)
 class NewEvent:
     """An event to append: its ``kind``, JSON ``payload``, for imports only its time, and the

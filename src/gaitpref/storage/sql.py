@@ -40,7 +40,13 @@ from sqlalchemy import (
 from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 from sqlalchemy.engine import URL, make_url
-from sqlalchemy.exc import ArgumentError, DBAPIError, IntegrityError, SQLAlchemyError
+from sqlalchemy.exc import (
+    ArgumentError,
+    DatabaseError,
+    DBAPIError,
+    IntegrityError,
+    SQLAlchemyError,
+)
 from sqlalchemy.pool import StaticPool
 
 from gaitpref.errors import StorageError
@@ -57,6 +63,7 @@ from gaitpref.storage.base import (
     SessionSpec,
     Status,
     StorageConnectError,
+    StorageFailureError,
     SubjectRecord,
     as_utc,
     check_event,
@@ -327,7 +334,7 @@ class SQLStorage(CheckedCreation):
         except OSError:
             same = False
         if not same:
-            raise StorageError(
+            raise StorageFailureError(
                 f"{self.url}: the database file {str(self._file)!r} was deleted, moved or "
                 "replaced since it was opened; nothing was written (a write now would be lost "
                 "with the old file): open the database again"
@@ -355,7 +362,10 @@ class SQLStorage(CheckedCreation):
         except DBAPIError as exc:
             if exc.connection_invalidated or "connect" in str(exc.orig).lower():
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
-            raise StorageError(f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}") from None
+            said = f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}"
+            if isinstance(exc, DatabaseError):  # OperationalError (disk I/O, locked, ...) too
+                raise StorageFailureError(said) from None
+            raise StorageError(said) from None
 
 
 def upgrade_database(url: str) -> str:
