@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import shlex
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
@@ -95,7 +95,17 @@ def _confirm(question: str, yes: bool) -> None:
 
 
 def _resume_hint(session_id: int, db: str | None) -> str:
-    return f"gaitpref session run {session_id}" + (f" --db {db}" if db else "")
+    return f"gaitpref session run {session_id}" + (f" --db {shlex.quote(db)}" if db else "")
+
+
+def _flag_hint(session_id: int, db: str | None) -> Callable[[int, str], str]:
+    """The command that flags a trial unsafe, given its number and the reason (shell-quoted)."""
+
+    def command(trial: int, reason: str) -> str:
+        where = f" --db {shlex.quote(db)}" if db else ""
+        return f"gaitpref session unsafe {session_id} {trial} --reason {shlex.quote(reason)}{where}"
+
+    return command
 
 
 # -- db ----------------------------------------------------------------------------------------
@@ -180,7 +190,14 @@ def run_session(session_id: IdArgument, db: DbOption = None) -> None:
     from gaitpref.terminal import run_terminal
 
     with _opened(db, session_id) as session:
-        guard(lambda: run_terminal(session, console, resume=_resume_hint(session_id, db)))
+        guard(
+            lambda: run_terminal(
+                session,
+                console,
+                resume=_resume_hint(session_id, db),
+                flag_with=_flag_hint(session_id, db),
+            )
+        )
 
 
 @session_app.command("validate")
