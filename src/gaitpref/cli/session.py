@@ -161,8 +161,17 @@ def new(
             if not gait_ids.is_file():
                 what = "is a folder" if gait_ids.is_dir() else "does not exist"
                 raise ValueError(f"--gait-ids {str(gait_ids)!r} {what}; give a text file")
+            from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES
+
+            with gait_ids.open("rb") as fh:  # read no further than the bound: not held whole
+                data = fh.read(MAX_LIBRARY_BYTES + 1)
+            if len(data) > MAX_LIBRARY_BYTES:
+                raise ValueError(
+                    f"--gait-ids {str(gait_ids)!r} is larger than {MAX_LIBRARY_BYTES:,} bytes; "
+                    "it was not read"
+                )
             try:  # UTF-8, whatever the locale; the error named neither the option nor the file
-                text = gait_ids.read_text(encoding="utf-8")
+                text = data.decode("utf-8")
             except UnicodeDecodeError as exc:
                 raise ValueError(
                     f"--gait-ids {str(gait_ids)!r} is not UTF-8 text (byte {exc.start}: "
