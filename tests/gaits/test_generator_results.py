@@ -155,3 +155,24 @@ def test_register_generator_refuses_to_replace_a_name_unless_told() -> None:
     finally:
         module._GENERATORS.pop("test-other", None)
     assert "test-other" not in generator_names()
+
+
+def test_a_cached_gait_unfit_to_use_is_made_again_not_logged(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A cache file (edited, or written before results were checked) whose gait has a message
+    of 3,000 characters was taken as it was, and logged with it."""
+    from gaitpref.gaits import CachedGait
+
+    monkeypatch.setattr(FakeSteps, "below", 0.3)
+    generator = FakeSteps(["step_length"], {})
+    vector = np.array([0.4])
+    good = generator.make(vector)
+    cache = GaitCache(tmp_path)
+    key = generator.key(vector)
+    spoiled = dataclasses.replace(good, message="x" * 3000)
+    cache.put(CachedGait(key, spoiled, None), generator.document(vector))
+    calls = len(FakeSteps.calls)
+    made, new = OnDemandGaits(generator, GaitCache(tmp_path), ranges=[1.0]).get(vector)
+    assert new and not made.from_cache and made.gait.message == good.message
+    assert len(FakeSteps.calls) == calls + 1

@@ -210,7 +210,7 @@ class OnDemandGaits:
         if known is not None:
             return known, False
         logged = None if recorded is None else recorded(key)
-        cached = logged if logged is not None else self.cache.get(key)
+        cached = logged if logged is not None else self._usable(self.cache.get(key), vec, name)
         if logged is not None and self.cache.get(key) is None:
             self.cache.put(logged, document)
         if cached is not None:
@@ -219,8 +219,7 @@ class OnDemandGaits:
             warm = self.nearest(vec)
             with self._faults(f"making gait {name}"):
                 gait = self.generator.make(vec, None if warm is None else warm.gait)
-                asked = self.generator.parameters(vec).get("step_length")
-            problem = made_gait_problem(gait, None if asked is None else float(asked))
+            problem = made_gait_problem(gait, self._asked(vec, name))
             if problem is not None:  # never logged, cached or shown
                 raise GaitGeneratorFaultError(
                     f"the gait generator {self.generator.name!r} made gait {name} "
@@ -233,6 +232,20 @@ class OnDemandGaits:
         if made.feasible:
             self._feasible.append(made)
         return made, True
+
+    def _asked(self, vec: FloatArray, name: str) -> float | None:
+        """The step length the generator's parameters ask for at ``vec`` (None: none)."""
+        with self._faults(f"describing gait {name}"):
+            asked = self.generator.parameters(vec).get("step_length")
+            return None if asked is None else float(asked)
+
+    def _usable(self, entry: CachedGait | None, vec: FloatArray, name: str) -> CachedGait | None:
+        """``entry`` unless its gait is unfit to use (:func:`made_gait_problem`: a cache file
+        edited, or written by a generator before its results were checked): then None, and the
+        gait is made again, as for an unreadable entry."""
+        if entry is None or made_gait_problem(entry.gait, self._asked(vec, name)) is not None:
+            return None
+        return entry
 
     def _check_name(self, name: object, vec: FloatArray) -> None:
         """A :class:`~gaitpref.errors.GaitGeneratorFaultError` when the generator's id of the
