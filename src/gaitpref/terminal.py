@@ -30,7 +30,7 @@ runner, said so, nothing more written; an undo whose 'last answer' is no longer 
 is refused; a write refused as busy (another writer holds the session) is asked again (the
 answer, an unsafe flag) or pauses the session (the next trial, an undo).  Lines are at most
 :data:`MAX_LINE` characters, and what is echoed back is printed without markup and cut
-(:func:`shown`).
+(:func:`clip`).
 Gaits are named by their gait library id, or ``G<action>`` (as in the console) without a
 library.  The loop only calls the public :class:`~gaitpref.sessions.session.Session` API.
 """
@@ -66,11 +66,14 @@ _MOVES = ("+big", "+small", "-small", "-big")
 
 #: the longest line of input taken (characters): a longer one is refused and asked again
 MAX_LINE = 65_536
-#: the most characters of a text echoed back (what was typed, a name, an error) that are shown
+#: the most characters of a text echoed back (what was typed, a gait id, a reason) that are shown
 MAX_SHOWN = 200
+#: and of an error's message (gaitpref's own say what happened and what to do: kept whole; one
+#: that quotes a generator's error at length is cut)
+MAX_MESSAGE = 4000
 
 
-def shown(text: object, limit: int = MAX_SHOWN) -> str:
+def clip(text: object, limit: int = MAX_SHOWN) -> str:
     """``text`` as echoed back: cut to ``limit`` characters, saying how long it was (printed
     with markup off, as every line here: a ``[bold]`` in it is shown as typed)."""
     out = str(text)
@@ -288,7 +291,7 @@ class Terminal:
             if key in allowed:
                 return key
             self.console.print(
-                f"  '{shown(raw)}' is not one of: {', '.join(allowed)}, u, q", markup=False
+                f"  '{clip(raw)}' is not one of: {', '.join(allowed)}, u, q", markup=False
             )
 
     # -- the loop ------------------------------------------------------------------------------
@@ -308,7 +311,7 @@ class Terminal:
     def _loop(self) -> None:
         s = self.session
         self.console.print(
-            f"Session {s.id}, subject {s.subject}, {shown(s.config.name)}: "
+            f"Session {s.id}, subject {s.subject}, {clip(s.config.name)}: "
             f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and "
             "quit.",
             markup=False,
@@ -320,12 +323,12 @@ class Terminal:
                     try:
                         self.validate()
                     except SessionStateError as exc:  # the round is gone: go on
-                        self.console.print(f"  {shown(exc)}", markup=False)
+                        self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                         self._stopped_elsewhere()
                         continue
                     except SessionBusyError as exc:  # the round could not be opened: pause
                         self.console.print(
-                            f"The validation round could not be opened: {shown(exc)}",
+                            f"The validation round could not be opened: {clip(exc, MAX_MESSAGE)}",
                             markup=False,
                         )
                         raise _QuitError from None
@@ -342,11 +345,14 @@ class Terminal:
                     self._say_infeasible(s.infeasible_gaits()[skipped:])
                 except NoSafeGaitError as exc:  # an ask that stopped logged its skipped gaits
                     self._say_infeasible(s.infeasible_gaits()[skipped:])
-                    self.console.print(f"No gait to propose: {shown(exc)}", markup=False)
+                    self.console.print(
+                        f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False
+                    )
                     raise _QuitError from None
                 except SessionBusyError as exc:  # nothing written: pause, say so
                     self.console.print(
-                        f"The next trial could not be proposed: {shown(exc)}", markup=False
+                        f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
+                        markup=False,
                     )
                     raise _QuitError from None
                 except SessionStateError:  # paused or finished elsewhere meanwhile
@@ -388,14 +394,14 @@ class Terminal:
         (the rule cannot act; the operator decides)."""
         blocked = self.session.stop_blocked()
         if blocked is not None:
-            self.console.print(f"  {shown(blocked, 2 * MAX_SHOWN)}", markup=False)
+            self.console.print(f"  {clip(blocked, MAX_MESSAGE)}", markup=False)
 
     def _say_infeasible(self, skipped: list[InfeasibleGait]) -> None:
         """Gaits made on demand that could not be made: skipped, never shown to the subject."""
         for bad in skipped:
             self.console.print(
-                f"  gait {shown(bad.gait_id)} cannot be made; skipped, with the gaits near it "
-                f"({shown(bad.reason)})",
+                f"  gait {clip(bad.gait_id)} cannot be made; skipped, with the gaits near it "
+                f"({clip(bad.reason, MAX_MESSAGE)})",
                 markup=False,
             )
 
@@ -403,7 +409,8 @@ class Terminal:
         """The gait generator failed to make a proposed gait (an error, not an infeasible gait):
         say so; the caller pauses the session, and resuming asks again."""
         self.console.print(
-            f"The next gait could not be made: {shown(exc or type(exc).__name__)}", markup=False
+            f"The next gait could not be made: {clip(exc or type(exc).__name__, MAX_MESSAGE)}",
+            markup=False,
         )
 
     def _pause(self) -> None:
@@ -420,7 +427,7 @@ class Terminal:
             return
         except SessionBusyError as exc:
             line = (
-                f"The session could not be paused ({shown(exc)}); it is left active: "
+                f"The session could not be paused ({clip(exc, MAX_MESSAGE)}); it is left active: "
                 f"continue it with {self.resume}"
             )
         else:
@@ -449,14 +456,14 @@ class Terminal:
         try:  # refused if another writer answered (or undid) since the question was asked
             pending = self.session.undo(query=answered[-1].query)
         except SessionStateError as exc:
-            self.console.print(f"  cannot undo: {shown(exc, 2 * MAX_SHOWN)}", markup=False)
+            self.console.print(f"  cannot undo: {clip(exc, MAX_MESSAGE)}", markup=False)
             self._stopped_elsewhere()
             return
         except SessionBusyError as exc:  # nothing written: pause, say so
-            self.console.print(f"  not undone: {shown(exc)}", markup=False)
+            self.console.print(f"  not undone: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except NoSafeGaitError as exc:
-            self.console.print(f"No gait to propose: {shown(exc)}", markup=False)
+            self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except GaitError as exc:  # the undo is written; the query in its place could not be made
             self.console.print("Undone.", markup=False)
@@ -498,12 +505,12 @@ class Terminal:
                     s.answer(q.id, [*comparisons, *ratings], suggestions)
                 except SessionBusyError as exc:
                     self.console.print(
-                        f"  not written: {shown(exc)}; confirm it again", markup=False
+                        f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
                     )
                     continue
                 except (QueryError, FeedbackError, SessionStateError) as exc:
                     # a round another writer opened meanwhile: the loop asks its ranking next
-                    self.console.print(f"  not written: {shown(exc, 2 * MAX_SHOWN)}", markup=False)
+                    self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
                 self._written(q, reason)
@@ -533,7 +540,7 @@ class Terminal:
                 redrawn |= done
         if flagged:
             self.console.print(
-                f"flagged unsafe: trial {', '.join(map(str, flagged))} ({shown(reason)}); "
+                f"flagged unsafe: trial {', '.join(map(str, flagged))} ({clip(reason)}); "
                 + s.config.safety.flag_effect(),
                 markup=False,
             )
@@ -555,12 +562,13 @@ class Terminal:
                 return s.flag_unsafe(trial, reason)
             except SessionBusyError as exc:
                 self.console.print(
-                    f"  trial {trial} is not flagged unsafe yet: {shown(exc)}; {later}",
+                    f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",
                     markup=False,
                 )
             except SessionStateError as exc:  # finished elsewhere, or withdrawn meanwhile
                 self.console.print(
-                    f"  trial {trial} was not flagged unsafe: {shown(exc)}; {later}", markup=False
+                    f"  trial {trial} was not flagged unsafe: {clip(exc, MAX_MESSAGE)}; {later}",
+                    markup=False,
                 )
                 return None
             try:
@@ -771,6 +779,14 @@ class Terminal:
             try:  # refused if the round was drawn again since its gaits were shown
                 result = s.answer_validation(plan.round, given, shown=shown)
                 break
+            except SessionBusyError as exc:  # nothing written: the ranking is asked again
+                if ranking is not None:
+                    raise
+                self.console.print(
+                    f"  the ranking was not recorded: {clip(exc, MAX_MESSAGE)}; type it again",
+                    markup=False,
+                )
+                continue
             except SessionStateError as exc:
                 if ranking is not None:
                     raise

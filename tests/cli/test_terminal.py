@@ -567,3 +567,15 @@ def test_the_printed_resume_and_flag_commands_quote_what_the_user_gave() -> None
     reason = "it's $(odd)"
     words = shlex.split(_flag_hint(3, db)(7, reason))
     assert words == ["gaitpref", "session", "unsafe", "3", "7", "--reason", reason, "--db", db]
+
+
+def test_a_ranking_refused_as_busy_is_asked_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The ranking's write met a session held by another writer: a 'session busy' error ended
+    the round's prompt."""
+    session = _answered(3)
+    monkeypatch.setattr(session, "answer_validation", _busy(1, session.answer_validation))
+    terminal, console = _terminal(session, "ABC", "y", "BAC", "y")
+    terminal.validate()
+    text = console.export_text()
+    assert "the ranking was not recorded: session 1 is busy" in text
+    assert ["".join(v.ranking) for v in session.validations()] == ["BAC"]
