@@ -25,6 +25,12 @@ the generator fails to make (gaits on demand; after an undo too) is said and the
 paused.  A signal (or a closed output) that comes while an answer is being written lets the
 write finish first.  Nothing is written before the operator confirms (answers, undo and a
 validation ranking alike), and the answer is committed before the next trial is shown.
+A session another writer pauses or finishes while the runner waits at a prompt stops the
+runner, said so, nothing more written; an undo whose 'last answer' is no longer the last one
+is refused; a write refused as busy (another writer holds the session) is asked again (the
+answer, an unsafe flag) or pauses the session (the next trial, an undo).  Lines are at most
+:data:`MAX_LINE` characters, and what is echoed back is printed without markup and cut
+(:func:`clip`).
 Gaits are named by their gait library id, or ``G<action>`` (as in the console) without a
 library.  The loop only calls the public :class:`~gaitpref.sessions.session.Session` API.
 """
@@ -33,6 +39,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import shlex
 import signal
 import sys
 from collections.abc import Callable, Iterator, Sequence
@@ -52,9 +59,60 @@ from gaitpref.sessions.records import (
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import LABELS, ValidationPlan, check_ranking
 from gaitpref.space import Feature
+from gaitpref.storage import SessionBusyError
 
 Reader = Callable[[str], str]
 _MOVES = ("+big", "+small", "-small", "-big")
+
+#: the longest line of input taken (characters): a longer one is refused and asked again
+MAX_LINE = 65_536
+#: the most characters of a text echoed back (what was typed, a gait id, a reason) that are shown
+MAX_SHOWN = 200
+#: and of an error's message (gaitpref's own say what happened and what to do: kept whole; one
+#: that quotes a generator's error at length is cut)
+MAX_MESSAGE = 4000
+
+
+def clip(text: object, limit: int = MAX_SHOWN) -> str:
+    """``text`` as echoed back: cut to ``limit`` characters, saying how long it was (printed
+    with markup off, as every line here: a ``[bold]`` in it is shown as typed)."""
+    out = str(text)
+    if len(out) <= limit:
+        return out
+    return f"{out[:limit]}... ({len(out)} characters)"
+
+
+def _bounded_input(prompt: str) -> str:
+    """``input()`` for a stdin that is not a terminal (a pipe, a file): a line is read
+    :data:`MAX_LINE` characters at a time, and the rest of a longer one is read and dropped in
+    pieces, so that no line is held whole; :class:`_LongLineError` then.  (A terminal's own
+    line discipline bounds a typed line: there ``input()`` is used, line editing and all.)"""
+    stdin = sys.stdin
+    if stdin is None:
+        raise EOFError
+    sys.stdout.write(prompt)
+    sys.stdout.flush()
+    line = stdin.readline(MAX_LINE + 1)
+    if not line:
+        raise EOFError
+    if len(line) > MAX_LINE and not line.endswith("\n"):
+        while True:  # the rest of the line, dropped
+            rest = stdin.readline(MAX_LINE)
+            if not rest or rest.endswith("\n"):
+                break
+        raise _LongLineError
+    return line.removesuffix("\n")
+
+
+def _is_terminal(stream: object) -> bool:
+    try:
+        return bool(stream.isatty())  # type: ignore[attr-defined]
+    except (AttributeError, OSError, ValueError):  # no such method, or closed
+        return False
+
+
+class _LongLineError(Exception):
+    """A line longer than :data:`MAX_LINE` characters was read."""
 
 
 class _QuitError(Exception):
@@ -63,6 +121,10 @@ class _QuitError(Exception):
 
 class _UndoError(Exception):
     """The operator pressed u."""
+
+
+class _ElsewhereError(Exception):
+    """Another writer (the console, a second terminal) paused or finished the session."""
 
 
 #: the signals that pause the session: Ctrl-C and a closed terminal
@@ -89,6 +151,7 @@ class Terminal:
         read: Reader = input,
         resume: str | None = None,
         record_with: Callable[[Sequence[str]], str] | None = None,
+        flag_with: Callable[[int, str], str] | None = None,
     ):
         self.session = session
         self.console = console or Console(highlight=False, soft_wrap=True, markup=False)
@@ -97,6 +160,14 @@ class Terminal:
         #: the command that records a round's ranking later, given the gait names it showed
         #: (``gaitpref session validate ID --gaits ...``): printed with each round shown
         self.record_with = record_with
+        #: the command that flags a trial unsafe later, given its number and the reason: printed
+        #: when the runner could not write a flag the operator asked for
+        self.flag_with = flag_with or (
+            lambda trial, reason: (
+                f"gaitpref session unsafe {session.id} {trial} --reason {shlex.quote(reason)}"
+            )
+        )
+        self._running = False  # in run(): each line read checks that the session is still active
         self.shown_gaits: list[str] | None = None  # the names of the round shown last
         self._reading = False  # a pause signal now interrupts the read at once
         self._signalled = False  # a pause signal came while writing: pause at the next read
@@ -157,25 +228,55 @@ class Terminal:
         """One line of input; a pause signal or the end of input quits (the session pauses).
 
         A line that is not valid text (bytes the terminal's encoding cannot decode, where its
-        errors are strict) is said so and read again."""
+        errors are strict) or longer than :data:`MAX_LINE` characters is said so and read
+        again.  In :meth:`run`, a session another writer paused or finished while the line was
+        being typed stops the runner (:class:`_ElsewhereError`)."""
         while True:
-            if self._signalled or (self._read is input and sys.stdin is None):
-                raise _QuitError  # a signal came, or no input at all (started with stdin closed)
-            self._reading = True
-            try:
-                return self._read("> ")
-            except (EOFError, KeyboardInterrupt):
-                raise _QuitError from None
-            except BrokenPipeError:  # input() could not write its prompt: the output is closed
-                self._on_output_closed()
-                raise _QuitError from None
-            except UnicodeDecodeError:
-                pass
-            finally:
-                self._reading = False
+            line = self._read_line()
+            if line is None:
+                continue
+            if self._running:
+                self._check_active()
+            return line
+
+    def _check_active(self) -> None:
+        """Raise :class:`_ElsewhereError` when another writer paused or finished the session
+        (a busy session is left to the write that follows, which says so)."""
+        with contextlib.suppress(SessionBusyError):
+            self.session.sync()
+        if self.session.status != "active":
+            raise _ElsewhereError
+
+    def _read_line(self) -> str | None:
+        """A line, or None when it was refused (and said so)."""
+        if self._signalled or (self._read is input and sys.stdin is None):
+            raise _QuitError  # a signal came, or no input at all (started with stdin closed)
+        reader = self._read
+        if reader is input and not _is_terminal(sys.stdin):
+            reader = _bounded_input
+        self._reading = True
+        try:
+            line = reader("> ")
+        except (EOFError, KeyboardInterrupt):
+            raise _QuitError from None
+        except BrokenPipeError:  # input() could not write its prompt: the output is closed
+            self._on_output_closed()
+            raise _QuitError from None
+        except _LongLineError:
+            line = None
+        except UnicodeDecodeError:
             self.console.print(
                 "  that line held bytes that are not text; type it again", markup=False
             )
+            return None
+        finally:
+            self._reading = False
+        if line is None or len(line) > MAX_LINE:
+            self.console.print(
+                f"  that line is longer than {MAX_LINE} characters; type it again", markup=False
+            )
+            return None
+        return line
 
     def ask(self, prompt: str, allowed: dict[str, str], default: str | None = None) -> str:
         """Ask until one of ``allowed`` keys (or u/q) is given; returns the key."""
@@ -189,7 +290,9 @@ class Terminal:
                 raise _UndoError
             if key in allowed:
                 return key
-            self.console.print(f"  '{raw}' is not one of: {', '.join(allowed)}, u, q", markup=False)
+            self.console.print(
+                f"  '{clip(raw)}' is not one of: {', '.join(allowed)}, u, q", markup=False
+            )
 
     # -- the loop ------------------------------------------------------------------------------
     def run(self) -> None:
@@ -199,60 +302,106 @@ class Terminal:
         if s.status == "paused":
             s.resume()
         with self.pause_on_signals():
-            self.console.print(
-                f"Session {s.id}, subject {s.subject}, {s.config.name}: "
-                f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and "
-                "quit.",
-                markup=False,
-            )
-            self._say_stop_blocked()
+            self._running = True
             try:
-                while True:
-                    if s.validation_plan is not None:
-                        try:
-                            self.validate()
-                        except SessionStateError as exc:  # the round is gone: go on
-                            self.console.print(f"  {exc}", markup=False)
-                            continue
+                self._loop()
+            finally:
+                self._running = False
+
+    def _loop(self) -> None:
+        s = self.session
+        self.console.print(
+            f"Session {s.id}, subject {s.subject}, {clip(s.config.name)}: "
+            f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and "
+            "quit.",
+            markup=False,
+        )
+        self._say_stop_blocked()
+        try:
+            while True:
+                if s.validation_plan is not None:
+                    try:
+                        self.validate()
+                    except SessionStateError as exc:  # the round is gone: go on
+                        self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
+                        self._stopped_elsewhere()
+                        continue
+                    except SessionBusyError as exc:  # the round could not be opened: pause
                         self.console.print(
-                            "The validation round is recorded.  The session is paused: resuming "
-                            "it goes on with more trials; 'gaitpref session finish "
-                            f"{s.id}' ends it.",
+                            f"The validation round could not be opened: {clip(exc, MAX_MESSAGE)}",
                             markup=False,
                         )
-                        raise _QuitError
-                    skipped = len(s.infeasible_gaits())
-                    try:
-                        query = s.next_query()
-                        self._say_infeasible(s.infeasible_gaits()[skipped:])
-                    except NoSafeGaitError as exc:  # an ask that stopped logged its skipped gaits
-                        self._say_infeasible(s.infeasible_gaits()[skipped:])
-                        self.console.print(f"No gait to propose: {exc}", markup=False)
                         raise _QuitError from None
-                    except GaitError as exc:  # the generator failed: nothing written, pause
-                        self._say_infeasible(s.infeasible_gaits()[skipped:])
-                        self._say_no_gait(exc)
-                        raise _QuitError from None
-                    try:
-                        self._one(query)
-                    except _UndoError:
-                        self._undo()
-            except _QuitError:
-                self._pause()
+                    self.console.print(
+                        "The validation round is recorded.  The session is paused: resuming "
+                        "it goes on with more trials; 'gaitpref session finish "
+                        f"{s.id}' ends it.",
+                        markup=False,
+                    )
+                    raise _QuitError
+                skipped = len(s.infeasible_gaits())
+                try:
+                    query = s.next_query()
+                    self._say_infeasible(s.infeasible_gaits()[skipped:])
+                except NoSafeGaitError as exc:  # an ask that stopped logged its skipped gaits
+                    self._say_infeasible(s.infeasible_gaits()[skipped:])
+                    self.console.print(
+                        f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False
+                    )
+                    raise _QuitError from None
+                except SessionBusyError as exc:  # nothing written: pause, say so
+                    self.console.print(
+                        f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
+                        markup=False,
+                    )
+                    raise _QuitError from None
+                except SessionStateError:  # paused or finished elsewhere meanwhile
+                    self._stopped_elsewhere()
+                    raise
+                except GaitError as exc:  # the generator failed: nothing written, pause
+                    self._say_infeasible(s.infeasible_gaits()[skipped:])
+                    self._say_no_gait(exc)
+                    raise _QuitError from None
+                try:
+                    self._one(query)
+                except _UndoError:
+                    self._undo()
+        except _QuitError:
+            self._pause()
+        except _ElsewhereError:
+            self._say_elsewhere()
+
+    def _stopped_elsewhere(self) -> None:
+        """Raise :class:`_ElsewhereError` if the session is no longer active (as this object
+        last caught up with it: after a refused operation, it has)."""
+        if self.session.status != "active":
+            raise _ElsewhereError
+
+    def _say_elsewhere(self) -> None:
+        """Another writer paused or finished the session: say so, and write nothing more."""
+        status = self.session.status
+        line = (
+            f"The session was {status} by another writer (the console, another terminal) "
+            "meanwhile; the runner stops and writes nothing more"
+        )
+        if status == "paused":
+            line += f".  Resume with: {self.resume}"
+        with contextlib.suppress(OSError):
+            self.console.print(line, markup=False)
 
     def _say_stop_blocked(self) -> None:
         """The ``[stop]`` rule says stop but no blind validation round can be drawn: say why
         (the rule cannot act; the operator decides)."""
         blocked = self.session.stop_blocked()
         if blocked is not None:
-            self.console.print(f"  {blocked}", markup=False)
+            self.console.print(f"  {clip(blocked, MAX_MESSAGE)}", markup=False)
 
     def _say_infeasible(self, skipped: list[InfeasibleGait]) -> None:
         """Gaits made on demand that could not be made: skipped, never shown to the subject."""
         for bad in skipped:
             self.console.print(
-                f"  gait {bad.gait_id} cannot be made; skipped, with the gaits near it "
-                f"({bad.reason})",
+                f"  gait {clip(bad.gait_id)} cannot be made; skipped, with the gaits near it "
+                f"({clip(bad.reason, MAX_MESSAGE)})",
                 markup=False,
             )
 
@@ -260,14 +409,29 @@ class Terminal:
         """The gait generator failed to make a proposed gait (an error, not an infeasible gait):
         say so; the caller pauses the session, and resuming asks again."""
         self.console.print(
-            f"The next gait could not be made: {exc or type(exc).__name__}", markup=False
+            f"The next gait could not be made: {clip(exc or type(exc).__name__, MAX_MESSAGE)}",
+            markup=False,
         )
 
     def _pause(self) -> None:
         """Pause the session, then say how to resume (the terminal may be gone: ignore that;
-        with the output closed, it is said on stderr)."""
-        self.session.pause()
-        line = f"Paused.  Resume with: {self.resume}"
+        with the output closed, it is said on stderr).  A session another writer paused or
+        finished meanwhile is said so; one held by another writer past the wait is left active,
+        and said so."""
+        try:
+            self.session.pause()
+        except SessionStateError:
+            if self.session.status == "active":
+                raise
+            self._say_elsewhere()
+            return
+        except SessionBusyError as exc:
+            line = (
+                f"The session could not be paused ({clip(exc, MAX_MESSAGE)}); it is left active: "
+                f"continue it with {self.resume}"
+            )
+        else:
+            line = f"Paused.  Resume with: {self.resume}"
         with contextlib.suppress(OSError):
             if self._output_closed:
                 print(f"output closed; {line}", file=sys.stderr)
@@ -277,6 +441,9 @@ class Terminal:
     def _undo(self) -> None:
         answered = self.session.trials()
         last = f" (trial {answered[-1].number})" if answered else ""
+        if not answered:
+            self.console.print("  cannot undo: no answer is in force", markup=False)
+            return
         while True:
             try:
                 key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
@@ -286,13 +453,17 @@ class Terminal:
         if key == "n":
             self.console.print("  not undone", markup=False)
             return
-        try:
-            pending = self.session.undo()
+        try:  # refused if another writer answered (or undid) since the question was asked
+            pending = self.session.undo(query=answered[-1].query)
         except SessionStateError as exc:
-            self.console.print(f"  cannot undo: {exc}", markup=False)
+            self.console.print(f"  cannot undo: {clip(exc, MAX_MESSAGE)}", markup=False)
+            self._stopped_elsewhere()
             return
+        except SessionBusyError as exc:  # nothing written: pause, say so
+            self.console.print(f"  not undone: {clip(exc, MAX_MESSAGE)}", markup=False)
+            raise _QuitError from None
         except NoSafeGaitError as exc:
-            self.console.print(f"No gait to propose: {exc}", markup=False)
+            self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except GaitError as exc:  # the undo is written; the query in its place could not be made
             self.console.print("Undone.", markup=False)
@@ -321,19 +492,36 @@ class Terminal:
             summary = "; ".join(said + rated + words) or "no comparison, no suggestion"
             flag = "x write and flag " + ("trial " if len(q.trials) == 1 else "trials ")
             flag += ", ".join(map(str, q.trials)) + " unsafe"
-            key = self.ask(
-                f"Write: {summary}.  y yes, n re-enter, {flag}", {"y": "", "n": "", "x": ""}, "y"
-            )
-            if key == "n":
-                continue
-            reason = self._reason() if key == "x" else ""
-            try:
-                s.answer(q.id, [*comparisons, *ratings], suggestions)
-            except (QueryError, FeedbackError, SessionStateError) as exc:
-                # a round another writer opened meanwhile: the loop asks its ranking next
-                self.console.print(f"  not written: {exc}", markup=False)
+            while True:  # asked again while another writer holds the session (nothing written)
+                key = self.ask(
+                    f"Write: {summary}.  y yes, n re-enter, {flag}",
+                    {"y": "", "n": "", "x": ""},
+                    "y",
+                )
+                if key == "n":
+                    break
+                reason = self._reason() if key == "x" else ""
+                try:
+                    s.answer(q.id, [*comparisons, *ratings], suggestions)
+                except SessionBusyError as exc:
+                    self.console.print(
+                        f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
+                    )
+                    continue
+                except (QueryError, FeedbackError, SessionStateError) as exc:
+                    # a round another writer opened meanwhile: the loop asks its ranking next
+                    self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
+                    self._stopped_elsewhere()
+                    return
+                self._written(q, reason)
                 return
-            self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+
+    def _written(self, q: SessionQuery, reason: str) -> None:
+        """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
+        flag asked with it (``reason``)."""
+        s = self.session
+        self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+        with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
             mean = s.posterior().mean
             if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
@@ -341,22 +529,56 @@ class Terminal:
                     line = sure.sentence(gait_name(s, sure.recommended))
                     self.console.print(f"  {line}", markup=False)
             self._say_stop_blocked()
-            if reason:
-                redrawn = False
-                for t in dict.fromkeys(q.trials):
-                    redrawn |= s.flag_unsafe(t, reason)
+        if not reason:
+            return
+        redrawn = False
+        flagged: list[int] = []
+        for t in dict.fromkeys(q.trials):
+            done = self._flag(t, reason)
+            if done is not None:
+                flagged.append(t)
+                redrawn |= done
+        if flagged:
+            self.console.print(
+                f"flagged unsafe: trial {', '.join(map(str, flagged))} ({clip(reason)}); "
+                + s.config.safety.flag_effect(),
+                markup=False,
+            )
+        if redrawn:
+            self.console.print(
+                "  the blind validation round showed a gait near the flag: it is drawn "
+                "again among the gaits still allowed",
+                markup=False,
+            )
+
+    def _flag(self, trial: int, reason: str) -> bool | None:
+        """Flag ``trial`` unsafe: what :meth:`Session.flag_unsafe` returns, or None when it could
+        not be written (said so, with the command that writes it later).  Refused as busy (another
+        writer holds the session), the operator is asked whether to try again."""
+        s = self.session
+        later = f"flag it later with: {self.flag_with(trial, reason)}"
+        while True:
+            try:
+                return s.flag_unsafe(trial, reason)
+            except SessionBusyError as exc:
                 self.console.print(
-                    f"flagged unsafe: trial {', '.join(map(str, q.trials))} ({reason}); "
-                    + s.config.safety.flag_effect(),
+                    f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",
                     markup=False,
                 )
-                if redrawn:
-                    self.console.print(
-                        "  the blind validation round showed a gait near the flag: it is drawn "
-                        "again among the gaits still allowed",
-                        markup=False,
-                    )
-            return
+            except SessionStateError as exc:  # finished elsewhere, or withdrawn meanwhile
+                self.console.print(
+                    f"  trial {trial} was not flagged unsafe: {clip(exc, MAX_MESSAGE)}; {later}",
+                    markup=False,
+                )
+                return None
+            try:
+                key = self.ask(f"Flag trial {trial} unsafe again?  y yes, n no", {"y": "", "n": ""})
+            except _UndoError:  # the flag is being asked: no undo before it is settled
+                self.console.print("  the flag is being asked: y yes, n no", markup=False)
+                continue
+            if key == "n":
+                self.console.print(f"  trial {trial} not flagged; {later}", markup=False)
+                return None
 
     def _reason(self) -> str:
         """Why the trial is unsafe (asked until given; ``q`` pauses and ``u`` undoes, as at
@@ -557,6 +779,14 @@ class Terminal:
             try:  # refused if the round was drawn again since its gaits were shown
                 result = s.answer_validation(plan.round, given, shown=shown)
                 break
+            except SessionBusyError as exc:  # nothing written: the ranking is asked again
+                if ranking is not None:
+                    raise
+                self.console.print(
+                    f"  the ranking was not recorded: {clip(exc, MAX_MESSAGE)}; type it again",
+                    markup=False,
+                )
+                continue
             except SessionStateError as exc:
                 if ranking is not None:
                     raise
@@ -586,9 +816,11 @@ def run_terminal(
     console: Console | None = None,
     read: Reader = input,
     resume: str | None = None,
+    flag_with: Callable[[int, str], str] | None = None,
 ) -> None:
-    """The interactive loop of ``gaitpref session run``; ``resume`` is the command it prints."""
-    Terminal(session, console, read, resume).run()
+    """The interactive loop of ``gaitpref session run``; ``resume`` is the command it prints,
+    ``flag_with`` the one that flags a trial unsafe later (given its number and the reason)."""
+    Terminal(session, console, read, resume, flag_with=flag_with).run()
 
 
 def run_validation(

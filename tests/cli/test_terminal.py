@@ -6,6 +6,7 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 
 import pytest
@@ -334,3 +335,247 @@ def test_the_terminal_says_why_the_stop_rule_cannot_open_validation() -> None:
     assert "open blind validation: the posterior mean is flat" in text
     assert "Finish the" in text and "go on with trials" in text
     assert session.validation_plan is None and session.status == "paused"
+
+
+def _with_second_writer() -> tuple[Session, Session]:
+    storage = MemoryStorage()
+    session = Session.create(storage, CONFIG, "S01", seed=1)
+    return session, Session.open(storage, session.id)
+
+
+@pytest.mark.parametrize("how", ["pause", "finish"])
+def test_a_session_paused_or_finished_elsewhere_at_a_prompt_stops_the_runner(how: str) -> None:
+    """The console (or a second terminal) paused or finished the session while the operator
+    typed: the runner said 'not written', then ended with a SessionStateError traceback."""
+    session, other = _with_second_writer()
+
+    def meanwhile() -> str:
+        getattr(other, how)()
+        return "0"
+
+    terminal, console = _terminal(session, meanwhile, "y", "q")
+    terminal.run()  # no error
+    text = console.export_text()
+    done = "paused" if how == "pause" else "finished"
+    assert f"The session was {done} by another writer" in text
+    assert ("Resume with: gaitpref session run 1" in text) == (how == "pause")
+    assert "saved" not in text and "Paused." not in text
+    assert session.trials() == [] and Session.open(session.storage, 1).status == done
+
+
+def test_the_undo_refuses_when_another_writer_answered_since_it_was_asked() -> None:
+    """The runner asked 'Undo the last answer (trial 1)?', another writer answered trial 2
+    meanwhile, and y undid trial 2's answer: someone else's."""
+    session, other = _with_second_writer()
+    q = session.next_query()
+    session.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+
+    def other_answers() -> str:
+        q = other.next_query()
+        other.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+        return "y"
+
+    terminal, console = _terminal(session, "u", other_answers)
+    terminal.run()
+    text = console.export_text()
+    assert "Undo the last answer (trial 1)?" in text
+    assert re.search(
+        r"cannot undo: the answer to query \d+ \(trial 1\) is no longer the last", text
+    )
+    assert [(t.number, t.undone) for t in session.trials(include_undone=True)] == [
+        (1, False),
+        (2, False),
+    ]
+
+
+def test_session_undo_with_a_query_that_is_not_the_last_answer_writes_nothing() -> None:
+    from gaitpref.errors import SessionStateError
+
+    session = _answered(2)
+    seq = session.last_seq
+    first = session.trials()[0].query
+    with pytest.raises(SessionStateError, match=r"query \d+ \(trial 1\) is no longer the last"):
+        session.undo(query=first)
+    assert session.last_seq == seq
+    session.undo(query=session.trials()[-1].query)
+    assert len(session.trials()) == 1
+
+
+def test_echoed_text_is_shown_as_typed_and_cut() -> None:
+    """What the operator typed is echoed back with markup off (a console made with markup on
+    too) and cut to a bounded length: a pasted 60,000 character line filled the screen."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    console = Console(record=True, width=200, highlight=False, markup=True, soft_wrap=True)
+    keys = iter(["[bold]x[/]", "7" * 60_000, "0", "y"])
+
+    def read(prompt: str) -> str:
+        try:
+            return next(keys)
+        except StopIteration:
+            raise EOFError from None
+
+    Terminal(session, console, read).run()
+    text = console.export_text()
+    assert "'[bold]x[/]' is not one of" in text
+    assert f"'{'7' * 200}... (60000 characters)' is not one of" in text
+    assert len(session.trials()) == 1
+
+
+def test_a_line_over_the_limit_is_refused_naming_it_and_asked_again() -> None:
+    from gaitpref.terminal import MAX_LINE
+
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    terminal, console = _terminal(session, "0" * (MAX_LINE + 1), "0", "y")
+    terminal.run()
+    assert f"that line is longer than {MAX_LINE} characters; type it again" in (
+        console.export_text()
+    )
+    assert len(session.trials()) == 1
+
+
+def test_piped_input_is_read_in_bounded_pieces(monkeypatch: pytest.MonkeyPatch) -> None:
+    """stdin not a terminal (``... | gaitpref session run``): a line without end was read
+    whole by input(); it is read and dropped in pieces, then the next line is taken."""
+    import io
+    import sys
+
+    from gaitpref.terminal import MAX_LINE
+
+    class Pipe:
+        """A stdin that is not a terminal, remembering the longest piece it handed out."""
+
+        longest = 0
+
+        def __init__(self, text: str) -> None:
+            self.text = io.StringIO(text)
+
+        def isatty(self) -> bool:
+            return False
+
+        def readline(self, size: int = -1) -> str:
+            line = self.text.readline(size)
+            Pipe.longest = max(Pipe.longest, len(line))
+            return line
+
+    pipe = Pipe("5" * (3 * MAX_LINE + 7) + "\n0\ny\n")
+    monkeypatch.setattr(sys, "stdin", pipe)
+    monkeypatch.setattr(sys, "stdout", io.StringIO())
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    console = Console(record=True, width=200, highlight=False)
+    Terminal(session, console).run()
+    assert f"that line is longer than {MAX_LINE} characters" in console.export_text()
+    assert Pipe.longest <= MAX_LINE + 1
+    assert len(session.trials()) == 1 and session.status == "paused"
+
+
+def _busy(times: int, method: Callable[..., object]) -> Callable[..., object]:
+    from gaitpref.storage import SessionBusyError
+
+    left = [times]
+
+    def wrapped(*args: object, **kwargs: object) -> object:
+        if left[0]:
+            left[0] -= 1
+            raise SessionBusyError("session 1 is busy: another writer held it too long")
+        return method(*args, **kwargs)
+
+    return wrapped
+
+
+def test_a_busy_session_at_the_confirmation_asks_it_again(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Another writer held the session past the wait when y was pressed: the runner ended with
+    'session busy', the session left active."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    monkeypatch.setattr(session, "answer", _busy(1, session.answer))
+    terminal, console = _terminal(session, "0", "y", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "not written: session 1 is busy" in text and "confirm it again" in text
+    assert len(session.trials()) == 1 and session.status == "paused"
+
+
+def test_a_busy_session_at_the_next_trial_or_undo_pauses_with_a_message(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    monkeypatch.setattr(session, "next_query", _busy(1, session.next_query))
+    terminal, console = _terminal(session)
+    terminal.run()
+    assert "The next trial could not be proposed: session 1 is busy" in console.export_text()
+    assert session.status == "paused"
+
+    session = _answered(1)
+    monkeypatch.setattr(session, "undo", _busy(1, session.undo))
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    assert "not undone: session 1 is busy" in console.export_text()
+    assert session.status == "paused" and len(session.trials()) == 1
+
+
+def test_a_busy_session_at_the_pause_says_it_is_left_active(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    monkeypatch.setattr(session, "pause", _busy(1, session.pause))
+    terminal, console = _terminal(session, "q")
+    terminal.run()
+    assert "could not be paused (session 1 is busy" in console.export_text()
+    assert session.status == "active"
+
+
+def test_an_unsafe_flag_refused_as_busy_is_asked_again_and_its_command_quoted(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The answer was written, then the flag was refused as busy: the runner ended, the flag
+    lost.  It is asked again; declined, the command that writes it is printed, the reason
+    shell-quoted."""
+    import shlex
+
+    from gaitpref.config import parse_config
+
+    reason = "knee 'buckled'; $(rm -rf ~)"
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    monkeypatch.setattr(session, "flag_unsafe", _busy(1, session.flag_unsafe))
+    terminal, console = _terminal(session, "", "0", "x", reason, "y")
+    terminal.run()
+    text = console.export_text()
+    assert "trial 1 is not flagged unsafe yet: session 1 is busy" in text
+    assert f"gaitpref session unsafe 1 1 --reason {shlex.quote(reason)}" in text
+    assert session.unsafe_flags() == {1: (session.trials()[0].action, reason)}
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    monkeypatch.setattr(session, "flag_unsafe", _busy(1, session.flag_unsafe))
+    terminal, console = _terminal(session, "", "0", "x", reason, "n")
+    terminal.run()
+    assert "trial 1 not flagged; flag it later with: gaitpref session unsafe 1 1 --reason " in (
+        console.export_text()
+    )
+    assert session.unsafe_flags() == {} and len(session.trials()) == 1
+
+
+def test_the_printed_resume_and_flag_commands_quote_what_the_user_gave() -> None:
+    """``--db`` was pasted into the resume hint as given: a path with a space (or a ';') made
+    a command that does something else when copied."""
+    import shlex
+
+    from gaitpref.cli.session import _flag_hint, _resume_hint
+
+    db = "sqlite:///my lab;rm x.db"
+    assert shlex.split(_resume_hint(3, db)) == ["gaitpref", "session", "run", "3", "--db", db]
+    reason = "it's $(odd)"
+    words = shlex.split(_flag_hint(3, db)(7, reason))
+    assert words == ["gaitpref", "session", "unsafe", "3", "7", "--reason", reason, "--db", db]
+
+
+def test_a_ranking_refused_as_busy_is_asked_again(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The ranking's write met a session held by another writer: a 'session busy' error ended
+    the round's prompt."""
+    session = _answered(3)
+    monkeypatch.setattr(session, "answer_validation", _busy(1, session.answer_validation))
+    terminal, console = _terminal(session, "ABC", "y", "BAC", "y")
+    terminal.validate()
+    text = console.export_text()
+    assert "the ranking was not recorded: session 1 is busy" in text
+    assert ["".join(v.ranking) for v in session.validations()] == ["BAC"]

@@ -55,3 +55,25 @@ def test_a_document_with_fields_of_its_own_is_kept_beside_the_file_fields(tmp_pa
     entry, document = read_entry(tmp_path / f"{key}.json", key)
     assert entry.key == key and entry.gait.step_length == 0.12 and not entry.gait.feasible
     assert document == g.document(vector)
+
+
+def test_an_entry_over_the_size_limit_is_not_read_whole_and_is_not_used(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A cache file of any size was read whole (one gait is a few kB)."""
+    from gaitpref.errors import GaitLibraryError
+    from gaitpref.gaits import gait_cache
+
+    g = make_generator("compass-hzd", ["step_length"], {"speed": 0.2})
+    vector = np.array([0.12])
+    key = g.key(vector)
+    GaitCache(tmp_path).put(CachedGait(key, _gait(), None), g.document(vector))
+    path = tmp_path / f"{key}.json"
+    size = path.stat().st_size
+    assert gait_cache.MAX_ENTRY_BYTES == 16 * 2**20
+    monkeypatch.setattr(gait_cache, "MAX_ENTRY_BYTES", size - 1)
+    with pytest.raises(GaitLibraryError, match=rf"{key}\.json: larger than the {size - 1:,} bytes"):
+        read_entry(path, key)
+    assert GaitCache(tmp_path).get(key) is None  # refused: made again, not loaded
+    monkeypatch.setattr(gait_cache, "MAX_ENTRY_BYTES", size)
+    assert GaitCache(tmp_path).get(key) is not None

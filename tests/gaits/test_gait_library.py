@@ -269,3 +269,57 @@ def test_gaits_are_read_only(duration_library: GaitLibrary) -> None:
     gait = duration_library.gait(0)
     with pytest.raises(ValueError, match="read-only"):
         gait.alpha[0, 0] = 1.0
+
+
+def test_a_library_file_over_the_size_limit_is_refused_by_name(
+    duration_library: GaitLibrary, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A library file was read whole whatever its size; the bound lives with the format now
+    (the export's import and the console take it from there)."""
+    from gaitpref.gaits import library_io
+    from gaitpref.sessions import export
+
+    assert export.MAX_LIBRARY_BYTES == library_io.MAX_LIBRARY_BYTES == 256 * 2**20
+    path = tmp_path / "lib.json"
+    duration_library.save(path)
+    size = path.stat().st_size
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", size - 1)
+    with pytest.raises(GaitLibraryError, match=rf"lib\.json: larger than the {size - 1:,} bytes"):
+        load_library(path)
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", size)
+    assert len(load_library(path)) == len(duration_library)
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "message"),
+    [
+        (
+            "model",
+            [1.0, 2.0, 3.0],
+            r"model\.parameters: expected an object of numbers by name, "
+            "got list",
+        ),
+        ("model", "hip_mass", r"model\.parameters: expected an object .* got str"),
+        ("model_item", "heavy", r"model\.parameters: model parameter leg_mass must be a number"),
+        ("formulation", [5], r"formulation\.degree: missing"),
+        ("status", True, r"gaits\[0\]: feasible must be a boolean, solver_status an integer"),
+    ],
+)
+def test_fields_of_the_wrong_type_are_refused_naming_the_field(
+    duration_library: GaitLibrary, tmp_path: Path, where: str, value: Any, message: str
+) -> None:
+    """A list or a text as the model's parameters was read as the names of its items
+    ('missing [...], unexpected ['h', 'i', ...]'); a formulation that is not an object named
+    the file twice; a boolean solver status was taken as 1."""
+    data = _document(duration_library, tmp_path)
+    if where == "model":
+        data["model"]["parameters"] = value
+    elif where == "model_item":
+        data["model"]["parameters"]["leg_mass"] = value
+    elif where == "formulation":
+        data["formulation"] = value
+    else:
+        data["gaits"][0]["solver_status"] = value
+    with pytest.raises(GaitLibraryError, match=message) as err:
+        load_library(_write(tmp_path, data))
+    assert str(err.value).count("edited.json") == 1

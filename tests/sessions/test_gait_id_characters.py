@@ -87,3 +87,42 @@ def test_session_new_names_a_gait_id_file_it_cannot_read(
     assert result.exit_code == 2, result.output
     assert f"--gait-ids {str(path)!r} {message}" in " ".join(result.output.split())
     assert not db.exists()
+
+
+def test_a_gait_id_given_twice_is_refused_naming_it() -> None:
+    """Two gaits under one id were taken: answers, flags and exports named either."""
+    db = MemoryStorage()
+    with pytest.raises(ValueError, match=r"gait id 'G3' is given twice \(actions 3 and 14\)"):
+        Session.create(db, CONFIG, "S01", library=[*IDS[:14], "G3"])
+    assert Session.list_sessions(db) == []
+
+
+def test_a_gait_id_over_the_limit_is_refused_naming_its_action() -> None:
+    """A 5,000 character id was taken, and shown whole with every trial."""
+    from gaitpref.gaits.library import MAX_GAIT_ID
+
+    db = MemoryStorage()
+    Session.create(db, CONFIG, "S01", library=[*IDS[:14], "g" * MAX_GAIT_ID]).close()
+    with pytest.raises(ValueError, match=r"\(action 14\) has 201 characters: .* at most 200"):
+        Session.create(db, CONFIG, "S01", library=[*IDS[:14], "g" * (MAX_GAIT_ID + 1)])
+    assert len(Session.list_sessions(db)) == 1
+
+
+def test_session_new_refuses_a_gait_id_file_over_the_limit(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The --gait-ids file was read whole, whatever its size."""
+    from gaitpref.gaits import library_io
+
+    path = tmp_path / "ids.txt"
+    path.write_text("\n".join(IDS) + "\n", encoding="utf-8")
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", path.stat().st_size - 1)
+    db = tmp_path / "lab.db"
+    args = ["session", "new", "--config", CONFIG, "--subject", "S01", "--db", str(db)]
+    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
+    assert result.exit_code == 2, result.output
+    assert f"--gait-ids {str(path)!r} is larger than" in " ".join(result.output.split())
+    assert not db.exists()
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", path.stat().st_size)
+    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
+    assert result.exit_code == 0, result.output

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 
@@ -174,3 +175,46 @@ def test_building_a_small_library_gives_what_reading_it_back_gives(tmp_path: Pat
     for a, b in zip(built, back, strict=True):
         np.testing.assert_array_equal(a, b)
     assert built[2].all() and built[1][1] < min(built[1][0], built[1][2])  # U-shaped COT
+
+
+def test_a_cot_curve_file_over_the_size_limit_is_refused_before_it_is_read(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A .csv or .npz COT curve of any size was read whole."""
+    from gaitpref.simulate import hzd
+
+    path = tmp_path / "curve.csv"
+    path.write_text("step_length,cot\n0.1,1\n0.2,2\n")
+    size = path.stat().st_size
+    monkeypatch.setattr(hzd, "MAX_CURVE_BYTES", size - 1)
+    with pytest.raises(ValueError, match=rf"curve\.csv: holds {size} bytes, more than the"):
+        read_cot_curve(path)
+    monkeypatch.setattr(hzd, "MAX_CURVE_BYTES", size)
+    assert read_cot_curve(path)[0].tolist() == [0.1, 0.2]
+
+
+def test_an_npz_that_unpacks_past_the_limit_is_refused_unread(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A small compressed .npz ("zip bomb") was unpacked whole, and a header claiming a huge
+    shape allocated it before failing."""
+    import zipfile
+
+    from gaitpref.simulate import hzd
+
+    bomb = tmp_path / "bomb.npz"
+    np.savez_compressed(bomb, step_length=np.zeros(1_000_000), cot=np.zeros(1_000_000))
+    assert bomb.stat().st_size < 100_000
+    monkeypatch.setattr(hzd, "MAX_CURVE_BYTES", 1_000_000)
+    with pytest.raises(ValueError, match=r"bomb\.npz: its arrays unpack to 16,000,\d+ bytes"):
+        read_cot_curve(bomb)
+
+    liar = tmp_path / "liar.npz"
+    header = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        header, {"descr": "<f8", "fortran_order": False, "shape": (10**9,)}
+    )
+    with zipfile.ZipFile(liar, "w") as z:
+        z.writestr("step_length.npy", header.getvalue() + b"\0" * 8)
+    with pytest.raises(ValueError, match=r"step_length\.npy: its header claims shape"):
+        read_cot_curve(liar)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 import shlex
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
@@ -95,7 +95,17 @@ def _confirm(question: str, yes: bool) -> None:
 
 
 def _resume_hint(session_id: int, db: str | None) -> str:
-    return f"gaitpref session run {session_id}" + (f" --db {db}" if db else "")
+    return f"gaitpref session run {session_id}" + (f" --db {shlex.quote(db)}" if db else "")
+
+
+def _flag_hint(session_id: int, db: str | None) -> Callable[[int, str], str]:
+    """The command that flags a trial unsafe, given its number and the reason (shell-quoted)."""
+
+    def command(trial: int, reason: str) -> str:
+        where = f" --db {shlex.quote(db)}" if db else ""
+        return f"gaitpref session unsafe {session_id} {trial} --reason {shlex.quote(reason)}{where}"
+
+    return command
 
 
 # -- db ----------------------------------------------------------------------------------------
@@ -151,8 +161,17 @@ def new(
             if not gait_ids.is_file():
                 what = "is a folder" if gait_ids.is_dir() else "does not exist"
                 raise ValueError(f"--gait-ids {str(gait_ids)!r} {what}; give a text file")
+            from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES
+
+            with gait_ids.open("rb") as fh:  # read no further than the bound: not held whole
+                data = fh.read(MAX_LIBRARY_BYTES + 1)
+            if len(data) > MAX_LIBRARY_BYTES:
+                raise ValueError(
+                    f"--gait-ids {str(gait_ids)!r} is larger than {MAX_LIBRARY_BYTES:,} bytes; "
+                    "it was not read"
+                )
             try:  # UTF-8, whatever the locale; the error named neither the option nor the file
-                text = gait_ids.read_text(encoding="utf-8")
+                text = data.decode("utf-8")
             except UnicodeDecodeError as exc:
                 raise ValueError(
                     f"--gait-ids {str(gait_ids)!r} is not UTF-8 text (byte {exc.start}: "
@@ -180,7 +199,14 @@ def run_session(session_id: IdArgument, db: DbOption = None) -> None:
     from gaitpref.terminal import run_terminal
 
     with _opened(db, session_id) as session:
-        guard(lambda: run_terminal(session, console, resume=_resume_hint(session_id, db)))
+        guard(
+            lambda: run_terminal(
+                session,
+                console,
+                resume=_resume_hint(session_id, db),
+                flag_with=_flag_hint(session_id, db),
+            )
+        )
 
 
 @session_app.command("validate")

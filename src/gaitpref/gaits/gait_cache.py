@@ -38,10 +38,13 @@ from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.generator import content_key
 from gaitpref.gaits.library import feasible_gait_problem
-from gaitpref.gaits.library_io import Reader, gait_entry, read_gait_entry
+from gaitpref.gaits.library_io import Reader, gait_entry, read_bounded, read_gait_entry
 
 FORMAT = "gaitpref-gait"
 SCHEMA_VERSION = 1
+#: the most bytes of a cache entry read (one gait: a few kB): a larger file is not read whole
+#: but refused (:func:`read_entry`), so the cache goes without it and the gait is made again
+MAX_ENTRY_BYTES = 16 * 2**20
 #: the cache file's own fields: a gait's document (generator, settings, parameters and any field
 #: a generator of one's own adds) is written among them, so it may use none of them
 FILE_FIELDS = ("format", "schema_version", "key", "warm_start", "gait")
@@ -186,8 +189,9 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
     """The gait in the file ``path`` under ``key`` and its document (generator, settings,
     parameters); :class:`GaitLibraryError` names the file and what is wrong with it."""
     r = Reader(str(path))
+    data = read_bounded(path, MAX_ENTRY_BYTES, "cached gait")  # not read whole past it
     try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
+        doc = json.loads(data.decode("utf-8"))
     except RecursionError:
         raise r.fail("file", "cannot be read as JSON (nested too deeply)") from None
     except (OSError, ValueError) as exc:  # a JSONDecodeError, bad UTF-8, too many digits
@@ -220,6 +224,7 @@ def read_entry(path: Path, key: str) -> tuple[CachedGait, dict[str, Any]]:
 __all__ = [
     "FILE_FIELDS",
     "FORMAT",
+    "MAX_ENTRY_BYTES",
     "SCHEMA_VERSION",
     "CachedGait",
     "GaitCache",

@@ -218,10 +218,20 @@ def _compass_hzd(features: Sequence[str], settings: Mapping[str, Any]) -> GaitGe
 _GENERATORS: dict[str, GeneratorFactory] = {CompassHZD.name: _compass_hzd}
 
 
-def register_generator(name: str, factory: GeneratorFactory) -> None:
-    """Make ``factory(features, settings)`` available as ``[gaits] generator = name``."""
+def register_generator(name: str, factory: GeneratorFactory, *, replace: bool = False) -> None:
+    """Make ``factory(features, settings)`` available as ``[gaits] generator = name``.
+
+    A name already registered to another factory (``compass-hzd`` included) is refused unless
+    ``replace=True``: sessions whose config names it would make their gaits with the new one
+    (registering the same factory again is harmless)."""
     if not isinstance(name, str) or not name:
         raise GaitGeneratorError(f"a generator's name is a non-empty string, got {name!r}")
+    known = _GENERATORS.get(name)
+    if known is not None and known is not factory and not replace:
+        raise GaitGeneratorError(
+            f"a gait generator {name!r} is registered already; give replace=True to replace it "
+            "(sessions whose config names it then make their gaits with the new one)"
+        )
     _GENERATORS[name] = factory
 
 

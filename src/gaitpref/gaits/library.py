@@ -89,6 +89,11 @@ def feasible_gait_problem(gait: Gait) -> str | None:
     return None
 
 
+#: the longest gait id a session takes (a library's, a generator's): ids are shown on every
+#: trial, stored in each event that names a gait and in the session's record
+MAX_GAIT_ID = 200
+
+
 def gait_id_of(values: Mapping[str, float], speed: float | None) -> str:
     """The id of the gait with these axis values (in axis order), e.g. ``L0.130-T0.950``, or
     ``L0.130-V0.200`` at a fixed ``speed``; a library and gaits made on demand share it."""

@@ -44,6 +44,10 @@ from gaitpref.gaits.params import CompassGaitParams
 
 FORMAT = "gaitpref-gait-library"
 SCHEMA_VERSION = 1
+#: the most bytes of a gait library file read (about 1 kB a gait): a larger one is refused,
+#: naming the file, before it is read whole (the export's copy of a library and the console's
+#: upload take the same bound: ``gaitpref.sessions.export``)
+MAX_LIBRARY_BYTES = 256 * 2**20
 _NUMBERS = (
     "phase_start",
     "phase_end",
@@ -112,15 +116,30 @@ def save_library(lib: GaitLibrary, path: str | Path) -> None:
     write_text_atomic(target, text + "\n", prefix=f".{target.name}.")
 
 
-def read_json(file: Path) -> Any:
-    """The JSON document in ``file``, or :class:`GaitLibraryError` naming it: besides a file
-    that cannot be read, a syntax error or bytes that are not UTF-8, a number past Python's
-    integer digits limit (a ValueError) and arrays nested past the recursion limit (a
-    RecursionError)."""
+def read_bounded(file: Path, limit: int, what: str) -> bytes:
+    """The bytes of ``file``, read no further than ``limit`` (+1, to see it is larger): a file
+    larger than that, or one that cannot be read, is :class:`GaitLibraryError` naming it and
+    ``what`` it is."""
     try:
-        return json.loads(file.read_text(encoding="utf-8"))
+        with file.open("rb") as fh:
+            data = fh.read(limit + 1)
     except OSError as exc:
         raise GaitLibraryError(f"{file}: cannot be read ({exc.strerror or exc})") from None
+    if len(data) > limit:
+        raise GaitLibraryError(
+            f"{file}: larger than the {limit:,} bytes a {what} may hold; it was not read"
+        )
+    return data
+
+
+def read_json(file: Path) -> Any:
+    """The JSON document in ``file``, or :class:`GaitLibraryError` naming it: besides a file
+    that cannot be read or is larger than :data:`MAX_LIBRARY_BYTES`, a syntax error or bytes
+    that are not UTF-8, a number past Python's integer digits limit (a ValueError) and arrays
+    nested past the recursion limit (a RecursionError)."""
+    data = read_bounded(file, MAX_LIBRARY_BYTES, "gait library file")
+    try:
+        return json.loads(data.decode("utf-8"))
     except RecursionError:
         raise GaitLibraryError(f"{file}: not valid JSON (nested too deeply)") from None
     except (UnicodeDecodeError, ValueError) as exc:  # json.JSONDecodeError is a ValueError
@@ -176,14 +195,21 @@ def from_document(
             "schema_version", f"{version!r} is not supported (this gaitpref reads {SCHEMA_VERSION})"
         )
     model = r.get(data, "model", "")
+    raw_params = r.get(model, "parameters", "model.")
+    if not isinstance(raw_params, dict):  # a list or a text was read as its items' names
+        raise r.fail(
+            "model.parameters",
+            f"expected an object of numbers by name, got {type(raw_params).__name__}",
+        )
     try:
-        params = CompassGaitParams.from_dict(r.get(model, "parameters", "model."))
+        params = CompassGaitParams.from_dict(raw_params)
     except (ValueError, OverflowError) as exc:
         raise r.fail("model.parameters", str(exc)) from None
     formulation = r.get(data, "formulation", "")
     fields = HZDSettings.__dataclass_fields__
+    raw_settings = {k: r.get(formulation, k, "formulation.") for k in fields}
     try:
-        settings = HZDSettings(**{k: r.get(formulation, k, "formulation.") for k in fields})
+        settings = HZDSettings(**raw_settings)
     except (TypeError, ValueError, OverflowError) as exc:
         raise r.fail("formulation", str(exc)) from None
     speed_raw = r.get(data, "speed", "")
@@ -248,6 +274,7 @@ def read_gait_entry(r: Reader, entry: Any, where: str, degree: int, step_length:
     message = r.get(entry, "solver_message", where)
     if (
         not isinstance(feasible, bool)
+        or isinstance(status, bool)
         or not isinstance(status, int)
         or not isinstance(message, str)
     ):

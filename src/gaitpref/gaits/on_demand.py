@@ -37,6 +37,7 @@ Notation: ``d`` features; a parameter vector is ``(d,)`` in the features' units.
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -44,12 +45,83 @@ from typing import Any
 
 import numpy as np
 
+from gaitpref.checks import char_name, hidden_in
 from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
 from gaitpref.gaits.gait_cache import FILE_FIELDS, CachedGait, GaitCache, file_field_in
 from gaitpref.gaits.generator import GaitGenerator
 from gaitpref.gaits.json_document import document_problem
+from gaitpref.gaits.library import MAX_GAIT_ID, feasible_gait_problem
 from gaitpref.space import FloatArray
+
+#: the longest solver message a made gait may carry (it is logged, and shown when infeasible)
+MAX_GAIT_MESSAGE = 2000
+_NUMBERS = (
+    "step_duration",
+    "phase_start",
+    "phase_end",
+    "cot",
+    "delta_squared",
+    "min_normal_force",
+    "max_friction_ratio",
+)
+
+
+def _kind(value: object) -> str:
+    """``value``'s type as a message names it: ``numpy.bool``, ``int``."""
+    kind = type(value)
+    return kind.__name__ if kind.__module__ == "builtins" else f"{kind.__module__}.{kind.__name__}"
+
+
+def made_gait_problem(gait: object, step_length: float | None) -> str | None:
+    """What makes a generator's result unfit to be logged and shown, or None: not a
+    :class:`Gait`; a ``feasible`` that is not a bool, a ``status`` that is not an int, a
+    ``message`` that is not text of at most :data:`MAX_GAIT_MESSAGE` characters without
+    hidden characters; a step length that is not a finite number (a positive one, when
+    feasible) or not the one asked for (``step_length``); numbers that are not numbers,
+    coefficients or an orbit of the wrong shape; and, for a gait called feasible, anything
+    not finite, ``delta^2`` outside ``(0, 1)``, a step duration that is not positive, an empty
+    phase or a constraint residual (normal force, friction ratio) that is not a number."""
+    if not isinstance(gait, Gait):
+        return f"it returned a {_kind(gait)}, not a Gait"
+    if not isinstance(gait.feasible, bool):
+        return f"feasible is a {_kind(gait.feasible)}, not a bool"
+    if isinstance(gait.status, bool) or not isinstance(gait.status, int):
+        return f"status is a {_kind(gait.status)}, not an int"
+    if not isinstance(gait.message, str):
+        return f"message is a {_kind(gait.message)}, not text"
+    if len(gait.message) > MAX_GAIT_MESSAGE:
+        return f"message has {len(gait.message):,} characters, more than {MAX_GAIT_MESSAGE}"
+    hidden = hidden_in(gait.message)
+    if hidden:
+        return f"message holds {char_name(hidden[0][1])}"
+    length = gait.step_length
+    if isinstance(length, bool) or not isinstance(length, int | float) or not math.isfinite(length):
+        return f"step length {length!r} is not a finite number"
+    if gait.feasible and length <= 0:  # an infeasible one may be a point no gait can pose
+        return f"feasible gait with step length {length!r}, not a positive one"
+    if step_length is not None and not math.isclose(length, step_length, rel_tol=1e-9):
+        return f"step length {length!r} is not the {step_length!r} asked for"
+    for name in _NUMBERS:
+        value = getattr(gait, name)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"{name} is a {_kind(value)}, not a number"
+    if gait.alpha.ndim != 2 or gait.alpha.shape[0] != 1 or gait.alpha.shape[1] < 2:
+        return f"alpha has shape {gait.alpha.shape}, not (1, M + 1)"
+    if gait.orbit_state.shape != (4,):
+        return f"orbit_state has shape {gait.orbit_state.shape}, not (4,)"
+    if not gait.feasible:
+        return None
+    problem = feasible_gait_problem(gait)
+    if problem is not None:
+        return problem
+    if gait.step_duration <= 0 or gait.phase_end == gait.phase_start:
+        return "feasible gait with a step duration that is not positive or an empty phase"
+    if not (math.isfinite(gait.min_normal_force) and math.isfinite(gait.max_friction_ratio)):
+        return "feasible gait whose constraint residuals (normal force, friction) are not finite"
+    if gait.max_friction_ratio < 0:
+        return "feasible gait with a negative friction ratio"
+    return None
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,6 +202,7 @@ class OnDemandGaits:
         with self._faults(f"naming the gait of {_shown(vector)}"):
             vec = self.generator.check(vector)
             name = self.gait_id(vec)
+            self._check_name(name, vec)
             document = self.generator.document(vec)
             self._check_document(document, name, vec)
             key = self.generator.key(vec)
@@ -137,7 +210,7 @@ class OnDemandGaits:
         if known is not None:
             return known, False
         logged = None if recorded is None else recorded(key)
-        cached = logged if logged is not None else self.cache.get(key)
+        cached = logged if logged is not None else self._usable(self.cache.get(key), vec, name)
         if logged is not None and self.cache.get(key) is None:
             self.cache.put(logged, document)
         if cached is not None:
@@ -146,12 +219,56 @@ class OnDemandGaits:
             warm = self.nearest(vec)
             with self._faults(f"making gait {name}"):
                 gait = self.generator.make(vec, None if warm is None else warm.gait)
+            problem = made_gait_problem(gait, self._asked(vec, name))
+            if problem is not None:  # never logged, cached or shown
+                raise GaitGeneratorFaultError(
+                    f"the gait generator {self.generator.name!r} made gait {name} "
+                    f"{_shown(vec)} unfit to use: {problem}; nothing of that gait is cached "
+                    "(an error in the generator, not a gait found infeasible)"
+                )
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
             self.cache.put(CachedGait(key, gait, made.warm_start), document)
         self._by_id[name] = made
         if made.feasible:
             self._feasible.append(made)
         return made, True
+
+    def _asked(self, vec: FloatArray, name: str) -> float | None:
+        """The step length the generator's parameters ask for at ``vec`` (None: none)."""
+        with self._faults(f"describing gait {name}"):
+            asked = self.generator.parameters(vec).get("step_length")
+            return None if asked is None else float(asked)
+
+    def _usable(self, entry: CachedGait | None, vec: FloatArray, name: str) -> CachedGait | None:
+        """``entry`` unless its gait is unfit to use (:func:`made_gait_problem`: a cache file
+        edited, or written by a generator before its results were checked): then None, and the
+        gait is made again, as for an unreadable entry."""
+        if entry is None or made_gait_problem(entry.gait, self._asked(vec, name)) is not None:
+            return None
+        return entry
+
+    def _check_name(self, name: object, vec: FloatArray) -> None:
+        """A :class:`~gaitpref.errors.GaitGeneratorFaultError` when the generator's id of the
+        gait at ``vec`` is not text of 1 to :data:`~gaitpref.gaits.library.MAX_GAIT_ID`
+        characters without hidden ones (it is shown with each trial and logged)."""
+        if (
+            isinstance(name, str)
+            and 0 < len(name) <= MAX_GAIT_ID
+            and not hidden_in(name, name=True)
+        ):
+            return
+        what = (
+            f"a {_kind(name)}"
+            if not isinstance(name, str)
+            else f"{len(name):,} characters"
+            if not 0 < len(name) <= MAX_GAIT_ID
+            else f"text holding {char_name(hidden_in(name, name=True)[0][1])}"
+        )
+        raise GaitGeneratorFaultError(
+            f"the gait generator {self.generator.name!r} named the gait {_shown(vec)} with "
+            f"{what}: a gait id is text of 1 to {MAX_GAIT_ID} characters, without control, "
+            "format or line-break characters (an error in the generator)"
+        )
 
     def _check_document(self, document: Any, name: str, vec: FloatArray) -> None:
         """A :class:`~gaitpref.errors.GaitGeneratorFaultError` when the generator's ``document``

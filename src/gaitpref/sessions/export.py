@@ -63,6 +63,7 @@ from gaitpref.atomic import write_bytes_atomic
 from gaitpref.content_lock import content_lock
 from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
+from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES as MAX_LIBRARY_BYTES
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import Trial
 from gaitpref.sessions.session import Session
@@ -86,8 +87,8 @@ TABLES = ("trials", "comparisons", "suggestions", "posterior", "validation", "co
 MAX_EVENTS_BYTES = 256 * 2**20
 MAX_EVENTS = 1_000_000  # and events (about 600 in a 150-trial log)
 MAX_TEXT_BYTES = 64 * 2**20
-#: and the export's copy of the gait library, which the import reads whole (about 1 kB a gait)
-MAX_LIBRARY_BYTES = 256 * 2**20
+#: and the export's copy of the gait library, which the import reads whole (about 1 kB a gait):
+#: :data:`gaitpref.gaits.library_io.MAX_LIBRARY_BYTES`, imported above
 #: the keys of an ``events.jsonl`` line (``version`` is absent from 0.1.0's exports: 1)
 EVENT_KEYS = frozenset({"seq", "kind", "at", "payload"})
 

@@ -443,8 +443,13 @@ class Session:
             f"only answered).  Query {query.id} stays pending; nothing was written"
         )
 
-    def undo(self) -> SessionQuery | None:
+    def undo(self, *, query: int | None = None) -> SessionQuery | None:
         """Take back the last answer: its query is pending again, the model as it was before.
+
+        ``query``: the id of the query whose answer the caller means to undo (the one it showed
+        as the last, ``Trial.query``); refused (:class:`SessionStateError`, nothing written)
+        when another writer answered or undid meanwhile, so that the last answer is now
+        another's: without it, whatever answer is last when the undo runs is taken back.
 
         When that query proposes a gait flagged unsafe (or within the flag's radius) after it
         was asked, or a gait in the region of avoidance of the model as the undo leaves it (an
@@ -459,6 +464,20 @@ class Session:
         def run() -> SessionQuery | None:
             st = self._state
             st.check_open("undo")
+            if query is not None:
+                last = st.told[-1].query if st.told else None
+                if last is None or last.id != query:
+                    now = (
+                        "no answer is in force"
+                        if last is None
+                        else f"the last answer is trial {', '.join(map(str, last.trials))}'s"
+                    )
+                    asked = [k.query.trials for k in st.told if k.query.id == query]
+                    which = f" (trial {', '.join(map(str, asked[0]))})" if asked else ""
+                    raise SessionStateError(
+                        f"the answer to query {query}{which} is no longer the last one: another "
+                        f"writer answered or undid meanwhile and {now} now; nothing was undone"
+                    )
             self._append([st.undo_event()])
             st = self._state
             if st.pending is not None:

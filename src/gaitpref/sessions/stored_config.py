@@ -21,6 +21,7 @@ import numpy as np
 from gaitpref.checks import hidden_in
 from gaitpref.config import ConfigError, ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ReplayError
+from gaitpref.gaits.library import MAX_GAIT_ID
 from gaitpref.space import Space
 from gaitpref.storage import SessionRecord, Storage
 
@@ -216,6 +217,19 @@ def gait_ids_of(library: GaitLibraryLike | None, space: Space) -> list[str] | No
         raise TypeError("library must map each action to a gait id (or have gait_id(action))")
     if not all(isinstance(g, str) and g for g in ids):
         raise ValueError("gait ids must be non-empty strings")
+    seen: dict[str, int] = {}
+    for action, gait in enumerate(ids):
+        if len(gait) > MAX_GAIT_ID:
+            raise ValueError(
+                f"gait id {gait[:40]!r}... (action {action}) has {len(gait):,} characters: "
+                f"gait ids have at most {MAX_GAIT_ID}"
+            )
+        if gait in seen:  # one id for two gaits: answers and flags would name either
+            raise ValueError(
+                f"gait id {gait!r} is given twice (actions {seen[gait]} and {action}): each "
+                "gait of the library needs its own id"
+            )
+        seen[gait] = action
     for action, gait in enumerate(ids):  # shown by the terminal loop, the console and exports
         hidden = hidden_in(gait, name=True)
         if hidden:

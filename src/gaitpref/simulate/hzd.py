@@ -22,6 +22,7 @@ Notation: ``n`` step lengths (m); COT dimensionless; ``feasible`` boolean, all `
 from __future__ import annotations
 
 import csv
+import io
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,11 @@ from gaitpref.gaits.study import PAPER_SPEED, cot_over_step_length
 from gaitpref.space import Feature, FloatArray, Space
 
 CotCurveArrays = tuple[FloatArray, FloatArray, NDArray[np.bool_]]
+
+#: the most bytes a ``.csv`` or ``.npz`` COT curve file may hold, and an ``.npz``'s arrays
+#: unpacked (a curve is a few hundred step lengths: kilobytes); a ``.json`` library takes the
+#: library's bound (``gaitpref.gaits.library_io.MAX_LIBRARY_BYTES``)
+MAX_CURVE_BYTES = 64 * 2**20
 
 _TRUE = {"true", "1", "yes", "y", "t"}
 _FALSE = {"false", "0", "no", "n", "f"}
@@ -150,16 +156,62 @@ def _flag(value: object, path: Path) -> bool:
     raise ValueError(f"{path}: feasible must be true/false, got {value!r}")
 
 
+def _check_file_size(path: Path) -> None:
+    size = path.stat().st_size
+    if size > MAX_CURVE_BYTES:
+        raise ValueError(
+            f"{path}: holds {size:,} bytes, more than the {MAX_CURVE_BYTES:,} a COT curve file "
+            "may; it was not read"
+        )
+
+
 def _from_npz(path: Path) -> dict[str, Any]:
+    _check_file_size(path)
     z = np.load(path, allow_pickle=False)
     if not isinstance(z, np.lib.npyio.NpzFile):
         raise ValueError("one array, not an archive of step_length, cot, ...")
     with z:
+        _check_unpacked(z, path)
         return {k: z[k].tolist() for k in z.files}
 
 
+def _check_unpacked(data: np.lib.npyio.NpzFile, path: Path) -> None:
+    """Refuse an archive whose arrays unpack past :data:`MAX_CURVE_BYTES` (a small compressed
+    file, a "zip bomb"), or whose header claims more than its member holds (allocated whole
+    before it failed), before any array is read."""
+    archive = data.zip
+    if archive is None:
+        raise ValueError(f"{path}: the archive is closed")
+    infos = archive.infolist()
+    total = sum(info.file_size for info in infos)
+    if total > MAX_CURVE_BYTES:
+        raise ValueError(
+            f"{path}: its arrays unpack to {total:,} bytes, more than the {MAX_CURVE_BYTES:,} a "
+            "COT curve file may; it was not read"
+        )
+    for info in infos:
+        with archive.open(info) as member:
+            version = np.lib.format.read_magic(member)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(member)
+            elif version == (2, 0):
+                shape, _, dtype = np.lib.format.read_array_header_2_0(member)
+            else:
+                raise ValueError(f"{path}: {info.filename}: .npy format {version} is not read")
+            if int(np.prod(shape, dtype=object)) * dtype.itemsize > info.file_size:
+                raise ValueError(
+                    f"{path}: {info.filename}: its header claims shape {shape}, more than it holds"
+                )
+
+
 def _from_csv(path: Path) -> dict[str, list[str]]:
-    with path.open(encoding="utf-8", newline="") as fh:
+    _check_file_size(path)
+    with path.open("rb") as raw_file:
+        data = raw_file.read(MAX_CURVE_BYTES + 1)
+    if len(data) > MAX_CURVE_BYTES:  # grown since it was measured
+        _check_file_size(path)
+        raise ValueError(f"{path}: more than {MAX_CURVE_BYTES:,} bytes; it was not read")
+    with io.StringIO(data.decode("utf-8"), newline="") as fh:
         reader = csv.DictReader(fh)
         if reader.fieldnames is None:
             raise ValueError(f"{path}: empty file")
