@@ -205,8 +205,8 @@ def simulate(
     minimize: Annotated[
         bool,
         typer.Option(
-            help="Lower objective values are better (a .npy objective, or with "
-            "--rating-quantiles; a function over points is maximized)."
+            help="Lower objective values are better (a .npy objective, or any objective with "
+            "--rating-quantiles; refused for a function over points without them: negate it)."
         ),
     ] = False,
     trials: Annotated[
