@@ -49,7 +49,7 @@ bench_app = typer.Typer(
 
 Backend = Annotated[
     str,
-    typer.Option("--backend", help="joblib (local processes) or ray (pip install gaitpref[ray])"),
+    typer.Option("--backend", help="joblib (local processes) or ray (pip install 'gaitpref[ray]')"),
 ]
 Address = Annotated[
     str | None,
