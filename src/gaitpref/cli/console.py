@@ -44,7 +44,11 @@ def console_url(host: str, port: int, token: str | None) -> str:
 
 def serve(
     db: Annotated[
-        str | None, typer.Option("--db", help="Database URL (default: $GAITPREF_DB or SQLite).")
+        str | None,
+        typer.Option(
+            "--db",
+            help="Database URL or SQLite path (default: $GAITPREF_DB, else ./gaitpref.db).",
+        ),
     ] = None,
     host: Annotated[str, typer.Option(help="Interface to listen on.")] = "127.0.0.1",
     port: Annotated[int, typer.Option(min=1, max=65535, help="Port to listen on.")] = 8000,

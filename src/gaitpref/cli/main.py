@@ -205,8 +205,8 @@ def simulate(
     minimize: Annotated[
         bool,
         typer.Option(
-            help="Lower objective values are better (a .npy objective, or with "
-            "--rating-quantiles; a function over points is maximized)."
+            help="Lower objective values are better (a .npy objective, or any objective with "
+            "--rating-quantiles; refused for a function over points without them: negate it)."
         ),
     ] = False,
     trials: Annotated[
@@ -356,7 +356,15 @@ def demo(
     objective_index: Annotated[
         int, typer.Option("--objective", min=0, max=99, help="Which of the 100 paper objectives.")
     ] = 0,
-    trials: Annotated[int, typer.Option(min=1, max=MAX_TRIALS)] = 150,
+    trials: Annotated[
+        int,
+        typer.Option(
+            min=1,
+            max=MAX_TRIALS,
+            help="Executed trials of the simulated experiment (the scripted session after it "
+            "answers 20 either way).",
+        ),
+    ] = 150,
 ) -> None:
     """A full simulated 2-D experiment on one of the paper's objectives, with figures."""
     from rich.markup import escape

@@ -49,7 +49,7 @@ bench_app = typer.Typer(
 
 Backend = Annotated[
     str,
-    typer.Option("--backend", help="joblib (local processes) or ray (pip install gaitpref[ray])"),
+    typer.Option("--backend", help="joblib (local processes) or ray (pip install 'gaitpref[ray]')"),
 ]
 Address = Annotated[
     str | None,
@@ -298,7 +298,7 @@ def compass_gait(
             "(default: build one on the grid at 0.2 m/s, saved as OUT/gait-library.json)"
         ),
     ] = None,
-    runs: Annotated[int, typer.Option(help="seeded runs per setting")] = 100,
+    runs: Annotated[int, typer.Option(help=f"seeded runs per setting (1 to {MAX_RUNS})")] = 100,
     trials: Annotated[int, Trials] = 60,
     iterations: Annotated[
         str, typer.Option(help="iteration counts for the posterior panels")
