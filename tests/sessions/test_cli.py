@@ -43,6 +43,30 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
     figure = tmp_path / "fig.png"
     info = json.loads(_ok("session", "show", "1", "--json", "--figure", str(figure), "--db", db))
     assert info["trials"] == 6 and info["excluded"] == [3] and figure.stat().st_size > 10_000
+    # the fields docs/sessions.md lists for `session show --json`
+    assert set(info) == {
+        "id",
+        "subject",
+        "config",
+        "seed",
+        "status",
+        "trials",
+        "excluded",
+        "comparisons",
+        "posterior",
+        "validations",
+        "figure",
+    }
+    assert info["figure"] == str(figure) and info["status"] == "active"
+    assert set(info["posterior"]) == {
+        "argmax",
+        "argmax_values",
+        "argmax_gait_id",
+        "mean_at_argmax",
+        "sd_at_argmax",
+        "trials_in_force",
+        "pending_query",
+    }
     reopened = Session.open(db, 1)
     assert info["posterior"]["argmax"] == reopened.posterior().argmax
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--yes", "--db", db)

@@ -225,7 +225,10 @@ def simulate(
     ] = None,
     rating_noise: Annotated[
         float,
-        typer.Option(help="The rater's ordinal noise, on the normalised objective (0 to 1)."),
+        typer.Option(
+            help="The rater's ordinal noise (>= 0; 0: none), in units of the objective "
+            "scaled to run from 0 to 1."
+        ),
     ] = 0.0,
     noise: Annotated[
         float,
