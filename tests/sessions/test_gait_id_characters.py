@@ -12,7 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
+from typer.testing import CliRunner, Result
 
 from gaitpref import Session
 from gaitpref.cli import app
@@ -81,12 +81,7 @@ def test_session_new_names_a_gait_id_file_it_cannot_read(
         path.write_bytes(content)
     elif content is None:
         path.mkdir()
-    db = tmp_path / "lab.db"
-    args = ["session", "new", "--config", CONFIG, "--subject", "S01", "--db", str(db)]
-    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
-    assert result.exit_code == 2, result.output
-    assert f"--gait-ids {str(path)!r} {message}" in " ".join(result.output.split())
-    assert not db.exists()
+    _refused(tmp_path, path, message)
 
 
 def test_a_gait_id_given_twice_is_refused_naming_it() -> None:
@@ -117,12 +112,22 @@ def test_session_new_refuses_a_gait_id_file_over_the_limit(
     path = tmp_path / "ids.txt"
     path.write_text("\n".join(IDS) + "\n", encoding="utf-8")
     monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", path.stat().st_size - 1)
+    _refused(tmp_path, path, "is larger than")
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", path.stat().st_size)
+    result = _session_new(tmp_path, path)
+    assert result.exit_code == 0, result.output
+
+
+def _session_new(tmp_path: Path, ids: Path) -> Result:
     db = tmp_path / "lab.db"
     args = ["session", "new", "--config", CONFIG, "--subject", "S01", "--db", str(db)]
-    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
+    return CliRunner().invoke(app, [*args, "--gait-ids", str(ids)])
+
+
+def _refused(tmp_path: Path, ids: Path, message: str) -> None:
+    """``session new --gait-ids IDS`` is a usage error naming the option, the file and
+    ``message``, and no database is made."""
+    result = _session_new(tmp_path, ids)
     assert result.exit_code == 2, result.output
-    assert f"--gait-ids {str(path)!r} is larger than" in " ".join(result.output.split())
-    assert not db.exists()
-    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", path.stat().st_size)
-    result = CliRunner().invoke(app, [*args, "--gait-ids", str(path)])
-    assert result.exit_code == 0, result.output
+    assert f"--gait-ids {str(ids)!r} {message}" in " ".join(result.output.split())
+    assert not (tmp_path / "lab.db").exists()

@@ -18,7 +18,7 @@ from fastapi.responses import Response
 from gaitpref.console.errors import InputError
 from gaitpref.console.pages import SessionId, read_form, see_other, service_of
 from gaitpref.console.schemas import MAX_ID
-from gaitpref.console.templating import render
+from gaitpref.console.templating import confirm_page
 from gaitpref.console.views import free_text
 from gaitpref.sessions.session import Session
 
@@ -49,7 +49,14 @@ async def post_unsafe(
             ]
 
         lines = await run_in_threadpool(service.read, session_id, summary)
-        return _confirm(request, session_id, "unsafe", lines, fields, f"trials/{trial}/unsafe")
+        return confirm_page(
+            request,
+            session_id,
+            "unsafe",
+            lines,
+            fields,
+            f"/sessions/{session_id}/trials/{trial}/unsafe",
+        )
     replaced = await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
     return see_other(f"/sessions/{session_id}?flagged={trial}&replaced={int(replaced)}")
 
@@ -65,32 +72,10 @@ async def post_withdraw_unsafe(
             service_of(request).read, session_id, lambda s: s.check_change("withdraw", trial)
         )
         lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
-        return _confirm(
-            request, session_id, "withdraw", lines, fields, f"trials/{trial}/unsafe/withdraw"
-        )
+        action = f"/sessions/{session_id}/trials/{trial}/unsafe/withdraw"
+        return confirm_page(request, session_id, "withdraw", lines, fields, action)
     await run_in_threadpool(service_of(request).withdraw_unsafe, session_id, trial)
     return see_other(f"/sessions/{session_id}?withdrawn={trial}")
-
-
-def _confirm(
-    request: Request,
-    session_id: int,
-    what: str,
-    lines: list[str],
-    fields: dict[str, str],
-    path: str,
-) -> Response:
-    """The confirm step as a page (without JavaScript)."""
-    return render(
-        request,
-        "confirm.html",
-        session_id=session_id,
-        what=what,
-        lines=lines,
-        fields=fields,
-        note="",
-        action=f"/sessions/{session_id}/{path}",
-    )
 
 
 __all__ = ["router"]

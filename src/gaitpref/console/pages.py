@@ -43,7 +43,7 @@ from gaitpref.console.service import (
     pending_of,
     session_query_error,
 )
-from gaitpref.console.templating import render
+from gaitpref.console.templating import confirm_page, render
 from gaitpref.console.trial_page import trial_context
 from gaitpref.sessions import read_prior_from
 from gaitpref.sessions.records import REASONS
@@ -207,18 +207,16 @@ async def set_status(request: Request, session_id: SessionId) -> Response:
     if status == "finished" and fields.get("confirmed") != "1":  # no undo: confirmed first
         session = await run_in_threadpool(service_of(request).get, session_id)
         if session.status != "finished":
-            return render(
+            return confirm_page(
                 request,
-                "confirm.html",
-                session_id=session_id,
-                what="finish",
-                lines=[
+                session_id,
+                "finish",
+                [
                     f"Finish session {session_id}: it will take no more answers, undos or "
                     "unsafe flags (its data stay, for export)"
                 ],
-                fields=fields,
-                note="",
-                action=f"/sessions/{session_id}/status",
+                fields,
+                f"/sessions/{session_id}/status",
             )
     await run_in_threadpool(service_of(request).set_status, session_id, status)
     back = fields.get("back", "")
@@ -332,15 +330,14 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             )
 
         lines = await run_in_threadpool(service.read, session_id, summary)
-        return render(
+        return confirm_page(
             request,
-            "confirm.html",
-            session_id=session_id,
-            what="answer",
-            lines=lines,
-            fields=fields,
+            session_id,
+            "answer",
+            lines,
+            fields,
+            f"/sessions/{session_id}/answer",
             note=note,
-            action=f"/sessions/{session_id}/answer",
         )
     answered, _ = await run_in_threadpool(
         service.answer, session_id, query_id, comparisons, suggestions, note, ratings
@@ -365,15 +362,13 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
             ]
 
         lines = await run_in_threadpool(service.read, session_id, summary)
-        return render(
+        return confirm_page(
             request,
-            "confirm.html",
-            session_id=session_id,
-            what="undo",
-            lines=lines,
-            fields=fields,
-            note="",
-            action=f"/sessions/{session_id}/undo",
+            session_id,
+            "undo",
+            lines,
+            fields,
+            f"/sessions/{session_id}/undo",
         )
     done = await run_in_threadpool(service.undo, session_id, query_id)
     flag = "&replaced=1" if done.withdrawn else ""
@@ -508,15 +503,13 @@ async def post_ranking(
             return [f"Record the subject's ranking of round {round_}, best first: {places}"]
 
         lines = await run_in_threadpool(service.read, session_id, summary)
-        return render(
+        return confirm_page(
             request,
-            "confirm.html",
-            session_id=session_id,
-            what="ranking",
-            lines=lines,
-            fields=fields,
-            note="",
-            action=f"/sessions/{session_id}/validation/{round_}",
+            session_id,
+            "ranking",
+            lines,
+            fields,
+            f"/sessions/{session_id}/validation/{round_}",
             back=f"/sessions/{session_id}/validation",
         )
     await run_in_threadpool(service.rank, session_id, round_, ranking, shown)

@@ -45,6 +45,33 @@ def render(request: Request, template: str, status_code: int = 200, **context: A
     return response
 
 
+def confirm_page(
+    request: Request,
+    session_id: int,
+    what: str,
+    lines: list[str],
+    fields: dict[str, str],
+    action: str,
+    *,
+    note: str = "",
+    back: str | None = None,
+) -> HTMLResponse:
+    """The confirm step as a page, for a browser without JavaScript: ``lines`` say what will be
+    written, ``fields`` are posted again to ``action`` with ``confirmed=1``; Back goes to
+    ``back`` (default: the session's page)."""
+    return render(
+        request,
+        "confirm.html",
+        session_id=session_id,
+        what=what,
+        lines=lines,
+        fields=fields,
+        note=note,
+        action=action,
+        back=back,
+    )
+
+
 def page_error(request: Request, ref: Refusal) -> HTMLResponse:
     """An error page that says what happened and that nothing was written."""
     return render(request, "error.html", status_code=ref.status, ref=ref)

@@ -18,6 +18,7 @@ import numpy as np
 
 from gaitpref.atomic import write_bytes_atomic
 from gaitpref.model.fit_memo import MAX_ENTRIES, FitMemo, Remembered
+from gaitpref.npz_sizes import npz_problem
 from gaitpref.storage import Storage
 
 #: the folder beside a SQLite database: ``lab.db.fits/<session id>.npz``
@@ -40,7 +41,7 @@ def load_memo(path: Path) -> FitMemo:
         if not path.is_file() or path.stat().st_size > MAX_FILE_BYTES:
             return memo
         with np.load(path, allow_pickle=False) as data:
-            if not _sizes_fit(data):
+            if npz_problem(data, MAX_FILE_BYTES, "a fit cache") is not None:
                 return memo
             keys, norms = data["keys"], data["norms"]
             offsets, modes = data["offsets"], data["modes"]
@@ -62,30 +63,6 @@ def load_memo(path: Path) -> FitMemo:
         return FitMemo()
     memo.dirty = False
     return memo
-
-
-def _sizes_fit(data: np.lib.npyio.NpzFile) -> bool:
-    """Whether the arrays in ``data`` hold at most :data:`MAX_FILE_BYTES` unpacked, each no more
-    than its stored bytes: a small compressed file (a "zip bomb") or a header claiming a huge
-    shape would otherwise be unpacked, or allocated, whole before it failed."""
-    archive = data.zip
-    if archive is None:  # closed
-        return False
-    infos = archive.infolist()
-    if sum(info.file_size for info in infos) > MAX_FILE_BYTES:
-        return False
-    for info in infos:
-        with archive.open(info) as member:
-            version = np.lib.format.read_magic(member)
-            if version == (1, 0):
-                shape, _, dtype = np.lib.format.read_array_header_1_0(member)
-            elif version == (2, 0):
-                shape, _, dtype = np.lib.format.read_array_header_2_0(member)
-            else:  # 3.0 (never written here)
-                return False
-            if int(np.prod(shape, dtype=object)) * dtype.itemsize > info.file_size:
-                return False
-    return True
 
 
 def save_memo(memo: FitMemo, path: Path) -> None:

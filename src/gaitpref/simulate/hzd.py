@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from gaitpref.gaits.build import build_library
 from gaitpref.gaits.library import GaitLibrary
 from gaitpref.gaits.study import PAPER_SPEED, cot_over_step_length
+from gaitpref.npz_sizes import npz_problem
 from gaitpref.space import Feature, FloatArray, Space
 
 CotCurveArrays = tuple[FloatArray, FloatArray, NDArray[np.bool_]]
@@ -179,29 +180,9 @@ def _check_unpacked(data: np.lib.npyio.NpzFile, path: Path) -> None:
     """Refuse an archive whose arrays unpack past :data:`MAX_CURVE_BYTES` (a small compressed
     file, a "zip bomb"), or whose header claims more than its member holds (allocated whole
     before it failed), before any array is read."""
-    archive = data.zip
-    if archive is None:
-        raise ValueError(f"{path}: the archive is closed")
-    infos = archive.infolist()
-    total = sum(info.file_size for info in infos)
-    if total > MAX_CURVE_BYTES:
-        raise ValueError(
-            f"{path}: its arrays unpack to {total:,} bytes, more than the {MAX_CURVE_BYTES:,} a "
-            "COT curve file may; it was not read"
-        )
-    for info in infos:
-        with archive.open(info) as member:
-            version = np.lib.format.read_magic(member)
-            if version == (1, 0):
-                shape, _, dtype = np.lib.format.read_array_header_1_0(member)
-            elif version == (2, 0):
-                shape, _, dtype = np.lib.format.read_array_header_2_0(member)
-            else:
-                raise ValueError(f"{path}: {info.filename}: .npy format {version} is not read")
-            if int(np.prod(shape, dtype=object)) * dtype.itemsize > info.file_size:
-                raise ValueError(
-                    f"{path}: {info.filename}: its header claims shape {shape}, more than it holds"
-                )
+    problem = npz_problem(data, MAX_CURVE_BYTES, "a COT curve file")
+    if problem is not None:
+        raise ValueError(f"{path}: {problem}; it was not read")
 
 
 def _from_csv(path: Path) -> dict[str, list[str]]:
