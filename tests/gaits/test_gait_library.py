@@ -323,3 +323,58 @@ def test_fields_of_the_wrong_type_are_refused_naming_the_field(
     with pytest.raises(GaitLibraryError, match=message) as err:
         load_library(_write(tmp_path, data))
     assert str(err.value).count("edited.json") == 1
+
+
+def test_the_entry_bound_holds_for_the_longest_numbers_id_and_message(
+    duration_library: GaitLibrary,
+) -> None:
+    """``max_gaits_in_file`` rests on ``entry_bytes_bound``: a gait's entry written with the
+    longest float reprs everywhere, a 200-character id, three parameters and a message of the
+    allowed length takes no more bytes in the file than the bound."""
+    from gaitpref.gaits.library import MAX_GAIT_ID
+    from gaitpref.gaits.library_io import MESSAGE_ALLOWANCE, entry_bytes_bound, to_document
+
+    longest = -1.2345678901234567e-300  # 24 characters, as long as a float's repr gets
+    assert len(repr(longest)) == 24
+    degree = 12
+    document = to_document(duration_library)
+    entry = dict(document["gaits"][0])
+    for key, value in entry.items():
+        if isinstance(value, float):
+            entry[key] = longest
+    entry.update(
+        index=10**6,
+        id="g" * MAX_GAIT_ID,
+        parameters={"step_length": longest, "step_duration": longest, "step_width": longest},
+        degree=degree,
+        alpha=[[longest] * (degree + 1)],
+        orbit_state=[longest] * 4,
+        solver_status=-(10**9),
+        solver_message="m" * MESSAGE_ALLOWANCE,
+    )
+    sizes = []
+    for n in (0, 1, 7):
+        document["gaits"] = [entry] * n
+        sizes.append(len(json.dumps(document, indent=1, allow_nan=False).encode()))
+    assert sizes[1] - sizes[0] <= entry_bytes_bound(degree)
+    assert sizes[2] - sizes[0] <= 7 * entry_bytes_bound(degree)
+    assert sizes[1] - sizes[0] > entry_bytes_bound(degree) // 2  # a bound, not a guess
+
+
+def test_save_refuses_a_library_larger_than_a_file_is_read_back(
+    duration_library: GaitLibrary, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A library whose file load_library would refuse is not written (it was, and then could
+    not be opened)."""
+    from gaitpref.gaits import library_io
+
+    path = tmp_path / "lib.json"
+    duration_library.save(path)
+    size = path.stat().st_size
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", size - 1)
+    with pytest.raises(GaitLibraryError, match=rf"6 gaits take {size:,} bytes, more than the"):
+        duration_library.save(tmp_path / "big.json")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lib.json"]
+    monkeypatch.setattr(library_io, "MAX_LIBRARY_BYTES", size)
+    duration_library.save(tmp_path / "big.json")
+    assert GaitLibrary.load(tmp_path / "big.json").shape == (3, 2)

@@ -100,6 +100,10 @@ def test_parse_range() -> None:
         (["--speed", "0.2", "--step-length", "0.12:0.1201:3"], "distinct gait ids"),
         (["--speed", "0.2", "--step-length", "0.1:0.2:100000000000"], "at most 1000000 values"),
         (["--step-length", "0.1:0.2:1000", "--step-duration", "0.5:1:1001"], "1001000 gaits"),
+        (  # within a config's grid, but past what a library file is read back at
+            ["--step-length", "0.1:0.2:400", "--step-duration", "0.5:1:400"],
+            "the grid has 160,000 gaits; a library file holds at most 96,978 of degree 6",
+        ),
         (["--speed", "0.2", "--out", "{tmp}/absent/lib.json"], "no folder"),
         (["--speed", "0.2", "--out", "{tmp}"], "is a folder"),
     ],

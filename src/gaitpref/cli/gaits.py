@@ -115,6 +115,7 @@ def build(
 
     from gaitpref.gaits.build import build_library
     from gaitpref.gaits.gait import HZDSettings
+    from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES, max_gaits_in_file
 
     if (step_duration is None) == (speed is None):
         raise typer.BadParameter("give exactly one of --step-duration and --speed")
@@ -126,16 +127,22 @@ def build(
     lengths = parse_range(step_length, "--step-length")
     durations = None if step_duration is None else parse_range(step_duration, "--step-duration")
     widths = None if step_width is None else parse_range(step_width, "--step-width")
+    try:
+        settings = HZDSettings(degree=degree)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--degree") from None
     size = len(lengths) * len(durations or (0,)) * len(widths or (0,))
     if size > max_gaits():
         raise typer.BadParameter(
             f"the grid has {size} gaits; a config takes at most {max_gaits()}",
             param_hint="--step-length/--step-duration/--step-width",
         )
-    try:
-        settings = HZDSettings(degree=degree)
-    except ValueError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--degree") from None
+    if size > (in_file := max_gaits_in_file(degree)):  # hours of work, then a file too large
+        raise typer.BadParameter(
+            f"the grid has {size:,} gaits; a library file holds at most {in_file:,} of degree "
+            f"{degree} (it is read back up to {MAX_LIBRARY_BYTES:,} bytes): build it in parts",
+            param_hint="--step-length/--step-duration/--step-width",
+        )
     check_file_out(out, "--out")
     total = len(lengths) * (len(durations) if durations else 1)
     columns = (

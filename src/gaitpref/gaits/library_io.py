@@ -37,6 +37,7 @@ from gaitpref.errors import GaitLibraryError
 from gaitpref.gaits.gait import Gait, HZDSettings
 from gaitpref.gaits.library import (
     AXES,
+    MAX_GAIT_ID,
     GaitLibrary,
     grid_size,
 )
@@ -48,6 +49,10 @@ SCHEMA_VERSION = 1
 #: naming the file, before it is read whole (the export's copy of a library and the console's
 #: upload take the same bound: ``gaitpref.sessions.export``)
 MAX_LIBRARY_BYTES = 256 * 2**20
+#: the longest solver message :func:`entry_bytes_bound` allows for (the optimiser's own are a
+#: few hundred characters; a longer one makes a file larger than the bound, which
+#: :func:`save_library` still refuses)
+MESSAGE_ALLOWANCE = 1_000
 _NUMBERS = (
     "phase_start",
     "phase_end",
@@ -106,14 +111,38 @@ def to_document(lib: GaitLibrary) -> dict[str, Any]:
     }
 
 
+def entry_bytes_bound(degree: int) -> int:
+    """At most how many bytes one gait of Bezier degree ``degree`` adds to a library file: its
+    ``degree + 18`` numbers (``alpha``, ``orbit_state``, three parameters, the rest) at 32 bytes
+    each (a float's 24 characters at most, with indentation and separator), 800 for keys and
+    layout, its id (at most ``MAX_GAIT_ID`` characters) and a solver message of up to
+    :data:`MESSAGE_ALLOWANCE` characters."""
+    return 800 + MAX_GAIT_ID + MESSAGE_ALLOWANCE + 32 * (degree + 18)
+
+
+def max_gaits_in_file(degree: int) -> int:
+    """The most gaits of Bezier degree ``degree`` whose library file is sure to be read back
+    (at most :data:`MAX_LIBRARY_BYTES`): what ``gaitpref gaits build`` may be asked for."""
+    return MAX_LIBRARY_BYTES // entry_bytes_bound(degree)
+
+
 def save_library(lib: GaitLibrary, path: str | Path) -> None:
     """Write ``lib`` to ``path`` (atomically: a temporary file, then a rename; a write that
     fails leaves neither a partial library nor the temporary file).  Its mode is what a plain
     ``open`` would give it: by the umask, or the mode of the file it replaces
-    (:mod:`gaitpref.atomic`)."""
+    (:mod:`gaitpref.atomic`).  A library whose file would be larger than
+    :data:`MAX_LIBRARY_BYTES` (which :func:`load_library` refuses) is a
+    :class:`GaitLibraryError` and nothing is written."""
     target = Path(path)
-    text = json.dumps(to_document(lib), indent=1, allow_nan=False)
-    write_text_atomic(target, text + "\n", prefix=f".{target.name}.")
+    text = json.dumps(to_document(lib), indent=1, allow_nan=False) + "\n"
+    size = len(text.encode())
+    if size > MAX_LIBRARY_BYTES:
+        raise GaitLibraryError(
+            f"{target}: the library's {len(lib):,} gaits take {size:,} bytes, more than the "
+            f"{MAX_LIBRARY_BYTES:,} a gait library file may (it could not be read back); "
+            "nothing was written: save it in parts, or with shorter ids and messages"
+        )
+    write_text_atomic(target, text, prefix=f".{target.name}.")
 
 
 def read_bounded(file: Path, limit: int, what: str) -> bytes:
