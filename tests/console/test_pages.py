@@ -300,3 +300,11 @@ def test_a_ranking_label_past_four_characters_is_refused_naming_its_place(
         assert r.status_code == 422 and "<code>rank2</code>" in r.text, r.text[:300]
         assert "at most 4 characters" in r.text and "A" * 61 not in r.text
     assert event_count(client, sid) == before
+
+
+def test_the_sessions_page_counts_each_subjects_sessions(client: TestClient) -> None:
+    for subject in ("S01", "S02", "S01"):
+        new_session(client, subject=subject)
+    html = client.get("/").text
+    pills = re.findall(r'<span class="pill">([^<]*)</span>', html)
+    assert "S01: 2 sessions" in pills and "S02: 1 session" in pills
