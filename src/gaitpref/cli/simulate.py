@@ -181,6 +181,18 @@ def _partial(given: Path | None, command: str) -> Path:
     return Path(tempfile.gettempdir()) / name
 
 
+def _outputs(out: Path) -> None:
+    """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
+    study that stopped: a new study wrote over it, then removed it)."""
+    kept = out / PARTIAL
+    if kept.exists() or kept.is_symlink():
+        fail(
+            f"--out {str(out)!r} holds {PARTIAL}, the finished runs of a study that stopped "
+            "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
+            "new study would write over it"
+        )
+
+
 def _folder(out: Path) -> None:
     """Make the output folder before any run, or fail naming ``--out`` (a traceback before)."""
     if out.exists() and not out.is_dir():
@@ -268,6 +280,7 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
+    _outputs(out)
     checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
@@ -323,6 +336,7 @@ def compass_gait(
     from gaitpref.simulate.tables import write_curves, write_table
 
     table_path = _table_path(out, table)  # before a gait library is built
+    _outputs(out)
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")

@@ -126,8 +126,10 @@ def run_study(
     """Run every run of ``study`` and collect the tidy table and curves.
 
     A run that fails stops the study with :class:`~gaitpref.simulate.partial.StudyRunError`
-    (the run named, the finished runs kept on it); ``partial``: a ``.csv`` file each finished
-    run is appended to as it finishes, removed once every run has finished.
+    (the run named, the finished runs kept on it); ``partial``: a new ``.csv`` file each
+    finished run is appended to as it finishes, removed once every run has finished (one that
+    exists is refused, ``FileExistsError``: it may hold the finished runs of a study that
+    stopped).
     """
     check_backend(backend, address)
     tasks = study.tasks()
