@@ -243,3 +243,42 @@ def test_parquet_without_pyarrow_is_refused_before_the_study_runs(
                        "--table", "parquet", "--out", str(tmp_path))  # fmt: skip
     assert code == 2 and "--table parquet: writing Parquet needs pyarrow" in " ".join(out.split())
     assert "runs in" not in out and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("command", "name"),
+    [("paper-2d", "runs.csv"), ("paper-2d", "summary.md"), ("compass-gait", "posterior.png")],
+)
+def test_a_folder_where_an_output_goes_is_refused_before_the_study(
+    tmp_path: Path, command: str, name: str
+) -> None:
+    """The study ran, then died writing that file with an IsADirectoryError traceback, and its
+    partial run table had been removed: every run's result lost."""
+    (tmp_path / name).mkdir()
+    code, out = invoke(
+        command, "--runs", "1", "--trials", "3", "--jobs", "1", "--out", str(tmp_path)
+    )
+    assert code == 2, out
+    assert f"--out '{tmp_path}': {name} is a folder" in " ".join(out.split())
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_results_that_cannot_be_written_keep_the_run_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file that cannot be written after the study finished (a full disk): status 1 and the
+    run table kept in runs.partial.csv, not a traceback with every run lost."""
+    import gaitpref.simulate.figures as figures
+
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(28, "No space left on device", str(tmp_path / "curves.png"))
+
+    monkeypatch.setattr(figures, "plot_paper_2d", full)
+    args = ("--runs", "2", "--trials", "3", "--settings", "n1_b1", "--jobs", "1")
+    code, out = invoke("paper-2d", *args, "--out", str(tmp_path))
+    assert code == 1, out
+    text = " ".join(out.split())
+    assert "results could not be written (No space left on device:" in text
+    assert f"the run table is kept in {tmp_path / 'runs.partial.csv'}" in text
+    kept = read_table(tmp_path / "runs.partial.csv")
+    assert len(kept) == 2 * 2 * 3 and kept.equals(read_table(tmp_path / "runs.csv"))

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import secrets
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TypeVar
 
@@ -149,6 +150,28 @@ def _run(
     )
 
 
+@contextmanager
+def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
+    """Write a finished study's files; when one cannot be written (a full disk, a folder made
+    at its name meanwhile), keep the run table in ``OUT/runs.partial.csv`` and exit with
+    status 1 saying so (a traceback before, and every run's result lost)."""
+    from gaitpref.simulate.tables import write_table
+
+    try:
+        yield
+    except OSError as exc:
+        what = f"{exc.strerror or exc}" + (f": {exc.filename}" if exc.filename else "")
+        kept = out / PARTIAL
+        try:
+            with open(kept, "x", encoding="utf-8"):  # never over an earlier study's runs
+                pass
+            write_table(result.table, kept)
+            where = f"the run table is kept in {kept}"
+        except OSError as again:
+            where = f"nor could the run table be kept in {kept} ({again.strerror or again})"
+        fail(f"the study finished but its results could not be written ({what}); {where}", 1)
+
+
 def _stopping(sweep: Callable[[], T]) -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
@@ -181,9 +204,10 @@ def _partial(given: Path | None, command: str) -> Path:
     return Path(tempfile.gettempdir()) / name
 
 
-def _outputs(out: Path) -> None:
+def _outputs(out: Path, names: tuple[str, ...]) -> None:
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
-    study that stopped: a new study wrote over it, then removed it)."""
+    study that stopped: a new study wrote over it, then removed it) or a folder where one of
+    the study's files ``names`` goes (the study ran, then died writing it, its results lost)."""
     kept = out / PARTIAL
     if kept.exists() or kept.is_symlink():
         fail(
@@ -191,6 +215,9 @@ def _outputs(out: Path) -> None:
             "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
             "new study would write over it"
         )
+    for name in names:
+        if (out / name).is_dir():
+            fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
 
 
 def _folder(out: Path) -> None:
@@ -280,7 +307,7 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
-    _outputs(out)
+    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"))
     checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
@@ -288,11 +315,12 @@ def paper_2d(
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
-    write_table(result.table, table_path)
-    write_curves(result.curves, out / "curves.csv")
-    plot_paper_2d(result.curves, published, out / "curves.png")
-    summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
-    (out / "summary.md").write_text(summary, encoding="utf-8")
+    with _keeping(result, out):
+        write_table(result.table, table_path)
+        write_curves(result.curves, out / "curves.csv")
+        plot_paper_2d(result.curves, published, out / "curves.png")
+        summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
+        (out / "summary.md").write_text(summary, encoding="utf-8")
     _console.print(
         f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, {result.jobs} jobs); "
         f"wrote {out}/curves.csv, {table_path.name}, curves.png, summary.md"
@@ -336,7 +364,9 @@ def compass_gait(
     from gaitpref.simulate.tables import write_curves, write_table
 
     table_path = _table_path(out, table)  # before a gait library is built
-    _outputs(out)
+    library_file = "gait-library.json" if objective == "hzd" and library is None else ""
+    names = (table_path.name, "curves.csv", "posterior.png", library_file)
+    _outputs(out, tuple(name for name in names if name))
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
@@ -375,16 +405,17 @@ def compass_gait(
     result = _run(study, checked, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
-    write_table(result.table, table_path)
-    write_curves(result.curves, out / "curves.csv")
-    plot_compass_gait(
-        obj.space.features[0].array,
-        obj.cot,
-        snapshots,
-        out / "posterior.png",
-        result.curves,
-        obj.label,
-    )
+    with _keeping(result, out):
+        write_table(result.table, table_path)
+        write_curves(result.curves, out / "curves.csv")
+        plot_compass_gait(
+            obj.space.features[0].array,
+            obj.cot,
+            snapshots,
+            out / "posterior.png",
+            result.curves,
+            obj.label,
+        )
     _console.print(
         f"{len(study)} runs in {result.seconds:.1f} s; wrote {out}/curves.csv, {table_path.name}, "
         "posterior.png"
