@@ -60,3 +60,29 @@ def test_notes_past_the_limit_are_refused_before_the_study(
     assert result.exit_code == 2, result.output
     assert f"--notes {str(notes)!r} is larger than" in " ".join(result.output.split())
     assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_the_ray_backend_without_ray_is_refused_before_the_output_folder_is_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, study: str
+) -> None:
+    """Ray not installed was found only when the runs started: the progress bar drawn, the
+    ``--out`` folder made (and ``compass-gait --objective hzd`` had built its gait library)."""
+    import sys
+
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before the options were checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray: ImportError
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), "--backend", "ray"]
+    if study == "compass-gait":
+        args += ["--objective", "hzd"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert "--backend ray: the Ray backend needs Ray: pip install 'gaitpref[ray]'" in text
+    assert not out.exists()

@@ -128,7 +128,10 @@ def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
 
     def check() -> None:
-        check_backend(backend, address)
+        try:
+            check_backend(backend, address)
+        except RuntimeError as exc:  # Ray not installed
+            fail(f"--backend {backend}: {exc}")
         resolve_jobs(jobs)
 
     guard(check)

@@ -158,11 +158,15 @@ def run_study(
 
 
 def check_backend(backend: str, address: str | None) -> None:
-    """Refuse a backend that is not one of :data:`BACKENDS`, or an address without Ray."""
+    """Refuse a backend that is not one of :data:`BACKENDS`, an address without Ray, or the
+    Ray backend where Ray is not installed (``RuntimeError``; found only when the runs started,
+    the benches had made their output folder, or built a gait library, before)."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
+    if backend == "ray":
+        _import_ray()
 
 
 def run_tasks(
