@@ -56,6 +56,17 @@ def test_paper_2d_refuses_bad_options(tmp_path: Path) -> None:
     assert not (tmp_path / "summary.md").exists()
 
 
+def test_settings_naming_random_selection_alone_are_refused_before_the_study(
+    tmp_path: Path,
+) -> None:
+    """``--settings random`` ran the study, wrote runs.csv and curves.csv, then died drawing
+    the figure (a panel per paper setting, none named) with a ValueError traceback, status 1."""
+    args = ("--runs", "1", "--trials", "3", "--jobs", "1", "--settings", "random")
+    code, out = invoke("paper-2d", *args, "--out", str(tmp_path / "out"))
+    assert code == 2 and "settings name only 'random'" in " ".join(out.split()), out
+    assert "Traceback" not in out and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("given", [[","], ["", " , "]])
 def test_a_settings_list_that_names_none_is_refused(tmp_path: Path, given: list[str]) -> None:
     """``--settings ,`` split to no name and silently ran all six settings."""

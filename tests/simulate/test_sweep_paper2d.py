@@ -43,6 +43,8 @@ def test_the_study_is_run_k_on_objective_k() -> None:
         paper_2d_study(settings=["n4_b0"])
     with pytest.raises(ValueError, match="no setting named"):  # not all six
         paper_2d_study(settings=[])
+    with pytest.raises(ValueError, match="settings name only 'random'"):
+        paper_2d_study(settings=["random"], baseline=False)
     with pytest.raises(ValueError, match=r"runs must be 1\.\.100"):
         paper_2d_study(runs=101)
 

@@ -48,7 +48,8 @@ MAX_SE_BELOW = 3.0
 
 def paper_2d_settings(names: Sequence[str] | None = None, baseline: bool = True) -> list[Setting]:
     """The named settings (None: all six), plus random selection when ``baseline``; naming none
-    (an empty list) is refused, not taken for all six."""
+    (an empty list) is refused, not taken for all six, and so is naming random selection alone
+    (the study ran, then its figure, a panel per paper setting, failed with a traceback)."""
     known = {s.name: s for s in (*PAPER_2D_SETTINGS, RANDOM)}
     if names is not None and not list(names):
         raise ValueError(f"no setting named; give some of {', '.join(known)}, or None for all six")
@@ -56,6 +57,12 @@ def paper_2d_settings(names: Sequence[str] | None = None, baseline: bool = True)
     unknown = [n for n in chosen if n not in known]
     if unknown:
         raise ValueError(f"unknown setting {unknown[0]!r}; the settings are {', '.join(known)}")
+    if all(n == RANDOM.name for n in chosen):
+        paper = ", ".join(s.name for s in PAPER_2D_SETTINGS)
+        raise ValueError(
+            f"settings name only {RANDOM.name!r}, the floor the paper's settings are read "
+            f"against; give some of {paper} too"
+        )
     if baseline and RANDOM.name not in chosen:
         chosen.append(RANDOM.name)
     return [known[n] for n in dict.fromkeys(chosen)]
