@@ -52,6 +52,16 @@ def test_noise_with_a_grid_objective_is_refused(grid_file: Path, noise: str) -> 
     assert runner.invoke(app, [*args, "--noise", "0"]).exit_code == 0
 
 
+@pytest.mark.parametrize("noise", ["nan", "inf", "-1"])
+def test_a_bad_noise_over_points_is_refused_naming_the_option(points_spec: str, noise: str) -> None:
+    """It said 'noise must be a finite number >= 0', not naming --noise."""
+    args = ["simulate", "synthetic-2d", "--objective", points_spec, "--trials", "2"]
+    result = runner.invoke(app, [*args, "--noise", noise])
+    assert result.exit_code == 2, result.output
+    assert "--noise must be a finite number >= 0" in result.output
+    assert "Traceback" not in result.output
+
+
 def test_noise_with_rating_quantiles_is_refused(tmp_path: Path, points_spec: str) -> None:
     """--rating-quantiles runs the grid's subject even for a function over points."""
     from gaitpref.config import load_config

@@ -453,8 +453,10 @@ def population(
 
     import numpy as np
 
+    from gaitpref.cli.points import check_noise
     from gaitpref.simulate.population import population_bench
 
+    guard(lambda: check_noise(user_noise, "--user-noise"))  # inf passed the option's min=0
     arr = read_array(objectives, "objectives file")
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "population")
