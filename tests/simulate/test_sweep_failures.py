@@ -181,3 +181,26 @@ def _tasks_with(tasks: object, objective: object, index: int = BROKEN) -> object
         return out
 
     return broken
+
+
+class _Interrupting:
+    """An objective whose reading is interrupted (Ctrl-C while its run runs)."""
+
+    def __array__(self, dtype: object = None, copy: object = None) -> object:
+        raise KeyboardInterrupt
+
+
+def test_an_interrupted_study_says_where_the_finished_runs_are(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C kept OUT/runs.partial.csv but said nothing (a bench's file is a new name in the
+    temporary folder): status 130 and the file named."""
+    from gaitpref.cli import app
+
+    monkeypatch.setattr(Study, "tasks", _tasks_with(Study.tasks, _Interrupting(), 2))
+    args = ["bench", "paper-2d", "--runs", "2", "--trials", "4", "--settings", "n1_b1"]
+    result = CliRunner().invoke(app, [*args, "--jobs", "1", "--out", str(tmp_path)])
+    assert result.exit_code == 130, result.output
+    kept = tmp_path / "runs.partial.csv"
+    assert f"interrupted; the runs that finished are in {kept}" in " ".join(result.output.split())
+    assert len(read_table(kept)) == 2 * 4  # the two runs before it

@@ -149,7 +149,8 @@ def _run(
     return _stopping(
         lambda: run_study(
             study, backend, jobs, address, progress=True, console=_console, partial=partial
-        )
+        ),
+        partial,
     )
 
 
@@ -175,14 +176,20 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
         fail(f"the study finished but its results could not be written ({what}); {where}", 1)
 
 
-def _stopping(sweep: Callable[[], T]) -> T:
+def _stopping(sweep: Callable[[], T], partial: Path) -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
-    finish; refused input as :func:`report` says."""
+    finish; refused input as :func:`report` says; an interrupt (Ctrl-C) after some run finished
+    exits with status 130 naming ``partial``, where they are (it said nothing, and a bench's
+    file is a new name in the temporary folder)."""
     from gaitpref.simulate.partial import RunError
 
     try:
         return sweep()
+    except KeyboardInterrupt:
+        if partial.exists():
+            fail(f"interrupted; the runs that finished are in {partial}", 130)
+        raise
     except RunError as exc:
         fail(str(exc), 1)
     except HANDLED as exc:
@@ -467,7 +474,7 @@ def population(
             partial=kept,
         )  # fmt: skip
 
-    result = _stopping(run)
+    result = _stopping(run, kept)
     if as_json:
         typer.echo(json.dumps(result))
         return
@@ -519,7 +526,8 @@ def continuous(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
                 partial=kept, checked=checked,
-            )
+            ),
+            kept,
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
