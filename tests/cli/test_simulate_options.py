@@ -100,3 +100,13 @@ def test_demo_refuses_a_file_as_its_out_folder_before_running(
     assert result.exit_code == 2, result.output
     assert f"--out {str(out)!r}" in " ".join(result.output.split())
     assert file.read_text(encoding="utf-8") == "a file"
+
+
+def test_demo_labels_the_trials_it_ran(tmp_path: Path) -> None:
+    """The summary said 'trials 1-25: ..., 126-150: ...' whatever --trials was (with 30 trials,
+    the means of trials 1-25 and 6-30)."""
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--trials", "30"])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    assert "mean normalized objective over trials 1-25: " in text and ", 6-30: " in text
+    assert "126-150" not in text
