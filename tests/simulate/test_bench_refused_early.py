@@ -86,3 +86,22 @@ def test_the_ray_backend_without_ray_is_refused_before_the_output_folder_is_made
     text = " ".join(result.output.split())
     assert "--backend ray: the Ray backend needs Ray: pip install 'gaitpref[ray]'" in text
     assert not out.exists()
+
+
+def test_negative_iterations_are_refused_by_name_before_a_gait_library_is_built(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--iterations 1,-5`` was refused by the posterior replay, after ``--objective hzd``
+    had built its gait library, as 'iterations must be non-negative counts'."""
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before --iterations was checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    out = tmp_path / "out"
+    args = ["bench", "compass-gait", "--objective", "hzd", "--out", str(out)]
+    result = CliRunner().invoke(app, [*args, "--iterations", "1,-5"])
+    assert result.exit_code == 2, result.output
+    assert "--iterations must be counts >= 0, got '1,-5'" in " ".join(result.output.split())
+    assert not out.exists()

@@ -385,6 +385,8 @@ def compass_gait(
                 f"--iterations: at most {MAX_SNAPSHOTS} counts, each at most {MAX_TRIALS}, "
                 f"got {iterations!r}"
             )
+        if min(its) < 0:  # refused by the replay after a gait library was built, unnamed
+            raise ValueError(f"--iterations must be counts >= 0, got {iterations!r}")
         if not 1 <= runs <= MAX_RUNS:  # as compass_gait_study says, but before a build
             raise ValueError(f"--runs must be 1 to {MAX_RUNS}, got {runs}")
         arms = 2 if baseline else 1  # the study's settings; refused before a library is built
