@@ -104,6 +104,8 @@ def test_bench_continuous_names_the_failed_run_and_keeps_the_finished_ones(
     assert f"objective {obj!r}, seed 2 failed (ValueError): the treadmill stopped" in text
     assert f"2 of 4 runs finished; their results are in {partial}" in text
     assert _lines(partial) == runs[:2]  # the runs before it, as the JSON gives them
+    documented = ["seed", "trials", "points", "objective", "best_point", "best_objective"]
+    assert list(runs[0]) == documented  # docs/sweeps.md's line (it left out trials)
 
 
 def test_bench_continuous_keeps_them_in_a_temporary_file_by_default(
