@@ -293,3 +293,20 @@ def test_results_that_cannot_be_written_keep_the_run_table(
     assert f"the run table is kept in {tmp_path / 'runs.partial.csv'}" in text
     kept = read_table(tmp_path / "runs.partial.csv")
     assert len(kept) == 2 * 2 * 3 and kept.equals(read_table(tmp_path / "runs.csv"))
+
+
+@pytest.mark.parametrize("command", ["paper-2d", "compass-gait"])
+def test_an_earlier_studys_results_in_out_are_not_written_over(
+    tmp_path: Path, command: str
+) -> None:
+    """A second study into the same --out (a quick test with the default out/paper-2d after a
+    study of hours) wrote over the first's run table, curves and figures without a word."""
+    args = ("--runs", "1", "--trials", "3", "--jobs", "1", "--out", str(tmp_path))
+    code, out = invoke(command, *args)
+    assert code == 0, out
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    code, out = invoke(command, *args, "--seed", "1", "--table", "parquet")
+    assert code == 2, out
+    text = " ".join(out.split())
+    assert f"--out '{tmp_path}' holds an earlier study's results (runs.csv, curves.csv" in text
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before

@@ -214,10 +214,17 @@ def _partial(given: Path | None, command: str) -> Path:
     return Path(tempfile.gettempdir()) / name
 
 
+#: a study's run table in every format ``--table`` writes (a rerun in another format left the
+#: earlier table beside the new curves)
+RUN_TABLES = ("runs.csv", "runs.csv.gz", "runs.parquet")
+
+
 def _outputs(out: Path, names: tuple[str, ...]) -> None:
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
-    study that stopped: a new study wrote over it, then removed it) or a folder where one of
-    the study's files ``names`` goes (the study ran, then died writing it, its results lost)."""
+    study that stopped: a new study wrote over it, then removed it), a folder where one of the
+    study's files ``names`` goes (the study ran, then died writing it, its results lost), or
+    an earlier study's results there (``names`` or a run table: written over without a word,
+    a quick test with the default ``--out`` replaced a study of hours)."""
     kept = out / PARTIAL
     if kept.exists() or kept.is_symlink():
         fail(
@@ -228,6 +235,12 @@ def _outputs(out: Path, names: tuple[str, ...]) -> None:
     for name in names:
         if (out / name).is_dir():
             fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
+    earlier = [n for n in dict.fromkeys((*RUN_TABLES, *names)) if (out / n).exists()]
+    if earlier:
+        fail(
+            f"--out {str(out)!r} holds an earlier study's results ({', '.join(earlier)}): give "
+            "another --out, or move them away; a new study would write over them"
+        )
 
 
 def _folder(out: Path) -> None:
