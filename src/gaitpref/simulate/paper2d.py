@@ -9,7 +9,8 @@ Checks (what the paper reports, and the project's acceptance test):
 
 - *not below the paper*: at trials 25, 50, 100 and 150 our mean is at most 3 combined standard
   errors ``sqrt(se_ours^2 + se_published^2)`` below the published mean (above is fine: the
-  authors' Laplace fit silently fell back to the prior on about 4% of late updates);
+  authors' Laplace fit silently fell back to the prior on about 4% of late updates; left out
+  with one run per setting, which has no standard error);
 - *coactive feedback helps* at every ``(n, b)``: the mean over trials (area under the learning
   curve) is higher with it, paired run by run on the same objective;
 - *(2, 0) learns slowest*: its area under the curve is the lowest, with and without coactive
@@ -166,8 +167,8 @@ def paper_claims(table: RunTable, published: Curves) -> list[Claim]:
     for name in [s.name for s in PAPER_2D_SETTINGS if s.name in have]:
         rows = [r for r in checkpoint_rows(ours, published, CHECKPOINTS) if r.setting == name]
         worst = min(rows, key=lambda r: r.z, default=None)
-        if worst is None:
-            continue
+        if worst is None or not all(np.isfinite(r.z) for r in rows):
+            continue  # one run has no standard error: z is NaN, and the check was 'failed'
         claims.append(
             Claim(
                 f"{name}: mean not more than {MAX_SE_BELOW:g} combined SE below the published "
