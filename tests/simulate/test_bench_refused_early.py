@@ -105,3 +105,23 @@ def test_negative_iterations_are_refused_by_name_before_a_gait_library_is_built(
     assert result.exit_code == 2, result.output
     assert "--iterations must be counts >= 0, got '1,-5'" in " ".join(result.output.split())
     assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_a_ray_address_where_nothing_listens_is_refused_before_the_output_folder_is_made(
+    tmp_path: Path, study: str
+) -> None:
+    """It was refused once the runs started: the progress bar drawn, an empty --out left."""
+    import socket
+
+    pytest.importorskip("ray")
+    with socket.socket() as free:  # a port nothing listens on once closed
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), "--backend", "ray"]
+    result = CliRunner().invoke(app, [*args, "--address", f"127.0.0.1:{port}"])
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert f"--address: could not reach the Ray cluster at '127.0.0.1:{port}'" in text
+    assert not out.exists()

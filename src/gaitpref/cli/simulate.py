@@ -122,7 +122,7 @@ def _integers(text: str, option: str) -> list[int]:
 def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
     """``--backend``, checked with ``--jobs`` and ``--address`` before the output folder is made
     (refused by the run itself, they left an empty ``--out`` folder)."""
-    from gaitpref.simulate.sweep import BACKENDS, check_backend, resolve_jobs
+    from gaitpref.simulate.sweep import BACKENDS, check_backend, probe_address, resolve_jobs
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
@@ -132,6 +132,11 @@ def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
             check_backend(backend, address)
         except RuntimeError as exc:  # Ray not installed
             fail(f"--backend {backend}: {exc}")
+        if backend == "ray" and address is not None:
+            try:  # a HOST:PORT where nothing listens
+                probe_address(address)
+            except RuntimeError as exc:
+                fail(f"--address: {exc}")
         resolve_jobs(jobs)
 
     guard(check)

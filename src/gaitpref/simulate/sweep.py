@@ -285,7 +285,7 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     if address is None:
         options["num_cpus"] = resolve_jobs(jobs)
     else:
-        _probe(address)
+        probe_address(address)
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
     try:
         ray.init(address=address, **options)
@@ -295,9 +295,10 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     return True
 
 
-def _probe(address: str, timeout: float = 5.0) -> None:
-    """Refuse a ``HOST:PORT`` address where nothing listens (Ray retried it for minutes, its
-    warnings the only output); ``auto`` and ``ray://`` addresses Ray itself answers at once."""
+def probe_address(address: str, timeout: float = 5.0) -> None:
+    """Refuse (``RuntimeError``) a ``HOST:PORT`` address where nothing listens (Ray retried it
+    for minutes, its warnings the only output); ``auto`` and ``ray://`` addresses Ray itself
+    answers at once.  The benches call it before they make their output folder."""
     host, sep, port = address.rpartition(":")
     if "://" in address or not sep or not port.isdigit():
         return
