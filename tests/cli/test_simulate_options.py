@@ -110,3 +110,16 @@ def test_demo_labels_the_trials_it_ran(tmp_path: Path) -> None:
     text = " ".join(result.output.split())
     assert "mean normalized objective over trials 1-25: " in text and ", 6-30: " in text
     assert "126-150" not in text
+
+
+@pytest.mark.parametrize("given", [["--rating-noise", "0.3"], ["--rating-quantiles", ""]])
+def test_rating_options_without_a_rater_are_refused_over_points(
+    points_spec: str, given: list[str]
+) -> None:
+    """With a function over points, --rating-noise without --rating-quantiles (and an empty
+    --rating-quantiles) was ignored, the run made without a rater; with a .npy objective both
+    were refused."""
+    args = ["simulate", "synthetic-2d", "--objective", points_spec, "--trials", "2", *given]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "--rating-" in result.output and "Traceback" not in result.output

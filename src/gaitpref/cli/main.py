@@ -254,7 +254,9 @@ def simulate(
 
     cfg = _load_config_or_fail(config)
     use_seed = cfg.seed if seed is None else seed
-    if not is_grid_objective(objective) and not rating_quantiles:
+    if not is_grid_objective(objective) and rating_quantiles is None:
+        if rating_noise != 0:  # there is no rater to take it: it was ignored (nan too)
+            fail("--rating-noise needs --rating-quantiles (the simulated rater)")
         if minimize:  # the subject over points prefers higher values: it was ignored
             fail(
                 f"--minimize: objective {objective!r} is a function over points, and those are "
