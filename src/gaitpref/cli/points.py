@@ -109,7 +109,8 @@ def bench_points(
     Everything :func:`check_bench_points` checks is checked before any run (a ValueError); a run
     that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
     (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
-    ``partial`` (JSON lines, written as each run finishes, removed once every run has).
+    ``partial`` (a new file of JSON lines, written as each run finishes, removed once every
+    run has; one that exists is refused, ``FileExistsError``).
     ``checked``: what :func:`check_bench_points` returned for the same arguments (not checked
     again, the first objective not made again).
     """
