@@ -310,3 +310,24 @@ def test_an_earlier_studys_results_in_out_are_not_written_over(
     text = " ".join(out.split())
     assert f"--out '{tmp_path}' holds an earlier study's results (runs.csv, curves.csv" in text
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_a_gait_library_left_in_out_is_built_again_but_not_a_folder_in_its_place(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--objective hzd without --library saves OUT/gait-library.json, the config's library
+    built again the same: one there is no earlier study's result (docs/results/README.md)."""
+    import gaitpref.simulate.compass
+
+    def built(*args: object, **kwargs: object) -> None:
+        raise ValueError("built")  # the options passed: the library would be built now
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", built)
+    (tmp_path / "gait-library.json").write_text("{}", encoding="utf-8")
+    args = ("--objective", "hzd", "--runs", "1", "--trials", "3", "--out", str(tmp_path))
+    code, out = invoke("compass-gait", *args)
+    assert code == 2 and "error: built" in out, out
+    (tmp_path / "gait-library.json").unlink()
+    (tmp_path / "gait-library.json").mkdir()
+    code, out = invoke("compass-gait", *args)
+    assert code == 2 and "gait-library.json is a folder" in " ".join(out.split()), out

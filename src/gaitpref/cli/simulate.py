@@ -224,12 +224,13 @@ def _partial(given: Path | None, command: str) -> Path:
 RUN_TABLES = ("runs.csv", "runs.csv.gz", "runs.parquet")
 
 
-def _outputs(out: Path, names: tuple[str, ...]) -> None:
+def _outputs(out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = ()) -> None:
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
     study that stopped: a new study wrote over it, then removed it), a folder where one of the
-    study's files ``names`` goes (the study ran, then died writing it, its results lost), or
-    an earlier study's results there (``names`` or a run table: written over without a word,
-    a quick test with the default ``--out`` replaced a study of hours)."""
+    study's files ``names`` or ``rebuilt`` goes (the study ran, then died writing it, its
+    results lost), or an earlier study's results there (``names`` or a run table: written over
+    without a word, a quick test with the default ``--out`` replaced a study of hours);
+    ``rebuilt`` files (a gait library built from the config) may be made again."""
     kept = out / PARTIAL
     if kept.exists() or kept.is_symlink():
         fail(
@@ -237,7 +238,7 @@ def _outputs(out: Path, names: tuple[str, ...]) -> None:
             "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
             "new study would write over it"
         )
-    for name in names:
+    for name in (*names, *rebuilt):
         if (out / name).is_dir():
             fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
     earlier = [n for n in dict.fromkeys((*RUN_TABLES, *names)) if (out / n).exists()]
@@ -392,9 +393,8 @@ def compass_gait(
     from gaitpref.simulate.tables import write_curves, write_table
 
     table_path = _table_path(out, table)  # before a gait library is built
-    library_file = "gait-library.json" if objective == "hzd" and library is None else ""
-    names = (table_path.name, "curves.csv", "posterior.png", library_file)
-    _outputs(out, tuple(name for name in names if name))
+    rebuilt = ("gait-library.json",) if objective == "hzd" and library is None else ()
+    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt)
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
