@@ -52,6 +52,16 @@ def test_noise_with_a_grid_objective_is_refused(grid_file: Path, noise: str) -> 
     assert runner.invoke(app, [*args, "--noise", "0"]).exit_code == 0
 
 
+@pytest.mark.parametrize("noise", ["nan", "inf", "-1"])
+def test_a_bad_noise_over_points_is_refused_naming_the_option(points_spec: str, noise: str) -> None:
+    """It said 'noise must be a finite number >= 0', not naming --noise."""
+    args = ["simulate", "synthetic-2d", "--objective", points_spec, "--trials", "2"]
+    result = runner.invoke(app, [*args, "--noise", noise])
+    assert result.exit_code == 2, result.output
+    assert "--noise must be a finite number >= 0" in result.output
+    assert "Traceback" not in result.output
+
+
 def test_noise_with_rating_quantiles_is_refused(tmp_path: Path, points_spec: str) -> None:
     """--rating-quantiles runs the grid's subject even for a function over points."""
     from gaitpref.config import load_config
@@ -90,3 +100,26 @@ def test_demo_refuses_a_file_as_its_out_folder_before_running(
     assert result.exit_code == 2, result.output
     assert f"--out {str(out)!r}" in " ".join(result.output.split())
     assert file.read_text(encoding="utf-8") == "a file"
+
+
+def test_demo_labels_the_trials_it_ran(tmp_path: Path) -> None:
+    """The summary said 'trials 1-25: ..., 126-150: ...' whatever --trials was (with 30 trials,
+    the means of trials 1-25 and 6-30)."""
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--trials", "30"])
+    assert result.exit_code == 0, result.output
+    text = " ".join(result.output.split())
+    assert "mean normalized objective over trials 1-25: " in text and ", 6-30: " in text
+    assert "126-150" not in text
+
+
+@pytest.mark.parametrize("given", [["--rating-noise", "0.3"], ["--rating-quantiles", ""]])
+def test_rating_options_without_a_rater_are_refused_over_points(
+    points_spec: str, given: list[str]
+) -> None:
+    """With a function over points, --rating-noise without --rating-quantiles (and an empty
+    --rating-quantiles) was ignored, the run made without a rater; with a .npy objective both
+    were refused."""
+    args = ["simulate", "synthetic-2d", "--objective", points_spec, "--trials", "2", *given]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 2, result.output
+    assert "--rating-" in result.output and "Traceback" not in result.output

@@ -104,6 +104,8 @@ def test_bench_continuous_names_the_failed_run_and_keeps_the_finished_ones(
     assert f"objective {obj!r}, seed 2 failed (ValueError): the treadmill stopped" in text
     assert f"2 of 4 runs finished; their results are in {partial}" in text
     assert _lines(partial) == runs[:2]  # the runs before it, as the JSON gives them
+    documented = ["seed", "trials", "points", "objective", "best_point", "best_objective"]
+    assert list(runs[0]) == documented  # docs/sweeps.md's line (it left out trials)
 
 
 def test_bench_continuous_keeps_them_in_a_temporary_file_by_default(
@@ -141,18 +143,19 @@ def test_a_bench_that_finishes_or_fails_first_leaves_no_partial_file(
 def test_input_refused_before_any_run_is_status_2_and_keeps_no_file(
     continuous_args: list[str], population_file: Path, tmp_path: Path
 ) -> None:
-    """A noise no subject can have is refused as input, not as every run's failure."""
+    """A noise no subject can have is refused as input, not as every run's failure, naming
+    the option (both said 'noise must be ...', for --user-noise too)."""
     partial = tmp_path / "kept.jsonl"
     result = CliRunner().invoke(
         app, [*continuous_args, "--noise", "inf", "--partial", str(partial)]
     )
     assert result.exit_code == 2, result.output
-    assert "noise must be a finite number >= 0, got inf" in _text(result.stderr)
+    assert "--noise must be a finite number >= 0, got inf" in _text(result.stderr)
     args = ["bench", "population", "--objectives", str(population_file), "--trials", "2",
             "--config", POPULATION, "--user-noise", "inf", "--partial", str(partial)]  # fmt: skip
     result = CliRunner().invoke(app, args)
     assert result.exit_code == 2, result.output
-    assert "noise must be a finite number >= 0, got inf" in _text(result.stderr)
+    assert "--user-noise must be a finite number >= 0, got inf" in _text(result.stderr)
     assert not partial.exists()
 
 

@@ -60,3 +60,68 @@ def test_notes_past_the_limit_are_refused_before_the_study(
     assert result.exit_code == 2, result.output
     assert f"--notes {str(notes)!r} is larger than" in " ".join(result.output.split())
     assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_the_ray_backend_without_ray_is_refused_before_the_output_folder_is_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, study: str
+) -> None:
+    """Ray not installed was found only when the runs started: the progress bar drawn, the
+    ``--out`` folder made (and ``compass-gait --objective hzd`` had built its gait library)."""
+    import sys
+
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before the options were checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray: ImportError
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), "--backend", "ray"]
+    if study == "compass-gait":
+        args += ["--objective", "hzd"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert "--backend ray: the Ray backend needs Ray: pip install 'gaitpref[ray]'" in text
+    assert not out.exists()
+
+
+def test_negative_iterations_are_refused_by_name_before_a_gait_library_is_built(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``--iterations 1,-5`` was refused by the posterior replay, after ``--objective hzd``
+    had built its gait library, as 'iterations must be non-negative counts'."""
+    import gaitpref.simulate.compass
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a gait library was built before --iterations was checked")
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", never)
+    out = tmp_path / "out"
+    args = ["bench", "compass-gait", "--objective", "hzd", "--out", str(out)]
+    result = CliRunner().invoke(app, [*args, "--iterations", "1,-5"])
+    assert result.exit_code == 2, result.output
+    assert "--iterations must be counts >= 0, got '1,-5'" in " ".join(result.output.split())
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["paper-2d", "compass-gait"])
+def test_a_ray_address_where_nothing_listens_is_refused_before_the_output_folder_is_made(
+    tmp_path: Path, study: str
+) -> None:
+    """It was refused once the runs started: the progress bar drawn, an empty --out left."""
+    import socket
+
+    pytest.importorskip("ray")
+    with socket.socket() as free:  # a port nothing listens on once closed
+        free.bind(("127.0.0.1", 0))
+        port = free.getsockname()[1]
+    out = tmp_path / "out"
+    args = ["bench", study, "--runs", "1", "--trials", "2", "--out", str(out), "--backend", "ray"]
+    result = CliRunner().invoke(app, [*args, "--address", f"127.0.0.1:{port}"])
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert f"--address: could not reach the Ray cluster at '127.0.0.1:{port}'" in text
+    assert not out.exists()

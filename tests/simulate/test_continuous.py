@@ -230,3 +230,22 @@ def test_runs_over_points_report_their_progress(tmp_path: Path) -> None:
     simulate_points(cfg, builtin("random-gp", cfg.space, 1), trials=5, seed=0,
                     progress=done.append)  # fmt: skip
     assert done == sorted(done) and done[-1] == 5
+
+
+@pytest.mark.parametrize(
+    ("spec", "message"),
+    [
+        ("hartmann6:5", "hartmann6 takes no seed"),  # ran hartmann6, the seed ignored
+        ("hartmann6:", "hartmann6 takes no seed"),
+        ("random-gp:", "the seed after ':' must be an integer >= 0"),  # ran the config's seed
+    ],
+)
+def test_a_builtin_seed_that_is_not_taken_is_refused(spec: str, message: str) -> None:
+    from gaitpref.config import load_config
+    from gaitpref.simulate.continuous import objective_from
+
+    space = load_config("synthetic-6d").space
+    with pytest.raises(ValueError, match=f"objective {spec!r}: {message}"):
+        objective_from(spec, space)
+    result = CliRunner().invoke(app, ["simulate", "synthetic-6d", "--objective", spec])
+    assert result.exit_code == 2 and message in " ".join(result.output.split()), result.output

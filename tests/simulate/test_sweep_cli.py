@@ -56,6 +56,17 @@ def test_paper_2d_refuses_bad_options(tmp_path: Path) -> None:
     assert not (tmp_path / "summary.md").exists()
 
 
+def test_settings_naming_random_selection_alone_are_refused_before_the_study(
+    tmp_path: Path,
+) -> None:
+    """``--settings random`` ran the study, wrote runs.csv and curves.csv, then died drawing
+    the figure (a panel per paper setting, none named) with a ValueError traceback, status 1."""
+    args = ("--runs", "1", "--trials", "3", "--jobs", "1", "--settings", "random")
+    code, out = invoke("paper-2d", *args, "--out", str(tmp_path / "out"))
+    assert code == 2 and "settings name only 'random'" in " ".join(out.split()), out
+    assert "Traceback" not in out and not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("given", [[","], ["", " , "]])
 def test_a_settings_list_that_names_none_is_refused(tmp_path: Path, given: list[str]) -> None:
     """``--settings ,`` split to no name and silently ran all six settings."""
@@ -243,3 +254,80 @@ def test_parquet_without_pyarrow_is_refused_before_the_study_runs(
                        "--table", "parquet", "--out", str(tmp_path))  # fmt: skip
     assert code == 2 and "--table parquet: writing Parquet needs pyarrow" in " ".join(out.split())
     assert "runs in" not in out and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    ("command", "name"),
+    [("paper-2d", "runs.csv"), ("paper-2d", "summary.md"), ("compass-gait", "posterior.png")],
+)
+def test_a_folder_where_an_output_goes_is_refused_before_the_study(
+    tmp_path: Path, command: str, name: str
+) -> None:
+    """The study ran, then died writing that file with an IsADirectoryError traceback, and its
+    partial run table had been removed: every run's result lost."""
+    (tmp_path / name).mkdir()
+    code, out = invoke(
+        command, "--runs", "1", "--trials", "3", "--jobs", "1", "--out", str(tmp_path)
+    )
+    assert code == 2, out
+    assert f"--out '{tmp_path}': {name} is a folder" in " ".join(out.split())
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_results_that_cannot_be_written_keep_the_run_table(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A file that cannot be written after the study finished (a full disk): status 1 and the
+    run table kept in runs.partial.csv, not a traceback with every run lost."""
+    import gaitpref.simulate.figures as figures
+
+    def full(*args: object, **kwargs: object) -> None:
+        raise OSError(28, "No space left on device", str(tmp_path / "curves.png"))
+
+    monkeypatch.setattr(figures, "plot_paper_2d", full)
+    args = ("--runs", "2", "--trials", "3", "--settings", "n1_b1", "--jobs", "1")
+    code, out = invoke("paper-2d", *args, "--out", str(tmp_path))
+    assert code == 1, out
+    text = " ".join(out.split())
+    assert "results could not be written (No space left on device:" in text
+    assert f"the run table is kept in {tmp_path / 'runs.partial.csv'}" in text
+    kept = read_table(tmp_path / "runs.partial.csv")
+    assert len(kept) == 2 * 2 * 3 and kept.equals(read_table(tmp_path / "runs.csv"))
+
+
+@pytest.mark.parametrize("command", ["paper-2d", "compass-gait"])
+def test_an_earlier_studys_results_in_out_are_not_written_over(
+    tmp_path: Path, command: str
+) -> None:
+    """A second study into the same --out (a quick test with the default out/paper-2d after a
+    study of hours) wrote over the first's run table, curves and figures without a word."""
+    args = ("--runs", "1", "--trials", "3", "--jobs", "1", "--out", str(tmp_path))
+    code, out = invoke(command, *args)
+    assert code == 0, out
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    code, out = invoke(command, *args, "--seed", "1", "--table", "parquet")
+    assert code == 2, out
+    text = " ".join(out.split())
+    assert f"--out '{tmp_path}' holds an earlier study's results (runs.csv, curves.csv" in text
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_a_gait_library_left_in_out_is_built_again_but_not_a_folder_in_its_place(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """--objective hzd without --library saves OUT/gait-library.json, the config's library
+    built again the same: one there is no earlier study's result (docs/results/README.md)."""
+    import gaitpref.simulate.compass
+
+    def built(*args: object, **kwargs: object) -> None:
+        raise ValueError("built")  # the options passed: the library would be built now
+
+    monkeypatch.setattr(gaitpref.simulate.compass, "compass_objective", built)
+    (tmp_path / "gait-library.json").write_text("{}", encoding="utf-8")
+    args = ("--objective", "hzd", "--runs", "1", "--trials", "3", "--out", str(tmp_path))
+    code, out = invoke("compass-gait", *args)
+    assert code == 2 and "error: built" in out, out
+    (tmp_path / "gait-library.json").unlink()
+    (tmp_path / "gait-library.json").mkdir()
+    code, out = invoke("compass-gait", *args)
+    assert code == 2 and "gait-library.json is a folder" in " ".join(out.split()), out

@@ -134,10 +134,42 @@ def test_the_cli_names_the_failed_run_and_keeps_the_finished_ones(
     assert len(table) == 3 * 6  # the three runs before it
     assert not (tmp_path / "runs.csv").exists() and not (tmp_path / "curves.csv").exists()
     monkeypatch.undo()
+    again = CliRunner().invoke(app, [*args, "--jobs", "1", "--out", str(tmp_path)])
+    assert again.exit_code == 2, again.output  # the kept runs are not written over
+    assert "holds runs.partial.csv" in " ".join(again.output.split())
+    assert read_table(tmp_path / "runs.partial.csv").equals(table)
+    (tmp_path / "runs.partial.csv").rename(tmp_path / "earlier.csv")
     ok = CliRunner().invoke(app, [*args, "--jobs", "1", "--out", str(tmp_path)])
     assert ok.exit_code == 0, ok.output
     assert not (tmp_path / "runs.partial.csv").exists()  # a study that finished: its tables
     assert (tmp_path / "runs.csv").exists()
+
+
+@pytest.mark.parametrize("command", ["paper-2d", "compass-gait"])
+def test_a_partial_table_left_in_out_is_not_written_over(tmp_path: Path, command: str) -> None:
+    """``OUT/runs.partial.csv`` holds the finished runs of a study that stopped: a new study
+    into that folder truncated it as it started and removed it when it finished (or when it was
+    interrupted before any run finished), the earlier runs lost.  Refused before any run."""
+    from gaitpref.cli import app
+
+    kept = tmp_path / "runs.partial.csv"
+    kept.write_text("setting,objective\nearlier,1\n", encoding="utf-8")
+    args = ["bench", command, "--runs", "1", "--trials", "3", "--jobs", "1", "--out", str(tmp_path)]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert f"--out '{tmp_path}' holds runs.partial.csv" in text and "Traceback" not in text
+    assert kept.read_text(encoding="utf-8") == "setting,objective\nearlier,1\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["runs.partial.csv"]
+
+
+def test_run_study_refuses_a_partial_file_that_exists(study: Study, tmp_path: Path) -> None:
+    """``run_study(partial=...)`` opened the file for writing: an existing one was truncated."""
+    kept = tmp_path / "runs.partial.csv"
+    kept.write_text("earlier runs\n", encoding="utf-8")
+    with pytest.raises(FileExistsError, match=r"already exists .* would be written over"):
+        run_study(study, jobs=1, partial=kept)
+    assert kept.read_text(encoding="utf-8") == "earlier runs\n"
 
 
 def _tasks_with(tasks: object, objective: object, index: int = BROKEN) -> object:
@@ -149,3 +181,26 @@ def _tasks_with(tasks: object, objective: object, index: int = BROKEN) -> object
         return out
 
     return broken
+
+
+class _Interrupting:
+    """An objective whose reading is interrupted (Ctrl-C while its run runs)."""
+
+    def __array__(self, dtype: object = None, copy: object = None) -> object:
+        raise KeyboardInterrupt
+
+
+def test_an_interrupted_study_says_where_the_finished_runs_are(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C kept OUT/runs.partial.csv but said nothing (a bench's file is a new name in the
+    temporary folder): status 130 and the file named."""
+    from gaitpref.cli import app
+
+    monkeypatch.setattr(Study, "tasks", _tasks_with(Study.tasks, _Interrupting(), 2))
+    args = ["bench", "paper-2d", "--runs", "2", "--trials", "4", "--settings", "n1_b1"]
+    result = CliRunner().invoke(app, [*args, "--jobs", "1", "--out", str(tmp_path)])
+    assert result.exit_code == 130, result.output
+    kept = tmp_path / "runs.partial.csv"
+    assert f"interrupted; the runs that finished are in {kept}" in " ".join(result.output.split())
+    assert len(read_table(kept)) == 2 * 4  # the two runs before it

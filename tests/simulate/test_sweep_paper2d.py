@@ -43,6 +43,8 @@ def test_the_study_is_run_k_on_objective_k() -> None:
         paper_2d_study(settings=["n4_b0"])
     with pytest.raises(ValueError, match="no setting named"):  # not all six
         paper_2d_study(settings=[])
+    with pytest.raises(ValueError, match="settings name only 'random'"):
+        paper_2d_study(settings=["random"], baseline=False)
     with pytest.raises(ValueError, match=r"runs must be 1\.\.100"):
         paper_2d_study(runs=101)
 
@@ -124,6 +126,19 @@ def test_a_tiny_real_study_is_summarized(small_machine: MachineInfo) -> None:
     assert "coactive feedback helps at (n, b) = (1, 1)" in text
     assert "learns slowest" not in text  # needs all three (n, b)
     assert result.table.settings == ("n1_b1", "n1_b1_coactive", "random")
+
+
+def test_one_run_per_setting_leaves_out_the_checks_against_the_published_means(
+    small_machine: MachineInfo,
+) -> None:
+    """With --runs 1 every z is NaN (no standard error) and each such check was reported as
+    failed: '[ ] ... z = +nan', 'does NOT hold: n1_b1: mean not more than 3 ...'."""
+    study = paper_2d_study(runs=1, trials=25, settings=["n1_b1", "n1_b1_coactive"])
+    result = run_study(study, jobs=1)
+    text = paper_2d_summary(result, published_curves(), small_machine)
+    assert "mean not more than 3 combined SE below" not in text and "z = +nan" not in text
+    assert "One run per setting has no standard error" in text
+    assert "coactive feedback helps at (n, b) = (1, 1)" in text
 
 
 @pytest.fixture

@@ -172,6 +172,42 @@ def test_studies_refuse_non_integer_counts_and_an_n_past_the_grid(small_study: S
     assert same.seeds == (0, 1) and same.objective_ids == (0, 5, 7)
 
 
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"noise": float("nan")}, "noise must be a number > 0 with a finite square, got nan"),
+        ({"noise": 0.0}, "noise must be a number > 0"),
+        ({"user_noise": -1.0}, "user_noise must be a finite number >= 0, got -1.0"),
+        ({"user_noise": float("inf")}, "user_noise must be a finite number >= 0, got inf"),
+        ({"user_noise": "0.1"}, "user_noise must be a finite number >= 0, got '0.1'"),
+        ({"minimize": "no"}, "minimize must be true or false, got 'no'"),
+        ({"seeds": 5}, "seeds must be a sequence of integers, got 5"),
+    ],
+)
+def test_studies_refuse_noises_minimize_and_seeds_of_the_wrong_value_by_key(
+    small_study: Study, changes: dict[str, object], message: str
+) -> None:
+    """A bad noise or user_noise was accepted and failed as every run's error ('noise must
+    be ...', naming no field), minimize="no" minimized, seeds=5 was a TypeError ('int' object
+    is not iterable)."""
+    with pytest.raises(ValueError, match=f"study {small_study.name!r}: {message}"):
+        _replaced(small_study, **changes)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"name": 5}, "setting name must be text, got 5"),  # a TypeError from 'in'
+        ({"name": "s", "config": 5}, "setting 's': config must be TOML text, got 5"),
+    ],
+)
+def test_a_setting_name_or_config_not_text_is_refused_by_key(
+    kwargs: dict[str, object], message: str
+) -> None:
+    with pytest.raises(ValueError, match=message):
+        Setting(n=2, **kwargs)  # type: ignore[arg-type]
+
+
 def test_no_more_workers_than_runs() -> None:
     """jobs = 8 for two runs started eight worker processes (a thousand for --jobs 1000)."""
     from gaitpref.data import paper_objectives

@@ -254,7 +254,9 @@ def simulate(
 
     cfg = _load_config_or_fail(config)
     use_seed = cfg.seed if seed is None else seed
-    if not is_grid_objective(objective) and not rating_quantiles:
+    if not is_grid_objective(objective) and rating_quantiles is None:
+        if rating_noise != 0:  # there is no rater to take it: it was ignored (nan too)
+            fail("--rating-noise needs --rating-quantiles (the simulated rater)")
         if minimize:  # the subject over points prefers higher values: it was ignored
             fail(
                 f"--minimize: objective {objective!r} is a function over points, and those are "
@@ -399,9 +401,10 @@ def demo(
     )
     figure = save_posterior_figure(pic, out / "posterior.png")
     score = result.normalized_objective
+    first, last = min(25, trials), max(1, trials - 24)  # labelled 1-25 and 126-150 whatever ran
     console.print(
-        f"{trials} trials in {elapsed:.2f} s; mean normalized objective over trials 1-25: "
-        f"{score[:25].mean():.3f}, 126-150: {score[-25:].mean():.3f}; "
+        f"{trials} trials in {elapsed:.2f} s; mean normalized objective over trials 1-{first}: "
+        f"{score[:first].mean():.3f}, {last}-{trials}: {score[last - 1 :].mean():.3f}; "
         f"the posterior's best action scores {_norm(objective, result.posterior_argmax):.3f}"
     )
     console.print(f"figure: [bold]{escape(str(figure))}[/]", markup=True)

@@ -12,6 +12,7 @@ study runs its runs: a run that fails stops the rest and keeps the finished ones
 from __future__ import annotations
 
 import json
+import math
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -75,7 +76,6 @@ def check_bench_points(
     ValueError.  Returns every run's objective spec and the first run's objective."""
     from gaitpref.limits import MAX_RUNS, MAX_STUDY_TRIALS, MAX_TRIALS
     from gaitpref.simulate.continuous import objective_from
-    from gaitpref.simulate.users import check_user_noise
 
     if not 1 <= runs <= MAX_RUNS:  # the runs' list is made first: 10**12 was a MemoryError
         raise ValueError(f"--runs must be 1 to {MAX_RUNS}, got {runs}")
@@ -86,7 +86,7 @@ def check_bench_points(
             f"--runs {runs} x --trials {trials} is {runs * trials} trials, more than "
             f"{MAX_STUDY_TRIALS}; give fewer runs or trials"
         )
-    check_user_noise(noise)  # refused here, not as every run's failure
+    check_noise(noise, "--noise")  # refused here, not as every run's failure
     specs = [f"random-gp:{k}" if spec == "random-gp" else spec for k in range(runs)]
     return specs, objective_from(specs[0], cfg.space, cfg.seed)
 
@@ -109,7 +109,8 @@ def bench_points(
     Everything :func:`check_bench_points` checks is checked before any run (a ValueError); a run
     that fails stops the rest with :class:`~gaitpref.simulate.partial.RunError` naming it
     (objective and seed), the finished runs on it as their JSON (``{"seed": k, ...}``), and in
-    ``partial`` (JSON lines, written as each run finishes, removed once every run has).
+    ``partial`` (a new file of JSON lines, written as each run finishes, removed once every
+    run has; one that exists is refused, ``FileExistsError``).
     ``checked``: what :func:`check_bench_points` returned for the same arguments (not checked
     again, the first objective not made again).
     """
@@ -168,11 +169,19 @@ def report(cfg: ExperimentConfig, result: PointsResult, seed: int, elapsed: floa
     console.print(f"simulated {curve.size} trials in {elapsed:.2f} s (wall clock)")
 
 
+def check_noise(noise: float, option: str) -> None:
+    """A simulated subject's probit noise given as ``option``: a finite number >= 0, else a
+    ValueError naming the option (it said 'noise must be ...', for --user-noise too)."""
+    if not (math.isfinite(noise) and noise >= 0):
+        raise ValueError(f"{option} must be a finite number >= 0, got {noise!r}")
+
+
 def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coactive: bool,
                 noise: float, as_json: bool) -> None:  # fmt: skip
     """``gaitpref simulate`` with a point objective."""
     from gaitpref.cli.main import progress_bar
 
+    guard(lambda: check_noise(noise, "--noise"))
     objective = load_point_objective(spec, cfg)
     start = time.perf_counter()
     with progress_bar(transient=True, shown=not as_json) as bar:  # trials: it said nothing
@@ -194,6 +203,7 @@ def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coacti
 __all__ = [
     "bench_points",
     "check_bench_points",
+    "check_noise",
     "is_grid_objective",
     "load_point_objective",
     "report",

@@ -18,7 +18,8 @@ from __future__ import annotations
 
 import secrets
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, TypeVar
 
@@ -121,13 +122,21 @@ def _integers(text: str, option: str) -> list[int]:
 def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
     """``--backend``, checked with ``--jobs`` and ``--address`` before the output folder is made
     (refused by the run itself, they left an empty ``--out`` folder)."""
-    from gaitpref.simulate.sweep import BACKENDS, check_backend, resolve_jobs
+    from gaitpref.simulate.sweep import BACKENDS, check_backend, probe_address, resolve_jobs
 
     if backend not in BACKENDS:
         fail(f"--backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
 
     def check() -> None:
-        check_backend(backend, address)
+        try:
+            check_backend(backend, address)
+        except RuntimeError as exc:  # Ray not installed
+            fail(f"--backend {backend}: {exc}")
+        if backend == "ray" and address is not None:
+            try:  # a HOST:PORT where nothing listens
+                probe_address(address)
+            except RuntimeError as exc:
+                fail(f"--address: {exc}")
         resolve_jobs(jobs)
 
     guard(check)
@@ -145,18 +154,47 @@ def _run(
     return _stopping(
         lambda: run_study(
             study, backend, jobs, address, progress=True, console=_console, partial=partial
-        )
+        ),
+        partial,
     )
 
 
-def _stopping(sweep: Callable[[], T]) -> T:
+@contextmanager
+def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
+    """Write a finished study's files; when one cannot be written (a full disk, a folder made
+    at its name meanwhile), keep the run table in ``OUT/runs.partial.csv`` and exit with
+    status 1 saying so (a traceback before, and every run's result lost)."""
+    from gaitpref.simulate.tables import write_table
+
+    try:
+        yield
+    except OSError as exc:
+        what = f"{exc.strerror or exc}" + (f": {exc.filename}" if exc.filename else "")
+        kept = out / PARTIAL
+        try:
+            with open(kept, "x", encoding="utf-8"):  # never over an earlier study's runs
+                pass
+            write_table(result.table, kept)
+            where = f"the run table is kept in {kept}"
+        except OSError as again:
+            where = f"nor could the run table be kept in {kept} ({again.strerror or again})"
+        fail(f"the study finished but its results could not be written ({what}); {where}", 1)
+
+
+def _stopping(sweep: Callable[[], T], partial: Path) -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
-    finish; refused input as :func:`report` says."""
+    finish; refused input as :func:`report` says; an interrupt (Ctrl-C) after some run finished
+    exits with status 130 naming ``partial``, where they are (it said nothing, and a bench's
+    file is a new name in the temporary folder)."""
     from gaitpref.simulate.partial import RunError
 
     try:
         return sweep()
+    except KeyboardInterrupt:
+        if partial.exists():
+            fail(f"interrupted; the runs that finished are in {partial}", 130)
+        raise
     except RunError as exc:
         fail(str(exc), 1)
     except HANDLED as exc:
@@ -179,6 +217,36 @@ def _partial(given: Path | None, command: str) -> Path:
         return given
     name = f"gaitpref-bench-{command}-{secrets.token_hex(4)}.partial.jsonl"
     return Path(tempfile.gettempdir()) / name
+
+
+#: a study's run table in every format ``--table`` writes (a rerun in another format left the
+#: earlier table beside the new curves)
+RUN_TABLES = ("runs.csv", "runs.csv.gz", "runs.parquet")
+
+
+def _outputs(out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = ()) -> None:
+    """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
+    study that stopped: a new study wrote over it, then removed it), a folder where one of the
+    study's files ``names`` or ``rebuilt`` goes (the study ran, then died writing it, its
+    results lost), or an earlier study's results there (``names`` or a run table: written over
+    without a word, a quick test with the default ``--out`` replaced a study of hours);
+    ``rebuilt`` files (a gait library built from the config) may be made again."""
+    kept = out / PARTIAL
+    if kept.exists() or kept.is_symlink():
+        fail(
+            f"--out {str(out)!r} holds {PARTIAL}, the finished runs of a study that stopped "
+            "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
+            "new study would write over it"
+        )
+    for name in (*names, *rebuilt):
+        if (out / name).is_dir():
+            fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
+    earlier = [n for n in dict.fromkeys((*RUN_TABLES, *names)) if (out / n).exists()]
+    if earlier:
+        fail(
+            f"--out {str(out)!r} holds an earlier study's results ({', '.join(earlier)}): give "
+            "another --out, or move them away; a new study would write over them"
+        )
 
 
 def _folder(out: Path) -> None:
@@ -268,6 +336,7 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
+    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"))
     checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
@@ -275,11 +344,12 @@ def paper_2d(
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
-    write_table(result.table, table_path)
-    write_curves(result.curves, out / "curves.csv")
-    plot_paper_2d(result.curves, published, out / "curves.png")
-    summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
-    (out / "summary.md").write_text(summary, encoding="utf-8")
+    with _keeping(result, out):
+        write_table(result.table, table_path)
+        write_curves(result.curves, out / "curves.csv")
+        plot_paper_2d(result.curves, published, out / "curves.png")
+        summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
+        (out / "summary.md").write_text(summary, encoding="utf-8")
     _console.print(
         f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, {result.jobs} jobs); "
         f"wrote {out}/curves.csv, {table_path.name}, curves.png, summary.md"
@@ -323,6 +393,8 @@ def compass_gait(
     from gaitpref.simulate.tables import write_curves, write_table
 
     table_path = _table_path(out, table)  # before a gait library is built
+    rebuilt = ("gait-library.json",) if objective == "hzd" and library is None else ()
+    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt)
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
@@ -331,6 +403,8 @@ def compass_gait(
                 f"--iterations: at most {MAX_SNAPSHOTS} counts, each at most {MAX_TRIALS}, "
                 f"got {iterations!r}"
             )
+        if min(its) < 0:  # refused by the replay after a gait library was built, unnamed
+            raise ValueError(f"--iterations must be counts >= 0, got {iterations!r}")
         if not 1 <= runs <= MAX_RUNS:  # as compass_gait_study says, but before a build
             raise ValueError(f"--runs must be 1 to {MAX_RUNS}, got {runs}")
         arms = 2 if baseline else 1  # the study's settings; refused before a library is built
@@ -361,16 +435,17 @@ def compass_gait(
     result = _run(study, checked, jobs, address, out)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
-    write_table(result.table, table_path)
-    write_curves(result.curves, out / "curves.csv")
-    plot_compass_gait(
-        obj.space.features[0].array,
-        obj.cot,
-        snapshots,
-        out / "posterior.png",
-        result.curves,
-        obj.label,
-    )
+    with _keeping(result, out):
+        write_table(result.table, table_path)
+        write_curves(result.curves, out / "curves.csv")
+        plot_compass_gait(
+            obj.space.features[0].array,
+            obj.cot,
+            snapshots,
+            out / "posterior.png",
+            result.curves,
+            obj.label,
+        )
     _console.print(
         f"{len(study)} runs in {result.seconds:.1f} s; wrote {out}/curves.csv, {table_path.name}, "
         "posterior.png"
@@ -405,8 +480,10 @@ def population(
 
     import numpy as np
 
+    from gaitpref.cli.points import check_noise
     from gaitpref.simulate.population import population_bench
 
+    guard(lambda: check_noise(user_noise, "--user-noise"))  # inf passed the option's min=0
     arr = read_array(objectives, "objectives file")
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "population")
@@ -417,7 +494,7 @@ def population(
             partial=kept,
         )  # fmt: skip
 
-    result = _stopping(run)
+    result = _stopping(run, kept)
     if as_json:
         typer.echo(json.dumps(result))
         return
@@ -469,7 +546,8 @@ def continuous(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
                 partial=kept, checked=checked,
-            )
+            ),
+            kept,
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])

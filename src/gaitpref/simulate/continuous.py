@@ -144,10 +144,12 @@ def load_function(spec: str) -> PointObjective:
 def objective_from(spec: str, space: Space, seed: int = 0) -> PointObjective:
     """``PATH.py:NAME``, ``hartmann6``, ``random-gp`` or ``random-gp:SEED``, checked on two
     points of ``space`` (``m`` finite utilities for ``m`` points)."""
-    head, _, tail = spec.partition(":")
+    head, sep, tail = spec.partition(":")
     if head in BUILTINS:
+        if sep and head != "random-gp":  # hartmann6:5 ran hartmann6, the seed ignored
+            raise ValueError(f"objective {spec!r}: {head} takes no seed; give {head!r}")
         digits = tail.lstrip("0")  # past MAX_SEED's 19 digits: refused before int() reads it
-        if tail and not (
+        if sep and not (
             tail.isascii() and tail.isdigit() and len(digits) <= 19 and int(digits or 0) <= MAX_SEED
         ):
             raise ValueError(

@@ -227,8 +227,9 @@ def population_bench(
 
     A run that fails stops the bench with :class:`~gaitpref.simulate.partial.RunError` naming
     it (subject, cold or warm, seed), its error the ``__cause__``, the finished runs on it as
-    :func:`walked_record` records; ``partial``: a file each finished run's record is appended
-    to as it finishes (JSON lines), removed once every run has finished.
+    :func:`walked_record` records; ``partial``: a new file each finished run's record is
+    appended to as it finishes (JSON lines), removed once every run has finished (one that
+    exists is refused, ``FileExistsError``, not written over).
 
     ``trials`` is at most :data:`~gaitpref.limits.MAX_TRIALS`, and subjects x the gaits each
     run may visit at most :data:`~gaitpref.limits.MAX_POPULATION_NODES`: refused (a ValueError)

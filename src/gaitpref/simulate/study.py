@@ -35,6 +35,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from gaitpref.checks import is_noise, is_number
 from gaitpref.config import ExperimentConfig, read_toml
 from gaitpref.config.feedback import parse_rating, parse_safety
 from gaitpref.errors import ConfigError, NoSafeGaitError
@@ -100,7 +101,11 @@ class Setting:
     config: str = ""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str):  # a TypeError from 'in' (an int), or "None" below
+            raise ValueError(f"setting name must be text, got {self.name!r}")
         where = f"setting {self.name!r}"
+        if not isinstance(self.config, str):  # an AttributeError from the TOML reader
+            raise ValueError(f"{where}: config must be TOML text, got {self.config!r}")
         for key in ("n", "buffer"):
             object.__setattr__(self, key, _integer(getattr(self, key), f"{where}: {key}"))
         if not isinstance(self.coactive, bool | np.bool_):
@@ -308,8 +313,26 @@ class Study:
         obj = obj.copy()
         obj.setflags(write=False)
         where = f"study {self.name!r}"
+        # refused here, by key, not as every run's failure naming no field (or, for minimize,
+        # taken by truth: minimize="no" minimized)
+        if not is_noise(self.noise):
+            noise = self.noise
+            raise ValueError(
+                f"{where}: noise must be a number > 0 with a finite square, got {noise!r}"
+            )
+        if not (is_number(self.user_noise) and 0 <= self.user_noise < np.inf):
+            raise ValueError(
+                f"{where}: user_noise must be a finite number >= 0, got {self.user_noise!r}"
+            )
+        if not isinstance(self.minimize, bool | np.bool_):
+            raise ValueError(f"{where}: minimize must be true or false, got {self.minimize!r}")
         if not isinstance(self.seeds, Sequence | np.ndarray):  # an iterator: counted once
-            object.__setattr__(self, "seeds", tuple(self.seeds))
+            try:
+                object.__setattr__(self, "seeds", tuple(self.seeds))
+            except TypeError:  # seeds=5: "'int' object is not iterable", naming no field
+                raise ValueError(
+                    f"{where}: seeds must be a sequence of integers, got {self.seeds!r}"
+                ) from None
         runs = len(settings) * obj.shape[0] * len(self.seeds)
         if runs > MAX_RUNS:
             raise ValueError(

@@ -126,8 +126,10 @@ def run_study(
     """Run every run of ``study`` and collect the tidy table and curves.
 
     A run that fails stops the study with :class:`~gaitpref.simulate.partial.StudyRunError`
-    (the run named, the finished runs kept on it); ``partial``: a ``.csv`` file each finished
-    run is appended to as it finishes, removed once every run has finished.
+    (the run named, the finished runs kept on it); ``partial``: a new ``.csv`` file each
+    finished run is appended to as it finishes, removed once every run has finished (one that
+    exists is refused, ``FileExistsError``: it may hold the finished runs of a study that
+    stopped).
     """
     check_backend(backend, address)
     tasks = study.tasks()
@@ -156,11 +158,15 @@ def run_study(
 
 
 def check_backend(backend: str, address: str | None) -> None:
-    """Refuse a backend that is not one of :data:`BACKENDS`, or an address without Ray."""
+    """Refuse a backend that is not one of :data:`BACKENDS`, an address without Ray, or the
+    Ray backend where Ray is not installed (``RuntimeError``; found only when the runs started,
+    the benches had made their output folder, or built a gait library, before)."""
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
     if address is not None and backend != "ray":
         raise ValueError("address is for the Ray backend (--backend ray)")
+    if backend == "ray":
+        _import_ray()
 
 
 def run_tasks(
@@ -279,7 +285,7 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     if address is None:
         options["num_cpus"] = resolve_jobs(jobs)
     else:
-        _probe(address)
+        probe_address(address)
     os.environ.setdefault("RAY_DEDUP_LOGS", "0")
     try:
         ray.init(address=address, **options)
@@ -289,9 +295,10 @@ def start_ray(address: str | None = None, jobs: int | None = None) -> bool:
     return True
 
 
-def _probe(address: str, timeout: float = 5.0) -> None:
-    """Refuse a ``HOST:PORT`` address where nothing listens (Ray retried it for minutes, its
-    warnings the only output); ``auto`` and ``ray://`` addresses Ray itself answers at once."""
+def probe_address(address: str, timeout: float = 5.0) -> None:
+    """Refuse (``RuntimeError``) a ``HOST:PORT`` address where nothing listens (Ray retried it
+    for minutes, its warnings the only output); ``auto`` and ``ray://`` addresses Ray itself
+    answers at once.  The benches call it before they make their output folder."""
     host, sep, port = address.rpartition(":")
     if "://" in address or not sep or not port.isdigit():
         return

@@ -242,12 +242,21 @@ def _write_rows(w: Any, table: RunTable) -> None:
 
 class RecordFile:
     """A text file written a record at a time, each record flushed and counted (``appended``),
-    so that what was written survives what stops the rest; ``newline`` as :func:`open`'s."""
+    so that what was written survives what stops the rest; ``newline`` as :func:`open`'s.
+
+    The file must be new (``FileExistsError`` naming it otherwise): one left by a sweep that
+    stopped holds its finished runs, and was written over, then removed."""
 
     def __init__(self, path: str | Path, newline: str | None = None) -> None:
         self.path = Path(path)
         self.appended = 0
-        self._fh: IO[str] | None = open(self.path, "w", encoding="utf-8", newline=newline)  # noqa: SIM115
+        try:
+            self._fh: IO[str] | None = open(self.path, "x", encoding="utf-8", newline=newline)  # noqa: SIM115
+        except FileExistsError:
+            raise FileExistsError(
+                f"{self.path} already exists (the finished runs of a sweep that stopped?); "
+                "move it away or give a new file: it would be written over"
+            ) from None
 
     def _open(self) -> IO[str]:
         """The file, while it is open (ValueError once closed)."""
