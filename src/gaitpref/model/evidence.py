@@ -49,7 +49,7 @@ from scipy.linalg import solve_triangular
 
 from gaitpref.checks import is_number
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.laplace import LaplaceMode, fit_laplace
+from gaitpref.model.laplace import LaplaceMode, check_visited, fit_laplace
 from gaitpref.model.likelihood import OrderedProbit, check_scales
 from gaitpref.model.singles import SingleData
 from gaitpref.space import FloatArray, IntArray, Space
@@ -236,6 +236,7 @@ def laplace_evidence(
     if singles is not None:
         singles = singles.at(hyper.thresholds)
     visited, a, b, s = _visited(data, singles)
+    check_visited(visited.shape[0])  # before the m x m prior is built
     kernel = hyper.kernel()
     K = kernel.cross(space, visited, rows=visited)
     m = visited.shape[0]

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from gaitpref.checks import is_noise
 from gaitpref.model.engines import GridEngine, check_grid_size, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
-from gaitpref.model.laplace import fit_laplace
+from gaitpref.model.laplace import check_visited, fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
 from gaitpref.model.ordinal import Ordinal, rating_likelihood
 from gaitpref.model.posterior import Posterior
@@ -155,6 +155,7 @@ class PreferenceGP:
         parts = [first, second] if single is None else [first, second, single]
         visited, inverse = np.unique(np.concatenate(parts), return_inverse=True)
         visited = visited.astype(np.intp)
+        check_visited(visited.size)  # before the m x m prior is built
         a, b = inverse[:n_first].astype(np.intp), inverse[n_first : 2 * n_first].astype(np.intp)
         s = None if single is None else inverse[2 * n_first :].astype(np.intp)
         kernel, space = self.kernel, self.space

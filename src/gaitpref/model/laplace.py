@@ -38,6 +38,23 @@ from gaitpref.model import fit_memo
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
 from gaitpref.space import FloatArray, IntArray
 
+#: The most distinct actions a fit is dense in: ``K_VV`` and the Hessian's factor are ``m x m``
+#: (at this bound 800 MB each, and each Newton step ``O(m^3)``); a session's visited gaits are a
+#: few hundred, but a simulated run of many trials on a large grid or the line path visits a new
+#: gait nearly every trial, and one of ``MAX_TRIALS`` would have asked for tens of gigabytes.
+MAX_VISITED = 10_000
+
+
+def check_visited(m: int) -> None:
+    """Refuse a fit over more than :data:`MAX_VISITED` distinct actions, before its ``m x m``
+    prior covariance is built (``ValueError`` naming the count and the bound)."""
+    if m > MAX_VISITED:
+        raise ValueError(
+            f"the answers involve {m:,} distinct gaits, more than the {MAX_VISITED:,} a posterior "
+            f"is fitted over (dense in them: an {m:,} x {m:,} matrix of "
+            f"{8 * m * m / 1e9:.1f} GB, and O(m^3) work for each answer); ask for fewer trials"
+        )
+
 
 @dataclass(frozen=True)
 class Recipe:
