@@ -8,7 +8,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from gaitpref import MOVES, Feature, Space, load_config
-from gaitpref.space import MAX_LINSPACE_VALUES
+from gaitpref.space import MAX_LINSPACE_VALUES, POINTS_LIMIT_ACTIONS
 
 
 def test_grid_is_c_order_over_features_as_declared(small_space: Space) -> None:
@@ -184,3 +184,40 @@ def test_one_point_does_not_build_the_grid() -> None:
     assert "points" not in vars(space)  # the cached grid was never made
     small = Space([Feature.linspace("a", 0, 1, 7), Feature("b", [0.1, 0.35, 2.0])])
     assert all(np.array_equal(small.point(i), small.points[i]) for i in range(len(small)))
+
+
+def test_every_point_is_refused_past_the_bound_before_allocating() -> None:
+    # 1000^4 actions: points and multi_index asked NumPy for 7.28 TiB (a MemoryError at best)
+    space = Space([Feature.linspace(f"f{k}", 0, 1, 1000) for k in range(4)])
+    for what in ("points", "multi_index"):
+        with pytest.raises(
+            ValueError,
+            match=rf"{what} would hold every one of the grid's "
+            r"1,000,000,000,000 actions \(1000 x 1000 x 1000 x 1000\)",
+        ):
+            getattr(space, what)
+    assert space.point(len(space) - 1).tolist() == [1.0, 1.0, 1.0, 1.0]  # single actions read
+    from gaitpref.model.engines import GRID_LIMIT_ACTIONS
+
+    assert POINTS_LIMIT_ACTIONS == GRID_LIMIT_ACTIONS  # every grid a model takes enumerates
+    at = Space([Feature.linspace("a", 0, 1, 10), Feature.linspace("b", 0, 1, 10**6)])
+    assert len(at) == POINTS_LIMIT_ACTIONS
+    with pytest.raises(ValueError, match="points would hold"):
+        _ = Space([*at.features, Feature("c", [0.0, 1.0])]).points
+
+
+def test_a_continuous_space_has_no_grid_points() -> None:
+    # points was the grid of the continuous feature's two bounds, as if they were its values
+    space = Space([Feature.interval("a", 0.0, 1.0), Feature("b", [1.0, 2.0, 3.0])])
+    for what in ("points", "multi_index"):
+        with pytest.raises(ValueError, match=r"continuous features \(a\) and no finite grid"):
+            getattr(space, what)
+
+
+@pytest.mark.parametrize("sizes", [[1], [3], [3, 4], [2, 1, 5], [4, 3, 2, 2]])
+def test_points_are_every_point_in_flat_index_order(sizes: list[int]) -> None:
+    space = Space([Feature.linspace(f"f{k}", 0, 1 + k, n) for k, n in enumerate(sizes)])
+    grids = np.meshgrid(*(f.array for f in space.features), indexing="ij")
+    assert np.array_equal(space.points, np.stack([g.ravel() for g in grids], axis=1))
+    assert np.array_equal(space.points, space.points_of(list(range(len(space)))))
+    assert np.array_equal(space.multi_index, np.argwhere(np.ones(space.shape, dtype=bool)))

@@ -43,6 +43,10 @@ IntArray = NDArray[np.intp]
 #: The most values :meth:`Feature.linspace` makes: as many as the largest grid a model takes
 #: (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features have at most 10**6.
 MAX_LINSPACE_VALUES = 10_000_000
+#: The most grid points :attr:`Space.points` and :attr:`Space.multi_index` build (``A x d``
+#: arrays): as many as a model on a grid takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``).
+#: Past it they are refused before anything is allocated (a 1000^4 grid asked NumPy for 7 TiB).
+POINTS_LIMIT_ACTIONS = 10_000_000
 
 
 @dataclass(frozen=True)
@@ -271,14 +275,37 @@ class Space:
 
     @cached_property
     def points(self) -> FloatArray:
-        """All grid points, ``A x d``, row ``a`` is the point with flat index ``a``."""
-        grids = np.meshgrid(*(f.array for f in self.features), indexing="ij")
-        return np.stack([g.ravel() for g in grids], axis=1)
+        """All grid points, ``A x d``, row ``a`` is the point with flat index ``a``.
+
+        A continuous space has no grid points (it returned the grid of its bounds before) and a
+        grid past :data:`POINTS_LIMIT_ACTIONS` is refused: ValueError, before anything is
+        allocated (:meth:`point` and :meth:`points_of` read single actions of any grid)."""
+        shape = self._enumerable("points")
+        out = np.empty((math.prod(shape), self.ndim))
+        for j, f in enumerate(self.features):  # each column in place: no A-sized temporaries
+            column = out[:, j].reshape(shape)
+            column[...] = f.array.reshape([-1 if k == j else 1 for k in range(self.ndim)])
+        return out
 
     @cached_property
     def multi_index(self) -> IntArray:
-        """Per-feature value indices of every point, ``A x d``."""
-        return np.stack(np.unravel_index(np.arange(len(self)), self.shape), axis=1).astype(np.intp)
+        """Per-feature value indices of every point, ``A x d`` (refused as :attr:`points`)."""
+        shape = self._enumerable("multi_index")
+        return np.stack(np.unravel_index(np.arange(math.prod(shape)), shape), axis=1).astype(
+            np.intp
+        )
+
+    def _enumerable(self, what: str) -> tuple[int, ...]:
+        """The grid's shape if ``what`` (an ``A x d`` array over every action) may be built."""
+        shape = self.shape  # ValueError for a continuous space
+        size = math.prod(shape)
+        if size > POINTS_LIMIT_ACTIONS:
+            raise ValueError(
+                f"{what} would hold every one of the grid's {size:,} actions ({self.words}); "
+                f"it is built for at most {POINTS_LIMIT_ACTIONS:,}: use point(index) or "
+                "points_of(actions) for the actions wanted"
+            )
+        return shape
 
     def feature_index(self, name: str) -> int:
         try:
