@@ -221,3 +221,39 @@ def test_points_are_every_point_in_flat_index_order(sizes: list[int]) -> None:
     assert np.array_equal(space.points, np.stack([g.ravel() for g in grids], axis=1))
     assert np.array_equal(space.points, space.points_of(list(range(len(space)))))
     assert np.array_equal(space.multi_index, np.argwhere(np.ones(space.shape, dtype=bool)))
+
+
+@pytest.mark.parametrize(
+    ("values", "error", "message"),
+    [
+        # NumPy reads a bool among integers as 0 or 1: [True, 3] was the actions [1, 3]
+        ([True, 3], TypeError, r"actions\[0\] = True is a bool, not a grid index"),
+        ((2, np.True_), TypeError, r"actions\[1\] = np.True_ is a bool"),
+        # an unsigned index past 2**63 was named as a negative one (-9223372036854775803)
+        (np.array([2**63 + 5], dtype=np.uint64), IndexError, r"= 9223372036854775813 is off"),
+        (np.array([2**64 - 1], dtype=np.uint64), IndexError, r"= 18446744073709551615 is off"),
+        # an integer past 64 bits was "dtype object", with [3, 2**63] "dtype float64"
+        ([2**70], IndexError, r"actions\[0\] = 1180591620717411303424 is off the grid \(0\.\.9\)"),
+        ([3, 2**63], IndexError, r"actions\[1\] = 9223372036854775808 is off the grid"),
+        ([3, -(2**70)], IndexError, r"actions\[1\] = -1180591620717411303424 is off"),
+        ([1.0], TypeError, "must hold integer grid indices, got dtype float64"),
+    ],
+)
+def test_indices_name_the_value_given(values: Any, error: type, message: str) -> None:
+    space = Space([Feature.linspace("a", 0, 1, 10)])
+    with pytest.raises(error, match=message):
+        space.check_indices(values)
+
+
+def test_indices_of_every_integer_kind() -> None:
+    space = Space([Feature.linspace("a", 0, 1, 10)])
+    # a list mixing NumPy integer types was read as floats ("got dtype float64")
+    cases: list[tuple[Any, list[int]]] = [
+        ([np.int8(3), 4, np.uint64(9)], [3, 4, 9]),
+        ((0,), [0]),
+        (np.array([9, 3], dtype=np.uint8), [9, 3]),
+    ]
+    for values, expected in cases:
+        idx = space.check_indices(values)
+        assert idx.dtype == np.intp and idx.tolist() == expected
+    assert space.check_indices([]).dtype == np.intp and space.check_indices(()).shape == (0,)

@@ -32,7 +32,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_count, is_number
 
 Move = Literal["+big", "+small", "-small", "-big"]
 MOVES: tuple[Move, ...] = get_args(Move)
@@ -332,6 +332,19 @@ class Space:
         """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
         ``TypeError`` for anything but integers (floats and bools included), ``IndexError`` for
         an index off the grid (negative ones too: they never wrap)."""
+        if isinstance(values, list | tuple):
+            # element by element: NumPy reads [True, 3] as the integers [1, 3], [3, 2**63] as
+            # floats, and an integer past 64 bits as an object
+            for k, v in enumerate(values):
+                if isinstance(v, bool | np.bool_):
+                    raise TypeError(f"{name}[{k}] = {v!r} is a bool, not a grid index")
+            if all(is_count(v) for v in values):
+                for k, v in enumerate(values):
+                    if not 0 <= v < len(self):
+                        raise IndexError(
+                            f"{name}[{k}] = {v} is off the grid ({self._range_words()})"
+                        )
+                return np.asarray(values, dtype=np.intp).reshape(len(values))
         arr = np.asarray(values)
         if arr.ndim != 1:
             raise ValueError(
@@ -339,13 +352,14 @@ class Space:
             )
         if arr.size and not np.issubdtype(arr.dtype, np.integer):
             raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
-        idx = arr.astype(np.intp)
-        bad = (idx < 0) | (idx >= len(self))
+        # the bounds on the values given (an unsigned index past 2**63 read as a negative one)
+        bad = (arr < 0) | (arr >= len(self))
         if np.any(bad):
             raise IndexError(
-                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
+                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(arr[bad][0])} is off the grid "
                 f"({self._range_words()})"
             )
+        idx: IntArray = arr.astype(np.intp)
         return idx
 
     def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
