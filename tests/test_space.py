@@ -93,6 +93,18 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, 1], "unit": None}, "unit must be a string"),  # was 'None'
         # a span of inf: the loop failed later with "a prior's median must be positive"
         ({"name": "x", "values": [-1.7e308, 1.7e308]}, "range of the values must be finite"),
+        # read by NumPy as numbers before: "123" as 123.0, bools as 0 and 1, a table row by row
+        ({"name": "x", "values": "123"}, "'x': values must be numbers, got '123'"),
+        ({"name": "x", "values": ["0.1", "0.2"]}, "values must be numbers"),
+        ({"name": "x", "values": [False, True]}, "values must be numbers"),
+        (
+            {"name": "x", "values": [[0, 1], [2, 3]]},
+            r"values must be a 1-D sequence, got shape \(2, 2\)",
+        ),
+        ({"name": "x", "values": [[0, 1], [2]]}, "values must be numbers"),
+        # "no" is truthy: the feature was continuous
+        ({"name": "x", "values": [0, 1], "continuous": "no"}, "continuous must be True or False"),
+        ({"name": "x", "values": [0, 1], "continuous": 1}, "continuous must be True or False"),
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:
@@ -257,3 +269,13 @@ def test_indices_of_every_integer_kind() -> None:
         idx = space.check_indices(values)
         assert idx.dtype == np.intp and idx.tolist() == expected
     assert space.check_indices([]).dtype == np.intp and space.check_indices(()).shape == (0,)
+
+
+def test_linspace_of_one_value_needs_min_at_most_max() -> None:
+    # num = 1 with max < min was the value max, whatever min said
+    with pytest.raises(ValueError, match=r"'a': max must exceed min, got 5\.0\.\.1\.0"):
+        Feature.linspace("a", 5.0, 1.0, 1)
+    assert Feature.linspace("a", 2.0, 2.0, 1).values == (2.0,)
+    assert Feature("a", 0.5).values == (0.5,)  # one number is one value, as before
+    flag: Any = np.True_
+    assert Feature("a", np.array([1, 2], dtype=np.int8), continuous=flag).continuous is True

@@ -77,10 +77,19 @@ class Feature:
     ) -> None:
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"feature name must be an identifier, got {name!r}")
+        # numbers only: NumPy read "123" as the value 123.0, [False, True] as 0 and 1, and a
+        # table of values as one row after another
         try:
-            arr = np.asarray(values, dtype=np.float64).ravel()
+            raw = None if isinstance(values, str | bytes) else np.asarray(values)
         except (TypeError, ValueError):
-            raise ValueError(f"feature {name!r}: values must be numbers, got {values!r}") from None
+            raw = None
+        if raw is None or raw.dtype.kind not in "iuf":
+            raise ValueError(f"feature {name!r}: values must be numbers, got {values!r}")
+        if raw.ndim > 1:
+            raise ValueError(
+                f"feature {name!r}: values must be a 1-D sequence, got shape {raw.shape}"
+            )
+        arr = raw.astype(np.float64).ravel()
         if arr.size == 0:
             raise ValueError(f"feature {name!r}: needs at least one value")
         if not np.all(np.isfinite(arr)):
@@ -89,6 +98,10 @@ class Feature:
             raise ValueError(f"feature {name!r}: the range of the values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
+        if not isinstance(continuous, bool | np.bool_):  # "no" was truthy: continuous
+            raise ValueError(
+                f"feature {name!r}: continuous must be True or False, got {continuous!r}"
+            )
         if continuous and arr.size != 2:
             raise ValueError(f"feature {name!r}: a continuous feature is given as (min, max)")
         try:
@@ -140,7 +153,7 @@ class Feature:
                 f"feature {name!r}: num must be an integer in 1..{MAX_LINSPACE_VALUES:,}, "
                 f"got {num!r}"
             )
-        if num > 1 and not hi > lo:
+        if (num > 1 and not hi > lo) or hi < lo:  # num = 1 with max < min gave the value max
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
 
