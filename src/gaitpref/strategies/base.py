@@ -30,6 +30,12 @@ MAX_SAMPLES = 4096
 MAX_GATES = 1000
 
 
+def plain(value: object) -> object:
+    """A NumPy scalar as the Python number it holds (others as they are): a setting built from
+    NumPy is stored and shown as one given in Python."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def check_count(settings: object, name: str, low: int, high: int) -> None:
     """The count setting ``name`` of a (frozen) strategy: an integer (not a bool; a NumPy one is
     kept as an ``int``) in ``low..high``."""
