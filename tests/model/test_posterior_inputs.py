@@ -113,3 +113,42 @@ def test_covariance_at_has_the_covariance_limit() -> None:
     with pytest.raises(ValueError, match=f"at most {COVARIANCE_LIMIT_ACTIONS} actions"):
         post.covariance_at(np.zeros(COVARIANCE_LIMIT_ACTIONS + 1, dtype=np.intp))
     assert post.covariance_at([0, 5, 7]).shape == (3, 3)
+
+
+@pytest.mark.parametrize(
+    ("noise", "message"),
+    [
+        # read by NumPy as noises before: True as 1.0, "0.1" as 0.1
+        (True, r"noise must be numbers \(one, or one per comparison\), got True"),
+        ("0.1", "noise must be numbers"),
+        ([np.True_, 0.1], "noise must be numbers"),
+        ([0.1, True], "noise must be numbers"),
+        # its square overflowed in the likelihood (the model's own noise is held to the same)
+        (
+            1e200,
+            r"positive with a finite square \(at most 1.34e\+154\), got 1e\+200 for comparison 0",
+        ),
+        ([0.1, -1.0], r"got -1.0 for comparison 1"),
+        ([0.1, np.nan], r"got nan for comparison 1"),
+    ],
+)
+def test_per_comparison_noise_is_numbers_with_finite_squares(noise: object, message: str) -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    with pytest.raises(ValueError, match=message):
+        gp.posterior([0, 1], [2, 3], noise=noise)  # type: ignore[arg-type]
+
+
+def test_per_comparison_noise_of_any_number_kind() -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    mixed: Any = [np.float32(0.25), 0.1]
+    given = gp.posterior([0, 1], [2, 3], noise=mixed)
+    same = gp.posterior([0, 1], [2, 3], noise=np.array([float(np.float32(0.25)), 0.1]))
+    assert np.array_equal(given.mean, same.mean)
+    assert np.array_equal(
+        gp.posterior([0], [2], noise=1).mean, gp.posterior([0], [2], noise=1.0).mean
+    )
+
+
+def test_the_ordinal_model_is_an_ordinal() -> None:
+    with pytest.raises(TypeError, match=r"ordinal must be a gaitpref\.Ordinal or None, got 5"):
+        PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1, ordinal=5)  # type: ignore[arg-type]
