@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -7,8 +8,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gaitpref import MOVES, Feature, Space, load_config
-from gaitpref.space import MAX_LINSPACE_VALUES, POINTS_LIMIT_ACTIONS
+from gaitpref import MOVES, CoSpar, Feature, PreferenceGP, Space, SquaredExponential, load_config
+from gaitpref.space import MAX_GRID_FEATURES, MAX_LINSPACE_VALUES, POINTS_LIMIT_ACTIONS
 
 
 def test_grid_is_c_order_over_features_as_declared(small_space: Space) -> None:
@@ -279,3 +280,28 @@ def test_linspace_of_one_value_needs_min_at_most_max() -> None:
     assert Feature("a", 0.5).values == (0.5,)  # one number is one value, as before
     flag: Any = np.True_
     assert Feature("a", np.array([1, 2], dtype=np.int8), continuous=flag).continuous is True
+
+
+def test_a_grid_is_indexed_over_at_most_max_grid_features() -> None:
+    # MAX_GRID_FEATURES + 2 features (all but one of one value): 2 actions, and every grid
+    # operation failed in NumPy with "maximum supported dimension for an ndarray is currently
+    # 64, found 66" (32 on NumPy 1)
+    count = MAX_GRID_FEATURES + 1
+    ones = [Feature(f"f{k}", [0.0]) for k in range(count)]
+    at = Space([*ones[:-2], Feature("z", [0.0, 1.0], coactive=(0.5, 1.0))])
+    assert len(at) == 2 and at.index([0.0] * (count - 2) + [1.0]) == 1
+    assert at.coactive_move(0, "z", "+big") == 1 and at.points.shape == (2, count - 1)
+    over = Space([*ones, Feature("z", [0.0, 1.0], coactive=(0.5, 1.0))])
+    assert len(over) == 2 and over.grid_size == 2 and over.words.endswith("x 2")
+    message = rf"the space has {count + 1} features; a grid's actions are indexed over at most"
+    reads: list[Callable[[Space], object]] = [
+        lambda s: s.point(1),
+        lambda s: s.index([0.0] * count + [1.0]),
+        lambda s: s.coactive_move(0, "z", "+big"),
+        lambda s: s.points,
+        lambda s: PreferenceGP(s, SquaredExponential(0.3, 1.0, 1e-6), 0.1),
+        lambda s: CoSpar(s, SquaredExponential(0.3, 1.0, 1e-6), 0.1, seed=0),
+    ]
+    for read in reads:
+        with pytest.raises(ValueError, match=message):
+            read(over)

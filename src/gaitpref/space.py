@@ -47,6 +47,10 @@ MAX_LINSPACE_VALUES = 10_000_000
 #: arrays): as many as a model on a grid takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``).
 #: Past it they are refused before anything is allocated (a 1000^4 grid asked NumPy for 7 TiB).
 POINTS_LIMIT_ACTIONS = 10_000_000
+#: The most features a grid's actions are indexed over: NumPy indexes them over one axis per
+#: feature, and ``ravel_multi_index`` takes one fewer than NumPy's 32 arguments (64 from NumPy
+#: 2).  More features run on the line path, which never indexes a grid.
+MAX_GRID_FEATURES = 63 if np.lib.NumpyVersion(np.__version__) >= "2.0.0" else 31
 
 
 @dataclass(frozen=True)
@@ -238,13 +242,13 @@ class Space:
 
     def __len__(self) -> int:
         # exact: NumPy's product wrapped past 2**63 (64 two-valued features read as 0 actions)
-        size = math.prod(self.shape)
-        if size > sys.maxsize:
+        size = self.grid_size  # None for a continuous space: shape says why below
+        if size is not None and size > sys.maxsize:
             raise OverflowError(
                 f"the grid has {size:,} actions, more than len() can count ({sys.maxsize:,}): "
                 "grid_size gives the number; a model needs a smaller grid or the line path"
             )
-        return size
+        return math.prod(self.shape)
 
     def __iter__(self) -> Iterator[Feature]:
         return iter(self.features)
@@ -270,6 +274,19 @@ class Space:
                 "the line path ([cospar] subspace = 'line')"
             )
         return tuple(len(f) for f in self.features)
+
+    @property
+    def index_shape(self) -> tuple[int, ...]:
+        """:attr:`shape`, where NumPy can index the grid's actions by it (at most
+        :data:`MAX_GRID_FEATURES` features: NumPy's "maximum supported dimension" otherwise)."""
+        shape = self.shape
+        if len(shape) > MAX_GRID_FEATURES:
+            raise ValueError(
+                f"the space has {len(shape)} features; a grid's actions are indexed over at most "
+                f"{MAX_GRID_FEATURES} (one array axis each): it runs on the line path "
+                "([cospar] subspace = 'line')"
+            )
+        return shape
 
     @property
     def words(self) -> str:
@@ -310,7 +327,7 @@ class Space:
 
     def _enumerable(self, what: str) -> tuple[int, ...]:
         """The grid's shape if ``what`` (an ``A x d`` array over every action) may be built."""
-        shape = self.shape  # ValueError for a continuous space
+        shape = self.index_shape  # ValueError for a continuous space
         size = math.prod(shape)
         if size > POINTS_LIMIT_ACTIONS:
             raise ValueError(
@@ -378,7 +395,7 @@ class Space:
     def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         """Feature values of ``actions`` (``k x d``) without building every grid point."""
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
-        multi = np.unravel_index(idx, self.shape)
+        multi = np.unravel_index(idx, self.index_shape)
         cols = [f.array[m] for f, m in zip(self.features, multi, strict=True)]
         return np.stack(cols, axis=1) if cols else np.zeros((0, 0))
 
@@ -401,7 +418,7 @@ class Space:
             if abs(f.values[k] - v) > atol:
                 raise ValueError(f"{f.name} = {v} is not a grid value of this space")
             idx.append(k)
-        return int(np.ravel_multi_index(tuple(idx), self.shape))
+        return int(np.ravel_multi_index(tuple(idx), self.index_shape))
 
     def _coords(self, point: Sequence[float] | dict[str, float], atol: float) -> list[float]:
         """A point's coordinates in feature order (with ``atol``, the tolerance it is matched
@@ -443,12 +460,12 @@ class Space:
         """Flat index after moving one feature of action ``index``; ``None`` if it clips back."""
         i = self.check_index(index)
         f = self.feature_number(feature)
-        multi = [int(m) for m in np.unravel_index(i, self.shape)]
+        multi = [int(m) for m in np.unravel_index(i, self.index_shape)]
         new = self.features[f].move(multi[f], move)
         if new is None:
             return None
         multi[f] = new
-        return int(np.ravel_multi_index(tuple(multi), self.shape))
+        return int(np.ravel_multi_index(tuple(multi), self.index_shape))
 
     def describe(self, index: int) -> str:
         """Human-readable feature values (4 significant digits), e.g. ``step_length=0.13 m``."""
