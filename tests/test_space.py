@@ -174,6 +174,13 @@ def test_linspace_bounds_what_it_allocates() -> None:
     assert len(Feature.linspace("x", 0, 1, 1)) == 1
 
 
+def test_a_feature_holds_at_most_the_linspace_bound() -> None:
+    # values given directly had no bound: 10**8 of them became 10**8 Python floats (3 GB)
+    many = np.broadcast_to(np.float64(0.0), (MAX_LINSPACE_VALUES + 1,))  # a view: no 80 MB
+    with pytest.raises(ValueError, match=r"'x': at most 10,000,000 values, got 10,000,001"):
+        Feature("x", many)
+
+
 def test_space_and_linspace_arguments() -> None:
     with pytest.raises(TypeError, match=r"features\[0\] must be a Feature"):
         Space(["a"])  # type: ignore[list-item]

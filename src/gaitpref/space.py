@@ -40,8 +40,9 @@ MOVES: tuple[Move, ...] = get_args(Move)
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
-#: The most values :meth:`Feature.linspace` makes: as many as the largest grid a model takes
-#: (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features have at most 10**6.
+#: The most values :meth:`Feature.linspace` makes, and a :class:`Feature` holds: as many as the
+#: largest grid a model takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features
+#: have at most 10**6.  A feature keeps its values as Python floats (32 bytes each).
 MAX_LINSPACE_VALUES = 10_000_000
 #: The most grid points :attr:`Space.points` and :attr:`Space.multi_index` build (``A x d``
 #: arrays): as many as a model on a grid takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``).
@@ -92,6 +93,10 @@ class Feature:
         if raw.ndim > 1:
             raise ValueError(
                 f"feature {name!r}: values must be a 1-D sequence, got shape {raw.shape}"
+            )
+        if raw.size > MAX_LINSPACE_VALUES:  # before a Python float is made for each
+            raise ValueError(
+                f"feature {name!r}: at most {MAX_LINSPACE_VALUES:,} values, got {raw.size:,}"
             )
         arr = raw.astype(np.float64).ravel()
         if arr.size == 0:
