@@ -18,3 +18,11 @@ def test_a_point_set_holds_at_most_the_grid_bound() -> None:
         PointSet(domain, rows)
     table = PointSet(domain, [[0.2], [0.5]])
     assert len(table) == 2 and table.find([0.5]) == 1
+
+
+def test_finding_a_point_of_the_wrong_length_says_so() -> None:
+    # None ("not in the set") before, as for any point not there
+    table = PointSet(Space([Feature.interval("a", 0.0, 1.0)]), [[0.2], [0.5]])
+    with pytest.raises(ValueError, match="point has 2 coordinates, the point set's features 1"):
+        table.find([0.5, 0.2])
+    assert table.find([0.7]) is None and table.find(np.array([0.2])) == 0

@@ -81,6 +81,10 @@ class PointSet(Space):
     def find(self, point: ArrayLike) -> int | None:
         """The row equal to ``point`` (exactly), or None."""
         key = tuple(float(v) for v in np.asarray(point, dtype=np.float64).ravel())
+        if len(key) != self.ndim:  # "not in the set" before, whatever the point
+            raise ValueError(
+                f"point has {len(key)} coordinates, the point set's features {self.ndim}"
+            )
         return self._rows.get(key)  # type: ignore[attr-defined, no-any-return]
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:
