@@ -165,6 +165,19 @@ def test_iterators_are_read_once() -> None:
     assert loop.excluded == {query.id: frozenset({0})}
 
 
+def test_safety_start_gaits_are_read_once_and_named() -> None:
+    from gaitpref.loop import Safety
+
+    # a generator was emptied by the check: the loop ran with no start gaits, silently
+    safety = Safety(start=cast(Any, (a for a in [3, 7])))
+    assert safety.start == (3, 7)
+    assert CoSpar(SPACE, KERNEL, 0.1, seed=0, safety=safety).ask().actions == (3,)
+    assert Safety(start=cast(Any, np.array([4, 1]))).start == (4, 1)
+    for bad in (5, "ab", [1.0], [True]):  # 5 was "'int' object is not iterable"
+        with pytest.raises(ValueError, match="start must hold action indices >= 0"):
+            Safety(start=cast(Any, bad))
+
+
 def test_tell_names_an_argument_that_is_not_a_list() -> None:
     from gaitpref import Comparison, FeedbackError, Suggestion
 
