@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
-from gaitpref.checks import is_count, is_noise
+from gaitpref.checks import is_count, is_noise, is_number
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine, check_grid_size, make_engine
 from gaitpref.model.evidence import (
@@ -67,7 +67,10 @@ from gaitpref.space import FloatArray, IntArray, Space
 
 
 def check_rho(rho: float) -> float:
-    """``rho`` as a float in ``[0, 1]``; ValueError otherwise."""
+    """``rho`` as a float in ``[0, 1]``; ValueError otherwise (a number: "0.5" and True were
+    read as 0.5 and 1)."""
+    if not is_number(rho):
+        raise ValueError(f"the population's shared fraction rho must lie in [0, 1], got {rho!r}")
     value = float(rho)
     if not (np.isfinite(value) and 0.0 <= value <= 1.0):
         raise ValueError(f"the population's shared fraction rho must lie in [0, 1], got {rho!r}")
