@@ -66,3 +66,16 @@ def test_population_numbers_are_numbers() -> None:
         LogitNormal("0.5", 1.0)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="rho's prior sd must be >= 0, got True"):
         LogitNormal(0.5, True)
+
+
+def test_a_population_model_checks_its_parts() -> None:
+    # a kernel of another type or of the wrong lengthscale count failed at the first posterior
+    kernel = SquaredExponential(0.3, 1.0, 1e-6)
+    with pytest.raises(TypeError, match=r"kernel must be a gaitpref\.SquaredExponential"):
+        PopulationModel(SPACE, "rbf", 0.5, 0.1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"space must be a gaitpref\.Space"):
+        PopulationModel([0.0, 1.0], kernel, 0.5, 0.1)  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match=r"ordinal must be a gaitpref\.Ordinal or None"):
+        PopulationModel(SPACE, kernel, 0.5, 0.1, ordinal=3)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="kernel has 2 lengthscales but the space has 1"):
+        PopulationModel(SPACE, SquaredExponential((0.3, 0.4), 1.0), 0.5, 0.1)

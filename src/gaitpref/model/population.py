@@ -272,10 +272,18 @@ class PopulationModel:
     share: float | None = None  # subject 0's own shared fraction (None: rho)
 
     def __post_init__(self) -> None:
+        # as PreferenceGP: a kernel or a space of another type failed at the first posterior
+        if not isinstance(self.space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {self.space!r}")
+        if not isinstance(self.kernel, SquaredExponential):
+            raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {self.kernel!r}")
+        if self.ordinal is not None and not isinstance(self.ordinal, Ordinal):
+            raise TypeError(f"ordinal must be a gaitpref.Ordinal or None, got {self.ordinal!r}")
         if not is_noise(self.noise):
             raise ValueError(
                 f"preference noise must be positive with a finite square, got {self.noise!r}"
             )
+        self.kernel.lengthscales(self.space.ndim)  # checks the count
         check_grid_size(self.space)
         object.__setattr__(self, "rho", check_rho(self.rho))
         object.__setattr__(self, "share", check_share(self.rho, self.share))
