@@ -22,6 +22,13 @@ KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
         ({"buffer": True}, ValueError, "buffer must be an integer >= 0, got True"),
         ({"coactive_weight": True}, ValueError, "coactive_weight must be positive"),
         ({"coactive_weight": "1"}, ValueError, "coactive_weight must be positive"),
+        # 0.1 / 1e-300 squared to inf: every suggestion a flat term, silently
+        (
+            {"coactive_weight": 1e-300},
+            ValueError,
+            r"a suggestion's noise, noise / coactive_weight = 0.1 / 1e-300, must be positive "
+            "with a finite square",
+        ),
         ({"seed": None}, ValueError, "seed must be an integer >= 0 or a numpy.random.Generator"),
         ({"seed": -1}, ValueError, "seed must be an integer >= 0"),
         ({"seed": 1.5}, ValueError, "seed must be an integer >= 0"),
