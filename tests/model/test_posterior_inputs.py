@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gaitpref import Feature, Ordinal, Posterior, PreferenceGP, Space, SquaredExponential
+from gaitpref.model import Probit
 
 SPACE = Space([Feature.linspace("a", 0, 1, 5), Feature.linspace("b", 0, 1, 4)])
 
@@ -152,3 +153,21 @@ def test_per_comparison_noise_of_any_number_kind() -> None:
 def test_the_ordinal_model_is_an_ordinal() -> None:
     with pytest.raises(TypeError, match=r"ordinal must be a gaitpref\.Ordinal or None, got 5"):
         PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1, ordinal=5)  # type: ignore[arg-type]
+
+
+def test_posterior_from_checks_its_indices_and_likelihood() -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    lik = Probit(np.full(2, 0.1))
+    # floats were truncated to gaits, silently; off-grid and negative indices NumPy's error
+    with pytest.raises(TypeError, match="first must hold integer grid indices, got dtype float64"):
+        gp.posterior_from(np.array([0.0, 5.0]), np.array([1, 2]), lik)
+    with pytest.raises(IndexError, match=r"second\[1\] = -1 is off the grid"):
+        gp.posterior_from(np.array([0, 5]), np.array([1, -1]), lik)
+    with pytest.raises(ValueError, match="2 first but 1 second actions"):
+        gp.posterior_from(np.array([0, 5]), np.array([1]), lik)
+    with pytest.raises(TypeError, match="likelihood must be a likelihood"):  # AttributeError
+        gp.posterior_from(np.array([0, 5]), np.array([1, 2]), 0.1)  # type: ignore[arg-type]
+    listed: Any = [0, 5]  # a list was "'list' object has no attribute 'size'"
+    given = gp.posterior_from(listed, [1, 2], lik)  # type: ignore[arg-type]
+    same = gp.posterior([0, 5], [1, 2], noise=0.1)
+    assert np.array_equal(given.mean, same.mean)

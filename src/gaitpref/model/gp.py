@@ -135,6 +135,15 @@ class PreferenceGP:
         and itself does carry evidence about the band).  :meth:`posterior`, where a preference of
         an action over itself can only be a mislabelling, refuses one.
         """
+        # grid indices, as posterior's: floats were truncated to gaits, an index off the grid
+        # was NumPy's error, a list an AttributeError
+        first = self.space.check_indices(first, "first")
+        second = self.space.check_indices(second, "second")
+        if first.shape != second.shape:
+            raise ValueError(f"{first.size} first but {second.size} second actions")
+        for name, lik in (("likelihood", likelihood), ("single_likelihood", single_likelihood)):
+            if lik is not None and not callable(getattr(lik, "terms", None)):
+                raise TypeError(f"{name} must be a likelihood (with terms), got {lik!r}")
         if single is not None:
             single = self.space.check_indices(single, "single")
             if single.size == 0:
