@@ -78,6 +78,22 @@ def test_sample_takes_numpy_counts_and_needs_a_generator(post: Posterior) -> Non
             post.sample(rng, 2)  # type: ignore[arg-type]
 
 
+def test_nugget_is_a_bool_and_mixtures_need_a_generator(post: Posterior) -> None:
+    from gaitpref.model.share_mix import PosteriorMixture
+
+    flag: Any = "False"  # truthy: the jitter's part was kept, silently
+    with pytest.raises(TypeError, match="nugget must be True or False, got 'False'"):
+        post.sample(np.random.default_rng(0), 2, nugget=flag)
+    smooth = post.sample(np.random.default_rng(0), 2, nugget=np.False_)  # type: ignore[arg-type]
+    assert np.array_equal(smooth, post.sample(np.random.default_rng(0), 2, nugget=False))
+    mixture = PosteriorMixture(((0.5, post), (0.5, post)))
+    seed: Any = 0  # an AttributeError in rng.choice before
+    with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
+        mixture.sample(seed, 2)
+    with pytest.raises(TypeError, match="nugget must be True or False"):
+        mixture.sample(np.random.default_rng(0), 2, nugget=flag)
+
+
 def test_argmax_samples_checks_the_mask(post: Posterior) -> None:
     rng = np.random.default_rng(0)
     with pytest.raises(ValueError, match="boolean mask over the 20 actions"):
