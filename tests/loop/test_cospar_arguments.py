@@ -127,6 +127,18 @@ def test_learning_keeps_its_hypotheses_as_a_tuple_and_checks_its_prior() -> None
         Learning(prior="x")  # type: ignore[arg-type]
 
 
+def test_learning_hypotheses_have_the_configs_bounds() -> None:
+    # any count and factor was taken: a million hypotheses made every tell a million fits
+    many = tuple(1.0 + k / 100 for k in range(16))
+    with pytest.raises(ValueError, match=r"hypotheses must be 1 to 15 lengthscale factors in "):
+        Learning(fit="evidence", hyper="average", hypotheses=many)
+    for factor in (0.01, 1e-9, 100.5, 1e300):
+        with pytest.raises(ValueError, match=r"factors in \(0.01, 100\], got 2"):
+            Learning(hypotheses=(1.0, factor))
+    assert Learning(hypotheses=(0.0101, 100.0)).hypotheses == (0.0101, 100.0)
+    assert len(Learning(hypotheses=many[:15]).hypotheses) == 15
+
+
 def test_avoid_all_checks_every_action_first() -> None:
     loop = CoSpar(SPACE, KERNEL, 0.1)
     query = loop.ask()
