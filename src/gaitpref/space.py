@@ -367,20 +367,20 @@ class Space:
         """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
         ``TypeError`` for anything but integers (floats and bools included), ``IndexError`` for
         an index off the grid (negative ones too: they never wrap)."""
-        if isinstance(values, list | tuple):
-            # element by element: NumPy reads [True, 3] as the integers [1, 3], [3, 2**63] as
-            # floats, and an integer past 64 bits as an object
-            for k, v in enumerate(values):
-                if isinstance(v, bool | np.bool_):
-                    raise TypeError(f"{name}[{k}] = {v!r} is a bool, not a grid index")
-            if all(is_count(v) for v in values):
-                for k, v in enumerate(values):
-                    if not 0 <= v < len(self):
-                        raise IndexError(
-                            f"{name}[{k}] = {v} is off the grid ({self._range_words()})"
-                        )
-                return np.asarray(values, dtype=np.intp).reshape(len(values))
+        size = len(self)
+        items: Sequence[object] = values if isinstance(values, list | tuple) else ()
+        if items and not {bool, np.bool_}.isdisjoint(map(type, items)):
+            # NumPy reads [True, 3] as the integers [1, 3]
+            k, v = next((k, v) for k, v in enumerate(items) if isinstance(v, bool | np.bool_))
+            raise TypeError(f"{name}[{k}] = {v!r} is a bool, not a grid index")
         arr = np.asarray(values)
+        if items and arr.dtype.kind not in "iu" and all(is_count(v) for v in items):
+            # integers NumPy did not read as such: [3, 2**63] as floats, past 64 bits objects
+            ints = [int(v) for v in items]  # type: ignore[call-overload]
+            for k, i in enumerate(ints):
+                if not 0 <= i < size:
+                    raise IndexError(f"{name}[{k}] = {i} is off the grid ({self._range_words()})")
+            arr = np.asarray(ints, dtype=np.intp)
         if arr.ndim != 1:
             raise ValueError(
                 f"{name} must be a 1-D sequence of grid indices, got shape {arr.shape}"
@@ -388,7 +388,7 @@ class Space:
         if arr.size and not np.issubdtype(arr.dtype, np.integer):
             raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
         # the bounds on the values given (an unsigned index past 2**63 read as a negative one)
-        bad = (arr < 0) | (arr >= len(self))
+        bad = (arr < 0) | (arr >= size)
         if np.any(bad):
             raise IndexError(
                 f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(arr[bad][0])} is off the grid "
