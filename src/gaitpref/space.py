@@ -247,13 +247,13 @@ class Space:
 
     def __len__(self) -> int:
         # exact: NumPy's product wrapped past 2**63 (64 two-valued features read as 0 actions)
-        size = self.grid_size  # None for a continuous space: shape says why below
-        if size is not None and size > sys.maxsize:
+        size = math.prod(self.shape)
+        if size > sys.maxsize:
             raise OverflowError(
                 f"the grid has {size:,} actions, more than len() can count ({sys.maxsize:,}): "
                 "grid_size gives the number; a model needs a smaller grid or the line path"
             )
-        return math.prod(self.shape)
+        return size
 
     def __iter__(self) -> Iterator[Feature]:
         return iter(self.features)
