@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -7,8 +8,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from gaitpref import MOVES, Feature, Space, load_config
-from gaitpref.space import MAX_LINSPACE_VALUES
+from gaitpref import MOVES, CoSpar, Feature, PreferenceGP, Space, SquaredExponential, load_config
+from gaitpref.space import MAX_GRID_FEATURES, MAX_LINSPACE_VALUES, POINTS_LIMIT_ACTIONS
 
 
 def test_grid_is_c_order_over_features_as_declared(small_space: Space) -> None:
@@ -93,6 +94,18 @@ def test_synthetic_config_moves_two_and_three_cells() -> None:
         ({"name": "x", "values": [0, 1], "unit": None}, "unit must be a string"),  # was 'None'
         # a span of inf: the loop failed later with "a prior's median must be positive"
         ({"name": "x", "values": [-1.7e308, 1.7e308]}, "range of the values must be finite"),
+        # read by NumPy as numbers before: "123" as 123.0, bools as 0 and 1, a table row by row
+        ({"name": "x", "values": "123"}, "'x': values must be numbers, got '123'"),
+        ({"name": "x", "values": ["0.1", "0.2"]}, "values must be numbers"),
+        ({"name": "x", "values": [False, True]}, "values must be numbers"),
+        (
+            {"name": "x", "values": [[0, 1], [2, 3]]},
+            r"values must be a 1-D sequence, got shape \(2, 2\)",
+        ),
+        ({"name": "x", "values": [[0, 1], [2]]}, "values must be numbers"),
+        # "no" is truthy: the feature was continuous
+        ({"name": "x", "values": [0, 1], "continuous": "no"}, "continuous must be True or False"),
+        ({"name": "x", "values": [0, 1], "continuous": 1}, "continuous must be True or False"),
     ],
 )
 def test_bad_features(kwargs: dict[str, object], message: str) -> None:
@@ -161,6 +174,13 @@ def test_linspace_bounds_what_it_allocates() -> None:
     assert len(Feature.linspace("x", 0, 1, 1)) == 1
 
 
+def test_a_feature_holds_at_most_the_linspace_bound() -> None:
+    # values given directly had no bound: 10**8 of them became 10**8 Python floats (3 GB)
+    many = np.broadcast_to(np.float64(0.0), (MAX_LINSPACE_VALUES + 1,))  # a view: no 80 MB
+    with pytest.raises(ValueError, match=r"'x': at most 10,000,000 values, got 10,000,001"):
+        Feature("x", many)
+
+
 def test_space_and_linspace_arguments() -> None:
     with pytest.raises(TypeError, match=r"features\[0\] must be a Feature"):
         Space(["a"])  # type: ignore[list-item]
@@ -184,3 +204,111 @@ def test_one_point_does_not_build_the_grid() -> None:
     assert "points" not in vars(space)  # the cached grid was never made
     small = Space([Feature.linspace("a", 0, 1, 7), Feature("b", [0.1, 0.35, 2.0])])
     assert all(np.array_equal(small.point(i), small.points[i]) for i in range(len(small)))
+
+
+def test_every_point_is_refused_past_the_bound_before_allocating() -> None:
+    # 1000^4 actions: points and multi_index asked NumPy for 7.28 TiB (a MemoryError at best)
+    space = Space([Feature.linspace(f"f{k}", 0, 1, 1000) for k in range(4)])
+    for what in ("points", "multi_index"):
+        with pytest.raises(
+            ValueError,
+            match=rf"{what} would hold every one of the grid's "
+            r"1,000,000,000,000 actions \(1000 x 1000 x 1000 x 1000\)",
+        ):
+            getattr(space, what)
+    assert space.point(len(space) - 1).tolist() == [1.0, 1.0, 1.0, 1.0]  # single actions read
+    from gaitpref.model.engines import GRID_LIMIT_ACTIONS
+
+    assert POINTS_LIMIT_ACTIONS == GRID_LIMIT_ACTIONS  # every grid a model takes enumerates
+    at = Space([Feature.linspace("a", 0, 1, 10), Feature.linspace("b", 0, 1, 10**6)])
+    assert len(at) == POINTS_LIMIT_ACTIONS
+    with pytest.raises(ValueError, match="points would hold"):
+        _ = Space([*at.features, Feature("c", [0.0, 1.0])]).points
+
+
+def test_a_continuous_space_has_no_grid_points() -> None:
+    # points was the grid of the continuous feature's two bounds, as if they were its values
+    space = Space([Feature.interval("a", 0.0, 1.0), Feature("b", [1.0, 2.0, 3.0])])
+    for what in ("points", "multi_index"):
+        with pytest.raises(ValueError, match=r"continuous features \(a\) and no finite grid"):
+            getattr(space, what)
+
+
+@pytest.mark.parametrize("sizes", [[1], [3], [3, 4], [2, 1, 5], [4, 3, 2, 2]])
+def test_points_are_every_point_in_flat_index_order(sizes: list[int]) -> None:
+    space = Space([Feature.linspace(f"f{k}", 0, 1 + k, n) for k, n in enumerate(sizes)])
+    grids = np.meshgrid(*(f.array for f in space.features), indexing="ij")
+    assert np.array_equal(space.points, np.stack([g.ravel() for g in grids], axis=1))
+    assert np.array_equal(space.points, space.points_of(list(range(len(space)))))
+    assert np.array_equal(space.multi_index, np.argwhere(np.ones(space.shape, dtype=bool)))
+
+
+@pytest.mark.parametrize(
+    ("values", "error", "message"),
+    [
+        # NumPy reads a bool among integers as 0 or 1: [True, 3] was the actions [1, 3]
+        ([True, 3], TypeError, r"actions\[0\] = True is a bool, not a grid index"),
+        ((2, np.True_), TypeError, r"actions\[1\] = np.True_ is a bool"),
+        # an unsigned index past 2**63 was named as a negative one (-9223372036854775803)
+        (np.array([2**63 + 5], dtype=np.uint64), IndexError, r"= 9223372036854775813 is off"),
+        (np.array([2**64 - 1], dtype=np.uint64), IndexError, r"= 18446744073709551615 is off"),
+        # an integer past 64 bits was "dtype object", with [3, 2**63] "dtype float64"
+        ([2**70], IndexError, r"actions\[0\] = 1180591620717411303424 is off the grid \(0\.\.9\)"),
+        ([3, 2**63], IndexError, r"actions\[1\] = 9223372036854775808 is off the grid"),
+        ([3, -(2**70)], IndexError, r"actions\[1\] = -1180591620717411303424 is off"),
+        ([1.0], TypeError, "must hold integer grid indices, got dtype float64"),
+    ],
+)
+def test_indices_name_the_value_given(values: Any, error: type, message: str) -> None:
+    space = Space([Feature.linspace("a", 0, 1, 10)])
+    with pytest.raises(error, match=message):
+        space.check_indices(values)
+
+
+def test_indices_of_every_integer_kind() -> None:
+    space = Space([Feature.linspace("a", 0, 1, 10)])
+    # a list mixing NumPy integer types was read as floats ("got dtype float64")
+    cases: list[tuple[Any, list[int]]] = [
+        ([np.int8(3), 4, np.uint64(9)], [3, 4, 9]),
+        ((0,), [0]),
+        (np.array([9, 3], dtype=np.uint8), [9, 3]),
+    ]
+    for values, expected in cases:
+        idx = space.check_indices(values)
+        assert idx.dtype == np.intp and idx.tolist() == expected
+    assert space.check_indices([]).dtype == np.intp and space.check_indices(()).shape == (0,)
+
+
+def test_linspace_of_one_value_needs_min_at_most_max() -> None:
+    # num = 1 with max < min was the value max, whatever min said
+    with pytest.raises(ValueError, match=r"'a': max must exceed min, got 5\.0\.\.1\.0"):
+        Feature.linspace("a", 5.0, 1.0, 1)
+    assert Feature.linspace("a", 2.0, 2.0, 1).values == (2.0,)
+    assert Feature("a", 0.5).values == (0.5,)  # one number is one value, as before
+    flag: Any = np.True_
+    assert Feature("a", np.array([1, 2], dtype=np.int8), continuous=flag).continuous is True
+
+
+def test_a_grid_is_indexed_over_at_most_max_grid_features() -> None:
+    # MAX_GRID_FEATURES + 2 features (all but one of one value): 2 actions, and every grid
+    # operation failed in NumPy with "maximum supported dimension for an ndarray is currently
+    # 64, found 66" (32 on NumPy 1)
+    count = MAX_GRID_FEATURES + 1
+    ones = [Feature(f"f{k}", [0.0]) for k in range(count)]
+    at = Space([*ones[:-2], Feature("z", [0.0, 1.0], coactive=(0.5, 1.0))])
+    assert len(at) == 2 and at.index([0.0] * (count - 2) + [1.0]) == 1
+    assert at.coactive_move(0, "z", "+big") == 1 and at.points.shape == (2, count - 1)
+    over = Space([*ones, Feature("z", [0.0, 1.0], coactive=(0.5, 1.0))])
+    assert len(over) == 2 and over.grid_size == 2 and over.words.endswith("x 2")
+    message = rf"the space has {count + 1} features; a grid's actions are indexed over at most"
+    reads: list[Callable[[Space], object]] = [
+        lambda s: s.point(1),
+        lambda s: s.index([0.0] * count + [1.0]),
+        lambda s: s.coactive_move(0, "z", "+big"),
+        lambda s: s.points,
+        lambda s: PreferenceGP(s, SquaredExponential(0.3, 1.0, 1e-6), 0.1),
+        lambda s: CoSpar(s, SquaredExponential(0.3, 1.0, 1e-6), 0.1, seed=0),
+    ]
+    for read in reads:
+        with pytest.raises(ValueError, match=message):
+            read(over)

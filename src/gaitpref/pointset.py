@@ -19,7 +19,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gaitpref.space import FloatArray, IntArray, Move, Space
+from gaitpref.space import POINTS_LIMIT_ACTIONS, FloatArray, IntArray, Move, Space
 
 
 class PointSet(Space):
@@ -36,6 +36,11 @@ class PointSet(Space):
         already known so that it is not rebuilt from all the points."""
         super().__init__(domain.features)
         arr = _rows(points, domain.ndim)
+        if arr.shape[0] > POINTS_LIMIT_ACTIONS:  # before a Python tuple is made of each row
+            raise ValueError(
+                f"a point set holds at most {POINTS_LIMIT_ACTIONS:,} points (a grid's bound), "
+                f"got {arr.shape[0]:,}"
+            )
         for j, f in enumerate(domain.features):
             col = arr[:, j]
             if col.size and not np.all(np.isfinite(col)):
@@ -76,6 +81,10 @@ class PointSet(Space):
     def find(self, point: ArrayLike) -> int | None:
         """The row equal to ``point`` (exactly), or None."""
         key = tuple(float(v) for v in np.asarray(point, dtype=np.float64).ravel())
+        if len(key) != self.ndim:  # "not in the set" before, whatever the point
+            raise ValueError(
+                f"point has {len(key)} coordinates, the point set's features {self.ndim}"
+            )
         return self._rows.get(key)  # type: ignore[attr-defined, no-any-return]
 
     def index(self, point: Sequence[float] | dict[str, float], *, atol: float = 1e-9) -> int:

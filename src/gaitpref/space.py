@@ -32,7 +32,7 @@ from typing import Literal, get_args
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from gaitpref.checks import is_number
+from gaitpref.checks import is_count, is_number
 
 Move = Literal["+big", "+small", "-small", "-big"]
 MOVES: tuple[Move, ...] = get_args(Move)
@@ -40,9 +40,18 @@ MOVES: tuple[Move, ...] = get_args(Move)
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
-#: The most values :meth:`Feature.linspace` makes: as many as the largest grid a model takes
-#: (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features have at most 10**6.
+#: The most values :meth:`Feature.linspace` makes, and a :class:`Feature` holds: as many as the
+#: largest grid a model takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``); a config's features
+#: have at most 10**6.  A feature keeps its values as Python floats (32 bytes each).
 MAX_LINSPACE_VALUES = 10_000_000
+#: The most grid points :attr:`Space.points` and :attr:`Space.multi_index` build (``A x d``
+#: arrays): as many as a model on a grid takes (``model/engines.py``, ``GRID_LIMIT_ACTIONS``).
+#: Past it they are refused before anything is allocated (a 1000^4 grid asked NumPy for 7 TiB).
+POINTS_LIMIT_ACTIONS = 10_000_000
+#: The most features a grid's actions are indexed over: NumPy indexes them over one axis per
+#: feature, and ``ravel_multi_index`` takes one fewer than NumPy's 32 arguments (64 from NumPy
+#: 2).  More features run on the line path, which never indexes a grid.
+MAX_GRID_FEATURES = 63 if np.lib.NumpyVersion(np.__version__) >= "2.0.0" else 31
 
 
 @dataclass(frozen=True)
@@ -73,10 +82,23 @@ class Feature:
     ) -> None:
         if not isinstance(name, str) or not name.isidentifier():
             raise ValueError(f"feature name must be an identifier, got {name!r}")
+        # numbers only: NumPy read "123" as the value 123.0, [False, True] as 0 and 1, and a
+        # table of values as one row after another
         try:
-            arr = np.asarray(values, dtype=np.float64).ravel()
+            raw = None if isinstance(values, str | bytes) else np.asarray(values)
         except (TypeError, ValueError):
-            raise ValueError(f"feature {name!r}: values must be numbers, got {values!r}") from None
+            raw = None
+        if raw is None or raw.dtype.kind not in "iuf":
+            raise ValueError(f"feature {name!r}: values must be numbers, got {values!r}")
+        if raw.ndim > 1:
+            raise ValueError(
+                f"feature {name!r}: values must be a 1-D sequence, got shape {raw.shape}"
+            )
+        if raw.size > MAX_LINSPACE_VALUES:  # before a Python float is made for each
+            raise ValueError(
+                f"feature {name!r}: at most {MAX_LINSPACE_VALUES:,} values, got {raw.size:,}"
+            )
+        arr = raw.astype(np.float64).ravel()
         if arr.size == 0:
             raise ValueError(f"feature {name!r}: needs at least one value")
         if not np.all(np.isfinite(arr)):
@@ -85,6 +107,10 @@ class Feature:
             raise ValueError(f"feature {name!r}: the range of the values must be finite")
         if arr.size > 1 and not np.all(np.diff(arr) > 0):
             raise ValueError(f"feature {name!r}: values must be strictly increasing")
+        if not isinstance(continuous, bool | np.bool_):  # "no" was truthy: continuous
+            raise ValueError(
+                f"feature {name!r}: continuous must be True or False, got {continuous!r}"
+            )
         if continuous and arr.size != 2:
             raise ValueError(f"feature {name!r}: a continuous feature is given as (min, max)")
         try:
@@ -136,7 +162,7 @@ class Feature:
                 f"feature {name!r}: num must be an integer in 1..{MAX_LINSPACE_VALUES:,}, "
                 f"got {num!r}"
             )
-        if num > 1 and not hi > lo:
+        if (num > 1 and not hi > lo) or hi < lo:  # num = 1 with max < min gave the value max
             raise ValueError(f"feature {name!r}: max must exceed min, got {lo}..{hi}")
         return cls(name, np.linspace(lo, hi, num), **kwargs)  # type: ignore[arg-type]
 
@@ -255,6 +281,19 @@ class Space:
         return tuple(len(f) for f in self.features)
 
     @property
+    def index_shape(self) -> tuple[int, ...]:
+        """:attr:`shape`, where NumPy can index the grid's actions by it (at most
+        :data:`MAX_GRID_FEATURES` features: NumPy's "maximum supported dimension" otherwise)."""
+        shape = self.shape
+        if len(shape) > MAX_GRID_FEATURES:
+            raise ValueError(
+                f"the space has {len(shape)} features; a grid's actions are indexed over at most "
+                f"{MAX_GRID_FEATURES} (one array axis each): it runs on the line path "
+                "([cospar] subspace = 'line')"
+            )
+        return shape
+
+    @property
     def words(self) -> str:
         """The space in a few words: ``15 x 10``, or ``continuous: a, b, c`` with no grid."""
         if self.continuous:
@@ -271,14 +310,37 @@ class Space:
 
     @cached_property
     def points(self) -> FloatArray:
-        """All grid points, ``A x d``, row ``a`` is the point with flat index ``a``."""
-        grids = np.meshgrid(*(f.array for f in self.features), indexing="ij")
-        return np.stack([g.ravel() for g in grids], axis=1)
+        """All grid points, ``A x d``, row ``a`` is the point with flat index ``a``.
+
+        A continuous space has no grid points (it returned the grid of its bounds before) and a
+        grid past :data:`POINTS_LIMIT_ACTIONS` is refused: ValueError, before anything is
+        allocated (:meth:`point` and :meth:`points_of` read single actions of any grid)."""
+        shape = self._enumerable("points")
+        out = np.empty((math.prod(shape), self.ndim))
+        for j, f in enumerate(self.features):  # each column in place: no A-sized temporaries
+            column = out[:, j].reshape(shape)
+            column[...] = f.array.reshape([-1 if k == j else 1 for k in range(self.ndim)])
+        return out
 
     @cached_property
     def multi_index(self) -> IntArray:
-        """Per-feature value indices of every point, ``A x d``."""
-        return np.stack(np.unravel_index(np.arange(len(self)), self.shape), axis=1).astype(np.intp)
+        """Per-feature value indices of every point, ``A x d`` (refused as :attr:`points`)."""
+        shape = self._enumerable("multi_index")
+        return np.stack(np.unravel_index(np.arange(math.prod(shape)), shape), axis=1).astype(
+            np.intp
+        )
+
+    def _enumerable(self, what: str) -> tuple[int, ...]:
+        """The grid's shape if ``what`` (an ``A x d`` array over every action) may be built."""
+        shape = self.index_shape  # ValueError for a continuous space
+        size = math.prod(shape)
+        if size > POINTS_LIMIT_ACTIONS:
+            raise ValueError(
+                f"{what} would hold every one of the grid's {size:,} actions ({self.words}); "
+                f"it is built for at most {POINTS_LIMIT_ACTIONS:,}: use point(index) or "
+                "points_of(actions) for the actions wanted"
+            )
+        return shape
 
     def feature_index(self, name: str) -> int:
         try:
@@ -305,26 +367,40 @@ class Space:
         """``values`` as a 1-D array of valid flat grid indices, else an error naming ``name``:
         ``TypeError`` for anything but integers (floats and bools included), ``IndexError`` for
         an index off the grid (negative ones too: they never wrap)."""
+        size = len(self)
+        items: Sequence[object] = values if isinstance(values, list | tuple) else ()
+        if items and not {bool, np.bool_}.isdisjoint(map(type, items)):
+            # NumPy reads [True, 3] as the integers [1, 3]
+            k, v = next((k, v) for k, v in enumerate(items) if isinstance(v, bool | np.bool_))
+            raise TypeError(f"{name}[{k}] = {v!r} is a bool, not a grid index")
         arr = np.asarray(values)
+        if items and arr.dtype.kind not in "iu" and all(is_count(v) for v in items):
+            # integers NumPy did not read as such: [3, 2**63] as floats, past 64 bits objects
+            ints = [int(v) for v in items]  # type: ignore[call-overload]
+            for k, i in enumerate(ints):
+                if not 0 <= i < size:
+                    raise IndexError(f"{name}[{k}] = {i} is off the grid ({self._range_words()})")
+            arr = np.asarray(ints, dtype=np.intp)
         if arr.ndim != 1:
             raise ValueError(
                 f"{name} must be a 1-D sequence of grid indices, got shape {arr.shape}"
             )
         if arr.size and not np.issubdtype(arr.dtype, np.integer):
             raise TypeError(f"{name} must hold integer grid indices, got dtype {arr.dtype}")
-        idx = arr.astype(np.intp)
-        bad = (idx < 0) | (idx >= len(self))
+        # the bounds on the values given (an unsigned index past 2**63 read as a negative one)
+        bad = (arr < 0) | (arr >= size)
         if np.any(bad):
             raise IndexError(
-                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(idx[bad][0])} is off the grid "
+                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(arr[bad][0])} is off the grid "
                 f"({self._range_words()})"
             )
+        idx: IntArray = arr.astype(np.intp)
         return idx
 
     def points_of(self, actions: Sequence[int] | IntArray) -> FloatArray:
         """Feature values of ``actions`` (``k x d``) without building every grid point."""
         idx = np.asarray([self.check_index(a) for a in actions], dtype=np.intp)
-        multi = np.unravel_index(idx, self.shape)
+        multi = np.unravel_index(idx, self.index_shape)
         cols = [f.array[m] for f, m in zip(self.features, multi, strict=True)]
         return np.stack(cols, axis=1) if cols else np.zeros((0, 0))
 
@@ -347,7 +423,7 @@ class Space:
             if abs(f.values[k] - v) > atol:
                 raise ValueError(f"{f.name} = {v} is not a grid value of this space")
             idx.append(k)
-        return int(np.ravel_multi_index(tuple(idx), self.shape))
+        return int(np.ravel_multi_index(tuple(idx), self.index_shape))
 
     def _coords(self, point: Sequence[float] | dict[str, float], atol: float) -> list[float]:
         """A point's coordinates in feature order (with ``atol``, the tolerance it is matched
@@ -389,12 +465,12 @@ class Space:
         """Flat index after moving one feature of action ``index``; ``None`` if it clips back."""
         i = self.check_index(index)
         f = self.feature_number(feature)
-        multi = [int(m) for m in np.unravel_index(i, self.shape)]
+        multi = [int(m) for m in np.unravel_index(i, self.index_shape)]
         new = self.features[f].move(multi[f], move)
         if new is None:
             return None
         multi[f] = new
-        return int(np.ravel_multi_index(tuple(multi), self.shape))
+        return int(np.ravel_multi_index(tuple(multi), self.index_shape))
 
     def describe(self, index: int) -> str:
         """Human-readable feature values (4 significant digits), e.g. ``step_length=0.13 m``."""

@@ -22,6 +22,13 @@ KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
         ({"buffer": True}, ValueError, "buffer must be an integer >= 0, got True"),
         ({"coactive_weight": True}, ValueError, "coactive_weight must be positive"),
         ({"coactive_weight": "1"}, ValueError, "coactive_weight must be positive"),
+        # 0.1 / 1e-300 squared to inf: every suggestion a flat term, silently
+        (
+            {"coactive_weight": 1e-300},
+            ValueError,
+            r"a suggestion's noise, noise / coactive_weight = 0.1 / 1e-300, must be positive "
+            "with a finite square",
+        ),
         ({"seed": None}, ValueError, "seed must be an integer >= 0 or a numpy.random.Generator"),
         ({"seed": -1}, ValueError, "seed must be an integer >= 0"),
         ({"seed": 1.5}, ValueError, "seed must be an integer >= 0"),
@@ -120,6 +127,18 @@ def test_learning_keeps_its_hypotheses_as_a_tuple_and_checks_its_prior() -> None
         Learning(prior="x")  # type: ignore[arg-type]
 
 
+def test_learning_hypotheses_have_the_configs_bounds() -> None:
+    # any count and factor was taken: a million hypotheses made every tell a million fits
+    many = tuple(1.0 + k / 100 for k in range(16))
+    with pytest.raises(ValueError, match=r"hypotheses must be 1 to 15 lengthscale factors in "):
+        Learning(fit="evidence", hyper="average", hypotheses=many)
+    for factor in (0.01, 1e-9, 100.5, 1e300):
+        with pytest.raises(ValueError, match=r"factors in \(0.01, 100\], got 2"):
+            Learning(hypotheses=(1.0, factor))
+    assert Learning(hypotheses=(0.0101, 100.0)).hypotheses == (0.0101, 100.0)
+    assert len(Learning(hypotheses=many[:15]).hypotheses) == 15
+
+
 def test_avoid_all_checks_every_action_first() -> None:
     loop = CoSpar(SPACE, KERNEL, 0.1)
     query = loop.ask()
@@ -163,6 +182,19 @@ def test_iterators_are_read_once() -> None:
     loop.tell(query, [(a, b, "first")])
     loop.exclude({query.id: cast(Any, iter([0]))})
     assert loop.excluded == {query.id: frozenset({0})}
+
+
+def test_safety_start_gaits_are_read_once_and_named() -> None:
+    from gaitpref.loop import Safety
+
+    # a generator was emptied by the check: the loop ran with no start gaits, silently
+    safety = Safety(start=cast(Any, (a for a in [3, 7])))
+    assert safety.start == (3, 7)
+    assert CoSpar(SPACE, KERNEL, 0.1, seed=0, safety=safety).ask().actions == (3,)
+    assert Safety(start=cast(Any, np.array([4, 1]))).start == (4, 1)
+    for bad in (5, "ab", [1.0], [True]):  # 5 was "'int' object is not iterable"
+        with pytest.raises(ValueError, match="start must hold action indices >= 0"):
+            Safety(start=cast(Any, bad))
 
 
 def test_tell_names_an_argument_that_is_not_a_list() -> None:

@@ -89,6 +89,29 @@ def test_allowed_restricts_the_recommendation_and_the_best() -> None:
         confidence(loop.posterior, np.random.default_rng(0), allowed=np.zeros(25, dtype=bool))
 
 
+@pytest.mark.parametrize(
+    ("allowed", "message"),
+    [
+        # integers were read bitwise (~1 is -2, an index) and as column indices: the
+        # recommendation and "the best" came from the wrong gaits, silently
+        (np.ones(25, dtype=int), "got dtype int64 and shape"),
+        (
+            np.ones(24, dtype=bool),
+            r"boolean mask over the 25 gaits, got dtype bool and shape \(24,\)",
+        ),
+        ([True] * 25, None),  # a list of bools is a mask
+    ],
+)
+def test_allowed_is_a_boolean_mask_over_every_gait(allowed: Any, message: str | None) -> None:
+    post = CoSpar(SPACE, KERNEL, NOISE, seed=0).posterior
+    if message is None:
+        same = confidence(post, np.random.default_rng(0), samples=50, allowed=allowed)
+        assert same == confidence(post, np.random.default_rng(0), samples=50)
+        return
+    with pytest.raises(ValueError, match=message):
+        confidence(post, np.random.default_rng(0), samples=50, allowed=allowed)
+
+
 def test_the_rule_triggers_on_confidence_or_trials() -> None:
     sure = Confidence(94, 0.91, 0.01, 0.02, 0.05, 2000)
     assert sure.sentence("G95") == "91% that G95 is within 5% of the best"

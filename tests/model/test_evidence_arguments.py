@@ -12,6 +12,7 @@ the limit reached.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -118,3 +119,50 @@ def test_evaluation_budgets_are_counts(name: str, count: object) -> None:
 @pytest.mark.parametrize("name", sorted(FITS))
 def test_a_one_evaluation_budget_runs(name: str) -> None:
     FITS[name](np.int64(1))
+
+
+def _problem() -> tuple[Any, ...]:
+    visited = np.array([1, 3, 5], dtype=np.intp)
+    k_vv = KERNEL.cross(SPACE, visited, rows=visited)
+    return k_vv, visited, np.array([0, 1]), np.array([1, 2]), Probit(np.full(2, 0.1))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        # a tolerance of inf accepted the start (the prior) as the mode, silently
+        ({"tol": np.inf}, r"tol must be a number in \(0, 1\), got inf"),
+        ({"tol": 1.0}, r"tol must be a number in \(0, 1\), got 1.0"),
+        ({"tol": np.nan}, "tol must be a number"),
+        ({"tol": 0.0}, "tol must be a number"),
+        ({"tol": "1e-9"}, "tol must be a number"),
+        # 0 or less failed with "did not converge in 0 Newton iterations"; 10**12 had no bound
+        ({"max_iter": 0}, r"max_iter must be an integer in 1\.\.10,000, got 0"),
+        ({"max_iter": 10**12}, "max_iter must be an integer"),
+        ({"max_iter": 2.5}, "max_iter must be an integer"),
+        ({"max_iter": True}, "max_iter must be an integer"),
+    ],
+)
+def test_a_laplace_fit_names_a_bad_tolerance_or_budget(
+    kwargs: dict[str, Any], message: str
+) -> None:
+    with pytest.raises(ValueError, match=message):
+        fit_laplace(*_problem(), **kwargs)
+
+
+def test_a_laplace_fit_names_a_bad_problem() -> None:
+    k_vv, visited, first, second, lik = _problem()
+    with pytest.raises(ValueError, match=r"first holds 5, not an index into the 3 visited"):
+        fit_laplace(k_vv, visited, np.array([0, 5]), second, lik)  # NumPy's IndexError before
+    with pytest.raises(ValueError, match=r"second holds -1"):
+        fit_laplace(k_vv, visited, first, np.array([1, -1]), lik)
+    with pytest.raises(ValueError, match="first and second differ in shape"):
+        fit_laplace(k_vv, visited, first, np.array([1]), lik)
+    with pytest.raises(ValueError, match=r"k_vv must be the \(2,\) visited actions' square"):
+        fit_laplace(k_vv, visited[:2], first, second, lik)
+    with pytest.raises(ValueError, match="must be finite"):  # blamed on the likelihood before
+        fit_laplace(np.full((3, 3), np.nan), visited, first, second, lik)
+    budget: Any = np.int64(50)
+    fit = fit_laplace(k_vv, visited, first, second, lik, tol=1e-9, max_iter=budget)
+    exact = fit_laplace(k_vv, visited, first, second, lik)
+    assert np.allclose(fit.mode, exact.mode, atol=1e-8) and fit.mode[0] > 0 > fit.mode[2]

@@ -29,6 +29,14 @@ def test_the_preference_noise_is_a_number(noise: object) -> None:
         ({"lengthscale": 0.3, "variance": "1"}, "signal variance must be positive"),
         ({"lengthscale": 0.3, "variance": None}, "signal variance must be positive"),
         ({"lengthscale": 0.3, "variance": 1.0, "jitter": True}, "jitter must be >= 0"),
+        # each finite, their sum not: the prior's variance was inf at every gait
+        (
+            {"lengthscale": 0.3, "variance": 1e308, "jitter": 1e308},
+            r"signal variance \+ jitter \(each gait's prior variance\) must be finite",
+        ),
+        # a table of lengthscales was read row after row as one per feature
+        ({"lengthscale": [[0.3, 0.4]], "variance": 1.0}, r"one per feature, got shape \(1, 2\)"),
+        ({"lengthscale": np.ones((2, 1)), "variance": 1.0}, r"got shape \(2, 1\)"),
     ],
 )
 def test_kernel_numbers_are_numbers(kwargs: dict[str, Any], message: str) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from gaitpref import Feature, Ordinal, Posterior, PreferenceGP, Space, SquaredExponential
+from gaitpref.model import Probit
 
 SPACE = Space([Feature.linspace("a", 0, 1, 5), Feature.linspace("b", 0, 1, 4)])
 
@@ -77,6 +78,22 @@ def test_sample_takes_numpy_counts_and_needs_a_generator(post: Posterior) -> Non
             post.sample(rng, 2)  # type: ignore[arg-type]
 
 
+def test_nugget_is_a_bool_and_mixtures_need_a_generator(post: Posterior) -> None:
+    from gaitpref.model.share_mix import PosteriorMixture
+
+    flag: Any = "False"  # truthy: the jitter's part was kept, silently
+    with pytest.raises(TypeError, match="nugget must be True or False, got 'False'"):
+        post.sample(np.random.default_rng(0), 2, nugget=flag)
+    smooth = post.sample(np.random.default_rng(0), 2, nugget=np.False_)  # type: ignore[arg-type]
+    assert np.array_equal(smooth, post.sample(np.random.default_rng(0), 2, nugget=False))
+    mixture = PosteriorMixture(((0.5, post), (0.5, post)))
+    seed: Any = 0  # an AttributeError in rng.choice before
+    with pytest.raises(TypeError, match=r"rng must be a numpy\.random\.Generator"):
+        mixture.sample(seed, 2)
+    with pytest.raises(TypeError, match="nugget must be True or False"):
+        mixture.sample(np.random.default_rng(0), 2, nugget=flag)
+
+
 def test_argmax_samples_checks_the_mask(post: Posterior) -> None:
     rng = np.random.default_rng(0)
     with pytest.raises(ValueError, match="boolean mask over the 20 actions"):
@@ -113,3 +130,60 @@ def test_covariance_at_has_the_covariance_limit() -> None:
     with pytest.raises(ValueError, match=f"at most {COVARIANCE_LIMIT_ACTIONS} actions"):
         post.covariance_at(np.zeros(COVARIANCE_LIMIT_ACTIONS + 1, dtype=np.intp))
     assert post.covariance_at([0, 5, 7]).shape == (3, 3)
+
+
+@pytest.mark.parametrize(
+    ("noise", "message"),
+    [
+        # read by NumPy as noises before: True as 1.0, "0.1" as 0.1
+        (True, r"noise must be numbers \(one, or one per comparison\), got True"),
+        ("0.1", "noise must be numbers"),
+        ([np.True_, 0.1], "noise must be numbers"),
+        ([0.1, True], "noise must be numbers"),
+        # its square overflowed in the likelihood (the model's own noise is held to the same)
+        (
+            1e200,
+            r"positive with a finite square \(at most 1.34e\+154\), got 1e\+200 for comparison 0",
+        ),
+        ([0.1, -1.0], r"got -1.0 for comparison 1"),
+        ([0.1, np.nan], r"got nan for comparison 1"),
+    ],
+)
+def test_per_comparison_noise_is_numbers_with_finite_squares(noise: object, message: str) -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    with pytest.raises(ValueError, match=message):
+        gp.posterior([0, 1], [2, 3], noise=noise)  # type: ignore[arg-type]
+
+
+def test_per_comparison_noise_of_any_number_kind() -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    mixed: Any = [np.float32(0.25), 0.1]
+    given = gp.posterior([0, 1], [2, 3], noise=mixed)
+    same = gp.posterior([0, 1], [2, 3], noise=np.array([float(np.float32(0.25)), 0.1]))
+    assert np.array_equal(given.mean, same.mean)
+    assert np.array_equal(
+        gp.posterior([0], [2], noise=1).mean, gp.posterior([0], [2], noise=1.0).mean
+    )
+
+
+def test_the_ordinal_model_is_an_ordinal() -> None:
+    with pytest.raises(TypeError, match=r"ordinal must be a gaitpref\.Ordinal or None, got 5"):
+        PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1, ordinal=5)  # type: ignore[arg-type]
+
+
+def test_posterior_from_checks_its_indices_and_likelihood() -> None:
+    gp = PreferenceGP(SPACE, SquaredExponential(0.3, 1.0), 0.1)
+    lik = Probit(np.full(2, 0.1))
+    # floats were truncated to gaits, silently; off-grid and negative indices NumPy's error
+    with pytest.raises(TypeError, match="first must hold integer grid indices, got dtype float64"):
+        gp.posterior_from(np.array([0.0, 5.0]), np.array([1, 2]), lik)
+    with pytest.raises(IndexError, match=r"second\[1\] = -1 is off the grid"):
+        gp.posterior_from(np.array([0, 5]), np.array([1, -1]), lik)
+    with pytest.raises(ValueError, match="2 first but 1 second actions"):
+        gp.posterior_from(np.array([0, 5]), np.array([1]), lik)
+    with pytest.raises(TypeError, match="likelihood must be a likelihood"):  # AttributeError
+        gp.posterior_from(np.array([0, 5]), np.array([1, 2]), 0.1)  # type: ignore[arg-type]
+    listed: Any = [0, 5]  # a list was "'list' object has no attribute 'size'"
+    given = gp.posterior_from(listed, [1, 2], lik)  # type: ignore[arg-type]
+    same = gp.posterior([0, 5], [1, 2], noise=0.1)
+    assert np.array_equal(given.mean, same.mean)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from scipy.stats import norm
@@ -18,6 +20,7 @@ from gaitpref.strategies import (
     Switch,
     make_strategy,
 )
+from gaitpref.strategies.base import MAX_CANDIDATES
 from gaitpref.strategies.eubo import (
     best_pair,
     covariance_among,
@@ -154,3 +157,23 @@ def test_every_strategy_runs_the_loop_deterministically_and_never_locks_in(
 def test_unknown_strategy_names_the_known_ones() -> None:
     with pytest.raises(ValueError, match="strategies are self-sparring, eubo"):
         make_strategy("ucb")
+
+
+def test_the_eubo_helpers_take_grid_indices(
+    small_space: Space, small_kernel: SquaredExponential
+) -> None:
+    post = _posterior(small_space, small_kernel)
+    size = len(small_space)
+    # -1 read the last gait's mean and variance (and failed in the kernel), silently in part
+    for reference in (-1, size, 2.5, True):
+        with pytest.raises((IndexError, TypeError), match="action index"):
+            eubo_against(post, reference)  # type: ignore[arg-type]
+    with pytest.raises(IndexError, match=r"candidates\[1\] = -1 is off the grid"):
+        best_pair(post, np.array([0, -1]))
+    with pytest.raises(TypeError, match="candidates must hold integer grid indices"):
+        covariance_among(post, np.array([0.0, 1.0]))
+    many = np.zeros(MAX_CANDIDATES + 1, dtype=np.intp)  # c x c: 10**6 asked for 8 TB
+    with pytest.raises(ValueError, match=f"at most {MAX_CANDIDATES} candidates"):
+        best_pair(post, many)
+    three: Any = np.int64(3)
+    assert np.array_equal(eubo_against(post, three), eubo_against(post, 3))

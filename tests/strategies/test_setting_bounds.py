@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from gaitpref import make_strategy
+from gaitpref.strategies import Switch
 from gaitpref.strategies.base import MAX_CANDIDATES, MAX_GATES, MAX_SAMPLES
 
 CASES = [
@@ -42,3 +43,47 @@ def test_a_strategy_name_is_a_name() -> None:
     for name in (["eubo"], None, 3):
         with pytest.raises(ValueError, match="unknown strategy"):  # a list was "unhashable type"
             make_strategy(name)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("name", "setting", "value", "expected"),
+    [
+        # refused before: "must be a finite number >= 0, got np.float64(2.0)" and the like
+        ("confident-eubo", "beta", np.float32(2.0), 2.0),
+        ("confident-eubo", "beta", np.int64(2), 2),
+        ("gated-eubo", "early_scale", np.float64(0.5), 0.5),
+        ("gated-eubo", "early_trials", np.int64(7), 7),
+        ("gated-eubo", "sparring_from", np.uint8(3), 3),
+        ("gated-eubo", "sparring_until", np.int32(9), 9),
+        ("eubo-then-sparring", "trials", np.int64(5), 5),
+    ],
+)
+def test_numpy_numbers_are_numbers(name: str, setting: str, value: object, expected: float) -> None:
+    made = getattr(make_strategy(name, **{setting: value}), setting)
+    assert made == expected and type(made) is type(expected)
+    with pytest.raises(ValueError, match=f"{setting} must be"):
+        make_strategy(name, **{setting: np.True_})
+
+
+@pytest.mark.parametrize(
+    ("name", "setting", "value"),
+    [
+        ("confident-eubo", "beta", np.float64(np.nan)),
+        ("confident-eubo", "beta", "1"),
+        ("gated-eubo", "early_scale", np.float64(np.nan)),
+        ("gated-eubo", "early_trials", np.int64(-1)),
+        ("gated-eubo", "early_trials", 2.0),
+        ("eubo-then-sparring", "trials", np.float64(3.0)),
+    ],
+)
+def test_bad_numbers_stay_refused(name: str, setting: str, value: object) -> None:
+    with pytest.raises(ValueError, match=f"{setting} must be"):
+        make_strategy(name, **{setting: value})
+
+
+def test_a_switch_switches_between_strategies() -> None:
+    # a name in place of a strategy was an AttributeError at the first ask
+    for part in ("early", "late"):
+        with pytest.raises(TypeError, match=f"{part} must be a strategy"):
+            Switch(**{part: "eubo"})  # type: ignore[arg-type]
+    assert Switch(early=make_strategy("information-gain")).early.name == "information-gain"

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from gaitpref.checks import is_count, is_number
+from gaitpref.checks import is_count, is_noise, is_number
 from gaitpref.errors import FeedbackError, NoSafeGaitError, QueryError
 from gaitpref.feedback import (
     ActionObservation,
@@ -194,6 +194,13 @@ class CoSpar:
             is_number(coactive_weight) and np.isfinite(coactive_weight) and coactive_weight > 0
         ):
             raise ValueError(f"coactive_weight must be positive, got {coactive_weight!r}")
+        if is_noise(noise) and not is_noise(noise / coactive_weight):
+            # a suggestion's noise squared to inf in the likelihood: every suggestion was a
+            # flat term, silently (1e-300), or a ConvergenceError at the first one
+            raise ValueError(
+                f"a suggestion's noise, noise / coactive_weight = {noise!r} / "
+                f"{coactive_weight!r}, must be positive with a finite square"
+            )
         if not isinstance(seed, np.random.Generator) and not (is_count(seed) and seed >= 0):
             raise ValueError(
                 f"seed must be an integer >= 0 or a numpy.random.Generator, got {seed!r} (every "

@@ -62,6 +62,11 @@ WarmFirst = Literal["strategy", "recommended"]
 WARM_FIRST: tuple[WarmFirst, ...] = ("strategy", "recommended")
 #: The default lengthscale hypotheses of ``hyper = "average"``: factors of the fitted ones.
 HYPOTHESES: tuple[float, ...] = (0.5, 0.71, 1.0, 1.41, 2.0)
+#: The most lengthscale hypotheses, and the factors one may be (a config's bounds,
+#: ``config/schema.py``): with ``hyper = "average"`` every answer refits each of them, so a
+#: million of them made every tell a million Laplace fits.
+MAX_HYPOTHESES = 15
+HYPOTHESIS_FACTORS = (0.01, 100.0)  # (exclusive, inclusive)
 
 
 @dataclass(frozen=True)
@@ -104,6 +109,14 @@ class Learning:
             or not all(is_number(c) and np.isfinite(c) and c > 0 for c in self.hypotheses)
         ):
             raise ValueError(f"hypotheses must be positive numbers, got {self.hypotheses!r}")
+        low, high = HYPOTHESIS_FACTORS
+        if len(self.hypotheses) > MAX_HYPOTHESES or not all(
+            low < c <= high for c in self.hypotheses
+        ):
+            raise ValueError(
+                f"hypotheses must be 1 to {MAX_HYPOTHESES} lengthscale factors in "
+                f"({low:g}, {high:g}], got {len(self.hypotheses)}: {self.hypotheses!r}"[:300]
+            )
         object.__setattr__(self, "hypotheses", tuple(float(c) for c in self.hypotheses))
         if self.prior is not None and not isinstance(self.prior, HyperPrior):
             raise TypeError(f"prior must be a HyperPrior or None, got {self.prior!r}")

@@ -62,7 +62,7 @@ empty on every line the ask draws, ``loop/line.py``).
 
 from __future__ import annotations
 
-from collections.abc import Collection
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -133,9 +133,13 @@ class Safety:
                 raise ValueError(f"cautious must be a fraction in (0, 1), got {self.cautious!r}")
         if not (is_number(self.explore) and np.isfinite(self.explore) and self.explore >= 0):
             raise ValueError(f"explore must be a finite number >= 0, got {self.explore!r}")
-        if isinstance(self.start, str) or any(not is_count(a) or a < 0 for a in self.start):
+        # read once (a generator was emptied by the check: no start gaits), and an iterable
+        # (one index was "'int' object is not iterable")
+        iterable = isinstance(self.start, Iterable) and not isinstance(self.start, str | bytes)
+        start = tuple(self.start) if iterable else ()
+        if not iterable or any(not is_count(a) or a < 0 for a in start):
             raise ValueError(f"start must hold action indices >= 0, got {self.start!r}")
-        object.__setattr__(self, "start", tuple(int(a) for a in self.start))
+        object.__setattr__(self, "start", tuple(int(a) for a in start))
         if self.reach is not None and not (
             is_number(self.reach) and np.isfinite(self.reach) and self.reach > 0
         ):

@@ -119,6 +119,14 @@ def confidence(
         raise ValueError(f"block must be an integer >= 1, got {block!r}")
     mean = np.array(posterior.mean)
     if allowed is not None:
+        # a mask of integers was read bitwise (~1 is -2: an index) and as column indices
+        arr = np.asarray(allowed)
+        if arr.dtype != np.bool_ or arr.shape != mean.shape:
+            raise ValueError(
+                f"allowed must be None or a boolean mask over the {mean.shape[0]} gaits, got "
+                f"dtype {arr.dtype} and shape {arr.shape}"
+            )
+        allowed = arr
         if not allowed.any():
             raise ValueError("no gait is allowed: there is nothing to recommend")
         mean[~allowed] = -np.inf

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.feedback import ActionObservation, ModelContext, Preference, Tie, kinds
 from gaitpref.loop.learning import pair_data
 from gaitpref.model.evidence import Hyperparameters, PairData
@@ -78,11 +79,25 @@ class WarmStart:
     gate: float | None = None  # nats the evidence must favour sharing by (None: plain MAP)
 
     def __post_init__(self) -> None:
+        if not isinstance(self.data, PairData):
+            raise TypeError(f"data must be a PairData (node codes), got {self.data!r}")
+        if self.singles is not None and not isinstance(self.singles, SingleData):
+            raise TypeError(f"singles must be a SingleData or None, got {self.singles!r}")
         object.__setattr__(self, "rho", check_rho(self.rho))
         if self.share is not None:
             object.__setattr__(self, "share", check_rho(self.share))
-        if isinstance(self.relearn_every, bool) or self.relearn_every < 0:
-            raise ValueError(f"relearn_every must be an int >= 0, got {self.relearn_every!r}")
+        # 2.5 re-learned every 5 answers (answers % 2.5), -1 or "2" failed at an answer
+        for name in ("subjects", "relearn_every"):
+            value = getattr(self, name)
+            if not is_count(value) or value < 0:
+                raise ValueError(f"{name} must be an integer >= 0, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if self.share_prior is not None and not isinstance(self.share_prior, LogitNormal):
+            raise TypeError(f"share_prior must be a LogitNormal or None, got {self.share_prior!r}")
+        gate = self.gate
+        if gate is not None and not (is_number(gate) and np.isfinite(gate) and gate >= 0):
+            # NaN never let the evidence favour sharing: the share was 0, silently
+            raise ValueError(f"gate must be None or a number of nats >= 0, got {gate!r}")
 
     @property
     def prior_of_share(self) -> LogitNormal:

@@ -75,6 +75,7 @@ def check_grid_size(space: Space) -> None:
             f"{GRID_LIMIT_ACTIONS:,} (its mean, variance and samples hold one number per "
             "action): use the line path"
         )
+    _ = space.index_shape  # a grid NumPy can index: ValueError naming its features otherwise
 
 
 def resolve_sampler(sampler: str, size: int) -> Literal["dense", "scalable"]:

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import scipy.sparse
@@ -115,6 +116,16 @@ class Hyperparameters:
         t = self.thresholds
         if t is not None and not (isinstance(t, tuple | list) and all(_finite(v) for v in t)):
             raise ValueError(f"thresholds must be None or a tuple of finite numbers, got {t!r}")
+        if t is not None and any(b < a for a, b in pairwise(t)):
+            # out of order, their log gaps (log_vector, what a fit starts from) were NaN
+            raise ValueError(f"thresholds must be in increasing order, got {t!r}")
+        # plain floats in tuples: a NumPy array here made two values unequal to compare
+        object.__setattr__(self, "lengthscale", tuple(float(v) for v in items))
+        object.__setattr__(self, "variance", float(self.variance))
+        object.__setattr__(self, "jitter", float(self.jitter))
+        object.__setattr__(self, "band", float(self.band))
+        if t is not None:
+            object.__setattr__(self, "thresholds", tuple(float(v) for v in t))
 
     @classmethod
     def from_kernel(

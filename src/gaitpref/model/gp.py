@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike
 
-from gaitpref.checks import is_noise
+from gaitpref.checks import MAX_NOISE, is_noise
 from gaitpref.model.engines import GridEngine, check_grid_size, make_engine, resolve_sampler
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import check_visited, fit_laplace
@@ -49,6 +49,8 @@ class PreferenceGP:
             raise ValueError(
                 f"preference noise must be positive with a finite square, got {noise!r}"
             )
+        if ordinal is not None and not isinstance(ordinal, Ordinal):  # failed at a rating
+            raise TypeError(f"ordinal must be a gaitpref.Ordinal or None, got {ordinal!r}")
         kernel.lengthscales(space.ndim)  # checks the count
         check_grid_size(space)
         self.space = space
@@ -89,17 +91,7 @@ class PreferenceGP:
         if w.shape != loser_idx.shape:
             raise ValueError(f"{w.size} winners but {loser_idx.size} losers")
         _check_distinct_pairs(w, loser_idx, "winners/losers")
-        if noise is None:
-            sigma = np.full(w.size, self.noise)
-        else:
-            try:
-                sigma = np.broadcast_to(np.asarray(noise, dtype=np.float64), w.shape).copy()
-            except (TypeError, ValueError):
-                raise ValueError(
-                    f"noise must be one number or one per comparison ({w.size}), got {noise!r}"
-                ) from None
-            if not np.all(np.isfinite(sigma) & (sigma > 0)):
-                raise ValueError("every comparison's noise must be positive and finite")
+        sigma = np.full(w.size, self.noise) if noise is None else _comparison_noise(noise, w.size)
         if not ratings:
             return self.posterior_from(w, loser_idx, Probit(sigma), init=init)
         if self.ordinal is None:
@@ -143,6 +135,15 @@ class PreferenceGP:
         and itself does carry evidence about the band).  :meth:`posterior`, where a preference of
         an action over itself can only be a mislabelling, refuses one.
         """
+        # grid indices, as posterior's: floats were truncated to gaits, an index off the grid
+        # was NumPy's error, a list an AttributeError
+        first = self.space.check_indices(first, "first")
+        second = self.space.check_indices(second, "second")
+        if first.shape != second.shape:
+            raise ValueError(f"{first.size} first but {second.size} second actions")
+        for name, lik in (("likelihood", likelihood), ("single_likelihood", single_likelihood)):
+            if lik is not None and not callable(getattr(lik, "terms", None)):
+                raise TypeError(f"{name} must be a likelihood (with terms), got {lik!r}")
         if single is not None:
             single = self.space.check_indices(single, "single")
             if single.size == 0:
@@ -170,6 +171,38 @@ class PreferenceGP:
             single_likelihood=single_likelihood, prior=prior,
         )  # fmt: skip
         return Posterior(self.space, self.kernel, fit, self.engine, self.noise, self.ordinal)
+
+
+def _comparison_noise(noise: ArrayLike, size: int) -> FloatArray:
+    """``noise`` (one number, or one per comparison) as ``size`` probit noises, each a number
+    in ``(0, MAX_NOISE]`` (its square finite, as the model's own noise), else a ValueError
+    naming it: NumPy read True as a noise of 1 and "0.1" as 0.1, and a noise of 1e200 squared
+    to inf in the likelihood."""
+    try:
+        raw = None if isinstance(noise, str | bytes) else np.asarray(noise)
+    except (TypeError, ValueError):
+        raw = None
+    listed = noise if isinstance(noise, list | tuple) else ()  # [True, 0.1] read as [1.0, 0.1]
+    if (
+        raw is None
+        or raw.dtype.kind not in "iuf"
+        or any(isinstance(v, bool | np.bool_) for v in listed)
+    ):
+        raise ValueError(f"noise must be numbers (one, or one per comparison), got {noise!r}")
+    try:
+        sigma = np.broadcast_to(raw.astype(np.float64), (size,)).copy()
+    except ValueError:
+        raise ValueError(
+            f"noise must be one number or one per comparison ({size}), got {noise!r}"
+        ) from None
+    bad = ~(np.isfinite(sigma) & (sigma > 0) & (sigma <= MAX_NOISE))
+    if np.any(bad):
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(
+            f"every comparison's noise must be positive with a finite square (at most "
+            f"{MAX_NOISE:.3g}), got {float(sigma[k])!r} for comparison {k}"
+        )
+    return sigma
 
 
 def _check_distinct_pairs(first: IntArray, second: IntArray, names: str) -> None:

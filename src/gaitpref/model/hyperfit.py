@@ -43,7 +43,7 @@ from numpy.typing import NDArray
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
-from gaitpref.checks import check_evaluations
+from gaitpref.checks import check_evaluations, is_number
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData, laplace_evidence
 from gaitpref.model.hypermix import Hypothesis
@@ -60,10 +60,13 @@ class LogNormal:
     sd: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.median) and self.median > 0):
+        # is_number first: a string was a NumPy TypeError, True a median of 1
+        if not (is_number(self.median) and np.isfinite(self.median) and self.median > 0):
             raise ValueError(f"a prior's median must be positive, got {self.median!r}")
-        if not (np.isfinite(self.sd) and self.sd >= 0):
+        if not (is_number(self.sd) and np.isfinite(self.sd) and self.sd >= 0):
             raise ValueError(f"a prior's sd must be >= 0, got {self.sd!r}")
+        object.__setattr__(self, "median", float(self.median))
+        object.__setattr__(self, "sd", float(self.sd))
 
 
 @dataclass(frozen=True)
@@ -78,7 +81,7 @@ class ThresholdPrior:
 
     def __post_init__(self) -> None:
         for name, sd in (("first_sd", self.first_sd), ("gap_sd", self.gap_sd)):
-            if sd is not None and not (np.isfinite(sd) and sd >= 0):
+            if sd is not None and not (is_number(sd) and np.isfinite(sd) and sd >= 0):
                 raise ValueError(f"the thresholds' prior {name} must be >= 0, got {sd!r}")
 
 
@@ -95,6 +98,24 @@ class HyperPrior:
     variance: LogNormal
     band: LogNormal | None = None
     thresholds: ThresholdPrior = ThresholdPrior()
+
+    def __post_init__(self) -> None:
+        # a float in place of a LogNormal was an AttributeError ('median') mid-fit
+        scales = self.lengthscale
+        if isinstance(scales, LogNormal) or not isinstance(scales, tuple | list):
+            raise TypeError(
+                f"lengthscale must be a tuple of LogNormal priors (one per feature), got {scales!r}"
+            )
+        for k, p in enumerate(scales):
+            if not isinstance(p, LogNormal):
+                raise TypeError(f"lengthscale[{k}] must be a LogNormal prior, got {p!r}")
+        object.__setattr__(self, "lengthscale", tuple(scales))
+        if not isinstance(self.variance, LogNormal):
+            raise TypeError(f"variance must be a LogNormal prior, got {self.variance!r}")
+        if self.band is not None and not isinstance(self.band, LogNormal):
+            raise TypeError(f"band must be a LogNormal prior or None, got {self.band!r}")
+        if not isinstance(self.thresholds, ThresholdPrior):
+            raise TypeError(f"thresholds must be a ThresholdPrior, got {self.thresholds!r}")
 
     def all(self) -> tuple[LogNormal | None, ...]:
         return (*self.lengthscale, self.variance, self.band)
@@ -263,6 +284,15 @@ def fit_hyperparameters(
     fitted too; ``after.thresholds`` then holds them (``start``'s, or the likelihood's own the
     first time, are the starting values)."""
     max_evaluations = check_evaluations(max_evaluations)
+    # one prior and one starting lengthscale a feature (a prior short of one was a NumPy
+    # "boolean index did not match" IndexError)
+    if not isinstance(prior, HyperPrior):
+        raise TypeError(f"prior must be a HyperPrior, got {prior!r}")
+    if not len(prior.lengthscale) == len(start.lengthscale) == space.ndim:
+        raise ValueError(
+            f"the space has {space.ndim} features; the prior has {len(prior.lengthscale)} "
+            f"lengthscale priors and the start {len(start.lengthscale)} lengthscales"
+        )
     if singles is not None and singles.size == 0:
         singles = None
     if prior.band is not None and start.band <= 0:

@@ -39,6 +39,10 @@ class SquaredExponential:
     def __post_init__(self) -> None:
         ls = self.lengthscale
         ls_t: tuple[float, ...] | float
+        if np.ndim(ls) > 1:  # a table of lengthscales was read row after row
+            raise ValueError(
+                f"lengthscale must be one number or one per feature, got shape {np.shape(ls)}"
+            )
         items = list(np.ravel(np.asarray(ls, dtype=object)))
         if not items or not all(is_number(v) and np.isfinite(v) and v > 0 for v in items):
             raise ValueError(f"lengthscale must be positive and finite, got {ls!r}")
@@ -50,6 +54,11 @@ class SquaredExponential:
             raise ValueError(f"signal variance must be positive, got {self.variance!r}")
         if not (is_number(self.jitter) and np.isfinite(self.jitter) and self.jitter >= 0):
             raise ValueError(f"jitter must be >= 0, got {self.jitter!r}")
+        if not np.isfinite(float(self.variance) + float(self.jitter)):  # the prior variance
+            raise ValueError(
+                f"signal variance + jitter (each gait's prior variance) must be finite, got "
+                f"{self.variance!r} + {self.jitter!r}"
+            )
         object.__setattr__(self, "lengthscale", ls_t)
         object.__setattr__(self, "variance", float(self.variance))
         object.__setattr__(self, "jitter", float(self.jitter))

@@ -33,6 +33,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from scipy.linalg import LinAlgError, cho_solve, cholesky, solve_triangular
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model import fit_memo
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood
@@ -297,6 +298,8 @@ def fit_laplace(
         raise ValueError("single and single_likelihood go together")
     if single is not None and single.size == 0:
         single = single_likelihood = None
+    _check_problem(k_vv, visited, first, second, single, tol, max_iter)
+    tol, max_iter = float(tol), int(max_iter)
     m = k_vv.shape[0]
     if init is not None and np.shape(init) != (m,):
         raise ValueError(
@@ -346,6 +349,56 @@ def fit_laplace(
     if memo is not None and key is not None:
         memo.put(key, fit_memo.Remembered(mode.whitened_mode, mode.gradient_norm))
     return mode
+
+
+#: The most Newton iterations a fit may be given (``max_iter``): each is ``O(m^3)``, and a fit
+#: converges in tens (100, the default, is already a failure's bound).
+MAX_NEWTON_ITERATIONS = 10_000
+
+
+def _check_problem(
+    k_vv: FloatArray,
+    visited: IntArray,
+    first: IntArray,
+    second: IntArray,
+    single: IntArray | None,
+    tol: float,
+    max_iter: int,
+) -> None:
+    """ValueError naming what :func:`fit_laplace` cannot fit: a tolerance of inf (or 1 and
+    more) accepted the start, the prior, as the mode at once; NaN or 0 never converged; a
+    ``max_iter`` of 0 or less failed without an iteration, and one without bound could run
+    without end; an index off the visited set was NumPy's IndexError."""
+    if not (is_number(tol) and 0 < tol < 1):
+        raise ValueError(f"tol must be a number in (0, 1), got {tol!r}")
+    if not is_count(max_iter) or not 1 <= max_iter <= MAX_NEWTON_ITERATIONS:
+        raise ValueError(
+            f"max_iter must be an integer in 1..{MAX_NEWTON_ITERATIONS:,}, got {max_iter!r}"
+        )
+    m = visited.shape[0] if visited.ndim == 1 else -1
+    if m < 0 or k_vv.shape != (m, m):
+        raise ValueError(
+            f"k_vv must be the {visited.shape} visited actions' square prior covariance, got "
+            f"shape {k_vv.shape}"
+        )
+    if not np.all(np.isfinite(k_vv)):  # blamed on the likelihood's curvature before
+        raise ValueError("k_vv, the visited actions' prior covariance, must be finite")
+    if first.shape != second.shape:
+        raise ValueError(f"first and second differ in shape: {first.shape} and {second.shape}")
+    for name, idx in (("first", first), ("second", second), ("single", single)):
+        if idx is None or idx.size == 0:
+            continue
+        if idx.ndim != 1 or not np.issubdtype(idx.dtype, np.integer):
+            raise ValueError(
+                f"{name} must be a 1-D array of indices into the visited set, got dtype "
+                f"{idx.dtype} and shape {idx.shape}"
+            )
+        low, high = int(idx.min()), int(idx.max())
+        if low < 0 or high >= m:
+            raise ValueError(
+                f"{name} holds {low if low < 0 else high}, not an index into the {m} visited "
+                f"actions (0..{m - 1})"
+            )
 
 
 def _at_remembered(

@@ -47,7 +47,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.linalg import cholesky
 
-from gaitpref.checks import is_count, is_noise
+from gaitpref.checks import is_count, is_noise, is_number
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine, check_grid_size, make_engine
 from gaitpref.model.evidence import (
@@ -67,7 +67,10 @@ from gaitpref.space import FloatArray, IntArray, Space
 
 
 def check_rho(rho: float) -> float:
-    """``rho`` as a float in ``[0, 1]``; ValueError otherwise."""
+    """``rho`` as a float in ``[0, 1]``; ValueError otherwise (a number: "0.5" and True were
+    read as 0.5 and 1)."""
+    if not is_number(rho):
+        raise ValueError(f"the population's shared fraction rho must lie in [0, 1], got {rho!r}")
     value = float(rho)
     if not (np.isfinite(value) and 0.0 <= value <= 1.0):
         raise ValueError(f"the population's shared fraction rho must lie in [0, 1], got {rho!r}")
@@ -269,10 +272,18 @@ class PopulationModel:
     share: float | None = None  # subject 0's own shared fraction (None: rho)
 
     def __post_init__(self) -> None:
+        # as PreferenceGP: a kernel or a space of another type failed at the first posterior
+        if not isinstance(self.space, Space):
+            raise TypeError(f"space must be a gaitpref.Space, got {self.space!r}")
+        if not isinstance(self.kernel, SquaredExponential):
+            raise TypeError(f"kernel must be a gaitpref.SquaredExponential, got {self.kernel!r}")
+        if self.ordinal is not None and not isinstance(self.ordinal, Ordinal):
+            raise TypeError(f"ordinal must be a gaitpref.Ordinal or None, got {self.ordinal!r}")
         if not is_noise(self.noise):
             raise ValueError(
                 f"preference noise must be positive with a finite square, got {self.noise!r}"
             )
+        self.kernel.lengthscales(self.space.ndim)  # checks the count
         check_grid_size(self.space)
         object.__setattr__(self, "rho", check_rho(self.rho))
         object.__setattr__(self, "share", check_share(self.rho, self.share))

@@ -20,7 +20,7 @@ import numpy as np
 from scipy.linalg import LinAlgError
 from scipy.optimize import minimize
 
-from gaitpref.checks import check_evaluations
+from gaitpref.checks import check_evaluations, is_number
 from gaitpref.errors import ConvergenceError, PriorNotPositiveDefiniteError
 from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hyperfit import HyperPrior, prior_bounds
@@ -38,9 +38,10 @@ class LogitNormal:
     sd: float = 1.5
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.median) and 0.0 < self.median < 1.0):
+        # is_number first: a string was a NumPy TypeError, True a median of 1
+        if not (is_number(self.median) and np.isfinite(self.median) and 0.0 < self.median < 1.0):
             raise ValueError(f"rho's prior median must lie in (0, 1), got {self.median!r}")
-        if not (np.isfinite(self.sd) and self.sd >= 0):
+        if not (is_number(self.sd) and np.isfinite(self.sd) and self.sd >= 0):
             raise ValueError(f"rho's prior sd must be >= 0, got {self.sd!r}")
 
 

@@ -264,7 +264,8 @@ class Posterior:
         naming both, before anything is drawn.
         """
         size = check_sample_size(size, len(self.space))
-        _check_generator(rng)
+        check_generator(rng)
+        check_nugget(nugget)
         if self.fit is None or size == 0:
             f, e = self.engine.prior_parts(rng, size, jitter_part=not nugget)
             if not nugget and e is not None:
@@ -357,7 +358,14 @@ def check_sample_size(size: object, points: int) -> int:
     return int(size)
 
 
-def _check_generator(rng: object) -> None:
+def check_nugget(nugget: object) -> None:
+    """``nugget`` is True or False (a string such as "False" was truthy: the jitter's part was
+    kept, silently)."""
+    if not isinstance(nugget, bool | np.bool_):
+        raise TypeError(f"nugget must be True or False, got {nugget!r}")
+
+
+def check_generator(rng: object) -> None:
     """Every random choice comes from an explicit generator (no seed, no global state)."""
     if not isinstance(rng, np.random.Generator):
         raise TypeError(

@@ -41,7 +41,7 @@ from gaitpref.model.evidence import Hyperparameters, PairData
 from gaitpref.model.hypermix import normalised
 from gaitpref.model.laplace import LaplaceMode
 from gaitpref.model.population import check_rho, population_evidence
-from gaitpref.model.posterior import Posterior, check_sample_size
+from gaitpref.model.posterior import Posterior, check_generator, check_nugget, check_sample_size
 from gaitpref.model.singles import SingleData, UnsupportedLikelihoodError
 from gaitpref.model.threads import in_threads
 from gaitpref.space import FloatArray, Space
@@ -201,6 +201,8 @@ class PosteriorMixture:
         ``size`` indices), then each chosen component's samples in component order.  ``size``
         is checked as :meth:`Posterior.sample` checks it, before the components are drawn."""
         size = check_sample_size(size, len(self.space))
+        check_generator(rng)  # an integer seed was an AttributeError in rng.choice
+        check_nugget(nugget)
         if len(self.components) == 1:  # one component: its own samples, the generator as its
             return self.components[0][1].sample(rng, size, nugget=nugget)
         which = rng.choice(len(self.components), size=size, p=self.weights)

@@ -22,9 +22,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from gaitpref.checks import is_number
 from gaitpref.model.posterior import Posterior, random_argmax
 from gaitpref.space import IntArray
-from gaitpref.strategies.base import MAX_CANDIDATES, AskContext, check_count
+from gaitpref.strategies.base import MAX_CANDIDATES, AskContext, check_count, plain
 from gaitpref.strategies.eubo import best_pair, eubo_against
 
 
@@ -119,8 +120,9 @@ class ConfidentEubo:
 
     def __post_init__(self) -> None:
         beta = self.beta
-        if isinstance(beta, bool) or not isinstance(beta, int | float) or not 0 <= beta < np.inf:
+        if not is_number(beta) or not 0 <= beta < np.inf:
             raise ValueError(f"beta must be a finite number >= 0, got {beta!r}")
+        object.__setattr__(self, "beta", plain(beta))  # a NumPy number as Python's
         check_count(self, "candidates", 2, MAX_CANDIDATES)
 
     def propose(self, context: AskContext) -> tuple[int, ...]:

@@ -30,6 +30,12 @@ MAX_SAMPLES = 4096
 MAX_GATES = 1000
 
 
+def plain(value: object) -> object:
+    """A NumPy scalar as the Python number it holds (others as they are): a setting built from
+    NumPy is stored and shown as one given in Python."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def check_count(settings: object, name: str, low: int, high: int) -> None:
     """The count setting ``name`` of a (frozen) strategy: an integer (not a bool; a NumPy one is
     kept as an ``int``) in ``low..high``."""
@@ -58,11 +64,43 @@ class AskContext:
     def __post_init__(self) -> None:
         # Every proposal loop runs at most ``n`` rounds: bound it by the grid, so that no query
         # (a config's ``n``, or a loop built by hand) can keep a strategy busy without end.
+        if not isinstance(self.posterior, Posterior):
+            raise TypeError(f"posterior must be a gaitpref Posterior, got {self.posterior!r}")
         size = len(self.posterior.space)
-        if isinstance(self.n, bool) or not isinstance(self.n, int) or not 1 <= self.n <= size:
+        if not is_count(self.n) or not 1 <= self.n <= size:
             raise ValueError(
                 f"a query needs 1 to {size} new actions (the grid's size), got n = {self.n!r}"
             )
+        object.__setattr__(self, "n", int(self.n))
+        # A context built by hand (a strategy scripted outside the loop) is checked as the
+        # loop's own: an off-grid buffer was a raw NumPy IndexError (a negative one wrapped), an
+        # integer seed an AttributeError, and an all-false mask let EUBO propose a gait the mask
+        # forbids.
+        buffer = self.buffer
+        if isinstance(buffer, str | bytes) or not isinstance(buffer, tuple | list):
+            raise TypeError(f"buffer must be a tuple of action indices, got {buffer!r}")
+        for k, a in enumerate(buffer):
+            if not is_count(a) or not 0 <= a < size:
+                raise ValueError(f"buffer[{k}] = {a!r} is not an action (0..{size - 1})")
+        object.__setattr__(self, "buffer", tuple(int(a) for a in buffer))
+        if not is_count(self.trial) or self.trial < 0:
+            raise ValueError(f"trial must be an integer >= 0, got {self.trial!r}")
+        object.__setattr__(self, "trial", int(self.trial))
+        if not isinstance(self.rng, np.random.Generator):
+            raise TypeError(
+                "rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), "
+                f"got {self.rng!r}"
+            )
+        allowed = self.allowed
+        if allowed is not None:
+            arr = np.asarray(allowed)
+            if arr.dtype != np.bool_ or arr.shape != (size,):
+                raise ValueError(
+                    f"allowed must be None or a boolean mask over the {size} actions, got dtype "
+                    f"{arr.dtype} and shape {arr.shape}"
+                )
+            if not arr.any():
+                raise ValueError("allowed allows no action: there is nothing to propose")
 
 
 class Strategy(Protocol):

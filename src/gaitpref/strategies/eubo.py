@@ -27,6 +27,7 @@ from scipy.special import ndtr
 
 from gaitpref.model.posterior import Posterior
 from gaitpref.space import FloatArray, IntArray
+from gaitpref.strategies.base import MAX_CANDIDATES
 
 _INV_SQRT_2PI = 1.0 / float(np.sqrt(2.0 * np.pi))
 _ROW_BLOCK = 8192
@@ -48,7 +49,7 @@ def eubo_pair(
 def covariance_with(posterior: Posterior, action: int) -> FloatArray:
     """``cov(f_x, f_action)`` for every action ``x`` (length ``A``)."""
     space, kernel = posterior.space, posterior.kernel
-    col = np.array([action], dtype=np.intp)
+    col = np.array([space.check_index(action)], dtype=np.intp)  # -1 wrapped, 2.5 truncated
     out = kernel.cross(space, col)[:, 0].copy()
     if posterior.fit is None:
         return out
@@ -60,8 +61,13 @@ def covariance_with(posterior: Posterior, action: int) -> FloatArray:
 
 
 def covariance_among(posterior: Posterior, actions: IntArray) -> FloatArray:
-    """The ``c x c`` posterior covariance of ``actions``."""
+    """The ``c x c`` posterior covariance of ``actions`` (at most :data:`MAX_CANDIDATES`)."""
     space, kernel = posterior.space, posterior.kernel
+    actions = space.check_indices(actions, "candidates")
+    if actions.size > MAX_CANDIDATES:  # c x c numbers: 10**6 candidates asked for 8 TB
+        raise ValueError(
+            f"at most {MAX_CANDIDATES} candidates are compared in pairs, got {actions.size}"
+        )
     out: FloatArray = kernel.cross(space, actions, rows=actions)
     if posterior.fit is None:
         return out
@@ -72,6 +78,7 @@ def covariance_among(posterior: Posterior, actions: IntArray) -> FloatArray:
 
 def eubo_against(posterior: Posterior, reference: int) -> FloatArray:
     """``EUBO(x, reference)`` for every action ``x`` (length ``A``)."""
+    reference = posterior.space.check_index(reference)  # -1 read the last gait before
     mu, var = np.asarray(posterior.mean), np.asarray(posterior.variance)
     cov = covariance_with(posterior, reference)
     return eubo_pair(mu, mu[reference], var, var[reference], cov)
@@ -79,10 +86,11 @@ def eubo_against(posterior: Posterior, reference: int) -> FloatArray:
 
 def best_pair(posterior: Posterior, candidates: IntArray) -> tuple[int, int, float]:
     """The pair of distinct ``candidates`` with the highest EUBO (first maximum)."""
+    candidates = posterior.space.check_indices(candidates, "candidates")
     if candidates.shape[0] < 2:
         raise ValueError("best_pair needs at least two candidates")
-    mu = np.asarray(posterior.mean)[candidates]
     cov = covariance_among(posterior, candidates)
+    mu = np.asarray(posterior.mean)[candidates]
     var = np.diag(cov)
     values = eubo_pair(mu[:, None], mu[None, :], var[:, None], var[None, :], cov)
     values[np.tril_indices(candidates.shape[0])] = -np.inf

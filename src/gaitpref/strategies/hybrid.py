@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from gaitpref.checks import is_count, is_number
 from gaitpref.strategies.acquire import Eubo, eubo_fill
 from gaitpref.strategies.base import (
     MAX_GATES,
@@ -44,6 +45,7 @@ from gaitpref.strategies.base import (
     Strategy,
     check_count,
     joint_draws,
+    plain,
 )
 
 
@@ -63,13 +65,14 @@ class GatedEubo:
     def __post_init__(self) -> None:
         check_count(self, "gates", 1, MAX_GATES)
         scale = self.early_scale
-        number = isinstance(scale, int | float) and not isinstance(scale, bool)
-        if not number or not 0.01 <= scale <= 100:
+        if not is_number(scale) or not 0.01 <= scale <= 100:
             raise ValueError(f"early_scale must be a number in [0.01, 100], got {scale!r}")
+        object.__setattr__(self, "early_scale", plain(scale))  # a NumPy number as Python's
         for setting in ("early_trials", "sparring_from", "sparring_until"):
             trials = getattr(self, setting)
-            if isinstance(trials, bool) or not isinstance(trials, int) or trials < 0:
+            if not is_count(trials) or trials < 0:
                 raise ValueError(f"{setting} must be an integer >= 0, got {trials!r}")
+            object.__setattr__(self, setting, int(trials))
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         if self.sparring_from <= context.trial < self.sparring_until:
@@ -111,8 +114,14 @@ class Switch:
     name: str = "eubo-then-sparring"
 
     def __post_init__(self) -> None:
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 0:
+        if not is_count(self.trials) or self.trials < 0:
             raise ValueError(f"trials must be an integer >= 0, got {self.trials!r}")
+        object.__setattr__(self, "trials", int(self.trials))
+        for part in ("early", "late"):  # a name in place of a strategy failed at its first ask
+            if not callable(getattr(getattr(self, part), "propose", None)):
+                raise TypeError(
+                    f"{part} must be a strategy (make_strategy(name)), got {getattr(self, part)!r}"
+                )
 
     def propose(self, context: AskContext) -> tuple[int, ...]:
         chosen = self.early if context.trial < self.trials else self.late
