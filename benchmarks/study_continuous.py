@@ -6,7 +6,9 @@ subjects; against random selection, and in 6-D against the full 57,750-gait grid
 5 x 5 x 3 values over the same box) with the line path run on that same grid (lines snapped to
 it) and on the continuous box.  The line path's strategy, fit and lines per query are
 ``--line-strategy``, ``--line-fit`` and ``--line-count`` (1, LineCoSpar's one line, unless
-given; a line config's default since defaults 0.10 is 4); the full grid runs twice, with
+given; a line config's default since defaults 0.10 is 4) and ``--line-boundary`` (``clip``, as
+every recorded run drew its lines, unless given; a line config's default since defaults 0.11 is
+``fold``, ``loop/lines.py``); the full grid runs twice, with
 self-sparring (``grid``) and with the project's default for grids, gated EUBO
 (``grid-gated``).  One process, seeds 0..S-1.
 
@@ -28,7 +30,7 @@ import numpy as np
 from gaitpref import CoSpar, Feature, Space, SquaredExponential
 from gaitpref.loop.learning import Learning
 from gaitpref.loop.line import LineCoSpar
-from gaitpref.loop.lines import LineSettings
+from gaitpref.loop.lines import Boundary, LineSettings
 from gaitpref.simulate.continuous import (
     HARTMANN6_MAX,
     builtin,
@@ -64,7 +66,8 @@ def kernel(objective: str, d: int) -> SquaredExponential:
 def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, seed: int,
             optimum: float | None, line_strategy: str = "self-sparring",
             line_fit: str = "fixed", line_count: int = 1,
-            line_points: int = 50, line_cloud: int = 0) -> dict[str, Any]:  # fmt: skip
+            line_points: int = 50, line_cloud: int = 0,
+            line_boundary: str = "clip") -> dict[str, Any]:  # fmt: skip
     domain = box(d) if path == "line" else grid6()
     fn = builtin(objective, domain, seed)
     if optimum is None:  # the objective's best over the domain
@@ -79,7 +82,8 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
     else:
         strategy = make_strategy(line_strategy)
         learning = Learning(fit="evidence" if line_fit == "evidence" else "fixed")
-        line = LineSettings(line_points, "random", line_count, line_cloud)
+        boundary: Boundary = "fold" if line_boundary == "fold" else "clip"
+        line = LineSettings(line_points, "random", line_count, line_cloud, boundary)
         loop = LineCoSpar(domain, k, PREF_NOISE, line=line, strategy=strategy,
                           learning=learning, **settings)  # fmt: skip
     user = PointUser(fn, np.random.default_rng(user_seed), noise)
@@ -94,6 +98,8 @@ def one_run(path: str, objective: str, d: int, coactive: bool, noise: float, see
         **({"lines": line_count} if path not in GRID_STRATEGY and line_count != 1 else {}),
         **({"points": line_points} if path not in GRID_STRATEGY and line_points != 50 else {}),
         **({"cloud": line_cloud} if path not in GRID_STRATEGY and line_cloud else {}),
+        **({"boundary": line_boundary} if path not in GRID_STRATEGY and line_boundary != "clip"
+           else {}),
         "random_mean": float(rand.mean()), "worst": float(fn(domain.points).min())
         if path != "line" else float(rand.min()),
         "curve": res.curve.tolist(), "best_at": {str(k): v for k, v in res.best_at.items()},
@@ -132,6 +138,11 @@ def main() -> None:
     parser.add_argument(
         "--line-cloud", type=int, default=0, help="points around the best point besides the lines"
     )
+    parser.add_argument(
+        "--line-boundary", choices=("clip", "fold"), default="clip",
+        help="a line leaving the box at once both ways: clip it to its origin (every recorded "
+        "run, as before defaults 0.11) or fold its direction into the box (the default since)",
+    )  # fmt: skip
     args = parser.parse_args()
     if args.report:
         report(args.out / "results.json", args.out)
@@ -145,7 +156,7 @@ def main() -> None:
             r = one_run(
                 path, objective, d, coactive, noise, seed, known,
                 args.line_strategy, args.line_fit, args.line_count, args.line_points,
-                args.line_cloud,
+                args.line_cloud, args.line_boundary,
             )  # fmt: skip
             runs.append(r)
             print(

@@ -122,7 +122,9 @@ DEFAULT_REFIT_EVERY: int = DEFAULTS["model"]["refit_every"]
 DEFAULT_STRATEGY: str = DEFAULTS["cospar"]["strategy"]
 DEFAULT_BUFFER: int = DEFAULTS["cospar"]["buffer"]
 #: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
-LINE_KEYS: Final = frozenset({"line_points", "line_direction", "line_count", "line_cloud"})
+LINE_KEYS: Final = frozenset(
+    {"line_points", "line_direction", "line_count", "line_cloud", "line_boundary"}
+)
 
 
 def shipped_configs() -> list[str]:
@@ -411,7 +413,9 @@ def _cospar(
                 + f"), got {cospar['n']}",
             )
         lines, cloud = cospar["line_count"], cospar["line_cloud"]
-        cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"], lines, cloud)
+        cospar["line"] = LineSettings(
+            cospar["line_points"], cospar["line_direction"], lines, cloud, cospar["line_boundary"]
+        )
         return cospar, defaulted
     cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"])
     size = len(space)
