@@ -1,6 +1,6 @@
 """A page's form past a limit gets the console's HTML error page saying what was too large.
 
-Starlette's form parser refuses a field over 1 MiB, more than 1000 fields or files and malformed
+Starlette's form parser refuses a field over 1 MiB, too many fields or files, and malformed
 multipart data with an ``HTTPException(400)``, which reached the operator's browser as FastAPI's
 bare ``{"detail": "Part exceeded maximum size of 1024KB."}``; a body over the console's own form
 limit was a JSON 413.  Now the form limits are set in ``console/limits.py`` and a page answers

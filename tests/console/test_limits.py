@@ -7,7 +7,15 @@ from collections.abc import Iterator
 
 from fastapi.testclient import TestClient
 
-from gaitpref.console.limits import MAX_FORM_BODY, MAX_JSON_BODY, MAX_LIST
+from gaitpref.console.limits import (
+    FEATURES_MOST,
+    MAX_COMPARISONS,
+    MAX_FORM_BODY,
+    MAX_FORM_FIELDS,
+    MAX_JSON_BODY,
+    MAX_LIST,
+    QUERY_MOST,
+)
 from tests.console.conftest import event_count, new_session
 
 
@@ -56,11 +64,15 @@ def test_a_list_over_its_maximum_is_413_naming_the_field(client: TestClient) -> 
     q = client.get(f"/api/sessions/{sid}/query").json()
     body = {
         "query_id": q["query_id"],
-        "comparisons": [[0, 1, "first"]] * (MAX_LIST + 1),
+        "comparisons": [[0, 1, "first"]] * (MAX_COMPARISONS + 1),
     }
     r = client.post(f"/api/sessions/{sid}/answers", json=body)
     assert r.status_code == 413
-    assert r.json()["detail"].startswith(f"comparisons: at most {MAX_LIST} items")
+    assert r.json()["detail"].startswith(f"comparisons: at most {MAX_COMPARISONS} items")
+    body = {"query_id": q["query_id"], "feedback": [{"kind": "rating"}] * (MAX_LIST + 1)}
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 413
+    assert r.json()["detail"].startswith(f"feedback: at most {MAX_LIST} items")
     ok = {"query_id": q["query_id"], "comparisons": [[i, j, "first"] for i, j in q["comparisons"]]}
     assert client.post(f"/api/sessions/{sid}/answers", json=ok).status_code == 200
 
@@ -86,3 +98,46 @@ def test_a_content_length_that_is_not_a_number_is_a_400_saying_so(client: TestCl
         assert r.status_code == 400 and "Content-Length header is not a number" in r.text
         assert 'id="back-to-trial"' in r.text
     assert event_count(client, sid) == before
+
+
+def test_the_answer_limits_hold_the_largest_query_a_config_may_have() -> None:
+    """Every comparison, suggestion and rating of the largest query a config allows fits the
+    JSON lists and the answer form (a config with ``n = 24`` had more pairs than the 256 items a
+    list took, and one with 45 gaits more radio groups than the form's 1,000 fields)."""
+    from gaitpref.config.schema import MAX_FEATURES, MAX_QUERY
+
+    assert (QUERY_MOST, FEATURES_MOST) == (MAX_QUERY, MAX_FEATURES)
+    n = b = MAX_QUERY
+    assert n * (n - 1) // 2 + n * b == MAX_COMPARISONS
+    assert MAX_COMPARISONS + n * MAX_FEATURES + n + 8 <= MAX_FORM_FIELDS
+
+
+def test_an_answer_to_every_pair_of_a_large_query_is_taken(client: TestClient) -> None:
+    config = """
+[space.x]
+min = 0.0
+max = 1.0
+num = 40
+[space.y]
+min = 0.0
+max = 1.0
+num = 40
+[model]
+lengthscale = 0.2
+signal_variance = 1.0
+noise = 0.05
+[cospar]
+n = 24
+buffer = 0
+strategy = "self-sparring"
+"""
+    r = client.post("/api/sessions", json={"config": config, "subject": "S01"})
+    assert r.status_code == 201, r.text
+    sid = r.json()["id"]
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    pairs = [[i, j, "first"] for i, j in q["comparisons"]]
+    assert len(pairs) > MAX_LIST  # 276 with 24 distinct gaits
+    r = client.post(
+        f"/api/sessions/{sid}/answers", json={"query_id": q["query_id"], "comparisons": pairs}
+    )
+    assert r.status_code == 200, r.text

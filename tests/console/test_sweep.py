@@ -30,7 +30,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from gaitpref.console import create_app
-from gaitpref.console.limits import MAX_FORM_BODY, MAX_JSON_BODY
+from gaitpref.console.limits import MAX_FORM_BODY, MAX_FORM_FIELDS, MAX_JSON_BODY
 from gaitpref.console.service import SessionService
 from tests.console.conftest import csrf_of
 from tests.console.test_ratings_safety import rated_config
@@ -372,7 +372,7 @@ def test_spoilt_forms_are_refused_not_500_and_write_nothing(console: Console, ro
         {"rate-9999999999": "1"},
         {"rate-0": "999"},
         {"unknown": "x"},
-        {f"f{i}": "v" for i in range(1100)},  # past the form parser's 1,000 fields
+        {f"f{i}": "v" for i in range(MAX_FORM_FIELDS + 1)},  # past the form parser's limit
     ):
         _post_form(console, route, {**valid(), **extra})
     path = route.path.format(sid=console.sid.get(name, 1))

@@ -117,8 +117,9 @@ def create_app(
             ]
             if long:  # a list past the documented maximum: 413, as for a body past its size
                 where = ".".join(str(p) for p in long[0]["loc"][1:])
+                most = long[0].get("ctx", {}).get("max_length", MAX_LIST)
                 return JSONResponse(
-                    {"detail": f"{where}: at most {MAX_LIST} items (see docs/console.md)"},
+                    {"detail": f"{where}: at most {most} items (see docs/console.md)"},
                     status_code=413,
                 )
             return JSONResponse({"detail": [_plain(e) for e in errors]}, status_code=422)

@@ -6,11 +6,14 @@ what                        limit           beyond it
 a JSON body (``/api/...``)  1 MB            413, before the JSON is read
 a form body (pages)         66 MB           413 (a config upload and a gait library fit)
 a form field (not a file)   1 MiB           413 saying so (a note, a reason, ...)
-a form's fields; its files  1000 each       413 saying so
+a form's fields             8,288           413 saying so (the largest answer form)
+a form's files              1000            413 saying so
 an uploaded config          200 kB          422 naming ``config_file``
 a pasted config's text      200,000 chars   422 naming ``config``
 an uploaded gait library    64 MB           422 naming ``library_file``
-a list in a JSON body       256 items       413 naming the field (``comparisons``, ...)
+``comparisons``             6,112 items     413 naming the field (the most one answer holds)
+``suggestions``             2,048 items     413 naming the field (a gait x feature each)
+another list in a JSON      256 items       413 naming the field (``feedback``, ...)
 ==========================  ==============  ==================================================
 
 A ``Content-Length`` that is not a number is a 400 saying so, not a 413.  The byte limits are
@@ -35,8 +38,18 @@ if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlet
 
 #: the most bytes of a JSON request body
 MAX_JSON_BODY = 1_000_000
-#: the most items of any list in a JSON request body (comparisons, suggestions, ranking)
+#: the most items of a list in a JSON request body (``feedback``, ``prior_from``, ...)
 MAX_LIST = 256
+#: the most queried gaits a config may have: ``[cospar] n`` and ``buffer`` (each at most
+#: ``gaitpref.config.schema.MAX_QUERY``) and features (``MAX_FEATURES``); plain numbers, so
+#: that `gaitpref --help` need not load the config schema (a test keeps them equal)
+QUERY_MOST, FEATURES_MOST = 64, 32
+#: the most comparisons one answer holds: each pair of the query's gaits with one executed
+#: now, ``n (n - 1) / 2 + n b`` (an answer of a config with ``n = 24`` had 276, past
+#: :data:`MAX_LIST`, and no answer to all its pairs could be sent)
+MAX_COMPARISONS = QUERY_MOST * (QUERY_MOST - 1) // 2 + QUERY_MOST * QUERY_MOST
+#: the most coactive suggestions one answer holds: one per executed gait and feature
+MAX_SUGGESTIONS = QUERY_MOST * FEATURES_MOST
 #: the most bytes of an uploaded config file
 MAX_UPLOAD = 200_000
 #: the most characters of a config's text given in a field (a page's ``config``, the API's
@@ -48,8 +61,11 @@ MAX_LIBRARY_BYTES = 64_000_000
 MAX_FORM_BODY = MAX_LIBRARY_BYTES + MAX_UPLOAD + 2_000_000
 #: the most bytes of one field of a form that is not a file (Starlette's default, made explicit)
 MAX_FORM_FIELD = 1024 * 1024
-#: the most fields, and the most files, of one form (Starlette's defaults, made explicit)
-MAX_FORM_FIELDS = 1000
+#: the most fields of one form: the trial page's answer form for the largest query a config
+#: may have (a field per comparison, per suggestion and per rating, and a few more); it was
+#: Starlette's default, 1,000, which a query of 45 gaits passed
+MAX_FORM_FIELDS = MAX_COMPARISONS + MAX_SUGGESTIONS + QUERY_MOST + 64
+#: the most files of one form (Starlette's default, made explicit)
 MAX_FORM_FILES = 1000
 
 

@@ -12,7 +12,12 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictInt, StrictStr, field_validator
 
-from gaitpref.console.limits import MAX_CONFIG_TEXT, MAX_LIST
+from gaitpref.console.limits import (
+    MAX_COMPARISONS,
+    MAX_CONFIG_TEXT,
+    MAX_LIST,
+    MAX_SUGGESTIONS,
+)
 from gaitpref.feedback import Outcome
 from gaitpref.space import Move
 
@@ -116,10 +121,12 @@ class AnswerIn(_Request):
 
     query_id: Id
     comparisons: list[ComparisonTriple] = Field(
-        default_factory=list, max_length=MAX_LIST, examples=[[[12, 7, "first"]]]
+        default_factory=list, max_length=MAX_COMPARISONS, examples=[[[12, 7, "first"]]]
     )
     suggestions: list[SuggestionTriple] = Field(
-        default_factory=list, max_length=MAX_LIST, examples=[[[12, "step_length", "+small"]]]
+        default_factory=list,
+        max_length=MAX_SUGGESTIONS,
+        examples=[[[12, "step_length", "+small"]]],
     )
     feedback: list[FeedbackIn] = Field(
         default_factory=list,
