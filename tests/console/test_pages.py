@@ -139,12 +139,16 @@ def test_notes_exclusion_pause_resume_finish_from_the_page(client: TestClient) -
         {"csrf_token": csrf, "reason": "device_fault", "detail": "m" * 501},
     )
     assert long.status_code == 422 and "at most 500 characters" in long.text
-    r = post(
-        client,
-        f"/sessions/{sid}/trials/1/exclude",
-        {"csrf_token": csrf, "reason": "device_fault", "detail": "motor"},
-    )
+    exclude = {"csrf_token": csrf, "reason": "device_fault", "detail": "motor"}
+    before = event_count(client, sid)
+    r = post(client, f"/sessions/{sid}/trials/1/exclude", exclude)  # an exclusion is for good:
+    assert r.status_code == 200 and "Exclude this trial?" in r.text  # confirmed first
+    assert "device fault (motor)" in r.text and "cannot be taken back" in r.text
+    assert event_count(client, sid) == before  # nothing written yet
+    r = post(client, f"/sessions/{sid}/trials/1/exclude", forms_of(r.text)["form1"].fields)
     assert r.status_code == 303
+    again = post(client, f"/sessions/{sid}/trials/1/exclude", exclude)  # a stale review: 409
+    assert again.status_code == 409 and "already excluded" in again.text
     html = client.get(f"/sessions/{sid}").text
     assert "strap loose" in html and "excluded: device fault" in html
     assert (

@@ -136,7 +136,7 @@ API = [
     Route(
         "exclude",
         "/api/sessions/{sid}/trials/1/exclude",
-        lambda q: {"reason": "stumble", "detail": "tripped"},
+        lambda q: {"reason": "stumble", "detail": "tripped", "confirmed": "1"},
     ),
     Route("unsafe", "/api/sessions/{sid}/trials/2/unsafe", lambda q: {"reason": "knee"}),
     Route("withdraw", "/api/sessions/{sid}/trials/2/unsafe/withdraw", None),
@@ -182,7 +182,7 @@ FORMS = [
     Route(
         "exclude",
         "/sessions/{sid}/trials/1/exclude",
-        lambda q: {"reason": "stumble", "detail": "tripped"},
+        lambda q: {"reason": "stumble", "detail": "tripped", "confirmed": "1"},
     ),
     Route(
         "unsafe", "/sessions/{sid}/trials/2/unsafe", lambda q: {"reason": "knee", "confirmed": "1"}

@@ -413,6 +413,21 @@ async def post_exclude(
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")
     service = service_of(request)
+    if fields.get("confirmed") != "1":  # an exclusion cannot be taken back: confirmed first
+
+        def summary(session: Session) -> list[str]:
+            session.check_change("exclude", trial)  # undone, excluded since, finished: 409 now
+            gait = next(t.action for t in session.trials() if t.number == trial)
+            why = reason.replace("_", " ") + (f" ({detail})" if detail else "")
+            return [
+                f"Exclude trial {trial} ({session.describe(gait)}): {why}",
+                "Its answers leave the model; they stay in the log, flagged. An exclusion "
+                "cannot be taken back.",
+            ]
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        action = f"/sessions/{session_id}/trials/{trial}/exclude"
+        return confirm_page(request, session_id, "exclude", lines, fields, action)
     replaced = await run_in_threadpool(service.exclude, session_id, trial, reason, detail)
     return see_other(f"/sessions/{session_id}?excluded={trial}&replaced={int(replaced)}")
 

@@ -54,6 +54,7 @@ from gaitpref.sessions.confidence import confidence_history, session_confidence,
 from gaitpref.sessions.fit_cache import load_memo, memo_path, save_memo
 from gaitpref.sessions.gaits import stopped_error
 from gaitpref.sessions.records import (
+    REASONS,
     Answered,
     ComparisonRecord,
     FeedbackEntry,
@@ -567,18 +568,23 @@ class Session:
 
         self._locked(run)
 
-    def check_change(self, change: Literal["undo", "unsafe", "withdraw"], trial: int = 0) -> None:
-        """Refuse, writing nothing, as :meth:`undo`, :meth:`flag_unsafe` (of ``trial``) or
-        :meth:`withdraw_unsafe` (of ``trial``) would now: the :class:`SessionStateError` of a
+    def check_change(
+        self, change: Literal["undo", "unsafe", "withdraw", "exclude"], trial: int = 0
+    ) -> None:
+        """Refuse, writing nothing, as :meth:`undo`, :meth:`flag_unsafe`, :meth:`withdraw_unsafe`
+        or :meth:`exclude` (of ``trial``) would now: the :class:`SessionStateError` of a
         finished session, of nothing to undo, of a trial not answered (or undone since), already
-        flagged or not flagged.  For a confirm step, so that a stale one is refused before the
-        operator confirms it."""
+        flagged, not flagged or already excluded.  For a confirm step, so that a stale one is
+        refused before the operator confirms it."""
 
         def run() -> None:
             st = self._state
             if change == "undo":
                 st.check_open("undo")
                 st.undo_event()
+            elif change == "exclude":
+                st.check_open("exclusions")
+                st.exclude_event(trial, REASONS[0], "")
             elif change == "unsafe":
                 st.check_open("unsafe flags")
                 st.unsafe_event(trial, "(checked)")

@@ -37,13 +37,19 @@
       if (button) lines.push(button.dataset.say);
       const reason = form.elements.namedItem("reason");
       if (kind === "unsafe" && reason) lines.push("Reason: " + reason.value.trim());
+      if (kind === "exclude" && reason) {
+        const detail = form.elements.namedItem("detail");
+        const more = detail && detail.value.trim() ? " (" + detail.value.trim() + ")" : "";
+        lines.push("Reason: " + reason.value.replace(/_/g, " ") + more);
+      }
     }
     return lines;
   }
 
   const TITLES = { answer: "Save this answer?", undo: "Undo the last answer?",
     ranking: "Record this ranking?", finish: "Finish the session?",
-    unsafe: "Flag this trial unsafe?", withdraw: "Withdraw the unsafe flag?" };
+    unsafe: "Flag this trial unsafe?", withdraw: "Withdraw the unsafe flag?",
+    exclude: "Exclude this trial?" };
 
   function ask(form) {
     if (!dialog) { confirmAndSend(form); return; }
