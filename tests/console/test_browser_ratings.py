@@ -89,6 +89,18 @@ def test_ratings_an_unsafe_flag_and_the_export(chromium: Any, live: str, tmp_pat
     page.wait_for_selector("#flash:has-text('flag of trial 2 was withdrawn')")
     assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {}
 
+    # exclude trial 3: an exclusion cannot be taken back, so it is confirmed first
+    page.click("tr[data-trial='3'] details.exclude summary")
+    page.select_option("tr[data-trial='3'] select[name=reason]", "stumble")
+    page.fill("tr[data-trial='3'] input[name=detail]", "tripped")
+    page.click("tr[data-trial='3'] .exclude-form button[type=submit]")
+    page.wait_for_selector("#confirm-dialog[open]")
+    assert "Reason: stumble (tripped)" in page.inner_text("#confirm-dialog ul")
+    page.click("#confirm-dialog [data-confirm-yes]")
+    page.wait_for_selector("#flash:has-text('Trial 3 excluded')")
+    excluded = httpx.get(f"{live}/api/sessions/{sid}/trials").json()[2]
+    assert excluded["excluded"] == "stumble"
+
     # export: ratings.csv holds the ratings given
     with page.expect_download() as download:
         page.click("#export-csv")
