@@ -262,6 +262,26 @@ def check_labels(config: ExperimentConfig) -> None:
             )
 
 
+def check_ignored(config: ExperimentConfig) -> None:
+    """Refuse, for a *new* session's config, a key its text gives that the config would ignore
+    (a silently ignored key is a defect): ``[safety] risk`` or ``lambda`` without a region of
+    avoidance (``avoid``).  A :class:`ConfigError` naming the table and key.  Like
+    :func:`check_name`, not checked by :func:`parse_config`: sessions stored with such a key
+    (earlier releases took it) parse, reopen and replay as they were."""
+    raw = read_toml(config.text)
+    safety = raw.get("safety")
+    if isinstance(safety, dict) and not safety.get("avoid"):
+        for key in ("risk", "lambda"):
+            if key in safety:
+                fail(
+                    "safety",
+                    key,
+                    f"is a setting of the region of avoidance, which is off without avoid = "
+                    f'["..."] (the worst [feedback.rating] labels): {key} = '
+                    f"{shown(safety[key])} would be ignored; give avoid, or leave {key} out",
+                )
+
+
 def parse_config(
     text: str,
     default_name: str = "experiment",

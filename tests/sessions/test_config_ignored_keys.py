@@ -1,0 +1,85 @@
+"""A new session refuses a config key that the config would ignore.
+
+``[safety] risk`` and ``lambda`` set the region of avoidance, which is off without ``avoid``:
+a config giving either without ``avoid`` parsed, and the rule it asked for did nothing
+(``Safety.avoid == 0``), silently.  Now a new session (and ``simulate``) refuses it with a
+ConfigError naming the table and key; a session stored with one reopens and replays as it was.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref import ConfigError, Session
+from gaitpref.cli import app
+from gaitpref.config import check_ignored, load_config, parse_config
+from gaitpref.storage import MemoryStorage
+from tests.sessions.sessionkit import CONFIG, Drive
+
+RATING = '[feedback.rating]\nlabels = ["bad", "okay", "good"]\n\n'
+
+
+def _text(extra: str) -> str:
+    return load_config(CONFIG).text + "\n" + extra
+
+
+IGNORED = [
+    ("[safety]\nrisk = 0.5\n", "risk"),
+    ("[safety]\nlambda = 2.0\n", "lambda"),
+    (RATING + "[safety]\nrisk = 0.5\n", "risk"),
+    (RATING + "[safety]\nlambda = 2.0\nunsafe_radius = 0.1\n", "lambda"),
+]
+
+
+@pytest.mark.parametrize(("extra", "key"), IGNORED)
+def test_a_region_setting_without_avoid_is_refused_by_name(extra: str, key: str) -> None:
+    config = parse_config(_text(extra))  # a stored config still parses
+    assert config.safety.avoid == 0
+    with pytest.raises(ConfigError, match=rf"\[safety\]\.{key}: is a setting of the region") as e:
+        check_ignored(config)
+    assert (e.value.table, e.value.key) == ("safety", key)
+    with pytest.raises(ConfigError, match=rf"\[safety\]\.{key}"):
+        Session.create(MemoryStorage(), config, "S01")
+
+
+def test_the_settings_with_avoid_are_taken() -> None:
+    text = _text(RATING + '[safety]\navoid = ["bad"]\nrisk = 0.5\nunsafe_radius = 0.1\n')
+    check_ignored(parse_config(text))
+    check_ignored(parse_config(_text("[safety]\nunsafe_radius = 0.1\n")))
+    for name in ("exo-1d-step-length", "synthetic-6d", "compass-continuous-3d"):
+        check_ignored(load_config(name))
+
+
+def test_session_new_and_simulate_refuse_it(tmp_path: Path) -> None:
+    path = tmp_path / "ignored.toml"
+    path.write_text(_text("[safety]\nrisk = 0.5\n"), "utf-8")
+    db = tmp_path / "lab.db"
+    for args in (
+        ["session", "new", "--config", str(path), "--subject", "S01", "--db", str(db)],
+        ["simulate", str(path), "--objective", "random-gp", "--trials", "1"],
+    ):
+        result = CliRunner().invoke(app, args)
+        assert result.exit_code == 2, result.output
+        assert "[safety].risk: is a setting of the region" in " ".join(result.output.split())
+        assert "Traceback" not in result.output
+    assert not db.exists()
+
+
+def test_a_session_stored_with_such_a_key_replays(
+    tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import gaitpref.sessions.session
+
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    with monkeypatch.context() as m:  # as earlier releases took it
+        m.setattr(gaitpref.sessions.session, "check_ignored", lambda config: None)
+        s = Session.create(url, parse_config(_text("[safety]\nlambda = 2.0\n")), "S01", seed=4)
+    drive(s, 3)
+    mean = s.posterior().mean.copy()
+    s.close()
+    with Session.open(url, s.id) as again:
+        assert (again.posterior().mean == mean).all() and len(again.trials()) == 3
+        drive(again, 1)
