@@ -2,7 +2,9 @@
 
 ``[safety] risk`` and ``lambda`` set the region of avoidance, which is off without ``avoid``:
 a config giving either without ``avoid`` parsed, and the rule it asked for did nothing
-(``Safety.avoid == 0``), silently.  Now a new session (and ``simulate``) refuses it with a
+(``Safety.avoid == 0``), silently.  So did ``[model] refit_every`` and ``[model.prior]`` with
+``fit = "fixed"`` (which never refits) and ``[model] hypotheses`` without ``hyper = "average"``.
+Now a new session (and ``simulate``) refuses it with a
 ConfigError naming the table and key; a session stored with one reopens and replays as it was.
 """
 
@@ -43,6 +45,34 @@ def test_a_region_setting_without_avoid_is_refused_by_name(extra: str, key: str)
     assert (e.value.table, e.value.key) == ("safety", key)
     with pytest.raises(ConfigError, match=rf"\[safety\]\.{key}"):
         Session.create(MemoryStorage(), config, "S01")
+
+
+MODEL_IGNORED = [
+    ('fit = "fixed"', 'fit = "fixed"\nrefit_every = 5', "model", "refit_every"),
+    (
+        'fit = "fixed"',
+        'fit = "fixed"\n\n[model.prior]\nsignal_variance = [1, 1]',
+        "model.prior",
+        None,
+    ),
+    ('fit = "fixed"', 'fit = "evidence"\nhypotheses = [0.5, 1, 2]', "model", "hypotheses"),
+]
+
+
+@pytest.mark.parametrize(("old", "new", "table", "key"), MODEL_IGNORED)
+def test_a_learning_key_the_fit_never_reads_is_refused_by_name(
+    old: str, new: str, table: str, key: str | None
+) -> None:
+    text = load_config(CONFIG).text
+    assert text.count(old) == 1
+    config = parse_config(text.replace(old, new))  # a stored config still parses
+    with pytest.raises(ConfigError, match="would be ignored") as e:
+        check_ignored(config)
+    assert (e.value.table, e.value.key) == (table, key)
+    taken = 'fit = "evidence"\nrefit_every = 5\nhyper = "average"\nhypotheses = [0.5, 1, 2]'
+    check_ignored(
+        parse_config(text.replace(old, taken + "\n\n[model.prior]\nsignal_variance = [1, 1]"))
+    )
 
 
 def test_the_settings_with_avoid_are_taken() -> None:

@@ -19,7 +19,8 @@
     fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
     refit_every = 20               # optional: answers between hyperparameter refits
     hyper = "map"                  # optional: "average" weighs lengthscale hypotheses
-    hypotheses = [0.5, 0.71, 1, 1.41, 2]  # optional: their factors of the fitted lengthscales
+    # hypotheses = [0.5, 0.71, 1, 1.41, 2]  # with hyper = "average": their factors of the
+                                   # fitted lengthscales
     share = "average"              # optional: a warm start's share, a mixture, or "map"
 
     [model.prior]                  # optional: log-normal priors as [median, sd of the log]
@@ -265,9 +266,11 @@ def check_labels(config: ExperimentConfig) -> None:
 def check_ignored(config: ExperimentConfig) -> None:
     """Refuse, for a *new* session's config, a key its text gives that the config would ignore
     (a silently ignored key is a defect): ``[safety] risk`` or ``lambda`` without a region of
-    avoidance (``avoid``).  A :class:`ConfigError` naming the table and key.  Like
-    :func:`check_name`, not checked by :func:`parse_config`: sessions stored with such a key
-    (earlier releases took it) parse, reopen and replay as they were."""
+    avoidance (``avoid``); ``[model] refit_every`` or ``[model.prior]`` with ``fit = "fixed"``,
+    which never refits; ``[model] hypotheses`` without ``hyper = "average"``.  A
+    :class:`ConfigError` naming the table and key.  Like :func:`check_name`, not checked by
+    :func:`parse_config`: sessions stored with such a key (earlier releases took it) parse,
+    reopen and replay as they were."""
     raw = read_toml(config.text)
     safety = raw.get("safety")
     if isinstance(safety, dict) and not safety.get("avoid"):
@@ -280,6 +283,34 @@ def check_ignored(config: ExperimentConfig) -> None:
                     f'["..."] (the worst [feedback.rating] labels): {key} = '
                     f"{shown(safety[key])} would be ignored; give avoid, or leave {key} out",
                 )
+    model = raw.get("model")
+    if not isinstance(model, dict):
+        return
+    learning = config.learning
+    if learning.fit == "fixed":
+        if "refit_every" in model:
+            fail(
+                "model",
+                "refit_every",
+                'is the answers between hyperparameter refits, and fit = "fixed" makes none: '
+                f"refit_every = {shown(model['refit_every'])} would be ignored; leave it out, or "
+                'use fit = "evidence"',
+            )
+        if "prior" in model:
+            fail(
+                "model.prior",
+                None,
+                'is the prior of the hyperparameter refits, and fit = "fixed" makes none: it '
+                'would be ignored; leave it out, or use fit = "evidence"',
+            )
+    if "hypotheses" in model and learning.hyper != "average":
+        fail(
+            "model",
+            "hypotheses",
+            f'are weighed only with hyper = "average" (here {learning.hyper!r}): '
+            f"hypotheses = {shown(model['hypotheses'])} would be ignored; leave it out, or use "
+            'hyper = "average"',
+        )
 
 
 def parse_config(
