@@ -3,8 +3,9 @@
 ``[safety] risk`` and ``lambda`` set the region of avoidance, which is off without ``avoid``:
 a config giving either without ``avoid`` parsed, and the rule it asked for did nothing
 (``Safety.avoid == 0``), silently.  So did ``[model] refit_every`` and ``[model.prior]`` with
-``fit = "fixed"`` (which never refits) and ``[model] hypotheses`` without ``hyper = "average"``.
-Now a new session (and ``simulate``) refuses it with a
+``fit = "fixed"`` (which never refits), ``[model] hypotheses`` without ``hyper = "average"``,
+``max`` of a ``[space.F]`` with ``num = 1`` (its one value is ``min``) and the line path's keys
+with ``[cospar] subspace = "grid"``.  Now a new session (and ``simulate``) refuses it with a
 ConfigError naming the table and key; a session stored with one reopens and replays as it was.
 """
 
@@ -72,6 +73,52 @@ def test_a_learning_key_the_fit_never_reads_is_refused_by_name(
     taken = 'fit = "evidence"\nrefit_every = 5\nhyper = "average"\nhypotheses = [0.5, 1, 2]'
     check_ignored(
         parse_config(text.replace(old, taken + "\n\n[model.prior]\nsignal_variance = [1, 1]"))
+    )
+
+
+GRID = """
+[space.a]
+min = 0.0
+max = 1.0
+num = 5
+
+[space.b]
+min = 0.5
+max = 0.5
+num = 1
+
+[model]
+lengthscale = 0.3
+signal_variance = 1.0
+noise = 0.1
+"""
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "table", "key"),
+    [
+        ("max = 0.5\nnum = 1", "max = 0.9\nnum = 1", "space.b", "num"),
+        ("min = 0.5\nmax = 0.5", "min = 0.7\nmax = 0.5", "space.b", "num"),
+        ("noise = 0.1", 'noise = 0.1\n[cospar]\nsubspace = "grid"\nline_count = 8', "cospar", None),
+        (
+            "noise = 0.1",
+            'noise = 0.1\n[cospar]\nsubspace = "grid"\nline_points = 9',
+            "cospar",
+            None,
+        ),
+    ],
+)
+def test_a_grid_key_that_is_ignored_is_refused_by_name(
+    old: str, new: str, table: str, key: str | None
+) -> None:
+    config = parse_config(GRID.replace(old, new))  # a stored config still parses
+    assert config.subspace == "grid" and config.space.shape == (5, 1)
+    with pytest.raises(ConfigError, match="would be ignored") as e:
+        check_ignored(config)
+    assert e.value.table == table and e.value.key == (key or new.split("\n")[-1].split(" ")[0])
+    check_ignored(parse_config(GRID))
+    check_ignored(
+        parse_config(GRID.replace("noise = 0.1", "noise = 0.1\n[cospar]\nline_count = 8"))
     )
 
 

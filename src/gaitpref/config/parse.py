@@ -267,11 +267,34 @@ def check_ignored(config: ExperimentConfig) -> None:
     """Refuse, for a *new* session's config, a key its text gives that the config would ignore
     (a silently ignored key is a defect): ``[safety] risk`` or ``lambda`` without a region of
     avoidance (``avoid``); ``[model] refit_every`` or ``[model.prior]`` with ``fit = "fixed"``,
-    which never refits; ``[model] hypotheses`` without ``hyper = "average"``.  A
+    which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
+    with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
+    setting (``[cospar] line_points``, ...) with ``subspace = "grid"``, which draws no lines.  A
     :class:`ConfigError` naming the table and key.  Like :func:`check_name`, not checked by
     :func:`parse_config`: sessions stored with such a key (earlier releases took it) parse,
     reopen and replay as they were."""
     raw = read_toml(config.text)
+    space = raw.get("space")
+    for name, feature in space.items() if isinstance(space, dict) else ():
+        if isinstance(feature, dict) and feature.get("num") == 1:
+            low, high = feature.get("min"), feature.get("max")
+            if low != high:
+                fail(
+                    f"space.{name}",
+                    "num",
+                    f"is 1: the feature's one value is min ({shown(low)}), and max "
+                    f"({shown(high)}) would be ignored; set max = min, or values = [...]",
+                )
+    cospar = raw.get("cospar")
+    if isinstance(cospar, dict) and cospar.get("subspace") == "grid":
+        for key in sorted(LINE_KEYS & set(cospar)):
+            fail(
+                "cospar",
+                key,
+                f"is a setting of the line path, and subspace = 'grid' draws no lines: {key} = "
+                f"{shown(cospar[key])} would be ignored; leave it out, or use subspace = 'auto' "
+                "or 'line'",
+            )
     safety = raw.get("safety")
     if isinstance(safety, dict) and not safety.get("avoid"):
         for key in ("risk", "lambda"):
