@@ -115,3 +115,27 @@ def test_session_new_and_simulate_refuse_it(tmp_path: Path) -> None:
         assert "[space.step_length].unit: must not hold" in " ".join(result.output.split())
         assert "\x1b" not in result.output
     assert not db.exists()
+
+
+def test_a_new_session_refuses_a_feature_name_longer_than_a_unit() -> None:
+    # a 100,000-character feature name was taken (a unit or a word holds at most 200), and every
+    # error about the feature echoed it whole in its table's name
+    long = "s" * 201
+    config = parse_config(
+        _text("[space.step_length]", f"[space.{long}]").replace(
+            "step_length = 0.03", f"{long} = 0.03"
+        )
+    )
+    with pytest.raises(ConfigError, match=r"^\[space\]: the feature name 'sss") as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == ("space", None)
+    assert "201 characters; at most 200" in str(e.value) and long not in str(e.value)
+    with pytest.raises(ConfigError, match="feature name"):
+        Session.create(MemoryStorage(), config, "S01")
+    check_labels(
+        parse_config(
+            _text("[space.step_length]", f"[space.{long[:200]}]").replace(
+                "step_length = 0.03", f"{long[:200]} = 0.03"
+            )
+        )
+    )

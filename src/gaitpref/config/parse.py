@@ -108,7 +108,7 @@ from gaitpref.config.schema import (
     check_table,
     defaults_for,
 )
-from gaitpref.config.specs import fail, shown
+from gaitpref.config.specs import MAX_NAME, fail, shown
 from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
@@ -242,10 +242,20 @@ def check_labels(config: ExperimentConfig) -> None:
     """Refuse, for a *new* session's config, a label shown to the operator with each trial that
     holds a control, format or line-break character (as :func:`check_name`):
     a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
-    (``[feedback.rating]``).  A :class:`ConfigError` naming the table and key.  Not checked by
-    :func:`parse_config`: sessions stored with such a label parse, reopen and replay."""
+    (``[feedback.rating]``); and a feature's name (``[space.F]``, shown with each trial too)
+    longer than a unit or a word may be (:data:`~gaitpref.config.specs.MAX_NAME` characters).
+    A :class:`ConfigError` naming the table and key.  Not checked by :func:`parse_config`:
+    sessions stored with such a label parse, reopen and replay."""
     labels: list[tuple[str, str, str]] = []
     for feature in config.space.features:
+        if len(feature.name) > MAX_NAME:
+            fail(
+                "space",
+                None,
+                f"the feature name {shown(feature.name)} has {len(feature.name):,} characters; "
+                f"at most {MAX_NAME} are allowed (as for a unit or a word): the operator is "
+                "shown it with each trial",
+            )
         table = f"space.{feature.name}"
         labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
     if config.ordinal is not None:
