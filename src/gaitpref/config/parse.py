@@ -402,6 +402,13 @@ def parse_config(
     model, model_defaulted = check_model(top["model"], defaults)
     cospar, defaulted = _cospar(top["cospar"], space, defaults, max_actions)
     on_line = cospar["subspace"] == "line"
+    if on_line and library is not None:  # Session.create refused it, simulate ran it on lines
+        fail(
+            "cospar",
+            "subspace",
+            "runs on the line path, but a [gaits] library names the gaits of a grid: use "
+            "subspace = 'grid', or [space] (with [gaits] generator for gaits made on demand)",
+        )
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])
