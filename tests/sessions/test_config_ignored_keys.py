@@ -4,9 +4,10 @@
 a config giving either without ``avoid`` parsed, and the rule it asked for did nothing
 (``Safety.avoid == 0``), silently.  So did ``[model] refit_every`` and ``[model.prior]`` with
 ``fit = "fixed"`` (which never refits), ``[model] hypotheses`` without ``hyper = "average"``,
-``max`` of a ``[space.F]`` with ``num = 1`` (its one value is ``min``) and the line path's keys
-with ``[cospar] subspace = "grid"``.  Now a new session (and ``simulate``) refuses it with a
-ConfigError naming the table and key; a session stored with one reopens and replays as it was.
+``max`` of a ``[space.F]`` with ``num = 1`` (its one value is ``min``), the line path's keys
+with ``[cospar] subspace = "grid"`` and a grid's ``[model] sampler`` on the line path.  Now a new
+session (and ``simulate``) refuses each with a ConfigError naming the table and key; a session
+stored with one reopens and replays as it was.
 """
 
 from __future__ import annotations
@@ -120,6 +121,20 @@ def test_a_grid_key_that_is_ignored_is_refused_by_name(
     check_ignored(
         parse_config(GRID.replace("noise = 0.1", "noise = 0.1\n[cospar]\nline_count = 8"))
     )
+
+
+def test_a_grid_sampler_on_the_line_path_is_refused_by_name() -> None:
+    # a point set always takes PointEngine: sampler = "dense" on the line path did nothing
+    line = GRID.replace("num = 5\n", "")
+    for sampler in ("dense", "scalable"):
+        config = parse_config(line.replace("noise = 0.1", f'noise = 0.1\nsampler = "{sampler}"'))
+        assert config.subspace == "line"
+        with pytest.raises(ConfigError, match="would be ignored") as e:
+            check_ignored(config)
+        assert (e.value.table, e.value.key) == ("model", "sampler")
+        grid = parse_config(GRID.replace("noise = 0.1", f'noise = 0.1\nsampler = "{sampler}"'))
+        check_ignored(grid)
+    check_ignored(parse_config(line.replace("noise = 0.1", 'noise = 0.1\nsampler = "auto"')))
 
 
 def test_the_settings_with_avoid_are_taken() -> None:

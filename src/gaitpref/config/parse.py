@@ -279,7 +279,8 @@ def check_ignored(config: ExperimentConfig) -> None:
     avoidance (``avoid``); ``[model] refit_every`` or ``[model.prior]`` with ``fit = "fixed"``,
     which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
     with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
-    setting (``[cospar] line_points``, ...) with ``subspace = "grid"``, which draws no lines.  A
+    setting (``[cospar] line_points``, ...) with ``subspace = "grid"``, which draws no lines;
+    ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own).  A
     :class:`ConfigError` naming the table and key.  Like :func:`check_name`, not checked by
     :func:`parse_config`: sessions stored with such a key (earlier releases took it) parse,
     reopen and replay as they were."""
@@ -319,6 +320,14 @@ def check_ignored(config: ExperimentConfig) -> None:
     model = raw.get("model")
     if not isinstance(model, dict):
         return
+    if config.subspace == "line" and model.get("sampler", "auto") != "auto":
+        fail(
+            "model",
+            "sampler",
+            f"is {shown(model['sampler'])}, a grid's sampler, and this config runs on the line "
+            "path, whose point sets always sample their own way (PointEngine): it would be "
+            'ignored; leave it out, or use sampler = "auto"',
+        )
     learning = config.learning
     if learning.fit == "fixed":
         if "refit_every" in model:
