@@ -5,7 +5,8 @@ a config giving either without ``avoid`` parsed, and the rule it asked for did n
 (``Safety.avoid == 0``), silently.  So did ``[model] refit_every`` and ``[model.prior]`` with
 ``fit = "fixed"`` (which never refits), ``[model] hypotheses`` without ``hyper = "average"``,
 ``max`` of a ``[space.F]`` with ``num = 1`` (its one value is ``min``), the line path's keys
-with ``[cospar] subspace = "grid"`` and a grid's ``[model] sampler`` on the line path.  Now a new
+with ``[cospar] subspace = "grid"``, a grid's ``[model] sampler`` on the line path and
+gated-eubo's burst and early settings when they are off as given.  Now a new
 session (and ``simulate``) refuses each with a ConfigError naming the table and key; a session
 stored with one reopens and replays as it was.
 """
@@ -135,6 +136,42 @@ def test_a_grid_sampler_on_the_line_path_is_refused_by_name() -> None:
         grid = parse_config(GRID.replace("noise = 0.1", f'noise = 0.1\nsampler = "{sampler}"'))
         check_ignored(grid)
     check_ignored(parse_config(line.replace("noise = 0.1", 'noise = 0.1\nsampler = "auto"')))
+
+
+@pytest.mark.parametrize(
+    ("settings", "key"),
+    [
+        ("sparring_from = 5", "sparring_from"),
+        ("sparring_from = 10\nsparring_until = 5", "sparring_until"),
+        ("sparring_from = 5\nsparring_until = 5", "sparring_until"),
+        ("early_trials = 30", "early_trials"),
+        ("early_scale = 1.0\nearly_trials = 30", "early_trials"),
+        ("early_scale = 0.5\nearly_trials = 0", "early_scale"),
+    ],
+)
+def test_gated_eubo_settings_that_are_off_as_given_are_refused_by_name(
+    settings: str, key: str
+) -> None:
+    text = GRID + '[cospar]\nstrategy = "gated-eubo"\n[cospar.strategy_settings]\n' + settings
+    config = parse_config(text)  # a stored config still parses
+    with pytest.raises(ConfigError, match="would be ignored") as e:
+        check_ignored(config)
+    assert (e.value.table, e.value.key) == ("cospar.strategy_settings", key)
+
+
+@pytest.mark.parametrize(
+    "settings",
+    [
+        "sparring_until = 5",
+        "sparring_from = 2\nsparring_until = 5",
+        "early_scale = 0.5",
+        "early_scale = 1.0",
+        "early_scale = 0.5\nearly_trials = 3",
+        "gates = 2",
+    ],
+)
+def test_gated_eubo_settings_that_act_are_taken(settings: str) -> None:
+    check_ignored(parse_config(GRID + "[cospar.strategy_settings]\n" + settings))
 
 
 def test_the_settings_with_avoid_are_taken() -> None:

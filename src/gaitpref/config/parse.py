@@ -280,11 +280,14 @@ def check_ignored(config: ExperimentConfig) -> None:
     which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
     with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
     setting (``[cospar] line_points``, ...) with ``subspace = "grid"``, which draws no lines;
-    ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own).  A
+    ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own);
+    gated-eubo's ``sparring_from`` or ``sparring_until`` without ``sparring_until`` the larger,
+    ``early_trials`` with ``early_scale = 1`` and ``early_scale`` with ``early_trials = 0``.  A
     :class:`ConfigError` naming the table and key.  Like :func:`check_name`, not checked by
     :func:`parse_config`: sessions stored with such a key (earlier releases took it) parse,
     reopen and replay as they were."""
     raw = read_toml(config.text)
+    _check_burst_and_early(config)
     space = raw.get("space")
     for name, feature in space.items() if isinstance(space, dict) else ():
         if isinstance(feature, dict) and feature.get("num") == 1:
@@ -352,6 +355,41 @@ def check_ignored(config: ExperimentConfig) -> None:
             f'are weighed only with hyper = "average" (here {learning.hyper!r}): '
             f"hypotheses = {shown(model['hypotheses'])} would be ignored; leave it out, or use "
             'hyper = "average"',
+        )
+
+
+def _check_burst_and_early(config: ExperimentConfig) -> None:
+    """Gated-eubo's settings that are off as given (:func:`check_ignored`)."""
+    given = config.strategy_settings
+    if config.strategy != "gated-eubo" or not given:
+        return
+    table = STRATEGY_TABLES["gated-eubo"]
+    full = {k: given.get(k, key.default) for k, key in table.items()}
+    where = "cospar.strategy_settings"
+    start, until = full["sparring_from"], full["sparring_until"]
+    burst = [k for k in ("sparring_until", "sparring_from") if k in given]
+    if burst and not start < until:
+        fail(
+            where,
+            burst[0],
+            f"is {full[burst[0]]}, and an exploration burst runs only with sparring_until the "
+            f"larger (sparring_from = {start}, sparring_until = {until}): it would be ignored; "
+            "leave both out, or set sparring_from < sparring_until",
+        )
+    scale, trials = full["early_scale"], full["early_trials"]
+    if "early_trials" in given and scale == 1:
+        fail(
+            where,
+            "early_trials",
+            f"is {trials}, and early_scale = 1 keeps the configured lengthscales (off): it would "
+            "be ignored; leave it out, or set early_scale",
+        )
+    if "early_scale" in given and scale != 1 and trials == 0:
+        fail(
+            where,
+            "early_scale",
+            f"is {scale:g}, and early_trials = 0 uses it on no trial: it would be ignored; leave "
+            "it out, or set early_trials above 0",
         )
 
 
