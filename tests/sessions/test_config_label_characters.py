@@ -139,3 +139,17 @@ def test_a_new_session_refuses_a_feature_name_longer_than_a_unit() -> None:
             )
         )
     )
+
+
+@pytest.mark.parametrize("words", ['["more", "more"]', '["Longer", "longer "]'])
+def test_a_new_session_refuses_two_words_that_are_the_same(words: str) -> None:
+    # the operator was offered "1 more, 2 slightly more, 3 slightly more, 4 more" (labels must
+    # differ; words were not checked)
+    config = parse_config(_text('words = ["longer", "shorter"]', f"words = {words}"))
+    with pytest.raises(
+        ConfigError, match=r"^\[space.step_length\].words: must be two different"
+    ) as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == ("space.step_length", "words")
+    with pytest.raises(ConfigError, match="two different words"):
+        Session.create(MemoryStorage(), config, "S01")

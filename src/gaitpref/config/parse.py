@@ -243,7 +243,8 @@ def check_labels(config: ExperimentConfig) -> None:
     holds a control, format or line-break character (as :func:`check_name`):
     a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
     (``[feedback.rating]``); and a feature's name (``[space.F]``, shown with each trial too)
-    longer than a unit or a word may be (:data:`~gaitpref.config.specs.MAX_NAME` characters).
+    longer than a unit or a word may be (:data:`~gaitpref.config.specs.MAX_NAME` characters);
+    and ``words`` whose two words are the same (ignoring case and spaces at the ends).
     A :class:`ConfigError` naming the table and key.  Not checked by :func:`parse_config`:
     sessions stored with such a label parse, reopen and replay."""
     labels: list[tuple[str, str, str]] = []
@@ -257,6 +258,15 @@ def check_labels(config: ExperimentConfig) -> None:
                 "shown it with each trial",
             )
         table = f"space.{feature.name}"
+        up, down = feature.words
+        if up.strip().casefold() == down.strip().casefold():
+            fail(
+                table,
+                "words",
+                f"must be two different words (how the operator says + and -), got "
+                f"{shown(list(feature.words))}: the suggestions 'slightly {up}' and 'slightly "
+                f"{down}' would read the same",
+            )
         labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
     if config.ordinal is not None:
         labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
