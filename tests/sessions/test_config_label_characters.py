@@ -153,3 +153,39 @@ def test_a_new_session_refuses_two_words_that_are_the_same(words: str) -> None:
     assert (e.value.table, e.value.key) == ("space.step_length", "words")
     with pytest.raises(ConfigError, match="two different words"):
         Session.create(MemoryStorage(), config, "S01")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "table", "key", "why"),
+    [
+        (
+            'words = ["longer", "shorter"]',
+            'words = ["  ", "shorter"]',
+            "space.step_length",
+            "words",
+            "blank",
+        ),
+        (
+            "[cospar]",
+            '[feedback.rating]\nlabels = ["bad", " ", "good"]\n\n[cospar]',
+            "feedback.rating",
+            "labels",
+            "blank",
+        ),
+        (
+            "[cospar]",
+            '[feedback.rating]\nlabels = ["bad", "okay", "Bad "]\n\n[cospar]',
+            "feedback.rating",
+            "labels",
+            "must differ",
+        ),
+    ],
+)
+def test_a_new_session_refuses_blank_or_alike_words_and_labels(
+    old: str, new: str, table: str, key: str, why: str
+) -> None:
+    config = parse_config(_text(old, new))  # a stored config still parses
+    with pytest.raises(ConfigError, match=why) as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == (table, key)
+    check_labels(parse_config(_text("[cospar]", RATING)))

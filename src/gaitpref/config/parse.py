@@ -244,7 +244,8 @@ def check_labels(config: ExperimentConfig) -> None:
     a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
     (``[feedback.rating]``); and a feature's name (``[space.F]``, shown with each trial too)
     longer than a unit or a word may be (:data:`~gaitpref.config.specs.MAX_NAME` characters);
-    and ``words`` whose two words are the same (ignoring case and spaces at the ends).
+    ``words`` whose two words are the same (ignoring case and spaces at the ends), rating
+    ``labels`` two of which are, and a word or a label that is blank (spaces only).
     A :class:`ConfigError` naming the table and key.  Not checked by :func:`parse_config`:
     sessions stored with such a label parse, reopen and replay."""
     labels: list[tuple[str, str, str]] = []
@@ -270,7 +271,24 @@ def check_labels(config: ExperimentConfig) -> None:
         labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
     if config.ordinal is not None:
         labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
+        seen: dict[str, str] = {}
+        for label in config.ordinal.categories:
+            same = seen.setdefault(label.strip().casefold(), label)
+            if same != label:
+                fail(
+                    "feedback.rating",
+                    "labels",
+                    f"must differ (ignoring case and spaces at the ends): {shown(same)} and "
+                    f"{shown(label)} would read the same to the subject",
+                )
     for table, key, label in labels:
+        if key != "unit" and not label.strip():
+            fail(
+                table,
+                key,
+                f"must not be blank (spaces only), got {shown(label)}: the operator is shown it "
+                "with each trial",
+            )
         hidden = hidden_in(label, name=True)
         if hidden:
             named = char_name(hidden[0][1])
