@@ -307,7 +307,8 @@ def check_ignored(config: ExperimentConfig) -> None:
     avoidance (``avoid``); ``[model] refit_every`` or ``[model.prior]`` with ``fit = "fixed"``,
     which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
     with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
-    setting (``[cospar] line_points``, ...) with ``subspace = "grid"``, which draws no lines;
+    setting (``[cospar] line_points``, ...) with ``subspace = "grid"`` or a gait library, which
+    draw no lines;
     ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own);
     gated-eubo's ``sparring_from`` or ``sparring_until`` without ``sparring_until`` the larger,
     ``early_trials`` with ``early_scale = 1`` and ``early_scale`` with ``early_trials = 0``.  A
@@ -328,14 +329,21 @@ def check_ignored(config: ExperimentConfig) -> None:
                     f"({shown(high)}) would be ignored; set max = min, or values = [...]",
                 )
     cospar = raw.get("cospar")
-    if isinstance(cospar, dict) and cospar.get("subspace") == "grid":
+    grid_only = (
+        "a [gaits] library names the gaits of a grid"
+        if config.library is not None
+        else "subspace = 'grid' draws no lines"
+    )
+    if isinstance(cospar, dict) and (
+        config.library is not None or cospar.get("subspace") == "grid"
+    ):
         for key in sorted(LINE_KEYS & set(cospar)):
             fail(
                 "cospar",
                 key,
-                f"is a setting of the line path, and subspace = 'grid' draws no lines: {key} = "
-                f"{shown(cospar[key])} would be ignored; leave it out, or use subspace = 'auto' "
-                "or 'line'",
+                f"is a setting of the line path, and {grid_only}: {key} = "
+                f"{shown(cospar[key])} would be ignored; leave it out"
+                + ("" if config.library is not None else ", or use subspace = 'auto' or 'line'"),
             )
     safety = raw.get("safety")
     if isinstance(safety, dict) and not safety.get("avoid"):
