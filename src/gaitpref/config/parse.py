@@ -156,7 +156,14 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
 def read_toml(text: str) -> dict[str, Any]:
     """``text`` as TOML, or a :class:`ConfigError`: besides a syntax error, a number past
     Python's integer digits limit (a ValueError from tomllib) and arrays or tables nested past
-    the interpreter's recursion limit (a RecursionError, not a crash of the server)."""
+    the interpreter's recursion limit (a RecursionError, not a crash of the server).  A text
+    that starts with a byte order mark (Windows editors' "UTF-8 with BOM") is named so: TOML
+    refused it as "Invalid statement (at line 1, column 1)", naming an invisible character."""
+    if text.startswith("\ufeff"):
+        raise ConfigError(
+            "config is not valid TOML: it starts with a byte order mark (U+FEFF, an editor's "
+            '"UTF-8 with BOM"), which TOML does not allow; save it as UTF-8 without one'
+        )
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
