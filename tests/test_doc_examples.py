@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 import gaitpref
-from gaitpref.config import parse_config
+from gaitpref.config import check_ignored, parse_config
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
@@ -88,3 +88,4 @@ def test_the_docs_have_toml_snippets() -> None:
 def test_toml_snippet_parses(page: str, index: int, snippet: str) -> None:
     config = parse_config(completed(snippet), default_name=f"{page}-{index}")
     assert config.space.describe(0)
+    check_ignored(config)  # a new session takes it: no key it gives is ignored

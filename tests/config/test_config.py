@@ -170,3 +170,15 @@ def test_n1_b0_is_allowed_and_learns_from_suggestions_only() -> None:
     target = cfg.space.coactive_move(a, "step_length", move)
     assert target is not None
     assert loop.posterior.mean[target] > loop.posterior.mean[a]
+
+
+def test_a_config_file_with_a_byte_order_mark_is_named(tmp_path: Path) -> None:
+    # Notepad's "UTF-8 with BOM": was "Invalid statement (at line 1, column 1)"
+    path = tmp_path / "bom.toml"
+    path.write_text(load_config("exo-1d-step-length").text, encoding="utf-8-sig")
+    with pytest.raises(
+        ConfigError,
+        match=r"^config '.*bom.toml' is not valid TOML: it starts "
+        r"with a byte order mark \(U\+FEFF",
+    ):
+        load_config(path)

@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 from gaitpref import ConfigError, GaitLibrary, load_config
+from gaitpref.config import check_ignored
 
 CONFIG = """
 [gaits]
@@ -76,3 +77,32 @@ start = ["{gait}"]
     (tmp_path / "bad.toml").write_text(text.replace(gait, "L9.999-T9.999"))
     with pytest.raises(ConfigError, match=r"\[safety\].start: gait 1 .*no gait with id"):
         load_config(tmp_path / "bad.toml")
+
+
+def test_a_library_config_on_the_line_path_is_refused_by_name(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    # the docs say a library cannot be named for a line-path config: it parsed, `simulate` ran
+    # it on lines and `session new` refused it with a ValueError naming no key
+    duration_library.save(tmp_path / "lib.json")
+    (tmp_path / "line.toml").write_text(CONFIG + "subspace = 'line'\n")
+    with pytest.raises(ConfigError, match=r"\[cospar\].subspace: runs on the line path, but") as e:
+        load_config(tmp_path / "line.toml")
+    assert (e.value.table, e.value.key) == ("cospar", "subspace")
+    (tmp_path / "grid.toml").write_text(CONFIG + "subspace = 'grid'\n")
+    assert load_config(tmp_path / "grid.toml").subspace == "grid"
+
+
+def test_a_line_key_in_a_library_config_is_refused_by_name(
+    duration_library: GaitLibrary, tmp_path: Path
+) -> None:
+    # a library config runs on its grid: line_count was taken and did nothing
+    duration_library.save(tmp_path / "lib.json")
+    (tmp_path / "c.toml").write_text(CONFIG + "line_count = 8\n")
+    config = load_config(tmp_path / "c.toml")
+    assert config.subspace == "grid"
+    with pytest.raises(ConfigError, match=r"\[cospar\].line_count: is a setting of the line") as e:
+        check_ignored(config)
+    assert (e.value.table, e.value.key) == ("cospar", "line_count")
+    (tmp_path / "c.toml").write_text(CONFIG)
+    check_ignored(load_config(tmp_path / "c.toml"))

@@ -115,3 +115,77 @@ def test_session_new_and_simulate_refuse_it(tmp_path: Path) -> None:
         assert "[space.step_length].unit: must not hold" in " ".join(result.output.split())
         assert "\x1b" not in result.output
     assert not db.exists()
+
+
+def test_a_new_session_refuses_a_feature_name_longer_than_a_unit() -> None:
+    # a 100,000-character feature name was taken (a unit or a word holds at most 200), and every
+    # error about the feature echoed it whole in its table's name
+    long = "s" * 201
+    config = parse_config(
+        _text("[space.step_length]", f"[space.{long}]").replace(
+            "step_length = 0.03", f"{long} = 0.03"
+        )
+    )
+    with pytest.raises(ConfigError, match=r"^\[space\]: the feature name 'sss") as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == ("space", None)
+    assert "201 characters; at most 200" in str(e.value) and long not in str(e.value)
+    with pytest.raises(ConfigError, match="feature name"):
+        Session.create(MemoryStorage(), config, "S01")
+    check_labels(
+        parse_config(
+            _text("[space.step_length]", f"[space.{long[:200]}]").replace(
+                "step_length = 0.03", f"{long[:200]} = 0.03"
+            )
+        )
+    )
+
+
+@pytest.mark.parametrize("words", ['["more", "more"]', '["Longer", "longer "]'])
+def test_a_new_session_refuses_two_words_that_are_the_same(words: str) -> None:
+    # the operator was offered "1 more, 2 slightly more, 3 slightly more, 4 more" (labels must
+    # differ; words were not checked)
+    config = parse_config(_text('words = ["longer", "shorter"]', f"words = {words}"))
+    with pytest.raises(
+        ConfigError, match=r"^\[space.step_length\].words: must be two different"
+    ) as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == ("space.step_length", "words")
+    with pytest.raises(ConfigError, match="two different words"):
+        Session.create(MemoryStorage(), config, "S01")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "table", "key", "why"),
+    [
+        (
+            'words = ["longer", "shorter"]',
+            'words = ["  ", "shorter"]',
+            "space.step_length",
+            "words",
+            "blank",
+        ),
+        (
+            "[cospar]",
+            '[feedback.rating]\nlabels = ["bad", " ", "good"]\n\n[cospar]',
+            "feedback.rating",
+            "labels",
+            "blank",
+        ),
+        (
+            "[cospar]",
+            '[feedback.rating]\nlabels = ["bad", "okay", "Bad "]\n\n[cospar]',
+            "feedback.rating",
+            "labels",
+            "must differ",
+        ),
+    ],
+)
+def test_a_new_session_refuses_blank_or_alike_words_and_labels(
+    old: str, new: str, table: str, key: str, why: str
+) -> None:
+    config = parse_config(_text(old, new))  # a stored config still parses
+    with pytest.raises(ConfigError, match=why) as e:
+        check_labels(config)
+    assert (e.value.table, e.value.key) == (table, key)
+    check_labels(parse_config(_text("[cospar]", RATING)))

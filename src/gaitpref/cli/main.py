@@ -75,6 +75,7 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
     from gaitpref.config import (
         check_description,
         check_draws,
+        check_ignored,
         check_labels,
         check_name,
         load_config,
@@ -85,6 +86,7 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
         check_name(cfg)
         check_description(cfg)
         check_labels(cfg)
+        check_ignored(cfg)
         check_draws(cfg)
         return cfg
 

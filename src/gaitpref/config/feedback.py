@@ -47,7 +47,7 @@ from gaitpref.config.schema import (
     check_table,
     defaults_for,
 )
-from gaitpref.config.specs import fail, shown
+from gaitpref.config.specs import clipped, fail, shown
 from gaitpref.errors import GaitLibraryError
 from gaitpref.loop.safety import Safety, default_risk
 from gaitpref.model.ordinal import Ordinal
@@ -161,7 +161,10 @@ def _at(values: dict[str, float], space: Space, where: str) -> int:
         wrong = sorted(set(values) - names) or sorted(names - set(values))
         what = "unknown feature" if set(values) - names else "missing feature"
         fail(
-            "safety", "start", f"{where}: {what} {wrong[0]!r} (features: {', '.join(space.names)})"
+            "safety",
+            "start",
+            f"{where}: {what} {shown(wrong[0])} (features: "
+            f"{', '.join(clipped(n) for n in space.names)})",
         )
     idx = []
     for f in space.features:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from gaitpref.config.schema import FEATURE, MAX_FEATURE_VALUES, MAX_FEATURES, check_table
-from gaitpref.config.specs import fail
+from gaitpref.config.specs import clipped, fail
 from gaitpref.space import Feature, Space
 
 if TYPE_CHECKING:
@@ -130,12 +130,12 @@ def _check_size(specs: dict[str, dict[str, Any]], max_actions: int) -> None:
 def grid_too_large(space: Space, max_actions: int) -> str | None:
     """Why ``space`` cannot run on the full-grid path (None: it can)."""
     if space.continuous:
-        names = ", ".join(f.name for f in space.features if f.continuous)
+        names = ", ".join(clipped(f.name) for f in space.features if f.continuous)
         return f"the features {names} are continuous (min and max, no num)"
     wide = [f for f in space.features if len(f.values) > MAX_FEATURE_VALUES]
     if wide:
         return (
-            f"the feature {wide[0].name} has {len(wide[0].values):,} values and at most "
+            f"the feature {clipped(wide[0].name)} has {len(wide[0].values):,} values and at most "
             f"{MAX_FEATURE_VALUES:,} a feature fit the full-grid path (its kernel factor is n x n)"
         )
     size = space.grid_size

@@ -19,7 +19,8 @@
     fit = "evidence"               # optional: "fixed" (the paper) or "evidence"
     refit_every = 20               # optional: answers between hyperparameter refits
     hyper = "map"                  # optional: "average" weighs lengthscale hypotheses
-    hypotheses = [0.5, 0.71, 1, 1.41, 2]  # optional: their factors of the fitted lengthscales
+    # hypotheses = [0.5, 0.71, 1, 1.41, 2]  # with hyper = "average": their factors of the
+                                   # fitted lengthscales
     share = "average"              # optional: a warm start's share, a mixture, or "map"
 
     [model.prior]                  # optional: log-normal priors as [median, sd of the log]
@@ -107,7 +108,7 @@ from gaitpref.config.schema import (
     check_table,
     defaults_for,
 )
-from gaitpref.config.specs import fail, shown
+from gaitpref.config.specs import MAX_NAME, fail, shown
 from gaitpref.config.stop import parse_stop
 from gaitpref.errors import ConfigError
 from gaitpref.loop.learning import FitMode, TiesMode
@@ -155,7 +156,14 @@ def _read(source: str | Path) -> tuple[str, str, Path | None]:
 def read_toml(text: str) -> dict[str, Any]:
     """``text`` as TOML, or a :class:`ConfigError`: besides a syntax error, a number past
     Python's integer digits limit (a ValueError from tomllib) and arrays or tables nested past
-    the interpreter's recursion limit (a RecursionError, not a crash of the server)."""
+    the interpreter's recursion limit (a RecursionError, not a crash of the server).  A text
+    that starts with a byte order mark (Windows editors' "UTF-8 with BOM") is named so: TOML
+    refused it as "Invalid statement (at line 1, column 1)", naming an invisible character."""
+    if text.startswith("\ufeff"):
+        raise ConfigError(
+            "config is not valid TOML: it starts with a byte order mark (U+FEFF, an editor's "
+            '"UTF-8 with BOM"), which TOML does not allow; save it as UTF-8 without one'
+        )
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -241,15 +249,53 @@ def check_labels(config: ExperimentConfig) -> None:
     """Refuse, for a *new* session's config, a label shown to the operator with each trial that
     holds a control, format or line-break character (as :func:`check_name`):
     a feature's ``unit`` and ``words`` (``[space.F]``) and the rating ``labels``
-    (``[feedback.rating]``).  A :class:`ConfigError` naming the table and key.  Not checked by
-    :func:`parse_config`: sessions stored with such a label parse, reopen and replay."""
+    (``[feedback.rating]``); and a feature's name (``[space.F]``, shown with each trial too)
+    longer than a unit or a word may be (:data:`~gaitpref.config.specs.MAX_NAME` characters);
+    ``words`` whose two words are the same (ignoring case and spaces at the ends), rating
+    ``labels`` two of which are, and a word or a label that is blank (spaces only).
+    A :class:`ConfigError` naming the table and key.  Not checked by :func:`parse_config`:
+    sessions stored with such a label parse, reopen and replay."""
     labels: list[tuple[str, str, str]] = []
     for feature in config.space.features:
+        if len(feature.name) > MAX_NAME:
+            fail(
+                "space",
+                None,
+                f"the feature name {shown(feature.name)} has {len(feature.name):,} characters; "
+                f"at most {MAX_NAME} are allowed (as for a unit or a word): the operator is "
+                "shown it with each trial",
+            )
         table = f"space.{feature.name}"
+        up, down = feature.words
+        if up.strip().casefold() == down.strip().casefold():
+            fail(
+                table,
+                "words",
+                f"must be two different words (how the operator says + and -), got "
+                f"{shown(list(feature.words))}: the suggestions 'slightly {up}' and 'slightly "
+                f"{down}' would read the same",
+            )
         labels += [(table, "unit", feature.unit)] + [(table, "words", w) for w in feature.words]
     if config.ordinal is not None:
         labels += [("feedback.rating", "labels", label) for label in config.ordinal.categories]
+        seen: dict[str, str] = {}
+        for label in config.ordinal.categories:
+            same = seen.setdefault(label.strip().casefold(), label)
+            if same != label:
+                fail(
+                    "feedback.rating",
+                    "labels",
+                    f"must differ (ignoring case and spaces at the ends): {shown(same)} and "
+                    f"{shown(label)} would read the same to the subject",
+                )
     for table, key, label in labels:
+        if key != "unit" and not label.strip():
+            fail(
+                table,
+                key,
+                f"must not be blank (spaces only), got {shown(label)}: the operator is shown it "
+                "with each trial",
+            )
         hidden = hidden_in(label, name=True)
         if hidden:
             named = char_name(hidden[0][1])
@@ -260,6 +306,134 @@ def check_labels(config: ExperimentConfig) -> None:
                 f"NUL, bidirectional overrides, ...); {shown(label)} holds {named}: the operator "
                 "is shown it with each trial",
             )
+
+
+def check_ignored(config: ExperimentConfig) -> None:
+    """Refuse, for a *new* session's config, a key its text gives that the config would ignore
+    (a silently ignored key is a defect): ``[safety] risk`` or ``lambda`` without a region of
+    avoidance (``avoid``); ``[model] refit_every`` or ``[model.prior]`` with ``fit = "fixed"``,
+    which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
+    with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
+    setting (``[cospar] line_points``, ...) with ``subspace = "grid"`` or a gait library, which
+    draw no lines;
+    ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own);
+    gated-eubo's ``sparring_from`` or ``sparring_until`` without ``sparring_until`` the larger,
+    ``early_trials`` with ``early_scale = 1`` and ``early_scale`` with ``early_trials = 0``.  A
+    :class:`ConfigError` naming the table and key.  Like :func:`check_name`, not checked by
+    :func:`parse_config`: sessions stored with such a key (earlier releases took it) parse,
+    reopen and replay as they were."""
+    raw = read_toml(config.text)
+    _check_burst_and_early(config)
+    space = raw.get("space")
+    for name, feature in space.items() if isinstance(space, dict) else ():
+        if isinstance(feature, dict) and feature.get("num") == 1:
+            low, high = feature.get("min"), feature.get("max")
+            if low != high:
+                fail(
+                    f"space.{name}",
+                    "num",
+                    f"is 1: the feature's one value is min ({shown(low)}), and max "
+                    f"({shown(high)}) would be ignored; set max = min, or values = [...]",
+                )
+    cospar = raw.get("cospar")
+    grid_only = (
+        "a [gaits] library names the gaits of a grid"
+        if config.library is not None
+        else "subspace = 'grid' draws no lines"
+    )
+    if isinstance(cospar, dict) and (
+        config.library is not None or cospar.get("subspace") == "grid"
+    ):
+        for key in sorted(LINE_KEYS & set(cospar)):
+            fail(
+                "cospar",
+                key,
+                f"is a setting of the line path, and {grid_only}: {key} = "
+                f"{shown(cospar[key])} would be ignored; leave it out"
+                + ("" if config.library is not None else ", or use subspace = 'auto' or 'line'"),
+            )
+    safety = raw.get("safety")
+    if isinstance(safety, dict) and not safety.get("avoid"):
+        for key in ("risk", "lambda"):
+            if key in safety:
+                fail(
+                    "safety",
+                    key,
+                    f"is a setting of the region of avoidance, which is off without avoid = "
+                    f'["..."] (the worst [feedback.rating] labels): {key} = '
+                    f"{shown(safety[key])} would be ignored; give avoid, or leave {key} out",
+                )
+    model = raw.get("model")
+    if not isinstance(model, dict):
+        return
+    if config.subspace == "line" and model.get("sampler", "auto") != "auto":
+        fail(
+            "model",
+            "sampler",
+            f"is {shown(model['sampler'])}, a grid's sampler, and this config runs on the line "
+            "path, whose point sets always sample their own way (PointEngine): it would be "
+            'ignored; leave it out, or use sampler = "auto"',
+        )
+    learning = config.learning
+    if learning.fit == "fixed":
+        if "refit_every" in model:
+            fail(
+                "model",
+                "refit_every",
+                'is the answers between hyperparameter refits, and fit = "fixed" makes none: '
+                f"refit_every = {shown(model['refit_every'])} would be ignored; leave it out, or "
+                'use fit = "evidence"',
+            )
+        if "prior" in model:
+            fail(
+                "model.prior",
+                None,
+                'is the prior of the hyperparameter refits, and fit = "fixed" makes none: it '
+                'would be ignored; leave it out, or use fit = "evidence"',
+            )
+    if "hypotheses" in model and learning.hyper != "average":
+        fail(
+            "model",
+            "hypotheses",
+            f'are weighed only with hyper = "average" (here {learning.hyper!r}): '
+            f"hypotheses = {shown(model['hypotheses'])} would be ignored; leave it out, or use "
+            'hyper = "average"',
+        )
+
+
+def _check_burst_and_early(config: ExperimentConfig) -> None:
+    """Gated-eubo's settings that are off as given (:func:`check_ignored`)."""
+    given = config.strategy_settings
+    if config.strategy != "gated-eubo" or not given:
+        return
+    table = STRATEGY_TABLES["gated-eubo"]
+    full = {k: given.get(k, key.default) for k, key in table.items()}
+    where = "cospar.strategy_settings"
+    start, until = full["sparring_from"], full["sparring_until"]
+    burst = [k for k in ("sparring_until", "sparring_from") if k in given]
+    if burst and not start < until:
+        fail(
+            where,
+            burst[0],
+            f"is {full[burst[0]]}, and an exploration burst runs only with sparring_until the "
+            f"larger (sparring_from = {start}, sparring_until = {until}): it would be ignored; "
+            "leave both out, or set sparring_from < sparring_until",
+        )
+    scale, trials = full["early_scale"], full["early_trials"]
+    if "early_trials" in given and scale == 1:
+        fail(
+            where,
+            "early_trials",
+            f"is {trials}, and early_scale = 1 keeps the configured lengthscales (off): it would "
+            "be ignored; leave it out, or set early_scale",
+        )
+    if "early_scale" in given and scale != 1 and trials == 0:
+        fail(
+            where,
+            "early_scale",
+            f"is {scale:g}, and early_trials = 0 uses it on no trial: it would be ignored; leave "
+            "it out, or set early_trials above 0",
+        )
 
 
 def parse_config(
@@ -318,6 +492,13 @@ def parse_config(
     model, model_defaulted = check_model(top["model"], defaults)
     cospar, defaulted = _cospar(top["cospar"], space, defaults, max_actions)
     on_line = cospar["subspace"] == "line"
+    if on_line and library is not None:  # Session.create refused it, simulate ran it on lines
+        fail(
+            "cospar",
+            "subspace",
+            "runs on the line path, but a [gaits] library names the gaits of a grid: use "
+            "subspace = 'grid', or [space] (with [gaits] generator for gaits made on demand)",
+        )
     check_scales(model, cospar["coactive_weight"])
     settings = _strategy_settings(cospar)
     ordinal = parse_rating(top["feedback"], model["noise"])

@@ -35,6 +35,7 @@ from gaitpref.config.specs import (
     Table,
     Text,
     Words,
+    clipped,
     fail,
     shown,
 )
@@ -313,8 +314,8 @@ def check_table(
         fail(table, None, f"must be a table, got {shown(raw)}")
     unknown = sorted(set(raw) - set(keys))
     if unknown:
-        allowed = ", ".join(keys) or "none"
-        fail(table, None, f"unknown key {unknown[0]!r}{for_what} (allowed: {allowed})")
+        allowed = ", ".join(clipped(k) for k in keys) or "none"
+        fail(table, None, f"unknown key {shown(unknown[0])}{for_what} (allowed: {allowed})")
     out: dict[str, Any] = {}
     defaulted = set()
     for name, key in keys.items():

@@ -21,8 +21,17 @@ MIN_SCALE: Final = 1e-12
 MAX_NAME: Final = 200
 
 
+def clipped(name: str, most: int = 80) -> str:
+    """A name (a table's, a key's, a feature's) as an error shows it: at most ``most``
+    characters, so that a config's megabyte-long key is not echoed whole."""
+    return name if len(name) <= most else name[: most - 3] + "..."
+
+
 def place(table: str, key: str | None) -> str:
-    """``[table].key``, ``[table]`` or (for the top level) ``key`` / ``top level``."""
+    """``[table].key``, ``[table]`` or (for the top level) ``key`` / ``top level`` (each name
+    :func:`clipped`)."""
+    table = clipped(table)
+    key = None if key is None else clipped(key)
     if not table:
         return key if key is not None else "top level"
     return f"[{table}]" if key is None else f"[{table}].{key}"

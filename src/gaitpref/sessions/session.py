@@ -35,6 +35,7 @@ from gaitpref.config import (
     ExperimentConfig,
     check_description,
     check_draws,
+    check_ignored,
     check_labels,
     check_name,
     load_config,
@@ -160,6 +161,7 @@ class Session:
         check_name(cfg)
         check_description(cfg)
         check_labels(cfg)
+        check_ignored(cfg)
         check_draws(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed
