@@ -192,3 +192,23 @@ def test_a_line_that_differs_is_shown_at_its_first_difference(tmp_path: Path) ->
     assert f"actions: log has {logged['actions']!r}, replay gives [99]" in describe_mismatch(
         2, "query_issued", logged, short
     )
+
+
+def test_an_unsafe_flag_without_a_radius_says_close_gaits_may_be_proposed(tmp_path: Path) -> None:
+    """`gaitpref session unsafe` on a continuous space whose config has no unsafe_radius: only
+    the flagged point is removed, and the CLI says so instead of "its gait will not be proposed
+    again" alone."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    db = str(tmp_path / "lab.db")
+    s = Session.create(db, parse_config(TEXT), "S01", seed=11)
+    assert s.config.safety.unsafe_radius == 0
+    _drive(s, 2)
+    s.close()
+    result = CliRunner().invoke(
+        app, ["session", "unsafe", "1", "2", "--reason", "knee gave way", "--db", db]
+    )
+    assert result.exit_code == 0, result.output
+    assert "gaits however close to it may be" in " ".join(result.output.split())
