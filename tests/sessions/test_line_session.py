@@ -212,3 +212,16 @@ def test_an_unsafe_flag_without_a_radius_says_close_gaits_may_be_proposed(tmp_pa
     )
     assert result.exit_code == 0, result.output
     assert "gaits however close to it may be" in " ".join(result.output.split())
+
+
+def test_a_validation_too_early_on_the_line_path_names_no_grid(tmp_path: Path) -> None:
+    """The line path has no grid: "the grid has 1" said the points so far."""
+    from gaitpref import SessionStateError
+
+    s = Session.create(f"sqlite:///{tmp_path / 's.db'}", parse_config(TEXT), "S01", seed=4)
+    _drive(s, 1)
+    with pytest.raises(SessionStateError) as err:
+        s.start_validation()
+    assert "needs at least 3 gaits; the model holds 1" in str(err.value)
+    assert "grid" not in str(err.value)
+    s.close()
