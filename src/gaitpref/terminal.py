@@ -541,7 +541,7 @@ class Terminal:
         if flagged:
             self.console.print(
                 f"flagged unsafe: trial {', '.join(map(str, flagged))} ({clip(reason)}); "
-                + s.config.safety.flag_effect(),
+                + s.config.safety.flag_effect(s.config.space.continuous),
                 markup=False,
             )
         if redrawn:

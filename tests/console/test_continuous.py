@@ -10,7 +10,8 @@ import zipfile
 
 from fastapi.testclient import TestClient
 
-from tests.console.conftest import new_session
+from tests.console.conftest import answer_once, new_session
+from tests.console.htmlforms import forms_of
 
 CONFIG = "compass-continuous-3d"
 ID = re.compile(r"^L\d\.\d{3}-T\d\.\d{3}-W\d\.\d{3}#[0-9a-f]{8}$")
@@ -76,3 +77,15 @@ def test_a_line_session_over_a_grid_too_large_to_enumerate_serves_its_posterior(
     post = r.json()
     assert post["shape"] is None and 2 <= len(post["mean"]) == len(post["sd"]) < 2000
     assert client.get(f"/sessions/{sid}").status_code == 200
+
+
+def test_the_flag_page_says_close_gaits_may_come_without_a_radius(client: TestClient) -> None:
+    """compass-continuous-3d has no [safety] unsafe_radius: the flag removes that point alone,
+    and on continuous features a gait however close to it may be proposed next."""
+    sid = new_session(client, CONFIG)
+    answer_once(client, sid)
+    html = client.get(f"/sessions/{sid}").text
+    flag = next(f for f in forms_of(html).values() if f.action.endswith("/trials/1/unsafe"))
+    ask = client.post(flag.action, data={**flag.fields, "reason": "hip pain"})
+    assert ask.status_code == 200 and "Flag this trial unsafe?" in ask.text
+    assert "but gaits however close to it may be" in " ".join(ask.text.split())

@@ -211,3 +211,14 @@ def test_a_flag_is_described_as_what_it_removes() -> None:
     assert Safety(unsafe_radius=0.25).flag_effect() == (
         "its gait and the gaits within unsafe_radius = 0.25 of it will not be proposed again"
     )
+
+
+def test_a_flag_without_a_radius_on_a_continuous_feature_says_close_gaits_may_come() -> None:
+    """On a continuous feature "its gait will not be proposed again" held for that point alone:
+    the line path proposed a gait 0.04 of the ranges from it at the next trial."""
+    said = Safety().flag_effect(continuous=True)
+    assert said.startswith("its gait will not be proposed again, but gaits however close")
+    assert "[safety] unsafe_radius" in said
+    assert Safety(unsafe_radius=0.1).flag_effect(continuous=True) == (
+        Safety(unsafe_radius=0.1).flag_effect()
+    )

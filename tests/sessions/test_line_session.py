@@ -161,3 +161,67 @@ def test_a_session_recorded_under_defaults_0_8_replays_with_one_line(tmp_path: P
     again = Session.open(url, 1)  # replays again, exactly, the pending query included
     assert again.next_query() == q
     again.close()
+
+
+def test_a_line_that_differs_is_shown_at_its_first_difference(tmp_path: Path) -> None:
+    """A line-path query's ``line`` holds every point of the star (up to 4,096): a mismatch
+    names the first item that differs, not both lines whole (about 100 kB on 12 features)."""
+    from gaitpref.sessions.events import describe_mismatch
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    s = Session.create(url, parse_config(TEXT), "S01", seed=2)
+    _drive(s, 2)
+    logged = next(e for e in s.events() if e.kind == "query_issued").payload
+    s.close()
+    derived = {
+        **logged,
+        "line": {**logged["line"], "points": [list(p) for p in logged["line"]["points"]]},
+    }
+    derived["line"]["points"][7][1] += 0.25
+    message = describe_mismatch(2, "query_issued", logged, derived)
+    was, now = logged["line"]["points"][7], derived["line"]["points"][7]
+    assert message == (
+        f"event 2 (query_issued):\n  line.points[7]: log has {was!r}, replay gives {now!r}"
+    )
+    fewer = {**logged, "line": {**logged["line"], "points": logged["line"]["points"][:-1]}}
+    n = len(logged["line"]["points"])
+    assert f"line.points: log has {n} items, replay gives {n - 1} items" in describe_mismatch(
+        2, "query_issued", logged, fewer
+    )
+    short = {**logged, "actions": [99]}  # a short value is shown whole, as before
+    assert f"actions: log has {logged['actions']!r}, replay gives [99]" in describe_mismatch(
+        2, "query_issued", logged, short
+    )
+
+
+def test_an_unsafe_flag_without_a_radius_says_close_gaits_may_be_proposed(tmp_path: Path) -> None:
+    """`gaitpref session unsafe` on a continuous space whose config has no unsafe_radius: only
+    the flagged point is removed, and the CLI says so instead of "its gait will not be proposed
+    again" alone."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    db = str(tmp_path / "lab.db")
+    s = Session.create(db, parse_config(TEXT), "S01", seed=11)
+    assert s.config.safety.unsafe_radius == 0
+    _drive(s, 2)
+    s.close()
+    result = CliRunner().invoke(
+        app, ["session", "unsafe", "1", "2", "--reason", "knee gave way", "--db", db]
+    )
+    assert result.exit_code == 0, result.output
+    assert "gaits however close to it may be" in " ".join(result.output.split())
+
+
+def test_a_validation_too_early_on_the_line_path_names_no_grid(tmp_path: Path) -> None:
+    """The line path has no grid: "the grid has 1" said the points so far."""
+    from gaitpref import SessionStateError
+
+    s = Session.create(f"sqlite:///{tmp_path / 's.db'}", parse_config(TEXT), "S01", seed=4)
+    _drive(s, 1)
+    with pytest.raises(SessionStateError) as err:
+        s.start_validation()
+    assert "needs at least 3 gaits; the model holds 1" in str(err.value)
+    assert "grid" not in str(err.value)
+    s.close()

@@ -477,7 +477,8 @@ def unsafe(
         pending = session.pending
         guard(lambda: session.flag_unsafe(trial, reason))
         console.print(
-            f"trial {trial} flagged unsafe ({reason}); {session.config.safety.flag_effect()}"
+            f"trial {trial} flagged unsafe ({reason}); "
+            + session.config.safety.flag_effect(session.config.space.continuous)
         )
         _say_withdrawn(pending, session, "near it")
 

@@ -43,9 +43,14 @@ async def post_unsafe(
             gait = next(t.action for t in session.trials() if t.number == trial)
             radius = session.config.safety.unsafe_radius
             near = f" and the gaits within {radius:g} of its range" if radius else ""
+            close = (
+                ", but gaits however close to it may be (unsafe_radius = 0 on a continuous feature)"
+                if not radius and session.config.space.continuous
+                else ""
+            )
             return [
                 f"Flag trial {trial} ({session.describe(gait)}) unsafe: {reason}",
-                f"Its gait{near} will not be proposed again (the flag can be withdrawn).",
+                f"Its gait{near} will not be proposed again{close} (the flag can be withdrawn).",
             ]
 
         lines = await run_in_threadpool(service.read, session_id, summary)

@@ -99,8 +99,17 @@ class Safety:
     #: likely than ``frontier`` times an unrated gait's (None: the ``risk`` rule's bound only)
     frontier: float | None = None
 
-    def flag_effect(self) -> str:
-        """What an unsafe flag does, as the terminal and the CLI say it after one."""
+    def flag_effect(self, continuous: bool = False) -> str:
+        """What an unsafe flag does, as the terminal and the CLI say it after one;
+        ``continuous``: the space has a continuous feature, where without a radius a gait
+        however close to the flagged one may be proposed (the line path proposed one a few
+        hundredths of the ranges away at the next trial)."""
+        if self.unsafe_radius == 0 and continuous:
+            return (
+                "its gait will not be proposed again, but gaits however close to it may be "
+                "(unsafe_radius = 0; give [safety] unsafe_radius, a fraction of each feature's "
+                "range, to keep them away too)"
+            )
         if self.unsafe_radius == 0:
             return "its gait will not be proposed again"
         return (

@@ -576,16 +576,48 @@ def same_value(logged: Any, derived: Any) -> bool:
     return bool(logged == derived)
 
 
+#: the longest value a mismatch shows whole (characters of its repr): a longer list or object
+#: is shown at its first difference (a line-path query's ``line`` holds up to 4,096 points)
+SHOWN_WHOLE = 200
+
+
 def describe_mismatch(seq: int, kind: str, logged: dict[str, Any], derived: dict[str, Any]) -> str:
-    """One line per checked field that differs between the log and what replay re-derived."""
+    """One line per checked field that differs between the log and what replay re-derived
+    (a long list or object at its first difference: :func:`_difference`)."""
     cls = payload_class(kind)
     fields = cls.checked_fields() if cls else tuple(sorted(set(logged) | set(derived)))
     lines = [
-        f"  {name}: log has {logged.get(name)!r}, replay gives {derived.get(name)!r}"
+        f"  {_difference(name, logged.get(name), derived.get(name))}"
         for name in fields
         if not same_value(logged.get(name), derived.get(name))
     ]
     return f"event {seq} ({kind}):\n" + "\n".join(lines)
+
+
+def _difference(path: str, logged: Any, derived: Any) -> str:
+    """``path: log has ..., replay gives ...``: both values whole when short
+    (:data:`SHOWN_WHOLE`), else the first item or key where they differ, or their lengths or
+    keys when those differ."""
+    whole, other = repr(logged), repr(derived)
+    if len(whole) <= SHOWN_WHOLE and len(other) <= SHOWN_WHOLE:
+        return f"{path}: log has {whole}, replay gives {other}"
+    if isinstance(logged, dict) and isinstance(derived, dict):
+        if logged.keys() != derived.keys():
+            return f"{path}: log has keys {sorted(logged)}, replay gives keys {sorted(derived)}"
+        key = next(k for k in logged if not same_value(logged[k], derived[k]))
+        return _difference(f"{path}.{key}", logged[key], derived[key])
+    if isinstance(logged, list) and isinstance(derived, list):
+        if len(logged) != len(derived):
+            return f"{path}: log has {len(logged)} items, replay gives {len(derived)} items"
+        i = next(
+            i for i, (a, b) in enumerate(zip(logged, derived, strict=True)) if not same_value(a, b)
+        )
+        return _difference(f"{path}[{i}]", logged[i], derived[i])
+    return f"{path}: log has {_clipped(whole)}, replay gives {_clipped(other)}"
+
+
+def _clipped(text: str) -> str:
+    return text if len(text) <= SHOWN_WHOLE else text[:SHOWN_WHOLE] + "..."
 
 
 def same_event(record: EventRecord, derived: NewEvent) -> bool:

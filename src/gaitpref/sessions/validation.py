@@ -82,7 +82,9 @@ def validation_actions(
         best, middle, worst = validation_actions(mu[among])
         return int(among[best]), int(among[middle]), int(among[worst])
     if mu.size < 3:
-        raise ValueError(f"blind validation needs at least 3 actions; the grid has {mu.size}")
+        raise ValueError(  # a grid's gaits, or on the line path the points so far (no grid)
+            f"blind validation needs at least 3 gaits; the model holds {mu.size}"
+        )
     best, worst = int(np.argmax(mu)), int(np.argmin(mu))
     if mu[best] == mu[worst]:
         raise ValueError(
