@@ -110,3 +110,19 @@ def test_sessions_recorded_before_0_11_replay_with_clipped_lines(version: str) -
 def test_line_settings_name_a_bad_boundary() -> None:
     with pytest.raises(ValueError, match="line boundary must be one of fold, clip; got 'wrap'"):
         LineSettings(boundary="wrap")  # type: ignore[arg-type]
+
+
+def test_a_point_a_rounding_inside_the_boundary_is_on_it() -> None:
+    """A line's end point lies a few roundings inside the box (``1 - 1e-16`` in normalised
+    units), not on it: through it, a line leaving the box both ways held only points that snap
+    to it, and the fold did not see it as on the boundary."""
+    space = Space([Feature(f"c{k}", (0.0, 3.0), continuous=True) for k in range(4)])
+    origin = np.array([3.0 * (1 - 2e-16), 0.0, 1.5, 1.5])
+    v = np.array([1.0, 1.0, 0.3, -0.2])  # out of the box on c0 (by a rounding) for t > 0,
+    v = v / np.linalg.norm(v)  # and on c1 for t < 0
+    t_lo, t_hi = _t_extent(space, origin, v)
+    assert -1e-12 < t_lo <= 0.0 <= t_hi < 1e-12  # a line a rounding long
+    folded = entering(space, origin, v)
+    assert folded[0] < 0 and folded[1] > 0
+    points = line_points(space, origin, folded, 50)
+    assert len(points) == 50 and np.ptp(points[:, 1]) > 0.5
