@@ -89,3 +89,23 @@ def hidden_in(text: str, *, name: bool = False) -> list[tuple[int, str]]:
 def char_name(char: str) -> str:
     """``"U+001B"``, or ``"U+202E RIGHT-TO-LEFT OVERRIDE"`` where Unicode names it."""
     return f"U+{ord(char):04X} {unicodedata.name(char, '')}".strip()
+
+
+def check_mask(
+    allowed: object, size: int, *, what: str = "actions", optional: bool = False, empty: str
+) -> np.ndarray[tuple[int], np.dtype[np.bool_]]:
+    """``allowed`` as a boolean mask over ``size`` ``what`` with at least one allowed, else a
+    ``ValueError`` naming it, with ``empty`` as the message when none is allowed.  A mask of
+    integers is refused: NumPy reads it bitwise (``~1`` is ``-2``) and as indices, so the
+    result would come silently from other actions.  ``optional``: the message says ``None``
+    is taken too."""
+    arr = np.asarray(allowed)
+    if arr.dtype != np.bool_ or arr.shape != (size,):
+        none = "None or " if optional else ""
+        raise ValueError(
+            f"allowed must be {none}a boolean mask over the {size} {what}, got dtype "
+            f"{arr.dtype} and shape {arr.shape}"
+        )
+    if not arr.any():
+        raise ValueError(empty)
+    return arr

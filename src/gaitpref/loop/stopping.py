@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from gaitpref.checks import is_count, is_number
+from gaitpref.checks import check_mask, is_count, is_number
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.share_mix import PosteriorMixture
 
@@ -119,16 +119,8 @@ def confidence(
         raise ValueError(f"block must be an integer >= 1, got {block!r}")
     mean = np.array(posterior.mean)
     if allowed is not None:
-        # a mask of integers was read bitwise (~1 is -2: an index) and as column indices
-        arr = np.asarray(allowed)
-        if arr.dtype != np.bool_ or arr.shape != mean.shape:
-            raise ValueError(
-                f"allowed must be None or a boolean mask over the {mean.shape[0]} gaits, got "
-                f"dtype {arr.dtype} and shape {arr.shape}"
-            )
-        allowed = arr
-        if not allowed.any():
-            raise ValueError("no gait is allowed: there is nothing to recommend")
+        empty = "no gait is allowed: there is nothing to recommend"
+        allowed = check_mask(allowed, mean.shape[0], what="gaits", optional=True, empty=empty)
         mean[~allowed] = -np.inf
     rec = int(np.argmax(mean))
     hits = 0

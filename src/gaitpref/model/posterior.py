@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
-from gaitpref.checks import is_noise
+from gaitpref.checks import check_mask, is_noise
 from gaitpref.model.cross import CrossCovariance
 from gaitpref.model.engines import GridEngine
 from gaitpref.model.kernels import SquaredExponential
@@ -320,16 +320,8 @@ class Posterior:
     def _check_allowed(self, allowed: object) -> NDArray[np.bool_]:
         """``allowed`` as a boolean mask over every action with an allowed one, else an error
         naming it (an all-false mask made every action equally likely: disallowed ones too)."""
-        arr = np.asarray(allowed)
-        size = len(self.space)
-        if arr.dtype != np.bool_ or arr.shape != (size,):
-            raise ValueError(
-                f"allowed must be a boolean mask over the {size} actions, got dtype {arr.dtype} "
-                f"and shape {arr.shape}"
-            )
-        if not arr.any():
-            raise ValueError("allowed allows no action: there is no argmax among none")
-        return arr
+        empty = "allowed allows no action: there is no argmax among none"
+        return check_mask(allowed, len(self.space), empty=empty)
 
     @property
     def argmax(self) -> int:

@@ -19,7 +19,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import NDArray
 
-from gaitpref.checks import is_count
+from gaitpref.checks import check_mask, is_count
 from gaitpref.model.posterior import Posterior
 
 #: The most candidates an EUBO search compares (its pairs are a ``c x c`` matrix), the most
@@ -91,16 +91,9 @@ class AskContext:
                 "rng must be a numpy.random.Generator (numpy.random.default_rng(seed)), "
                 f"got {self.rng!r}"
             )
-        allowed = self.allowed
-        if allowed is not None:
-            arr = np.asarray(allowed)
-            if arr.dtype != np.bool_ or arr.shape != (size,):
-                raise ValueError(
-                    f"allowed must be None or a boolean mask over the {size} actions, got dtype "
-                    f"{arr.dtype} and shape {arr.shape}"
-                )
-            if not arr.any():
-                raise ValueError("allowed allows no action: there is nothing to propose")
+        if self.allowed is not None:
+            empty = "allowed allows no action: there is nothing to propose"
+            check_mask(self.allowed, size, optional=True, empty=empty)
 
 
 class Strategy(Protocol):
