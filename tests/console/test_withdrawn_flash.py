@@ -31,9 +31,13 @@ def _exclude(client: TestClient, sid: int, trial: int) -> tuple[str, str]:
     html = client.get(f"/sessions/{sid}").text
     action = f"/sessions/{sid}/trials/{trial}/exclude"
     form = next(f for f in forms_of(html).values() if f.action == action)
-    done = client.post(
+    review = client.post(
         form.action, data={**form.fields, "reason": "device_fault"}, follow_redirects=False
     )
+    assert review.status_code == 200  # the confirm step (an exclusion is for good)
+    confirmed = forms_of(review.text)["form1"].fields
+    assert confirmed["confirmed"] == "1"
+    done = client.post(form.action, data=confirmed, follow_redirects=False)
     assert done.status_code == 303
     location = done.headers["location"]
     return location, client.get(location).text
