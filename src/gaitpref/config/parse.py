@@ -134,11 +134,25 @@ def shipped_configs() -> list[str]:
     return sorted(p.name[:-5] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
+#: the most bytes of a config file read (a config of 32 features with a long ``values`` list
+#: each is well under it; the whole file was read, and 32 lists of 10**6 values parsed to
+#: gigabytes).  The console takes 200,000 characters of config text.
+MAX_CONFIG_BYTES = 16 * 2**20
+
+
 def _read(source: str | Path) -> tuple[str, str, Path | None]:
     path = Path(source)
     if path.is_file():
+        with path.open("rb") as fh:
+            data = fh.read(MAX_CONFIG_BYTES + 1)
+        if len(data) > MAX_CONFIG_BYTES:
+            raise ConfigError(
+                f"config {str(path)!r} is larger than the {MAX_CONFIG_BYTES:,} bytes a config "
+                "file may hold; it was not read"
+            )
         try:
-            return path.read_text(encoding="utf-8"), path.stem, path.resolve().parent
+            text = data.decode("utf-8").replace("\r\n", "\n").replace("\r", "\n")  # as read_text
+            return text, path.stem, path.resolve().parent
         except UnicodeDecodeError as exc:
             raise ConfigError(
                 f"config {str(path)!r} is not UTF-8 text (byte {exc.start}: {exc.reason})"
