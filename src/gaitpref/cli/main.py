@@ -72,22 +72,11 @@ def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
 def _load_config_or_fail(source: str) -> ExperimentConfig:
     """A config for a new run: loaded, and checked as a new session checks it (its name and
     its largest draw), so that a run is refused at once rather than at the first ask."""
-    from gaitpref.config import (
-        check_description,
-        check_draws,
-        check_ignored,
-        check_labels,
-        check_name,
-        load_config,
-    )
+    from gaitpref.config import check_new, load_config
 
     def load() -> ExperimentConfig:
         cfg = load_config(source)
-        check_name(cfg)
-        check_description(cfg)
-        check_labels(cfg)
-        check_ignored(cfg)
-        check_draws(cfg)
+        check_new(cfg)
         return cfg
 
     return guard(load)

@@ -8,6 +8,7 @@ and :data:`LIMITS` the sizes a config may ask for.
 
 from gaitpref.config.draws import check_draws, draw_size
 from gaitpref.config.experiment import ExperimentConfig
+from gaitpref.config.new import check_new
 from gaitpref.config.parse import (
     DEFAULT_BUFFER,
     DEFAULT_FIT,
@@ -42,6 +43,7 @@ __all__ = [
     "check_ignored",
     "check_labels",
     "check_name",
+    "check_new",
     "draw_size",
     "load_config",
     "parse_config",

@@ -31,15 +31,7 @@ from pathlib import Path
 from typing import Any, Literal, TypeVar
 
 from gaitpref.checks import is_count
-from gaitpref.config import (
-    ExperimentConfig,
-    check_description,
-    check_draws,
-    check_ignored,
-    check_labels,
-    check_name,
-    load_config,
-)
+from gaitpref.config import ExperimentConfig, check_new, load_config
 from gaitpref.errors import (
     InfeasibleProposalsError,
     NoSafeGaitError,
@@ -158,11 +150,7 @@ class Session:
         Everything is checked before the database is touched.
         """
         cfg = config if isinstance(config, ExperimentConfig) else load_config(config)
-        check_name(cfg)
-        check_description(cfg)
-        check_labels(cfg)
-        check_ignored(cfg)
-        check_draws(cfg)
+        check_new(cfg)
         check_subject(subject)
         use_seed = cfg.seed if seed is None else seed
         if isinstance(use_seed, bool) or not isinstance(use_seed, int) or not 0 <= use_seed < 2**63:
