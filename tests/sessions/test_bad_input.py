@@ -247,13 +247,13 @@ def test_a_blank_config_name_is_refused_for_a_new_session(tmp_path: Path, name: 
 def test_a_session_stored_with_a_blank_config_name_reopens_and_replays(
     tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import gaitpref.sessions.session
+    import gaitpref.config.new
     from gaitpref.config import load_config, parse_config
 
     url = f"sqlite:///{tmp_path / 'old.db'}"
     text = load_config(CONFIG).text.replace('name = "exo-1d-step-length"', 'name = "   "')
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.session, "check_name", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_name", lambda config: None)
         s = Session.create(url, parse_config(text), "S01", seed=4)
     drive(s, 3)
     mean = s.posterior().mean.copy()

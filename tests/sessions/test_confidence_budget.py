@@ -75,12 +75,12 @@ def test_the_cli_refuses_it_before_a_run(monkeypatch: pytest.MonkeyPatch, tmp_pa
 def test_sessions_read_the_bounded_count_stored_ones_too(monkeypatch: pytest.MonkeyPatch) -> None:
     """A session made before the check (samples given past the budget) opens, and its
     confidence, live and in the export's history, reads the bounded count."""
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     monkeypatch.setattr(stopping, "CONFIDENCE_VALUES", 900 * 150)
     db = MemoryStorage()
     with monkeypatch.context() as m:
-        m.setattr(gaitpref.sessions.session, "check_draws", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_draws", lambda config: None)
         made = Session.create(db, parse_config(GRID + "\n[stop]\nsamples = 2000\n"), "S01")
     q = made.next_query()
     made.answer(q.id, [(q.actions[0], q.actions[1])] if len(q.actions) > 1 else [])

@@ -200,11 +200,11 @@ def test_session_new_and_simulate_refuse_it(tmp_path: Path) -> None:
 def test_a_session_stored_with_such_a_key_replays(
     tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     url = f"sqlite:///{tmp_path / 'old.db'}"
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.session, "check_ignored", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_ignored", lambda config: None)
         s = Session.create(url, parse_config(_text("[safety]\nlambda = 2.0\n")), "S01", seed=4)
     drive(s, 3)
     mean = s.posterior().mean.copy()

@@ -86,12 +86,12 @@ def test_printable_labels_are_taken() -> None:
 def test_a_session_stored_with_such_a_label_replays(
     tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     url = f"sqlite:///{tmp_path / 'old.db'}"
     text = _text('unit = "m"', 'unit = "m\\u001b[2J"')
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.session, "check_labels", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_labels", lambda config: None)
         s = Session.create(url, parse_config(text), "S01", seed=4)
     drive(s, 3)
     mean = s.posterior().mean.copy()

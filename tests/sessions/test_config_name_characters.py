@@ -89,12 +89,12 @@ def test_a_file_name_with_a_newline_is_refused_as_the_default_name(tmp_path: Pat
 def test_a_session_stored_with_a_control_character_in_its_name_reopens_and_replays(
     tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     url = f"sqlite:///{tmp_path / 'old.db'}"
     name = "lab\u001b[2J\n"
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.session, "check_name", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_name", lambda config: None)
         s = Session.create(url, parse_config(_text(name)), "S01", seed=4)
     drive(s, 3)
     mean = s.posterior().mean.copy()

@@ -99,11 +99,11 @@ def test_a_session_stored_with_such_a_config_still_opens(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Created as earlier releases did: it opens (its asks fail as they always did)."""
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     db = MemoryStorage()
     with monkeypatch.context() as m:
-        m.setattr(gaitpref.sessions.session, "check_draws", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_draws", lambda config: None)
         made = Session.create(db, parse_config(_big()), "S01")
     with pytest.raises(ValueError, match="more than the sampling budget"):
         made.next_query()  # what the operator met at the first ask
