@@ -53,7 +53,8 @@ MAX_LIBRARY_BYTES = 256 * 2**20
 #: few hundred characters; a longer one makes a file larger than the bound, which
 #: :func:`save_library` still refuses)
 MESSAGE_ALLOWANCE = 1_000
-_NUMBERS = (
+#: a gait's scalar numbers, in the order a library entry lists them
+GAIT_NUMBERS = (
     "phase_start",
     "phase_end",
     "step_duration",
@@ -75,9 +76,9 @@ def gait_entry(g: Gait) -> dict[str, Any]:
         "degree": g.degree,
         "alpha": [[_num(v) for v in row] for row in g.alpha],
     }
-    entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[:3]})
+    entry.update({k: _num(getattr(g, k)) for k in GAIT_NUMBERS[:3]})
     entry["orbit_state"] = [_num(v) for v in g.orbit_state]
-    entry.update({k: _num(getattr(g, k)) for k in _NUMBERS[3:]})
+    entry.update({k: _num(getattr(g, k)) for k in GAIT_NUMBERS[3:]})
     entry.update({"feasible": g.feasible, "solver_status": g.status, "solver_message": g.message})
     return entry
 
@@ -309,7 +310,7 @@ def read_gait_entry(r: Reader, entry: Any, where: str, degree: int, step_length:
     ):
         raise r.fail(where.rstrip("."), "feasible must be a boolean, solver_status an integer, "
                      "solver_message a string")  # fmt: skip
-    nums = {key: r.number(entry, key, where, nullable=True) for key in _NUMBERS}
+    nums = {key: r.number(entry, key, where, nullable=True) for key in GAIT_NUMBERS}
     return Gait(
         step_length=step_length,
         alpha=r.matrix(r.get(entry, "alpha", where), (1, degree + 1), f"{where}alpha"),

@@ -52,19 +52,11 @@ from gaitpref.gaits.gait_cache import FILE_FIELDS, CachedGait, GaitCache, file_f
 from gaitpref.gaits.generator import GaitGenerator
 from gaitpref.gaits.json_document import document_problem
 from gaitpref.gaits.library import MAX_GAIT_ID, feasible_gait_problem
+from gaitpref.gaits.library_io import GAIT_NUMBERS
 from gaitpref.space import FloatArray
 
 #: the longest solver message a made gait may carry (it is logged, and shown when infeasible)
 MAX_GAIT_MESSAGE = 2000
-_NUMBERS = (
-    "step_duration",
-    "phase_start",
-    "phase_end",
-    "cot",
-    "delta_squared",
-    "min_normal_force",
-    "max_friction_ratio",
-)
 
 
 def _kind(value: object) -> str:
@@ -102,7 +94,7 @@ def made_gait_problem(gait: object, step_length: float | None) -> str | None:
         return f"feasible gait with step length {length!r}, not a positive one"
     if step_length is not None and not math.isclose(length, step_length, rel_tol=1e-9):
         return f"step length {length!r} is not the {step_length!r} asked for"
-    for name in _NUMBERS:
+    for name in GAIT_NUMBERS:
         value = getattr(gait, name)
         if isinstance(value, bool) or not isinstance(value, int | float):
             return f"{name} is a {_kind(value)}, not a number"
