@@ -45,6 +45,8 @@ from gaitpref.loop.learning import (
     FIT_MODES,
     HYPER_MODES,
     HYPOTHESES,
+    HYPOTHESIS_FACTORS,
+    MAX_HYPOTHESES,
     SHARE_MODES,
     TIES_MODES,
     WARM_FIRST,
@@ -176,7 +178,9 @@ MODEL: Final[dict[str, Key]] = {
     "fit": Key(Choice(FIT_MODES), "evidence"),
     "refit_every": Key(Integer(1, 1_000_000), 20),
     "hyper": Key(Choice(HYPER_MODES), "map"),  # "average": over lengthscale hypotheses
-    "hypotheses": Key(Numbers(Number(0.01, 100.0, open_lo=True), 1, 15), HYPOTHESES),
+    "hypotheses": Key(
+        Numbers(Number(*HYPOTHESIS_FACTORS, open_lo=True), 1, MAX_HYPOTHESES), HYPOTHESES
+    ),
     "share": Key(Choice(SHARE_MODES), "average"),  # a warm start's share: a mixture, or "map"
     # a warm start's first trial: the earlier subjects' recommendation, or the strategy's pick
     "warm_first": Key(Choice(WARM_FIRST), "recommended"),
