@@ -31,6 +31,7 @@ import json
 import re
 from typing import TYPE_CHECKING
 
+from gaitpref.config.schema import MAX_FEATURES, MAX_QUERY
 from gaitpref.console.errors import FormTooLargeError, FormUnreadableError, Refusal
 
 if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlette
@@ -40,10 +41,9 @@ if TYPE_CHECKING:  # annotations only: `gaitpref --help` does not import Starlet
 MAX_JSON_BODY = 1_000_000
 #: the most items of a list in a JSON request body (``feedback``, ``prior_from``, ...)
 MAX_LIST = 256
-#: the most queried gaits a config may have: ``[cospar] n`` and ``buffer`` (each at most
-#: ``gaitpref.config.schema.MAX_QUERY``) and features (``MAX_FEATURES``); plain numbers, so
-#: that `gaitpref --help` need not load the config schema (a test keeps them equal)
-QUERY_MOST, FEATURES_MOST = 64, 32
+#: the most gaits of each part of a query a config may have (``[cospar] n`` and ``buffer``)
+#: and the most features (the config schema's bounds)
+QUERY_MOST, FEATURES_MOST = MAX_QUERY, MAX_FEATURES
 #: the most comparisons one answer holds: each pair of the query's gaits with one executed
 #: now, ``n (n - 1) / 2 + n b`` (an answer of a config with ``n = 24`` had 276, past
 #: :data:`MAX_LIST`, and no answer to all its pairs could be sent)
