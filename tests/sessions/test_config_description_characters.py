@@ -83,12 +83,12 @@ def test_newlines_tabs_and_printable_text_are_taken(description: str) -> None:
 def test_a_session_stored_with_a_control_character_in_its_description_replays(
     tmp_path: Path, drive: Drive, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import gaitpref.sessions.session
+    import gaitpref.config.new
 
     url = f"sqlite:///{tmp_path / 'old.db'}"
     description = "lab\u001b[2J\u202e"
     with monkeypatch.context() as m:  # as earlier releases took it
-        m.setattr(gaitpref.sessions.session, "check_description", lambda config: None)
+        m.setattr(gaitpref.config.new, "check_description", lambda config: None)
         s = Session.create(url, parse_config(_text(description)), "S01", seed=4)
     drive(s, 3)
     mean = s.posterior().mean.copy()
