@@ -127,12 +127,17 @@ class LineCoSpar(CoSpar):
         return out
 
     def _towards(self) -> FloatArray | None:
-        """The last answer's coactive direction (normalised), if it had suggestions."""
+        """The last answer's coactive direction (normalised), if it had suggestions: those the
+        model keeps (``line_settings.coactive = "kept"``; none when its trial was excluded, and
+        the direction is random), or every one recorded (``"recorded"``, as before defaults
+        0.12: an excluded trial's too)."""
         if not self.answers:
             return None
+        last = self.answers[-1]
+        kept = self._kept(last) if self.line_settings.coactive == "kept" else last.preferences
         moves = [
             self.space.points[p.winner] - self.space.points[p.loser]
-            for p in self.answers[-1].preferences
+            for p in kept
             if p.source == "coactive"
         ]
         if not moves:
