@@ -195,7 +195,7 @@ class LineCoSpar(CoSpar):
             chosen = list(proposed(self.strategy, context))
         self._rng_before_pending = state
         self._table_before_pending = self.space
-        table, actions = self.space.extended(space.points[chosen])
+        table, actions = self.space.extended(space.points[chosen], share=True)
         self._use_table(table)
         points = tuple(tuple(row) for row in table.points[actions].tolist())
         query = Query(self._next_id, tuple(int(a) for a in actions), self._buffer, points, line)
@@ -241,7 +241,7 @@ class LineCoSpar(CoSpar):
         ]
         found = [t for t in targets if t is not None]
         if found:
-            self._use_table(self.space.extended(np.array(found))[0])
+            self._use_table(self.space.extended(np.array(found), share=True)[0])
         return records
 
     def _take_back(self) -> Answer:
