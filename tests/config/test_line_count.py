@@ -34,7 +34,7 @@ EXPLICIT = 'share = "average"\nwarm_first = "recommended"\n'
 def test_a_line_config_draws_a_star_of_four_lines_and_records_it() -> None:
     cfg = parse_config(LINE + EXPLICIT)
     assert cfg.subspace == "line" and cfg.line.lines == 4
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.11"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.12"}
     assert config_of(stored_record(LINE + EXPLICIT, library_meta(cfg))).line.lines == 4
 
 
@@ -44,6 +44,7 @@ def test_sessions_recorded_before_0_10_replay_with_one_line() -> None:
     # a 0.8 session that relied on no changed default stored no version: it reads as 0.1's
     assert config_of(stored_record(LINE + EXPLICIT, {})).line.lines == 1
     given = LINE + EXPLICIT + '[cospar]\nbuffer = 1\nline_count = 2\nline_boundary = "fold"\n'
+    given += 'line_coactive = "kept"\n'  # no default left that changed since
     assert parse_config(given, defaults="0.8").line.lines == 2  # a value given is kept
     assert not parse_config(given).relies_on_changed_defaults
 

@@ -225,3 +225,33 @@ def test_a_validation_too_early_on_the_line_path_names_no_grid(tmp_path: Path) -
     assert "needs at least 3 gaits; the model holds 1" in str(err.value)
     assert "grid" not in str(err.value)
     s.close()
+
+
+@pytest.mark.parametrize("defaults", [None, "0.11"], ids=["new", "recorded-under-0.11"])
+def test_an_excluded_trials_suggestion_steers_no_line(tmp_path: Path, defaults: str | None) -> None:
+    """``line_direction = "coactive"``: the trial's "longer step" suggestion steered the next
+    line although the trial was excluded (its suggestion out of the model).  A new config's
+    line no longer follows it (``line_coactive = "kept"``, defaults 0.12); a session recorded
+    under 0.11 goes on following it, and replays as it ran."""
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    cfg = parse_config(TEXT) if defaults is None else parse_config(TEXT, defaults=defaults)
+    assert cfg.line.coactive == ("kept" if defaults is None else "recorded")
+    s = Session.create(url, cfg, "S01", seed=11)
+    _drive(s, 3)
+    q = s.next_query()
+    a, p = q.actions[0], q.points[0]
+    comps = [(a, b, "first") for b in q.buffer if b != a]
+    s.answer(q.id, comps, [(a, "step_length", "+small" if p[0] < 0.13 else "-small")])
+    s.exclude(q.trials[0], "stumble")
+    after = s.next_query()
+    issued = [e for e in s.events() if e.kind == "query_issued"]
+    direction = np.abs(issued[-1].payload["line"]["direction"])
+    along_step_length = bool(np.array_equal(direction, [1.0, 0.0, 0.0]))
+    assert along_step_length == (defaults is not None)
+    reopened = Session.open(url, s.id)
+    assert reopened.pending == after and reopened.pending.points == after.points
+    replayed = [e for e in reopened.events() if e.kind == "query_issued"]
+    assert [e.payload for e in replayed] == [e.payload for e in issued]
+    np.testing.assert_array_equal(reopened.posterior().mean, s.posterior().mean)
+    reopened.close()
+    s.close()

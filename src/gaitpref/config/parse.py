@@ -124,7 +124,7 @@ DEFAULT_STRATEGY: str = DEFAULTS["cospar"]["strategy"]
 DEFAULT_BUFFER: int = DEFAULTS["cospar"]["buffer"]
 #: ``[cospar]`` keys only the line path reads: a grid config does not rely on their defaults
 LINE_KEYS: Final = frozenset(
-    {"line_points", "line_direction", "line_count", "line_cloud", "line_boundary"}
+    {"line_points", "line_direction", "line_count", "line_cloud", "line_boundary", "line_coactive"}
 )
 
 
@@ -329,7 +329,7 @@ def check_ignored(config: ExperimentConfig) -> None:
     which never refits; ``[model] hypotheses`` without ``hyper = "average"``; a ``[space.F]``
     with ``num = 1`` and ``max`` other than ``min`` (its one value is ``min``); a line path
     setting (``[cospar] line_points``, ...) with ``subspace = "grid"`` or a gait library, which
-    draw no lines;
+    draw no lines; ``[cospar] line_coactive`` without ``line_direction = "coactive"``;
     ``[model] sampler`` other than ``"auto"`` on the line path (point sets take their own);
     gated-eubo's ``sparring_from`` or ``sparring_until`` without ``sparring_until`` the larger,
     ``early_trials`` with ``early_scale = 1`` and ``early_scale`` with ``early_trials = 0``.  A
@@ -366,6 +366,19 @@ def check_ignored(config: ExperimentConfig) -> None:
                 f"{shown(cospar[key])} would be ignored; leave it out"
                 + ("" if config.library is not None else ", or use subspace = 'auto' or 'line'"),
             )
+    if (
+        isinstance(cospar, dict)
+        and "line_coactive" in cospar
+        and config.line.direction != "coactive"
+    ):
+        fail(
+            "cospar",
+            "line_coactive",
+            "chooses the suggestions that give the coactive line direction, and line_direction "
+            f"= {config.line.direction!r} draws none: line_coactive = "
+            f"{shown(cospar['line_coactive'])} would be ignored; leave it out, or use "
+            'line_direction = "coactive"',
+        )
     safety = raw.get("safety")
     if isinstance(safety, dict) and not safety.get("avoid"):
         for key in ("risk", "lambda"):
@@ -609,7 +622,12 @@ def _cospar(
             )
         lines, cloud = cospar["line_count"], cospar["line_cloud"]
         cospar["line"] = LineSettings(
-            cospar["line_points"], cospar["line_direction"], lines, cloud, cospar["line_boundary"]
+            cospar["line_points"],
+            cospar["line_direction"],
+            lines,
+            cloud,
+            cospar["line_boundary"],
+            cospar["line_coactive"],
         )
         return cospar, defaulted
     cospar["line"] = LineSettings(cospar["line_points"], cospar["line_direction"])

@@ -51,7 +51,13 @@ from gaitpref.loop.learning import (
     TIES_MODES,
     WARM_FIRST,
 )
-from gaitpref.loop.lines import BOUNDARIES, DIRECTIONS, MAX_LINES, MAX_STAR_POINTS
+from gaitpref.loop.lines import (
+    BOUNDARIES,
+    COACTIVE_SOURCES,
+    DIRECTIONS,
+    MAX_LINES,
+    MAX_STAR_POINTS,
+)
 from gaitpref.loop.stopping import MAX_SAMPLES as MAX_CONFIDENCE_SAMPLES
 from gaitpref.model.engines import SAMPLERS
 from gaitpref.strategies import STRATEGIES, STRATEGY_CLASSES, STRATEGY_SETTINGS
@@ -209,6 +215,9 @@ COSPAR: Final[dict[str, Key]] = {
     # a line through a point on the box's boundary that would leave it at once both ways:
     # "fold" its direction into the box, or "clip" it to the point alone (before 0.11)
     "line_boundary": Key(Choice(BOUNDARIES), "fold"),
+    # the coactive direction (line_direction = "coactive") from the last answer's suggestions
+    # the model "kept" (an excluded trial's left out), or every one "recorded" (before 0.12)
+    "line_coactive": Key(Choice(COACTIVE_SOURCES), "kept"),
 }
 
 #: Bounds of every strategy setting; the defaults are the strategy classes' own.
@@ -248,7 +257,7 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.11"
+DEFAULTS_VERSION: Final = "0.12"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
@@ -258,7 +267,9 @@ DEFAULTS_VERSION: Final = "0.11"
 #: first trial was the strategy's, ``[model] warm_first = "strategy"``; 0.1 to 0.8: the line path
 #: drew one line per query, ``[cospar] line_count = 1``; 0.1 to 0.10: a line through a point on
 #: the box's boundary that left it at once both ways held that point alone,
-#: ``[cospar] line_boundary = "clip"``).  "0.9" is not a version: a commit
+#: ``[cospar] line_boundary = "clip"``; 0.1 to 0.11: the coactive line direction followed the
+#: last answer's suggestions even when its trial was excluded since,
+#: ``[cospar] line_coactive = "recorded"``).  "0.9" is not a version: a commit
 #: named it for a default that was withdrawn before release, and it stays unknown, so that a
 #: database written in between fails to open instead of replaying with other defaults.
 _UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
@@ -267,7 +278,8 @@ _MODEL_BEFORE_0_6: Final[dict[str, Any]] = {
     "jitter": 0.0,
     "warm_first": "strategy",
 }
-_CLIPPED: Final[dict[str, Any]] = {"line_boundary": "clip"}
+_RECORDED: Final[dict[str, Any]] = {"line_coactive": "recorded"}
+_CLIPPED: Final[dict[str, Any]] = {"line_boundary": "clip", **_RECORDED}
 _ONE_LINE: Final[dict[str, Any]] = {"line_count": 1, **_CLIPPED}
 EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.1": {
@@ -294,6 +306,7 @@ EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
     "0.7": {"cospar": _ONE_LINE, "model": {"warm_first": "strategy"}},
     "0.8": {"cospar": _ONE_LINE},
     "0.10": {"cospar": _CLIPPED},
+    "0.11": {"cospar": _RECORDED},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

@@ -127,12 +127,17 @@ class LineCoSpar(CoSpar):
         return out
 
     def _towards(self) -> FloatArray | None:
-        """The last answer's coactive direction (normalised), if it had suggestions."""
+        """The last answer's coactive direction (normalised), if it had suggestions: those the
+        model keeps (``line_settings.coactive = "kept"``; none when its trial was excluded, and
+        the direction is random), or every one recorded (``"recorded"``, as before defaults
+        0.12: an excluded trial's too)."""
         if not self.answers:
             return None
+        last = self.answers[-1]
+        kept = self._kept(last) if self.line_settings.coactive == "kept" else last.preferences
         moves = [
             self.space.points[p.winner] - self.space.points[p.loser]
-            for p in self.answers[-1].preferences
+            for p in kept
             if p.source == "coactive"
         ]
         if not moves:
@@ -190,7 +195,7 @@ class LineCoSpar(CoSpar):
             chosen = list(proposed(self.strategy, context))
         self._rng_before_pending = state
         self._table_before_pending = self.space
-        table, actions = self.space.extended(space.points[chosen])
+        table, actions = self.space.extended(space.points[chosen], share=True)
         self._use_table(table)
         points = tuple(tuple(row) for row in table.points[actions].tolist())
         query = Query(self._next_id, tuple(int(a) for a in actions), self._buffer, points, line)
@@ -236,7 +241,7 @@ class LineCoSpar(CoSpar):
         ]
         found = [t for t in targets if t is not None]
         if found:
-            self._use_table(self.space.extended(np.array(found))[0])
+            self._use_table(self.space.extended(np.array(found), share=True)[0])
         return records
 
     def _take_back(self) -> Answer:

@@ -15,7 +15,10 @@ such a line to its origin, as every line was drawn before).
 
 Directions: ``"random"`` (uniform on the sphere), ``"coordinate"`` (one feature chosen at
 random) or ``"coactive"`` (from the last executed point towards the point the user's coactive
-suggestions point to, else random).
+suggestions point to, else random).  The suggestions are the last answer's that the model keeps
+(``LineSettings.coactive = "kept"``, the default since config defaults 0.12): those of a trial
+excluded since no longer steer the line; ``"recorded"`` takes every suggestion recorded with the
+answer, excluded or not, as every line was drawn before (``loop/line.py``).
 
 ``lines`` > 1 draws a *star* of lines through the same origin: the first with the direction
 rule, the others random directions, the query chosen among all their points (a union of
@@ -49,6 +52,10 @@ Direction = Literal["random", "coordinate", "coactive"]
 DIRECTIONS: tuple[Direction, ...] = get_args(Direction)
 Boundary = Literal["fold", "clip"]
 BOUNDARIES: tuple[Boundary, ...] = get_args(Boundary)
+#: which of the last answer's coactive suggestions give the ``"coactive"`` direction: those the
+#: model keeps (an excluded trial's taken out), or every one recorded (before defaults 0.12)
+CoactiveSource = Literal["kept", "recorded"]
+COACTIVE_SOURCES: tuple[CoactiveSource, ...] = get_args(CoactiveSource)
 
 #: the most lines one query draws (:func:`redraw_rule`): while every point of the lines drawn is
 #: excluded, four with the configured rule through the best point (the first with the coactive
@@ -75,8 +82,14 @@ class LineSettings:
     lines: int = 1
     cloud: int = 0
     boundary: Boundary = "fold"
+    coactive: CoactiveSource = "kept"
 
     def __post_init__(self) -> None:
+        if self.coactive not in COACTIVE_SOURCES:
+            raise ValueError(
+                "line coactive source must be one of "
+                f"{', '.join(COACTIVE_SOURCES)}; got {self.coactive!r}"
+            )
         if self.boundary not in BOUNDARIES:
             raise ValueError(
                 f"line boundary must be one of {', '.join(BOUNDARIES)}; got {self.boundary!r}"
@@ -307,12 +320,14 @@ def normalised(space: Space, delta: FloatArray) -> FloatArray:
 __all__ = [
     "BOUNDARIES",
     "CLOUD_SCALES",
+    "COACTIVE_SOURCES",
     "DIRECTIONS",
     "LINE_DRAWS",
     "MAX_LINES",
     "MAX_STAR_POINTS",
     "ON_BOUNDARY",
     "Boundary",
+    "CoactiveSource",
     "Direction",
     "Line",
     "LineSettings",
