@@ -8,9 +8,9 @@ on a loaded 2-core machine it can be several times slower than one thread (measu
 On large grids the same holds: the Laplace fit is ``m x m`` work whatever the grid's size, and an
 ask on the scalable path is mostly memory-bound (normal draws, axis-wise prior transforms, the
 argmax) around ``2 A m`` flops of matrix products.  At 1,048,576 actions and 300 comparisons on a
-loaded 2-core machine an ask + tell took 0.15 s (p95 0.18 s) with one thread and 0.34 s (p95
-1.3 s) with two (``benchmarks/results/large.md``), so the loop uses :func:`one_blas_thread` at
-every size.
+loaded 2-core machine (load average 5) an ask + tell took a median 0.06-0.13 s with one thread
+and 0.19-0.78 s (p95 up to 2.2 s) with BLAS's default of two (``benchmarks/bench_threads.py``,
+``benchmarks/results/threads.md``), so the loop uses :func:`one_blas_thread` at every size.
 
 Independent fits of one step (a warm start's share hypotheses, ``share_mix.py``) may instead run
 side by side in threads (:func:`in_threads`), each on one BLAS thread: NumPy and LAPACK release
