@@ -332,3 +332,34 @@ def test_the_answer_form_of_a_query_of_45_gaits_is_taken(client: TestClient) -> 
     done = post(client, f"/sessions/{sid}/answer", forms_of(confirm.text)["form1"].fields)
     assert done.status_code == 303
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 45
+
+
+def test_an_answer_whose_stop_check_fails_is_saved_and_says_so(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The [stop] rule raising after the answer is stored: the answer is not a 500 (which an
+    operator would post again), the page says it is saved and that the rule was not checked,
+    and the API's response carries why."""
+    from gaitpref.sessions import Session, StopCheckWarning
+
+    def fails(self: Session) -> None:
+        raise FloatingPointError("the confidence's samples are not finite")
+
+    monkeypatch.setattr(Session, "_stop_if_sure", fails)
+    sid = new_session(client)
+    with pytest.warns(StopCheckWarning):
+        body = answer_once(client, sid)
+    assert body["trials"] == [1] and "FloatingPointError" in body["stop_warning"]
+    form = trial_form(client, sid)
+    cmp = next(k for k in form.radios if k.startswith("cmp-"))
+    with pytest.warns(StopCheckWarning):
+        done = post(
+            client, f"/sessions/{sid}/answer", {**form.fields, cmp: "first", "confirmed": "1"}
+        )
+    assert done.status_code == 303
+    assert done.headers["location"] == f"/sessions/{sid}?answered=2&stop_unchecked=1"
+    shown = client.get(done.headers["location"]).text
+    assert "Saved: trial 2." in shown and "The [stop] rule could not be checked" in shown
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2  # each stored once
+    monkeypatch.undo()
+    assert answer_once(client, sid)["stop_warning"] is None

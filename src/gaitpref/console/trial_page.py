@@ -92,7 +92,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         ]
     post = session.posterior()
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
-    best = int(np.argmax(mean))
+    best = session.recommended()  # among the gaits that may be proposed, as the confidence's
     trials = session.trials()
     learned = bool(mean.max() > mean.min())
     sure = None
@@ -123,8 +123,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "multi": len(actions) > 1,
         "chronology": chronology(session),
         "notes": list(reversed(session.notes()))[:20],
-        "best": views.gait_view(space, best, gait_id=session.gait_name(best)),
-        "best_mean": float(mean[best]),
+        "best": None
+        if best is None
+        else views.gait_view(space, best, gait_id=session.gait_name(best)),
+        "best_mean": None if best is None else float(mean[best]),
         "learned": learned,
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,

@@ -146,6 +146,9 @@ class Answered:
     seqs: tuple[int, ...]
     preferences: int  # how many pair terms (preferences) entered the model
     singles: int = 0  # how many single-action terms entered it
+    #: the answer is stored, but the ``[stop]`` rule could not be checked after it: why
+    #: (also issued as a :class:`~gaitpref.sessions.confidence.StopCheckWarning`); None when it was
+    stop_warning: str | None = None
 
 
 def check_storable(text: str, what: str) -> str:
