@@ -517,15 +517,24 @@ class Terminal:
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason, answered.stop_warning)
+                self._written(q, reason, answered.stop_warning, answered.clipped)
                 return
 
-    def _written(self, q: SessionQuery, reason: str, stop_warning: str | None = None) -> None:
+    def _written(
+        self,
+        q: SessionQuery,
+        reason: str,
+        stop_warning: str | None = None,
+        clipped: Sequence[str] = (),
+    ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
         flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
-        checked after it (:attr:`Answered.stop_warning`), said after the save."""
+        checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
+        went past the edge of their range (:attr:`Answered.clipped`), said after the save."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+        for note in clipped:
+            self.console.print(f"  note: {clip(note, MAX_MESSAGE)}", markup=False)
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
         with contextlib.suppress(SessionBusyError):  # only a report: the answer is written

@@ -363,3 +363,34 @@ def test_an_answer_whose_stop_check_fails_is_saved_and_says_so(
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2  # each stored once
     monkeypatch.undo()
     assert answer_once(client, sid)["stop_warning"] is None
+
+
+def test_a_suggestion_past_the_edge_is_said_in_the_answer_and_the_chronology(
+    client: TestClient,
+) -> None:
+    """A move clipped at the edge of its range: the API's answer says so (``clipped``) and the
+    trial page's chronology marks it (before, only a move back to the same gait was marked)."""
+    from gaitpref.config import load_config
+
+    wide = load_config("exo-1d-step-length").text.replace(
+        "coactive = [0.1, 0.2]", "coactive = [0.5, 1.0]"
+    )
+    assert "coactive = [0.5, 1.0]" in wide
+    sid = new_session(client, config=wide)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    gait = q["actions"][0]
+    value, lo, hi = gait["values"]["step_length"], 0.08, 0.18
+    if value in (lo, hi):  # at an edge: a move outwards goes back to the same gait
+        move, mark = ("-big" if value == lo else "+small"), "(at the grid's edge)"
+    else:  # "longer" moves the whole range: clipped to the longest step
+        move, mark = "+big", "(clipped at the grid's edge)"
+    body = {
+        "query_id": q["query_id"],
+        "comparisons": [],
+        "suggestions": [[gait["index"], "step_length", move]],
+    }
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 200, r.text
+    (note,) = r.json()["clipped"]
+    assert note.startswith("trial 1: step_length ") and "past the edge" in note
+    assert mark.replace("'", "&#39;") in client.get(f"/sessions/{sid}").text  # HTML-escaped

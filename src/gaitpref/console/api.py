@@ -156,6 +156,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         trials=list(answered.trials),
         next_query_id=pending,
         stop_warning=answered.stop_warning,
+        clipped=list(answered.clipped),
     )
 
 

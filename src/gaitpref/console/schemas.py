@@ -145,6 +145,11 @@ class AnsweredOut(BaseModel):
         description="the answer is stored, but the [stop] rule could not be checked after it: "
         "why (it is checked again after the next answer); null when it was",
     )
+    clipped: list[str] = Field(
+        default_factory=list,
+        description="suggestions that asked to go past the edge of a feature's range and were "
+        "clipped there (stored as given): one sentence each",
+    )
 
 
 class UndoIn(_Request):

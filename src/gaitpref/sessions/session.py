@@ -39,6 +39,7 @@ from gaitpref.errors import (
     ReplayError,
     SessionStateError,
 )
+from gaitpref.feedback.suggestion import clipped_note
 from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.fit_memo import FitMemo, remembering
@@ -422,8 +423,26 @@ class Session:
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
         seqs = tuple(r.seq for r in records)
+        clipped = self._clipped_after(seqs)
         warning = self._stop_check_after(query, seqs)
-        return Answered(query.id, query.trials, seqs, kept, singles, warning)
+        return Answered(query.id, query.trials, seqs, kept, singles, warning, clipped)
+
+    def _clipped_after(self, seqs: tuple[int, ...]) -> tuple[str, ...]:
+        """What to tell the operator of the suggestions just logged at ``seqs`` that went past
+        the edge of a feature's range (:func:`clipped_note`).  Only a report, worked out after
+        the answer is stored: an error here leaves it out rather than report the stored answer
+        as failed."""
+        written = set(seqs)
+        space = self._state.loop.space
+        try:
+            return tuple(
+                note
+                for r in self._state.suggestions_log
+                if r.seq in written
+                and (note := clipped_note(space, r.action, r.feature, r.move, r.trial))
+            )
+        except Exception:  # a report only: the answer is stored
+            return ()
 
     def _stop_check_after(self, query: SessionQuery, seqs: tuple[int, ...]) -> str | None:
         """:meth:`_stop_if_sure` after the answer to ``query`` (logged at ``seqs``) is stored
