@@ -394,3 +394,40 @@ def test_a_suggestion_past_the_edge_is_said_in_the_answer_and_the_chronology(
     (note,) = r.json()["clipped"]
     assert note.startswith("trial 1: step_length ") and "past the edge" in note
     assert mark.replace("'", "&#39;") in client.get(f"/sessions/{sid}").text  # HTML-escaped
+
+
+def test_best_so_far_is_never_a_gait_flagged_unsafe(client: TestClient) -> None:
+    """The trial page's "Best so far" and the API's ``recommended`` are the highest posterior
+    mean among the gaits that may be proposed (the gait the confidence names); ``argmax`` stays
+    the unrestricted highest, here the gait flagged unsafe."""
+    from gaitpref.config import load_config
+
+    text = load_config("exo-1d-step-length").text + "\n[safety]\nunsafe_radius = 0.1\n"
+    sid = new_session(client, config=text)
+    walked: dict[int, int] = {}
+    for _ in range(12):  # the subject prefers the longer step
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        body = {
+            "query_id": q["query_id"],
+            "comparisons": [[i, j, "first" if i > j else "second"] for i, j in q["comparisons"]],
+        }
+        assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+        trials = client.get(f"/api/sessions/{sid}/trials").json()
+        walked = {t["gait"]["index"]: t["trial"] for t in trials}
+        best = client.get(f"/api/sessions/{sid}/posterior").json()["argmax"]["index"]
+        if best in walked:
+            break
+    assert best in walked, "the posterior's argmax was never a walked gait"
+    post = client.get(f"/api/sessions/{sid}/posterior").json()
+    assert post["recommended"]["index"] == best  # nothing flagged yet
+    r = client.post(f"/api/sessions/{sid}/trials/{walked[best]}/unsafe", json={"reason": "knee"})
+    assert r.status_code == 200, r.text
+    post = client.get(f"/api/sessions/{sid}/posterior").json()
+    rec = post["recommended"]
+    assert post["argmax"]["index"] == best and rec is not None and rec["index"] != best
+    mean = post["mean"]
+    assert mean[rec["index"]] < mean[best]
+    html = client.get(f"/sessions/{sid}").text
+    assert f'<b id="best">{rec["gait_id"]}</b>' in html
+    assert f'<b id="best">G{best}</b>' not in html
+    assert post["confidence"] is None or rec["gait_id"] in post["confidence"]["sentence"]
