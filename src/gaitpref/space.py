@@ -210,6 +210,18 @@ class Feature:
         new = self.snap(value + sign * fraction * self.span)
         return None if new == value else new
 
+    def move_clipped(self, value: float, move: str) -> bool:
+        """Whether a coactive move from ``value`` would leave the feature's range, so that
+        :meth:`move_value` clips it at the edge (to the edge, or back to ``value`` when it is
+        there already): the subject asked for more than the range holds."""
+        if move not in MOVES:
+            raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
+        fraction = self.coactive[1] if move.endswith("big") else self.coactive[0]
+        sign = 1.0 if move.startswith("+") else -1.0
+        raw = float(value) + sign * fraction * self.span
+        slack = 1e-9 * self.span  # rounding: a move that ends exactly on the edge stays in
+        return raw > self.values[-1] + slack or raw < self.values[0] - slack
+
     def move(self, value_index: int, move: Move) -> int | None:
         """Value index after a coactive move, or ``None`` when it clips back to the same value."""
         if (

@@ -42,6 +42,7 @@ import os
 import shlex
 import signal
 import sys
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
 
@@ -50,6 +51,7 @@ from rich.console import Console
 from gaitpref.errors import FeedbackError, GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
+from gaitpref.sessions.confidence import StopCheckWarning
 from gaitpref.sessions.records import (
     InfeasibleGait,
     SessionQuery,
@@ -502,7 +504,9 @@ class Terminal:
                     break
                 reason = self._reason() if key == "x" else ""
                 try:
-                    s.answer(q.id, [*comparisons, *ratings], suggestions)
+                    with warnings.catch_warnings():  # said by _written, not as a Python warning
+                        warnings.simplefilter("ignore", StopCheckWarning)
+                        answered = s.answer(q.id, [*comparisons, *ratings], suggestions)
                 except SessionBusyError as exc:
                     self.console.print(
                         f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
@@ -513,14 +517,26 @@ class Terminal:
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason)
+                self._written(q, reason, answered.stop_warning, answered.clipped)
                 return
 
-    def _written(self, q: SessionQuery, reason: str) -> None:
+    def _written(
+        self,
+        q: SessionQuery,
+        reason: str,
+        stop_warning: str | None = None,
+        clipped: Sequence[str] = (),
+    ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
-        flag asked with it (``reason``)."""
+        flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
+        checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
+        went past the edge of their range (:attr:`Answered.clipped`), said after the save."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
+        for note in clipped:
+            self.console.print(f"  note: {clip(note, MAX_MESSAGE)}", markup=False)
+        if stop_warning is not None:
+            self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
         with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
             mean = s.posterior().mean
             if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt

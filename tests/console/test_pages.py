@@ -332,3 +332,102 @@ def test_the_answer_form_of_a_query_of_45_gaits_is_taken(client: TestClient) -> 
     done = post(client, f"/sessions/{sid}/answer", forms_of(confirm.text)["form1"].fields)
     assert done.status_code == 303
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 45
+
+
+def test_an_answer_whose_stop_check_fails_is_saved_and_says_so(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The [stop] rule raising after the answer is stored: the answer is not a 500 (which an
+    operator would post again), the page says it is saved and that the rule was not checked,
+    and the API's response carries why."""
+    from gaitpref.sessions import Session, StopCheckWarning
+
+    def fails(self: Session) -> None:
+        raise FloatingPointError("the confidence's samples are not finite")
+
+    monkeypatch.setattr(Session, "_stop_if_sure", fails)
+    sid = new_session(client)
+    with pytest.warns(StopCheckWarning):
+        body = answer_once(client, sid)
+    assert body["trials"] == [1] and "FloatingPointError" in body["stop_warning"]
+    form = trial_form(client, sid)
+    cmp = next(k for k in form.radios if k.startswith("cmp-"))
+    with pytest.warns(StopCheckWarning):
+        done = post(
+            client, f"/sessions/{sid}/answer", {**form.fields, cmp: "first", "confirmed": "1"}
+        )
+    assert done.status_code == 303
+    assert done.headers["location"] == f"/sessions/{sid}?answered=2&stop_unchecked=1"
+    shown = client.get(done.headers["location"]).text
+    assert "Saved: trial 2." in shown and "The [stop] rule could not be checked" in shown
+    assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2  # each stored once
+    monkeypatch.undo()
+    assert answer_once(client, sid)["stop_warning"] is None
+
+
+def test_a_suggestion_past_the_edge_is_said_in_the_answer_and_the_chronology(
+    client: TestClient,
+) -> None:
+    """A move clipped at the edge of its range: the API's answer says so (``clipped``) and the
+    trial page's chronology marks it (before, only a move back to the same gait was marked)."""
+    from gaitpref.config import load_config
+
+    wide = load_config("exo-1d-step-length").text.replace(
+        "coactive = [0.1, 0.2]", "coactive = [0.5, 1.0]"
+    )
+    assert "coactive = [0.5, 1.0]" in wide
+    sid = new_session(client, config=wide)
+    q = client.get(f"/api/sessions/{sid}/query").json()
+    gait = q["actions"][0]
+    value, lo, hi = gait["values"]["step_length"], 0.08, 0.18
+    if value in (lo, hi):  # at an edge: a move outwards goes back to the same gait
+        move, mark = ("-big" if value == lo else "+small"), "(at the grid's edge)"
+    else:  # "longer" moves the whole range: clipped to the longest step
+        move, mark = "+big", "(clipped at the grid's edge)"
+    body = {
+        "query_id": q["query_id"],
+        "comparisons": [],
+        "suggestions": [[gait["index"], "step_length", move]],
+    }
+    r = client.post(f"/api/sessions/{sid}/answers", json=body)
+    assert r.status_code == 200, r.text
+    (note,) = r.json()["clipped"]
+    assert note.startswith("trial 1: step_length ") and "past the edge" in note
+    assert mark.replace("'", "&#39;") in client.get(f"/sessions/{sid}").text  # HTML-escaped
+
+
+def test_best_so_far_is_never_a_gait_flagged_unsafe(client: TestClient) -> None:
+    """The trial page's "Best so far" and the API's ``recommended`` are the highest posterior
+    mean among the gaits that may be proposed (the gait the confidence names); ``argmax`` stays
+    the unrestricted highest, here the gait flagged unsafe."""
+    from gaitpref.config import load_config
+
+    text = load_config("exo-1d-step-length").text + "\n[safety]\nunsafe_radius = 0.1\n"
+    sid = new_session(client, config=text)
+    walked: dict[int, int] = {}
+    for _ in range(12):  # the subject prefers the longer step
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        body = {
+            "query_id": q["query_id"],
+            "comparisons": [[i, j, "first" if i > j else "second"] for i, j in q["comparisons"]],
+        }
+        assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+        trials = client.get(f"/api/sessions/{sid}/trials").json()
+        walked = {t["gait"]["index"]: t["trial"] for t in trials}
+        best = client.get(f"/api/sessions/{sid}/posterior").json()["argmax"]["index"]
+        if best in walked:
+            break
+    assert best in walked, "the posterior's argmax was never a walked gait"
+    post = client.get(f"/api/sessions/{sid}/posterior").json()
+    assert post["recommended"]["index"] == best  # nothing flagged yet
+    r = client.post(f"/api/sessions/{sid}/trials/{walked[best]}/unsafe", json={"reason": "knee"})
+    assert r.status_code == 200, r.text
+    post = client.get(f"/api/sessions/{sid}/posterior").json()
+    rec = post["recommended"]
+    assert post["argmax"]["index"] == best and rec is not None and rec["index"] != best
+    mean = post["mean"]
+    assert mean[rec["index"]] < mean[best]
+    html = client.get(f"/sessions/{sid}").text
+    assert f'<b id="best">{rec["gait_id"]}</b>' in html
+    assert f'<b id="best">G{best}</b>' not in html
+    assert post["confidence"] is None or rec["gait_id"] in post["confidence"]["sentence"]

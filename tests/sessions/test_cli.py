@@ -64,11 +64,17 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "argmax_gait_id",
         "mean_at_argmax",
         "sd_at_argmax",
+        "recommended",
+        "recommended_values",
+        "recommended_gait_id",
+        "mean_at_recommended",
+        "sd_at_recommended",
         "trials_in_force",
         "pending_query",
     }
     reopened = Session.open(db, 1)
     assert info["posterior"]["argmax"] == reopened.posterior().argmax
+    assert info["posterior"]["recommended"] == reopened.recommended()
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--yes", "--db", db)
     assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--yes", "--db", db)
     _ok("session", "finish", "1", "--yes", "--db", db)

@@ -18,7 +18,7 @@ def test_scripted_session_is_a_real_finished_session(tmp_path: Path) -> None:
     assert s.status == "finished" and len(s.trials()) == 12
     assert s.validations() == [done.validation]
     assert done.validation.agrees  # a noiseless subject after 12 trials
-    assert s.posterior().argmax == done.best_action
+    assert s.recommended() == done.best_action == s.confidence().recommended
     assert np.isfinite(s.posterior().mean).all()
     kinds = [e.kind for e in s.events()]
     assert kinds[0] == "created" and kinds[-1] == "finished" and "note" in kinds

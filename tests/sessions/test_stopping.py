@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ import pytest
 from gaitpref import Rating, Session
 from gaitpref.config import ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ConfigError, NoSafeGaitError
-from gaitpref.sessions import export_session
+from gaitpref.sessions import StopCheckWarning, export_session
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive, state_of
 
@@ -165,3 +166,82 @@ def test_max_trials_with_nothing_learnt_says_why_no_round_opens() -> None:
     assert blocked is not None and "the posterior mean is flat" in blocked
     s.finish()  # the operator decided: nothing left to say
     assert s.stop_blocked() is None
+
+
+@pytest.mark.parametrize(
+    "error",
+    [
+        FloatingPointError("the confidence's samples are not finite"),
+        NoSafeGaitError("no gait may be recommended"),
+        KeyboardInterrupt(),
+    ],
+    ids=["numerical", "no-safe-gait", "ctrl-c"],
+)
+def test_a_failed_stop_check_after_an_answer_is_a_warning_not_a_failure(
+    drive: Drive, monkeypatch: pytest.MonkeyPatch, error: BaseException
+) -> None:
+    """The [stop] rule runs after the answer is stored: when it raises, the answer is stored
+    once and reported as stored (a caller told it failed would answer again), with a
+    StopCheckWarning saying why; the rule is checked again after the next answer."""
+    db = MemoryStorage()
+    s = Session.create(db, _config("max_trials = 4\n"), "S01")
+    drive(s, 3)
+    q = s.next_query()
+    comparisons = [(q.actions[0], q.buffer[0], "first")] if q.buffer else []
+
+    def fails(self: Session) -> None:
+        raise error
+
+    with monkeypatch.context() as patch:
+        patch.setattr(Session, "_stop_if_sure", fails)
+        with pytest.warns(StopCheckWarning, match="could not be checked") as caught:
+            answered = s.answer(q.id, comparisons)
+    assert answered.query == q.id and answered.trials == q.trials
+    assert answered.stop_warning is not None
+    assert f"the answer to query {q.id} is stored" in answered.stop_warning
+    assert type(error).__name__ in answered.stop_warning
+    assert str(caught[0].message) == answered.stop_warning
+    walked = [e for e in db.events(s.id) if e.kind == "trial_executed"]
+    assert len(walked) == 4 and walked[-1].seq in answered.seqs  # stored, exactly once
+    assert s.pending is None and len(s.trials()) == 4
+    assert s.validation_plan is None  # the rule did not act: its check failed
+    again = Session.open(db, s.id)  # the log replays as written
+    assert len(again.trials()) == 4 and again.pending is None
+    drive(s, 1)  # the next answer checks the rule again: it opens the round
+    plan = s.validation_plan
+    assert plan is not None and plan.round == 1
+
+
+def test_a_stop_check_that_runs_warns_nothing(drive: Drive) -> None:
+    s = Session.create(MemoryStorage(), _config("max_trials = 2\n"), "S01")
+    drive(s, 1)
+    q = s.next_query()
+    answered = s.answer(q.id, [(q.actions[0], q.buffer[0], "first")] if q.buffer else [])
+    assert answered.stop_warning is None and s.validation_plan is not None
+
+
+def test_the_terminal_says_a_failed_stop_check_after_saved(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The terminal says the answer is saved, then why the rule could not be checked (not as a
+    Python warning), and goes on to the next trial."""
+    from io import StringIO
+
+    from rich.console import Console
+
+    from gaitpref.terminal import Terminal
+
+    def fails(self: Session) -> None:
+        raise FloatingPointError("the confidence's samples are not finite")
+
+    monkeypatch.setattr(Session, "_stop_if_sure", fails)
+    s = Session.create(MemoryStorage(), _config("max_trials = 1\n"), "S01")
+    out = StringIO()
+    keys = ["2", "y"]  # trial 1: "slightly longer", write it; then q
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", StopCheckWarning)  # the terminal says it itself
+        Terminal(s, Console(file=out, width=400), read=lambda _: keys.pop(0) if keys else "q").run()
+    text = out.getvalue()
+    said = "saved: trial 1\n  warning: the answer to query "
+    assert said in text and "could not be checked after it (FloatingPointError" in text
+    assert "Trial 2: run" in text and len(s.trials()) == 1

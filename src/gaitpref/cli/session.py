@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -367,13 +367,7 @@ def show(
         if as_json:
             typer.echo(json.dumps(info))
             return
-        best = summary["argmax"]
-        so_far = (
-            "best so far: none yet (the line path's posterior lives on the points walked)"
-            if best is None
-            else f"best so far: action {best} ({session.describe(best)}), posterior mean "
-            f"{summary['mean_at_argmax']:.4g} ± {summary['sd_at_argmax']:.2g}"
-        )
+        so_far = _best_so_far(session, summary)
         console.print(
             f"session {session.id}: subject {session.subject}, {session.config.name}, "
             f"seed {session.seed}, {session.status}\n"
@@ -387,6 +381,31 @@ def show(
             )
         if path is not None:
             console.print(f"figure: {path}")
+
+
+def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
+    """The ``best so far`` line of ``session show``: the recommended gait (the highest posterior
+    mean among the gaits that may be proposed, as the confidence names it), never one flagged
+    unsafe or in the region of avoidance; the unrestricted highest is named as not to walk when
+    it is another."""
+    best, rec = summary["argmax"], summary["recommended"]
+    if best is None:
+        return "best so far: none yet (the line path's posterior lives on the points walked)"
+    if rec is None:
+        return (
+            "best so far: none may be recommended (every gait is in the region of avoidance or "
+            "near a gait flagged unsafe)"
+        )
+    line = (
+        f"best so far: action {rec} ({session.describe(rec)}), posterior mean "
+        f"{summary['mean_at_recommended']:.4g} ± {summary['sd_at_recommended']:.2g}"
+    )
+    if best != rec:
+        line += (
+            f"\n  (the highest posterior mean, action {best}, may not be proposed: flagged "
+            "unsafe, near a gait flagged unsafe, or in the region of avoidance)"
+        )
+    return line
 
 
 @session_app.command("undo")

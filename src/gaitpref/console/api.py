@@ -151,7 +151,13 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         None if body.note is None else views.free_text(body.note, "note", "the note"),
         records,
     )
-    return AnsweredOut(query_id=answered.query, trials=list(answered.trials), next_query_id=pending)
+    return AnsweredOut(
+        query_id=answered.query,
+        trials=list(answered.trials),
+        next_query_id=pending,
+        stop_warning=answered.stop_warning,
+        clipped=list(answered.clipped),
+    )
 
 
 @router.post("/sessions/{session_id}/undo", response_model=UndoneOut)

@@ -238,6 +238,7 @@ async def trial_page(
     withdrawn: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
     excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
+    stop_unchecked: Annotated[int | None, Query(ge=1, le=1)] = None,
 ) -> Response:
     for name, text in (("answered", answered), ("undone", undone)):
         if text is not None and text.count(",") >= MAX_FLASH_TRIALS:
@@ -250,6 +251,11 @@ async def trial_page(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
     flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded)
+    if stop_unchecked and flash.startswith("Saved:"):
+        flash += (
+            " The [stop] rule could not be checked after it (the console's log says why, a "
+            "StopCheckWarning); it is checked again after the next answer."
+        )
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 
 
@@ -345,7 +351,8 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
         service.answer, session_id, query_id, comparisons, suggestions, note, ratings
     )
     trials = ",".join(map(str, answered.trials))
-    return see_other(f"/sessions/{session_id}?answered={trials}")
+    unchecked = "&stop_unchecked=1" if answered.stop_warning is not None else ""
+    return see_other(f"/sessions/{session_id}?answered={trials}{unchecked}")
 
 
 @router.post("/sessions/{session_id}/undo")

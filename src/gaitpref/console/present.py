@@ -120,6 +120,7 @@ def posterior_out(session: Session) -> PosteriorOut:
     mean = np.asarray(post.mean, dtype=float)
     sd = np.asarray(post.std, dtype=float)
     space = session.space
+    rec = session.recommended()
     confidence = None
     sure = None
     if mean.size and mean.max() > mean.min():  # something learnt (the trial page shows it too)
@@ -141,6 +142,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         mean=mean.tolist(),
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,
+        recommended=None if rec is None else gait_out(session, rec),
         trials=[t.action for t in session.trials()],
         confidence=confidence,
     )

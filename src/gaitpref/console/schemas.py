@@ -140,6 +140,16 @@ class AnsweredOut(BaseModel):
     query_id: int
     trials: list[int]
     next_query_id: int | None
+    stop_warning: str | None = Field(
+        default=None,
+        description="the answer is stored, but the [stop] rule could not be checked after it: "
+        "why (it is checked again after the next answer); null when it was",
+    )
+    clipped: list[str] = Field(
+        default_factory=list,
+        description="suggestions that asked to go past the edge of a feature's range and were "
+        "clipped there (stored as given): one sentence each",
+    )
 
 
 class UndoIn(_Request):
@@ -213,14 +223,21 @@ class PosteriorOut(BaseModel):
     mean: list[float]
     sd: list[float]
     argmax: GaitOut | None = Field(
-        description="the gait of the highest posterior mean (None while there is no point: the "
-        "line path before its first query)"
+        description="the gait of the highest posterior mean over every gait, which may be one "
+        "that may not be proposed (flagged unsafe, near one, in the region of avoidance): see "
+        "recommended (None while there is no point: the line path before its first query)"
+    )
+    recommended: GaitOut | None = Field(
+        default=None,
+        description="the best gait so far to walk: the highest posterior mean among the gaits "
+        "that may be proposed, the one confidence is about (None while there is no point, and "
+        "when no gait may be proposed)",
     )
     trials: list[int] = Field(description="executed actions in trial order")
     confidence: ConfidenceOut | None = Field(
         default=None,
-        description="how sure the model is of argmax (None before any answer, and when no gait "
-        "may be proposed)",
+        description="how sure the model is of recommended (None before any answer, and when no "
+        "gait may be proposed)",
     )
 
 

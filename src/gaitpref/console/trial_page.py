@@ -12,7 +12,9 @@ from gaitpref.console import views
 from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
 from gaitpref.errors import NoSafeGaitError
+from gaitpref.sessions.records import SuggestionRecord
 from gaitpref.sessions.session import Session
+from gaitpref.space import Space
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,16 @@ def _outcome_text(first: int, second: int, outcome: str, trial: int) -> str:
     return f"> trial {other}" if won else f"< trial {other}"
 
 
+def _edge(space: Space, s: SuggestionRecord) -> str:
+    """What the chronology adds to a suggestion that went past the edge of its feature's
+    range: back to the same gait (not modelled), or clipped to the edge."""
+    if s.target is None:
+        return " (at the grid's edge)"
+    f = space.features[space.feature_number(s.feature)]
+    value = float(space.point(s.action)[space.feature_number(s.feature)])
+    return " (clipped at the grid's edge)" if f.move_clipped(value, s.move) else ""
+
+
 def chronology(session: Session) -> list[ChronoRow]:
     """The trials in force, newest first, with their comparisons and suggestions."""
     space = session.space
@@ -54,9 +66,7 @@ def chronology(session: Session) -> list[ChronoRow]:
         if s.undone:
             continue
         text = f"{views.pretty(s.feature)}: {words[s.feature][s.move]}"
-        suggested.setdefault(s.trial, []).append(
-            text + (" (at the grid's edge)" if s.target is None else "")
-        )
+        suggested.setdefault(s.trial, []).append(text + _edge(space, s))
     rated = ratings_by_trial(session)
     unsafe = session.unsafe_flags()
     rows = [
@@ -92,7 +102,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         ]
     post = session.posterior()
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
-    best = int(np.argmax(mean))
+    best = session.recommended()  # among the gaits that may be proposed, as the confidence's
     trials = session.trials()
     learned = bool(mean.max() > mean.min())
     sure = None
@@ -123,8 +133,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "multi": len(actions) > 1,
         "chronology": chronology(session),
         "notes": list(reversed(session.notes()))[:20],
-        "best": views.gait_view(space, best, gait_id=session.gait_name(best)),
-        "best_mean": float(mean[best]),
+        "best": None
+        if best is None
+        else views.gait_view(space, best, gait_id=session.gait_name(best)),
+        "best_mean": None if best is None else float(mean[best]),
         "learned": learned,
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,

@@ -3,7 +3,9 @@
 The paper's coactive feedback: the move ``a -> a~`` (a fraction of the feature's range,
 ``space.coactive_move``) enters the model as a preference ``a~ > a`` with probit noise
 ``sigma / beta`` (``beta``: the coactive weight); a move that clips back to ``a`` is stored and
-ignored.  Stored as a ``suggestion_given`` event, with its target action.
+ignored.  Stored as a ``suggestion_given`` event, with its target action.  A move that would
+leave the feature's range is clipped at its edge; :func:`clipped_note` says so for the operator
+(``Answered.clipped``), and what is stored is the suggestion as given either way.
 """
 
 from __future__ import annotations
@@ -25,7 +27,7 @@ from gaitpref.feedback.base import (
     grid_index,
 )
 from gaitpref.payloads import EventPayload
-from gaitpref.space import MOVES, Move
+from gaitpref.space import MOVES, Move, Space
 
 
 @dataclass(frozen=True)
@@ -118,4 +120,32 @@ class SuggestionKind(FeedbackKind[Suggestion]):
         return Suggestion(payload.action, payload.feature, payload.move)
 
 
-__all__ = ["Suggestion", "SuggestionGiven", "SuggestionKind"]
+def clipped_note(space: Space, action: int, feature: str, move: str, trial: int) -> str | None:
+    """What to tell the operator when the suggestion (``move`` of ``feature`` from ``action``,
+    walked in ``trial``) asked to go past the edge of the feature's range and was clipped there:
+    to the edge, or, at the edge already, back to the same gait (stored, but no term enters the
+    model).  None when the move stays within the range.  Nothing stored changes: the suggestion
+    is stored as given either way."""
+    if move not in MOVES:
+        raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
+    number = space.feature_number(feature)
+    f = space.features[number]
+    value = float(space.point(action)[number])
+    if not f.move_clipped(value, move):
+        return None
+    more, less = f.words
+    word = {"+big": more, "+small": f"slightly {more}", "-small": f"slightly {less}"}.get(
+        move, less
+    )
+    unit = f" {f.unit}" if f.unit else ""
+    edge = f.values[-1] if move.startswith("+") else f.values[0]
+    said = f"trial {trial}: {feature} {word} goes past the edge of its range ({edge:.4g}{unit})"
+    if f.move_value(value, move) is None:
+        return (
+            f"{said}; the gait is at the edge already, so the suggestion is stored but does not "
+            "enter the model"
+        )
+    return f"{said}; it is taken as a move to the edge"
+
+
+__all__ = ["Suggestion", "SuggestionGiven", "SuggestionKind", "clipped_note"]

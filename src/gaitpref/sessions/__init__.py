@@ -14,6 +14,7 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 """
 
 from gaitpref.errors import ExportError, ReplayError, SessionError, SessionStateError
+from gaitpref.sessions.confidence import StopCheckWarning
 from gaitpref.sessions.export import export_session, import_session, posterior_summary
 from gaitpref.sessions.records import (
     REASONS,
@@ -47,6 +48,7 @@ __all__ = [
     "SessionQuery",
     "SessionStateError",
     "ShownGait",
+    "StopCheckWarning",
     "SuggestionRecord",
     "Trial",
     "ValidationPlan",

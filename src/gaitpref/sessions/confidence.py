@@ -8,7 +8,8 @@ states the confidence after every step that changed the model (an answer, an und
 exclusion): the export's ``confidence`` table.  When no gait may be proposed (the region of
 avoidance and the unsafe flags cover the grid) there is nothing to recommend: the session states
 no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the rule does not act on one and the
-table has no row for that step.
+table has no row for that step.  :func:`recommended` names the same gait without sampling (what
+``session show``, the console and exports call the best so far).
 """
 
 from __future__ import annotations
@@ -23,6 +24,14 @@ from gaitpref.loop.stopping import Confidence, StopRule, confidence
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord
+
+
+class StopCheckWarning(UserWarning):
+    """The ``[stop]`` rule could not be checked after an answer (its confidence raised, or
+    opening the blind validation round failed, or Ctrl-C stopped it): the answer is stored
+    and reported as stored (:attr:`~gaitpref.sessions.records.Answered.stop_warning` says
+    why), and the rule is checked again after the next answer."""
+
 
 CONFIDENCE_STREAM = 0xC0F1DE7CE  # the confidence's generator: (seed, this, answers in force)
 
@@ -50,6 +59,25 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
         allowed=allowed,
         draws=loop.share_mixture(),
     )
+
+
+def recommended(state: SessionState) -> int | None:
+    """The gait the session recommends: the posterior mean's argmax among the gaits that may be
+    proposed (``loop.allowed()``: the region of avoidance, gaits flagged unsafe and their
+    radius), the lowest index among exact ties, as :func:`session_confidence` recommends it.
+    None while the posterior has no point (the line path before its first query) and when no
+    gait may be proposed.  Unlike ``Posterior.argmax`` it never names a gait that may not be
+    walked."""
+    loop = state.loop
+    if not len(loop.space):
+        return None
+    allowed = loop.allowed()
+    mean = np.array(loop.posterior.mean, dtype=float)
+    if allowed is not None:
+        if not allowed.any():
+            return None
+        mean[~allowed] = -np.inf
+    return int(np.argmax(mean))
 
 
 def recommends(state: SessionState) -> bool:
@@ -123,7 +151,9 @@ def confidence_history(
 
 __all__ = [
     "CONFIDENCE_STREAM",
+    "StopCheckWarning",
     "confidence_history",
+    "recommended",
     "recommends",
     "session_confidence",
     "stop_reason",

@@ -68,7 +68,7 @@ class DemoSession:
     database: Path
     session_id: int
     trials: int
-    best_action: int
+    best_action: int | None  # Session.recommended(): None when no gait may be proposed
     best_description: str
     validation: ValidationResult
     figure: Path | None
@@ -110,10 +110,9 @@ def demo_session(
             from gaitpref.plots.session import save_session_figure
 
             picture = save_session_figure(session, out / f"session-{session.id}.png")
-        best = session.posterior().argmax
-        return DemoSession(
-            database, session.id, trials, best, session.describe(best), result, picture
-        )
+        best = session.recommended()  # the best gait that may be walked, as the confidence's
+        described = "none may be recommended" if best is None else session.describe(best)
+        return DemoSession(database, session.id, trials, best, described, result, picture)
 
 
 def print_demo_session(out: Path, console: Console) -> DemoSession:

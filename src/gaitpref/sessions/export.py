@@ -253,18 +253,29 @@ def _manifest(session: Session, files: dict[str, str]) -> dict[str, Any]:
 
 
 def posterior_summary(session: Session) -> dict[str, Any]:
-    """The posterior's best action, its value, and the pending query (JSON-ready); the
-    ``argmax`` fields are None while the posterior has no point (the line path before a query:
-    it lives on the points present)."""
+    """The posterior's best action, its value, and the pending query (JSON-ready).
+
+    ``argmax`` is the highest posterior mean over every gait, which may be one that may not be
+    proposed (flagged unsafe, near one, in the region of avoidance); ``recommended`` is the
+    highest among those that may be (:meth:`Session.recommended`: the gait the confidence
+    recommends, the best so far to walk).  The ``argmax`` fields are None while the posterior
+    has no point (the line path before a query: it lives on the points present); the
+    ``recommended`` fields then too, and when no gait may be proposed."""
     post = session.posterior()
     pending = session.pending
     best: int | None = post.argmax if len(session.space) else None
+    rec = session.recommended()
     return {
         "argmax": best,
         "argmax_values": None if best is None else session.space.values_of(best),
         "argmax_gait_id": None if best is None else session.gait_id(best),
         "mean_at_argmax": None if best is None else float(post.mean[best]),
         "sd_at_argmax": None if best is None else float(post.std[best]),
+        "recommended": rec,
+        "recommended_values": None if rec is None else session.space.values_of(rec),
+        "recommended_gait_id": None if rec is None else session.gait_id(rec),
+        "mean_at_recommended": None if rec is None else float(post.mean[rec]),
+        "sd_at_recommended": None if rec is None else float(post.std[rec]),
         "trials_in_force": len(session.trials()),
         "pending_query": None
         if pending is None

@@ -146,6 +146,13 @@ class Answered:
     seqs: tuple[int, ...]
     preferences: int  # how many pair terms (preferences) entered the model
     singles: int = 0  # how many single-action terms entered it
+    #: the answer is stored, but the ``[stop]`` rule could not be checked after it: why
+    #: (also issued as a :class:`~gaitpref.sessions.confidence.StopCheckWarning`); None when it was
+    stop_warning: str | None = None
+    #: suggestions that asked to go past the edge of a feature's range, clipped there (stored
+    #: as given): one sentence each for the operator
+    #: (:func:`~gaitpref.feedback.suggestion.clipped_note`)
+    clipped: tuple[str, ...] = ()
 
 
 def check_storable(text: str, what: str) -> str:

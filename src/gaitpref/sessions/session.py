@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypeVar
@@ -38,12 +39,19 @@ from gaitpref.errors import (
     ReplayError,
     SessionStateError,
 )
+from gaitpref.feedback.suggestion import clipped_note
 from gaitpref.loop.cospar import QueryError, as_records
 from gaitpref.loop.stopping import Confidence
 from gaitpref.model.fit_memo import FitMemo, remembering
 from gaitpref.model.posterior import Posterior
 from gaitpref.sessions import events as log
-from gaitpref.sessions.confidence import confidence_history, session_confidence, stop_reason
+from gaitpref.sessions.confidence import (
+    StopCheckWarning,
+    confidence_history,
+    recommended,
+    session_confidence,
+    stop_reason,
+)
 from gaitpref.sessions.fit_cache import load_memo, memo_path, save_memo
 from gaitpref.sessions.gaits import stopped_error
 from gaitpref.sessions.records import (
@@ -411,11 +419,50 @@ class Session:
         except BaseException:  # written, booked in part (Ctrl-C): rebuilt from the log next
             self._broken = True
             raise
-        self._stop_if_sure()
         loop = self._state.loop
         kept = len(answer.preferences) - len(loop.excluded.get(query.loop_id, ()))
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
-        return Answered(query.id, query.trials, tuple(r.seq for r in records), kept, singles)
+        seqs = tuple(r.seq for r in records)
+        clipped = self._clipped_after(seqs)
+        warning = self._stop_check_after(query, seqs)
+        return Answered(query.id, query.trials, seqs, kept, singles, warning, clipped)
+
+    def _clipped_after(self, seqs: tuple[int, ...]) -> tuple[str, ...]:
+        """What to tell the operator of the suggestions just logged at ``seqs`` that went past
+        the edge of a feature's range (:func:`clipped_note`).  Only a report, worked out after
+        the answer is stored: an error here leaves it out rather than report the stored answer
+        as failed."""
+        written = set(seqs)
+        space = self._state.loop.space
+        try:
+            return tuple(
+                note
+                for r in self._state.suggestions_log
+                if r.seq in written
+                and (note := clipped_note(space, r.action, r.feature, r.move, r.trial))
+            )
+        except Exception:  # a report only: the answer is stored
+            return ()
+
+    def _stop_check_after(self, query: SessionQuery, seqs: tuple[int, ...]) -> str | None:
+        """:meth:`_stop_if_sure` after the answer to ``query`` (logged at ``seqs``) is stored
+        and booked: nothing it raises (a numerical error in the confidence, a failed write of
+        the round, Ctrl-C while the confidence is sampled) may turn the stored answer into a
+        reported failure, which a caller would answer again.  A failure is issued as a
+        :class:`StopCheckWarning` and returned (why); the rule is checked again after the next
+        answer (it runs after every answer until a round is opened)."""
+        try:
+            self._stop_if_sure()
+        except (Exception, KeyboardInterrupt) as exc:
+            why = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+            warning = (
+                f"the answer to query {query.id} is stored (events {', '.join(map(str, seqs))}), "
+                f"but the [stop] rule could not be checked after it ({why}); it is checked again "
+                "after the next answer"
+            )
+            warnings.warn(warning, StopCheckWarning, stacklevel=6)  # Session.answer's caller
+            return warning
+        return None
 
     def _check_no_open_round(self, query: SessionQuery) -> None:
         """Refuse an answer while a blind validation round is open (the query was pending when
@@ -645,6 +692,14 @@ class Session:
             return self._sure[1]
 
         return self._locked(run)
+
+    def recommended(self) -> int | None:
+        """The gait to walk as the best so far: the posterior mean's highest among the gaits that
+        may be proposed (never one flagged unsafe, near one, or in the region of avoidance), the
+        gait :meth:`confidence` recommends.  None while the posterior has no point (the line
+        path before its first query) and when no gait may be proposed.
+        ``posterior().argmax`` is the unrestricted highest, which may be a gait not to walk."""
+        return self._locked(lambda: recommended(self._state))
 
     def confidence_history(
         self, progress: Callable[[int, int], None] | None = None

@@ -1,0 +1,118 @@
+""" "Best so far" names a gait that may be walked: the highest posterior mean among the gaits that
+may be proposed (``Session.recommended``, the gait the confidence recommends), never one flagged
+unsafe, near one, or in the region of avoidance; ``argmax`` stays the unrestricted highest."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from gaitpref import Session
+from gaitpref.cli import app
+from gaitpref.config import parse_config
+from gaitpref.loop.safety import near
+from gaitpref.sessions import posterior_summary
+
+CONFIG = """
+name = "best-1d"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 15
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+jitter = 0.0
+fit = "fixed"
+[cospar]
+seed = 1
+strategy = "self-sparring"
+[safety]
+unsafe_radius = RADIUS
+"""
+
+runner = CliRunner()
+
+
+def _show(url: str, sid: int) -> tuple[str, dict[str, object]]:
+    text = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--db", url])
+    assert text.exit_code == 0, text.output
+    out = runner.invoke(app, ["session", "show", str(sid), "--json", "--no-figure", "--db", url])
+    assert out.exit_code == 0, out.output
+    return text.output, json.loads(out.output)
+
+
+def _session_with_a_walked_argmax(url: str, radius: float) -> tuple[Session, int]:
+    """A session whose posterior argmax is a gait walked in trial ``number`` (returned): the
+    subject prefers the longer step each time."""
+    s = Session.create(url, parse_config(CONFIG.replace("RADIUS", str(radius))), "S01")
+    for _ in range(12):
+        q = s.next_query()
+        a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
+        if a != b:
+            s.answer(q.id, [(a, b, "first" if a > b else "second")])
+        else:
+            s.answer(q.id, [])
+        best = s.posterior().argmax
+        walked = [t.number for t in s.trials() if t.action == best]
+        if walked and s.posterior().mean[best] > np.median(s.posterior().mean):
+            return s, walked[-1]
+    raise AssertionError("the posterior's argmax was never a walked gait")
+
+
+def test_a_gait_flagged_unsafe_at_the_argmax_is_not_the_best_so_far(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'b.db'}"
+    s, number = _session_with_a_walked_argmax(url, 0.1)
+    best = s.posterior().argmax
+    assert s.recommended() == best  # nothing flagged yet: the same gait
+    s.flag_unsafe(number, "knee gave way")
+    banned = near(s.space, {best}, 0.1)
+    rec = s.recommended()
+    assert rec is not None and rec != best and not banned[rec]
+    mean = np.asarray(s.posterior().mean)
+    assert mean[rec] == mean[~banned].max()
+    assert rec == s.confidence().recommended  # what the confidence sentence names
+    summary = posterior_summary(s)
+    assert summary["argmax"] == best  # unchanged: the export's import check compares it
+    assert summary["recommended"] == rec
+    assert summary["recommended_values"] == s.space.values_of(rec)
+    assert summary["mean_at_recommended"] == float(mean[rec])
+    sid = s.id
+    s.close()
+    text, info = _show(url, sid)
+    posterior = info["posterior"]
+    assert isinstance(posterior, dict)
+    assert posterior["argmax"] == best and posterior["recommended"] == rec
+    assert f"best so far: action {rec} (" in text
+    assert f"best so far: action {best} (" not in text
+    assert f"action {best}, may not be proposed" in text
+
+
+def test_no_best_so_far_when_no_gait_may_be_proposed(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'b.db'}"
+    s, number = _session_with_a_walked_argmax(url, 1.0)  # a flag bans the whole line
+    s.flag_unsafe(number, "knee gave way")
+    assert s.recommended() is None
+    summary = posterior_summary(s)
+    assert summary["argmax"] == s.posterior().argmax
+    assert all(
+        summary[k] is None
+        for k in (
+            "recommended",
+            "recommended_values",
+            "recommended_gait_id",
+            "mean_at_recommended",
+            "sd_at_recommended",
+        )
+    )
+    sid = s.id
+    s.close()
+    text, info = _show(url, sid)
+    posterior = info["posterior"]
+    assert isinstance(posterior, dict) and posterior["recommended"] is None
+    assert "best so far: none may be recommended" in text
+    assert "best so far: action" not in text
