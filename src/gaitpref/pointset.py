@@ -15,6 +15,7 @@ this one's (so an action keeps its index), with points already present mapped to
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -55,8 +56,16 @@ class PointSet(Space):
             known = {tuple(row): k for k, row in reversed(list(enumerate(arr.tolist())))}
         object.__setattr__(self, "_rows", known)
 
+    #: a point set has no grid: an index past its rows is not in its point table
+    _off: ClassVar[str] = "not in the point table"
+
     def __len__(self) -> int:
         return int(self.points.shape[0])
+
+    def _range_words(self) -> str:
+        """The valid rows in words: ``points 0..A-1 so far`` (the line path adds points), or
+        none yet."""
+        return f"points 0..{len(self) - 1} so far" if len(self) else "it has no points yet"
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, PointSet):
