@@ -40,7 +40,7 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
-from gaitpref.loop.cospar import GRID_LIMIT_VALUES
+from gaitpref.loop.cospar import GRID_LIMIT_VALUES, QUERY_LIMIT
 from gaitpref.loop.learning import (
     FIT_MODES,
     HYPER_MODES,
@@ -65,8 +65,9 @@ MAX_FEATURE_VALUES: Final = GRID_LIMIT_VALUES
 SUBSPACES: Final = ("auto", "grid", "line")
 #: At most this many features (``[space.<feature>]`` tables).
 MAX_FEATURES: Final = 32
-#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many.
-MAX_QUERY: Final = 64
+#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many (the
+#: loop's own bound, which ``CoSpar`` built by hand and simulated settings keep too).
+MAX_QUERY: Final = QUERY_LIMIT
 #: ``signal_variance * max(1, coactive_weight)**2 / noise**2`` at most this: beyond it the
 #: likelihood is so nearly deterministic that the Laplace fit's Hessian cannot be factorised.
 MAX_SIGNAL_TO_NOISE: Final = 1e6
