@@ -19,6 +19,7 @@ up to 1,000 points on 12 features held 47 MB of rows and 20 MB of indices, a cop
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -70,8 +71,16 @@ class PointSet(Space):
         object.__setattr__(self, "_rows", known)
         object.__setattr__(self, "_lineage", None)
 
+    #: a point set has no grid: an index past its rows is not in its point table
+    _off: ClassVar[str] = "not in the point table"
+
     def __len__(self) -> int:
         return int(self.points.shape[0])
+
+    def _range_words(self) -> str:
+        """The valid rows in words: ``points 0..A-1 so far`` (the line path adds points), or
+        none yet."""
+        return f"points 0..{len(self) - 1} so far" if len(self) else "it has no points yet"
 
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, PointSet):

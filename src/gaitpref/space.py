@@ -27,7 +27,7 @@ import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Literal, get_args
+from typing import ClassVar, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -368,8 +368,11 @@ class Space:
             raise TypeError(f"action index must be an integer, got {index!r}")
         i = int(index)
         if not 0 <= i < len(self):
-            raise IndexError(f"action index {i} is off the grid ({self._range_words()})")
+            raise IndexError(f"action index {i} is {self._off} ({self._range_words()})")
         return i
+
+    #: What an index past the actions is, in an error: off the grid (a point set: not a row)
+    _off: ClassVar[str] = "off the grid"
 
     def _range_words(self) -> str:
         """The valid indices in words: ``0..A-1``, or none (an empty point set)."""
@@ -391,7 +394,7 @@ class Space:
             ints = [int(v) for v in items]  # type: ignore[call-overload]
             for k, i in enumerate(ints):
                 if not 0 <= i < size:
-                    raise IndexError(f"{name}[{k}] = {i} is off the grid ({self._range_words()})")
+                    raise IndexError(f"{name}[{k}] = {i} is {self._off} ({self._range_words()})")
             arr = np.asarray(ints, dtype=np.intp)
         if arr.ndim != 1:
             raise ValueError(
@@ -403,7 +406,7 @@ class Space:
         bad = (arr < 0) | (arr >= size)
         if np.any(bad):
             raise IndexError(
-                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(arr[bad][0])} is off the grid "
+                f"{name}[{int(np.flatnonzero(bad)[0])}] = {int(arr[bad][0])} is {self._off} "
                 f"({self._range_words()})"
             )
         idx: IntArray = arr.astype(np.intp)

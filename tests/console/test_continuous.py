@@ -10,6 +10,7 @@ import zipfile
 
 from fastapi.testclient import TestClient
 
+from gaitpref import load_config
 from tests.console.conftest import answer_once, new_session
 from tests.console.htmlforms import forms_of
 
@@ -79,13 +80,33 @@ def test_a_line_session_over_a_grid_too_large_to_enumerate_serves_its_posterior(
     assert client.get(f"/sessions/{sid}").status_code == 200
 
 
-def test_the_flag_page_says_close_gaits_may_come_without_a_radius(client: TestClient) -> None:
-    """compass-continuous-3d has no [safety] unsafe_radius: the flag removes that point alone,
-    and on continuous features a gait however close to it may be proposed next."""
-    sid = new_session(client, CONFIG)
+def _flag_confirm_page(client: TestClient, config: str) -> str:
+    sid = new_session(client, config)
     answer_once(client, sid)
     html = client.get(f"/sessions/{sid}").text
     flag = next(f for f in forms_of(html).values() if f.action.endswith("/trials/1/unsafe"))
     ask = client.post(flag.action, data={**flag.fields, "reason": "hip pain"})
     assert ask.status_code == 200 and "Flag this trial unsafe?" in ask.text
-    assert "but gaits however close to it may be" in " ".join(ask.text.split())
+    return " ".join(ask.text.split())
+
+
+def test_the_flag_page_says_close_gaits_may_come_without_a_radius(client: TestClient) -> None:
+    """compass-continuous-3d without its [safety] unsafe_radius (as shipped before): the flag
+    removes that point alone, and on continuous features a gait however close to it may be
+    proposed next."""
+    text = load_config(CONFIG).text
+    table = "[safety]\nunsafe_radius = 0.1\n"
+    assert table in text
+    page = _flag_confirm_page(client, text.replace(table, ""))
+    assert "but gaits however close to it may be" in page
+
+
+def test_the_shipped_continuous_config_keeps_gaits_near_an_unsafe_flag_away(
+    client: TestClient,
+) -> None:
+    """compass-continuous-3d has a radius (0.1 of the ranges): the flag says the gaits within it
+    go too, and nothing about gaits however close."""
+    assert load_config(CONFIG).safety.unsafe_radius == 0.1
+    page = _flag_confirm_page(client, CONFIG)
+    assert "Its gait and the gaits within 0.1 of its range will not be proposed again" in page
+    assert "however close" not in page

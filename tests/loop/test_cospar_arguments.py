@@ -20,6 +20,10 @@ KERNEL = SquaredExponential(0.3, 1.0, 1e-6)
     [
         ({"n": True}, ValueError, "n .actions per query. must be an integer >= 1, got True"),
         ({"buffer": True}, ValueError, "buffer must be an integer >= 0, got True"),
+        # a config's bounds (MAX_QUERY): a buffer of 10**9 kept every trial's actions
+        ({"buffer": 10**9}, ValueError, "buffer must be at most 64, got 1000000000"),
+        ({"buffer": 65}, ValueError, "buffer must be at most 64, got 65"),
+        ({"n": 65}, ValueError, r"n \(actions per query\) must be at most 64, got 65"),
         ({"coactive_weight": True}, ValueError, "coactive_weight must be positive"),
         ({"coactive_weight": "1"}, ValueError, "coactive_weight must be positive"),
         # 0.1 / 1e-300 squared to inf: every suggestion a flat term, silently
@@ -47,6 +51,9 @@ def test_bad_arguments_are_named(kwargs: dict[str, Any], error: type, message: s
 def test_the_line_path_checks_the_same() -> None:
     with pytest.raises(ValueError, match="seed must be an integer >= 0"):
         LineCoSpar(SPACE, KERNEL, 0.1, seed=None)
+    with pytest.raises(ValueError, match="buffer must be at most 64, got 65"):
+        LineCoSpar(SPACE, KERNEL, 0.1, buffer=65)
+    assert LineCoSpar(SPACE, KERNEL, 0.1, n=2, buffer=64).buffer_size == 64
 
 
 def test_numpy_integers_are_integers() -> None:

@@ -140,7 +140,7 @@ def test_a_point_set_holds_numbers_and_finds_points_by_their_numbers() -> None:
             table.extended(bad)
     assert len(PointSet(domain, [])) == 0
     # an empty set's range read "0..-1"
-    with pytest.raises(IndexError, match=r"off the grid \(it has no actions yet\)"):
+    with pytest.raises(IndexError, match=r"not in the point table \(it has no points yet\)"):
         empty_points(domain).check_index(0)
 
 

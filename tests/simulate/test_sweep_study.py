@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from typing import Any
 
 import numpy as np
 import pytest
 
+from gaitpref import Feature, Space, SquaredExponential
 from gaitpref.config import load_config
+from gaitpref.config.schema import MAX_QUERY
 from gaitpref.simulate.study import Setting, Study, run_one, run_seed_sequence
 from gaitpref.simulate.sweep import resolve_jobs, run_study
 
@@ -152,6 +155,29 @@ def test_settings_of_the_wrong_type_are_refused_by_key(
         Setting("s", **kwargs)  # type: ignore[arg-type]
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "key", "value"),
+    [
+        ({"n": 2, "buffer": 10**9}, "buffer", 10**9),  # kept every trial, compared with all
+        ({"n": 2, "buffer": MAX_QUERY + 1}, "buffer", MAX_QUERY + 1),
+        ({"n": MAX_QUERY + 1, "buffer": 0}, "n", MAX_QUERY + 1),
+        ({"strategy": "random", "buffer": 10**12}, "buffer", 10**12),
+    ],
+)
+def test_settings_take_a_config_s_bounds_on_n_and_buffer(
+    kwargs: dict[str, object], key: str, value: int
+) -> None:
+    """n and buffer of a setting were unbounded above (a config's are at most MAX_QUERY)."""
+    message = f"setting 's': {key} must be at most {MAX_QUERY} (as a config's [cospar] {key}), "
+    with pytest.raises(ValueError, match=re.escape(f"{message}got {value}")):
+        Setting("s", **kwargs)  # type: ignore[arg-type]
+
+
+def test_settings_at_a_config_s_bounds_are_taken() -> None:
+    setting = Setting("s", n=MAX_QUERY, buffer=MAX_QUERY)
+    assert (setting.n, setting.buffer) == (MAX_QUERY, MAX_QUERY)
+
+
 def _replaced(study: Study, **changes: Any) -> Study:
     """``dataclasses.replace`` with values of any type: a study checks them itself."""
     return dataclasses.replace(study, **changes)
@@ -166,8 +192,15 @@ def test_studies_refuse_non_integer_counts_and_an_n_past_the_grid(small_study: S
         _replaced(small_study, trials=2.5)
     with pytest.raises(ValueError, match="objective_ids must be an integer"):
         _replaced(small_study, objective_ids=(0.0, 5, 7))
-    with pytest.raises(ValueError, match="setting 'wide': n = 901 is more actions than the grid"):
-        dataclasses.replace(small_study, settings=(Setting("wide", 901, 0),))
+    tiny = Space([Feature("x", (0.0, 0.5, 1.0))])  # 3 actions: n up to MAX_QUERY passes them
+    with pytest.raises(ValueError, match="setting 'wide': n = 4 is more actions than the grid"):
+        dataclasses.replace(
+            small_study,
+            space=tiny,
+            kernel=SquaredExponential(0.2, 0.005),
+            objectives=np.zeros((3, 3)),
+            settings=(Setting("wide", 4, 0),),
+        )
     same = _replaced(small_study, seeds=np.arange(2), objective_ids=np.array([0, 5, 7]))
     assert same.seeds == (0, 1) and same.objective_ids == (0, 5, 7)
 

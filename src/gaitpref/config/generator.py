@@ -7,7 +7,8 @@ a default since defaults version 0.5, and configs recorded before get ``None``: 
 ``avoid_radius`` is the neighbourhood (a fraction of each feature's range, as ``[safety]
 unsafe_radius``) that a proposal whose gait cannot be made takes out of every later query;
 ``max_infeasible`` bounds how many such proposals one ask makes before it stops proposing
-(``sessions/gaits.py``)::
+(``sessions/gaits.py``), and their product, the solver iterations one ask may spend on gaits
+that cannot be made, is at most :data:`~gaitpref.config.schema.MAX_ASK_ITERATIONS`::
 
     [space.step_length]
     min = 0.08
@@ -30,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from gaitpref.config.schema import DEFAULT_MAX_INFEASIBLE, MAX_ASK_ITERATIONS
 from gaitpref.config.specs import fail
 from gaitpref.space import Space
 
@@ -48,7 +50,7 @@ class GeneratorSpec:
     name: str
     settings: dict[str, Any] = field(default_factory=dict)
     avoid_radius: float = 0.0
-    max_infeasible: int = 20
+    max_infeasible: int = DEFAULT_MAX_INFEASIBLE
 
     def make(self, space: Space) -> GaitGenerator:
         """The generator over ``space``'s features."""
@@ -57,10 +59,31 @@ class GeneratorSpec:
         return make_generator(self.name, space.names, self.settings)
 
 
+def check_ask_cost(max_iterations: int | None, max_infeasible: int) -> None:
+    """Refuse ``[gaits] max_iterations x max_infeasible`` past :data:`MAX_ASK_ITERATIONS`: the
+    solver iterations one ask may spend on gaits that cannot be made (each key alone is bounded;
+    10,000 x 1,000 was about a day of solver time for one ask).  ``max_iterations = None`` (a
+    session recorded under defaults before 0.5, which had no ``max_infeasible`` either, so 20)
+    leaves each gait to the generator's own bound and is not checked."""
+    if max_iterations is None:
+        return
+    iterations = max_iterations * max_infeasible
+    if iterations > MAX_ASK_ITERATIONS:
+        fail(
+            "gaits",
+            "max_infeasible",
+            f"max_iterations x max_infeasible is {max_iterations:,} x {max_infeasible:,} = "
+            f"{iterations:,} solver iterations one ask may spend on gaits that cannot be made; "
+            f"at most {MAX_ASK_ITERATIONS:,} are allowed (about 10 ms each with compass-hzd): "
+            "lower [gaits] max_iterations or max_infeasible",
+        )
+
+
 def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     """The checked ``[gaits]`` table of a generator config, tried on ``space``."""
     from gaitpref.errors import GaitGeneratorError
 
+    check_ask_cost(gaits["max_iterations"], gaits["max_infeasible"])
     settings = {k: gaits[k] for k in GENERATOR_SETTINGS if gaits[k] is not None}
     spec = GeneratorSpec(
         gaits["generator"], settings, gaits["avoid_radius"], gaits["max_infeasible"]
@@ -88,4 +111,4 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     return spec
 
 
-__all__ = ["GENERATOR_SETTINGS", "GeneratorSpec", "parse_generator"]
+__all__ = ["GENERATOR_SETTINGS", "GeneratorSpec", "check_ask_cost", "parse_generator"]

@@ -59,7 +59,8 @@ made when first proposed (``generator.py``; ``docs/gaits.md``, "Gaits on demand"
     speed = 0.2                    # its fixed settings (m/s; or a step_duration feature)
     avoid_radius = 0.05            # optional: taken out around a gait that cannot be made
     max_iterations = 60            # optional: solver iterations one gait may take (defaults 0.5)
-    max_infeasible = 20            # optional: proposals without a gait one ask may make (1..1000)
+    max_infeasible = 20            # optional: proposals without a gait one ask may make (1..1000;
+                                   # max_iterations x max_infeasible at most 200,000)
 
 Every key, its type, default and allowed values are declared once in ``schema.py``
 (:data:`~gaitpref.config.schema.DEFAULTS` is the table of defaults); every error is a

@@ -40,7 +40,7 @@ from gaitpref.config.specs import (
     shown,
 )
 from gaitpref.errors import ConfigError
-from gaitpref.loop.cospar import GRID_LIMIT_VALUES
+from gaitpref.loop.cospar import GRID_LIMIT_VALUES, QUERY_LIMIT
 from gaitpref.loop.learning import (
     FIT_MODES,
     HYPER_MODES,
@@ -71,8 +71,9 @@ MAX_FEATURE_VALUES: Final = GRID_LIMIT_VALUES
 SUBSPACES: Final = ("auto", "grid", "line")
 #: At most this many features (``[space.<feature>]`` tables).
 MAX_FEATURES: Final = 32
-#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many.
-MAX_QUERY: Final = 64
+#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many (the
+#: loop's own bound, which ``CoSpar`` built by hand and simulated settings keep too).
+MAX_QUERY: Final = QUERY_LIMIT
 #: ``signal_variance * max(1, coactive_weight)**2 / noise**2`` at most this: beyond it the
 #: likelihood is so nearly deterministic that the Laplace fit's Hessian cannot be factorised.
 MAX_SIGNAL_TO_NOISE: Final = 1e6
@@ -84,6 +85,16 @@ MAX_GAIT_ITERATIONS: Final = 10_000
 #: ``[gaits] max_infeasible``: one ask may be allowed at most this many proposals whose gait
 #: cannot be made (each costs up to ``max_iterations`` solver iterations).
 MAX_INFEASIBLE: Final = 1000
+#: ``[gaits] max_infeasible``'s default.
+DEFAULT_MAX_INFEASIBLE: Final = 20
+#: ``[gaits] max_iterations x max_infeasible``: the solver iterations one ask may spend on gaits
+#: that cannot be made.  Each key alone is bounded above, their product was not: 10,000 x 1,000
+#: iterations at about 10 ms each (``benchmarks/results/gaits_on_demand.md``: 60 iterations took
+#: 0.59 s of CPU) is about 28 hours for one ask.  This bound is the largest ``max_iterations``
+#: at the default ``max_infeasible``, so every config that raises one key alone still loads:
+#: about 2,000 s (33 min) of CPU at most, and ``max_infeasible = 1000`` takes
+#: ``max_iterations`` up to 200.
+MAX_ASK_ITERATIONS: Final = MAX_GAIT_ITERATIONS * DEFAULT_MAX_INFEASIBLE
 
 LIMITS: Final[dict[str, float]] = {
     "actions": MAX_ACTIONS,
@@ -94,6 +105,7 @@ LIMITS: Final[dict[str, float]] = {
     "smallest scale": MIN_SCALE,
     "signal to noise": MAX_SIGNAL_TO_NOISE,
     "line points a query": MAX_STAR_POINTS,
+    "gait solver iterations an ask (max_iterations x max_infeasible)": MAX_ASK_ITERATIONS,
 }
 
 
@@ -171,7 +183,8 @@ GAITS: Final[dict[str, Key]] = {
     "max_iterations": Key(Integer(1, MAX_GAIT_ITERATIONS), 60),
     # proposals whose gait cannot be made that one ask may make before it stops, proposing
     # nothing (only live asks: replay follows the log, so every earlier session replays as it ran)
-    "max_infeasible": Key(Integer(1, MAX_INFEASIBLE), 20),
+    # max_iterations x max_infeasible at most MAX_ASK_ITERATIONS (config/generator.py)
+    "max_infeasible": Key(Integer(1, MAX_INFEASIBLE), DEFAULT_MAX_INFEASIBLE),
 }
 MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),

@@ -201,6 +201,9 @@ class CoSpar:
             raise ValueError(f"n (actions per query) must be an integer >= 1, got {n!r}")
         if not is_count(buffer) or buffer < 0:
             raise ValueError(f"buffer must be an integer >= 0, got {buffer!r}")
+        for key, value in (("n (actions per query)", n), ("buffer", buffer)):
+            if value > QUERY_LIMIT:  # as a config's [cospar] n and buffer
+                raise ValueError(f"{key} must be at most {QUERY_LIMIT}, got {value!r}")
         if not (
             is_number(coactive_weight) and np.isfinite(coactive_weight) and coactive_weight > 0
         ):
@@ -1060,6 +1063,10 @@ GRID_LIMIT_ACTIONS = MODEL_GRID_LIMIT
 #: ... and features with more values than this: the kernel's factor of a feature is ``n x n``,
 #: built at every fit (and eigendecomposed for samples: 0.3 s at 1,000, 34 s at 4,000).
 GRID_LIMIT_VALUES = 1_000
+#: Actions per query (``n``) and remembered trials (``buffer``): each at most this many (a
+#: config's ``[cospar] n`` and ``buffer``, ``gaitpref.config.schema.MAX_QUERY``).  A buffer of
+#: 10**9 kept every trial's actions and compared each trial with all of them.
+QUERY_LIMIT = 64
 
 
 def check_radius(radius: object) -> None:

@@ -621,10 +621,16 @@ class SessionState:
         return ShownGait(label, int(action), name, space.values_of(action), space.describe(action))
 
     def gait_name(self, action: int) -> str:
-        """How the apps, exports and the stop reason name a gait: its id, or ``G<action>``."""
-        return self.gait_id(action) or f"G{int(action)}"
+        """How the apps, exports and the stop reason name a gait: its id, or ``G<action>``.
+        An action that is not one of the space's (:meth:`gait_id`) is an error, not a name."""
+        action = self.loop.space.check_index(action)
+        return self.gait_id(action) or f"G{action}"
 
     def gait_id(self, action: int) -> str | None:
+        """``action``'s gait id, or None: a ``TypeError`` for an action that is not an integer
+        and an ``IndexError`` for one off the grid or the line path's point table (before, -1
+        was named ``G-1``, or the library's last gait)."""
+        action = self.loop.space.check_index(action)
         if self.on_demand is not None:
             return self.on_demand.gait_id(self.loop.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]

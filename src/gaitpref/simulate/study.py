@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 from gaitpref.checks import is_noise, is_number
 from gaitpref.config import ExperimentConfig, read_toml
 from gaitpref.config.feedback import parse_rating, parse_safety
+from gaitpref.config.schema import MAX_QUERY
 from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.limits import MAX_RUNS, MAX_SEED, MAX_STUDY_TRIALS, MAX_TRIALS
 from gaitpref.loop.cospar import CoSpar
@@ -88,6 +89,7 @@ class Setting:
     at these quantiles of the objective (ordinal noise ``rating_noise`` on the normalised
     objective).  ``config``: ``[feedback.rating]`` (needed with ratings, one label more than
     quantiles) and ``[safety]`` tables as TOML text, e.g. ``[safety] avoid = ["very bad"]``.
+    ``n`` and ``buffer`` are at most :data:`~gaitpref.config.schema.MAX_QUERY`, as a config's.
     """
 
     name: str
@@ -107,7 +109,14 @@ class Setting:
         if not isinstance(self.config, str):  # an AttributeError from the TOML reader
             raise ValueError(f"{where}: config must be TOML text, got {self.config!r}")
         for key in ("n", "buffer"):
-            object.__setattr__(self, key, _integer(getattr(self, key), f"{where}: {key}"))
+            value = _integer(getattr(self, key), f"{where}: {key}")
+            if value > MAX_QUERY:  # as a config's [cospar] n and buffer: a buffer of 10**9
+                # kept every trial's actions, each trial compared with all of them
+                raise ValueError(
+                    f"{where}: {key} must be at most {MAX_QUERY} (as a config's [cospar] {key}), "
+                    f"got {value}"
+                )
+            object.__setattr__(self, key, value)
         if not isinstance(self.coactive, bool | np.bool_):
             raise ValueError(f"{where}: coactive must be true or false, got {self.coactive!r}")
         if not _real(self.coactive_weight) or not 0 < self.coactive_weight < np.inf:
