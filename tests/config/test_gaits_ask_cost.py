@@ -1,6 +1,7 @@
-"""``[gaits] max_iterations x max_infeasible`` is bounded: each key alone was, their product
-(the solver iterations one ask may spend on gaits that cannot be made) was not, and 10,000 x
-1,000 was about a day of solver time for one ask."""
+"""``[gaits] max_iterations x max_infeasible`` is bounded for a new session or run: each key
+alone was, their product (the solver iterations one ask may spend on gaits that cannot be made)
+was not, and 10,000 x 1,000 was about a day of solver time for one ask.  A stored config past it
+still parses (``gaitpref.config.new``: a session of an earlier release reopens as it ran)."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import pytest
 
 from gaitpref import load_config
 from gaitpref.config import LIMITS, ConfigError, parse_config
+from gaitpref.config.new import check_new
 from gaitpref.config.schema import (
     DEFAULT_MAX_INFEASIBLE,
     DEFAULTS_VERSION,
@@ -36,7 +38,8 @@ def test_the_bound_lets_either_key_alone_reach_its_own_maximum() -> None:
     spec = parse_config(_config(max_infeasible=MAX_INFEASIBLE)).generator  # 60 x 1000
     assert spec is not None and spec.max_infeasible == MAX_INFEASIBLE
     largest = MAX_ASK_ITERATIONS // MAX_INFEASIBLE  # 200 x 1000: exactly at the bound
-    parse_config(_config(max_iterations=largest, max_infeasible=MAX_INFEASIBLE))
+    check_new(parse_config(_config(max_iterations=largest, max_infeasible=MAX_INFEASIBLE)))
+    check_new(parse_config(_config(max_iterations=MAX_GAIT_ITERATIONS)))
 
 
 @pytest.mark.parametrize(
@@ -46,8 +49,9 @@ def test_the_bound_lets_either_key_alone_reach_its_own_maximum() -> None:
 def test_a_product_past_the_bound_is_refused_naming_both_keys(
     iterations: int, infeasible: int
 ) -> None:
+    config = parse_config(_config(max_iterations=iterations, max_infeasible=infeasible))
     with pytest.raises(ConfigError) as info:
-        parse_config(_config(max_iterations=iterations, max_infeasible=infeasible))
+        check_new(config)
     err = info.value
     assert (err.table, err.key) == ("gaits", "max_infeasible")
     text = str(err)
@@ -56,12 +60,17 @@ def test_a_product_past_the_bound_is_refused_naming_both_keys(
     assert f"at most {MAX_ASK_ITERATIONS:,}" in text
 
 
-def test_a_config_file_past_the_bound_is_named_and_left_as_it_was(tmp_path: Path) -> None:
+def test_a_config_file_past_the_bound_loads_but_makes_no_new_session(tmp_path: Path) -> None:
+    """A config stored with a session of an earlier release reopens (``load_config`` parses
+    it); a new session or run from it is refused, naming the keys, and the file is left as it
+    was."""
     path = tmp_path / "exo.toml"
     text = _config(max_iterations=10_000, max_infeasible=1000)
     path.write_text(text, encoding="utf-8")
-    with pytest.raises(ConfigError, match=r"^config '.*exo\.toml': \[gaits\]\.max_infeasible: "):
-        load_config(path)
+    config = load_config(path)
+    assert config.generator is not None and config.generator.max_infeasible == 1000
+    with pytest.raises(ConfigError, match=r"\[gaits\]\.max_infeasible: max_iterations x "):
+        check_new(config)
     assert path.read_text(encoding="utf-8") == text
 
 
@@ -71,3 +80,14 @@ def test_a_session_recorded_without_an_iteration_budget_still_parses() -> None:
     config = parse_config(_config(), defaults="0.4")
     assert config.generator is not None and "max_iterations" not in config.generator.settings
     assert parse_config(_config(), defaults=DEFAULTS_VERSION).generator is not None
+
+
+def test_a_new_session_is_refused_and_nothing_is_written() -> None:
+    from gaitpref import Session
+    from gaitpref.storage import MemoryStorage
+
+    store = MemoryStorage()
+    config = parse_config(_config(max_iterations=MAX_GAIT_ITERATIONS, max_infeasible=100))
+    with pytest.raises(ConfigError, match=r"max_iterations x max_infeasible is 10,000 x 100"):
+        Session.create(store, config, subject="S01")
+    assert store.list_sessions() == []

@@ -123,7 +123,11 @@ def test_every_strategy_proposes_even_when_the_query_fills_the_grid(strategy: st
 def test_a_loop_built_by_hand_with_n_past_the_grid_is_refused_by_name(strategy: str) -> None:
     space = Space([Feature.linspace("x", 0, 1, 4)])
     # refused where it is built (it was at the first ask, by the strategy's context)
-    with pytest.raises(ValueError, match=r"must be at most the grid's size, 4, got 1000000000"):
+    with pytest.raises(ValueError, match=r"must be at most the grid's size, 4, got 5"):
+        CoSpar(space, SquaredExponential((0.2,), 0.005), 0.02, n=5,
+               strategy=make_strategy(strategy))  # fmt: skip
+    # past the bound on every query (QUERY_LIMIT, a config's [cospar] n) whatever the grid
+    with pytest.raises(ValueError, match=r"must be at most 64, got 1000000000"):
         CoSpar(space, SquaredExponential((0.2,), 0.005), 0.02, n=10**9,
                strategy=make_strategy(strategy))  # fmt: skip
 

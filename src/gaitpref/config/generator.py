@@ -64,7 +64,9 @@ def check_ask_cost(max_iterations: int | None, max_infeasible: int) -> None:
     solver iterations one ask may spend on gaits that cannot be made (each key alone is bounded;
     10,000 x 1,000 was about a day of solver time for one ask).  ``max_iterations = None`` (a
     session recorded under defaults before 0.5, which had no ``max_infeasible`` either, so 20)
-    leaves each gait to the generator's own bound and is not checked."""
+    leaves each gait to the generator's own bound and is not checked.  Like the other checks of
+    :func:`~gaitpref.config.new.check_new` it is made for a new session or run only: a session
+    stored under an earlier release with a larger product reopens and replays as it ran."""
     if max_iterations is None:
         return
     iterations = max_iterations * max_infeasible
@@ -83,7 +85,6 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     """The checked ``[gaits]`` table of a generator config, tried on ``space``."""
     from gaitpref.errors import GaitGeneratorError
 
-    check_ask_cost(gaits["max_iterations"], gaits["max_infeasible"])
     settings = {k: gaits[k] for k in GENERATOR_SETTINGS if gaits[k] is not None}
     spec = GeneratorSpec(
         gaits["generator"], settings, gaits["avoid_radius"], gaits["max_infeasible"]
