@@ -2,7 +2,9 @@
 
     gaitpref bench paper-2d [--runs 100] [--trials 150] [--settings n1_b1,n1_b1_coactive]
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
+                            [--resume]
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
+                                [--resume]
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
                               [--partial FILE.jsonl]
     gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
@@ -12,6 +14,8 @@ Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``,
 ``sweep``, files in ``tables``/``report``/``figures``).  A run that fails stops every command
 with status 1 and an error naming the run and where the finished runs are (a study's in
 ``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
+A study that stopped continues with the same command and ``--resume``: the runs in
+``OUT/runs.partial.csv`` are kept and only the others run (:mod:`gaitpref.simulate.resume`).
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, TypeVar
+from typing import TYPE_CHECKING, Annotated, TextIO, TypeVar
 
 import typer
 
@@ -86,6 +90,15 @@ Seed = typer.Option(min=0, max=MAX_SEED, help="study seed")
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
 #: the finished runs of a study that has not finished (in --out): removed when every run has
 PARTIAL = "runs.partial.csv"
+Resume = Annotated[
+    bool,
+    typer.Option(
+        "--resume",
+        help=f"continue the study that stopped, from the finished runs in OUT/{PARTIAL}: "
+        "they are kept and the other runs run (give the options that wrote it; a file of "
+        "another study is refused)",
+    ),
+]
 Partial = Annotated[
     Path | None,
     typer.Option(
@@ -144,19 +157,58 @@ def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
 
 
 def _run(
-    study: Study, backend: SweepBackend, jobs: int, address: str | None, out: Path
+    study: Study,
+    backend: SweepBackend,
+    jobs: int,
+    address: str | None,
+    out: Path,
+    resume: bool = False,
 ) -> StudyResult:
     """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
-    finished (then the file is removed), so a run that fails loses none of the others."""
+    finished (then the file is removed), so a run that fails loses none of the others;
+    ``resume``: the runs already in that file are kept and only the others run."""
     from gaitpref.simulate.sweep import run_study
 
     partial = out / PARTIAL
-    return _stopping(
-        lambda: run_study(
-            study, backend, jobs, address, progress=True, console=_console, partial=partial
-        ),
-        partial,
-    )
+    with _warnings_shown():
+        return _stopping(
+            lambda: run_study(
+                study, backend, jobs, address, progress=True, console=_console, partial=partial,
+                resume=resume,
+            ),
+            partial,
+        )  # fmt: skip
+
+
+@contextmanager
+def _warnings_shown() -> Iterator[None]:
+    """A resumed study's warnings (lines of its partial table dropped) printed as
+    ``warning: ...`` as they come, not as Python's ``file:line: Warning`` lines."""
+    import warnings
+
+    from rich.markup import escape
+
+    from gaitpref.simulate.resume import PartialRunsWarning
+
+    shown = warnings.showwarning
+
+    def show(
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: TextIO | None = None,
+        line: str | None = None,
+    ) -> None:
+        if issubclass(category, PartialRunsWarning):
+            _console.print(f"[yellow]warning:[/yellow] {escape(str(message))}", markup=True)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", PartialRunsWarning)
+        warnings.showwarning = show
+        yield
 
 
 @contextmanager
@@ -164,7 +216,7 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
     """Write a finished study's files; when one cannot be written (a full disk, a folder made
     at its name meanwhile), keep the run table in ``OUT/runs.partial.csv`` and exit with
     status 1 saying so (a traceback before, and every run's result lost)."""
-    from gaitpref.simulate.tables import write_table
+    from gaitpref.simulate.resume import write_partial
 
     try:
         yield
@@ -174,7 +226,7 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
         try:
             with open(kept, "x", encoding="utf-8"):  # never over an earlier study's runs
                 pass
-            write_table(result.table, kept)
+            write_partial(kept, result.study, result.table)  # --resume writes the files
             where = f"the run table is kept in {kept}"
         except OSError as again:
             where = f"nor could the run table be kept in {kept} ({again.strerror or again})"
@@ -224,19 +276,28 @@ def _partial(given: Path | None, command: str) -> Path:
 RUN_TABLES = ("runs.csv", "runs.csv.gz", "runs.parquet")
 
 
-def _outputs(out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = ()) -> None:
+def _outputs(
+    out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = (), resume: bool = False
+) -> None:
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
-    study that stopped: a new study wrote over it, then removed it), a folder where one of the
-    study's files ``names`` or ``rebuilt`` goes (the study ran, then died writing it, its
-    results lost), or an earlier study's results there (``names`` or a run table: written over
-    without a word, a quick test with the default ``--out`` replaced a study of hours);
-    ``rebuilt`` files (a gait library built from the config) may be made again."""
+    study that stopped: a new study wrote over it, then removed it) unless ``resume``, and
+    one without it when ``resume``; a folder where one of the study's files ``names`` or
+    ``rebuilt`` goes (the study ran, then died writing it, its results lost), or an earlier
+    study's results there (``names`` or a run table: written over without a word, a quick test
+    with the default ``--out`` replaced a study of hours); ``rebuilt`` files (a gait library
+    built from the config) may be made again."""
     kept = out / PARTIAL
-    if kept.exists() or kept.is_symlink():
+    if resume and not kept.is_file():
+        fail(
+            f"--resume: --out {str(out)!r} holds no {PARTIAL} (the finished runs of a study "
+            "that stopped) to resume from; leave --resume out to run the study"
+        )
+    if not resume and (kept.exists() or kept.is_symlink()):
         fail(
             f"--out {str(out)!r} holds {PARTIAL}, the finished runs of a study that stopped "
-            "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
-            "new study would write over it"
+            "(gaitpref.simulate.read_table reads it): give --resume (and the options that "
+            "wrote it) to continue that study, or move it away or give another --out; a new "
+            "study would write over it"
         )
     for name in (*names, *rebuilt):
         if (out / name).is_dir():
@@ -325,6 +386,7 @@ def paper_2d(
     notes: Annotated[
         Path | None, typer.Option(help="markdown file appended to summary.md as Notes")
     ] = None,
+    resume: Resume = False,
 ) -> None:
     """The paper's Fig. 4 study on the authors' 100 objectives, beside the published curves."""
     from gaitpref.simulate.paper2d import paper_2d_study, published_curves
@@ -336,11 +398,11 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
-    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"))
+    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"), resume=resume)
     checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
-    result = _run(study, checked, jobs, address, out)
+    result = _run(study, checked, jobs, address, out, resume)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
@@ -380,6 +442,7 @@ def compass_gait(
     seed: Annotated[int, Seed] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/compass-gait"),
     table: TableFormat = "csv",
+    resume: Resume = False,
 ) -> None:
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     from rich.markup import escape
@@ -394,7 +457,7 @@ def compass_gait(
 
     table_path = _table_path(out, table)  # before a gait library is built
     rebuilt = ("gait-library.json",) if objective == "hzd" and library is None else ()
-    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt)
+    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt, resume)
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
@@ -432,7 +495,7 @@ def compass_gait(
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
     _folder(out)
-    result = _run(study, checked, jobs, address, out)
+    result = _run(study, checked, jobs, address, out, resume)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
     with _keeping(result, out):
