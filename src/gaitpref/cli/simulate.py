@@ -227,7 +227,7 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
             with open(kept, "x", encoding="utf-8"):  # never over an earlier study's runs
                 pass
             write_partial(kept, result.study, result.table)  # --resume writes the files
-            where = f"the run table is kept in {kept}"
+            where = f"the run table is kept in {kept}: the same command with --resume writes them"
         except OSError as again:
             where = f"nor could the run table be kept in {kept} ({again.strerror or again})"
         fail(f"the study finished but its results could not be written ({what}); {where}", 1)
@@ -282,10 +282,11 @@ def _outputs(
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
     study that stopped: a new study wrote over it, then removed it) unless ``resume``, and
     one without it when ``resume``; a folder where one of the study's files ``names`` or
-    ``rebuilt`` goes (the study ran, then died writing it, its results lost), or an earlier
-    study's results there (``names`` or a run table: written over without a word, a quick test
-    with the default ``--out`` replaced a study of hours); ``rebuilt`` files (a gait library
-    built from the config) may be made again."""
+    ``rebuilt`` goes (the study ran, then died writing it, its results lost), or, unless
+    ``resume`` (the stopped study's own files, when it finished but could not write them all),
+    an earlier study's results there (``names`` or a run table: written over without a word, a
+    quick test with the default ``--out`` replaced a study of hours); ``rebuilt`` files (a gait
+    library built from the config) may be made again."""
     kept = out / PARTIAL
     if resume and not kept.is_file():
         fail(
@@ -302,6 +303,8 @@ def _outputs(
     for name in (*names, *rebuilt):
         if (out / name).is_dir():
             fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
+    if resume:  # a study that finished but could not write every file (_keeping) wrote some
+        return
     earlier = [n for n in dict.fromkeys((*RUN_TABLES, *names)) if (out / n).exists()]
     if earlier:
         fail(

@@ -118,19 +118,19 @@ def _short(value: object) -> str:
     return text if len(text) <= 80 else text[:77] + "..."
 
 
-#: what each field of :func:`describe` is, in the errors
+#: what differs when a field of :func:`describe` does, in the errors
 _FIELDS = {
-    "study": "the study's name",
-    "objective_ids": "the objectives",
-    "seeds": "the seeds",
-    "trials": "the trials per run",
-    "seed": "the study seed",
-    "minimize": "minimize",
-    "noise": "the model's noise",
-    "user_noise": "the simulated subjects' noise",
-    "kernel": "the kernel",
-    "space": "the grid (its features and values)",
-    "objectives": "the objective values",
+    "study": "the study's name differs",
+    "objective_ids": "the objectives differ",
+    "seeds": "the seeds differ",
+    "trials": "the trials per run differ",
+    "seed": "the study seed differs",
+    "minimize": "minimize differs",
+    "noise": "the model's noise differs",
+    "user_noise": "the simulated subjects' noise differs",
+    "kernel": "the kernel differs",
+    "space": "the grid (its features and values) differs",
+    "objectives": "the objective values differ",
 }
 
 
@@ -157,8 +157,8 @@ def _difference(kept: dict[str, Any], mine: dict[str, Any]) -> str | None:
     for key, what in _FIELDS.items():
         if kept.get(key) != mine[key]:
             if key in ("space", "objectives"):
-                return f"{what} differ"
-            return f"{what} differ: {_short(kept.get(key))} in the file, {_short(mine[key])} here"
+                return what
+            return f"{what}: {_short(kept.get(key))} in the file, {_short(mine[key])} here"
     return None
 
 
@@ -183,12 +183,13 @@ def _lines(first: int, last: int) -> str:
     return f"line {first}" if first == last else f"lines {first}-{last}"
 
 
-def _runs(reader: Any, path: Path, header: list[str]) -> Iterator[_Run]:
-    """The rows of ``reader`` grouped into runs (consecutive rows of one run's coordinates)."""
+def _runs(reader: Any, path: Path, header: list[str], offset: int) -> Iterator[_Run]:
+    """The rows of ``reader`` grouped into runs (consecutive rows of one run's coordinates);
+    line numbers are the file's (``offset`` lines before the reader's first)."""
     run: _Run | None = None
     rated = len(header) > len(run_columns(False))
     for row in reader:
-        line = reader.line_num
+        line = reader.line_num + offset
         if len(row) != len(header):
             raise ResumeError(f"{path}:{line}: {len(row)} fields, the header has {len(header)}")
         try:
@@ -268,9 +269,9 @@ def read_partial(path: Path, study: Study, tasks: Sequence[RunTask] | None = Non
     index = {(t.setting.name, t.objective_id, t.seed): i for i, t in enumerate(tasks)}
     rates = {s.name: bool(s.rating_quantiles) for s in study.settings}
     kept: dict[int, RunResult] = {}
-    runs = list(_runs(reader, path, header))
+    runs = list(_runs(reader, path, header, offset))
     for k, run in enumerate(runs):
-        first, last = run.first + offset, run.last + offset
+        first, last = run.first, run.last
         where = f"{path}:{first}"
         i = index.get(run.key)
         if i is None:
@@ -290,7 +291,8 @@ def read_partial(path: Path, study: Study, tasks: Sequence[RunTask] | None = Non
             if k < len(runs) - 1:
                 raise ResumeError(
                     f"{path}:{_lines(first, last)}: {_coords(run.key)} has {n} of "
-                    f"{study.trials} trials, and other runs follow it"
+                    f"{study.trials} trials, and other runs follow it (was it written with "
+                    "other trials?)"
                 )
             _warn(
                 f"{path}:{_lines(first, last)}: {_coords(run.key)} has {n} of {study.trials} "
