@@ -8,14 +8,15 @@
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
                               [--partial FILE.jsonl]
     gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
-                              [--partial FILE.jsonl]
+                              [--partial FILE.jsonl [--resume]]
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
 ``sweep``, files in ``tables``/``report``/``figures``).  A run that fails stops every command
 with status 1 and an error naming the run and where the finished runs are (a study's in
 ``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
 A study that stopped continues with the same command and ``--resume``: the runs in
-``OUT/runs.partial.csv`` are kept and only the others run (:mod:`gaitpref.simulate.resume`).
+``OUT/runs.partial.csv`` are kept and only the others run (:mod:`gaitpref.simulate.resume`);
+so does ``bench continuous`` from its ``--partial`` file (:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations
@@ -182,7 +183,7 @@ def _run(
 
 @contextmanager
 def _warnings_shown() -> Iterator[None]:
-    """A resumed study's warnings (lines of its partial table dropped) printed as
+    """A resumed sweep's warnings (lines of its partial file dropped) printed as
     ``warning: ...`` as they come, not as Python's ``file:line: Warning`` lines."""
     import warnings
 
@@ -255,14 +256,22 @@ def _stopping(sweep: Callable[[], T], partial: Path) -> T:
         fail(str(exc))
 
 
-def _partial(given: Path | None, command: str) -> Path:
+def _partial(given: Path | None, command: str, resume: bool = False) -> Path:
     """Where a bench keeps its finished runs: ``--partial``, else a new name in the temporary
-    folder (not made until the runs start: a bench refused before leaves no file)."""
+    folder (not made until the runs start: a bench refused before leaves no file); ``resume``:
+    ``--partial``, a file that exists."""
+    if resume:
+        if given is None:
+            fail("--resume needs --partial FILE: the file the bench that stopped kept its runs in")
+        if not given.is_file():
+            fail(f"--resume: --partial {str(given)!r} is not a file, no runs to resume from")
+        return given
     if given is not None:  # opened for writing, and removed once every run has finished
         if given.exists() or given.is_symlink():  # was truncated, then removed (/dev/null too)
             fail(
                 f"--partial {str(given)!r} already exists: give a new file name (the file is "
-                "written afresh and removed once every run has finished)"
+                "written afresh and removed once every run has finished), or --resume to "
+                "continue the bench that stopped (bench continuous)"
             )
         if not given.parent.is_dir():
             fail(f"--partial {str(given)!r}: no folder {str(given.parent)!r} to write it in")
@@ -591,6 +600,15 @@ def continuous(
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     partial: Partial = None,
+    resume: Annotated[
+        bool,
+        typer.Option(
+            "--resume",
+            help="continue the bench that stopped, from the finished runs in its --partial "
+            "file: they are kept and the other runs run (give the options that wrote it; a "
+            "file of another bench is refused)",
+        ),
+    ] = False,
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""
@@ -602,16 +620,16 @@ def continuous(
     from gaitpref.cli.points import bench_points, check_bench_points, run_record
 
     cfg = guard(lambda: _bench_config(config))
-    kept = _partial(partial, "continuous")
+    kept = _partial(partial, "continuous", resume)
     # refused before the bar shows
     checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
-    with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
+    with progress_bar(shown=not as_json) as bar, _warnings_shown():  # it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
-                partial=kept, checked=checked,
+                partial=kept, checked=checked, resume=resume,
             ),
             kept,
         )  # fmt: skip

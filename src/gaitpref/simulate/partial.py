@@ -251,7 +251,21 @@ def partial_file(sink: A | None) -> Iterator[A | None]:
 
 class JsonLines(RecordFile):
     """A JSON-lines file (one JSON object a line: one finished run of a bench) written a run at
-    a time (a :class:`~gaitpref.simulate.tables.RecordFile`)."""
+    a time (a :class:`~gaitpref.simulate.tables.RecordFile`).  ``first``: an object written as
+    the first line (the bench that writes the file: :mod:`gaitpref.simulate.resume_lines`), not
+    counted as a run; ``existing``: the file exists, holding that many runs, and is appended to
+    (nothing written first)."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        first: Mapping[str, object] | None = None,
+        existing: int | None = None,
+    ) -> None:
+        super().__init__(path, existing=existing)
+        if first is not None and existing is None:
+            self._open().write(json.dumps(first) + "\n")
+            self._open().flush()
 
     def append(self, record: Mapping[str, object]) -> None:
         self._open().write(json.dumps(record) + "\n")
