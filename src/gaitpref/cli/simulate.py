@@ -105,7 +105,8 @@ Partial = Annotated[
     typer.Option(
         "--partial",
         help="JSON-lines file each finished run is written to as it finishes, kept when a run "
-        "fails (default: a new file in the temporary folder); removed when every run finishes",
+        "fails (default: a new file in the temporary folder); removed when every run finishes "
+        "(bench continuous: --resume continues from it)",
     ),
 ]
 T = TypeVar("T")
