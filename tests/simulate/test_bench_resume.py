@@ -66,6 +66,7 @@ def test_a_resumed_bench_prints_the_uninterrupted_json(
     _break_seed(monkeypatch, 2)
     code, out, err = _invoke(*args, "--partial", str(partial))
     assert code == 1 and out == "", err
+    assert f"the same command with --partial '{partial}' --resume continues the bench" in err
     monkeypatch.undo()
     ran = _break_seed(monkeypatch, -1)  # none breaks now; which seeds run is recorded
     code, out, err = _invoke(*args, "--partial", str(partial), "--resume")

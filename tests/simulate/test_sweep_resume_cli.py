@@ -65,6 +65,7 @@ def test_a_stopped_study_resumed_writes_the_uninterrupted_files(
     code, out = _invoke(command, resumed, *args)
     assert code == status, out
     assert "runs.partial.csv" in out and not (resumed / "runs.csv").exists()
+    assert "the same command with --resume continues the study from them" in out
     monkeypatch.undo()
     code, out = _invoke(command, resumed, *args, "--resume")
     assert code == 0, out

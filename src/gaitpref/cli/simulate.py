@@ -179,6 +179,7 @@ def _run(
                 resume=resume,
             ),
             partial,
+            "the same command with --resume continues the study from them",
         )  # fmt: skip
 
 
@@ -235,22 +236,26 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
         fail(f"the study finished but its results could not be written ({what}); {where}", 1)
 
 
-def _stopping(sweep: Callable[[], T], partial: Path) -> T:
+def _stopping(sweep: Callable[[], T], partial: Path, resume: str = "") -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
     finish; refused input as :func:`report` says; an interrupt (Ctrl-C) after some run finished
     exits with status 130 naming ``partial``, where they are (it said nothing, and a bench's
-    file is a new name in the temporary folder)."""
+    file is a new name in the temporary folder).  ``resume``: how the command continues from
+    ``partial`` (``--resume``), said after either when the file is there."""
     from gaitpref.simulate.partial import RunError
+
+    def kept() -> str:
+        return f"; {resume}" if resume and partial.is_file() else ""
 
     try:
         return sweep()
     except KeyboardInterrupt:
         if partial.exists():
-            fail(f"interrupted; the runs that finished are in {partial}", 130)
+            fail(f"interrupted; the runs that finished are in {partial}{kept()}", 130)
         raise
     except RunError as exc:
-        fail(str(exc), 1)
+        fail(f"{exc}{kept()}", 1)
     except HANDLED as exc:
         report(exc)
     except RuntimeError as exc:  # a Ray runtime that cannot start
@@ -633,6 +638,8 @@ def continuous(
                 partial=kept, checked=checked, resume=resume,
             ),
             kept,
+            f"the same command with --partial {str(kept)!r} --resume continues the bench from "
+            "them",
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])
