@@ -11,7 +11,8 @@ they finish) in memory and, when asked, in a ``partial`` file written run by run
 (:func:`partial_file`: a CSV run table for a study, :class:`JsonLines` for a bench), and raises
 :class:`RunError` (a study: :class:`StudyRunError`), which names the failed run (a study's
 setting, objective and seed; a bench's objective or subject, and seed), its error and where the
-finished runs are.
+finished runs are.  A study resumes from its partial table (:mod:`gaitpref.simulate.resume`),
+``bench continuous`` from its JSON lines (:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations

@@ -17,11 +17,11 @@ runs it keeps and those run afresh make the table an uninterrupted study makes, 
 What a machine that died while writing leaves is dropped with a :class:`PartialRunsWarning`
 naming the file and lines, and its run runs again: a last line cut short (no newline), and a
 last run with fewer rows than trials.  A file written before the first line named the sweep
-(gaitpref 0.1.0) is read too: its runs must be runs of this study with its trials, and the
-first of them is run again and must give the same rows (its objective, seeds and settings
-checked so), with a warning that this is all that could be checked.  The file is then
-rewritten (atomically) with the signature and the runs kept, and the resumed study appends to
-it.
+(gaitpref 0.1.0 before resuming) is read too: its runs must be runs of this study with its
+trials, and the first of them is run again and must give the same rows (its objective, seeds
+and settings checked so), with a warning that this is all that could be checked.  The file is
+then rewritten (atomically) with the signature and the runs kept, and the resumed study
+appends to it.
 """
 
 from __future__ import annotations
@@ -339,9 +339,9 @@ def _check_one(path: Path, tasks: Sequence[RunTask], kept: dict[int, RunResult])
     """A file without a signature: its first run, run again, must give its rows."""
     i, was = next(iter(kept.items()))
     _warn(
-        f"{path} does not name the sweep that wrote it (written by gaitpref 0.1.0): its runs "
-        f"are runs of this study with its trials, and {coordinates_of(was)}, run again, gives "
-        "the same rows; nothing else of the sweep could be checked"
+        f"{path} does not name the sweep that wrote it (written before partial tables did): "
+        f"its runs are runs of this study with its trials, and {coordinates_of(was)}, run "
+        "again, gives the same rows; nothing else of the sweep could be checked"
     )
     now = run_one(tasks[i])
     same = np.array_equal(now.actions, was.actions) and np.array_equal(

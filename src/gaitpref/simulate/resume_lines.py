@@ -11,9 +11,9 @@ while writing it) is dropped with a :class:`~gaitpref.simulate.resume.PartialRun
 naming the file and line, and its run runs again; the file is then written again without it
 (:func:`write_lines`, atomically).
 
-A file written before the first line named its bench (gaitpref 0.1.0) is refused: nothing in it
-says which options wrote it.  ``bench population`` is not resumed: its warm runs start from
-every cold run's answers, which its lines do not hold.
+A file written before the first line named its bench (gaitpref 0.1.0 before resuming) is
+refused: nothing in it says which options wrote it.  ``bench population`` is not resumed: its
+warm runs start from every cold run's answers, which its lines do not hold.
 """
 
 from __future__ import annotations
@@ -82,9 +82,9 @@ def _check_first(first: dict[str, Any], path: Path, sweep: Mapping[str, object])
     written = first.get(KEY)
     if not isinstance(written, dict):
         raise ResumeError(
-            f"{path}:1: the first line does not name the bench that wrote the file (gaitpref "
-            "0.1.0 wrote none), so it cannot be checked and is not resumed; run the bench "
-            "afresh with a new --partial file"
+            f"{path}:1: the first line does not name the bench that wrote the file (none did "
+            "before resuming), so it cannot be checked and is not resumed; run the bench afresh "
+            "with a new --partial file"
         )
     mine = json.loads(json.dumps(dict(sweep)))  # as JSON reads it back
     for key, value in mine.items():
