@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 import ray
 
@@ -82,3 +84,22 @@ def test_an_address_where_nothing_listens_is_refused_at_once(
     monkeypatch.setattr(ray, "init", init)
     with pytest.raises(RuntimeError, match="nothing answers there"):
         start_ray(f"127.0.0.1:{port}")
+
+
+def test_a_study_stopped_on_joblib_resumes_on_ray_with_the_same_table(
+    ray_runtime: None, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Runs are seeded by their coordinates only: where the rest run does not matter."""
+    from gaitpref.simulate.partial import StudyRunError
+    from tests.simulate.breaking import Raising
+    from tests.simulate.test_sweep_resume import _breaking, _same, _study
+
+    study = _study()
+    whole = run_study(study, backend="joblib", jobs=1)
+    partial = tmp_path / "runs.partial.csv"
+    undo = _breaking(monkeypatch, Raising(), 5)
+    with pytest.raises(StudyRunError):
+        run_study(study, backend="joblib", jobs=1, partial=partial)
+    undo()
+    _same(run_study(study, backend="ray", jobs=2, partial=partial, resume=True), whole)
+    assert not partial.exists()

@@ -102,6 +102,7 @@ def bench_points(
     progress: Callable[[int], None] | None = None,
     partial: Path | None = None,
     checked: tuple[list[str], PointObjective] | None = None,
+    resume: bool = False,
 ) -> list[PointsResult]:
     """``gaitpref bench continuous``'s runs, seeds ``0 .. runs - 1`` (``random-gp`` alone: run
     ``k`` against ``random-gp:k``); ``progress`` is called with the trials done in all runs.
@@ -112,10 +113,14 @@ def bench_points(
     ``partial`` (a new file of JSON lines, written as each run finishes, removed once every
     run has; one that exists is refused, ``FileExistsError``).
     ``checked``: what :func:`check_bench_points` returned for the same arguments (not checked
-    again, the first objective not made again).
+    again, the first objective not made again).  The file's first line names the bench
+    (:func:`continuous_sweep`); ``resume``: ``partial`` is such a file, left by this bench when
+    it stopped: its runs are kept, only the others run (:mod:`gaitpref.simulate.resume_lines`),
+    and the results are those of a bench that never stopped.
     """
     from gaitpref.simulate.continuous import objective_from
     from gaitpref.simulate.partial import JsonLines, partial_file, run_error
+    from gaitpref.simulate.resume_lines import first_line
     from gaitpref.simulate.sweep import run_tasks
 
     specs, first = (
@@ -123,6 +128,19 @@ def bench_points(
         if checked is None
         else checked
     )
+    sweep = continuous_sweep(cfg, spec, runs, trials=trials, coactive=coactive, noise=noise)
+    kept: dict[int, PointsResult] = {}
+    sink: JsonLines | None = None
+    if resume:
+        if partial is None:
+            raise ValueError("resume: give the partial file the bench stopped with")
+        kept = _kept_points(partial, sweep, runs, trials)
+        sink = JsonLines(partial, existing=len(kept))
+        if progress is not None and kept:
+            progress(len(kept) * trials)
+    elif partial is not None:
+        sink = JsonLines(partial, first=first_line(sweep))
+    todo = [k for k in range(runs) if k not in kept]
 
     def one(seed: int) -> PointsResult:
         fn = first if seed == 0 else objective_from(specs[seed], cfg.space, cfg.seed)
@@ -131,18 +149,88 @@ def bench_points(
             progress=None if progress is None else lambda done: progress(seed * trials + done),
         )  # fmt: skip
 
-    with partial_file(None if partial is None else JsonLines(partial)) as sink:
+    with partial_file(sink):
 
-        def done(seed: int, result: PointsResult) -> None:
+        def done(index: int, result: PointsResult) -> None:
             if sink is not None:
-                sink.append(run_record(seed, result))
+                sink.append(run_record(todo[index], result))
 
-        results, failure = run_tasks(one, list(range(runs)), 1, done=done)
+        ran, failure = run_tasks(one, todo, 1, done=done)
+        results: list[PointsResult | None] = [kept.get(k) for k in range(runs)]
+        for k, result in zip(todo, ran, strict=True):
+            results[k] = result
         if failure is not None:
-            kept = [run_record(k, r) for k, r in enumerate(results) if r is not None]
-            names = [f"objective {s!r}, seed {k}" for k, s in enumerate(specs)]
-            raise run_error(failure, names, kept, runs, None if sink is None else sink.path)
+            records = [run_record(k, r) for k, r in enumerate(results) if r is not None]
+            names = [f"objective {specs[k]!r}, seed {k}" for k in todo]
+            raise run_error(failure, names, records, runs, None if sink is None else sink.path)
     return [r for r in results if r is not None]
+
+
+def continuous_sweep(
+    cfg: ExperimentConfig, spec: str, runs: int, *, trials: int, coactive: bool, noise: float
+) -> dict[str, object]:
+    """What ``bench continuous``'s runs depend on (its partial file's first line names it):
+    the release, the config's name and text (a digest), the objective (and a digest of its
+    file), the runs, trials, coactive feedback and noise."""
+    import hashlib
+
+    from gaitpref import __version__
+
+    source = Path(spec.rpartition(":")[0])
+    text = source.read_bytes() if source.suffix == ".py" and source.is_file() else None
+    return {
+        "bench": "continuous",
+        "gaitpref": __version__,
+        "config": cfg.name,
+        "config_sha256": cfg.sha256,
+        "objective": spec,
+        "objective_file_sha256": None if text is None else hashlib.sha256(text).hexdigest(),
+        "runs": runs,
+        "trials": trials,
+        "coactive": coactive,
+        "noise": noise,
+    }
+
+
+def _kept_points(
+    partial: Path, sweep: dict[str, object], runs: int, trials: int
+) -> dict[int, PointsResult]:
+    """The finished runs in ``partial`` by seed (the file written again without a line cut
+    short); a line that is not a run of this bench is refused naming it."""
+    from gaitpref.simulate.points import PointsResult
+    from gaitpref.simulate.resume import ResumeError
+    from gaitpref.simulate.resume_lines import read_lines, write_lines
+
+    if not partial.is_file():
+        raise FileNotFoundError(
+            f"{partial}: no such file, no finished runs to resume from; run the bench without "
+            "resuming"
+        )
+    lines, rewrite = read_lines(partial, sweep)
+    kept: dict[int, PointsResult] = {}
+    for line, record in lines:
+        where = f"{partial}:{line}"
+        seed = record.get("seed")
+        if not isinstance(seed, int) or not 0 <= seed < runs or record.get("trials") != trials:
+            raise ResumeError(
+                f"{where}: not a run of this bench (seeds 0..{runs - 1}, {trials} trials)"
+            )
+        if seed in kept:
+            raise ResumeError(f"{where}: the run of seed {seed} is in the file twice")
+        try:
+            result = PointsResult(
+                record["points"], record["objective"], record["best_point"],
+                record["best_objective"],
+            )  # fmt: skip
+            same = json.dumps(run_record(seed, result)) == json.dumps(record)
+        except (KeyError, TypeError, ValueError):
+            same = False
+        if not same:
+            raise ResumeError(f"{where}: not a run record of bench continuous (seed {seed})")
+        kept[seed] = result
+    if rewrite:
+        write_lines(partial, sweep, [run_record(k, r) for k, r in kept.items()])
+    return kept
 
 
 def report(cfg: ExperimentConfig, result: PointsResult, seed: int, elapsed: float,

@@ -2,16 +2,21 @@
 
     gaitpref bench paper-2d [--runs 100] [--trials 150] [--settings n1_b1,n1_b1_coactive]
                             [--backend joblib|ray] [--address ADDR] [--jobs N] [--out DIR]
+                            [--resume]
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
+                                [--resume]
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
                               [--partial FILE.jsonl]
     gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
-                              [--partial FILE.jsonl]
+                              [--partial FILE.jsonl [--resume]]
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
 ``sweep``, files in ``tables``/``report``/``figures``).  A run that fails stops every command
 with status 1 and an error naming the run and where the finished runs are (a study's in
 ``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
+A study that stopped continues with the same command and ``--resume``: the runs in
+``OUT/runs.partial.csv`` are kept and only the others run (:mod:`gaitpref.simulate.resume`);
+so does ``bench continuous`` from its ``--partial`` file (:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, TypeVar
+from typing import TYPE_CHECKING, Annotated, TextIO, TypeVar
 
 import typer
 
@@ -86,12 +91,22 @@ Seed = typer.Option(min=0, max=MAX_SEED, help="study seed")
 TableFormat = Annotated[str, typer.Option("--table", help="run table file: csv, csv.gz or parquet")]
 #: the finished runs of a study that has not finished (in --out): removed when every run has
 PARTIAL = "runs.partial.csv"
+Resume = Annotated[
+    bool,
+    typer.Option(
+        "--resume",
+        help=f"continue the study that stopped, from the finished runs in OUT/{PARTIAL}: "
+        "they are kept and the other runs run (give the options that wrote it; a file of "
+        "another study is refused)",
+    ),
+]
 Partial = Annotated[
     Path | None,
     typer.Option(
         "--partial",
         help="JSON-lines file each finished run is written to as it finishes, kept when a run "
-        "fails (default: a new file in the temporary folder); removed when every run finishes",
+        "fails (default: a new file in the temporary folder); removed when every run finishes "
+        "(bench continuous: --resume continues from it)",
     ),
 ]
 T = TypeVar("T")
@@ -144,19 +159,59 @@ def _execution(backend: str, jobs: int, address: str | None) -> SweepBackend:
 
 
 def _run(
-    study: Study, backend: SweepBackend, jobs: int, address: str | None, out: Path
+    study: Study,
+    backend: SweepBackend,
+    jobs: int,
+    address: str | None,
+    out: Path,
+    resume: bool = False,
 ) -> StudyResult:
     """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
-    finished (then the file is removed), so a run that fails loses none of the others."""
+    finished (then the file is removed), so a run that fails loses none of the others;
+    ``resume``: the runs already in that file are kept and only the others run."""
     from gaitpref.simulate.sweep import run_study
 
     partial = out / PARTIAL
-    return _stopping(
-        lambda: run_study(
-            study, backend, jobs, address, progress=True, console=_console, partial=partial
-        ),
-        partial,
-    )
+    with _warnings_shown():
+        return _stopping(
+            lambda: run_study(
+                study, backend, jobs, address, progress=True, console=_console, partial=partial,
+                resume=resume,
+            ),
+            partial,
+            "the same command with --resume continues the study from them",
+        )  # fmt: skip
+
+
+@contextmanager
+def _warnings_shown() -> Iterator[None]:
+    """A resumed sweep's warnings (lines of its partial file dropped) printed as
+    ``warning: ...`` as they come, not as Python's ``file:line: Warning`` lines."""
+    import warnings
+
+    from rich.markup import escape
+
+    from gaitpref.simulate.resume import PartialRunsWarning
+
+    shown = warnings.showwarning
+
+    def show(
+        message: Warning | str,
+        category: type[Warning],
+        filename: str,
+        lineno: int,
+        file: TextIO | None = None,
+        line: str | None = None,
+    ) -> None:
+        if issubclass(category, PartialRunsWarning):
+            _console.print(f"[yellow]warning:[/yellow] {escape(str(message))}", markup=True)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", PartialRunsWarning)
+        warnings.showwarning = show
+        yield
 
 
 @contextmanager
@@ -164,7 +219,7 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
     """Write a finished study's files; when one cannot be written (a full disk, a folder made
     at its name meanwhile), keep the run table in ``OUT/runs.partial.csv`` and exit with
     status 1 saying so (a traceback before, and every run's result lost)."""
-    from gaitpref.simulate.tables import write_table
+    from gaitpref.simulate.resume import write_partial
 
     try:
         yield
@@ -174,43 +229,55 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
         try:
             with open(kept, "x", encoding="utf-8"):  # never over an earlier study's runs
                 pass
-            write_table(result.table, kept)
-            where = f"the run table is kept in {kept}"
+            write_partial(kept, result.study, result.table)  # --resume writes the files
+            where = f"the run table is kept in {kept}: the same command with --resume writes them"
         except OSError as again:
             where = f"nor could the run table be kept in {kept} ({again.strerror or again})"
         fail(f"the study finished but its results could not be written ({what}); {where}", 1)
 
 
-def _stopping(sweep: Callable[[], T], partial: Path) -> T:
+def _stopping(sweep: Callable[[], T], partial: Path, resume: str = "") -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
     finish; refused input as :func:`report` says; an interrupt (Ctrl-C) after some run finished
     exits with status 130 naming ``partial``, where they are (it said nothing, and a bench's
-    file is a new name in the temporary folder)."""
+    file is a new name in the temporary folder).  ``resume``: how the command continues from
+    ``partial`` (``--resume``), said after either when the file is there."""
     from gaitpref.simulate.partial import RunError
+
+    def kept() -> str:
+        return f"; {resume}" if resume and partial.is_file() else ""
 
     try:
         return sweep()
     except KeyboardInterrupt:
         if partial.exists():
-            fail(f"interrupted; the runs that finished are in {partial}", 130)
+            fail(f"interrupted; the runs that finished are in {partial}{kept()}", 130)
         raise
     except RunError as exc:
-        fail(str(exc), 1)
+        fail(f"{exc}{kept()}", 1)
     except HANDLED as exc:
         report(exc)
     except RuntimeError as exc:  # a Ray runtime that cannot start
         fail(str(exc))
 
 
-def _partial(given: Path | None, command: str) -> Path:
+def _partial(given: Path | None, command: str, resume: bool = False) -> Path:
     """Where a bench keeps its finished runs: ``--partial``, else a new name in the temporary
-    folder (not made until the runs start: a bench refused before leaves no file)."""
+    folder (not made until the runs start: a bench refused before leaves no file); ``resume``:
+    ``--partial``, a file that exists."""
+    if resume:
+        if given is None:
+            fail("--resume needs --partial FILE: the file the bench that stopped kept its runs in")
+        if not given.is_file():
+            fail(f"--resume: --partial {str(given)!r} is not a file, no runs to resume from")
+        return given
     if given is not None:  # opened for writing, and removed once every run has finished
         if given.exists() or given.is_symlink():  # was truncated, then removed (/dev/null too)
             fail(
                 f"--partial {str(given)!r} already exists: give a new file name (the file is "
-                "written afresh and removed once every run has finished)"
+                "written afresh and removed once every run has finished), or --resume to "
+                "continue the bench that stopped (bench continuous)"
             )
         if not given.parent.is_dir():
             fail(f"--partial {str(given)!r}: no folder {str(given.parent)!r} to write it in")
@@ -224,23 +291,35 @@ def _partial(given: Path | None, command: str) -> Path:
 RUN_TABLES = ("runs.csv", "runs.csv.gz", "runs.parquet")
 
 
-def _outputs(out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = ()) -> None:
+def _outputs(
+    out: Path, names: tuple[str, ...], rebuilt: tuple[str, ...] = (), resume: bool = False
+) -> None:
     """Refuse, before any run, an ``--out`` holding :data:`PARTIAL` (the finished runs of a
-    study that stopped: a new study wrote over it, then removed it), a folder where one of the
-    study's files ``names`` or ``rebuilt`` goes (the study ran, then died writing it, its
-    results lost), or an earlier study's results there (``names`` or a run table: written over
-    without a word, a quick test with the default ``--out`` replaced a study of hours);
-    ``rebuilt`` files (a gait library built from the config) may be made again."""
+    study that stopped: a new study wrote over it, then removed it) unless ``resume``, and
+    one without it when ``resume``; a folder where one of the study's files ``names`` or
+    ``rebuilt`` goes (the study ran, then died writing it, its results lost), or, unless
+    ``resume`` (the stopped study's own files, when it finished but could not write them all),
+    an earlier study's results there (``names`` or a run table: written over without a word, a
+    quick test with the default ``--out`` replaced a study of hours); ``rebuilt`` files (a gait
+    library built from the config) may be made again."""
     kept = out / PARTIAL
-    if kept.exists() or kept.is_symlink():
+    if resume and not kept.is_file():
+        fail(
+            f"--resume: --out {str(out)!r} holds no {PARTIAL} (the finished runs of a study "
+            "that stopped) to resume from; leave --resume out to run the study"
+        )
+    if not resume and (kept.exists() or kept.is_symlink()):
         fail(
             f"--out {str(out)!r} holds {PARTIAL}, the finished runs of a study that stopped "
-            "(gaitpref.simulate.read_table reads it): move it away or give another --out; a "
-            "new study would write over it"
+            "(gaitpref.simulate.read_table reads it): give --resume (and the options that "
+            "wrote it) to continue that study, or move it away or give another --out; a new "
+            "study would write over it"
         )
     for name in (*names, *rebuilt):
         if (out / name).is_dir():
             fail(f"--out {str(out)!r}: {name} is a folder, where the study writes its {name}")
+    if resume:  # a study that finished but could not write every file (_keeping) wrote some
+        return
     earlier = [n for n in dict.fromkeys((*RUN_TABLES, *names)) if (out / n).exists()]
     if earlier:
         fail(
@@ -325,6 +404,7 @@ def paper_2d(
     notes: Annotated[
         Path | None, typer.Option(help="markdown file appended to summary.md as Notes")
     ] = None,
+    resume: Resume = False,
 ) -> None:
     """The paper's Fig. 4 study on the authors' 100 objectives, beside the published curves."""
     from gaitpref.simulate.paper2d import paper_2d_study, published_curves
@@ -336,11 +416,11 @@ def paper_2d(
     )
     note_text = _notes(notes)
     table_path = _table_path(out, table)
-    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"))
+    _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"), resume=resume)
     checked = _execution(backend, jobs, address)
     _folder(out)
     load_before = load_average()
-    result = _run(study, checked, jobs, address, out)
+    result = _run(study, checked, jobs, address, out, resume)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
@@ -380,6 +460,7 @@ def compass_gait(
     seed: Annotated[int, Seed] = 0,
     out: Annotated[Path, typer.Option(help="output folder")] = Path("out/compass-gait"),
     table: TableFormat = "csv",
+    resume: Resume = False,
 ) -> None:
     """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     from rich.markup import escape
@@ -394,7 +475,7 @@ def compass_gait(
 
     table_path = _table_path(out, table)  # before a gait library is built
     rebuilt = ("gait-library.json",) if objective == "hzd" and library is None else ()
-    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt)
+    _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt, resume)
     checked = _execution(backend, jobs, address)
     try:
         its = _integers(iterations, "--iterations")
@@ -432,7 +513,7 @@ def compass_gait(
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
     _folder(out)
-    result = _run(study, checked, jobs, address, out)
+    result = _run(study, checked, jobs, address, out, resume)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
     with _keeping(result, out):
@@ -525,6 +606,15 @@ def continuous(
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     partial: Partial = None,
+    resume: Annotated[
+        bool,
+        typer.Option(
+            "--resume",
+            help="continue the bench that stopped, from the finished runs in its --partial "
+            "file: they are kept and the other runs run (give the options that wrote it; a "
+            "file of another bench is refused)",
+        ),
+    ] = False,
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""
@@ -536,18 +626,20 @@ def continuous(
     from gaitpref.cli.points import bench_points, check_bench_points, run_record
 
     cfg = guard(lambda: _bench_config(config))
-    kept = _partial(partial, "continuous")
+    kept = _partial(partial, "continuous", resume)
     # refused before the bar shows
     checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
-    with progress_bar(shown=not as_json) as bar:  # runs x trials: it said nothing till the end
+    with progress_bar(shown=not as_json) as bar, _warnings_shown():  # it said nothing till the end
         task = bar.add_task(f"{runs} runs", total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
                 progress=lambda done: bar.update(task, completed=done),
-                partial=kept, checked=checked,
+                partial=kept, checked=checked, resume=resume,
             ),
             kept,
+            f"the same command with --partial {str(kept)!r} --resume continues the bench from "
+            "them",
         )  # fmt: skip
     curves = np.array([r.curve[:trials] for r in results])
     best = np.array([r.best_objective for r in results])

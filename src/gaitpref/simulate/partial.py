@@ -11,7 +11,8 @@ they finish) in memory and, when asked, in a ``partial`` file written run by run
 (:func:`partial_file`: a CSV run table for a study, :class:`JsonLines` for a bench), and raises
 :class:`RunError` (a study: :class:`StudyRunError`), which names the failed run (a study's
 setting, objective and seed; a bench's objective or subject, and seed), its error and where the
-finished runs are.
+finished runs are.  A study resumes from its partial table (:mod:`gaitpref.simulate.resume`),
+``bench continuous`` from its JSON lines (:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations
@@ -251,7 +252,21 @@ def partial_file(sink: A | None) -> Iterator[A | None]:
 
 class JsonLines(RecordFile):
     """A JSON-lines file (one JSON object a line: one finished run of a bench) written a run at
-    a time (a :class:`~gaitpref.simulate.tables.RecordFile`)."""
+    a time (a :class:`~gaitpref.simulate.tables.RecordFile`).  ``first``: an object written as
+    the first line (the bench that writes the file: :mod:`gaitpref.simulate.resume_lines`), not
+    counted as a run; ``existing``: the file exists, holding that many runs, and is appended to
+    (nothing written first)."""
+
+    def __init__(
+        self,
+        path: str | Path,
+        first: Mapping[str, object] | None = None,
+        existing: int | None = None,
+    ) -> None:
+        super().__init__(path, existing=existing)
+        if first is not None and existing is None:
+            self._open().write(json.dumps(first) + "\n")
+            self._open().flush()
 
     def append(self, record: Mapping[str, object]) -> None:
         self._open().write(json.dumps(record) + "\n")

@@ -18,6 +18,8 @@ When a run fails (its error, or its worker dies) the study stops and raises
 :class:`~gaitpref.simulate.partial.StudyRunError` naming the run, with the runs that finished;
 given ``partial``, a CSV path, each finished run is also appended there as it finishes (the file
 is removed when the whole study finishes, and kept when it does not, whatever stopped it).
+``resume=True`` continues a study from that file: its runs are kept, only the others run
+(:mod:`gaitpref.simulate.resume`).
 
 :func:`run_tasks` is the machinery under it, for any function over any tasks: each result as it
 finishes, and the first failure; ``gaitpref bench continuous`` and ``bench population`` keep
@@ -59,7 +61,8 @@ from gaitpref.simulate.partial import (
     sendable,
     study_error,
 )
-from gaitpref.simulate.study import RunResult, Study, run_one
+from gaitpref.simulate.resume import read_partial, signature, write_partial
+from gaitpref.simulate.study import RunResult, RunTask, Study, run_one
 from gaitpref.simulate.tables import Curves, RunTable, TableAppender, summarize
 
 Backend = Literal["joblib", "ray"]
@@ -122,32 +125,55 @@ def run_study(
     progress: bool = False,
     console: Console | None = None,
     partial: str | Path | None = None,
+    resume: bool = False,
 ) -> StudyResult:
     """Run every run of ``study`` and collect the tidy table and curves.
 
     A run that fails stops the study with :class:`~gaitpref.simulate.partial.StudyRunError`
     (the run named, the finished runs kept on it); ``partial``: a new ``.csv`` file each
-    finished run is appended to as it finishes, removed once every run has finished (one that
-    exists is refused, ``FileExistsError``: it may hold the finished runs of a study that
-    stopped).
+    finished run is appended to as it finishes, its first line naming the study
+    (:mod:`gaitpref.simulate.resume`), removed once every run has finished (one that exists is
+    refused, ``FileExistsError``: it may hold the finished runs of a study that stopped).
+
+    ``resume``: ``partial`` is such a file, left by this study when it stopped: its finished
+    runs are kept (:func:`~gaitpref.simulate.resume.read_partial`; a file of another sweep is
+    refused with :class:`~gaitpref.simulate.resume.ResumeError`), only the others run, and are
+    appended to it; the result is the one an uninterrupted study gives.
     """
     check_backend(backend, address)
     tasks = study.tasks()
-    n_jobs = min(resolve_jobs(jobs), len(tasks))
-    rated = any(s.rating_quantiles for s in study.settings)
+    rated = _rated(study)
+    sink: TableAppender | None = None
+    kept: dict[int, RunResult] = {}
+    if resume:
+        if partial is None:
+            raise ValueError("resume: give the partial file the study stopped with")
+        kept = _resumed(study, tasks, Path(partial))
+        sink = TableAppender(partial, rated, existing=len(kept))
+    elif partial is not None:  # made before any run: a path that cannot be written fails at once
+        sink = TableAppender(partial, rated, comment=signature(study))
+    todo = [i for i in range(len(tasks)) if i not in kept]
+    n_jobs = min(resolve_jobs(jobs), max(1, len(todo)))
     start = time.perf_counter()
-    # the partial table is made before any run: a path that cannot be written fails at once
-    with partial_file(None if partial is None else TableAppender(partial, rated)) as sink:
+    with partial_file(sink):
         with _progress(console) if progress else _NoProgress() as bar:
-            tid = bar.add_task(study.name, total=len(tasks))
+            tid = bar.add_task(study.name, total=len(tasks), completed=len(kept))
 
             def done(index: int, result: RunResult) -> None:
                 if sink is not None:
                     sink.append(run_table([result], rated))
                 bar.advance(tid)
 
-            results, failure = run_tasks(run_one, tasks, n_jobs, backend, address, done)
+            ran, failure = run_tasks(
+                run_one, [tasks[i] for i in todo], n_jobs, backend, address, done
+            )
+        results: list[RunResult | None] = [kept.get(i) for i in range(len(tasks))]
+        for i, result in zip(todo, ran, strict=True):
+            results[i] = result
         if failure is not None:
+            failure = RunFailure(
+                tuple(todo[i] for i in failure.indices), failure.error, failure.died
+            )
             raise study_error(failure, tasks, results, rated, None if sink is None else sink.path)
     seconds = time.perf_counter() - start
     done_runs = [r for r in results if r is not None]
@@ -155,6 +181,25 @@ def run_study(
         raise RuntimeError(f"{len(tasks) - len(done_runs)} of {len(tasks)} runs returned no result")
     table = run_table(done_runs, rated)
     return StudyResult(study, table, summarize(table), backend, n_jobs, seconds)
+
+
+def _resumed(study: Study, tasks: Sequence[RunTask], partial: Path) -> dict[int, RunResult]:
+    """The finished runs in ``partial`` (a ``FileNotFoundError`` naming it when there is none),
+    the file written again with its signature and only those runs when lines were dropped."""
+    if not partial.is_file():
+        raise FileNotFoundError(
+            f"{partial}: no such file, no finished runs to resume from; run the study without "
+            "resuming"
+        )
+    kept = read_partial(partial, study, tasks)
+    if kept.rewrite:
+        runs = list(kept.runs.values())
+        write_partial(partial, study, run_table(runs, _rated(study)) if runs else None)
+    return kept.runs
+
+
+def _rated(study: Study) -> bool:
+    return any(s.rating_quantiles for s in study.settings)
 
 
 def check_backend(backend: str, address: str | None) -> None:
@@ -368,7 +413,7 @@ class _NoProgress:
     def __exit__(self, *exc: object) -> None:
         return None
 
-    def add_task(self, description: str, total: int) -> TaskID:
+    def add_task(self, description: str, total: int, completed: int = 0) -> TaskID:
         return TaskID(0)
 
     def advance(self, task: TaskID) -> None:

@@ -9,7 +9,9 @@ of ``normalized_objective`` over a setting's runs at each trial, with its standa
 
 Files: ``.csv`` (optionally ``.csv.gz``) with the standard library, ``.parquet`` through pyarrow
 (``pip install gaitpref[parquet]``).  Floats are written with ``repr`` so a table reads back
-bit for bit.
+bit for bit.  A CSV run table may start with one comment line, ``# ...``, saying what wrote it
+(a study's partial table names its sweep: :mod:`gaitpref.simulate.resume`); :func:`read_table`
+skips it.
 
 Notation: ``R`` rows; per setting ``runs x trials`` values.
 """
@@ -19,6 +21,7 @@ from __future__ import annotations
 import csv
 import gzip
 import io
+import itertools
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -31,6 +34,9 @@ from numpy.typing import NDArray
 from gaitpref.space import FloatArray, IntArray
 
 RUN_COLUMNS = ("setting", "objective", "seed", "trial", "action", "normalized_objective")
+#: how a CSV run table's first line starts when it says what wrote the table (a study's
+#: partial table: :mod:`gaitpref.simulate.resume`); :func:`read_table` skips that line
+COMMENT = "# "
 CURVE_COLUMNS = ("setting", "trial", "mean", "se")
 _RUN_DTYPES = (str, np.intp, np.intp, np.intp, np.intp, np.float64)
 _CURVE_DTYPES = (str, np.intp, np.float64, np.float64)
@@ -234,10 +240,20 @@ def write_table(table: RunTable, path: str | Path) -> Path:
     return path
 
 
-def _write_rows(w: Any, table: RunTable) -> None:
+def run_columns(rated: bool) -> tuple[str, ...]:
+    """A run table's header: :data:`RUN_COLUMNS`, and ``rating`` when ``rated``."""
+    return (*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS
+
+
+def csv_rows(table: RunTable) -> Iterator[tuple[object, ...]]:
+    """The rows of ``table`` as a CSV run table writes them (floats with ``repr``)."""
     ratings = [] if table.rating is None else table.rating.tolist()
     for k, (s, o, sd, t, a, v) in enumerate(table.rows()):
-        w.writerow((s, o, sd, t, a, repr(v), *ratings[k : k + 1]))
+        yield (s, o, sd, t, a, repr(v), *ratings[k : k + 1])
+
+
+def _write_rows(w: Any, table: RunTable) -> None:
+    w.writerows(csv_rows(table))
 
 
 class RecordFile:
@@ -245,13 +261,18 @@ class RecordFile:
     so that what was written survives what stops the rest; ``newline`` as :func:`open`'s.
 
     The file must be new (``FileExistsError`` naming it otherwise): one left by a sweep that
-    stopped holds its finished runs, and was written over, then removed."""
+    stopped holds its finished runs, and was written over, then removed.  ``existing``: the
+    file exists and already holds that many records (a sweep resumed from it): it is appended
+    to, and counted from there."""
 
-    def __init__(self, path: str | Path, newline: str | None = None) -> None:
+    def __init__(
+        self, path: str | Path, newline: str | None = None, existing: int | None = None
+    ) -> None:
         self.path = Path(path)
-        self.appended = 0
+        self.appended = existing or 0
+        mode = "x" if existing is None else "a"
         try:
-            self._fh: IO[str] | None = open(self.path, "x", encoding="utf-8", newline=newline)  # noqa: SIM115
+            self._fh: IO[str] | None = open(self.path, mode, encoding="utf-8", newline=newline)  # noqa: SIM115
         except FileExistsError:
             raise FileExistsError(
                 f"{self.path} already exists (the finished runs of a sweep that stopped?); "
@@ -278,16 +299,30 @@ class RecordFile:
 class TableAppender(RecordFile):
     """A CSV run table (``.csv``) written a few rows at a time, e.g. each run of a study as it
     finishes (a :class:`RecordFile`); :func:`read_table` reads it.  ``rated``: with the
-    ``rating`` column."""
+    ``rating`` column.  ``comment``: one line of text written first, as ``# comment`` (what
+    wrote the table: :mod:`gaitpref.simulate.resume`; :func:`read_table` skips it).
+    ``existing``: the table exists, its header and that many runs written, and is appended to
+    (no header, no comment)."""
 
-    def __init__(self, path: str | Path, rated: bool) -> None:
+    def __init__(
+        self,
+        path: str | Path,
+        rated: bool,
+        comment: str | None = None,
+        existing: int | None = None,
+    ) -> None:
         if not Path(path).name.endswith(".csv"):
             raise ValueError(f"{Path(path)}: a table written row by row must end in .csv")
-        super().__init__(path, newline="")
+        if comment is not None and ("\n" in comment or "\r" in comment):
+            raise ValueError(f"{Path(path)}: a table's comment is one line, got {comment!r}")
+        super().__init__(path, newline="", existing=existing)
         self.rated = rated
         self._w = csv.writer(self._open(), lineterminator="\n")
-        self._w.writerow((*RUN_COLUMNS, "rating") if rated else RUN_COLUMNS)
-        self._open().flush()
+        if existing is None:
+            if comment is not None:
+                self._open().write(f"{COMMENT}{comment}\n")
+            self._w.writerow(run_columns(rated))
+            self._open().flush()
 
     def append(self, table: RunTable) -> None:
         self._open()
@@ -306,7 +341,7 @@ def read_table(path: str | Path) -> RunTable:
         rating = t.column("rating").to_numpy() if "rating" in t.column_names else None
         s, o, sd, tr, a, v = (t.column(c).to_numpy() for c in RUN_COLUMNS)
         return RunTable(s, o, sd, tr, a, v, rating)
-    cols = _read_csv(path, RUN_COLUMNS, optional=("rating",))
+    cols = _read_csv(path, RUN_COLUMNS, optional=("rating",), comment=True)
     objective, seed, trial, action = (np.array(c, dtype=np.intp) for c in cols[1:5])
     return RunTable(
         np.array(cols[0], dtype=str),
@@ -348,19 +383,32 @@ def read_curves(path: str | Path, columns: Sequence[str] = CURVE_COLUMNS) -> Cur
 
 
 def _read_csv(
-    path: Path, columns: tuple[str, ...], optional: tuple[str, ...] = ()
+    path: Path, columns: tuple[str, ...], optional: tuple[str, ...] = (), comment: bool = False
 ) -> list[list[str]]:
-    """The named columns' cells; an ``optional`` column the file lacks comes back as None."""
+    """The named columns' cells; an ``optional`` column the file lacks comes back as None;
+    ``comment``: a first line starting with :data:`COMMENT` is skipped."""
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such file")
     with _open_text(path, "r") as fh:
-        return _parse_csv(fh, columns, str(path), optional)
+        return _parse_csv(fh, columns, str(path), optional, comment)
 
 
 def _parse_csv(
-    fh: Any, columns: tuple[str, ...], where: str, optional: tuple[str, ...] = ()
+    fh: Any,
+    columns: tuple[str, ...],
+    where: str,
+    optional: tuple[str, ...] = (),
+    comment: bool = False,
 ) -> list[Any]:
-    reader = csv.reader(fh)
+    first = 1
+    lines: Iterator[str] = iter(fh)
+    if comment:
+        top = next(lines, "")
+        if top.startswith(COMMENT):
+            first = 2
+        else:
+            lines = itertools.chain([top] if top else [], lines)
+    reader = csv.reader(lines)
     header = next(reader, None)
     if header is None:
         raise ValueError(f"{where}: empty file")
@@ -370,7 +418,7 @@ def _parse_csv(
     wanted = [*columns, *(c for c in optional if c in header)]
     idx = [header.index(c) for c in wanted]
     out: list[list[str]] = [[] for _ in wanted]
-    for line, row in enumerate(reader, start=2):
+    for line, row in enumerate(reader, start=first + 1):
         if len(row) != len(header):
             raise ValueError(f"{where}:{line}: {len(row)} fields, header has {len(header)}")
         for k, i in enumerate(idx):
