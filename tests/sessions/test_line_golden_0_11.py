@@ -20,7 +20,7 @@ from tests.fixtures.make_db_line_0_11 import (
     CONTINUOUS,
     CORNER,
     RATED_UTILITY,
-    _answer,
+    answer_next,
     digest,
     summary,
 )
@@ -145,7 +145,7 @@ def test_the_current_code_goes_on_with_a_recorded_session(old_db: str, name: str
     want = EXPECTED["sessions"][name]
     with Session.open(old_db, want["id"]) as s:
         for k in range(2):
-            _answer(s, UTILITIES[name], 9 + k, FEATURES[name], rated=name == "rated")
+            answer_next(s, UTILITIES[name], 9 + k, FEATURES[name], rated=name == "rated")
         q = s.next_query()
         issued = [e.payload for e in s.events() if e.kind == "query_issued"]
         assert len(issued) == len(want["queries"]) + (3 if want["pending"] is None else 2)
