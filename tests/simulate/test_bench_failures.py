@@ -216,7 +216,8 @@ def test_bench_population_names_the_failed_run_and_keeps_the_finished_ones(
     text = _text(result.stderr)
     assert "subject 1 (warm), seed 0 failed (ValueError): the subject left" in text
     assert f"4 of 6 runs finished; their results are in {partial}" in text
-    kept = _lines(partial)
+    first, *kept = _lines(partial)
+    assert first["gaitpref bench"]["bench"] == "population"  # the bench that wrote it
     assert [(r["subject"], r["run"]) for r in kept] == [(0, "cold"), (1, "cold"), (2, "cold"),
                                                          (0, "warm")]  # fmt: skip
     for r in kept:  # the runs of the bench that finished
@@ -224,6 +225,7 @@ def test_bench_population_names_the_failed_run_and_keeps_the_finished_ones(
         assert r["scores"] == s[r["run"]] and r["stated"] == s["stated"][r["run"]]
         assert r["right"] == s["right"][r["run"]] and r["seed"] == 0
     assert kept[3]["rho"] == subjects[0]["rho"]
+    assert all(("preferences" in r) == (r["run"] == "cold") for r in kept)
 
 
 def test_population_bench_keeps_the_finished_runs_on_its_error(

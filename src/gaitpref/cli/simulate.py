@@ -6,7 +6,7 @@
     gaitpref bench compass-gait [--objective poly|hzd] [--library FILE.json] [--runs 100] ...
                                 [--resume]
     gaitpref bench population --objectives FILE.npy --trials T [--jobs N] [--json]
-                              [--partial FILE.jsonl]
+                              [--partial FILE.jsonl [--resume]]
     gaitpref bench continuous CONFIG --objective PATH.py:NAME|hartmann6|random-gp [--runs 5] ...
                               [--partial FILE.jsonl [--resume]]
 
@@ -16,7 +16,8 @@ with status 1 and an error naming the run and where the finished runs are (a stu
 ``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
 A study that stopped continues with the same command and ``--resume``: the runs in
 ``OUT/runs.partial.csv`` are kept and only the others run (:mod:`gaitpref.simulate.resume`);
-so does ``bench continuous`` from its ``--partial`` file (:mod:`gaitpref.simulate.resume_lines`).
+so do ``bench continuous`` and ``bench population`` from their ``--partial`` file
+(:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations
@@ -106,7 +107,16 @@ Partial = Annotated[
         "--partial",
         help="JSON-lines file each finished run is written to as it finishes, kept when a run "
         "fails (default: a new file in the temporary folder); removed when every run finishes "
-        "(bench continuous: --resume continues from it)",
+        "(bench continuous, population: --resume continues from it)",
+    ),
+]
+BenchResume = Annotated[
+    bool,
+    typer.Option(
+        "--resume",
+        help="continue the bench that stopped, from the finished runs in its --partial "
+        "file: they are kept and the other runs run (give the options that wrote it; a "
+        "file of another bench is refused)",
     ),
 ]
 T = TypeVar("T")
@@ -277,7 +287,7 @@ def _partial(given: Path | None, command: str, resume: bool = False) -> Path:
             fail(
                 f"--partial {str(given)!r} already exists: give a new file name (the file is "
                 "written afresh and removed once every run has finished), or --resume to "
-                "continue the bench that stopped (bench continuous)"
+                "continue the bench that stopped (bench continuous, population)"
             )
         if not given.parent.is_dir():
             fail(f"--partial {str(given)!r}: no folder {str(given.parent)!r} to write it in")
@@ -555,6 +565,7 @@ def population(
     ] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     partial: Partial = None,
+    resume: BenchResume = False,
 ) -> None:
     """Each subject held out in turn: cold, then warm-started from the others (same seeds)."""
     import json
@@ -567,15 +578,20 @@ def population(
     guard(lambda: check_noise(user_noise, "--user-noise"))  # inf passed the option's min=0
     arr = read_array(objectives, "objectives file")
     cfg = guard(lambda: _bench_config(config))
-    kept = _partial(partial, "population")
+    kept = _partial(partial, "population", resume)
 
     def run() -> dict[str, object]:
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
-            partial=kept,
+            partial=kept, resume=resume,
         )  # fmt: skip
 
-    result = _stopping(run, kept)
+    with _warnings_shown():
+        result = _stopping(
+            run,
+            kept,
+            f"the same command with --partial {str(kept)!r} --resume continues the bench from them",
+        )
     if as_json:
         typer.echo(json.dumps(result))
         return
@@ -606,15 +622,7 @@ def continuous(
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     partial: Partial = None,
-    resume: Annotated[
-        bool,
-        typer.Option(
-            "--resume",
-            help="continue the bench that stopped, from the finished runs in its --partial "
-            "file: they are kept and the other runs run (give the options that wrote it; a "
-            "file of another bench is refused)",
-        ),
-    ] = False,
+    resume: BenchResume = False,
 ) -> None:
     """A sweep over seeds against an objective over points (grid or line path, issue 13):
     the learning curve and the final best point's objective, mean and standard error."""

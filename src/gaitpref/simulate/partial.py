@@ -12,7 +12,8 @@ they finish) in memory and, when asked, in a ``partial`` file written run by run
 :class:`RunError` (a study: :class:`StudyRunError`), which names the failed run (a study's
 setting, objective and seed; a bench's objective or subject, and seed), its error and where the
 finished runs are.  A study resumes from its partial table (:mod:`gaitpref.simulate.resume`),
-``bench continuous`` from its JSON lines (:mod:`gaitpref.simulate.resume_lines`).
+``bench continuous`` and ``bench population`` from their JSON lines
+(:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations

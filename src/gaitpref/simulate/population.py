@@ -16,11 +16,18 @@ checked against the subject's objective.  :func:`calibration` bins those pairs: 
 :func:`synthetic_population` builds the populations of the study in
 ``docs/results/population``: each subject's utility is ``sqrt(rho) z_0 + sqrt(1 - rho) z_s``
 over standardised objectives ``z`` (the paper's, ``gaitpref.data``).
+
+A bench that stopped resumes from its partial file (:func:`population_bench`, ``resume``): the
+file's first line names the bench (:func:`population_sweep`), each cold run's line holds the
+preferences it left (:func:`walked_record`), from which the warm runs start, so the runs kept
+are rebuilt from the file and only the others run (:mod:`gaitpref.simulate.resume_lines`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -35,6 +42,8 @@ from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import check_tolerance, confidence
 from gaitpref.loop.warm import RELEARN_EVERY, relearning, warm_start
 from gaitpref.simulate.partial import JsonLines, partial_file, run_error
+from gaitpref.simulate.resume import ResumeError
+from gaitpref.simulate.resume_lines import first_line, read_lines, write_lines
 from gaitpref.simulate.sweep import run_tasks
 from gaitpref.simulate.users import SimulatedUser, check_user_noise, objective_on_grid
 from gaitpref.space import FloatArray
@@ -65,8 +74,10 @@ def _walk_args(args: tuple[Any, ...]) -> Walked:
 
 
 def walked_record(subject: int, arm: str, seed: int, walked: Walked) -> dict[str, object]:
-    """One finished run as a bench keeps it when another fails (a line of the partial file)."""
-    return {
+    """One finished run as a bench keeps it when another fails (a line of the partial file); a
+    cold run's holds the preferences it left (``"preferences"``: ``winner``, ``loser``,
+    ``noise``, ``source`` and ``query_id``, a list each), from which the warm runs start."""
+    record: dict[str, object] = {
         "subject": subject,
         "run": arm,
         "seed": seed,
@@ -77,6 +88,120 @@ def walked_record(subject: int, arm: str, seed: int, walked: Walked) -> dict[str
         "share": walked.share,
         "alone": walked.alone,
     }
+    if arm == "cold":
+        prefs = walked.preferences
+        record["preferences"] = {
+            "winner": [int(p.winner) for p in prefs],
+            "loser": [int(p.loser) for p in prefs],
+            "noise": [float(p.noise) for p in prefs],
+            "source": [p.source for p in prefs],
+            "query_id": [int(p.query_id) for p in prefs],
+        }
+    return record
+
+
+def _walked_of(record: Mapping[str, Any]) -> Walked:
+    """The run a :func:`walked_record` holds (KeyError, TypeError or ValueError when it is not
+    one; the caller checks that it gives the record back)."""
+    prefs: list[Preference] = []
+    if record["run"] == "cold":
+        cols = record["preferences"]
+        fields = ("winner", "loser", "noise", "source", "query_id")
+        if not isinstance(cols, dict) or sorted(cols) != sorted(fields):
+            raise ValueError("not the preferences of a run")
+        rows = zip(*(cols[f] for f in fields), strict=True)
+        for winner, loser, noise, source, query_id in rows:
+            if source not in ("comparison", "coactive"):
+                raise ValueError(f"not a source of a preference: {source!r}")
+            prefs.append(Preference(winner, loser, noise, source, query_id))
+    return Walked(
+        list(record["scores"]), prefs, list(record["stated"]), list(record["right"]),
+        record["rho"], record["share"], record["alone"],
+    )  # fmt: skip
+
+
+def _array_digest(values: ArrayLike) -> str:
+    arr = np.ascontiguousarray(values, dtype="<f8")
+    return hashlib.sha256(str(arr.shape).encode("ascii") + arr.tobytes()).hexdigest()
+
+
+def population_sweep(
+    config: ExperimentConfig,
+    objectives: ArrayLike,
+    trials: int,
+    *,
+    seed: int,
+    tolerance: float,
+    samples: int,
+    user_noise: float,
+    relearn_every: int,
+    truths: ArrayLike | None,
+) -> dict[str, object]:
+    """What ``bench population``'s runs depend on (its partial file's first line names it): the
+    release, the config's name and text (a digest), the objectives (and truths: a digest of
+    their values), the trials, seed, tolerance, confidence samples, the subjects' noise and how
+    often the warm runs re-learn the share.  Not ``jobs``: the runs are the same on any."""
+    from gaitpref import __version__
+
+    return {
+        "bench": "population",
+        "gaitpref": __version__,
+        "config": config.name,
+        "config_sha256": config.sha256,
+        "objectives_sha256": _array_digest(objectives),
+        "truths_sha256": None if truths is None else _array_digest(truths),
+        "trials": trials,
+        "seed": seed,
+        "tolerance": tolerance,
+        "samples": samples,
+        "user_noise": user_noise,
+        "relearn_every": relearn_every,
+    }
+
+
+def _kept_runs(
+    partial: Path, sweep: Mapping[str, object], subjects: int, trials: int, seed: int
+) -> dict[tuple[str, int], Walked]:
+    """The finished runs in ``partial`` by (arm, subject) (the file written again without a
+    line cut short); a line that is not a run of this bench is refused naming it."""
+    if not partial.is_file():
+        raise FileNotFoundError(
+            f"{partial}: no such file, no finished runs to resume from; run the bench without "
+            "resuming"
+        )
+    lines, rewrite = read_lines(partial, sweep)
+    kept: dict[tuple[str, int], Walked] = {}
+    for line, record in lines:
+        where = f"{partial}:{line}"
+        k, arm = record.get("subject"), record.get("run")
+        scores = record.get("scores")
+        if (
+            not isinstance(k, int)
+            or not 0 <= k < subjects
+            or arm not in ARMS
+            or record.get("seed") != seed
+            or not isinstance(scores, list)
+            or len(scores) != trials
+        ):
+            raise ResumeError(
+                f"{where}: not a run of this bench (subjects 0..{subjects - 1}, cold or warm, "
+                f"seed {seed}, {trials} trials)"
+            )
+        assert isinstance(arm, str)
+        if (arm, k) in kept:
+            raise ResumeError(f"{where}: the {arm} run of subject {k} is in the file twice")
+        try:
+            walked = _walked_of(record)
+            same = json.dumps(walked_record(k, arm, seed, walked)) == json.dumps(record)
+        except (KeyError, TypeError, ValueError):
+            same = False
+        if not same:
+            raise ResumeError(f"{where}: not a run record of bench population (subject {k}, {arm})")
+        kept[arm, k] = walked
+    if rewrite:
+        records = [walked_record(k, arm, seed, w) for (arm, k), w in kept.items()]
+        write_lines(partial, sweep, records)
+    return kept
 
 
 def _walk(
@@ -216,6 +341,7 @@ def population_bench(
     relearn_every: int = RELEARN_EVERY,
     truths: FloatArray | None = None,
     partial: str | Path | None = None,
+    resume: bool = False,
 ) -> dict[str, object]:
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
     simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
@@ -229,7 +355,13 @@ def population_bench(
     it (subject, cold or warm, seed), its error the ``__cause__``, the finished runs on it as
     :func:`walked_record` records; ``partial``: a new file each finished run's record is
     appended to as it finishes (JSON lines), removed once every run has finished (one that
-    exists is refused, ``FileExistsError``, not written over).
+    exists is refused, ``FileExistsError``, not written over).  The file's first line names the
+    bench (:func:`population_sweep`); ``resume``: ``partial`` is such a file, left by this bench
+    when it stopped: its runs are kept (a cold run's preferences with it, from which the warm
+    runs start), only the others run, and the results are those of a bench that never stopped;
+    a file of another bench is refused (:class:`~gaitpref.simulate.resume.ResumeError` naming
+    what differs), a last line cut short dropped with a
+    :class:`~gaitpref.simulate.resume.PartialRunsWarning` (its run runs again).
 
     ``trials`` is at most :data:`~gaitpref.limits.MAX_TRIALS`, and subjects x the gaits each
     run may visit at most :data:`~gaitpref.limits.MAX_POPULATION_NODES`: refused (a ValueError)
@@ -258,37 +390,54 @@ def population_bench(
     check_user_noise(user_noise)  # refused here, not as every run's failure
     check_tolerance(tolerance)  # likewise (a run failure, status 1, before)
     S = len(grids)
-    walked: dict[str, list[Walked | None]] = {arm: [None] * S for arm in ARMS}
+    sweep = population_sweep(
+        config, objectives, trials, seed=seed, tolerance=tolerance, samples=samples,
+        user_noise=user_noise, relearn_every=relearn_every, truths=truths,
+    )  # fmt: skip
+    kept: dict[tuple[str, int], Walked] = {}
+    sink: JsonLines | None = None
+    if resume:
+        if partial is None:
+            raise ValueError("resume: give the partial file the bench stopped with")
+        kept = _kept_runs(Path(partial), sweep, S, trials, seed)
+        sink = JsonLines(partial, existing=len(kept))
+    elif partial is not None:
+        sink = JsonLines(partial, first=first_line(sweep))
+    walked: dict[str, list[Walked | None]] = {
+        arm: [kept.get((arm, k)) for k in range(S)] for arm in ARMS
+    }
 
-    def run(arm: str, others: Sequence[Others | None], sink: JsonLines | None) -> list[Walked]:
-        """Every subject's ``arm`` run; a failure is a RunError keeping the finished runs."""
+    def run(arm: str, others: Sequence[Others | None]) -> list[Walked]:
+        """Every subject's ``arm`` run not kept; a failure is a RunError keeping the finished
+        runs."""
+        todo = [k for k in range(S) if walked[arm][k] is None]
         args = [
             (config, grids[k], judged[k], trials, (seed, k), others[k], tolerance, samples,
              user_noise, relearn_every)
-            for k in range(S)
+            for k in todo
         ]  # fmt: skip
 
-        def done(k: int, w: Walked) -> None:
-            walked[arm][k] = w
+        def done(index: int, w: Walked) -> None:
+            walked[arm][todo[index]] = w
             if sink is not None:
-                sink.append(walked_record(k, arm, seed, w))
+                sink.append(walked_record(todo[index], arm, seed, w))
 
         _, failure = run_tasks(_walk_args, args, jobs, done=done)
         if failure is not None:
-            kept = [
+            records = [
                 walked_record(k, a, seed, w)
                 for a in ARMS
                 for k, w in enumerate(walked[a])
                 if w is not None
             ]
-            names = [f"subject {k} ({arm}), seed {seed}" for k in range(S)]
-            raise run_error(failure, names, kept, 2 * S, None if sink is None else sink.path)
+            names = [f"subject {k} ({arm}), seed {seed}" for k in todo]
+            raise run_error(failure, names, records, 2 * S, None if sink is None else sink.path)
         return [w for w in walked[arm] if w is not None]
 
-    with partial_file(None if partial is None else JsonLines(partial)) as sink:
-        cold = run("cold", [None] * S, sink)
+    with partial_file(sink):
+        cold = run("cold", [None] * S)
         warm = run("warm", [[c.preferences for j, c in enumerate(cold) if j != k]
-                            for k in range(S)], sink)  # fmt: skip
+                            for k in range(S)])  # fmt: skip
     stated = [p for w in (*cold, *warm) for p in w.stated]
     right = [r for w in (*cold, *warm) for r in w.right]
     return {
@@ -356,6 +505,7 @@ __all__ = [
     "cluster_bootstrap",
     "gp_population",
     "population_bench",
+    "population_sweep",
     "synthetic_population",
     "walked_record",
 ]

@@ -1,19 +1,20 @@
 """Resume a bench that stopped, from the finished runs in its ``--partial`` JSON-lines file.
 
-``gaitpref bench continuous`` writes, as the first line of its ``--partial`` file, the bench that
-writes it: ``{"gaitpref bench": {...}}`` (:func:`first_line`: the bench's name, the release and
-every option its runs depend on, with digests of the config's text and of an objective file);
-each later line is one finished run.  :func:`read_lines` reads the runs back for a resumed
-bench: a file whose first line names another bench, or other options, is refused with
-:class:`~gaitpref.simulate.resume.ResumeError` naming what differs, as is a line that is not a
-JSON object (naming the file and line).  A last line cut short (no newline: the machine died
-while writing it) is dropped with a :class:`~gaitpref.simulate.resume.PartialRunsWarning`
-naming the file and line, and its run runs again; the file is then written again without it
-(:func:`write_lines`, atomically).
+``gaitpref bench continuous`` and ``gaitpref bench population`` write, as the first line of
+their ``--partial`` file, the bench that writes it: ``{"gaitpref bench": {...}}``
+(:func:`first_line`: the bench's name, the release and every option its runs depend on, with
+digests of the config's text and of the objectives); each later line is one finished run.
+:func:`read_lines` reads the runs back for a resumed bench: a file whose first line names
+another bench, or other options, is refused with :class:`~gaitpref.simulate.resume.ResumeError`
+naming what differs, as is a line that is not a JSON object (naming the file and line).  A last
+line cut short (no newline: the machine died while writing it) is dropped with a
+:class:`~gaitpref.simulate.resume.PartialRunsWarning` naming the file and line, and its run runs
+again; the file is then written again without it (:func:`write_lines`, atomically).
 
 A file written before the first line named its bench (gaitpref 0.1.0 before resuming) is
-refused: nothing in it says which options wrote it.  ``bench population`` is not resumed: its
-warm runs start from every cold run's answers, which its lines do not hold.
+refused: nothing in it says which options wrote it.  ``bench population``'s cold lines hold
+the preferences each cold run left, from which its warm runs start
+(:func:`gaitpref.simulate.population.walked_record`).
 """
 
 from __future__ import annotations
