@@ -100,14 +100,17 @@ Resume = Annotated[
         "another study is refused)",
     ),
 ]
+_PARTIAL_HELP = (
+    "JSON-lines file each finished run is written to as it finishes, kept when a run fails "
+    "(default: a new file in the temporary folder); removed when every run finishes"
+)
 Partial = Annotated[
     Path | None,
-    typer.Option(
-        "--partial",
-        help="JSON-lines file each finished run is written to as it finishes, kept when a run "
-        "fails (default: a new file in the temporary folder); removed when every run finishes "
-        "(bench continuous: --resume continues from it)",
-    ),
+    typer.Option("--partial", help=f"{_PARTIAL_HELP} (population is not resumed)"),
+]
+PartialResumable = Annotated[
+    Path | None,
+    typer.Option("--partial", help=f"{_PARTIAL_HELP}; --resume continues from it"),
 ]
 T = TypeVar("T")
 
@@ -605,7 +608,7 @@ def continuous(
     coactive: Annotated[bool, typer.Option(help="simulate coactive suggestions")] = False,
     noise: Annotated[float, typer.Option(help="the subject's probit noise")] = 0.0,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
-    partial: Partial = None,
+    partial: PartialResumable = None,
     resume: Annotated[
         bool,
         typer.Option(
