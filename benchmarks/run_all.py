@@ -1,5 +1,5 @@
-"""Run every speed benchmark (``benchmarks/bench_*.py``: console, core, gaits, large, sessions,
-startup, sweeps); each records its results in results/."""
+"""Run every speed benchmark (every ``benchmarks/bench_*.py``, in name order: console, core,
+gaits, large, sessions, startup, sweeps, threads, ...); each records its results in results/."""
 
 from __future__ import annotations
 

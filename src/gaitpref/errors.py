@@ -21,6 +21,9 @@ family                     raised when
 :class:`GaitError`         a gait library, a gait generator or a gait simulation failed
                            (:class:`GaitGeneratorFaultError`: the generator raised an
                            unexpected error making a gait)
+``RunError``               a simulated sweep was stopped by a run (``gaitpref.simulate.partial``;
+                           ``ResumeError``: a partial file that is not the sweep's to resume,
+                           ``gaitpref.simulate.resume``)
 =========================  ====================================================================
 """
 

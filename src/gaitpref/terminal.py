@@ -25,6 +25,9 @@ the generator fails to make (gaits on demand; after an undo too) is said and the
 paused.  A signal (or a closed output) that comes while an answer is being written lets the
 write finish first.  Nothing is written before the operator confirms (answers, undo and a
 validation ranking alike), and the answer is committed before the next trial is shown.
+After ``saved:`` the runner says which suggestions went past the edge of their range and were
+clipped there (``note: ...``, :attr:`Answered.clipped`) and, when the ``[stop]`` rule could not
+be checked after the stored answer, why (``warning: ...``, :attr:`Answered.stop_warning`).
 A session another writer pauses or finishes while the runner waits at a prompt stops the
 runner, said so, nothing more written; an undo whose 'last answer' is no longer the last one
 is refused; a write refused as busy (another writer holds the session) is asked again (the

@@ -5,7 +5,9 @@ mapping ``key -> Key(spec, default)``; a spec (``specs.py``) checks one value an
 what it allows, so every error reads ``[table].key: must be <allowed>, got <value>``.
 :data:`DEFAULTS` is the one table of defaults (the docs show it), :data:`LIMITS` the sizes a
 config may ask for: they are checked from the config's numbers before anything is built, so
-no config can make the process allocate or loop without bound (issue 15, items 1 and 2).
+no config can make the process allocate or loop without bound (issue 15, items 1 and 2).  The
+bound on gait solver iterations an ask (``MAX_ASK_ITERATIONS``) is checked for a new session or
+run only (``config/new.py``), so that a session stored with a larger product reopens.
 
 The strategies' settings (``[cospar.strategy_settings]``) take their defaults from the strategy
 classes themselves (``gaitpref.strategies``); only their bounds are declared here.

@@ -7,7 +7,9 @@
   preference mean at each step length").
 - 2-D: a heat map of the posterior mean with the trials numbered in order (one label per gait:
   ``"3, 7"`` when it was tried twice; dark numbers with a light outline, readable on every colour)
-  and the best action starred; a legend names the star and the crosses.
+  and the highest posterior mean starred (over every gait: it may be one flagged unsafe or in
+  the region of avoidance, which ``Session.recommended`` never names); a legend names the star
+  and the crosses.
 - With a blind validation: the subject's ranking of gaits A/B/C against their posterior mean.
 
 Excluded trials are drawn as crosses.  :func:`session_picture` collects plain arrays from a

@@ -8,7 +8,9 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 - records (``records.py``): :class:`SessionQuery`, :class:`Trial`, :class:`ComparisonRecord`,
   :class:`SuggestionRecord`, :class:`Answered`, :class:`ShownGait` (a validation gait as shown).
 - warm starts from earlier sessions (``warm.py``; :func:`read_prior_from` reads typed ids
-  and subject codes), the confidence after every answer (``confidence.py``);
+  and subject codes), the confidence after every answer and the recommended gait
+  (``confidence.py``; :class:`StopCheckWarning` when the ``[stop]`` rule could not be checked
+  after a stored answer);
 - blind validation (``validation.py``), export and import (``export.py``), the stored config
   (``stored_config.py``) and the simulated demo subject (``demo.py``).
 """
