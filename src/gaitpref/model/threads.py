@@ -1,16 +1,18 @@
 """BLAS threading for the small dense problems of one CoSpar iteration.
 
 An iteration on a paper-sized grid is dominated by ``m x m`` factorisations and ``A x m`` products
-with ``m`` a few hundred: multi-threaded BLAS spends longer waking its threads than computing, and
-on a loaded 2-core machine it can be several times slower than one thread (measured: 0.12 s vs
-0.31-0.84 s per 150-trial run on the 30 x 30 grid).
+with ``m`` a few hundred, where multi-threaded BLAS has little to gain.  Measured on a 2-core
+machine at load 2.2 (``benchmarks/bench_threads.py``, ``benchmarks/results/threads.md``),
+150-trial runs on the 30 x 30 grid took 0.20-0.36 s with one thread and 0.19-0.27 s with
+BLAS's default of two: no difference at that load.  (An earlier measurement under heavier load,
+not recorded, gave 0.12 s against 0.31-0.84 s.)
 
-On large grids the same holds: the Laplace fit is ``m x m`` work whatever the grid's size, and an
-ask on the scalable path is mostly memory-bound (normal draws, axis-wise prior transforms, the
-argmax) around ``2 A m`` flops of matrix products.  At 1,048,576 actions and 300 comparisons on a
-loaded 2-core machine (load average 5) an ask + tell took a median 0.06-0.13 s with one thread
-and 0.19-0.78 s (p95 up to 2.2 s) with BLAS's default of two (``benchmarks/bench_threads.py``,
-``benchmarks/results/threads.md``), so the loop uses :func:`one_blas_thread` at every size.
+On large grids one thread wins: the Laplace fit is ``m x m`` work whatever the grid's size, and
+an ask on the scalable path is mostly memory-bound (normal draws, axis-wise prior transforms,
+the argmax) around ``2 A m`` flops of matrix products.  At 1,048,576 actions and 300 comparisons
+an ask + tell took a median 0.059 s with one thread against 0.155 s with two (p95 0.065 s
+against 1.2 s) at load 2.2, and 0.06-0.13 s against 0.19-0.78 s at load 5 (the same script's
+first run, commit 717ee57).  So the loop uses :func:`one_blas_thread` at every size.
 
 Independent fits of one step (a warm start's share hypotheses, ``share_mix.py``) may instead run
 side by side in threads (:func:`in_threads`), each on one BLAS thread: NumPy and LAPACK release
