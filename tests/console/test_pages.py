@@ -381,9 +381,9 @@ def test_a_suggestion_past_the_edge_is_said_in_the_answer_and_the_chronology(
     gait = q["actions"][0]
     value, lo, hi = gait["values"]["step_length"], 0.08, 0.18
     if value in (lo, hi):  # at an edge: a move outwards goes back to the same gait
-        move, mark = ("-big" if value == lo else "+small"), "(at the grid's edge)"
+        move, mark = ("-big" if value == lo else "+small"), "(already at the edge of its range)"
     else:  # "longer" moves the whole range: clipped to the longest step
-        move, mark = "+big", "(clipped at the grid's edge)"
+        move, mark = "+big", "(clipped at the edge of its range)"
     body = {
         "query_id": q["query_id"],
         "comparisons": [],

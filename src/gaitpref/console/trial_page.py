@@ -45,10 +45,10 @@ def _edge(space: Space, s: SuggestionRecord) -> str:
     """What the chronology adds to a suggestion that went past the edge of its feature's
     range: back to the same gait (not modelled), or clipped to the edge."""
     if s.target is None:
-        return " (at the grid's edge)"
+        return " (already at the edge of its range)"
     f = space.features[space.feature_number(s.feature)]
     value = float(space.point(s.action)[space.feature_number(s.feature)])
-    return " (clipped at the grid's edge)" if f.move_clipped(value, s.move) else ""
+    return " (clipped at the edge of its range)" if f.move_clipped(value, s.move) else ""
 
 
 def chronology(session: Session) -> list[ChronoRow]:
