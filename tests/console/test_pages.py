@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import re
 
 import httpx
@@ -335,11 +336,14 @@ def test_the_answer_form_of_a_query_of_45_gaits_is_taken(client: TestClient) -> 
 
 
 def test_an_answer_whose_stop_check_fails_is_saved_and_says_so(
-    client: TestClient, monkeypatch: pytest.MonkeyPatch
+    client: TestClient, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
 ) -> None:
     """The [stop] rule raising after the answer is stored: the answer is not a 500 (which an
     operator would post again), the page says it is saved and that the rule was not checked,
-    and the API's response carries why."""
+    and the API's response carries why; the console's log says why each time (a
+    ``StopCheckWarning`` alone is shown once per place per process by Python's default
+    filter)."""
+    caplog.set_level(logging.WARNING, logger="gaitpref.console")
     from gaitpref.sessions import Session, StopCheckWarning
 
     def fails(self: Session) -> None:
@@ -361,6 +365,12 @@ def test_an_answer_whose_stop_check_fails_is_saved_and_says_so(
     shown = client.get(done.headers["location"]).text
     assert "Saved: trial 2." in shown and "The [stop] rule could not be checked" in shown
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 2  # each stored once
+    logged = [r.getMessage() for r in caplog.records if r.name == "gaitpref.console"]
+    assert len(logged) == 2  # both failures, not the first alone
+    assert all(
+        m.startswith(f"session {sid}: ") and "FloatingPointError" in m and "[stop] rule" in m
+        for m in logged
+    )
     monkeypatch.undo()
     assert answer_once(client, sid)["stop_warning"] is None
 
@@ -381,9 +391,9 @@ def test_a_suggestion_past_the_edge_is_said_in_the_answer_and_the_chronology(
     gait = q["actions"][0]
     value, lo, hi = gait["values"]["step_length"], 0.08, 0.18
     if value in (lo, hi):  # at an edge: a move outwards goes back to the same gait
-        move, mark = ("-big" if value == lo else "+small"), "(at the grid's edge)"
+        move, mark = ("-big" if value == lo else "+small"), "(already at the edge of its range)"
     else:  # "longer" moves the whole range: clipped to the longest step
-        move, mark = "+big", "(clipped at the grid's edge)"
+        move, mark = "+big", "(clipped at the edge of its range)"
     body = {
         "query_id": q["query_id"],
         "comparisons": [],

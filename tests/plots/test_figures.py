@@ -12,8 +12,9 @@ from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
 from gaitpref import Session
-from gaitpref.plots import BAND_LABEL, BAND_SD
-from gaitpref.plots.posterior import posterior_picture, render
+from gaitpref.config import parse_config
+from gaitpref.plots import BAND_LABEL, BAND_SD, HIGHEST_LABEL, RECOMMENDED_LABEL
+from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
 from gaitpref.plots.session import render_session, session_picture, trial_numbers
 from gaitpref.storage import MemoryStorage
 
@@ -86,7 +87,87 @@ def test_repeated_gaits_get_one_readable_label(two_d: Session) -> None:
     texts = [t for t in fig.axes[0].texts]
     assert len(texts) == len(labels)
     assert all(t.get_color() == "k" and t.get_path_effects() for t in texts)  # not white on yellow
-    assert "best posterior mean" in _legend_texts(fig)
+    assert RECOMMENDED_LABEL in _legend_texts(fig)
+    plt.close(fig)
+
+
+CONFIG_2D = """
+name = "best-2d"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 6
+[space.step_duration]
+min = 0.8
+max = 1.2
+num = 5
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.15 }
+signal_variance = 0.005
+noise = 0.02
+jitter = 0.0
+fit = "fixed"
+[cospar]
+seed = 1
+strategy = "self-sparring"
+[safety]
+unsafe_radius = 0.1
+"""
+
+
+def _marks(fig: Figure) -> dict[str, np.ndarray]:
+    """The heat map's marks by legend label: their (x, y) offsets."""
+    return {
+        str(c.get_label()): np.asarray(c.get_offsets())
+        for c in fig.axes[0].collections
+        if not str(c.get_label()).startswith("_")
+    }
+
+
+def test_the_session_figure_stars_the_recommended_gait_not_a_flagged_highest() -> None:
+    s = Session.create(MemoryStorage(), parse_config(CONFIG_2D), "S01")
+    walked: list[int] = []
+    for _ in range(20):  # the subject prefers the higher index, until the argmax is walked
+        q = s.next_query()
+        a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
+        s.answer(q.id, [(a, b, "first" if a > b else "second")] if a != b else [])
+        walked = [t.number for t in s.trials() if t.action == s.posterior().argmax]
+        if walked:
+            break
+    assert walked
+    pic = session_picture(s, samples=0)
+    fig = render_session(pic)
+    marks = _marks(fig)
+    plt.close(fig)
+    assert pic.recommended == s.posterior().argmax and HIGHEST_LABEL not in marks
+    s.flag_unsafe(walked[-1], "knee gave way")
+    highest, rec = s.posterior().argmax, s.recommended()
+    assert rec is not None and rec != highest
+    pic = session_picture(s, samples=0)
+    assert pic.recommended == rec
+    fig = render_session(pic)
+    marks = _marks(fig)
+    assert {RECOMMENDED_LABEL, HIGHEST_LABEL} <= _legend_texts(fig)
+    plt.close(fig)
+    point = s.space.points  # the heat map's x is the second feature, its y the first
+    assert np.allclose(marks[RECOMMENDED_LABEL], [[point[rec][1], point[rec][0]]])
+    assert np.allclose(marks[HIGHEST_LABEL], [[point[highest][1], point[highest][0]]])
+    from gaitpref.console.figures import picture_of  # the console's figure beside "Best so far"
+
+    posterior = picture_of(s, "posterior")
+    assert isinstance(posterior, PosteriorPicture) and posterior.recommended == rec
+    fig = render(posterior)
+    marks = _marks(fig)
+    plt.close(fig)
+    assert np.allclose(marks[RECOMMENDED_LABEL], [[point[rec][1], point[rec][0]]])
+    assert np.allclose(marks[HIGHEST_LABEL], [[point[highest][1], point[highest][0]]])
+    assert "best posterior mean" not in marks
+
+
+def test_no_best_is_marked_before_a_preference_is_learned() -> None:
+    s = Session.create(MemoryStorage(), parse_config(CONFIG_2D), "S01")
+    fig = render_session(session_picture(s, samples=0))
+    assert not {RECOMMENDED_LABEL, HIGHEST_LABEL} & set(_marks(fig))
     plt.close(fig)
 
 

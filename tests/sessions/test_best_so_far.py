@@ -14,7 +14,7 @@ from gaitpref import Session
 from gaitpref.cli import app
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
-from gaitpref.sessions import posterior_summary
+from gaitpref.sessions import posterior_summary, preference_learned
 
 CONFIG = """
 name = "best-1d"
@@ -116,3 +116,25 @@ def test_no_best_so_far_when_no_gait_may_be_proposed(tmp_path: Path) -> None:
     assert isinstance(posterior, dict) and posterior["recommended"] is None
     assert "best so far: none may be recommended" in text
     assert "best so far: action" not in text
+
+
+def test_no_best_so_far_before_a_preference_is_learned(tmp_path: Path) -> None:
+    """0 trials: the flat prior's argmax is the first gait for no reason; ``session show`` says
+    what the console says (the same condition), and ``--json`` keeps its documented fields."""
+    url = f"sqlite:///{tmp_path / 'b.db'}"
+    s = Session.create(url, parse_config(CONFIG.replace("RADIUS", "0.1")), "S01")
+    assert not preference_learned(s.posterior().mean) and not s.trials()
+    sid = s.id
+    s.close()
+    text, info = _show(url, sid)
+    assert "no preference learned yet: every gait is as likely to be the best" in text
+    assert "best so far: action" not in text and "posterior mean 0" not in text
+    posterior = info["posterior"]
+    assert isinstance(posterior, dict)
+    assert posterior["recommended"] == 0 and posterior["argmax"] == 0  # as documented
+    assert posterior["trials_in_force"] == 0
+
+
+def test_the_console_and_show_share_the_learned_condition() -> None:
+    assert not preference_learned(np.zeros(4)) and not preference_learned(np.zeros(0))
+    assert preference_learned(np.array([0.0, 0.1, 0.0]))

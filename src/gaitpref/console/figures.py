@@ -73,7 +73,7 @@ def picture_of(session: Session, kind: str) -> Picture:
     trials = [t.action for t in session.trials()]
     title = f"session {session.id}: posterior after {len(trials)} trials"
     if not on_a_grid(post.space):  # continuous, or past 2-D: the posterior at the trials
-        return trials_picture(post, trials, title=title)
+        return trials_picture(post, trials, recommended=session.recommended(), title=title)
     if kind == "session":
         return session_picture(session)
     config = session.config
@@ -81,7 +81,15 @@ def picture_of(session: Session, kind: str) -> Picture:
     shade = None
     if config.safety.avoid or unsafe:  # the region of avoidance and the unsafe flags, shaded
         shade = safety_shading(post, config.safety, config.ordinal, unsafe)
-    return posterior_picture(post, trials, samples=0, title=title, safety=shade)
+    return posterior_picture(
+        post,
+        trials,
+        samples=0,
+        title=title,
+        safety=shade,
+        recommending=True,
+        recommended=session.recommended(),
+    )
 
 
 def png_of(pic: Picture, dpi: int = 90) -> bytes:

@@ -253,8 +253,8 @@ async def trial_page(
     flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded)
     if stop_unchecked and flash.startswith("Saved:"):
         flash += (
-            " The [stop] rule could not be checked after it (the console's log says why, a "
-            "StopCheckWarning); it is checked again after the next answer."
+            " The [stop] rule could not be checked after it (the console's log says why: a "
+            "warning of the gaitpref.console logger); it is checked again after the next answer."
         )
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
 

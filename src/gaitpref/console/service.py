@@ -16,6 +16,7 @@ anything is written; :mod:`gaitpref.console.errors` turns that into HTTP 409.
 from __future__ import annotations
 
 import io
+import logging
 import tempfile
 import threading
 import zipfile
@@ -44,6 +45,10 @@ T = TypeVar("T")
 KEEP = 32
 #: per-session locks, striped by session id
 LOCK_STRIPES = 64
+#: the console's log: ``gaitpref console`` leaves it to Python's last-resort handler (stderr)
+#: unless the application configures logging.  A warning is written there every time, unlike a
+#: ``warnings.warn`` (Python's default filter shows one once per place per process)
+logger = logging.getLogger("gaitpref.console")
 
 
 @dataclass(frozen=True)
@@ -198,6 +203,8 @@ class SessionService:
             raise InputError("note", str(exc)) from None
         with self.locked(session_id) as session:
             answered = session.answer(query_id, [*comparisons, *feedback], suggestions)
+            if answered.stop_warning is not None:  # the page and the API say "the log says why"
+                logger.warning("session %d: %s", session_id, answered.stop_warning)
             if text:
                 session.note(f"trial {', '.join(map(str, answered.trials))}: {text}")
             pending = session.pending

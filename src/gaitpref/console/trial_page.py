@@ -12,6 +12,7 @@ from gaitpref.console import views
 from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
 from gaitpref.errors import NoSafeGaitError
+from gaitpref.sessions import preference_learned
 from gaitpref.sessions.records import SuggestionRecord
 from gaitpref.sessions.session import Session
 from gaitpref.space import Space
@@ -44,10 +45,10 @@ def _edge(space: Space, s: SuggestionRecord) -> str:
     """What the chronology adds to a suggestion that went past the edge of its feature's
     range: back to the same gait (not modelled), or clipped to the edge."""
     if s.target is None:
-        return " (at the grid's edge)"
+        return " (already at the edge of its range)"
     f = space.features[space.feature_number(s.feature)]
     value = float(space.point(s.action)[space.feature_number(s.feature)])
-    return " (clipped at the grid's edge)" if f.move_clipped(value, s.move) else ""
+    return " (clipped at the edge of its range)" if f.move_clipped(value, s.move) else ""
 
 
 def chronology(session: Session) -> list[ChronoRow]:
@@ -104,7 +105,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
     best = session.recommended()  # among the gaits that may be proposed, as the confidence's
     trials = session.trials()
-    learned = bool(mean.max() > mean.min())
+    learned = preference_learned(mean)  # as session show says it
     sure = None
     if learned:
         with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend: none stated

@@ -7,7 +7,9 @@ with matplotlib (Agg backend, no screen needed):
   every figure), a few joint posterior samples, the trials coloured by order (colour bar);
 - 2-D: a heat map of the posterior mean (colour bar) with the trials in chronological order
   (shaded by order, their own colour bar), the best posterior mean starred and, when the true
-  objective is known, its best marked with an X; a legend names the marks.
+  objective is known, its best marked with an X; a legend names the marks.  A session's figure
+  (``recommended`` given: the console's) stars the recommended gait instead and circles the
+  highest over every gait when that is another (:func:`gaitpref.plots.mark_best`).
 
 With ``safety`` (ROIAL's region of avoidance and the operator's unsafe flags,
 :mod:`gaitpref.plots.safety`), both kinds shade the avoided gaits (``Safety.avoided``, the loop's
@@ -29,7 +31,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from gaitpref.model.posterior import Posterior
-from gaitpref.plots import BAND_LABEL, BAND_SD, plain
+from gaitpref.plots import BAND_LABEL, BAND_SD, mark_best, plain
 from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -46,6 +48,8 @@ class PosteriorPicture:
     objective: FloatArray | None  # true objective (flat), if known
     title: str
     safety: SafetyShading | None = None  # region of avoidance and unsafe flags, if any
+    recommending: bool = False  # a session's: star ``recommended``, not the argmax
+    recommended: int | None = None  # Session.recommended(): None when no gait may be proposed
 
 
 def posterior_picture(
@@ -57,9 +61,13 @@ def posterior_picture(
     rng: np.random.Generator | None = None,
     title: str = "",
     safety: SafetyShading | None = None,
+    recommending: bool = False,
+    recommended: int | None = None,
 ) -> PosteriorPicture:
     """Collect what to draw (``samples`` joint posterior samples, drawn with ``rng``;
-    ``safety``: what :func:`gaitpref.plots.safety.safety_shading` computed, to shade)."""
+    ``safety``: what :func:`gaitpref.plots.safety.safety_shading` computed, to shade).
+    ``recommending``: a session's figure, which stars ``recommended`` (its
+    ``Session.recommended()``) rather than the argmax over every gait."""
     if posterior.space.ndim > 2:
         raise ValueError("posterior figures are drawn for 1-D and 2-D spaces only")
     gen = rng if rng is not None else np.random.default_rng(0)
@@ -73,6 +81,8 @@ def posterior_picture(
         objective=None if objective is None else np.asarray(objective, dtype=float).reshape(-1),
         title=title,
         safety=safety,
+        recommending=recommending,
+        recommended=recommended,
     )
 
 
@@ -143,11 +153,14 @@ def _draw_2d(pic: PosteriorPicture, fig: Figure) -> None:
             label="trials (shade: order)",
         )
         fig.colorbar(dots, ax=ax, fraction=0.046, label="trial")
-    best = pic.space.points[int(np.argmax(pic.mean))]
-    ax.scatter(
-        [best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
-        label="best posterior mean",
-    )  # fmt: skip
+    if pic.recommending:
+        mark_best(ax, pic.space.points, pic.mean, pic.recommended)
+    else:
+        best = pic.space.points[int(np.argmax(pic.mean))]
+        ax.scatter(
+            [best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
+            label="best posterior mean",
+        )  # fmt: skip
     if pic.objective is not None:
         true_best = pic.space.points[int(np.argmax(pic.objective))]
         for a in axes:

@@ -7,9 +7,11 @@
   preference mean at each step length").
 - 2-D: a heat map of the posterior mean with the trials numbered in order (one label per gait:
   ``"3, 7"`` when it was tried twice; dark numbers with a light outline, readable on every colour)
-  and the highest posterior mean starred (over every gait: it may be one flagged unsafe or in
-  the region of avoidance, which ``Session.recommended`` never names); a legend names the star
-  and the crosses.
+  and the recommended gait starred (``Session.recommended``: the highest posterior mean among
+  the gaits that may be proposed, the "best so far" the operator is told to walk); when the
+  highest over every gait is another (flagged unsafe, near one, or in the region of avoidance)
+  it gets a hollow circle, "highest mean (may not be proposed)".  Neither is drawn while the
+  posterior mean is flat (nothing learned yet).  A legend names the marks and the crosses.
 - With a blind validation: the subject's ranking of gaits A/B/C against their posterior mean.
 
 Excluded trials are drawn as crosses.  :func:`session_picture` collects plain arrays from a
@@ -34,7 +36,7 @@ from matplotlib.figure import Figure
 from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
-from gaitpref.plots import BAND_LABEL, BAND_SD, plain
+from gaitpref.plots import BAND_LABEL, BAND_SD, mark_best, plain
 from gaitpref.plots.trials import on_a_grid, render_trials, trials_picture
 from gaitpref.space import FloatArray, IntArray, Space
 
@@ -55,6 +57,7 @@ class SessionPicture:
     history: FloatArray  # T x A: posterior mean after each trial
     validation: tuple[tuple[str, int, int, float], ...]  # (label, action, subject rank, mean)
     title: str
+    recommended: int | None = None  # Session.recommended(): None when no gait may be proposed
 
 
 def session_picture(session: Session, samples: int = 3, seed: int = 0) -> SessionPicture:
@@ -84,6 +87,7 @@ def session_picture(session: Session, samples: int = 3, seed: int = 0) -> Sessio
         validation=validation,
         title=f"session {session.id}: subject {session.subject}, {session.config.name}, "
         f"{len(trials)} trials",
+        recommended=session.recommended(),
     )
 
 
@@ -143,10 +147,9 @@ def _heat_2d(ax: Axes, pic: SessionPicture) -> None:
             bad = pts[pic.excluded]
             ax.scatter(bad[:, 1], bad[:, 0], marker="x", c="r", s=50, zorder=4,
                        label="excluded trial")  # fmt: skip
-    best = pic.space.points[int(np.argmax(pic.mean))]
-    ax.scatter([best[1]], [best[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
-               label="best posterior mean")  # fmt: skip
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
+    mark_best(ax, pic.space.points, pic.mean, pic.recommended)
+    if ax.get_legend_handles_labels()[0]:  # nothing to name before a trial and a preference
+        ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
     ax.set_xlabel(_label(pic.space, 1))
     ax.set_ylabel(_label(pic.space, 0))
     ax.set_title("posterior mean and trials (numbered)")
@@ -210,7 +213,8 @@ def save_session_figure(session: Session, path: str | Path) -> Path:
     else:
         trials = [t.action for t in session.trials()]
         title = f"session {session.id} ({session.subject}): posterior after {len(trials)} trials"
-        fig = render_trials(trials_picture(post, trials, title=title))
+        pic = trials_picture(post, trials, recommended=session.recommended(), title=title)
+        fig = render_trials(pic)
     fig.savefig(out, dpi=110)
     plt.close(fig)
     return out

@@ -16,7 +16,7 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 """
 
 from gaitpref.errors import ExportError, ReplayError, SessionError, SessionStateError
-from gaitpref.sessions.confidence import StopCheckWarning
+from gaitpref.sessions.confidence import StopCheckWarning, preference_learned
 from gaitpref.sessions.export import export_session, import_session, posterior_summary
 from gaitpref.sessions.records import (
     REASONS,
@@ -58,6 +58,7 @@ __all__ = [
     "export_session",
     "import_session",
     "posterior_summary",
+    "preference_learned",
     "read_prior_from",
     "software_version",
 ]
