@@ -9,16 +9,27 @@ works here unchanged.  The trial page's rating buttons post ``rate-<action>`` fi
 
 Refusals are :class:`~gaitpref.console.errors.InputError` naming the field (``feedback`` with
 the item's position, or the form field), so the client gets 422 and nothing is written.
+
+:func:`logged_answer` compares an answer form posted to a query that is answered already with
+the answer the session logged for it, so that the trial page can tell a repeated post of the
+same form (a double click or a re-sent form without JavaScript: already saved, nothing to do)
+from a different answer (refused, 409).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import re
+from collections import Counter
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from gaitpref.console.errors import InputError, quoted
 from gaitpref.feedback import Rating, kind_named
+from gaitpref.feedback.rating import RatingGiven
+
+if TYPE_CHECKING:
+    from gaitpref.sessions.session import Session, SessionQuery
 
 _RATE = re.compile(r"^rate-(\d{1,10})$")
 _SCALARS = (str, int, float, bool, type(None))
@@ -79,4 +90,90 @@ def is_rating_field(name: str) -> bool:
     return _RATE.match(name) is not None
 
 
-__all__ = ["feedback_record", "feedback_records", "is_rating_field", "read_rating_fields"]
+@dataclasses.dataclass(frozen=True)
+class LoggedAnswer:
+    """The answer the session logged for a query that is answered (and not undone), and
+    whether a posted answer is the same one."""
+
+    query: SessionQuery
+    trials: tuple[int, ...]
+    same: bool
+    comparisons: tuple[tuple[int, int, str], ...]
+    suggestions: tuple[tuple[int, str, str], ...]
+    #: ``(action, category)`` of each rating
+    ratings: tuple[tuple[int, str], ...]
+    #: kinds of other feedback in the logged answer (a form cannot post them)
+    other_kinds: tuple[str, ...]
+
+
+def _comparison_key(first: int, second: int, outcome: str) -> tuple[int, int, str]:
+    """A comparison with its pair in order: ``(j, i, "first")`` is ``(i, j, "second")``."""
+    if first <= second:
+        return first, second, outcome
+    return second, first, {"first": "second", "second": "first"}.get(outcome, outcome)
+
+
+def logged_answer(
+    session: Session,
+    query_id: int,
+    comparisons: Sequence[tuple[int, int, str]],
+    suggestions: Sequence[tuple[int, str, str]],
+    ratings: Sequence[Rating],
+) -> LoggedAnswer | None:
+    """The logged answer of ``query_id`` compared with a posted one (comparisons, suggestions
+    and ratings; the note is not part of the answer), or None when ``query_id`` is pending or
+    has no answer in force (stale, unknown, or its answer undone).  Reads only."""
+    pending = session.pending
+    if pending is not None and pending.id == query_id:
+        return None
+    query = next((q for q, _ in session.history() if q.id == query_id), None)
+    if query is None:
+        return None
+    trials = tuple(t.number for t in session.trials() if t.query == query_id)
+    logged_cmp = tuple(
+        (c.first, c.second, c.outcome)
+        for c in session.comparisons()
+        if c.query == query_id and not c.undone
+    )
+    logged_sug = tuple(
+        (s.action, s.feature, s.move)
+        for s in session.suggestions()
+        if s.query == query_id and not s.undone
+    )
+    logged_rating: list[tuple[int, int, str]] = []
+    others: list[str] = []
+    for f in session.feedback():
+        if f.query != query_id or f.undone:
+            continue
+        if f.kind == RatingGiven.kind:
+            p = f.payload
+            logged_rating.append((int(p["action"]), int(p["label"]), str(p.get("category", ""))))
+        else:
+            others.append(f.kind)
+    same = (
+        not others
+        and Counter(_comparison_key(*c) for c in logged_cmp)
+        == Counter(_comparison_key(i, j, o) for i, j, o in comparisons)
+        and Counter(logged_sug) == Counter(suggestions)
+        and Counter((a, label) for a, label, _ in logged_rating)
+        == Counter((int(r.action), int(r.label)) for r in ratings)
+    )
+    return LoggedAnswer(
+        query,
+        trials,
+        same,
+        logged_cmp,
+        logged_sug,
+        tuple((a, category or str(label)) for a, label, category in logged_rating),
+        tuple(others),
+    )
+
+
+__all__ = [
+    "LoggedAnswer",
+    "feedback_record",
+    "feedback_records",
+    "is_rating_field",
+    "logged_answer",
+    "read_rating_fields",
+]

@@ -10,6 +10,9 @@ error                                       status  meaning
                                                     ``limits.py`` (a field's bytes, the
                                                     fields or files of one form)
 ``SessionNotFoundError``                    404     no such session
+``AnsweredDifferentlyError`` (console)       409     a page's answer to a query answered
+                                                    already with another answer (the same
+                                                    answer again redirects: already saved)
 ``QueryError``                              409     stale, unknown or already-answered query
 ``SessionStateError``                       409     paused/finished session, nothing to undo...
 ``ConflictError``                           409     another writer changed the session first
@@ -105,12 +108,18 @@ class FormUnreadableError(ValueError):
     """A page's form that cannot be parsed as the form it says it is."""
 
 
+class AnsweredDifferentlyError(QueryError):
+    """A page's answer form posted to a query that is answered already, with an answer other
+    than the one logged (the message says which, and how to change it)."""
+
+
 #: checked in order: the first matching type gives the status
 STATUS_OF: tuple[tuple[type[Exception], int, str], ...] = (
     (CsrfError, 403, "refused form"),
     (FormTooLargeError, 413, "form too large"),
     (FormUnreadableError, 400, "form not readable"),
     (SessionNotFoundError, 404, "not found"),
+    (AnsweredDifferentlyError, 409, "answered already"),
     (QueryError, 409, "stale query"),
     (SessionStateError, 409, "not now"),
     (ConflictError, 409, "changed elsewhere"),

@@ -21,8 +21,8 @@ from starlette.exceptions import HTTPException
 
 from gaitpref.config import ExperimentConfig, load_config, shipped_configs
 from gaitpref.console import figures, views
-from gaitpref.console.answers import read_rating_fields
-from gaitpref.console.errors import CsrfError, InputError, quoted
+from gaitpref.console.answers import logged_answer, read_rating_fields
+from gaitpref.console.errors import AnsweredDifferentlyError, CsrfError, InputError, quoted
 from gaitpref.console.limits import (
     MAX_CONFIG_TEXT,
     MAX_FORM_FIELD,
@@ -46,6 +46,9 @@ from gaitpref.console.service import (
 )
 from gaitpref.console.templating import confirm_page, render
 from gaitpref.console.trial_page import trial_context
+from gaitpref.errors import SessionStateError
+from gaitpref.feedback import Rating
+from gaitpref.loop.cospar import QueryError
 from gaitpref.sessions import read_prior_from
 from gaitpref.sessions.records import REASONS
 from gaitpref.sessions.session import Session
@@ -239,6 +242,7 @@ async def trial_page(
     replaced: Annotated[int | None, Query(ge=0, le=1)] = None,
     excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     stop_unchecked: Annotated[int | None, Query(ge=1, le=1)] = None,
+    again: Annotated[int | None, Query(ge=1, le=1)] = None,
 ) -> Response:
     for name, text in (("answered", answered), ("undone", undone)):
         if text is not None and text.count(",") >= MAX_FLASH_TRIALS:
@@ -250,7 +254,7 @@ async def trial_page(
     context = await run_in_threadpool(
         service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
     )
-    flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded)
+    flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded, again)
     if stop_unchecked and flash.startswith("Saved:"):
         flash += (
             " The [stop] rule could not be checked after it (the console's log says why: a "
@@ -274,6 +278,7 @@ def _flash(
     flagged: int | None,
     withdrawn: int | None,
     excluded: int | None = None,
+    again: int | None = None,
 ) -> str:
     """What the redirect after a post says, if it is still so: a page reloaded after another
     tab undid the answer, withdrew the flag (...) says nothing rather than what is no longer
@@ -281,6 +286,9 @@ def _flash(
     done = {row.trial for row in context["chronology"]}
     unsafe = context["unsafe"]
     saved, taken = _numbers(answered), _numbers(undone)
+    if saved and saved <= done and again:
+        names = ", ".join(map(str, sorted(saved)))
+        return f"That answer was already saved (trial {names}); nothing was stored twice."
     if saved and saved <= done:
         return f"Saved: trial {', '.join(map(str, sorted(saved)))}."
     if taken and not taken & done:
@@ -327,9 +335,12 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
     ratings = read_rating_fields(fields, len(categories))
     if fields.get("confirmed") != "1":
 
-        def summary(session: Session) -> list[str]:
+        def summary(session: Session) -> list[str] | tuple[int, ...]:
             pending = session.pending
             if pending is None or pending.id != query_id:
+                repeat = _repeat_of(session, query_id, comparisons, suggestions, ratings)
+                if repeat is not None:
+                    return repeat  # the trials it answered: already saved
                 raise session_query_error(session, query_id)
             space = session.space
             said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
@@ -338,6 +349,8 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             )
 
         lines = await run_in_threadpool(service.read, session_id, summary)
+        if isinstance(lines, tuple):
+            return _already_saved(session_id, lines)
         return confirm_page(
             request,
             session_id,
@@ -347,12 +360,61 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
             f"/sessions/{session_id}/answer",
             note=note,
         )
-    answered, _ = await run_in_threadpool(
-        service.answer, session_id, query_id, comparisons, suggestions, note, ratings
-    )
+    try:
+        answered, _ = await run_in_threadpool(
+            service.answer, session_id, query_id, comparisons, suggestions, note, ratings
+        )
+    except (QueryError, SessionStateError):  # answered already? (finished or paused since)
+
+        def repeat_of(session: Session) -> tuple[int, ...] | None:
+            return _repeat_of(session, query_id, comparisons, suggestions, ratings)
+
+        repeat = await run_in_threadpool(service.read, session_id, repeat_of)
+        if repeat is None:
+            raise
+        return _already_saved(session_id, repeat)
     trials = ",".join(map(str, answered.trials))
     unchecked = "&stop_unchecked=1" if answered.stop_warning is not None else ""
     return see_other(f"/sessions/{session_id}?answered={trials}{unchecked}")
+
+
+def _repeat_of(
+    session: Session,
+    query_id: int,
+    comparisons: list[tuple[int, int, str]],
+    suggestions: list[tuple[int, str, str]],
+    ratings: list[Rating],
+) -> tuple[int, ...] | None:
+    """For an answer form posted to a query that is not pending: the trials of the query's
+    logged answer when it is the same answer (a second post of the same form: nothing to do);
+    :class:`AnsweredDifferentlyError` when it is another; None when the query has no answer in
+    force (stale or unknown: the session's own refusal says so)."""
+    logged = logged_answer(session, query_id, comparisons, suggestions, ratings)
+    if logged is None:
+        return None
+    if logged.same:
+        return logged.trials
+    words = views.answer_summary(
+        session.space,
+        logged.query,
+        logged.comparisons,
+        logged.suggestions,
+        session.gait_name,
+        logged.ratings,
+    )
+    words += [f"an answer of kind {kind!r}" for kind in logged.other_kinds]
+    names = ", ".join(map(str, logged.trials))
+    raise AnsweredDifferentlyError(
+        f"query {query_id} (trial {names}) was already answered, with a different answer than "
+        f"this form's: {'; '.join(words)}. To change the answer, undo it on the trial page "
+        f'("Undo last answer"; answers given after it must be undone first) and answer '
+        f"trial {names} again"
+    )
+
+
+def _already_saved(session_id: int, trials: tuple[int, ...]) -> Response:
+    """The redirect after a second post of an answer that is saved already."""
+    return see_other(f"/sessions/{session_id}?answered={','.join(map(str, trials))}&again=1")
 
 
 @router.post("/sessions/{session_id}/undo")
