@@ -29,7 +29,7 @@ from gaitpref.limits import (
     MAX_TRIALS,
     PAPER_OBJECTIVES,
 )
-from tests.simulate.test_bench_failures import CONTINUOUS
+from tests.simulate.resumekit import CONTINUOUS
 
 #: every ask fails the test (``no_trial``, tests/conftest.py)
 pytestmark = pytest.mark.usefixtures("no_trial")

@@ -3,6 +3,7 @@ numbers readable and not stacked, the same +-2 sd band everywhere, no clipped le
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -16,6 +17,7 @@ from gaitpref.config import parse_config
 from gaitpref.plots import BAND_LABEL, BAND_SD, HIGHEST_LABEL, RECOMMENDED_LABEL
 from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
 from gaitpref.plots.session import render_session, session_picture, trial_numbers
+from gaitpref.space import FloatArray
 from gaitpref.storage import MemoryStorage
 
 
@@ -124,8 +126,11 @@ def _marks(fig: Figure) -> dict[str, np.ndarray]:
     }
 
 
-def test_the_session_figure_stars_the_recommended_gait_not_a_flagged_highest() -> None:
-    s = Session.create(MemoryStorage(), parse_config(CONFIG_2D), "S01")
+def _highest_walked(config: str) -> tuple[Session, int]:
+    """A session whose subject prefers the higher index, answered until the gait of the highest
+    posterior mean is walked: the session and the number of the trial that walked it (flag it
+    unsafe and the recommended gait is another)."""
+    s = Session.create(MemoryStorage(), parse_config(config), "S01")
     walked: list[int] = []
     for _ in range(20):  # the subject prefers the higher index, until the argmax is walked
         q = s.next_query()
@@ -135,33 +140,53 @@ def test_the_session_figure_stars_the_recommended_gait_not_a_flagged_highest() -
         if walked:
             break
     assert walked
-    pic = session_picture(s, samples=0)
-    fig = render_session(pic)
-    marks = _marks(fig)
+    return s, walked[-1]
+
+
+def _drawn(fig: Figure) -> tuple[dict[str, np.ndarray], set[str]]:
+    """The figure's marks (:func:`_marks`) and legend texts; the figure closed."""
+    marks, texts = _marks(fig), _legend_texts(fig)
     plt.close(fig)
-    assert pic.recommended == s.posterior().argmax and HIGHEST_LABEL not in marks
-    s.flag_unsafe(walked[-1], "knee gave way")
+    return marks, texts
+
+
+def _check_the_recommended_star(config: str, at: Callable[[FloatArray, int], list[float]]) -> None:
+    """The session figure, then the console's posterior figure of a session of ``config``: the
+    star on the recommended gait, no circle while it is the highest; once the highest is flagged
+    unsafe, the circle on it.  ``at(mean, action)``: where a figure marks ``action``."""
+    from gaitpref.console.figures import picture_of  # the console's figure beside "Best so far"
+
+    s, walked = _highest_walked(config)
+    pic = session_picture(s, samples=0)
+    marks, _ = _drawn(render_session(pic))
+    best = s.posterior().argmax
+    assert pic.recommended == best and HIGHEST_LABEL not in marks
+    assert np.allclose(marks[RECOMMENDED_LABEL], [at(pic.mean, best)])
+    s.flag_unsafe(walked, "knee gave way")
     highest, rec = s.posterior().argmax, s.recommended()
     assert rec is not None and rec != highest
     pic = session_picture(s, samples=0)
     assert pic.recommended == rec
-    fig = render_session(pic)
-    marks = _marks(fig)
-    assert {RECOMMENDED_LABEL, HIGHEST_LABEL} <= _legend_texts(fig)
-    plt.close(fig)
-    point = s.space.points  # the heat map's x is the second feature, its y the first
-    assert np.allclose(marks[RECOMMENDED_LABEL], [[point[rec][1], point[rec][0]]])
-    assert np.allclose(marks[HIGHEST_LABEL], [[point[highest][1], point[highest][0]]])
-    from gaitpref.console.figures import picture_of  # the console's figure beside "Best so far"
-
+    marks, texts = _drawn(render_session(pic))
+    assert {RECOMMENDED_LABEL, HIGHEST_LABEL} <= texts
+    assert np.allclose(marks[RECOMMENDED_LABEL], [at(pic.mean, rec)])
+    assert np.allclose(marks[HIGHEST_LABEL], [at(pic.mean, highest)])
     posterior = picture_of(s, "posterior")
     assert isinstance(posterior, PosteriorPicture) and posterior.recommended == rec
-    fig = render(posterior)
-    marks = _marks(fig)
-    plt.close(fig)
-    assert np.allclose(marks[RECOMMENDED_LABEL], [[point[rec][1], point[rec][0]]])
-    assert np.allclose(marks[HIGHEST_LABEL], [[point[highest][1], point[highest][0]]])
+    marks, texts = _drawn(render(posterior))
+    assert {RECOMMENDED_LABEL, HIGHEST_LABEL} <= texts
+    assert np.allclose(marks[RECOMMENDED_LABEL], [at(posterior.mean, rec)])
+    assert np.allclose(marks[HIGHEST_LABEL], [at(posterior.mean, highest)])
     assert "best posterior mean" not in marks
+
+
+def test_the_session_figure_stars_the_recommended_gait_not_a_flagged_highest() -> None:
+    point = parse_config(CONFIG_2D).space.points
+
+    def at(mean: FloatArray, action: int) -> list[float]:
+        return [point[action][1], point[action][0]]  # the heat map's x: the second feature
+
+    _check_the_recommended_star(CONFIG_2D, at)
 
 
 def test_no_best_is_marked_before_a_preference_is_learned() -> None:
@@ -201,3 +226,57 @@ def test_the_learning_curves_are_not_clipped(
     ax = captured[0].axes[0]
     assert ax.get_ylim()[0] <= 0.12 - 0.01  # the lowest band is inside the axes
     assert ax.get_ylim()[1] == 1.0
+
+
+CONFIG_1D = """
+name = "best-1d"
+[space.step_length]
+min = 0.08
+max = 0.18
+num = 8
+[model]
+lengthscale = 0.03
+signal_variance = 0.005
+noise = 0.02
+jitter = 0.0
+fit = "fixed"
+[cospar]
+seed = 1
+strategy = "self-sparring"
+[safety]
+unsafe_radius = 0.1
+"""
+
+
+def test_the_1d_figures_star_the_recommended_gait_not_a_flagged_highest() -> None:
+    """As on the heat map: the star on the mean curve at the recommended gait, the hollow circle
+    at the highest when another; the session figure's posterior panel and the console's."""
+    x = parse_config(CONFIG_1D).space.points[:, 0]
+
+    def at(mean: FloatArray, action: int) -> list[float]:
+        return [x[action], mean[action]]  # on the mean curve
+
+    _check_the_recommended_star(CONFIG_1D, at)
+
+
+def test_no_best_is_marked_on_the_1d_figures_before_a_preference_is_learned() -> None:
+    s = Session.create(MemoryStorage(), parse_config(CONFIG_1D), "S01")
+    fig = render_session(session_picture(s, samples=0))
+    assert not {RECOMMENDED_LABEL, HIGHEST_LABEL} & set(_marks(fig))
+    plt.close(fig)
+    from gaitpref.console.figures import picture_of
+
+    posterior = picture_of(s, "posterior")
+    assert isinstance(posterior, PosteriorPicture)
+    fig = render(posterior)
+    assert not {RECOMMENDED_LABEL, HIGHEST_LABEL} & set(_marks(fig))
+    plt.close(fig)
+
+
+def test_a_1d_posterior_figure_without_a_session_marks_no_best() -> None:
+    """Simulation figures (no ``recommended``) draw the 1-D posterior as before: no star."""
+    s = _session("exo-1d-step-length", 6)
+    pic = posterior_picture(s.posterior(), [t.action for t in s.trials()], samples=0)
+    fig = render(pic)
+    assert not {RECOMMENDED_LABEL, HIGHEST_LABEL} & set(_marks(fig))
+    plt.close(fig)

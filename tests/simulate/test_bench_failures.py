@@ -16,24 +16,17 @@ from typer.testing import CliRunner
 
 from gaitpref.cli import app
 from gaitpref.config import load_config
-from gaitpref.simulate import population as population_module
 from gaitpref.simulate.partial import RunError, RunFailure
 from gaitpref.simulate.population import population_bench
 from gaitpref.simulate.sweep import run_tasks
 from tests.simulate.breaking import fails_at_three
-
-CONTINUOUS = """\
-[space.a]
-min = 0.0
-max = 2.0
-[model]
-lengthscale = 0.4
-signal_variance = 1.0
-noise = 0.05
-jitter = 1e-6
-fit = "fixed"
-"""
-POPULATION = "exo-1d-step-length"
+from tests.simulate.resumekit import (
+    POPULATION,
+    break_seed,
+    break_subject,
+    continuous_bench,
+    population_objectives,
+)
 
 
 def _text(output: str) -> str:
@@ -65,26 +58,7 @@ def test_run_tasks_returns_the_finished_runs_and_the_first_failure(jobs: int) ->
 
 @pytest.fixture()
 def continuous_args(tmp_path: Path) -> list[str]:
-    cfg = tmp_path / "cont.toml"
-    cfg.write_text(CONTINUOUS)
-    obj = tmp_path / "obj.py"
-    obj.write_text("import numpy as np\ndef f(x):\n    return -np.abs(x[:, 0] - 1.0)\n")
-    return ["bench", "continuous", str(cfg), "--objective", f"{obj}:f", "--runs", "4",
-            "--trials", "5"]  # fmt: skip
-
-
-def _break_seed(monkeypatch: pytest.MonkeyPatch, seed: int) -> None:
-    """The run of ``seed`` raises (the runs of bench continuous run in this process)."""
-    import gaitpref.cli.points as points
-
-    real = points.simulate_points
-
-    def simulate_points(*args: Any, **kwargs: Any) -> Any:
-        if kwargs["seed"] == seed:
-            raise ValueError("the treadmill stopped")
-        return real(*args, **kwargs)
-
-    monkeypatch.setattr(points, "simulate_points", simulate_points)
+    return continuous_bench(tmp_path)
 
 
 def test_bench_continuous_names_the_failed_run_and_keeps_the_finished_ones(
@@ -93,7 +67,7 @@ def test_bench_continuous_names_the_failed_run_and_keeps_the_finished_ones(
     clean = CliRunner().invoke(app, [*continuous_args, "--json"])
     assert clean.exit_code == 0, clean.output
     runs = json.loads(clean.stdout)["runs"]
-    _break_seed(monkeypatch, 2)
+    break_seed(monkeypatch, 2)
     partial = tmp_path / "kept.jsonl"
     result = CliRunner().invoke(app, [*continuous_args, "--json", "--partial", str(partial)])
     assert result.exit_code == 1, result.output
@@ -119,7 +93,7 @@ def test_bench_continuous_keeps_them_in_a_temporary_file_by_default(
     ok = CliRunner().invoke(app, continuous_args)
     assert ok.exit_code == 0, ok.output
     assert list(folder.iterdir()) == []  # a bench that finished keeps no partial file
-    _break_seed(monkeypatch, 1)
+    break_seed(monkeypatch, 1)
     result = CliRunner().invoke(app, continuous_args)
     assert result.exit_code == 1, result.output
     (kept,) = folder.iterdir()
@@ -135,7 +109,7 @@ def test_a_bench_that_finishes_or_fails_first_leaves_no_partial_file(
     ok = CliRunner().invoke(app, [*continuous_args, "--partial", str(partial)])
     assert ok.exit_code == 0, ok.output
     assert not partial.exists()
-    _break_seed(monkeypatch, 0)
+    break_seed(monkeypatch, 0)
     result = CliRunner().invoke(app, [*continuous_args, "--partial", str(partial)])
     assert result.exit_code == 1, result.output
     assert "0 of 4 runs finished (none to keep)" in _text(result.stderr)
@@ -181,23 +155,7 @@ def test_a_tolerance_outside_0_1_is_refused_before_any_run(
 
 @pytest.fixture()
 def population_file(tmp_path: Path) -> Path:
-    x = np.linspace(0, 1, len(load_config(POPULATION).space))
-    path = tmp_path / "objectives.npy"
-    np.save(path, np.array([-((x - p) ** 2) for p in (0.6, 0.65, 0.7)]))
-    return path
-
-
-def _break_subject(monkeypatch: pytest.MonkeyPatch, subject: int, arm: str) -> None:
-    """Subject ``subject``'s ``arm`` run raises (with jobs = 1 the runs run in this process)."""
-    real = population_module._walk
-
-    def walk(*args: Any) -> Any:
-        seeds, others = args[4], args[5]  # (seed, subject); the others' preferences when warm
-        if seeds[1] == subject and (others is not None) == (arm == "warm"):
-            raise ValueError("the subject left")
-        return real(*args)
-
-    monkeypatch.setattr(population_module, "_walk", walk)
+    return population_objectives(tmp_path)
 
 
 def test_bench_population_names_the_failed_run_and_keeps_the_finished_ones(
@@ -208,7 +166,7 @@ def test_bench_population_names_the_failed_run_and_keeps_the_finished_ones(
     clean = CliRunner().invoke(app, args)
     assert clean.exit_code == 0, clean.output
     subjects = json.loads(clean.stdout)["subjects"]
-    _break_subject(monkeypatch, 1, "warm")
+    break_subject(monkeypatch, 1, "warm")
     partial = tmp_path / "kept.jsonl"
     result = CliRunner().invoke(app, [*args, "--partial", str(partial)])
     assert result.exit_code == 1, result.output
@@ -233,7 +191,7 @@ def test_population_bench_keeps_the_finished_runs_on_its_error(
 ) -> None:
     """From Python: the error names the run and carries the finished runs' records; a cold run
     that fails stops the bench before any warm run."""
-    _break_subject(monkeypatch, 2, "cold")
+    break_subject(monkeypatch, 2, "cold")
     with pytest.raises(RunError) as info:
         population_bench(load_config(POPULATION), np.load(population_file), 3)
     err = info.value

@@ -7,60 +7,50 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
-from gaitpref.cli import app
 from gaitpref.config import load_config
-from gaitpref.simulate import population as population_module
 from gaitpref.simulate.population import population_bench
-
-CONFIG = "exo-1d-step-length"
+from tests.simulate.resumekit import (
+    POPULATION,
+    break_subject,
+    check_resume_needs_an_existing_partial_file,
+    invoke,
+    population_objectives,
+    read_lines,
+    resume,
+    write_lines,
+)
 
 
 @pytest.fixture()
 def objectives(tmp_path: Path) -> Path:
-    x = np.linspace(0, 1, len(load_config(CONFIG).space))
-    path = tmp_path / "objectives.npy"
-    np.save(path, np.array([-((x - p) ** 2) for p in (0.6, 0.65, 0.7)]))
-    return path
+    return population_objectives(tmp_path)
 
 
 @pytest.fixture()
 def args(objectives: Path) -> list[str]:
     return ["bench", "population", "--objectives", str(objectives), "--trials", "4",
-            "--config", CONFIG, "--json"]  # fmt: skip
-
-
-def _invoke(*args: str) -> tuple[int, str, str]:
-    result = CliRunner().invoke(app, list(args))
-    return result.exit_code, result.stdout, " ".join(result.stderr.split())
-
-
-def _break(monkeypatch: pytest.MonkeyPatch, subject: int, arm: str) -> list[tuple[str, int]]:
-    """Subject ``subject``'s ``arm`` run raises (with jobs = 1 the runs run in this process);
-    the returned list holds the runs that ran, as (arm, subject)."""
-    real, ran = population_module._walk, []
-
-    def walk(*args: Any) -> Any:
-        seeds, others = args[4], args[5]  # (seed, subject); the others' preferences when warm
-        which = ("cold" if others is None else "warm", seeds[1])
-        ran.append(which)
-        if which == (arm, subject):
-            raise ValueError("the subject left")
-        return real(*args)
-
-    monkeypatch.setattr(population_module, "_walk", walk)
-    return ran
+            "--config", POPULATION, "--json"]  # fmt: skip
 
 
 def _runs(path: Path) -> list[tuple[str, int]]:
     lines = [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines()]
     assert lines[0]["gaitpref bench"]["bench"] == "population"
     return [(r["run"], r["subject"]) for r in lines[1:]]
+
+
+def _stopped(
+    args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch, subject: int, arm: str
+) -> Path:
+    """The bench run with ``--partial tmp_path/kept.jsonl`` and subject ``subject``'s ``arm`` run
+    failing: it stops (status 1), the finished runs in that file, which is returned."""
+    partial = tmp_path / "kept.jsonl"
+    break_subject(monkeypatch, subject, arm)
+    assert invoke(*args, "--partial", str(partial))[0] == 1
+    return partial
 
 
 @pytest.mark.parametrize(
@@ -83,18 +73,18 @@ def test_a_resumed_bench_prints_the_uninterrupted_json(
 ) -> None:
     """Stopped in the cold runs, the warm runs start from the kept cold runs' preferences read
     back from the file; stopped in the warm runs, only the rest run."""
-    code, whole, err = _invoke(*args)
+    code, whole, err = invoke(*args)
     assert code == 0, err
     partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, subject, arm)
-    code, out, err = _invoke(*args, "--partial", str(partial))
+    break_subject(monkeypatch, subject, arm)
+    code, out, err = invoke(*args, "--partial", str(partial))
     assert code == 1 and out == "", err
     assert f"subject {subject} ({arm}), seed 0 failed (ValueError): the subject left" in err
     assert f"the same command with --partial '{partial}' --resume continues the bench" in err
     assert _runs(partial) == kept
     monkeypatch.undo()
-    ran = _break(monkeypatch, -1, "cold")  # none breaks now; which runs run is recorded
-    code, out, err = _invoke(*args, "--partial", str(partial), "--resume")
+    ran = break_subject(monkeypatch, -1, "cold")  # none breaks now; which runs run is recorded
+    code, out, err = resume(args, partial)
     assert code == 0, err
     assert ran == rerun
     assert out == whole  # byte for byte
@@ -104,18 +94,16 @@ def test_a_resumed_bench_prints_the_uninterrupted_json(
 def test_stopped_twice_and_resumed_on_two_processes(
     args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    code, whole, _ = _invoke(*args)
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "cold")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
+    code, whole, _ = invoke(*args)
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "cold")
     monkeypatch.undo()
-    _break(monkeypatch, 0, "warm")
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    break_subject(monkeypatch, 0, "warm")
+    code, _, err = resume(args, partial)
     assert code == 1, err
     assert f"3 of 6 runs finished; their results are in {partial}" in err
     assert _runs(partial) == [("cold", 0), ("cold", 1), ("cold", 2)]
     monkeypatch.undo()
-    code, out, err = _invoke(*args, "--partial", str(partial), "--resume", "--jobs", "2")
+    code, out, err = resume(args, partial, "--jobs", "2")
     assert code == 0, err
     assert out == whole
 
@@ -124,15 +112,13 @@ def test_a_last_line_cut_short_is_dropped_with_a_warning(
     args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """The machine died writing subject 1's cold line: it is dropped and that run runs again."""
-    code, whole, _ = _invoke(*args)
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 2, "cold")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
+    code, whole, _ = invoke(*args)
+    partial = _stopped(args, tmp_path, monkeypatch, 2, "cold")
     data = partial.read_bytes()
     partial.write_bytes(data[:-10])
     monkeypatch.undo()
-    ran = _break(monkeypatch, -1, "cold")
-    code, out, err = _invoke(*args, "--partial", str(partial), "--resume")
+    ran = break_subject(monkeypatch, -1, "cold")
+    code, out, err = resume(args, partial)
     assert code == 0, err
     assert f"warning: {partial}:3: the last line is cut short" in err
     assert ran == [("cold", 1), ("cold", 2), ("warm", 0), ("warm", 1), ("warm", 2)]
@@ -155,12 +141,10 @@ def test_a_file_of_other_options_is_refused_naming_them(
     change: list[str],
     message: str,
 ) -> None:
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "warm")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "warm")
     kept = partial.read_bytes()
-    ran = _break(monkeypatch, -1, "cold")
-    code, _, err = _invoke(*args, *change, "--partial", str(partial), "--resume")
+    ran = break_subject(monkeypatch, -1, "cold")
+    code, _, err = resume(args, partial, *change)
     assert code == 2, err
     assert f"{partial} holds the finished runs of another bench: {message}" in err
     assert ran == [] and partial.read_bytes() == kept
@@ -169,12 +153,10 @@ def test_a_file_of_other_options_is_refused_naming_them(
 def test_another_config_text_is_refused(
     args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "warm")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "warm")
     edited = tmp_path / "edited.toml"
-    edited.write_text(load_config(CONFIG).text + "\n# edited\n", encoding="utf-8")
-    code, _, err = _invoke(*args, "--config", str(edited), "--partial", str(partial), "--resume")
+    edited.write_text(load_config(POPULATION).text + "\n# edited\n", encoding="utf-8")
+    code, _, err = invoke(*args, "--config", str(edited), "--partial", str(partial), "--resume")
     assert code == 2, err
     assert f"{partial} holds the finished runs of another bench: config_sha256 differs" in err
 
@@ -182,14 +164,12 @@ def test_another_config_text_is_refused(
 def test_another_objectives_file_is_refused(
     args: list[str], objectives: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "warm")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "warm")
     kept = partial.read_bytes()
     values = np.load(objectives)
     values[2] = values[2][::-1]
     np.save(objectives, values)
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    code, _, err = resume(args, partial)
     assert code == 2, err
     assert f"{partial} holds the finished runs of another bench: objectives_sha256 differs" in err
     assert partial.read_bytes() == kept
@@ -198,14 +178,12 @@ def test_another_objectives_file_is_refused(
 def test_a_file_of_bench_continuous_is_refused(
     args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "warm")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
-    lines = partial.read_text(encoding="utf-8").splitlines(keepends=True)
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "warm")
+    lines = read_lines(partial)
     first = json.loads(lines[0])
     first["gaitpref bench"]["bench"] = "continuous"
     partial.write_text(json.dumps(first) + "\n" + "".join(lines[1:]), encoding="utf-8")
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    code, _, err = resume(args, partial)
     assert code == 2, err
     assert 'bench differs: "continuous" in the file, "population" here' in err
 
@@ -213,45 +191,38 @@ def test_a_file_of_bench_continuous_is_refused(
 def test_a_damaged_line_is_refused_naming_it(
     args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 1, "warm")
-    assert _invoke(*args, "--partial", str(partial))[0] == 1
-    lines = partial.read_text(encoding="utf-8").splitlines(keepends=True)
+    partial = _stopped(args, tmp_path, monkeypatch, 1, "warm")
+    lines = read_lines(partial)
     cold = json.loads(lines[2])
     assert (cold["run"], cold["subject"]) == ("cold", 1)
     del cold["preferences"]["loser"][0]  # one preference short
     lines[2] = json.dumps(cold) + "\n"
-    partial.write_text("".join(lines), encoding="utf-8")
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    write_lines(partial, lines)
+    code, _, err = resume(args, partial)
     assert code == 2, err
     assert f"{partial}:3: not a run record of bench population (subject 1, cold)" in err
     lines[2] = lines[1]
-    partial.write_text("".join(lines), encoding="utf-8")
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    write_lines(partial, lines)
+    code, _, err = resume(args, partial)
     assert code == 2 and f"{partial}:3: the cold run of subject 0 is in the file twice" in err
     lines[2] = '{"subject": 7, "run": "cold"}\n'
-    partial.write_text("".join(lines), encoding="utf-8")
-    code, _, err = _invoke(*args, "--partial", str(partial), "--resume")
+    write_lines(partial, lines)
+    code, _, err = resume(args, partial)
     assert code == 2 and f"{partial}:3: not a run of this bench (subjects 0..2" in err
 
 
 def test_resume_needs_an_existing_partial_file(args: list[str], tmp_path: Path) -> None:
-    code, _, err = _invoke(*args, "--resume")
-    assert code == 2 and "--resume needs --partial FILE" in err
-    missing = tmp_path / "none.jsonl"
-    code, _, err = _invoke(*args, "--partial", str(missing), "--resume")
-    assert code == 2 and f"--resume: --partial '{missing}' is not a file" in err
-    assert not missing.exists()
+    check_resume_needs_an_existing_partial_file(args, tmp_path)
 
 
 def test_population_bench_resumes_from_python(
     objectives: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """``population_bench(..., partial=PATH, resume=True)`` returns the uninterrupted result."""
-    cfg, values = load_config(CONFIG), np.load(objectives)
+    cfg, values = load_config(POPULATION), np.load(objectives)
     whole = population_bench(cfg, values, 3, samples=50)
     partial = tmp_path / "kept.jsonl"
-    _break(monkeypatch, 2, "cold")
+    break_subject(monkeypatch, 2, "cold")
     with pytest.raises(RuntimeError):
         population_bench(cfg, values, 3, samples=50, partial=partial)
     monkeypatch.undo()

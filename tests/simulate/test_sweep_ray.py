@@ -92,12 +92,13 @@ def test_a_study_stopped_on_joblib_resumes_on_ray_with_the_same_table(
     """Runs are seeded by their coordinates only: where the rest run does not matter."""
     from gaitpref.simulate.partial import StudyRunError
     from tests.simulate.breaking import Raising
-    from tests.simulate.test_sweep_resume import _breaking, _same, _study
+    from tests.simulate.resumekit import break_task
+    from tests.simulate.test_sweep_resume import _same, _study
 
     study = _study()
     whole = run_study(study, backend="joblib", jobs=1)
     partial = tmp_path / "runs.partial.csv"
-    undo = _breaking(monkeypatch, Raising(), 5)
+    undo = break_task(monkeypatch, Raising(), 5)
     with pytest.raises(StudyRunError):
         run_study(study, backend="joblib", jobs=1, partial=partial)
     undo()

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import warnings
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -16,11 +15,12 @@ import pytest
 from gaitpref.config import load_config
 from gaitpref.data import paper_objectives
 from gaitpref.simulate.partial import StudyRunError
-from gaitpref.simulate.resume import PartialRunsWarning, ResumeError, read_partial
+from gaitpref.simulate.resume import PartialRunsWarning, ResumeError, read_partial, write_partial
 from gaitpref.simulate.study import RunTask, Setting, Study
 from gaitpref.simulate.sweep import StudyResult, run_study
 from gaitpref.simulate.tables import read_table
 from tests.simulate.breaking import Dying, Raising
+from tests.simulate.resumekit import break_task
 
 RATING = '[feedback.rating]\nlabels = ["very bad", "bad", "okay", "good"]\n'
 TRIALS = 8
@@ -61,25 +61,11 @@ def uninterrupted(study: Study) -> StudyResult:
     return run_study(study, jobs=1)
 
 
-def _breaking(monkeypatch: pytest.MonkeyPatch, objective: object, index: int) -> Callable[[], None]:
-    """``Study.tasks`` with run ``index``'s objective replaced by ``objective``; the returned
-    function undoes it."""
-    tasks = Study.tasks
-
-    def broken(self: Study) -> list[RunTask]:
-        out = tasks(self)
-        out[index] = dataclasses.replace(out[index], objective=objective)  # type: ignore[arg-type]
-        return out
-
-    monkeypatch.setattr(Study, "tasks", broken)
-    return monkeypatch.undo
-
-
 def _stop_at(
     study: Study, partial: Path, monkeypatch: pytest.MonkeyPatch, index: int, jobs: int = 1
 ) -> StudyRunError:
     """Run ``study`` (resuming when ``partial`` exists) with run ``index`` failing."""
-    undo = _breaking(monkeypatch, Raising(), index)
+    undo = break_task(monkeypatch, Raising(), index)
     try:
         with pytest.raises(StudyRunError) as info:
             run_study(study, jobs=jobs, partial=partial, resume=partial.exists())
@@ -140,7 +126,7 @@ def test_a_study_whose_worker_died_resumes(
     study: Study, uninterrupted: StudyResult, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     partial = tmp_path / "runs.partial.csv"
-    undo = _breaking(monkeypatch, Dying(), 5)
+    undo = break_task(monkeypatch, Dying(), 5)
     with pytest.raises(StudyRunError):
         run_study(study, jobs=2, partial=partial)
     undo()
@@ -181,7 +167,7 @@ def test_a_last_run_cut_at_a_line_end_is_dropped_with_a_warning(
     partial.write_text("".join(rows[:-3]), encoding="utf-8")  # 5 of the last run's 8 rows
     last = len(rows) - 3
     with pytest.warns(PartialRunsWarning, match=rf":lines {last - 4}-{last}: .* has 5 of 8"):
-        undo = _breaking(monkeypatch, Raising(), 7)  # stops again: the file is rewritten
+        undo = break_task(monkeypatch, Raising(), 7)  # stops again: the file is rewritten
         with pytest.raises(StudyRunError, match="7 of 12 runs finished"):
             run_study(study, jobs=1, partial=partial, resume=True)
         undo()
@@ -258,7 +244,7 @@ def test_a_file_of_the_earlier_release_resumes_checked_by_a_run(
     _stop_at(study, partial, monkeypatch, 6)
     _unsigned(partial)
     with pytest.warns(PartialRunsWarning, match="does not name the sweep that wrote it"):
-        undo = _breaking(monkeypatch, Raising(), 8)
+        undo = break_task(monkeypatch, Raising(), 8)
         with pytest.raises(StudyRunError):
             run_study(study, jobs=1, partial=partial, resume=True)
         undo()
@@ -317,14 +303,18 @@ def test_resume_needs_the_file(study: Study, tmp_path: Path) -> None:
     assert not partial.exists()
 
 
+def _every_run(study: Study, uninterrupted: StudyResult, tmp_path: Path) -> Path:
+    """A signed partial table holding every run of ``study``."""
+    partial = tmp_path / "runs.partial.csv"
+    write_partial(partial, study, uninterrupted.table)
+    return partial
+
+
 def test_a_file_holding_every_run_resumes_without_running_any(
     study: Study, uninterrupted: StudyResult, tmp_path: Path
 ) -> None:
     """What the commands keep when a study finished but its files could not be written."""
-    from gaitpref.simulate.resume import write_partial
-
-    partial = tmp_path / "runs.partial.csv"
-    write_partial(partial, study, uninterrupted.table)
+    partial = _every_run(study, uninterrupted, tmp_path)
     _same(run_study(study, jobs=1, partial=partial, resume=True), uninterrupted)
     assert not partial.exists()
 
@@ -332,8 +322,5 @@ def test_a_file_holding_every_run_resumes_without_running_any(
 def test_read_table_reads_a_signed_partial_table(
     study: Study, uninterrupted: StudyResult, tmp_path: Path
 ) -> None:
-    from gaitpref.simulate.resume import write_partial
-
-    partial = tmp_path / "runs.partial.csv"
-    write_partial(partial, study, uninterrupted.table)
+    partial = _every_run(study, uninterrupted, tmp_path)
     assert read_table(partial).equals(uninterrupted.table)

@@ -4,15 +4,14 @@ table and curves an uninterrupted study writes, byte for byte."""
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
-from gaitpref.simulate.study import RunTask, Study
 from tests.simulate.breaking import Raising
+from tests.simulate.resumekit import break_task
 
 ARGS = ("--runs", "2", "--trials", "5", "--settings", "n1_b1", "--jobs", "1")
 COMPASS = ("--runs", "2", "--trials", "5", "--iterations", "1,3", "--jobs", "1")
@@ -21,17 +20,6 @@ COMPASS = ("--runs", "2", "--trials", "5", "--iterations", "1,3", "--jobs", "1")
 def _invoke(command: str, out: Path, *args: str) -> tuple[int, str]:
     result = CliRunner().invoke(app, ["bench", command, *args, "--out", str(out)])
     return result.exit_code, " ".join(result.output.split())  # Rich wraps long lines
-
-
-def _break(monkeypatch: pytest.MonkeyPatch, objective: object, index: int) -> None:
-    tasks = Study.tasks
-
-    def broken(self: Study) -> list[RunTask]:
-        out = tasks(self)
-        out[index] = dataclasses.replace(out[index], objective=objective)  # type: ignore[arg-type]
-        return out
-
-    monkeypatch.setattr(Study, "tasks", broken)
 
 
 class _Interrupting:
@@ -61,7 +49,7 @@ def test_a_stopped_study_resumed_writes_the_uninterrupted_files(
     whole, resumed = tmp_path / "whole", tmp_path / "resumed"
     code, out = _invoke(command, whole, *args)
     assert code == 0, out
-    _break(monkeypatch, stop, 2)
+    break_task(monkeypatch, stop, 2)
     code, out = _invoke(command, resumed, *args)
     assert code == status, out
     assert "runs.partial.csv" in out and not (resumed / "runs.csv").exists()
@@ -84,7 +72,7 @@ def test_resume_without_a_partial_table_is_refused(tmp_path: Path) -> None:
 def test_a_partial_table_of_other_options_is_refused_naming_them(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    _break(monkeypatch, Raising(), 2)
+    break_task(monkeypatch, Raising(), 2)
     code, out = _invoke("paper-2d", tmp_path, *ARGS)
     assert code == 1, out
     monkeypatch.undo()
@@ -105,7 +93,7 @@ def test_a_line_cut_short_is_dropped_with_a_warning(
 ) -> None:
     whole, resumed = tmp_path / "whole", tmp_path / "resumed"
     assert _invoke("paper-2d", whole, *ARGS)[0] == 0
-    _break(monkeypatch, Raising(), 3)
+    break_task(monkeypatch, Raising(), 3)
     assert _invoke("paper-2d", resumed, *ARGS)[0] == 1
     monkeypatch.undo()
     partial = resumed / "runs.partial.csv"

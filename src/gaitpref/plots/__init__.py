@@ -39,18 +39,24 @@ def plain(text: str) -> str:
 
 
 def mark_best(ax: Axes, points: FloatArray, mean: FloatArray, recommended: int | None) -> None:
-    """On a 2-D heat map (x: the second feature, y: the first): the ``recommended`` gait starred
-    (None: no gait may be proposed, no star) and, when another, the highest ``mean`` over every
-    gait circled (hollow).  Neither while the mean is flat: every gait as likely to be the best
-    (the console's "No preference learned yet")."""
+    """On a 1-D posterior curve (x: the feature, y: the posterior mean) or a 2-D heat map (x: the
+    second feature, y: the first): the ``recommended`` gait starred (None: no gait may be
+    proposed, no star) and, when another, the highest ``mean`` over every gait circled (hollow).
+    Neither while the mean is flat: every gait as likely to be the best (the console's "No
+    preference learned yet")."""
     if not mean.size or mean.max() <= mean.min():
         return
     highest = int(np.argmax(mean))
+
+    def at(action: int) -> tuple[float, float]:
+        p = points[action]
+        return (float(p[0]), float(mean[action])) if p.size == 1 else (float(p[1]), float(p[0]))
+
     if recommended is not None:
-        p = points[recommended]
-        ax.scatter([p[1]], [p[0]], marker="*", s=160, c="red", edgecolors="k", zorder=4,
+        x, y = at(recommended)
+        ax.scatter([x], [y], marker="*", s=160, c="red", edgecolors="k", zorder=4,
                    label=RECOMMENDED_LABEL)  # fmt: skip
     if highest != recommended:
-        q = points[highest]
-        ax.scatter([q[1]], [q[0]], marker="o", s=160, facecolors="none", edgecolors="red",
+        x, y = at(highest)
+        ax.scatter([x], [y], marker="o", s=160, facecolors="none", edgecolors="red",
                    linewidths=1.8, zorder=4, label=HIGHEST_LABEL)  # fmt: skip

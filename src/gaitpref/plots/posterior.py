@@ -4,7 +4,9 @@ The data of a picture is computed first (:class:`PosteriorPicture`, plain arrays
 with matplotlib (Agg backend, no screen needed):
 
 - 1-D: posterior mean +- 2 standard deviations (:data:`gaitpref.plots.BAND_SD`, the band of
-  every figure), a few joint posterior samples, the trials coloured by order (colour bar);
+  every figure), a few joint posterior samples, the trials coloured by order (colour bar); a
+  session's figure (``recommended`` given: the console's) stars the recommended gait on the mean
+  and circles the highest over every gait when that is another (:func:`gaitpref.plots.mark_best`);
 - 2-D: a heat map of the posterior mean (colour bar) with the trials in chronological order
   (shaded by order, their own colour bar), the best posterior mean starred and, when the true
   objective is known, its best marked with an X; a legend names the marks.  A session's figure
@@ -116,6 +118,8 @@ def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
         ax2.set_ylabel("true objective")
     if pic.safety is not None:
         draw_1d(ax, x, pic.mean, pic.safety)
+    if pic.recommending:
+        mark_best(ax, pic.space.points, pic.mean, pic.recommended)
     ax.set_xlabel(_axis_label(pic.space, 0))
     ax.set_ylabel("utility")
     ax.legend(loc="best", fontsize=8)

@@ -1,7 +1,8 @@
 """The figure of a session, as in the paper's Figs. 2 and 3 (one row per subject there).
 
 - 1-D: the posterior mean +- 2 standard deviations (:data:`gaitpref.plots.BAND_SD`, as every
-  figure) with a few joint samples and the trials;
+  figure) with a few joint samples and the trials, the recommended gait starred on the mean and
+  the highest over every gait, when another, circled (as on the 2-D heat map below);
   beside it the trials in chronological order (trial number upwards) over a background that
   shows, row by row, the posterior mean after each trial ("the background depicting the posterior
   preference mean at each step length").
@@ -109,6 +110,7 @@ def _posterior_1d(ax: Axes, pic: SessionPicture) -> None:
     if pic.excluded.any():
         ax.scatter(x[pic.trials[~kept]], pic.mean[pic.trials[~kept]], marker="x", c="r", s=30,
                    zorder=3, label="excluded")  # fmt: skip
+    mark_best(ax, pic.space.points, pic.mean, pic.recommended)
     ax.set_xlabel(_label(pic.space, 0))
     ax.set_ylabel("utility")
     ax.legend(loc="best", fontsize=7)
