@@ -44,9 +44,14 @@ MAX_POPULATION_NODES = 10_000
 #: The authors' objectives of the paper's Fig. 4 (``gaitpref.data.paper_objectives``): ``bench
 #: paper-2d --runs`` runs objective k in run k, so it takes at most this many.
 PAPER_OBJECTIVES = 100
+#: The largest partial file a resumed sweep reads (``--resume``: ``OUT/runs.partial.csv``, a
+#: bench's ``--partial``): it is read whole, and a study's run table is at most about 1 GB
+#: (:data:`MAX_STUDY_TRIALS` rows of about 100 bytes); a larger file is refused, not read.
+MAX_PARTIAL_BYTES = 2 * 1024**3
 
 __all__ = [
     "MAX_JOBS",
+    "MAX_PARTIAL_BYTES",
     "MAX_POPULATION_NODES",
     "MAX_RUNS",
     "MAX_SEED",

@@ -41,6 +41,7 @@ import numpy as np
 from gaitpref import __version__
 from gaitpref.atomic import write_text_atomic
 from gaitpref.errors import GaitprefError
+from gaitpref.limits import MAX_PARTIAL_BYTES
 from gaitpref.simulate.study import RunResult, RunTask, Study, run_one
 from gaitpref.simulate.tables import COMMENT, RunTable, csv_rows, run_columns
 
@@ -228,12 +229,25 @@ class Kept:
     rewrite: bool
 
 
+def partial_bytes(path: Path) -> bytes:
+    """The bytes of the partial file ``path``, read whole: :class:`ResumeError` naming the file
+    when it is larger than :data:`~gaitpref.limits.MAX_PARTIAL_BYTES` (no sweep writes one that
+    large; it is not read)."""
+    size = path.stat().st_size
+    if size > MAX_PARTIAL_BYTES:
+        raise ResumeError(
+            f"{path}: {size:,} bytes, more than the {MAX_PARTIAL_BYTES:,} a resumed sweep reads "
+            "(no sweep writes a partial file that large): not read; run the sweep afresh"
+        )
+    return path.read_bytes()
+
+
 def read_partial(path: Path, study: Study, tasks: Sequence[RunTask] | None = None) -> Kept:
     """The finished runs of ``study`` in its partial table ``path`` (as the module says):
     :class:`ResumeError` for a file of another sweep or not a run table of this study, a
     :class:`PartialRunsWarning` for each thing dropped; ``tasks``: ``study.tasks()``."""
     tasks = study.tasks() if tasks is None else tasks
-    data = path.read_bytes()
+    data = partial_bytes(path)
     end = data.rfind(b"\n") + 1
     rewrite = False
     if end < len(data):

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from gaitpref.atomic import write_text_atomic
-from gaitpref.simulate.resume import PartialRunsWarning, ResumeError
+from gaitpref.simulate.resume import PartialRunsWarning, ResumeError, partial_bytes
 
 #: the key of a bench's partial file's first line
 KEY = "gaitpref bench"
@@ -45,7 +45,7 @@ def _short(value: object) -> str:
 def read_lines(path: Path, sweep: Mapping[str, object]) -> tuple[list[tuple[int, Any]], bool]:
     """The runs in ``path`` (each with its line number), checked to be those of the bench
     ``sweep`` describes, and whether the file must be written again (a line was dropped)."""
-    data = path.read_bytes()
+    data = partial_bytes(path)
     end = data.rfind(b"\n") + 1
     rewrite = False
     if end < len(data):
