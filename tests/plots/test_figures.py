@@ -19,6 +19,7 @@ from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
 from gaitpref.plots.session import render_session, session_picture, trial_numbers
 from gaitpref.space import FloatArray
 from gaitpref.storage import MemoryStorage
+from tests.sessions.unsafekit import unsafe_config
 
 
 def _session(config: str, answers: int) -> Session:
@@ -228,24 +229,7 @@ def test_the_learning_curves_are_not_clipped(
     assert ax.get_ylim()[1] == 1.0
 
 
-CONFIG_1D = """
-name = "best-1d"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 8
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-jitter = 0.0
-fit = "fixed"
-[cospar]
-seed = 1
-strategy = "self-sparring"
-[safety]
-unsafe_radius = 0.1
-"""
+CONFIG_1D = unsafe_config("best-1d", 0.1, num=8)
 
 
 def test_the_1d_figures_star_the_recommended_gait_not_a_flagged_highest() -> None:

@@ -15,25 +15,7 @@ from gaitpref.cli import app
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
 from gaitpref.sessions import posterior_summary, preference_learned
-
-CONFIG = """
-name = "best-1d"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 15
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-jitter = 0.0
-fit = "fixed"
-[cospar]
-seed = 1
-strategy = "self-sparring"
-[safety]
-unsafe_radius = RADIUS
-"""
+from tests.sessions.unsafekit import unsafe_config
 
 runner = CliRunner()
 
@@ -49,7 +31,7 @@ def _show(url: str, sid: int) -> tuple[str, dict[str, object]]:
 def _session_with_a_walked_argmax(url: str, radius: float) -> tuple[Session, int]:
     """A session whose posterior argmax is a gait walked in trial ``number`` (returned): the
     subject prefers the longer step each time."""
-    s = Session.create(url, parse_config(CONFIG.replace("RADIUS", str(radius))), "S01")
+    s = Session.create(url, parse_config(unsafe_config("best-1d", radius)), "S01")
     for _ in range(12):
         q = s.next_query()
         a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
@@ -122,7 +104,7 @@ def test_no_best_so_far_before_a_preference_is_learned(tmp_path: Path) -> None:
     """0 trials: the flat prior's argmax is the first gait for no reason; ``session show`` says
     what the console says (the same condition), and ``--json`` keeps its documented fields."""
     url = f"sqlite:///{tmp_path / 'b.db'}"
-    s = Session.create(url, parse_config(CONFIG.replace("RADIUS", "0.1")), "S01")
+    s = Session.create(url, parse_config(unsafe_config("best-1d", 0.1)), "S01")
     assert not preference_learned(s.posterior().mean) and not s.trials()
     sid = s.id
     s.close()

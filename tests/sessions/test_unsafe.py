@@ -12,25 +12,9 @@ import pytest
 from gaitpref import Session, SessionStateError
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
+from tests.sessions.unsafekit import unsafe_config
 
-CONFIG = """
-name = "unsafe-1d"
-[space.step_length]
-min = 0.08
-max = 0.18
-num = 15
-[model]
-lengthscale = 0.03
-signal_variance = 0.005
-noise = 0.02
-jitter = 0.0
-fit = "fixed"
-[cospar]
-seed = 1
-strategy = "self-sparring"
-[safety]
-unsafe_radius = 0.15
-"""
+CONFIG = unsafe_config("unsafe-1d", 0.15)
 
 
 def _answer(s: Session, k: int) -> None:
