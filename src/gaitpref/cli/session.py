@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from gaitpref.cli.output import check_file_out, console, fail, guard
+from gaitpref.cli.output import check_file_out, console, err_console, fail, guard, reported
 from gaitpref.limits import MAX_SEED
 
 if TYPE_CHECKING:
@@ -128,6 +128,50 @@ def db_status(db: DbOption = None) -> None:
 
     # missing, interrupted upgrade, needs upgrade, newer, or its revision and counts
     console.print(guard(lambda: database_status(resolve_url(db))))
+
+
+@db_app.command("check")
+def db_check(
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="One JSON object per session and line: id, subject, config, events, status, "
+            "ok, error, error_type.",
+        ),
+    ] = False,
+    db: DbOption = None,
+) -> None:
+    """Replay every session with this gaitpref, writing nothing; exit 1 if any fails.
+
+    Run it after upgrading gaitpref or restoring a backup, before the next subject walks.
+    """
+    from gaitpref.cli.main import progress_bar
+    from gaitpref.sessions.check import check_database
+    from gaitpref.storage import resolve_url
+
+    failed = total = 0
+    with reported(), progress_bar(transient=True) as bar:
+        task = bar.add_task("replaying sessions", total=None)
+        for result in check_database(resolve_url(db), lambda n: bar.update(task, total=n)):
+            total += 1
+            failed += not result.ok
+            bar.advance(task)
+            if as_json:
+                typer.echo(json.dumps(result.as_json()))
+                continue
+            line = (
+                f"session {result.id}: subject {result.subject}, {result.config}, "
+                f"{result.events} events, {result.status}: "
+            )
+            console.print(line + ("OK" if result.ok else f"FAILED ({result.error_type})"))
+            if not result.ok:
+                console.print(f"  {result.error}".replace("\n", "\n  "))
+    if failed:
+        err_console.print(f"{failed} of {total} sessions do not replay")
+        raise typer.Exit(1)
+    if not as_json:
+        console.print(f"all {total} sessions replay")
 
 
 # -- session -----------------------------------------------------------------------------------
