@@ -110,12 +110,29 @@ def _flag_hint(session_id: int, db: str | None) -> Callable[[int, str], str]:
 
 # -- db ----------------------------------------------------------------------------------------
 @db_app.command("upgrade")
-def db_upgrade(db: DbOption = None) -> None:
+def db_upgrade(
+    db: DbOption = None,
+    no_backup: Annotated[
+        bool,
+        typer.Option(
+            "--no-backup",
+            help="Do not first back a SQLite file that needs migrating up beside it "
+            "(NAME.before-REVISION.bak).",
+        ),
+    ] = False,
+) -> None:
     """Create the database, or migrate it to the schema this gaitpref writes."""
     from gaitpref.storage import migrate, resolve_url
-    from gaitpref.storage.sql import upgrade_database
+    from gaitpref.storage.sql import backup_before_upgrade, upgrade_database
 
     url = resolve_url(db)  # not in memory (refused by --db's check)
+    if not no_backup:
+        saved = guard(lambda: backup_before_upgrade(url))
+        if saved is not None:
+            console.print(
+                f"backed up to {saved.path} before migrating (schema revision {saved.revision}, "
+                f"{saved.sessions} sessions, {saved.events} events)"
+            )
     shown = guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
 
@@ -128,6 +145,22 @@ def db_status(db: DbOption = None) -> None:
 
     # missing, interrupted upgrade, needs upgrade, newer, or its revision and counts
     console.print(guard(lambda: database_status(resolve_url(db))))
+
+
+@db_app.command("backup")
+def db_backup(
+    out: Annotated[Path, typer.Argument(metavar="OUT", help="The copy: a new file.")],
+    db: DbOption = None,
+) -> None:
+    """Copy a SQLite database to OUT, consistently even while it is written, and verify it."""
+    from gaitpref.storage import resolve_url
+    from gaitpref.storage.sql import backup_database
+
+    saved = guard(lambda: backup_database(resolve_url(db), out))
+    console.print(
+        f"backed up to {saved.path}: schema revision {saved.revision}, {saved.sessions} "
+        f"sessions, {saved.events} events (verified)"
+    )
 
 
 @db_app.command("check")
