@@ -114,3 +114,32 @@ def test_no_backup_and_a_new_database_make_none(tmp_path: Path) -> None:
     fresh = CliRunner().invoke(app, ["db", "upgrade", "--db", str(tmp_path / "new.db")])
     assert fresh.exit_code == 0 and "backed up" not in fresh.stdout
     assert [p for p in tmp_path.iterdir() if p.name.endswith(".bak")] == []
+
+
+def test_a_backup_while_a_session_is_written_is_one_consistent_state(tmp_path: Path) -> None:
+    import threading
+
+    from gaitpref.storage.sql import backup_database
+
+    lab = _lab(tmp_path)
+    url = f"sqlite:///{lab}"
+    stop = threading.Event()
+
+    def write() -> None:
+        with Session.open(url, 1) as s:
+            while not stop.is_set():
+                s.note("the console writes")
+
+    writer = threading.Thread(target=write)
+    writer.start()
+    try:
+        copies = [backup_database(url, tmp_path / f"copy{k}.db") for k in range(5)]
+    finally:
+        stop.set()
+        writer.join()
+    for saved in copies:
+        with sqlite3.connect(saved.path) as raw:
+            rows = raw.execute("SELECT count(*) FROM events").fetchone()[0]
+            seqs = raw.execute("SELECT sum(last_seq) FROM sessions").fetchone()[0]
+        raw.close()
+        assert rows == seqs == saved.events  # the events and the sessions' counters agree

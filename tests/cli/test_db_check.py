@@ -85,3 +85,28 @@ def test_a_missing_database_is_refused_and_not_made(tmp_path: Path) -> None:
     assert result.exit_code == 2
     assert "no gaitpref database" in result.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("kind", ["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
+def test_on_each_backend(request: pytest.FixtureRequest, tmp_path: Path, kind: str) -> None:
+    if kind == "sqlite":
+        url = f"sqlite:///{tmp_path / 'lab.db'}"
+    else:
+        url = str(request.getfixturevalue("postgres_url"))
+    for subject in ("S01", "S02"):
+        with Session.create(url, CONFIG, subject, seed=1) as s:
+            _drive(s, 1)
+    from sqlalchemy import create_engine, text
+
+    engine = create_engine(url)
+    with engine.begin() as conn:  # a stored config edited outside gaitpref: replay refuses it
+        conn.execute(text("UPDATE sessions SET config_text = config_text || '#' WHERE id = 2"))
+        events = conn.execute(text("SELECT count(*) FROM events")).scalar()
+    result = CliRunner().invoke(app, ["db", "check", "--json", "--db", url])
+    with engine.connect() as conn:
+        assert conn.execute(text("SELECT count(*) FROM events")).scalar() == events
+    engine.dispose()
+    assert result.exit_code == 1, result.output
+    rows = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [(r["id"], r["ok"]) for r in rows] == [(1, True), (2, False)]
+    assert "2 sessions" in result.stderr and "1 of" in result.stderr
