@@ -27,7 +27,15 @@ def _text(output: str) -> str:
 
 @pytest.mark.parametrize("url", MEMORY)
 @pytest.mark.parametrize(
-    "command", [NEW, ["db", "upgrade"], ["session", "list"], ["session", "show", "1"]]
+    "command",
+    [
+        NEW,
+        ["db", "upgrade"],
+        ["db", "check"],
+        ["db", "backup", "copy.db"],
+        ["session", "list"],
+        ["session", "show", "1"],
+    ],
 )
 def test_an_in_memory_database_is_refused_naming_db(url: str, command: list[str]) -> None:
     result = CliRunner().invoke(app, [*command, "--db", url])

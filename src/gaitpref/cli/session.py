@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from gaitpref.cli.output import check_file_out, console, fail, guard
+from gaitpref.cli.output import check_file_out, console, err_console, fail, guard, reported
 from gaitpref.limits import MAX_SEED
 
 if TYPE_CHECKING:
@@ -110,12 +110,29 @@ def _flag_hint(session_id: int, db: str | None) -> Callable[[int, str], str]:
 
 # -- db ----------------------------------------------------------------------------------------
 @db_app.command("upgrade")
-def db_upgrade(db: DbOption = None) -> None:
+def db_upgrade(
+    db: DbOption = None,
+    no_backup: Annotated[
+        bool,
+        typer.Option(
+            "--no-backup",
+            help="Do not first back a SQLite file that needs migrating up beside it "
+            "(NAME.before-REVISION.bak).",
+        ),
+    ] = False,
+) -> None:
     """Create the database, or migrate it to the schema this gaitpref writes."""
     from gaitpref.storage import migrate, resolve_url
-    from gaitpref.storage.sql import upgrade_database
+    from gaitpref.storage.sql import backup_before_upgrade, upgrade_database
 
     url = resolve_url(db)  # not in memory (refused by --db's check)
+    if not no_backup:
+        saved = guard(lambda: backup_before_upgrade(url))
+        if saved is not None:
+            console.print(
+                f"backed up to {saved.path} before migrating (schema revision {saved.revision}, "
+                f"{saved.sessions} sessions, {saved.events} events)"
+            )
     shown = guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
 
@@ -128,6 +145,66 @@ def db_status(db: DbOption = None) -> None:
 
     # missing, interrupted upgrade, needs upgrade, newer, or its revision and counts
     console.print(guard(lambda: database_status(resolve_url(db))))
+
+
+@db_app.command("backup")
+def db_backup(
+    out: Annotated[Path, typer.Argument(metavar="OUT", help="The copy: a new file.")],
+    db: DbOption = None,
+) -> None:
+    """Copy a SQLite database to OUT, consistently even while it is written, and verify it."""
+    from gaitpref.storage import resolve_url
+    from gaitpref.storage.sql import backup_database
+
+    saved = guard(lambda: backup_database(resolve_url(db), out))
+    console.print(
+        f"backed up to {saved.path}: schema revision {saved.revision}, {saved.sessions} "
+        f"sessions, {saved.events} events (verified)"
+    )
+
+
+@db_app.command("check")
+def db_check(
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="One JSON object per session and line: id, subject, config, events, status, "
+            "ok, error, error_type.",
+        ),
+    ] = False,
+    db: DbOption = None,
+) -> None:
+    """Replay every session with this gaitpref, writing nothing; exit 1 if any fails.
+
+    Run it after upgrading gaitpref or restoring a backup, before the next subject walks.
+    """
+    from gaitpref.cli.main import progress_bar
+    from gaitpref.sessions.check import check_database
+    from gaitpref.storage import resolve_url
+
+    failed = total = 0
+    with reported(), progress_bar(transient=True) as bar:
+        task = bar.add_task("replaying sessions", total=None)
+        for result in check_database(resolve_url(db), lambda n: bar.update(task, total=n)):
+            total += 1
+            failed += not result.ok
+            bar.advance(task)
+            if as_json:
+                typer.echo(json.dumps(result.as_json()))
+                continue
+            line = (
+                f"session {result.id}: subject {result.subject}, {result.config}, "
+                f"{result.events} events, {result.status}: "
+            )
+            console.print(line + ("OK" if result.ok else f"FAILED ({result.error_type})"))
+            if not result.ok:
+                console.print(f"  {result.error}".replace("\n", "\n  "))
+    if failed:
+        err_console.print(f"{failed} of {total} sessions do not replay")
+        raise typer.Exit(1)
+    if not as_json:
+        console.print(f"all {total} sessions replay")
 
 
 # -- session -----------------------------------------------------------------------------------

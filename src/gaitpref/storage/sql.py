@@ -21,8 +21,10 @@ from __future__ import annotations
 import functools
 import json
 import os
+import sqlite3
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -56,6 +58,7 @@ from gaitpref.storage.base import (
     ConflictError,
     EventRecord,
     NewEvent,
+    SchemaError,
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
@@ -433,6 +436,171 @@ def database_status(url: str) -> str:
     return (
         f"{where}: schema revision {migrate.head_revision()} (the newest), {sessions} sessions, "
         f"{subjects} subjects"
+    )
+
+
+@dataclass(frozen=True)
+class Backup:
+    """A verified copy of a SQLite database: where, and what it holds."""
+
+    path: Path
+    revision: str
+    sessions: int
+    events: int
+
+
+def backup_database(url: str, out: Path) -> Backup:
+    """Copy the SQLite database at ``url`` to the new file ``out``, verified.
+
+    The copy is made with SQLite's online backup API in one step inside a read transaction, so
+    it is one consistent state of the database even while another process (the console) is
+    writing; it is written to a temporary file beside ``out``, checked (``PRAGMA quick_check``,
+    the same schema revision, the same numbers of sessions and events as the state it copied),
+    and only then linked to ``out``, which must not exist.  SQLite's backup bumps three counters
+    in the copy's header (the change counter, the schema cookie and its version-valid-for
+    number): every page else is the original's.  PostgreSQL is refused with the ``pg_dump``
+    command to use instead.
+    """
+    parsed = parse_url(url)
+    where = _masked(parsed)
+    if parsed.get_backend_name() != "sqlite":
+        raise StorageError(
+            f"{where}: gaitpref backs up SQLite files only; {_pg_dump_hint(parsed, out)}"
+        )
+    if _sqlite_memory(parsed):
+        raise StorageError(f"{where} is an in-memory database: there is no file to back up")
+    source = Path(parsed.database or "")
+    if not source.exists():
+        raise StorageConnectError(
+            f"no gaitpref database at {where} (the file {str(source)!r} does not exist)"
+        )
+    _refuse_folder(source, where)
+    if out.exists() or out.is_symlink():
+        raise StorageError(f"{str(out)!r} exists: give a new file name (nothing was written)")
+    if not out.parent.is_dir():
+        raise StorageError(f"cannot write {str(out)!r}: its folder does not exist")
+    import tempfile
+
+    fd, tmp_name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.name}.", suffix=".tmp")
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        os.chmod(tmp, source.stat().st_mode & 0o777)
+        src = sqlite3.connect(source, timeout=BUSY_TIMEOUT_S, isolation_level=None)
+        try:
+            src.execute("BEGIN")  # one snapshot: the counts and the pages copied
+            revision, sessions, events = _counts(src, where)
+            dst = sqlite3.connect(tmp, isolation_level=None)
+            try:
+                src.backup(dst)  # pages=-1: every page in one step, from this snapshot
+            finally:
+                dst.close()
+            src.execute("COMMIT")
+        finally:
+            src.close()
+        with tmp.open("rb+") as fh:
+            os.fsync(fh.fileno())
+        copy = sqlite3.connect(tmp, isolation_level=None)
+        try:
+            check = copy.execute("PRAGMA quick_check").fetchall()
+            got = _counts(copy, f"the copy {str(tmp)!r}")
+        finally:
+            copy.close()
+        if check != [("ok",)] or got != (revision, sessions, events):
+            raise StorageFailureError(
+                f"the copy of {where} does not match it (quick_check {check[:3]}, revision, "
+                f"sessions, events {got} instead of {(revision, sessions, events)}); nothing "
+                f"was written to {str(out)!r}"
+            )
+        try:
+            os.link(tmp, out)  # never over a file made meanwhile
+        except FileExistsError:
+            raise StorageError(
+                f"{str(out)!r} exists: give a new file name (nothing was written)"
+            ) from None
+        _fsync_folder(out.parent)
+    except sqlite3.Error as exc:
+        raise StorageFailureError(f"cannot back up {where}: {exc}") from None
+    finally:
+        tmp.unlink(missing_ok=True)
+    return Backup(out, revision, sessions, events)
+
+
+def backup_before_upgrade(url: str) -> Backup | None:
+    """The backup ``gaitpref db upgrade`` makes first: for a SQLite file at a schema revision
+    this gaitpref knows and would migrate, a copy beside it named
+    ``NAME.before-<newest revision>.bak`` (``-2``, ``-3``, ... before ``.bak`` when taken);
+    None (nothing written) for PostgreSQL, a missing, empty or foreign file, or one at the
+    newest revision or a newer gaitpref's (which the upgrade refuses)."""
+    parsed = parse_url(url)
+    if parsed.get_backend_name() != "sqlite" or _sqlite_memory(parsed):
+        return None
+    source = Path(parsed.database or "")
+    if not source.is_file() or source.stat().st_size == 0:
+        return None
+    try:
+        raw = sqlite3.connect(source, timeout=BUSY_TIMEOUT_S)
+        try:
+            rows = raw.execute("SELECT version_num FROM alembic_version").fetchall()
+        finally:
+            raw.close()
+    except sqlite3.Error:  # no gaitpref schema, or not a database: the upgrade says which
+        return None
+    head = migrate.head_revision()
+    if len(rows) != 1 or rows[0][0] == head or rows[0][0] not in migrate.known_revisions():
+        return None
+    name = f"{source.name}.before-{head}"
+    target = source.with_name(f"{name}.bak")
+    n = 1
+    while target.exists() or target.is_symlink():
+        n += 1
+        target = source.with_name(f"{name}-{n}.bak")
+    return backup_database(url, target)
+
+
+def _counts(conn: sqlite3.Connection, where: str) -> tuple[str, int, int]:
+    try:
+        rows = conn.execute("SELECT version_num FROM alembic_version").fetchall()
+        sessions = conn.execute("SELECT count(*) FROM sessions").fetchone()[0]
+        events = conn.execute("SELECT count(*) FROM events").fetchone()[0]
+    except sqlite3.DatabaseError as exc:
+        if isinstance(exc, sqlite3.OperationalError) and "no such table" not in str(exc):
+            raise  # locked, I/O: not a verdict on what the file is
+        raise SchemaError(f"{where} is not a gaitpref database ({exc})") from None
+    if len(rows) != 1:
+        raise SchemaError(f"{where}: alembic_version holds {len(rows)} rows; expected exactly one")
+    return str(rows[0][0]), int(sessions), int(events)
+
+
+def _fsync_folder(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _pg_dump_hint(url: URL, out: Path) -> str:
+    """The ``pg_dump`` command for ``url``'s database (the password never shown)."""
+    import shlex
+
+    parts = ["pg_dump", "--format=custom", f"--file={shlex.quote(str(out))}"]
+    if url.host:
+        parts.append(f"--host={shlex.quote(url.host)}")
+    if url.port:
+        parts.append(f"--port={url.port}")
+    if url.username:
+        parts.append(f"--username={shlex.quote(url.username)}")
+    parts.append(shlex.quote(url.database or ""))
+    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if url.password else ""
+    return (
+        f"back a PostgreSQL database up with its own tool, e.g. `{' '.join(parts)}`{secret}; "
+        "restore with pg_restore"
     )
 
 
