@@ -77,7 +77,7 @@ def test_all_replay_exits_0(tmp_path: Path) -> None:
         _drive(s, 1)
     result = CliRunner().invoke(app, ["db", "check", "--db", str(good)])
     assert result.exit_code == 0, result.output
-    assert "session 1: subject S01" in result.stdout and "all 1 sessions replay" in result.stdout
+    assert "session 1: subject S01" in result.stdout and "the one session replays" in result.stdout
 
 
 def test_a_missing_database_is_refused_and_not_made(tmp_path: Path) -> None:

@@ -201,10 +201,15 @@ def db_check(
             if not result.ok:
                 console.print(f"  {result.error}".replace("\n", "\n  "))
     if failed:
-        err_console.print(f"{failed} of {total} sessions do not replay")
+        err_console.print(
+            f"{failed} of {total} sessions do not replay"
+            if total != 1
+            else "the one session does not replay"
+        )
         raise typer.Exit(1)
     if not as_json:
-        console.print(f"all {total} sessions replay")
+        said = {0: "no sessions to check", 1: "the one session replays"}
+        console.print(said.get(total, f"all {total} sessions replay"))
 
 
 # -- session -----------------------------------------------------------------------------------
