@@ -102,6 +102,8 @@ class RecordedGaits:
 
     def __init__(self, records: Sequence[EventRecord]) -> None:
         self._next = deque(r for r in records if log.is_query_part(r.kind))
+        #: the event of the gait handed out last, as a warning names it
+        self.handed_out: str | None = None
         last = records[-1] if records else None
         #: the limit a stopped ask's batch was logged with (None: the batch issued its query)
         self.limit: int | None = (
@@ -127,6 +129,7 @@ class RecordedGaits:
         if "gait" not in p:
             return None
         where = f"event {r.seq} ({r.kind})"
+        self.handed_out = f"session {r.session_id}, {where}"
         if p["key"] != key:
             raise ReplayError(
                 f"{where}: key: the log has {p['key']}, the proposed point's gait is {key}: "
