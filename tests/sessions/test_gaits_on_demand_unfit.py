@@ -5,6 +5,7 @@ nor used as a warm start: an ask of that point from the cache makes it afresh.""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import sqlite3
@@ -18,7 +19,7 @@ import pytest
 
 from gaitpref import Session
 from gaitpref.gaits import GaitCache, GaitCacheWarning, OnDemandGaits
-from gaitpref.gaits.gait_cache import read_gait
+from gaitpref.gaits.gait_cache import CachedGait, read_gait
 from gaitpref.storage import EventRecord, NewEvent
 from tests.sessions.gaitkit import GAIT_EVENTS, FakeSteps, copied, fresh_fake_steps, never_made
 from tests.sessions.test_gaits_on_demand_log import _recorded, _sqlite, _state
@@ -146,3 +147,30 @@ def test_an_unfit_gait_in_the_cache_folder_is_made_afresh(tmp_path: Path) -> Non
     assert len(FakeSteps.calls) == calls + 1 and not made.from_cache
     assert made.gait.max_friction_ratio >= 0
     assert json.loads(path.read_text())["gait"]["max_friction_ratio"] >= 0
+
+
+def test_an_unfit_recorded_gait_is_neither_cached_nor_a_warm_start(tmp_path: Path) -> None:
+    """The gaits layer alone: a recorded gait with a NaN residual is handed back as recorded (so
+    replay follows the log), with a warning, but the cache (folder and memory) keeps nothing of
+    it, the next gait made is not warm-started from it, and a fresh view of the cache makes it."""
+    generator = FakeSteps(["step_length"], {})
+    cache = GaitCache(tmp_path / "cache")
+    point = np.array([0.8])
+    good = generator.make(point)
+    bad = dataclasses.replace(good, max_friction_ratio=math.nan)
+    key = generator.key(point)
+    gaits = OnDemandGaits(generator, cache, [1.0])
+    with pytest.warns(GaitCacheWarning, match=rf"the session's log: .* \(key {key}\) .* residuals"):
+        made, new = gaits.get(point, lambda k: CachedGait(k, bad, None))
+    assert new and made.gait is bad and made.from_cache  # as recorded
+    path = cache.path(key)
+    assert path is not None and not path.exists()
+    assert cache.get(key) is None and gaits.nearest(np.array([0.9])) is None
+    again, _ = gaits.get(point)
+    assert again is made  # the session knows the point: replay must not make it again
+    fresh = OnDemandGaits(generator, cache, [1.0])
+    calls = len(FakeSteps.calls)
+    remade, _ = fresh.get(point)
+    assert len(FakeSteps.calls) == calls + 1 and not remade.from_cache
+    assert math.isfinite(remade.gait.max_friction_ratio)
+    assert cache.get(key) is not None

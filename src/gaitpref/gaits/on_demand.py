@@ -6,7 +6,9 @@ them.  The gait of a parameter vector is, in turn,
 
 1. the one this session already made for the same gait id;
 2. the one its log carries, when the session is replayed (``recorded``: the session layer
-   checks it against the log and hands it over; a recorded gait is never made again);
+   checks it against the log and hands it over; a recorded gait is never made again; one
+   that fails :func:`made_gait_problem` is used as logged, so that replay follows the log, but is
+   neither cached nor a warm start, with a :class:`~gaitpref.gaits.gait_cache.GaitCacheWarning`);
 3. the cached one (:class:`~gaitpref.gaits.gait_cache.GaitCache`, content-addressed by the
    generator's key), used as it is;
 4. a new one from the generator, warm-started from the nearest *feasible* gait this session made

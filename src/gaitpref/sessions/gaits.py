@@ -61,6 +61,17 @@ carries is taken from the log (:class:`RecordedGaits`), never optimised again: i
 the one derived for the proposed point, its document must read as a gait, and its verdict must
 be the event's (``gait_made`` feasible, ``gait_infeasible`` not); it is then put into the gait
 cache.  A version-1 event carries no gait: that one is taken from the cache, or made again.
+A logged gait is also checked as a freshly made one is
+(:func:`~gaitpref.gaits.on_demand.made_gait_problem`, with the step length the proposal asks
+for).  One that fails (an edited or damaged database, or a release whose checks were weaker)
+does not stop the replay, since databases of earlier releases must open and replay as they
+ran: the session replays as logged (the same queries, the same posterior), but the gait is
+neither put into the gait cache (folder or memory) nor used as a warm start, and a
+:class:`~gaitpref.gaits.gait_cache.GaitCacheWarning` names the session, the event (seq, kind),
+the gait id, its key and the problem (:attr:`RecordedGaits.handed_out`).  An ask of that point
+from the cache then makes it afresh, as for a version-1 event whose gait is not cached (a cache
+file failing the check is not used either: ``OnDemandGaits._usable``).  The replayed session
+itself keeps the point as the log says it was made: proposing it again logs and makes nothing.
 """
 
 from __future__ import annotations
