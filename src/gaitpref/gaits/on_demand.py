@@ -6,7 +6,9 @@ them.  The gait of a parameter vector is, in turn,
 
 1. the one this session already made for the same gait id;
 2. the one its log carries, when the session is replayed (``recorded``: the session layer
-   checks it against the log and hands it over; a recorded gait is never made again);
+   checks it against the log and hands it over; a recorded gait is never made again; one
+   that fails :func:`made_gait_problem` is used as logged, so that replay follows the log, but is
+   neither cached nor a warm start, with a :class:`~gaitpref.gaits.gait_cache.GaitCacheWarning`);
 3. the cached one (:class:`~gaitpref.gaits.gait_cache.GaitCache`, content-addressed by the
    generator's key), used as it is;
 4. a new one from the generator, warm-started from the nearest *feasible* gait this session made
@@ -38,6 +40,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import warnings
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -48,7 +51,13 @@ import numpy as np
 from gaitpref.checks import char_name, hidden_in
 from gaitpref.errors import GaitGeneratorFaultError, GaitprefError
 from gaitpref.gaits.gait import Gait
-from gaitpref.gaits.gait_cache import FILE_FIELDS, CachedGait, GaitCache, file_field_in
+from gaitpref.gaits.gait_cache import (
+    FILE_FIELDS,
+    CachedGait,
+    GaitCache,
+    GaitCacheWarning,
+    file_field_in,
+)
 from gaitpref.gaits.generator import GaitGenerator
 from gaitpref.gaits.json_document import document_problem
 from gaitpref.gaits.library import MAX_GAIT_ID, feasible_gait_problem
@@ -202,8 +211,11 @@ class OnDemandGaits:
         if known is not None:
             return known, False
         logged = None if recorded is None else recorded(key)
+        unfit = None if logged is None else made_gait_problem(logged.gait, self._asked(vec, name))
+        if unfit is not None:  # replayed as logged, but neither cached nor a warm start
+            self._unfit_logged(recorded, key, name, unfit)
         cached = logged if logged is not None else self._usable(self.cache.get(key), vec, name)
-        if logged is not None and self.cache.get(key) is None:
+        if logged is not None and unfit is None and self.cache.get(key) is None:
             self.cache.put(logged, document)
         if cached is not None:
             made = MadeGait(key, vec, cached.gait, name, cached.warm_start, True)
@@ -221,9 +233,23 @@ class OnDemandGaits:
             made = MadeGait(key, vec, gait, name, None if warm is None else warm.key, False)
             self.cache.put(CachedGait(key, gait, made.warm_start), document)
         self._by_id[name] = made
-        if made.feasible:
+        if made.feasible and unfit is None:
             self._feasible.append(made)
         return made, True
+
+    def _unfit_logged(self, recorded: object, key: str, name: str, problem: str) -> None:
+        """A :class:`~gaitpref.gaits.gait_cache.GaitCacheWarning` that the gait ``recorded``
+        (a session's log, on replay) carries for ``key`` fails :func:`made_gait_problem`: replay
+        follows the log, but the gait is not cached nor warm-starts another, so a later ask of
+        the point from the cache makes it afresh."""
+        where = getattr(recorded, "handed_out", None) or "the session's log"
+        warnings.warn(
+            f"{where}: the logged gait {name} (key {key}) is unfit to use: {problem}; the "
+            "session replays as logged, but that gait is not put into the gait cache nor used "
+            "as a warm start: an ask of that point that is not this session's makes it afresh",
+            GaitCacheWarning,
+            stacklevel=2,
+        )
 
     def _asked(self, vec: FloatArray, name: str) -> float | None:
         """The step length the generator's parameters ask for at ``vec`` (None: none)."""

@@ -61,6 +61,17 @@ carries is taken from the log (:class:`RecordedGaits`), never optimised again: i
 the one derived for the proposed point, its document must read as a gait, and its verdict must
 be the event's (``gait_made`` feasible, ``gait_infeasible`` not); it is then put into the gait
 cache.  A version-1 event carries no gait: that one is taken from the cache, or made again.
+A logged gait is also checked as a freshly made one is
+(:func:`~gaitpref.gaits.on_demand.made_gait_problem`, with the step length the proposal asks
+for).  One that fails (an edited or damaged database, or a release whose checks were weaker)
+does not stop the replay, since databases of earlier releases must open and replay as they
+ran: the session replays as logged (the same queries, the same posterior), but the gait is
+neither put into the gait cache (folder or memory) nor used as a warm start, and a
+:class:`~gaitpref.gaits.gait_cache.GaitCacheWarning` names the session, the event (seq, kind),
+the gait id, its key and the problem (:attr:`RecordedGaits.handed_out`).  An ask of that point
+from the cache then makes it afresh, as for a version-1 event whose gait is not cached (a cache
+file failing the check is not used either: ``OnDemandGaits._usable``).  The replayed session
+itself keeps the point as the log says it was made: proposing it again logs and makes nothing.
 """
 
 from __future__ import annotations
@@ -102,6 +113,8 @@ class RecordedGaits:
 
     def __init__(self, records: Sequence[EventRecord]) -> None:
         self._next = deque(r for r in records if log.is_query_part(r.kind))
+        #: the event of the gait handed out last, as a warning names it
+        self.handed_out: str | None = None
         last = records[-1] if records else None
         #: the limit a stopped ask's batch was logged with (None: the batch issued its query)
         self.limit: int | None = (
@@ -127,6 +140,7 @@ class RecordedGaits:
         if "gait" not in p:
             return None
         where = f"event {r.seq} ({r.kind})"
+        self.handed_out = f"session {r.session_id}, {where}"
         if p["key"] != key:
             raise ReplayError(
                 f"{where}: key: the log has {p['key']}, the proposed point's gait is {key}: "
