@@ -432,14 +432,17 @@ class Session:
         the edge of a feature's range (:func:`clipped_note`).  Only a report, worked out after
         the answer is stored: an error here leaves it out rather than report the stored answer
         as failed."""
-        written = set(seqs)
+        first = min(seqs, default=0)
+        log = self._state.suggestions_log
+        start = len(log)  # the answer's suggestions are the log's last rows: read only those
+        while start and log[start - 1].seq >= first:
+            start -= 1
         space = self._state.loop.space
         try:
             return tuple(
                 note
-                for r in self._state.suggestions_log
-                if r.seq in written
-                and (note := clipped_note(space, r.action, r.feature, r.move, r.trial))
+                for r in log[start:]
+                if (note := clipped_note(space, r.action, r.feature, r.move, r.trial))
             )
         except Exception:  # a report only: the answer is stored
             return ()
