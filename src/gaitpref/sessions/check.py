@@ -15,13 +15,16 @@ the file while it is open, as for any reader; the database file's bytes are not 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from gaitpref.storage import SessionRecord, SQLStorage, StorageError
-from gaitpref.storage.base import EventRecord, NewEvent, SessionsCheck, SessionSpec, Status
+
+if TYPE_CHECKING:
+    from sqlalchemy import Connection
 
 
 @dataclass(frozen=True)
@@ -52,23 +55,10 @@ class ReadOnlySQLStorage(SQLStorage):
     def folder_beside(self, suffix: str) -> Path | None:
         return None
 
-    def _create(
-        self,
-        spec: SessionSpec,
-        events: Sequence[NewEvent],
-        status: Status,
-        check: SessionsCheck | None,
-    ) -> SessionRecord:
+    @contextmanager
+    def _write(self) -> Iterator[Connection]:  # every write of SQLStorage goes through it
         raise StorageError(f"{self.url} is open read-only (gaitpref db check)")
-
-    def append(
-        self,
-        session_id: int,
-        after: int,
-        events: Sequence[NewEvent],
-        status: Status | None = None,
-    ) -> list[EventRecord]:
-        raise StorageError(f"{self.url} is open read-only (gaitpref db check)")
+        yield  # pragma: no cover  (a generator, as the method it replaces)
 
 
 def check_database(
