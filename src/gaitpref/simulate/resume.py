@@ -242,26 +242,35 @@ def partial_bytes(path: Path) -> bytes:
     return path.read_bytes()
 
 
+def read_whole_lines(path: Path, sweep: str, what: str) -> tuple[str, bool]:
+    """The whole lines of the partial file ``path`` (read by :func:`partial_bytes`), and whether
+    a last line cut short was dropped (a :class:`PartialRunsWarning` says so, naming the line:
+    the ``sweep`` stopped while writing it); :class:`ResumeError` when it is not UTF-8 text,
+    ``what`` naming what the file should have been."""
+    data = partial_bytes(path)
+    end = data.rfind(b"\n") + 1
+    cut = end < len(data)
+    if cut:
+        line = data.count(b"\n", 0, end) + 1
+        warnings.warn(
+            f"{path}:{line}: the last line is cut short (the {sweep} stopped while writing it): "
+            "dropped, and its run runs again",
+            PartialRunsWarning,
+            stacklevel=3,
+        )
+    try:
+        return data[:end].decode("utf-8"), cut
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise ResumeError(f"{path}:{line}: not UTF-8 text, not {what}") from None
+
+
 def read_partial(path: Path, study: Study, tasks: Sequence[RunTask] | None = None) -> Kept:
     """The finished runs of ``study`` in its partial table ``path`` (as the module says):
     :class:`ResumeError` for a file of another sweep or not a run table of this study, a
     :class:`PartialRunsWarning` for each thing dropped; ``tasks``: ``study.tasks()``."""
     tasks = study.tasks() if tasks is None else tasks
-    data = partial_bytes(path)
-    end = data.rfind(b"\n") + 1
-    rewrite = False
-    if end < len(data):
-        line = data.count(b"\n", 0, end) + 1
-        _warn(
-            f"{path}:{line}: the last line is cut short (the study stopped while writing it): "
-            "dropped, and its run runs again"
-        )
-        rewrite = True
-    try:
-        text = data[:end].decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise ResumeError(f"{path}:{line}: not UTF-8 text, not a study's run table") from None
+    text, rewrite = read_whole_lines(path, "study", "a study's run table")
     signed = text.startswith(COMMENT)
     offset = 0
     if signed:

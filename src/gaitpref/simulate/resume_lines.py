@@ -20,13 +20,12 @@ the preferences each cold run left, from which its warm runs start
 from __future__ import annotations
 
 import json
-import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from gaitpref.atomic import write_text_atomic
-from gaitpref.simulate.resume import PartialRunsWarning, ResumeError, partial_bytes
+from gaitpref.simulate.resume import ResumeError, read_whole_lines
 
 #: the key of a bench's partial file's first line
 KEY = "gaitpref bench"
@@ -45,23 +44,8 @@ def _short(value: object) -> str:
 def read_lines(path: Path, sweep: Mapping[str, object]) -> tuple[list[tuple[int, Any]], bool]:
     """The runs in ``path`` (each with its line number), checked to be those of the bench
     ``sweep`` describes, and whether the file must be written again (a line was dropped)."""
-    data = partial_bytes(path)
-    end = data.rfind(b"\n") + 1
-    rewrite = False
-    if end < len(data):
-        line = data.count(b"\n", 0, end) + 1
-        warnings.warn(
-            f"{path}:{line}: the last line is cut short (the bench stopped while writing it): "
-            "dropped, and its run runs again",
-            PartialRunsWarning,
-            stacklevel=2,
-        )
-        rewrite = True
-    try:
-        lines = data[:end].decode("utf-8").split("\n")[:-1]
-    except UnicodeDecodeError as exc:
-        line = data.count(b"\n", 0, exc.start) + 1
-        raise ResumeError(f"{path}:{line}: not UTF-8 text, not a bench's partial file") from None
+    text, rewrite = read_whole_lines(path, "bench", "a bench's partial file")
+    lines = text.split("\n")[:-1]
     objects = [(n, _object(text, path, n)) for n, text in enumerate(lines, start=1)]
     if not objects:  # made, its first line not yet written
         return [], True
