@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from gaitpref.checks import check_mask, is_count, is_number
 from gaitpref.model.posterior import Posterior
@@ -93,6 +93,15 @@ def check_tolerance(tolerance: float) -> float:
     return value
 
 
+def recommendation(mean: ArrayLike, allowed: NDArray[np.bool_] | None = None) -> int:
+    """The recommended gait: the posterior ``mean``'s argmax among the ``allowed`` gaits (None:
+    all; at least one must be), the lowest index among exact ties."""
+    masked = np.array(mean, dtype=float)
+    if allowed is not None:
+        masked[~allowed] = -np.inf
+    return int(np.argmax(masked))
+
+
 def confidence(
     posterior: Posterior,
     rng: np.random.Generator,
@@ -117,12 +126,12 @@ def confidence(
     _check_samples(samples)
     if not is_count(block) or block < 1:
         raise ValueError(f"block must be an integer >= 1, got {block!r}")
-    mean = np.array(posterior.mean)
     if allowed is not None:
         empty = "no gait is allowed: there is nothing to recommend"
-        allowed = check_mask(allowed, mean.shape[0], what="gaits", optional=True, empty=empty)
-        mean[~allowed] = -np.inf
-    rec = int(np.argmax(mean))
+        allowed = check_mask(
+            allowed, len(posterior.space), what="gaits", optional=True, empty=empty
+        )
+    rec = recommendation(posterior.mean, allowed)
     hits = 0
     shortfall = relative = 0.0
     done = 0
@@ -195,4 +204,5 @@ __all__ = [
     "StopRule",
     "check_tolerance",
     "confidence",
+    "recommendation",
 ]

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from gaitpref.errors import NoSafeGaitError
-from gaitpref.loop.stopping import Confidence, StopRule, confidence
+from gaitpref.loop.stopping import Confidence, StopRule, confidence, recommendation
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord
@@ -72,12 +72,9 @@ def recommended(state: SessionState) -> int | None:
     if not len(loop.space):
         return None
     allowed = loop.allowed()
-    mean = np.array(loop.posterior.mean, dtype=float)
-    if allowed is not None:
-        if not allowed.any():
-            return None
-        mean[~allowed] = -np.inf
-    return int(np.argmax(mean))
+    if allowed is not None and not allowed.any():
+        return None
+    return recommendation(loop.posterior.mean, allowed)
 
 
 def preference_learned(mean: Sequence[float] | np.ndarray) -> bool:
