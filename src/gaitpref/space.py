@@ -200,25 +200,26 @@ class Feature:
             return self.values[k - 1]
         return self.values[k]
 
-    def move_value(self, value: float, move: Move) -> float | None:
-        """The value after a coactive move from ``value`` (a fraction of the range, clipped and
-        snapped as :meth:`snap`), or ``None`` when it lands back on ``value``."""
+    def _moved(self, value: float, move: str) -> float:
+        """Where a coactive move from ``value`` points: a fraction of the range, before any
+        clipping or snapping."""
         if move not in MOVES:
             raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
         fraction = self.coactive[1] if move.endswith("big") else self.coactive[0]
         sign = 1.0 if move.startswith("+") else -1.0
-        new = self.snap(value + sign * fraction * self.span)
+        return float(value) + sign * fraction * self.span
+
+    def move_value(self, value: float, move: Move) -> float | None:
+        """The value after a coactive move from ``value`` (a fraction of the range, clipped and
+        snapped as :meth:`snap`), or ``None`` when it lands back on ``value``."""
+        new = self.snap(self._moved(value, move))
         return None if new == value else new
 
     def move_clipped(self, value: float, move: str) -> bool:
         """Whether a coactive move from ``value`` would leave the feature's range, so that
         :meth:`move_value` clips it at the edge (to the edge, or back to ``value`` when it is
         there already): the subject asked for more than the range holds."""
-        if move not in MOVES:
-            raise ValueError(f"move must be one of {', '.join(MOVES)}; got {move!r}")
-        fraction = self.coactive[1] if move.endswith("big") else self.coactive[0]
-        sign = 1.0 if move.startswith("+") else -1.0
-        raw = float(value) + sign * fraction * self.span
+        raw = self._moved(value, move)
         slack = 1e-9 * self.span  # rounding: a move that ends exactly on the edge stays in
         return raw > self.values[-1] + slack or raw < self.values[0] - slack
 
