@@ -102,6 +102,15 @@ def recommendation(mean: ArrayLike, allowed: NDArray[np.bool_] | None = None) ->
     return int(np.argmax(masked))
 
 
+def preference_learned(mean: ArrayLike) -> bool:
+    """Whether the posterior ``mean`` (over the gaits) tells any gait apart: False while it is
+    the same everywhere (before any answer, or after ties only), when the recommendation
+    (:func:`recommendation`) and the argmax name the first gait for no reason.  The console then
+    says "No preference learned yet", ``session show`` the same, and the figures mark no gait."""
+    values = np.asarray(mean, dtype=float)
+    return bool(values.size) and bool(values.max() > values.min())
+
+
 def confidence(
     posterior: Posterior,
     rng: np.random.Generator,
@@ -204,5 +213,6 @@ __all__ = [
     "StopRule",
     "check_tolerance",
     "confidence",
+    "preference_learned",
     "recommendation",
 ]

@@ -44,7 +44,9 @@ def mark_best(ax: Axes, points: FloatArray, mean: FloatArray, recommended: int |
     proposed, no star) and, when another, the highest ``mean`` over every gait circled (hollow).
     Neither while the mean is flat: every gait as likely to be the best (the console's "No
     preference learned yet")."""
-    if not mean.size or mean.max() <= mean.min():
+    from gaitpref.loop.stopping import preference_learned
+
+    if not preference_learned(mean):
         return
     highest = int(np.argmax(mean))
 

@@ -16,7 +16,8 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 """
 
 from gaitpref.errors import ExportError, ReplayError, SessionError, SessionStateError
-from gaitpref.sessions.confidence import StopCheckWarning, preference_learned
+from gaitpref.loop.stopping import preference_learned
+from gaitpref.sessions.confidence import StopCheckWarning
 from gaitpref.sessions.export import export_session, import_session, posterior_summary
 from gaitpref.sessions.records import (
     REASONS,

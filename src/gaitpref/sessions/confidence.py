@@ -77,15 +77,6 @@ def recommended(state: SessionState) -> int | None:
     return recommendation(loop.posterior.mean, allowed)
 
 
-def preference_learned(mean: Sequence[float] | np.ndarray) -> bool:
-    """Whether the posterior ``mean`` (over the gaits) tells any gait apart: False while it is
-    the same everywhere (before any answer, or after ties only), when :func:`recommended` and
-    the argmax name the first gait for no reason.  The console then says "No preference learned
-    yet" and ``session show`` the same."""
-    values = np.asarray(mean, dtype=float)
-    return bool(values.size) and bool(values.max() > values.min())
-
-
 def recommends(state: SessionState) -> bool:
     """Whether some gait may be proposed, so recommended (else no confidence is stated)."""
     allowed = state.loop.allowed()
