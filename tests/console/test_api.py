@@ -348,6 +348,30 @@ def test_posterior_has_a_mean_and_sd_per_action(client: TestClient) -> None:
     assert post["trials"] == [t["gait"]["index"] for t in trials]
 
 
+def test_learned_says_whether_recommended_means_anything(client: TestClient) -> None:
+    """Before a preference is learned ``recommended`` and ``argmax`` still name the flat prior's
+    argmax, the first gait; ``learned`` false tells a client so, as the trial page's "No
+    preference learned yet" does; one preference turns it true."""
+    sid = new_session(client)
+
+    def learned() -> bool:
+        post = client.get(f"/api/sessions/{sid}/posterior").json()
+        page = client.get(f"/sessions/{sid}").text
+        assert ("No preference learned yet" in page) is (not post["learned"])
+        if not post["learned"]:  # kept as it was, for the clients that read it
+            assert post["recommended"]["index"] == post["argmax"]["index"] == 0
+            assert post["confidence"] is None
+        return bool(post["learned"])
+
+    assert learned() is False
+    answer_once(client, sid)  # the first trial: nothing to compare it with
+    assert learned() is False
+    answer_once(client, sid, "first")  # one preference
+    assert learned() is True
+    schema = client.get("/openapi.json").json()["components"]["schemas"]["PosteriorOut"]
+    assert schema["properties"]["learned"]["type"] == "boolean"
+
+
 def test_notes_exclusion_and_status(client: TestClient) -> None:
     sid = new_session(client)
     answer_once(client, sid)

@@ -115,6 +115,48 @@ def test_no_best_so_far_before_a_preference_is_learned(tmp_path: Path) -> None:
     assert isinstance(posterior, dict)
     assert posterior["recommended"] == 0 and posterior["argmax"] == 0  # as documented
     assert posterior["trials_in_force"] == 0
+    assert posterior["learned"] is False  # what tells a client that 0 is no recommendation
+
+
+def test_learned_turns_true_with_the_first_preference_and_agrees_with_the_text(
+    tmp_path: Path,
+) -> None:
+    """``--json``'s ``learned`` is False exactly while the text says "none yet": before any
+    answer, and after a tie (the mean stays flat); one strict preference makes both name a
+    gait."""
+    url = f"sqlite:///{tmp_path / 'b.db'}"
+    s = Session.create(url, parse_config(unsafe_config("best-1d", 0.1)), "S01")
+    sid = s.id
+    q = s.next_query()
+    assert not q.buffer  # the first trial has nothing to be compared with
+    s.answer(q.id, [])
+    assert s.trials() and posterior_summary(s)["learned"] is False  # a trial, no preference
+    q = s.next_query()
+    a, b = q.actions[0], q.buffer[0]
+    assert a != b
+    s.answer(q.id, [(a, b, "none")])  # a tie: nothing told apart
+    assert not preference_learned(s.posterior().mean)
+    assert posterior_summary(s)["learned"] is False
+    s.close()
+    text, info = _show(url, sid)
+    posterior = info["posterior"]
+    assert isinstance(posterior, dict) and posterior["learned"] is False
+    assert posterior["recommended"] == 0 and posterior["trials_in_force"] == 2  # kept as it was
+    assert "best so far: none yet (no preference learned yet" in text
+    s = Session.open(url, sid)
+    q = s.next_query()
+    a, b = q.actions[0], q.buffer[0]
+    assert a != b
+    s.answer(q.id, [(a, b, "first")])  # one preference
+    assert preference_learned(s.posterior().mean)
+    summary = posterior_summary(s)
+    assert summary["learned"] is True and summary["recommended"] == s.recommended()
+    s.close()
+    text, info = _show(url, sid)
+    posterior = info["posterior"]
+    assert isinstance(posterior, dict) and posterior["learned"] is True
+    assert "none yet" not in text
+    assert f"best so far: action {posterior['recommended']} (" in text
 
 
 def test_the_console_and_show_share_the_learned_condition() -> None:

@@ -69,12 +69,14 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "recommended_gait_id",
         "mean_at_recommended",
         "sd_at_recommended",
+        "learned",
         "trials_in_force",
         "pending_query",
     }
     reopened = Session.open(db, 1)
     assert info["posterior"]["argmax"] == reopened.posterior().argmax
     assert info["posterior"]["recommended"] == reopened.recommended()
+    assert info["posterior"]["learned"] is True  # answers given: a best so far is named
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--yes", "--db", db)
     assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--yes", "--db", db)
     _ok("session", "finish", "1", "--yes", "--db", db)
@@ -166,6 +168,7 @@ def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:
     _ok("session", "new", "--config", "compass-continuous-3d", "--subject", "S01", "--db", db)
     info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
     assert info["posterior"]["argmax"] is None and info["trials"] == 0
+    assert info["posterior"]["learned"] is False
     assert "best so far: none yet" in _ok("session", "show", "1", "--no-figure", "--db", db)
     figure = tmp_path / "fig.png"
     _ok("session", "show", "1", "--figure", str(figure), "--db", db)

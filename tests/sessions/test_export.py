@@ -65,6 +65,7 @@ def test_the_files_are_readable_without_gaitpref(
     assert manifest["software_version"] == "0.1.0" and manifest["seed"] == 17
     assert manifest["config_sha256"] == s.config.sha256
     assert manifest["posterior"]["argmax"] == s.posterior().argmax
+    assert manifest["posterior"]["learned"] is True
     assert set(manifest["files"]) >= {"config.toml", "events.jsonl", "trials.csv"}
     with open(out / "comparisons.csv", newline="") as f:
         comparisons = list(csv.DictReader(f))
@@ -183,6 +184,32 @@ def test_a_session_figure_without_a_suffix_is_a_png_and_a_folder_is_refused(
     with pytest.raises(ValueError, match="is a folder"):
         save_session_figure(s, tmp_path)
     assert not (tmp_path.parent / f"{tmp_path.name}.png").exists()
+
+
+def test_learned_is_in_the_manifest_and_a_manifest_without_it_still_imports(
+    tmp_path: Path, sqlite_url: str, drive: Drive
+) -> None:
+    """The posterior summary's ``learned`` (added after format version 1 was fixed) is written
+    but never read: a fresh session's export says false and imports; a manifest without it, as
+    earlier releases wrote, imports as before; the events are the same either way."""
+    fresh = Session.create(sqlite_url, CONFIG, "S08", seed=5)
+    export_session(fresh, tmp_path / "fresh", "json")
+    manifest = json.loads((tmp_path / "fresh" / "manifest.json").read_text())
+    assert manifest["format_version"] == 1
+    summary = manifest["posterior"]
+    assert summary["learned"] is False and summary["argmax"] == summary["recommended"] == 0
+    import_session(f"sqlite:///{tmp_path / 'a.db'}", tmp_path / "fresh").close()
+    s = _session(sqlite_url, drive)
+    out = tmp_path / "old"
+    export_session(s, out, "csv")
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["posterior"].pop("learned") is True
+    (out / "manifest.json").write_text(json.dumps(manifest))  # as an earlier release wrote it
+    imported = import_session(f"sqlite:///{tmp_path / 'b.db'}", out)
+    assert [(e.seq, e.kind, e.payload, e.at) for e in imported.events()] == [
+        (e.seq, e.kind, e.payload, e.at) for e in s.events()
+    ]
+    imported.close()
 
 
 def test_importing_the_same_export_twice_needs_as_new(

@@ -470,12 +470,10 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
     mean among the gaits that may be proposed, as the confidence names it), never one flagged
     unsafe or in the region of avoidance; the unrestricted highest is named as not to walk when
     it is another."""
-    from gaitpref.sessions import preference_learned
-
     best, rec = summary["argmax"], summary["recommended"]
     if best is None:
         return "best so far: none yet (the line path's posterior lives on the points walked)"
-    if not preference_learned(session.posterior().mean):  # the console's condition
+    if not summary["learned"]:  # preference_learned, the console's condition; --json's learned
         return (
             "best so far: none yet (no preference learned yet: every gait is as likely to be "
             "the best)"

@@ -21,6 +21,7 @@ from gaitpref.console.schemas import (
     ValidationOut,
 )
 from gaitpref.errors import NoSafeGaitError
+from gaitpref.loop.stopping import preference_learned
 from gaitpref.pointset import PointSet
 from gaitpref.sessions.records import ShownGait
 from gaitpref.sessions.session import Session, SessionQuery
@@ -123,7 +124,8 @@ def posterior_out(session: Session) -> PosteriorOut:
     rec = session.recommended()
     confidence = None
     sure = None
-    if mean.size and mean.max() > mean.min():  # something learnt (the trial page shows it too)
+    learned = preference_learned(mean)  # as the trial page and session show say it
+    if learned:  # something learnt
         with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend: none stated
             sure = session.confidence()
     if sure is not None:
@@ -143,6 +145,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,
         recommended=None if rec is None else gait_out(session, rec),
+        learned=learned,
         trials=[t.action for t in session.trials()],
         confidence=confidence,
     )

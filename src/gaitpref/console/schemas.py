@@ -231,7 +231,14 @@ class PosteriorOut(BaseModel):
         default=None,
         description="the best gait so far to walk: the highest posterior mean among the gaits "
         "that may be proposed, the one confidence is about (None while there is no point, and "
-        "when no gait may be proposed)",
+        "when no gait may be proposed). Before a preference is learned (learned false) it is "
+        "still the flat prior's argmax, the first gait that may be proposed, for no reason",
+    )
+    learned: bool = Field(
+        description="whether a preference has been learned: the posterior mean tells some gaits "
+        'apart (false before any answer, and after ties only; the trial page then says "No '
+        'preference learned yet" and session show "none yet"). While false, argmax and '
+        "recommended name the first gait for no reason",
     )
     trials: list[int] = Field(description="executed actions in trial order")
     confidence: ConfidenceOut | None = Field(

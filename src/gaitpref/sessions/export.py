@@ -64,6 +64,7 @@ from gaitpref.content_lock import content_lock
 from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
 from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES as MAX_LIBRARY_BYTES
+from gaitpref.loop.stopping import preference_learned
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import Trial
 from gaitpref.sessions.session import Session
@@ -260,11 +261,18 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     highest among those that may be (:meth:`Session.recommended`: the gait the confidence
     recommends, the best so far to walk).  The ``argmax`` fields are None while the posterior
     has no point (the line path before a query: it lives on the points present); the
-    ``recommended`` fields then too, and when no gait may be proposed."""
+    ``recommended`` fields then too, and when no gait may be proposed.
+
+    ``learned`` says whether a preference has been learned (:func:`preference_learned`: the
+    posterior mean tells some gaits apart), exactly when ``session show`` names a best gait
+    rather than "none yet": while it is False, ``argmax`` and ``recommended`` still name the flat
+    prior's argmax (the first gait, the first that may be proposed) for no reason.  An import
+    reads none of it (exports written before it was added lack it)."""
     post = session.posterior()
     pending = session.pending
     best: int | None = post.argmax if len(session.space) else None
     rec = session.recommended()
+    learned = best is not None and preference_learned(post.mean)
     return {
         "argmax": best,
         "argmax_values": None if best is None else session.space.values_of(best),
@@ -276,6 +284,7 @@ def posterior_summary(session: Session) -> dict[str, Any]:
         "recommended_gait_id": None if rec is None else session.gait_id(rec),
         "mean_at_recommended": None if rec is None else float(post.mean[rec]),
         "sd_at_recommended": None if rec is None else float(post.std[rec]),
+        "learned": learned,
         "trials_in_force": len(session.trials()),
         "pending_query": None
         if pending is None
