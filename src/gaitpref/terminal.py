@@ -498,14 +498,18 @@ class Terminal:
             flag = "x write and flag " + ("trial " if len(q.trials) == 1 else "trials ")
             flag += ", ".join(map(str, q.trials)) + " unsafe"
             while True:  # asked again while another writer holds the session (nothing written)
-                key = self.ask(
-                    f"Write: {summary}.  y yes, n re-enter, {flag}",
-                    {"y": "", "n": "", "x": ""},
-                    "y",
-                )
-                if key == "n":
-                    break
-                reason = self._reason() if key == "x" else ""
+                try:
+                    key = self.ask(
+                        f"Write: {summary}.  y yes, n re-enter, {flag}",
+                        {"y": "", "n": "", "x": ""},
+                        "y",
+                    )
+                    if key == "n":
+                        break
+                    reason = self._reason() if key == "x" else ""
+                except _QuitError:  # the answer was shown in full: say it was not kept
+                    self._not_written(q, summary)
+                    raise
                 try:
                     with warnings.catch_warnings():  # said by _written, not as a Python warning
                         warnings.simplefilter("ignore", StopCheckWarning)
@@ -522,6 +526,15 @@ class Terminal:
                     return
                 self._written(q, reason, answered.stop_warning, answered.clipped)
                 return
+
+    def _not_written(self, q: SessionQuery, summary: str) -> None:
+        """Quitting at the confirmation (or the unsafe reason) writes nothing: say so, since
+        the answer was just shown as if about to be saved."""
+        trials = ("trial " if len(q.trials) == 1 else "trials ") + ", ".join(map(str, q.trials))
+        self.console.print(
+            f"  not written: {summary} ({trials} asked again when the session resumes)",
+            markup=False,
+        )
 
     def _written(
         self,

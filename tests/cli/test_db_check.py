@@ -110,3 +110,17 @@ def test_on_each_backend(request: pytest.FixtureRequest, tmp_path: Path, kind: s
     rows = [json.loads(line) for line in result.stdout.splitlines()]
     assert [(r["id"], r["ok"]) for r in rows] == [(1, True), (2, False)]
     assert "2 sessions" in result.stderr and "1 of" in result.stderr
+
+
+def test_its_progress_bar_leaves_no_blank_line_off_a_terminal(tmp_path: Path) -> None:
+    """A transient bar cannot vanish from a file or a pipe: it left an empty line on stderr
+    before the error (and after the sessions), in logs and scripts."""
+    result = CliRunner().invoke(app, ["db", "check", "--db", str(tmp_path / "missing.db")])
+    assert result.exit_code == 2
+    assert result.stderr.startswith("storage error: no gaitpref database at")
+    path = tmp_path / "lab.db"
+    with Session.create(f"sqlite:///{path}", CONFIG, "S01", seed=1) as s:
+        _drive(s, 1)
+    result = CliRunner().invoke(app, ["db", "check", "--db", str(path)])
+    assert result.exit_code == 0, result.output
+    assert "\n\n" not in "\n" + result.stderr

@@ -579,3 +579,29 @@ def test_a_ranking_refused_as_busy_is_asked_again(monkeypatch: pytest.MonkeyPatc
     text = console.export_text()
     assert "the ranking was not recorded: session 1 is busy" in text
     assert ["".join(v.ranking) for v in session.validations()] == ["BAC"]
+
+
+@pytest.mark.parametrize("quit_keys", [("q",), (), ("x", "q")])
+def test_quitting_at_the_confirmation_says_the_answer_was_not_written(
+    quit_keys: tuple[str, ...],
+) -> None:
+    """q, the end of input or q at the unsafe reason, after the answer was shown as 'Write:
+    ...': only 'Paused.' was said, as if the answer shown had been kept."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    terminal, console = _terminal(session, "2", *quit_keys)  # trial 1: slightly longer
+    terminal.run()
+    text = console.export_text()
+    assert "Write: step_length slightly longer." in text
+    assert (
+        "  not written: step_length slightly longer (trial 1 asked again when the session " in text
+    )
+    assert text.index("not written") < text.index("Paused.")
+    assert session.trials() == [] and session.status == "paused"
+
+
+def test_an_answer_written_is_not_said_to_be_not_written() -> None:
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    terminal, console = _terminal(session, "2", "y", "q")  # saved, then q at trial 2's question
+    terminal.run()
+    assert "saved: trial 1" in console.export_text()
+    assert "not written" not in console.export_text()

@@ -81,3 +81,16 @@ def test_a_file_given_as_the_libraries_folder_is_refused(
     assert "--libraries" in result.output and "is a file, not a folder" in result.output
     assert served == {}  # nothing served
     run("--db", db_url, "--libraries", str(tmp_path / "new-folder"))  # a new folder is fine
+
+
+def test_a_new_database_is_said_to_be_new(served: dict[str, Any], tmp_path: Path) -> None:
+    """A mistyped --db served an empty session list with nothing saying the file was new: the
+    operator's sessions looked lost."""
+    missing = tmp_path / "typo.db"
+    out = run("--db", str(missing))
+    assert missing.is_file()
+    assert f"no database was at {str(missing)!r}: a new, empty one was made there" in out
+    assert "check --db and $GAITPREF_DB" in out
+    # the same file again, and a database given by URL that is there: nothing said
+    assert "no database was at" not in run("--db", str(missing))
+    assert "no database was at" not in run("--db", f"sqlite:///{missing}")

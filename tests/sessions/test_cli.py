@@ -272,3 +272,18 @@ def test_session_list_marks_its_times_utc(tmp_path: Path) -> None:
     for when in (created, updated):
         utc = when.astimezone(UTC)
         assert f"{utc:%Y-%m-%d}" in out and f"{utc:%H:%M}" in out
+
+
+def test_session_list_folds_long_names_instead_of_cutting_them(tmp_path: Path) -> None:
+    """On 80 columns exo-2d-length-duration and exo-2d-length-width were both 'exo-2d-le…':
+    an operator could not tell which session ran which config."""
+    db = str(tmp_path / "lab.db")
+    for config in ("exo-2d-length-duration", "exo-2d-length-width"):
+        Session.create(db, config, "S01-long-code").close()
+    out = CliRunner().invoke(app, ["session", "list", "--db", db], env={"COLUMNS": "80"}).output
+    assert "…" not in out
+    cells = [line.split("│") for line in out.splitlines() if line.count("│") > 3]
+    column = "".join(cell[3].strip() for cell in cells)  # the config's pieces, row after row
+    assert "exo-2d-length-duration" in column and "exo-2d-length-width" in column
+    assert "S01-long-code" in "".join(cell[2].strip() for cell in cells)
+    assert max(len(line) for line in out.splitlines()) <= 80

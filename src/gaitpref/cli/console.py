@@ -42,6 +42,23 @@ def console_url(host: str, port: int, token: str | None) -> str:
     return f"http://{shown}:{port}/" + (f"?token={token}" if token else "")
 
 
+def new_sqlite_file(url: str) -> Path | None:
+    """The SQLite file ``url`` names when there is none yet (opening it makes a new database),
+    else None (a file that is there, another backend, memory, a URL that does not parse)."""
+    from gaitpref.errors import StorageError
+    from gaitpref.storage.sql import parse_url
+
+    try:
+        parsed = parse_url(url)
+    except StorageError:
+        return None  # opening it says what is wrong
+    name = parsed.database
+    if parsed.get_backend_name() != "sqlite" or name in (None, "", ":memory:"):
+        return None
+    path = Path(name)
+    return None if path.exists() else path
+
+
 def serve(
     db: Annotated[
         str | None,
@@ -76,7 +93,7 @@ def serve(
             f"the console needs its web dependencies (module {exc.name!r} is not installed): "
             f"{INSTALL_HINT}"
         )
-    from gaitpref.storage import resolve_url
+    from gaitpref.storage import ENV_VAR, resolve_url
 
     if libraries is not None and libraries.exists() and not libraries.is_dir():
         fail(  # taken before: the console served, and each upload failed to make its folder
@@ -85,8 +102,16 @@ def serve(
         )
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
+    new_file = new_sqlite_file(resolve_url(db))
     app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
     _out.print(f"[bold]gaitpref console[/] on {escape(resolve_url(db))}", markup=True)
+    if new_file is not None and new_file.is_file():
+        # a mistyped --db or $GAITPREF_DB served an empty list: the sessions looked lost
+        _out.print(
+            f"no database was at {str(new_file)!r}: a new, empty one was made there (no "
+            f"sessions yet; if you expected some, check --db and ${ENV_VAR})",
+            soft_wrap=True,
+        )
     _out.print(f"open [bold]{escape(console_url(host, port, use_token))}[/]", markup=True)
     if use_token is not None:
         _out.print(

@@ -49,7 +49,10 @@ app.add_typer(gaits_app, name="gaits")
 
 
 def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
-    """The Rich progress bar used by long commands (on stderr; ``shown=False``: none)."""
+    """The Rich progress bar used by long commands (on stderr; ``shown=False``: none).
+
+    A ``transient`` bar is shown on a terminal only: elsewhere (a file, a pipe) it cannot be
+    taken back and left an empty line on stderr."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -65,7 +68,7 @@ def progress_bar(transient: bool = False, shown: bool = True) -> Progress:
         TimeRemainingColumn(),
         console=err_console,
         transient=transient,
-        disable=not shown,
+        disable=not shown or (transient and not err_console.is_terminal),
     )
 
 

@@ -373,10 +373,12 @@ def list_sessions(
     rows = guard(run)
     table = Table(title="sessions")
     # times are stored in UTC: the headers say so (the console writes "... UTC" after each)
+    # every cell folded onto more lines, never cut with an ellipsis: on 80 columns
+    # exo-2d-length-duration and exo-2d-length-width both showed as "exo-2d-le…"
     for col in ("id", "subject", "config", "seed", "status", "events"):
-        table.add_column(col)
-    table.add_column("created (UTC)")
-    table.add_column("updated (UTC)")
+        table.add_column(col, overflow="fold")
+    table.add_column("created (UTC)", overflow="fold")
+    table.add_column("updated (UTC)", overflow="fold")
     for r in rows:
         table.add_row(
             str(r.id),

@@ -619,14 +619,22 @@ def _has_tables(url: URL) -> bool:
 
 # -- helpers -----------------------------------------------------------------------------------
 def _hint(file: Path | None, exc: BaseException) -> str:
-    """Why SQLite could not open an existing file: its folder is read-only."""
+    """Why SQLite could not open the file: its folder is read-only (an existing file's -wal and
+    -shm files, or a new database, cannot be made there)."""
     if file is None or "unable to open database file" not in _reason(exc):
         return ""
     folder = file.resolve().parent
-    if file.is_file() and not os.access(folder, os.W_OK):
+    if not folder.is_dir() or os.access(folder, os.W_OK):
+        return ""
+    if file.is_file():
         return (
             f" (the folder {str(folder)!r} is read-only: SQLite creates the database's -wal "
             "and -shm files beside it even to read; copy the database to a writable folder)"
+        )
+    if not file.exists():
+        return (
+            f" (the folder {str(folder)!r} is read-only: a new database cannot be made in it; "
+            "name a file in a writable folder)"
         )
     return ""
 
