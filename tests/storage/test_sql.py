@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import sqlite3
 from pathlib import Path
 
@@ -202,21 +201,6 @@ def test_a_database_in_a_read_only_folder_is_named_so(
     assert "-wal" not in made
     assert sql._hint(tmp_path / "nodir" / "g.db", refused) == ""  # said by its own check
     assert sql._hint(tmp_path / "g.db", sqlite3.OperationalError("disk I/O error")) == ""
-
-
-@pytest.mark.skipif(
-    not hasattr(os, "geteuid") or os.geteuid() == 0, reason="root writes in a read-only folder"
-)
-def test_a_new_database_in_a_read_only_folder_is_named_so(tmp_path: Path) -> None:
-    folder = tmp_path / "ro"
-    folder.mkdir()
-    folder.chmod(0o555)
-    try:
-        with pytest.raises(StorageError, match="is read-only: a new database cannot be made"):
-            open_storage(f"sqlite:///{folder / 'lab.db'}")
-    finally:
-        folder.chmod(0o755)
-    assert list(folder.iterdir()) == []
 
 
 def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:
