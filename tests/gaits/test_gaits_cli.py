@@ -120,6 +120,7 @@ def test_build_refuses_before_optimizing_and_writes_nothing(
     result = runner.invoke(app, argv)
     assert result.exit_code == 2, result.output
     assert problem in _text(result.output) and "Traceback" not in result.output
+    assert "optimizing gaits" not in result.output  # the bar drew '0/1' above the error
     assert not list(tmp_path.iterdir())
 
 

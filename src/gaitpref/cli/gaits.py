@@ -113,7 +113,7 @@ def build(
         TimeElapsedColumn,
     )
 
-    from gaitpref.gaits.build import build_library
+    from gaitpref.gaits.build import build_library, check_grid
     from gaitpref.gaits.gait import HZDSettings
     from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES, max_gaits_in_file
 
@@ -143,6 +143,12 @@ def build(
             f"{degree} (it is read back up to {MAX_LIBRARY_BYTES:,} bytes): build it in parts",
             param_hint="--step-length/--step-duration/--step-width",
         )
+    try:  # before the progress bar: it drew '0/1' above the error
+        check_grid(lengths, durations, speed, widths)
+    except ValueError as exc:  # GaitLibraryError too
+        raise typer.BadParameter(
+            str(exc), param_hint="--step-length/--step-duration/--step-width"
+        ) from None
     check_file_out(out, "--out")
     total = len(lengths) * (len(durations) if durations else 1)
     columns = (
