@@ -386,10 +386,11 @@ def _bench_config(source: str) -> ExperimentConfig:
     """A bench's config, with a new session's check of its largest draw against the sampling
     budget (``config/draws.py``): refused before any run, naming the key, rather than as every
     run's failure."""
+    from gaitpref.cli.main import checked_config
     from gaitpref.config import check_draws, load_config
 
     cfg = load_config(source)
-    check_draws(cfg)
+    checked_config(source, cfg, check_draws)
     return cfg
 
 
