@@ -287,3 +287,11 @@ def test_the_rate_shown_when_a_study_ends_is_the_whole_studys() -> None:
         now[0] += 0.001
         bar.advance(tid)
     assert _RateColumn().render(bar.tasks[0]).plain == "  1.0 runs/s"  # 6 runs in 6.006 s
+
+
+def test_a_setting_of_its_defaults_alone_says_why_it_is_refused() -> None:
+    """Setting(name) is n = 1, buffer = 0, which compares nothing: the error gave the rule
+    only, not that the defaults broke it nor what to give."""
+    with pytest.raises(ValueError, match=r"got n = 1, b = 0: one gait a query .*give buffer=1"):
+        Setting("mine")
+    assert Setting("mine", buffer=1).buffer == 1
