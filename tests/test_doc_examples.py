@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -89,3 +90,43 @@ def test_toml_snippet_parses(page: str, index: int, snippet: str) -> None:
     config = parse_config(completed(snippet), default_name=f"{page}-{index}")
     assert config.space.describe(0)
     check_ignored(config)  # a new session takes it: no key it gives is ignored
+
+
+BENCHES = ("paper-2d", "compass-gait", "population", "continuous")
+
+
+def documented_usage(command: str) -> set[str]:
+    """The options of ``gaitpref bench COMMAND`` in docs/sweeps.md's usage blocks and examples:
+    the lines that begin with it (in code blocks only) and the indented lines that continue
+    them."""
+    found: set[str] = set()
+    lines = (DOCS / "sweeps.md").read_text(encoding="utf-8").splitlines()
+    for i, line in enumerate(lines):
+        if line.startswith(f"gaitpref bench {command} "):
+            rest = [line]
+            for more in lines[i + 1 :]:
+                if not more.startswith(" "):
+                    break
+                rest.append(more)
+            found |= set(re.findall(r"--[a-z][a-z0-9-]*", "\n".join(rest)))
+    return found
+
+
+@pytest.mark.parametrize("command", BENCHES)
+def test_the_bench_usage_in_sweeps_md_names_every_option(command: str) -> None:
+    """The usage blocks left out --seed, --table, --address and --no-baseline of some benches:
+    each option is documented by one of its names, and nothing documented is not an option."""
+    import typer.main
+
+    from gaitpref.cli.main import app
+
+    group: Any = typer.main.get_command(app)  # typer's own click: no click.Group to check
+    options = [
+        {o for o in (*p.opts, *p.secondary_opts) if o.startswith("--")}
+        for p in group.commands["bench"].commands[command].params
+        if p.param_type_name == "option" and p.name != "help"
+    ]
+    documented = documented_usage(command)
+    assert documented, command
+    assert [sorted(o) for o in options if not o & documented] == []
+    assert documented <= set().union(*options)

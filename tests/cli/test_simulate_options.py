@@ -123,3 +123,30 @@ def test_rating_options_without_a_rater_are_refused_over_points(
     result = runner.invoke(app, args)
     assert result.exit_code == 2, result.output
     assert "--rating-" in result.output and "Traceback" not in result.output
+
+
+@pytest.mark.parametrize(
+    ("command", "extra", "key"),
+    [
+        (["simulate"], "\n[stop]\nconfidence = 0.9\nsamples = 100000\n", "[stop].samples"),
+        (
+            ["bench", "continuous"],
+            "\n[cospar.strategy_settings]\nsamples = 4096\ngates = 3\n",
+            "[cospar.strategy_settings].samples",
+        ),
+    ],
+)
+def test_a_config_refused_for_a_new_run_is_named_with_its_key(
+    tmp_path: Path, command: list[str], extra: str, key: str
+) -> None:
+    """Parse errors named the file (config 'my.toml': ...), a new run's checks only the key."""
+    from gaitpref.config import load_config
+
+    text = load_config("synthetic-6d").text
+    if "strategy_settings" in extra:  # 4096 joint samples of 57,750 gaits: past the budget
+        text = text.replace('strategy = "self-sparring"', 'strategy = "plausible-eubo"', 1)
+    path = tmp_path / "mine.toml"
+    path.write_text(text + extra, encoding="utf-8")
+    result = runner.invoke(app, [*command, str(path), "--objective", "hartmann6"])
+    said = " ".join(result.output.split())
+    assert result.exit_code == 2 and f"mine.toml': {key}" in said, result.output

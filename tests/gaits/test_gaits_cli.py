@@ -38,7 +38,9 @@ def test_build_writes_a_loadable_library(built: Path) -> None:
     assert [lib.gait_id(i) for i in range(3)] == ["L0.100-V0.200", "L0.120-V0.200", "L0.140-V0.200"]
 
 
-def test_build_with_durations_and_width_label(tmp_path: Path) -> None:
+def test_build_with_durations_and_width_label(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     out = tmp_path / "grid.json"
     args = ["build", "--step-length", "0.12", "--step-duration", "0.9:1.0:2",
             "--step-width", "0.25:0.30:2", "--jobs", str(min(2, cpu_count())),
@@ -47,6 +49,17 @@ def test_build_with_durations_and_width_label(tmp_path: Path) -> None:
     assert result.exit_code == 0, result.output
     lib = GaitLibrary.load(out)
     assert lib.names == ("step_length", "step_duration", "step_width") and lib.shape == (1, 2, 2)
+    # at 80 columns the lined table cut values ('L0.120-T0.900-W…', '0.0…', 'y…') and showed
+    # the index column empty: now a header wraps and no value is cut
+    from gaitpref.cli.output import console
+
+    monkeypatch.setattr(console, "_width", 80)
+    shown = runner.invoke(app, ["show", str(out)])
+    assert shown.exit_code == 0, shown.output
+    rows = [line.split() for line in shown.output.splitlines() if "-W0." in line]
+    assert [row[:2] for row in rows] == [[str(i), lib.gait_id(i)] for i in range(4)]
+    assert [row[-2:] for row in rows] == [[f"{g.delta_squared:.4f}", "yes"] for g in lib.gaits]
+    assert all(f"{g.cot:.5f}" in row for g, row in zip(lib.gaits, rows, strict=True))
 
 
 def test_show_table_and_json(built: Path) -> None:
@@ -120,6 +133,7 @@ def test_build_refuses_before_optimizing_and_writes_nothing(
     result = runner.invoke(app, argv)
     assert result.exit_code == 2, result.output
     assert problem in _text(result.output) and "Traceback" not in result.output
+    assert "optimizing gaits" not in result.output  # the bar drew '0/1' above the error
     assert not list(tmp_path.iterdir())
 
 

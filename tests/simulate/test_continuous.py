@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -74,6 +75,30 @@ def test_an_objective_loads_from_a_python_file(tmp_path: Path) -> None:
     space = Space([Feature.interval("a", 0.0, 1.0)])
     with pytest.raises(ValueError, match="must return 2 finite utilities"):
         objective_from(f"{bad}:one", space)
+
+
+@pytest.mark.parametrize(
+    ("spec", "extra"),
+    [
+        ("hartman6", ""),  # a mistyped built-in said only 'expected PATH.py:NAME'
+        ("obj.py", ""),
+        ("grid.npy", "`gaitpref simulate` takes it"),  # bench continuous takes no grid
+    ],
+)
+def test_an_objective_that_is_no_function_nor_builtin_names_what_is_taken(
+    spec: str, extra: str
+) -> None:
+    message = (
+        f"objective {spec!r}: expected PATH.py:NAME (a function in a Python file) or a "
+        "built-in: hartmann6, random-gp[:SEED]"
+    )
+    with pytest.raises(ValueError, match=re.escape(message)) as caught:
+        load_function(spec)
+    assert extra in str(caught.value)
+    result = CliRunner().invoke(
+        app, ["bench", "continuous", "synthetic-2d", "--objective", spec, "--runs", "1"]
+    )
+    assert result.exit_code == 2 and "random-gp[:SEED]" in result.output, result.output
 
 
 def test_builtins_read_the_box_in_the_features_units() -> None:

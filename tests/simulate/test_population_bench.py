@@ -157,3 +157,20 @@ def test_an_infinite_user_noise_is_refused_as_not_finite() -> None:
     cfg = load_config(CONFIG)
     with pytest.raises(ValueError, match="noise must be a finite number >= 0, got inf"):
         population_bench(cfg, np.zeros((2, len(cfg.space))), 1, user_noise=float("inf"))
+
+
+def test_the_bench_reports_its_progress_run_by_run(tmp_path: Path) -> None:
+    """It said nothing till the end (minutes for 20 subjects): the API counts the finished
+    runs, and the command draws a bar of them (not with --json, whose stdout is the JSON)."""
+    config = load_config(CONFIG)
+    x = np.linspace(0, 1, len(config.space))
+    objectives = np.array([-((x - p) ** 2) for p in (0.6, 0.65)])
+    seen: list[int] = []
+    population_bench(config, objectives, 2, progress=seen.append)
+    assert seen == [0, 1, 2, 3, 4]  # once before the runs, then each of 2 cold, 2 warm
+    path = tmp_path / "objectives.npy"
+    np.save(path, objectives)
+    args = ["bench", "population", "--objectives", str(path), "--trials", "2"]
+    result = CliRunner().invoke(app, [*args, "--config", CONFIG])
+    assert result.exit_code == 0, result.output
+    assert "2 subjects, cold and warm" in result.output and "4/4" in result.output

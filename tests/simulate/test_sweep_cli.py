@@ -37,6 +37,7 @@ def test_paper_2d_writes_every_output(tmp_path: Path) -> None:
         "parquet",
     )
     assert code == 0, out
+    assert "(joblib, 1 job)" in " ".join(out.split())  # '1 jobs'
     curves = read_curves(tmp_path / "curves.csv")
     assert curves.settings == ("n1_b1", "n1_b1_coactive", "random")
     table = read_table(tmp_path / "runs.parquet")
@@ -112,6 +113,8 @@ def test_compass_gait_poly_and_hzd(tmp_path: Path) -> None:
         str(tmp_path / "poly"),
     )
     assert code == 0, out
+    said = " ".join(out.split())  # it named neither the backend nor the workers
+    assert "(joblib, 1 job); wrote" in said and "gait-library.json" not in said
     assert read_curves(tmp_path / "poly" / "curves.csv").settings == ("n2_b0", "random")
     assert (tmp_path / "poly" / "posterior.png").is_file()
 
@@ -331,3 +334,13 @@ def test_a_gait_library_left_in_out_is_built_again_but_not_a_folder_in_its_place
     (tmp_path / "gait-library.json").mkdir()
     code, out = invoke("compass-gait", *args)
     assert code == 2 and "gait-library.json is a folder" in " ".join(out.split()), out
+
+
+def test_a_gait_library_built_is_named_among_the_files_written(tmp_path: Path) -> None:
+    """--objective hzd without --library saves OUT/gait-library.json: the last line listed the
+    other files only."""
+    args = ("--objective", "hzd", "--runs", "1", "--trials", "3", "--iterations", "1")
+    code, out = invoke("compass-gait", *args, "--jobs", "1", "--out", str(tmp_path))
+    assert code == 0, out
+    assert "posterior.png, gait-library.json" in " ".join(out.split())
+    assert (tmp_path / "gait-library.json").is_file()

@@ -141,6 +141,16 @@ def test_one_run_per_setting_leaves_out_the_checks_against_the_published_means(
     assert "coactive feedback helps at (n, b) = (1, 1)" in text
 
 
+def test_a_study_no_check_applies_to_says_so(small_machine: MachineInfo) -> None:
+    """10 trials reach no checkpoint and one setting has no twin: the summary said '0 of 0
+    checks hold.', which reads as a pass, and cited design notes the repository does not ship."""
+    study = paper_2d_study(runs=2, trials=10, settings=["n1_b1"], baseline=False)
+    text = paper_2d_summary(run_study(study, jobs=1), published_curves(), small_machine)
+    assert "0 of 0 checks hold" not in text
+    assert "No check applies to this study: a setting's mean is checked against the " in text
+    assert "design/algorithm.md" not in text
+
+
 @pytest.fixture
 def small_machine() -> MachineInfo:
     return MachineInfo(2, "Linux x86_64", "3.11", (1.0, 0.5, 0.25), (1.5, 0.6, 0.3))

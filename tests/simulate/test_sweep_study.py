@@ -270,3 +270,28 @@ def test_a_study_holds_at_most_max_runs(small_study: Study) -> None:
     result = CliRunner().invoke(app, ["bench", "compass-gait", "--runs", "100000000"])
     assert result.exit_code == 2 and f"runs must be 1 to {MAX_RUNS}" in result.output
     assert _replaced(small_study, seeds=iter((0, 1))).seeds == (0, 1)
+
+
+def test_the_rate_shown_when_a_study_ends_is_the_whole_studys() -> None:
+    """Rich's estimate reads the last updates only: 6 runs after a 6 s start-up (Ray's), or
+    runs arriving in batches, showed about 1000 runs/s; the runs a resume kept are not run."""
+    from rich.progress import Progress
+
+    from gaitpref.simulate.sweep import _RateColumn
+
+    now = [0.0]
+    bar = Progress(_RateColumn(), get_time=lambda: now[0], disable=True)
+    tid = bar.add_task("study", total=10, completed=4, kept=4)
+    now[0] = 6.0
+    for _ in range(6):
+        now[0] += 0.001
+        bar.advance(tid)
+    assert _RateColumn().render(bar.tasks[0]).plain == "  1.0 runs/s"  # 6 runs in 6.006 s
+
+
+def test_a_setting_of_its_defaults_alone_says_why_it_is_refused() -> None:
+    """Setting(name) is n = 1, buffer = 0, which compares nothing: the error gave the rule
+    only, not that the defaults broke it nor what to give."""
+    with pytest.raises(ValueError, match=r"got n = 1, b = 0: one gait a query .*give buffer=1"):
+        Setting("mine")
+    assert Setting("mine", buffer=1).buffer == 1

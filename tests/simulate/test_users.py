@@ -108,3 +108,13 @@ def test_simulation_trials_are_a_count() -> None:
         user = SimulatedUser(config.space, objective, np.random.default_rng(0))
         with pytest.raises(ValueError, match="trials must be an integer >= 1"):
             run_simulation(config.make_loop(seed=0), user, trials)  # type: ignore[arg-type]
+
+
+def test_an_objective_of_another_shape_is_refused_naming_the_grids() -> None:
+    """A 1-D grid's two shapes are one: it said 'the grid needs (15,) or (15,)'."""
+    from gaitpref.simulate.users import objective_on_grid
+
+    with pytest.raises(ValueError, match=r"shape \(30, 30\); the grid needs \(15,\)$"):
+        objective_on_grid(load_config("exo-1d-step-length").space, np.zeros((30, 30)))
+    with pytest.raises(ValueError, match=r"shape \(5,\); the grid needs \(30, 30\) or \(900,\)$"):
+        objective_on_grid(load_config("synthetic-2d").space, np.zeros(5))

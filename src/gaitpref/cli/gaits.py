@@ -113,7 +113,7 @@ def build(
         TimeElapsedColumn,
     )
 
-    from gaitpref.gaits.build import build_library
+    from gaitpref.gaits.build import build_library, check_grid
     from gaitpref.gaits.gait import HZDSettings
     from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES, max_gaits_in_file
 
@@ -143,6 +143,12 @@ def build(
             f"{degree} (it is read back up to {MAX_LIBRARY_BYTES:,} bytes): build it in parts",
             param_hint="--step-length/--step-duration/--step-width",
         )
+    try:  # before the progress bar: it drew '0/1' above the error
+        check_grid(lengths, durations, speed, widths)
+    except ValueError as exc:  # GaitLibraryError too
+        raise typer.BadParameter(
+            str(exc), param_hint="--step-length/--step-duration/--step-width"
+        ) from None
     check_file_out(out, "--out")
     total = len(lengths) * (len(durations) if durations else 1)
     columns = (
@@ -183,6 +189,7 @@ def show(
     as_json: Annotated[bool, typer.Option("--json", help="One JSON object on stdout.")] = False,
 ) -> None:
     """List the gaits of a library: parameters, duration, COT, delta^2, feasibility."""
+    from rich import box
     from rich.table import Table
     from rich.text import Text
 
@@ -215,12 +222,21 @@ def show(
     feasible = len(lib) - len(lib.infeasible())
     table = Table(
         title=f"{file.name}: {len(lib)} gaits ({feasible} feasible) over "
-        f"{' x '.join(lib.names)}{speed}"
+        f"{' x '.join(lib.names)}{speed}",
+        box=box.SIMPLE_HEAD,  # no column rules: 80 columns hold three axes
+        pad_edge=False,
+        collapse_padding=True,
     )
-    # "ok": feasible; the unit in "duration [s]" shows now that markup is off, and 80 columns
-    # hold the table with the short header
+    # "ok": feasible; the unit in "duration [s]" shows now that markup is off.  A value is never
+    # cut: past the width a header wraps, a value folds (a lined table at 80 columns showed the
+    # index column empty and 'L0.080-T0.950-W…', '0.0…', 'y…' for two axes or three)
     for col in ("#", "id", *lib.names, "duration [s]", "COT", "delta^2", "ok"):
-        table.add_column(col, justify="left" if col == "id" else "right", no_wrap=True)
+        table.add_column(
+            col,
+            justify="left" if col == "id" else "right",
+            overflow="fold",
+            no_wrap=col in ("#", "id"),
+        )
     for i, gait in enumerate(lib.gaits):
         params = [f"{v:.4g}" for v in lib.parameters(i).values()]
         cot = f"{gait.cot:.5f}" if gait.feasible else "-"

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -79,10 +79,23 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
 
     def load() -> ExperimentConfig:
         cfg = load_config(source)
-        check_new(cfg)
+        checked_config(source, cfg, check_new)
         return cfg
 
     return guard(load)
+
+
+def checked_config(
+    source: str, cfg: ExperimentConfig, check: Callable[[ExperimentConfig], None]
+) -> None:
+    """``check(cfg)``, its :class:`ConfigError` naming the config as a parse error does
+    (``config 'my.toml': [stop].samples: ...``): a new run's checks named the key only."""
+    from gaitpref.errors import ConfigError
+
+    try:
+        check(cfg)
+    except ConfigError as exc:
+        raise ConfigError(f"config {source!r}: {exc}", table=exc.table, key=exc.key) from None
 
 
 def _load_objective(path: Path) -> np.ndarray:

@@ -386,10 +386,11 @@ def _bench_config(source: str) -> ExperimentConfig:
     """A bench's config, with a new session's check of its largest draw against the sampling
     budget (``config/draws.py``): refused before any run, naming the key, rather than as every
     run's failure."""
+    from gaitpref.cli.main import checked_config
     from gaitpref.config import check_draws, load_config
 
     cfg = load_config(source)
-    check_draws(cfg)
+    checked_config(source, cfg, check_draws)
     return cfg
 
 
@@ -441,8 +442,9 @@ def paper_2d(
         summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
         (out / "summary.md").write_text(summary, encoding="utf-8")
     _console.print(
-        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, {result.jobs} jobs); "
-        f"wrote {out}/curves.csv, {table_path.name}, curves.png, summary.md"
+        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, "
+        f"{_jobs_text(result.jobs)}); wrote {out}/curves.csv, {table_path.name}, curves.png, "
+        "summary.md"
     )
 
 
@@ -537,10 +539,17 @@ def compass_gait(
             result.curves,
             obj.label,
         )
+    built = ", gait-library.json" if rebuilt else ""  # it was saved, and said nowhere
     _console.print(
-        f"{len(study)} runs in {result.seconds:.1f} s; wrote {out}/curves.csv, {table_path.name}, "
-        "posterior.png"
+        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, "
+        f"{_jobs_text(result.jobs)}); wrote {out}/curves.csv, {table_path.name}, posterior.png"
+        f"{built}"
     )
+
+
+def _jobs_text(jobs: int) -> str:
+    """'1 job', '2 jobs' (it said '1 jobs')."""
+    return f"{jobs} job" if jobs == 1 else f"{jobs} jobs"
 
 
 @bench_app.command("population")
@@ -571,7 +580,9 @@ def population(
     import json
 
     import numpy as np
+    from rich.progress import TaskID
 
+    from gaitpref.cli.main import progress_bar
     from gaitpref.cli.points import check_noise
     from gaitpref.simulate.population import population_bench
 
@@ -580,18 +591,33 @@ def population(
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "population", resume)
 
+    # each subject's cold run, then its warm one: it said nothing till the end (minutes)
+    bar = progress_bar(shown=not as_json)
+    tasks: list[TaskID] = []
+
+    def shown(done: int) -> None:  # first called once the input is checked: no bar before
+        if not tasks:
+            bar.start()
+            subjects = len(arr)
+            tasks.append(bar.add_task(f"{subjects} subjects, cold and warm", total=2 * subjects))
+        bar.update(tasks[0], completed=done)
+
     def run() -> dict[str, object]:
         return population_bench(
             cfg, arr, trials, seed=seed, jobs=jobs, tolerance=tolerance, user_noise=user_noise,
-            partial=kept, resume=resume,
+            partial=kept, resume=resume, progress=shown,
         )  # fmt: skip
 
-    with _warnings_shown():
-        result = _stopping(
-            run,
-            kept,
-            f"the same command with --partial {str(kept)!r} --resume continues the bench from them",
-        )
+    try:
+        with _warnings_shown():
+            result = _stopping(
+                run,
+                kept,
+                f"the same command with --partial {str(kept)!r} --resume continues the bench "
+                "from them",
+            )
+    finally:
+        bar.stop()
     if as_json:
         typer.echo(json.dumps(result))
         return
@@ -624,7 +650,7 @@ def continuous(
     partial: Partial = None,
     resume: BenchResume = False,
 ) -> None:
-    """A sweep over seeds against an objective over points (grid or line path, issue 13):
+    """A sweep over seeds against an objective over points (on the grid or the line path):
     the learning curve and the final best point's objective, mean and standard error."""
     import json
 

@@ -59,6 +59,28 @@ def _chains(
     return [[requests[k] for k in piece] for piece in pieces if piece.size]
 
 
+def check_grid(
+    step_lengths: Sequence[float],
+    step_durations: Sequence[float] | None,
+    speed: float | None,
+    step_widths: Sequence[float] | None = None,
+    params: CompassGaitParams | None = None,
+) -> tuple[tuple[str, tuple[float, ...]], ...]:
+    """What :func:`build_library` checks before it optimizes anything: the axes (positive,
+    increasing, distinct ids; :class:`GaitLibraryError`) and step lengths the legs reach,
+    ``0 < L < 2 l`` (a ``ValueError``).  Returns the library's axes."""
+    axes: list[tuple[str, tuple[float, ...]]] = [("step_length", tuple(step_lengths))]
+    if step_durations is not None:
+        axes.append(("step_duration", tuple(step_durations)))
+    if step_widths is not None:
+        axes.append(("step_width", tuple(step_widths)))
+    check_axes(tuple(axes), speed)
+    p = params or CompassGaitParams()
+    for length in step_lengths:
+        guard_angle(p, length)  # a step the legs reach: 0 < L < 2 l
+    return tuple(axes)
+
+
 def build_library(
     step_lengths: Sequence[float],
     *,
@@ -85,14 +107,7 @@ def build_library(
     lengths = [float(v) for v in step_lengths]
     durations = None if step_durations is None else [float(v) for v in step_durations]
     widths = None if step_widths is None else [float(w) for w in step_widths]
-    axes: list[tuple[str, tuple[float, ...]]] = [("step_length", tuple(lengths))]
-    if durations is not None:
-        axes.append(("step_duration", tuple(durations)))
-    if widths is not None:
-        axes.append(("step_width", tuple(widths)))
-    check_axes(tuple(axes), speed)  # fail before any optimization
-    for length in lengths:
-        guard_angle(p, length)  # a step the legs reach: 0 < L < 2 l
+    axes = check_grid(lengths, durations, speed, widths, p)  # fail before any optimization
     chains = _chains(lengths, durations, speed, n_jobs)
     workers = min(n_jobs, len(chains))  # joblib starts every worker asked for, idle or not
     base: dict[int, Gait] = {}
@@ -108,4 +123,4 @@ def build_library(
     n_base = len(base)
     repeat = len(widths) if widths is not None else 1
     gaits = tuple(base[k // repeat] for k in range(n_base * repeat))
-    return GaitLibrary(p, s, tuple(axes), gaits, speed)
+    return GaitLibrary(p, s, axes, gaits, speed)

@@ -99,6 +99,7 @@ def on_box(space: Space, fn: PointObjective, dims: int | None = None) -> PointOb
 
 
 BUILTINS = ("hartmann6", "random-gp")
+_BUILTIN_SPECS = ("hartmann6", "random-gp[:SEED]")  # as the built-ins are written
 
 
 def random_gp_lengthscale(d: int) -> float:
@@ -120,7 +121,17 @@ def load_function(spec: str) -> PointObjective:
     """The function ``NAME`` of the Python file ``PATH`` given as ``PATH.py:NAME``."""
     path_text, sep, name = spec.rpartition(":")
     if not sep or not path_text.endswith(".py") or not name.isidentifier():
-        raise ValueError(f"objective {spec!r}: expected PATH.py:NAME")
+        # a mistyped built-in ('hartman6') or a .npy grid here said only 'expected PATH.py:NAME'
+        grid = (
+            " (a .npy file is one utility per grid point: `gaitpref simulate` takes it, a "
+            "sweep over points does not)"
+            if spec.endswith(".npy")
+            else ""
+        )
+        raise ValueError(
+            f"objective {spec!r}: expected PATH.py:NAME (a function in a Python file) or a "
+            f"built-in: {', '.join(_BUILTIN_SPECS)}{grid}"
+        )
     path = Path(path_text)
     if not path.is_file():
         raise ValueError(f"objective file {path_text!r} does not exist")

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -342,6 +342,7 @@ def population_bench(
     truths: FloatArray | None = None,
     partial: str | Path | None = None,
     resume: bool = False,
+    progress: Callable[[int], None] | None = None,
 ) -> dict[str, object]:
     """The JSON of ``gaitpref bench population`` (module docstring); ``user_noise``: the
     simulated subjects' probit noise in the objectives' units (``simulate/users.py``);
@@ -362,6 +363,9 @@ def population_bench(
     a file of another bench is refused (:class:`~gaitpref.simulate.resume.ResumeError` naming
     what differs), a last line cut short dropped with a
     :class:`~gaitpref.simulate.resume.PartialRunsWarning` (its run runs again).
+
+    ``progress``: called with the number of runs finished (of ``2 x`` subjects, those a resume
+    kept included) as each run finishes, and once before any runs.
 
     ``trials`` is at most :data:`~gaitpref.limits.MAX_TRIALS`, and subjects x the gaits each
     run may visit at most :data:`~gaitpref.limits.MAX_POPULATION_NODES`: refused (a ValueError)
@@ -421,6 +425,8 @@ def population_bench(
             walked[arm][todo[index]] = w
             if sink is not None:
                 sink.append(walked_record(todo[index], arm, seed, w))
+            if progress is not None:
+                progress(sum(x is not None for a in ARMS for x in walked[a]))
 
         _, failure = run_tasks(_walk_args, args, jobs, done=done)
         if failure is not None:
@@ -434,6 +440,8 @@ def population_bench(
             raise run_error(failure, names, records, 2 * S, None if sink is None else sink.path)
         return [w for w in walked[arm] if w is not None]
 
+    if progress is not None:
+        progress(len(kept))
     with partial_file(sink):
         cold = run("cold", [None] * S)
         warm = run("warm", [[c.preferences for j, c in enumerate(cold) if j != k]

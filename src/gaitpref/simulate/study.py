@@ -140,9 +140,16 @@ class Setting:
         if self.strategy == "cospar" and (
             self.n < 1 or self.buffer < 0 or (self.n == 1 and self.buffer == 0)
         ):
+            why = (  # Setting(name) alone is this: its defaults are n = 1, buffer = 0
+                ": one gait a query and none remembered compares nothing; give buffer=1 (the "
+                "paper's human protocol) or n >= 2 (buffer defaults to 0 here, not to a "
+                "config's 1)"
+                if self.n == 1 and self.buffer == 0
+                else ""
+            )
             raise ValueError(
                 f"setting {self.name!r}: needs n >= 1, b >= 0 and not n = 1 with b = 0, "
-                f"got n = {self.n}, b = {self.buffer}"
+                f"got n = {self.n}, b = {self.buffer}{why}"
             )
 
     def _check_ratings(self) -> None:

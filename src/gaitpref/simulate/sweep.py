@@ -85,7 +85,15 @@ class StudyResult:
 
 class _RateColumn(ProgressColumn):
     def render(self, task: Task) -> Text:
-        speed = task.finished_speed or task.speed
+        if task.finished_time:
+            # The whole sweep's rate, start-up included, not counting the runs a resume kept:
+            # rich's own estimate reads its last 1,000 updates only and left out the wait for
+            # the first (3 Ray runs in 7.6 s showed 41.9 runs/s; a resumed 4,000-run study,
+            # whose joblib results arrive in batches, 4835.7 runs/s for about 230).
+            ran = task.completed - int(task.fields.get("kept", 0))
+            speed: float | None = ran / task.finished_time
+        else:
+            speed = task.speed
         return Text("  -  runs/s" if speed is None else f"{speed:5.1f} runs/s", style="cyan")
 
 
@@ -157,7 +165,7 @@ def run_study(
     start = time.perf_counter()
     with partial_file(sink):
         with _progress(console) if progress else _NoProgress() as bar:
-            tid = bar.add_task(study.name, total=len(tasks), completed=len(kept))
+            tid = bar.add_task(study.name, total=len(tasks), completed=len(kept), kept=len(kept))
 
             def done(index: int, result: RunResult) -> None:
                 if sink is not None:
@@ -413,7 +421,7 @@ class _NoProgress:
     def __exit__(self, *exc: object) -> None:
         return None
 
-    def add_task(self, description: str, total: int, completed: int = 0) -> TaskID:
+    def add_task(self, description: str, total: int, completed: int = 0, kept: int = 0) -> TaskID:
         return TaskID(0)
 
     def advance(self, task: TaskID) -> None:

@@ -33,9 +33,9 @@ def objective_on_grid(space: Space, objective: ArrayLike) -> FloatArray:
     """The objective as a flat array over the grid (shaped like the grid or already flat)."""
     arr = np.asarray(objective, dtype=np.float64)
     if arr.shape not in (space.shape, (len(space),)):
-        raise ValueError(
-            f"objective has shape {arr.shape}; the grid needs {space.shape} or ({len(space)},)"
-        )
+        flat = (len(space),)  # a 1-D grid's shape: it said 'needs (15,) or (15,)'
+        needs = f"{space.shape}" if space.shape == flat else f"{space.shape} or {flat}"
+        raise ValueError(f"objective has shape {arr.shape}; the grid needs {needs}")
     if not np.all(np.isfinite(arr)):
         raise ValueError("objective values must be finite")
     return arr.reshape(-1).copy()
