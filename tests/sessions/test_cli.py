@@ -53,6 +53,7 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "trials",
         "excluded",
         "comparisons",
+        "unsafe",
         "posterior",
         "validations",
         "figure",
@@ -157,9 +158,22 @@ def test_unsafe_flag_and_withdrawal_from_the_cli(tmp_path: Path, drive: Drive) -
     assert "already flagged" in _fails("session", "unsafe", "1", "2", "--reason", "x", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags()[2][1] == "knee gave way"
+        action = again.unsafe_flags()[2][0]
+        gait = again.gait_name(action)
+    # session show lists the flag in force: in the text, and in --json as the API names it
+    text = _ok("session", "show", "1", "--no-figure", "--db", db)
+    assert f"flagged unsafe: trial 2, gait {gait} (knee gave way)" in text
+    info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
+    assert info["unsafe"] == [
+        {"trial": 2, "action": action, "gait": gait, "reason": "knee gave way"}
+    ]
     assert "withdrawn" in _ok("session", "unsafe", "1", "2", "--withdraw", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags() == {}
+    # withdrawn: no longer listed
+    assert "flagged unsafe" not in _ok("session", "show", "1", "--no-figure", "--db", db)
+    info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
+    assert info["unsafe"] == []
 
 
 def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:

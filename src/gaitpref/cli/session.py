@@ -427,6 +427,12 @@ def show(
             target = figure or Path(f"session-{session.id}.png")
             path = guard(lambda: save_session_figure(session, target))
         trials = session.trials()
+        # the unsafe flags in force (a withdrawn one is gone), each gait named as the terminal,
+        # the console and exports name it
+        flags = [
+            {"trial": trial, "action": action, "gait": session.gait_name(action), "reason": why}
+            for trial, (action, why) in sorted(session.unsafe_flags().items())
+        ]
         info = {
             "id": session.id,
             "subject": session.subject,
@@ -436,6 +442,7 @@ def show(
             "trials": len(trials),
             "excluded": [t.number for t in trials if t.excluded],
             "comparisons": sum(not c.undone for c in session.comparisons()),
+            "unsafe": flags,
             "posterior": summary,
             "validations": [
                 {
@@ -458,6 +465,11 @@ def show(
             f"{len(trials)} trials ({len(info['excluded'])} excluded), "  # type: ignore[arg-type]
             f"{info['comparisons']} comparisons\n{so_far}"
         )
+        if flags:
+            console.print(
+                "flagged unsafe: "
+                + "; ".join(f"trial {u['trial']}, gait {u['gait']} ({u['reason']})" for u in flags)
+            )
         for v in session.validations():
             console.print(
                 f"validation {v.round}: ranking {''.join(v.ranking)}, "
