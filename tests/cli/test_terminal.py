@@ -605,3 +605,13 @@ def test_an_answer_written_is_not_said_to_be_not_written() -> None:
     terminal.run()
     assert "saved: trial 1" in console.export_text()
     assert "not written" not in console.export_text()
+
+
+def test_the_opening_line_counts_one_trial_in_the_singular() -> None:
+    """It said "1 trials so far"."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+    terminal, console = _terminal(session)  # no input: the runner pauses at once
+    terminal.run()
+    assert "exo-1d-step-length: 1 trial so far." in console.export_text()

@@ -37,7 +37,7 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
     session = Session.open(db, 1)
     drive(session, 6)
     assert "S01" in _ok("session", "list", "--db", db)
-    assert "1 sessions" in _ok("db", "status", "--db", db)
+    assert "1 session, 1 subject" in _ok("db", "status", "--db", db)  # it said "1 sessions"
     _ok("session", "note", "1", "knee strap loosened", "--db", db)
     _ok("session", "exclude", "1", "3", "--reason", "device-fault", "--detail", "E12", "--db", db)
     figure = tmp_path / "fig.png"
@@ -301,3 +301,17 @@ def test_session_list_folds_long_names_instead_of_cutting_them(tmp_path: Path) -
     assert "exo-2d-length-duration" in column and "exo-2d-length-width" in column
     assert "S01-long-code" in "".join(cell[2].strip() for cell in cells)
     assert max(len(line) for line in out.splitlines()) <= 80
+
+
+def test_show_counts_one_trial_and_one_comparison_in_the_singular(tmp_path: Path) -> None:
+    """It said "1 trials (0 excluded), 1 comparisons"."""
+    db = str(tmp_path / "lab.db")
+    with Session.create(f"sqlite:///{db}", CONFIG, "S01", seed=1) as s:
+        q = s.next_query()
+        s.answer(q.id, [], [(q.actions[0], "step_length", "+big")])  # one trial, no comparison
+        text = _ok("session", "show", "1", "--no-figure", "--db", db)
+        assert "1 trial (0 excluded), 0 comparisons" in text
+        q = s.next_query()  # the new gait against the buffered one: one comparison
+        s.answer(q.id, [(q.actions[0], q.buffer[0], "first")])
+    text = _ok("session", "show", "1", "--no-figure", "--db", db)
+    assert "2 trials (0 excluded), 1 comparison\n" in text
