@@ -65,6 +65,7 @@ from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import LABELS, ValidationPlan, check_ranking
 from gaitpref.space import Feature
 from gaitpref.storage import SessionBusyError
+from gaitpref.wording import plural
 
 Reader = Callable[[str], str]
 _MOVES = ("+big", "+small", "-small", "-big")
@@ -317,8 +318,8 @@ class Terminal:
         s = self.session
         self.console.print(
             f"Session {s.id}, subject {s.subject}, {clip(s.config.name)}: "
-            f"{len(s.trials())} trials so far.  Keys: u undo the last answer, q pause and "
-            "quit.",
+            f"{plural(len(s.trials()), 'trial')} so far.  Keys: u undo the last answer, q pause "
+            "and quit.",
             markup=False,
         )
         self._say_stop_blocked()

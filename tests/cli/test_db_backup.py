@@ -143,3 +143,16 @@ def test_a_backup_while_a_session_is_written_is_one_consistent_state(tmp_path: P
             seqs = raw.execute("SELECT sum(last_seq) FROM sessions").fetchone()[0]
         raw.close()
         assert rows == seqs == saved.events  # the events and the sessions' counters agree
+
+
+def test_one_session_and_one_event_are_counted_in_the_singular(tmp_path: Path) -> None:
+    """It said "1 sessions, 1 events" (a new session's log holds one event)."""
+    lab = tmp_path / "lab.db"
+    Session.create(f"sqlite:///{lab}", CONFIG, "S01", seed=4).close()
+    out = tmp_path / "copy.db"
+    result = CliRunner().invoke(app, ["db", "backup", str(out), "--db", str(lab)])
+    assert result.exit_code == 0, result.output
+    assert "1 session, 1 event (verified)" in result.stdout
+    check = CliRunner().invoke(app, ["db", "check", "--db", str(lab)])
+    assert check.exit_code == 0, check.output
+    assert "session 1: subject S01, exo-1d-step-length, 1 event, active: OK" in check.stdout

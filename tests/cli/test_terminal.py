@@ -8,11 +8,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 from rich.console import Console
+from typer.testing import CliRunner
 
 from gaitpref import Session, load_config
+from gaitpref.cli import app
 from gaitpref.storage import MemoryStorage
 from gaitpref.terminal import Terminal, gait_name
 from tests.sessions.sessionkit import CONFIG
@@ -605,3 +608,34 @@ def test_an_answer_written_is_not_said_to_be_not_written() -> None:
     terminal.run()
     assert "saved: trial 1" in console.export_text()
     assert "not written" not in console.export_text()
+
+
+def test_the_opening_line_counts_one_trial_in_the_singular() -> None:
+    """It said "1 trials so far"."""
+    session = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+    terminal, console = _terminal(session)  # no input: the runner pauses at once
+    terminal.run()
+    assert "exo-1d-step-length: 1 trial so far." in console.export_text()
+
+
+def test_the_shipped_rated_config_runs_from_the_cli_with_a_rating(tmp_path: Path) -> None:
+    """``configs/exo-2d-rated.toml``: a new session from the CLI, then two trials at the
+    terminal, the first rated."""
+    db = tmp_path / "lab.db"
+    new = CliRunner().invoke(
+        app, ["session", "new", "--config", "exo-2d-rated", "--subject", "S01", "--db", str(db)]
+    )
+    assert new.exit_code == 0, new.output
+    with Session.open(f"sqlite:///{db}", 1) as session:
+        # trial 1: rated 1 (very bad), no suggestion on either feature, written; trial 2:
+        # compared, not rated
+        terminal, console = _terminal(session, "1", "0", "0", "y", "1", "", "0", "0", "y")
+        terminal.run()
+        text = console.export_text()
+        assert "Rating of trial 1: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip" in text
+        assert "trial 1 rated very bad" in text
+        rated = [e.payload for e in session.events() if e.kind == "rating_given"]
+        assert [(r["trial"], r["category"]) for r in rated] == [(1, "very bad")]
+        assert len(session.trials()) == 2 and session.config.name == "exo-2d-rated"

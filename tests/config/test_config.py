@@ -47,6 +47,7 @@ def test_issue_example_parses() -> None:
         ("exo-1d-step-length", (15,), (0.03,), 0.005, 1e-7, 0.02, 1, 1),
         ("exo-2d-length-duration", (15, 10), (0.03, 0.08), 0.005, 1e-7, 0.02, 1, 1),
         ("exo-2d-length-width", (15, 6), (0.03, 0.03), 0.005, 1e-7, 0.02, 1, 1),
+        ("exo-2d-rated", (15, 6), (0.03, 0.03), 0.005, 1e-7, 0.02, 1, 1),  # and ratings
         ("compass-gait", (24,), (0.025,), 1e-4, 1e-8, 0.01, 2, 0),
         ("synthetic-2d", (30, 30), (0.15, 0.15), 1e-4, 1e-5, 0.01, 1, 1),
     ],
@@ -182,3 +183,23 @@ def test_a_config_file_with_a_byte_order_mark_is_named(tmp_path: Path) -> None:
         r"with a byte order mark \(U\+FEFF",
     ):
         load_config(path)
+
+
+def test_the_rated_example_config_rates_and_avoids() -> None:
+    """No shipped config had [feedback.rating] or [safety] avoid: a lab wrote its own."""
+    from gaitpref.config import check_new
+
+    cfg = load_config("exo-2d-rated")
+    check_new(cfg)  # a new session takes it
+    assert cfg.ordinal is not None
+    assert cfg.ordinal.categories == ("very bad", "bad", "okay", "good")
+    assert cfg.safety.avoid == 1 and cfg.safety.unsafe_radius == 0.1
+    assert cfg.safety.risk == 0.35  # the default its comment works out: 1/4 + 0.1
+    # as its comment says: a flag takes out the gait and its step-length neighbours alone
+    from gaitpref.loop.safety import near
+
+    middle = 7 * 6 + 3  # step length 8 of 15, step width 4 of 6
+    assert np.flatnonzero(near(cfg.space, [middle], 0.1)).tolist() == [39, 45, 51]
+    base = load_config("exo-2d-length-width")  # built on it: the same space, model and loop
+    assert cfg.space.shape == base.space.shape and cfg.kernel == base.kernel
+    assert (cfg.n, cfg.buffer, cfg.strategy) == (base.n, base.buffer, base.strategy)

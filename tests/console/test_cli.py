@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import socket
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,7 @@ from fastapi.testclient import TestClient
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
+from gaitpref.cli import console as console_cli
 
 
 @pytest.fixture
@@ -24,6 +26,8 @@ def served(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
         seen.update(kwargs)
 
     monkeypatch.setattr(uvicorn, "run", fake_run)
+    # nothing listens, so whether the port is free here is no matter (tested on its own below)
+    monkeypatch.setattr(console_cli, "port_taken", lambda host, port: False)
     monkeypatch.delenv("GAITPREF_TOKEN", raising=False)
     return seen
 
@@ -94,3 +98,28 @@ def test_a_new_database_is_said_to_be_new(served: dict[str, Any], tmp_path: Path
     # the same file again, and a database given by URL that is there: nothing said
     assert "no database was at" not in run("--db", str(missing))
     assert "no database was at" not in run("--db", f"sqlite:///{missing}")
+
+
+def test_a_port_in_use_is_refused_naming_it(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """Before, uvicorn printed its raw "[Errno 98] address already in use" and exited 3."""
+
+    def must_not_run(application: Any, **kwargs: Any) -> None:
+        raise AssertionError("served on a port in use")
+
+    monkeypatch.setattr(uvicorn, "run", must_not_run)
+    db = tmp_path / "console.db"
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as other:  # another program's server
+        other.bind(("127.0.0.1", 0))
+        other.listen()
+        port = other.getsockname()[1]
+        assert console_cli.port_taken("127.0.0.1", port)
+        result = CliRunner().invoke(app, ["console", "--db", str(db), "--port", str(port)])
+    assert result.exit_code == 2, result.output
+    assert f"port {port} on 127.0.0.1 is already in use" in result.output
+    assert "--port" in result.output and "Errno" not in result.output
+    assert not db.exists()  # refused before the database is opened
+    # closed: free again (an address not this machine's is left to uvicorn, not called taken)
+    assert not console_cli.port_taken("127.0.0.1", port)
+    assert not console_cli.port_taken("10.0.0.5", port)

@@ -38,7 +38,13 @@ def _play(loop: CoSpar, answers: int, ties_every: int = 0) -> None:
 
 
 #: the shipped configs on a grid (a continuous one runs on the line path, tested there)
-GRID_CONFIGS = [n for n in shipped_configs() if not load_config(n).space.continuous]
+#: without ratings (exo-2d-rated's region of avoidance is no part of the paper's loop: its risk
+#: rule and cautious level, moved by the answers too, narrow the gaits a query may propose)
+GRID_CONFIGS = [
+    n
+    for n in shipped_configs()
+    if not load_config(n).space.continuous and load_config(n).ordinal is None
+]
 
 
 @pytest.mark.parametrize("name", GRID_CONFIGS)

@@ -37,7 +37,7 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
     session = Session.open(db, 1)
     drive(session, 6)
     assert "S01" in _ok("session", "list", "--db", db)
-    assert "1 sessions" in _ok("db", "status", "--db", db)
+    assert "1 session, 1 subject" in _ok("db", "status", "--db", db)  # it said "1 sessions"
     _ok("session", "note", "1", "knee strap loosened", "--db", db)
     _ok("session", "exclude", "1", "3", "--reason", "device-fault", "--detail", "E12", "--db", db)
     figure = tmp_path / "fig.png"
@@ -53,6 +53,7 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "trials",
         "excluded",
         "comparisons",
+        "unsafe",
         "posterior",
         "validations",
         "figure",
@@ -157,9 +158,22 @@ def test_unsafe_flag_and_withdrawal_from_the_cli(tmp_path: Path, drive: Drive) -
     assert "already flagged" in _fails("session", "unsafe", "1", "2", "--reason", "x", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags()[2][1] == "knee gave way"
+        action = again.unsafe_flags()[2][0]
+        gait = again.gait_name(action)
+    # session show lists the flag in force: in the text, and in --json as the API names it
+    text = _ok("session", "show", "1", "--no-figure", "--db", db)
+    assert f"flagged unsafe: trial 2, gait {gait} (knee gave way)" in text
+    info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
+    assert info["unsafe"] == [
+        {"trial": 2, "action": action, "gait": gait, "reason": "knee gave way"}
+    ]
     assert "withdrawn" in _ok("session", "unsafe", "1", "2", "--withdraw", "--db", db)
     with Session.open(f"sqlite:///{db}", 1) as again:
         assert again.unsafe_flags() == {}
+    # withdrawn: no longer listed
+    assert "flagged unsafe" not in _ok("session", "show", "1", "--no-figure", "--db", db)
+    info = json.loads(_ok("session", "show", "1", "--json", "--no-figure", "--db", db))
+    assert info["unsafe"] == []
 
 
 def test_show_a_fresh_session_on_the_line_path(tmp_path: Path) -> None:
@@ -287,3 +301,17 @@ def test_session_list_folds_long_names_instead_of_cutting_them(tmp_path: Path) -
     assert "exo-2d-length-duration" in column and "exo-2d-length-width" in column
     assert "S01-long-code" in "".join(cell[2].strip() for cell in cells)
     assert max(len(line) for line in out.splitlines()) <= 80
+
+
+def test_show_counts_one_trial_and_one_comparison_in_the_singular(tmp_path: Path) -> None:
+    """It said "1 trials (0 excluded), 1 comparisons"."""
+    db = str(tmp_path / "lab.db")
+    with Session.create(f"sqlite:///{db}", CONFIG, "S01", seed=1) as s:
+        q = s.next_query()
+        s.answer(q.id, [], [(q.actions[0], "step_length", "+big")])  # one trial, no comparison
+        text = _ok("session", "show", "1", "--no-figure", "--db", db)
+        assert "1 trial (0 excluded), 0 comparisons" in text
+        q = s.next_query()  # the new gait against the buffered one: one comparison
+        s.answer(q.id, [(q.actions[0], q.buffer[0], "first")])
+    text = _ok("session", "show", "1", "--no-figure", "--db", db)
+    assert "2 trials (0 excluded), 1 comparison\n" in text

@@ -59,6 +59,32 @@ def new_sqlite_file(url: str) -> Path | None:
     return None if path.exists() else path
 
 
+def port_taken(host: str, port: int) -> bool:
+    """Whether another program listens on ``port`` at ``host``: a bind test on each address
+    ``host`` resolves to, made as uvicorn (asyncio) binds (``SO_REUSEADDR``, so a port a closed
+    server left in TIME_WAIT is free; IPv6 alone on an IPv6 address).  An address that cannot be
+    bound for another reason (not this machine's, a name that does not resolve) is not taken:
+    uvicorn reports it, as before."""
+    import errno
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    except (OSError, UnicodeError):
+        return False
+    for family, kind, proto, _, address in infos:
+        try:
+            with socket.socket(family, kind, proto) as sock:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                if family == socket.AF_INET6 and hasattr(socket, "IPPROTO_IPV6"):
+                    sock.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+                sock.bind(address)
+        except OSError as exc:
+            if exc.errno == errno.EADDRINUSE:
+                return True
+    return False
+
+
 def serve(
     db: Annotated[
         str | None,
@@ -99,6 +125,12 @@ def serve(
         fail(  # taken before: the console served, and each upload failed to make its folder
             f"--libraries {str(libraries)!r} is a file, not a folder (uploaded gait libraries "
             "are kept in it)"
+        )
+    if port_taken(host, port):  # before: uvicorn's "[Errno 98] address already in use", exit 3
+        other = port + 1 if port < 65535 else port - 1
+        fail(
+            f"port {port} on {host} is already in use (another console or program is listening "
+            f"there): stop it, or give another port with --port, e.g. --port {other}"
         )
     use_token = choose_token(host, token)
     hosts = None if host not in LOOPBACK else list(LOOPBACK)

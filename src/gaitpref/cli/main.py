@@ -23,6 +23,7 @@ from gaitpref.cli.output import console, err_console, fail, guard, read_array
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 from gaitpref.limits import MAX_SEED, MAX_TRIALS
+from gaitpref.wording import plural
 
 if TYPE_CHECKING:
     import numpy as np
@@ -327,7 +328,7 @@ def simulate(
         typer.echo(json.dumps(payload))
         return
     score = result.normalized_objective
-    table = Table(title=f"{cfg.name}: {trials} trials, seed {use_seed}")
+    table = Table(title=f"{cfg.name}: {plural(trials, 'trial')}, seed {use_seed}")
     table.add_column("trials")
     table.add_column("mean normalized objective", justify="right")
     for lo, hi in [(1, 10), (11, 25), (26, 50), (51, 100), (101, trials)]:
@@ -343,7 +344,7 @@ def simulate(
         f"posterior argmax: action {best} ({cfg.space.describe(best)}), normalized objective "
         f"{result.argmax_normalized_objective:.3f}"
     )
-    console.print(f"simulated {trials} trials in {elapsed:.2f} s (wall clock)")
+    console.print(f"simulated {plural(trials, 'trial')} in {elapsed:.2f} s (wall clock)")
 
 
 @app.command("configs")
@@ -404,13 +405,15 @@ def demo(
         result.actions,
         objective.reshape(-1),
         samples=0,
-        title=f"synthetic objective {objective_index}: {trials} trials, CoSpar n=1, b=1, coactive",
+        title=f"synthetic objective {objective_index}: {plural(trials, 'trial')}, CoSpar n=1, "
+        "b=1, coactive",
     )
     figure = save_posterior_figure(pic, out / "posterior.png")
     score = result.normalized_objective
     first, last = min(25, trials), max(1, trials - 24)  # labelled 1-25 and 126-150 whatever ran
     console.print(
-        f"{trials} trials in {elapsed:.2f} s; mean normalized objective over trials 1-{first}: "
+        f"{plural(trials, 'trial')} in {elapsed:.2f} s; mean normalized objective over trials "
+        f"1-{first}: "
         f"{score[:first].mean():.3f}, {last}-{trials}: {score[last - 1 :].mean():.3f}; "
         f"the posterior's best action scores {_norm(objective, result.posterior_argmax):.3f}"
     )

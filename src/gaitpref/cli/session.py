@@ -19,6 +19,7 @@ import typer
 
 from gaitpref.cli.output import check_file_out, console, err_console, fail, guard, reported
 from gaitpref.limits import MAX_SEED
+from gaitpref.wording import plural
 
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
@@ -131,7 +132,7 @@ def db_upgrade(
         if saved is not None:
             console.print(
                 f"backed up to {saved.path} before migrating (schema revision {saved.revision}, "
-                f"{saved.sessions} sessions, {saved.events} events)"
+                f"{plural(saved.sessions, 'session')}, {plural(saved.events, 'event')})"
             )
     shown = guard(lambda: upgrade_database(url))
     console.print(f"{shown}: schema revision {migrate.head_revision()} (the newest)")
@@ -158,8 +159,8 @@ def db_backup(
 
     saved = guard(lambda: backup_database(resolve_url(db), out))
     console.print(
-        f"backed up to {saved.path}: schema revision {saved.revision}, {saved.sessions} "
-        f"sessions, {saved.events} events (verified)"
+        f"backed up to {saved.path}: schema revision {saved.revision}, "
+        f"{plural(saved.sessions, 'session')}, {plural(saved.events, 'event')} (verified)"
     )
 
 
@@ -195,7 +196,7 @@ def db_check(
                 continue
             line = (
                 f"session {result.id}: subject {result.subject}, {result.config}, "
-                f"{result.events} events, {result.status}: "
+                f"{plural(result.events, 'event')}, {result.status}: "
             )
             console.print(line + ("OK" if result.ok else f"FAILED ({result.error_type})"))
             if not result.ok:
@@ -427,6 +428,14 @@ def show(
             target = figure or Path(f"session-{session.id}.png")
             path = guard(lambda: save_session_figure(session, target))
         trials = session.trials()
+        # the unsafe flags in force (a withdrawn one is gone), each gait named as the terminal,
+        # the console and exports name it
+        flags = [
+            {"trial": trial, "action": action, "gait": session.gait_name(action), "reason": why}
+            for trial, (action, why) in sorted(session.unsafe_flags().items())
+        ]
+        excluded = [t.number for t in trials if t.excluded]
+        compared = sum(not c.undone for c in session.comparisons())
         info = {
             "id": session.id,
             "subject": session.subject,
@@ -434,8 +443,9 @@ def show(
             "seed": session.seed,
             "status": session.status,
             "trials": len(trials),
-            "excluded": [t.number for t in trials if t.excluded],
-            "comparisons": sum(not c.undone for c in session.comparisons()),
+            "excluded": excluded,
+            "comparisons": compared,
+            "unsafe": flags,
             "posterior": summary,
             "validations": [
                 {
@@ -455,9 +465,14 @@ def show(
         console.print(
             f"session {session.id}: subject {session.subject}, {session.config.name}, "
             f"seed {session.seed}, {session.status}\n"
-            f"{len(trials)} trials ({len(info['excluded'])} excluded), "  # type: ignore[arg-type]
-            f"{info['comparisons']} comparisons\n{so_far}"
+            f"{plural(len(trials), 'trial')} ({len(excluded)} excluded), "
+            f"{plural(compared, 'comparison')}\n{so_far}"
         )
+        if flags:
+            console.print(
+                "flagged unsafe: "
+                + "; ".join(f"trial {u['trial']}, gait {u['gait']} ({u['reason']})" for u in flags)
+            )
         for v in session.validations():
             console.print(
                 f"validation {v.round}: ranking {''.join(v.ranking)}, "

@@ -42,6 +42,7 @@ from gaitpref.limits import (
     MAX_TRIALS,
     PAPER_OBJECTIVES,
 )
+from gaitpref.wording import plural
 
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
@@ -442,8 +443,8 @@ def paper_2d(
         summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
         (out / "summary.md").write_text(summary, encoding="utf-8")
     _console.print(
-        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, "
-        f"{_jobs_text(result.jobs)}); wrote {out}/curves.csv, {table_path.name}, curves.png, "
+        f"{plural(len(study), 'run')} in {result.seconds:.1f} s ({result.backend}, "
+        f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, curves.png, "
         "summary.md"
     )
 
@@ -541,15 +542,10 @@ def compass_gait(
         )
     built = ", gait-library.json" if rebuilt else ""  # it was saved, and said nowhere
     _console.print(
-        f"{len(study)} runs in {result.seconds:.1f} s ({result.backend}, "
-        f"{_jobs_text(result.jobs)}); wrote {out}/curves.csv, {table_path.name}, posterior.png"
+        f"{plural(len(study), 'run')} in {result.seconds:.1f} s ({result.backend}, "
+        f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, posterior.png"
         f"{built}"
     )
-
-
-def _jobs_text(jobs: int) -> str:
-    """'1 job', '2 jobs' (it said '1 jobs')."""
-    return f"{jobs} job" if jobs == 1 else f"{jobs} jobs"
 
 
 @bench_app.command("population")
@@ -664,7 +660,7 @@ def continuous(
     # refused before the bar shows
     checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
     with progress_bar(shown=not as_json) as bar, _warnings_shown():  # it said nothing till the end
-        task = bar.add_task(f"{runs} runs", total=runs * trials)
+        task = bar.add_task(plural(runs, "run"), total=runs * trials)
         results = _stopping(
             lambda: bench_points(
                 cfg, objective, runs, trials=trials, coactive=coactive, noise=noise,
@@ -694,7 +690,7 @@ def continuous(
             _console.print(f"trials {lo}-{min(hi, trials)}: {curves[:, lo - 1 : hi].mean():.4g}")
     _console.print(
         f"final best point's objective: {out['best_objective_mean']:.4g} "
-        f"+- {out['best_objective_se']:.2g} (SE, {runs} runs, {cfg.subspace} path)"
+        f"+- {out['best_objective_se']:.2g} (SE, {plural(runs, 'run')}, {cfg.subspace} path)"
     )
 
 

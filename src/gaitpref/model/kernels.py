@@ -3,7 +3,8 @@
 The paper's prior (Section "Modeling Utilities from Preference Data"): ``f ~ N(0, K)`` with
 ``K_ij = s^2 prod_f exp(-(x_if - x_jf)^2 / (2 l_f^2)) + jitter [i == j]``.  The jitter (the paper's
 "noise variance") belongs to the prior over grid points: it appears wherever a row and a column
-are the same grid point, also in a cross-covariance ``K_{:,V}`` (``design/algorithm.md``).
+are the same grid point, also in a cross-covariance ``K_{:,V}`` (``docs/model.md``, "Notation"
+for ``K``, "Large grids" for the jitter at row ``v_j`` of column ``j`` of ``K_{:,V}``).
 
 On a Cartesian grid the kernel factorises, ``K = s^2 (K_1 (x) ... (x) K_d) + jitter I`` with the
 per-feature ``n_f x n_f`` correlation matrices ``K_f``; any block ``K[rows, cols]`` is the product

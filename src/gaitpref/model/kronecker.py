@@ -1,7 +1,8 @@
 """Kronecker structure of the product kernel on a grid: prior samples and ``K_{:,V}`` products.
 
-``design/algorithm.md``, "Joint samples": on a Cartesian grid the prior covariance is
-``K = s^2 (K_1 (x) ... (x) K_d) + jitter I``, so nothing ``A x A`` (or ``A x m``) is ever needed.
+``docs/model.md``, "Posterior over all actions" (joint samples) and "Large grids": on a Cartesian
+grid the prior covariance is ``K = s^2 (K_1 (x) ... (x) K_d) + jitter I``, so nothing ``A x A``
+(or ``A x m``) is ever needed.
 
 - Prior samples: ``f0 = s (S_1 (x) ... (x) S_d) z + sqrt(jitter) z'`` with ``S_f S_f^T = K_f``,
   applied axis by axis in ``O(A sum n_f)`` per sample.

@@ -1,6 +1,6 @@
 """Laplace mode of the preference GP by Newton's method in the visited subspace.
 
-Chu & Ghahramani (2005), Section 3; ``design/algorithm.md``, "Laplace approximation".  The
+Chu & Ghahramani (2005), Section 3; ``docs/model.md``, "Laplace mode".  The
 negative log posterior ``S(f) = 1/2 f^T K^-1 f - sum_k log p_k(f_a - f_b)`` depends on ``f`` off
 the ``m`` visited actions ``V`` only through the prior, so its mode is ``f_hat = K_{:,V} a`` and we
 solve for ``f_V`` alone, in whitened coordinates ``f_V = L u`` (``K_VV = L L^T``):

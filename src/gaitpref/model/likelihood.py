@@ -9,8 +9,9 @@ a function of the difference ``d_k = f_a - f_b`` of one observation ``k`` and re
 - ``c_k = -d^2 log p_k / d d_k^2 >= 0`` (for the probit: ``(r_k^2 + z_k r_k) / (2 sigma_k^2)``).
 
 With the signed incidence matrix ``G`` (row ``k`` is ``e_a - e_b``) the log-likelihood's gradient
-over utilities is ``G^T g`` and its negative Hessian ``Lambda = G^T diag(c) G``
-(``design/algorithm.md``, "Laplace approximation").  ``log Phi`` uses ``scipy.special.log_ndtr``
+over utilities is ``G^T g`` and its negative Hessian ``Lambda = G^T diag(c) G`` (``docs/model.md``,
+"Likelihood" for ``g`` and ``c``, "Laplace mode" for the gradient and ``H = diag(sqrt(c)) G L``,
+with ``H^T H = L^T Lambda L``).  ``log Phi`` uses ``scipy.special.log_ndtr``
 and ``r`` the scaled complementary error function, so neither underflows: the authors' code
 computed ``log(norm.cdf(z))``, which reaches ``-inf`` and made their fit fall back to the prior.
 """

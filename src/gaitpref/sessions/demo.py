@@ -23,6 +23,7 @@ from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
 from gaitpref.simulate.users import GradientCoactive, SimulatedUser
 from gaitpref.space import FloatArray, Space
+from gaitpref.wording import plural
 
 
 def bump_utility(space: Space, best: dict[str, float] | None = None) -> FloatArray:
@@ -126,7 +127,8 @@ def print_demo_session(out: Path, console: Console) -> DemoSession:
         export = export_session(session, out / f"session-{done.session_id}-export", "csv").parent
     v = done.validation
     console.print(
-        f"[bold]scripted session[/]: a simulated subject answered {done.trials} trials of "
+        "[bold]scripted session[/]: a simulated subject answered "
+        f"{plural(done.trials, 'trial')} of "
         f"exo-2d-length-width through the Session API in {time.perf_counter() - start:.1f} s; "
         f"best gait {escape(done.best_description)}; blind ranking {escape(''.join(v.ranking))} "
         f"{'agrees' if v.agrees else 'does not agree'} with the posterior "

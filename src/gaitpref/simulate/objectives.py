@@ -2,8 +2,8 @@
 
 Section "Optimizing the Compass-Gait Biped's Cost of Transport": the cost of transport (COT) of
 gaits over step length at a fixed forward hip velocity of 0.2 m/s, lower is better.  The authors'
-simulation code uses a 5th-degree polynomial fit in metres (``design/algorithm.md``): 0.0314 at
-0.08 m, a minimum of about 0.0195 near 0.132 m, 0.0263 at 0.18 m.
+simulation code uses a 5th-degree polynomial fit in metres (``COT_COEFFICIENTS`` below): 0.0314 at
+0.08 m, a minimum of about 0.0195 near 0.134 m, 0.0263 at 0.18 m.
 
 (The synthetic 2-D objectives of Fig. 4 and the published curves are in :mod:`gaitpref.data`.)
 

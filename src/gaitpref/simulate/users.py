@@ -5,7 +5,7 @@
   ``P(i preferred) = Phi((f_i - f_j) / (sqrt(2) noise))``.  It compares every executed action with
   every other query member once (the paper's ``R``: ``n x (n + b)`` without repeated pairs).
 - :class:`GradientCoactive` is the paper's simulated coactive feedback (Section "Optimizing
-  Synthetic Two-Dimensional Functions"; ``design/algorithm.md``, "The synthetic 2-D benchmark"):
+  Synthetic Two-Dimensional Functions"; ``docs/results/large-6d/README.md``, "Setting"):
   the gradient by ``numpy.gradient`` over the grid (second-order central differences inside,
   first-order at the edges, in grid-index units); per feature, thresholds at the 50th and 75th
   percentiles of ``|gradient|``; on the feature with the largest ``|gradient|`` component, no

@@ -77,6 +77,7 @@ from gaitpref.storage.schema import events as events_t
 from gaitpref.storage.schema import sessions as sessions_t
 from gaitpref.storage.schema import subjects as subjects_t
 from gaitpref.storage.turns import FileTurns
+from gaitpref.wording import plural
 
 BUSY_TIMEOUT_S = 30.0
 
@@ -434,8 +435,8 @@ def database_status(url: str) -> str:
     finally:
         store.close()
     return (
-        f"{where}: schema revision {migrate.head_revision()} (the newest), {sessions} sessions, "
-        f"{subjects} subjects"
+        f"{where}: schema revision {migrate.head_revision()} (the newest), "
+        f"{plural(sessions, 'session')}, {plural(subjects, 'subject')}"
     )
 
 
