@@ -51,8 +51,11 @@ from joblib import Parallel, delayed
 
 from gaitpref.config import ExperimentConfig, load_config, parse_config
 from gaitpref.data import paper_objectives
+from gaitpref.feedback import Preference
+from gaitpref.loop.cospar import CoSpar
 from gaitpref.loop.stopping import confidence
-from gaitpref.simulate.population import cluster_bootstrap
+from gaitpref.loop.warm import relearning, warm_start
+from gaitpref.simulate.population import cluster_bootstrap, synthetic_population
 from gaitpref.simulate.users import SimulatedUser
 
 try:
@@ -83,19 +86,32 @@ def arm_config(arm: str) -> ExperimentConfig:
 
 
 def one_run(
-    arm: str, subject: str, k: int, trials: int, every: int, dense: float
+    arm: str,
+    subject: str,
+    k: int,
+    trials: int,
+    every: int,
+    dense: float,
+    clinic: tuple[float, int, int] | None = None,
 ) -> dict[str, Any]:
     """Objective ``k`` walked ``trials`` times; the stated confidences and whether each was
-    right."""
+    right.  ``clinic``: ``(rho, subjects, others' trials)``: subject ``k`` of the synthetic
+    clinic of ``rho`` (``synthetic_population``: objective 0 shared, 1.. their own), warm-started
+    from the others' cold runs of that many trials, as sessions' warm starts are made."""
     config = arm_config(arm)
-    raw = paper_objectives().reshape(100, -1)[k]
-    utility = (raw - raw.mean()) / raw.std()
-    loop_ss, user_ss, sure_ss = np.random.SeedSequence([16, k]).spawn(3)
+    if clinic is None:
+        raw = paper_objectives().reshape(100, -1)[k]
+        utility = (raw - raw.mean()) / raw.std()
+        seeds = [16, k]
+    else:
+        grids = synthetic_population(paper_objectives(), clinic[0], clinic[1])
+        utility, seeds = grids[k], [16, k, 1]
+    loop_ss, user_ss, sure_ss = np.random.SeedSequence(seeds).spawn(3)
     loop = config.make_loop(seed=np.random.default_rng(loop_ss))
-    noise = 0.0
-    if subject in ("model_noise", "low_noise"):
-        noise = float(loop.gp.noise) / float(np.sqrt(loop.gp.kernel.variance))
-        noise *= 0.3 if subject == "low_noise" else 1.0
+    noise = _noise(subject, loop)
+    if clinic is not None:
+        others = [_cold(config, grids[j], clinic[2], j, noise) for j in range(clinic[1]) if j != k]
+        loop.warm_start(relearning(warm_start(config.space, loop.hyper, loop.prior, others)))
     user = SimulatedUser(config.space, utility, np.random.default_rng(user_ss), noise=noise)
     rng = np.random.default_rng(sure_ss)
     span = float(utility.max() - utility.min())
@@ -110,7 +126,9 @@ def one_run(
         loop.tell(query, user.answer(query))
         if not (close or t % every == 0 or t == trials):
             continue
-        sure = confidence(loop.posterior, rng, tolerance=TOLERANCE, samples=SAMPLES)
+        sure = confidence(
+            loop.posterior, rng, tolerance=TOLERANCE, samples=SAMPLES, draws=loop.share_mixture()
+        )
         answers.append(t)
         stated.append(sure.probability)
         right.append(bool(utility.max() - utility[sure.recommended] <= TOLERANCE * span))
@@ -118,9 +136,31 @@ def one_run(
         scales.append([float(v) for v in np.atleast_1d(loop.gp.kernel.lengthscale)])
         close = close or sure.probability >= dense
     return {
-        "arm": arm, "subject": subject, "objective": k, "answers": answers,
+        "arm": arm if clinic is None else f"{arm}+warm", "subject": subject, "objective": k,
+        "answers": answers,
         "stated": stated, "right": right, "scores": scores, "lengthscales": scales,
     }  # fmt: skip
+
+
+def _noise(subject: str, loop: CoSpar) -> float:
+    """The subject's probit noise on objectives of sd 1."""
+    if subject == "noiseless":
+        return 0.0
+    noise = float(loop.gp.noise) / float(np.sqrt(loop.gp.kernel.variance))
+    return noise * (0.3 if subject == "low_noise" else 1.0)
+
+
+def _cold(
+    config: ExperimentConfig, utility: np.ndarray, trials: int, j: int, noise: float
+) -> list[Preference]:
+    """Subject ``j``'s cold run of ``trials`` trials: the preferences a warm start reads."""
+    loop_ss, user_ss = np.random.SeedSequence([16, j, 2]).spawn(2)
+    loop = config.make_loop(seed=np.random.default_rng(loop_ss))
+    user = SimulatedUser(config.space, utility, np.random.default_rng(user_ss), noise=noise)
+    for _ in range(trials):
+        query = loop.ask()
+        loop.tell(query, user.answer(query))
+    return list(loop.preferences)
 
 
 def main() -> None:
@@ -133,6 +173,11 @@ def main() -> None:
     parser.add_argument("--dense", type=float, default=0.75)
     parser.add_argument("--stop", type=float, default=0.9)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument(
+        "--clinic", default=None,
+        help="RHO,SUBJECTS,TRIALS: warm runs instead, each subject of a synthetic clinic "
+        "warm-started from the others' cold runs of TRIALS trials",
+    )  # fmt: skip
     parser.add_argument("--report", action="store_true", help="summarise results.json only")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
@@ -148,18 +193,25 @@ def main() -> None:
         for arm, subject in cells:
             arm_config(arm)  # a wrong name stops before any work
             start = time.perf_counter()
+            clinic = None
+            count = args.objectives
+            if args.clinic is not None:
+                rho, subjects, others = args.clinic.split(",")
+                clinic = (float(rho), int(subjects), int(others))
+                count = clinic[1]
             runs = Parallel(n_jobs=args.jobs)(
-                delayed(one_run)(arm, subject, k, args.trials, args.every, args.dense)
-                for k in range(args.objectives)
+                delayed(one_run)(arm, subject, k, args.trials, args.every, args.dense, clinic)
+                for k in range(count)
             )
+            name = arm if clinic is None else f"{arm}+warm"
             results["runs"] = [
-                r for r in results["runs"] if (r["arm"], r["subject"]) != (arm, subject)
+                r for r in results["runs"] if (r["arm"], r["subject"]) != (name, subject)
             ] + list(runs)
             results["commands"].append(
                 {
                     "command": "python benchmarks/check_stop_calibration.py "
                     + " ".join(shlex.quote(a) for a in sys.argv[1:]),
-                    "cell": [arm, subject],
+                    "cell": [name, subject],
                     "seconds": round(time.perf_counter() - start, 1),
                     "machine": machine_description(),
                     "trials": args.trials,
@@ -169,7 +221,7 @@ def main() -> None:
             )
             args.out.mkdir(parents=True, exist_ok=True)
             path.write_text(json.dumps(results) + "\n", encoding="utf-8")
-            print(f"{arm} / {subject}: {time.perf_counter() - start:.0f} s", flush=True)
+            print(f"{name} / {subject}: {time.perf_counter() - start:.0f} s", flush=True)
     old = args.out / "summary.md"
     text = old.read_text(encoding="utf-8") if old.is_file() else ""
     hand = text[text.index(HAND) :] if HAND in text else ""  # kept as written
