@@ -29,6 +29,8 @@ within ``--every`` answers (counted and reported).  Two readings:
 
     python benchmarks/check_stop_calibration.py [--arms default,paper] \
         [--subjects noiseless,model_noise] [--objectives 100] [--trials 150] [--jobs 2]
+    python benchmarks/check_stop_calibration.py --arms paper,default --subjects noiseless \
+        --clinic 0.5,24,20    # warm runs (cells named ARM+warm)
     python benchmarks/check_stop_calibration.py --report
 
 writes ``docs/results/population/stop-calibration/`` (``results.json``: every stated value,
@@ -280,8 +282,9 @@ def summary(results: dict[str, Any], stop: float) -> str:
     out = [
         "# The stopping rule's calibration, upper half (issue 14)",
         "",
-        "`benchmarks/check_stop_calibration.py` (its docstring says what it runs). Cold single",
-        "subjects on the paper's objectives (standardised), 30 x 30 grid, n = 1, b = 1; the",
+        "`benchmarks/check_stop_calibration.py` (its docstring says what it runs). Single",
+        "subjects on the paper's objectives (standardised; cold, or warm-started where a cell",
+        "says `+warm`), 30 x 30 grid, n = 1, b = 1; the",
         f"product's confidence ({SAMPLES} joint samples, recommended gait within "
         f"{TOLERANCE:.0%} of the range of the best).",
         "",
