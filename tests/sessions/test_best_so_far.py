@@ -69,9 +69,9 @@ def test_a_gait_flagged_unsafe_at_the_argmax_is_not_the_best_so_far(tmp_path: Pa
     posterior = info["posterior"]
     assert isinstance(posterior, dict)
     assert posterior["argmax"] == best and posterior["recommended"] == rec
-    assert f"best so far: action {rec} (" in text
-    assert f"best so far: action {best} (" not in text
-    assert f"action {best}, may not be proposed" in text
+    assert f"best so far: G{rec} (action {rec}: " in text
+    assert f"(action {best}: " not in text
+    assert f"G{best} (action {best}), may not be proposed" in text
 
 
 def test_no_best_so_far_when_no_gait_may_be_proposed(tmp_path: Path) -> None:
@@ -97,7 +97,7 @@ def test_no_best_so_far_when_no_gait_may_be_proposed(tmp_path: Path) -> None:
     posterior = info["posterior"]
     assert isinstance(posterior, dict) and posterior["recommended"] is None
     assert "best so far: none may be recommended" in text
-    assert "best so far: action" not in text
+    assert "(action " not in text
 
 
 def test_no_best_so_far_before_a_preference_is_learned(tmp_path: Path) -> None:
@@ -110,7 +110,7 @@ def test_no_best_so_far_before_a_preference_is_learned(tmp_path: Path) -> None:
     s.close()
     text, info = _show(url, sid)
     assert "no preference learned yet: every gait is as likely to be the best" in text
-    assert "best so far: action" not in text and "posterior mean 0" not in text
+    assert "(action " not in text and "posterior mean 0" not in text
     posterior = info["posterior"]
     assert isinstance(posterior, dict)
     assert posterior["recommended"] == 0 and posterior["argmax"] == 0  # as documented
@@ -156,7 +156,8 @@ def test_learned_turns_true_with_the_first_preference_and_agrees_with_the_text(
     posterior = info["posterior"]
     assert isinstance(posterior, dict) and posterior["learned"] is True
     assert "none yet" not in text
-    assert f"best so far: action {posterior['recommended']} (" in text
+    rec = posterior["recommended"]
+    assert f"best so far: G{rec} (action {rec}: " in text
 
 
 def test_the_console_and_show_share_the_learned_condition() -> None:

@@ -178,7 +178,8 @@ def test_a_memory_database_reopens_from_the_log_without_making_gaits_again() -> 
 def test_a_compass_gait_that_cannot_be_made_never_reaches_the_subject(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """The real HZD optimisation: 0.02 m steps at 0.2 m/s have no gait (design/gaits.md)."""
+    """The real HZD optimisation: 0.02 m steps at 0.2 m/s have no gait (docs/gaits.md, "Gaits on
+    demand")."""
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     s = Session.create(url, parse_config(COMPASS), subject="S01")
     for _ in range(4):

@@ -19,10 +19,18 @@ _CLI = "from gaitpref.cli import main; main()"
 
 def _spawn(*args: str) -> pexpect.spawn:
     env = {**os.environ, "NO_COLOR": "1", "TERM": "dumb", "COLUMNS": "200"}
+    # generous: the runner imports numpy and scipy and may wait on a loaded machine
     child = pexpect.spawn(
-        sys.executable, ["-c", _CLI, *args], env=env, encoding="utf-8", timeout=60
+        sys.executable, ["-c", _CLI, *args], env=env, encoding="utf-8", timeout=180
     )
     return child
+
+
+def _at_prompt(child: pexpect.spawn, question: str) -> None:
+    """Wait for ``question`` and then for the ``> `` input() writes as it starts reading, so that
+    a signal sent next reaches a runner that is waiting for the operator's answer."""
+    child.expect(question)
+    child.expect_exact("> ")
 
 
 def _answer(child: pexpect.spawn, comparison: str | None, suggestion: str) -> None:
@@ -102,7 +110,7 @@ def test_ctrl_c_and_a_closed_terminal_pause_the_session(tmp_path: Path) -> None:
     child.expect(r"Trial 1: run G\d+ \(step_length=")
     _answer(child, None, "0")
     child.expect("saved: trial 1")
-    child.expect(r"Trial 2 against trial 1")
+    _at_prompt(child, r"Trial 2 against trial 1")
     child.sendintr()  # Ctrl-C
     child.expect(f"Paused.  Resume with: gaitpref session run 1 --db {url}")
     child.expect(pexpect.EOF)
@@ -112,7 +120,7 @@ def test_ctrl_c_and_a_closed_terminal_pause_the_session(tmp_path: Path) -> None:
         assert s.status == "paused" and len(s.trials()) == 1
 
     child = _spawn("session", "run", "1", "--db", url)
-    child.expect(r"Trial 2 against trial 1")
+    _at_prompt(child, r"Trial 2 against trial 1")
     child.kill(signal.SIGHUP)  # the terminal window was closed
     child.expect(pexpect.EOF)
     child.close()

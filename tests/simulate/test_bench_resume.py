@@ -132,3 +132,20 @@ def test_a_damaged_line_is_refused_naming_it(
     write_lines(partial, lines)
     code, _, err = resume(args, partial)
     assert code == 2 and f"{partial}:3: not a JSON object" in err
+
+
+def test_an_interrupt_before_any_run_finished_says_nothing_was_kept(
+    args: list[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Ctrl-C in the first run: status 130 saying so (it said nothing), and no partial file."""
+    import gaitpref.cli.points as points
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(points, "simulate_points", interrupted)
+    partial = tmp_path / "kept.jsonl"
+    code, out, err = invoke(*args, "--partial", str(partial))
+    assert code == 130 and out == "", err
+    assert "interrupted before any run finished: nothing was kept or written" in err
+    assert "--out" not in err and not partial.exists()

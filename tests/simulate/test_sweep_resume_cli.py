@@ -57,9 +57,44 @@ def test_a_stopped_study_resumed_writes_the_uninterrupted_files(
     monkeypatch.undo()
     code, out = _invoke(command, resumed, *args, "--resume")
     assert code == 0, out
+    # runs 0 and 1 finished before run 2 stopped it (one job): kept, not run in the time given
+    assert "runs (2 kept from runs.partial.csv) in " in out
     assert not (resumed / "runs.partial.csv").exists()
     for name in files:
         assert (resumed / name).read_bytes() == (whole / name).read_bytes(), name
+
+
+@pytest.mark.parametrize(("command", "args"), [("paper-2d", ARGS), ("compass-gait", COMPASS)])
+@pytest.mark.parametrize("there", [False, True])
+def test_an_interrupt_before_any_run_finished_says_so(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    command: str,
+    args: tuple[str, ...],
+    there: bool,
+) -> None:
+    """Ctrl-C in the first run (one job): status 130 saying nothing was kept or written (it
+    said nothing), and an --out the command made, still empty, removed; one that was there is
+    left, empty, as it was."""
+    out_dir = tmp_path / "a" / "out"
+    if there:
+        out_dir.mkdir(parents=True)
+    break_task(monkeypatch, _Interrupting(), 0)
+    code, out = _invoke(command, out_dir, *args)
+    assert code == 130, out
+    assert "interrupted before any run finished: nothing was kept or written" in out
+    if there:
+        assert f"--out '{out_dir}' is left as it was" in out
+        assert list(out_dir.iterdir()) == []
+    else:
+        assert f"--out '{out_dir}', made by this command, was removed" in out
+        assert not out_dir.exists()
+
+
+def test_an_uninterrupted_study_names_no_kept_runs(tmp_path: Path) -> None:
+    code, out = _invoke("paper-2d", tmp_path / "out", *ARGS)
+    assert code == 0, out
+    assert "kept from" not in out and " runs in " in out
 
 
 def test_resume_without_a_partial_table_is_refused(tmp_path: Path) -> None:

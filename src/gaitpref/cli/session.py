@@ -501,13 +501,15 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
             "near a gait flagged unsafe)"
         )
     line = (
-        f"best so far: action {rec} ({session.describe(rec)}), posterior mean "
-        f"{summary['mean_at_recommended']:.4g} ± {summary['sd_at_recommended']:.2g}"
+        f"best so far: {session.gait_name(rec)} (action {rec}: {session.space.describe(rec)}), "
+        f"posterior mean {summary['mean_at_recommended']:.4g} ± "
+        f"{summary['sd_at_recommended']:.2g}"
     )
     if best != rec:
         line += (
-            f"\n  (the highest posterior mean, action {best}, may not be proposed: flagged "
-            "unsafe, near a gait flagged unsafe, or in the region of avoidance)"
+            f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), may not "
+            "be proposed: flagged unsafe, near a gait flagged unsafe, or in the region of "
+            "avoidance)"
         )
     return line
 

@@ -22,6 +22,7 @@ so do ``bench continuous`` and ``bench population`` from their ``--partial`` fil
 
 from __future__ import annotations
 
+import contextlib
 import secrets
 import tempfile
 from collections.abc import Callable, Iterator
@@ -176,10 +177,13 @@ def _run(
     address: str | None,
     out: Path,
     resume: bool = False,
+    made: bool = False,
 ) -> StudyResult:
     """Run ``study``; each finished run is kept in ``OUT/runs.partial.csv`` until every run has
     finished (then the file is removed), so a run that fails loses none of the others;
-    ``resume``: the runs already in that file are kept and only the others run."""
+    ``resume``: the runs already in that file are kept and only the others run; ``made``: this
+    command made ``out`` (removed, when still empty, after an interrupt before any run
+    finished)."""
     from gaitpref.simulate.sweep import run_study
 
     partial = out / PARTIAL
@@ -191,6 +195,8 @@ def _run(
             ),
             partial,
             "the same command with --resume continues the study from them",
+            out=out,
+            made=made,
         )  # fmt: skip
 
 
@@ -247,13 +253,22 @@ def _keeping(result: StudyResult, out: Path) -> Iterator[None]:
         fail(f"the study finished but its results could not be written ({what}); {where}", 1)
 
 
-def _stopping(sweep: Callable[[], T], partial: Path, resume: str = "") -> T:
+def _stopping(
+    sweep: Callable[[], T],
+    partial: Path,
+    resume: str = "",
+    out: Path | None = None,
+    made: bool = False,
+) -> T:
     """``sweep()``: a run that failed (:class:`~gaitpref.simulate.partial.RunError`, naming the
     run and where the finished runs are) exits with status 1, a computation that could not
     finish; refused input as :func:`report` says; an interrupt (Ctrl-C) after some run finished
     exits with status 130 naming ``partial``, where they are (it said nothing, and a bench's
-    file is a new name in the temporary folder).  ``resume``: how the command continues from
-    ``partial`` (``--resume``), said after either when the file is there."""
+    file is a new name in the temporary folder), and before any run finished with status 130
+    saying that nothing was kept or written (it said nothing); ``out``: the study's folder,
+    removed then if this command ``made`` it and it is still empty.  ``resume``: how the
+    command continues from ``partial`` (``--resume``), said after either when the file is
+    there."""
     from gaitpref.simulate.partial import RunError
 
     def kept() -> str:
@@ -264,7 +279,10 @@ def _stopping(sweep: Callable[[], T], partial: Path, resume: str = "") -> T:
     except KeyboardInterrupt:
         if partial.exists():
             fail(f"interrupted; the runs that finished are in {partial}{kept()}", 130)
-        raise
+        fail(
+            f"interrupted before any run finished: nothing was kept or written{_left(out, made)}",
+            130,
+        )
     except RunError as exc:
         fail(f"{exc}{kept()}", 1)
     except HANDLED as exc:
@@ -339,14 +357,34 @@ def _outputs(
         )
 
 
-def _folder(out: Path) -> None:
-    """Make the output folder before any run, or fail naming ``--out`` (a traceback before)."""
+def _folder(out: Path) -> bool:
+    """Make the output folder before any run, or fail naming ``--out`` (a traceback before);
+    whether this call made it (it was not there)."""
     if out.exists() and not out.is_dir():
         fail(f"--out {str(out)!r} is a file, not a folder")
+    made = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         fail(f"--out {str(out)!r}: cannot make the output folder ({exc.strerror or exc})")
+    return made
+
+
+def _kept(result: StudyResult) -> str:
+    """The runs a ``--resume`` kept, which did not run in ``result.seconds``."""
+    return f" ({result.kept} kept from {PARTIAL})" if result.kept else ""
+
+
+def _left(out: Path | None, made: bool) -> str:
+    """After an interrupt before any run finished: what became of ``out`` (removed if this
+    command ``made`` it and it is empty; its parents, made too, are left)."""
+    if out is None:
+        return ""
+    if made:
+        with contextlib.suppress(OSError):  # not empty (a gait library built first), or gone
+            out.rmdir()
+            return f"; --out {str(out)!r}, made by this command, was removed"
+    return f"; --out {str(out)!r} is left as it was"
 
 
 #: The most ``--notes`` a summary takes: read whole, ``/dev/zero`` was a MemoryError traceback.
@@ -430,9 +468,9 @@ def paper_2d(
     table_path = _table_path(out, table)
     _outputs(out, (table_path.name, "curves.csv", "curves.png", "summary.md"), resume=resume)
     checked = _execution(backend, jobs, address)
-    _folder(out)
+    made = _folder(out)
     load_before = load_average()
-    result = _run(study, checked, jobs, address, out, resume)
+    result = _run(study, checked, jobs, address, out, resume, made)
     from gaitpref.simulate.figures import plot_paper_2d  # matplotlib: only when drawing
 
     published = published_curves()
@@ -443,7 +481,7 @@ def paper_2d(
         summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
         (out / "summary.md").write_text(summary, encoding="utf-8")
     _console.print(
-        f"{plural(len(study), 'run')} in {result.seconds:.1f} s ({result.backend}, "
+        f"{plural(len(study), 'run')}{_kept(result)} in {result.seconds:.1f} s ({result.backend}, "
         f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, curves.png, "
         "summary.md"
     )
@@ -490,6 +528,7 @@ def compass_gait(
     rebuilt = ("gait-library.json",) if objective == "hzd" and library is None else ()
     _outputs(out, (table_path.name, "curves.csv", "posterior.png"), rebuilt, resume)
     checked = _execution(backend, jobs, address)
+    made = False  # this command made --out (before a gait library is built into it)
     try:
         its = _integers(iterations, "--iterations")
         if len(set(its)) > MAX_SNAPSHOTS or max(its) > MAX_TRIALS:  # a panel each, replayed
@@ -511,7 +550,7 @@ def compass_gait(
             raise ValueError(f"--objective must be 'poly' or 'hzd', got {objective!r}")
         build = objective == "hzd" and library is None
         if build:
-            _folder(out)
+            made = _folder(out)
             _console.print("building HZD gaits at 0.2 m/s on the 24 step lengths ...")
         obj = compass_objective(
             objective,  # type: ignore[arg-type]
@@ -525,8 +564,8 @@ def compass_gait(
         report(exc)
     if obj.note:
         _console.print(f"[yellow]note:[/yellow] {escape(obj.note)}", markup=True)
-    _folder(out)
-    result = _run(study, checked, jobs, address, out, resume)
+    made = _folder(out) or made
+    result = _run(study, checked, jobs, address, out, resume, made)
     from gaitpref.simulate.figures import plot_compass_gait  # matplotlib: only when drawing
 
     with _keeping(result, out):
@@ -542,7 +581,7 @@ def compass_gait(
         )
     built = ", gait-library.json" if rebuilt else ""  # it was saved, and said nowhere
     _console.print(
-        f"{plural(len(study), 'run')} in {result.seconds:.1f} s ({result.backend}, "
+        f"{plural(len(study), 'run')}{_kept(result)} in {result.seconds:.1f} s ({result.backend}, "
         f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, posterior.png"
         f"{built}"
     )

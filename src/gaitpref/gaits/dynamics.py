@@ -1,9 +1,9 @@
 """Continuous-phase dynamics of the compass-gait biped in single support.
 
-Lagrangian model (Westervelt et al. 2007, ch. 3; ``design/gaits.md``) in the coordinates
-``q = (phi1, q2)``: ``phi1`` is the stance leg's angle from the vertical (positive when the hip is
-ahead of the stance foot) and ``q2 = phi2 - phi1`` the hip angle, ``phi2`` the swing leg's absolute
-angle.  With the stance foot at the origin, ``x`` forward and ``y`` up::
+Lagrangian model (Westervelt et al. 2007, ch. 3; ``docs/gaits.md``, "The model") in the
+coordinates ``q = (phi1, q2)``: ``phi1`` is the stance leg's angle from the vertical (positive
+when the hip is ahead of the stance foot) and ``q2 = phi2 - phi1`` the hip angle, ``phi2`` the
+swing leg's absolute angle.  With the stance foot at the origin, ``x`` forward and ``y`` up::
 
     hip        p_H = l (sin phi1, cos phi1)
     stance m   p_1 = a (sin phi1, cos phi1)

@@ -2,9 +2,9 @@
 (:class:`HZDSettings`) and what comes back (:class:`Gait`).
 
 A gait is the Bezier virtual constraint ``q2 = B(alpha, tau)``, ``tau = (phi1 - phase_start) /
-(phase_end - phase_start)`` (``design/gaits.md``), and the periodic orbit it induces on the hybrid
-zero dynamics.  ``alpha`` is stored as a matrix with one row per output (one here: the hip angle),
-as exoskeleton gait libraries do.
+(phase_end - phase_start)`` (``docs/gaits.md``, "The HZD formulation"), and the periodic orbit
+it induces on the hybrid zero dynamics.  ``alpha`` is stored as a matrix with one row per output
+(one here: the hip angle), as exoskeleton gait libraries do.
 
 Notation: ``M`` Bezier degree; ``alpha`` is ``1 x (M + 1)``; ``orbit_state`` is
 ``(phi1, q2, phi1d, q2d)`` at the start of a step, right after the impact.

@@ -1,6 +1,6 @@
 """Heel strike: rigid plastic impact in extended coordinates, then the legs swap roles.
 
-Westervelt et al. (2007), Section 3.4.2 (``design/gaits.md``).  In extended coordinates
+Westervelt et al. (2007), Section 3.4.2 (``docs/gaits.md``, "The model").  In extended coordinates
 ``q_e = (x, y, phi1, q2)`` (``(x, y)`` the stance foot) every point mass ``i`` sits at
 ``(x, y) + r_i(q)``, so ``D_e = sum_i m_i J_i^T J_i`` with ``J_i = [I_2, dr_i/dq]``.  With ``J`` the
 swing foot's Jacobian, the impulsive force ``F`` and the post-impact velocity solve::

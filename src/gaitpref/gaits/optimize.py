@@ -2,7 +2,7 @@
 
 The paper's problem (Section "Gait Generation for Bipedal Robots", eqs. (3)-(5)):
 ``alpha* = argmin J(alpha)`` subject to impact invariance and physical constraints.  Here
-(``design/gaits.md``):
+(``docs/gaits.md``, "The HZD formulation"):
 
 * decision ``x = (alpha_2..alpha_{M-1}) / (2 theta_0), thetad_-``; impact invariance is built in
   (:meth:`StepGeometry.complete` fixes ``alpha_0, alpha_1, alpha_M``);

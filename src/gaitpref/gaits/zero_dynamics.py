@@ -1,10 +1,10 @@
 """Hybrid zero dynamics of the compass gait under a Bezier virtual constraint on the hip angle.
 
-Westervelt, Grizzle et al. (2007), ch. 5-6 (``design/gaits.md``).  The phase is the stance
-angle, ``theta = phi1``, ``tau = (theta - theta_s) / (theta_e - theta_s)``, and the output
-``y = q2 - h(theta)``, ``h(theta) = B(alpha, tau)``.  On ``y = 0`` the unactuated row of the
-dynamics reduces to one degree of freedom.  Its generalized momentum is the angular momentum
-about the stance foot, ``sigma = I(theta) thetad`` with ``I = d11 + d12 h'``, and
+Westervelt, Grizzle et al. (2007), ch. 5-6 (``docs/gaits.md``, "The HZD formulation").  The
+phase is the stance angle, ``theta = phi1``, ``tau = (theta - theta_s) / (theta_e - theta_s)``,
+and the output ``y = q2 - h(theta)``, ``h(theta) = B(alpha, tau)``.  On ``y = 0`` the unactuated
+row of the dynamics reduces to one degree of freedom.  Its generalized momentum is the angular
+momentum about the stance foot, ``sigma = I(theta) thetad`` with ``I = d11 + d12 h'``, and
 ``dsigma/dt = -G1`` because ``D`` does not depend on ``phi1``.  Hence, with ``zeta = sigma^2 / 2``::
 
     d zeta / d theta = -I(theta) G1(theta)        (a quadrature: "single-point shooting")

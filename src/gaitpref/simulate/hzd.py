@@ -1,7 +1,8 @@
 """The compass-gait objective from the project's own HZD gaits: COT over step length.
 
-The gait library (:mod:`gaitpref.gaits`, ``design/gaits.md``) optimises one gait per step length
-at a fixed forward speed (0.2 m/s in the paper) and records its mechanical cost of transport.
+The gait library (:mod:`gaitpref.gaits`; ``docs/gaits.md``, "COT over step length") optimises
+one gait per step length at a fixed forward speed (0.2 m/s in the paper) and records its
+mechanical cost of transport.
 This module turns that into the objective of the compass-gait study:
 
 - :func:`build_cot_curve`: build a fixed-speed library on the study's step lengths

@@ -81,6 +81,8 @@ class StudyResult:
     backend: str
     jobs: int
     seconds: float
+    #: the runs a resume kept from the partial run table (not run, not counted in ``seconds``)
+    kept: int = 0
 
 
 class _RateColumn(ProgressColumn):
@@ -188,7 +190,7 @@ def run_study(
     if len(done_runs) != len(tasks):
         raise RuntimeError(f"{len(tasks) - len(done_runs)} of {len(tasks)} runs returned no result")
     table = run_table(done_runs, rated)
-    return StudyResult(study, table, summarize(table), backend, n_jobs, seconds)
+    return StudyResult(study, table, summarize(table), backend, n_jobs, seconds, len(kept))
 
 
 def _resumed(study: Study, tasks: Sequence[RunTask], partial: Path) -> dict[int, RunResult]:
