@@ -255,13 +255,15 @@ class Terminal:
 
     def _read_line(self) -> str | None:
         """A line, or None when it was refused (and said so)."""
-        if self._signalled or (self._read is input and sys.stdin is None):
-            raise _QuitError  # a signal came, or no input at all (started with stdin closed)
-        reader = self._read
-        if reader is input and not _is_terminal(sys.stdin):
-            reader = _bounded_input
+        # reading first, then the check: a signal between the two used to be recorded and not
+        # acted on, and the runner waited at the prompt for Enter
         self._reading = True
         try:
+            if self._signalled or (self._read is input and sys.stdin is None):
+                raise _QuitError  # a signal came, or no input at all (started with stdin closed)
+            reader = self._read
+            if reader is input and not _is_terminal(sys.stdin):
+                reader = _bounded_input
             line = reader("> ")
         except (EOFError, KeyboardInterrupt):
             raise _QuitError from None
