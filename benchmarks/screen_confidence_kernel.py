@@ -7,10 +7,13 @@ confidence of a second posterior of the same answers:
 
 - ``variance SD``: hyperparameters refitted with the signal variance free too (its log-normal
   prior's sd ``SD``; the product holds it, ``docs/learning.md``), from the loop's current ones;
-- ``config``: the config's own kernel (lengthscales as written, never fitted).
+- ``config``: the config's own kernel (lengthscales as written, never fitted);
+- ``config-variance SD``: the config's lengthscales held, the signal variance fitted (log-sd
+  ``SD``).
 
     python benchmarks/screen_confidence_kernel.py variance 3.0 [--objectives 100]
     python benchmarks/screen_confidence_kernel.py config 0 [--objectives 100]
+    python benchmarks/screen_confidence_kernel.py config-variance 3.0 [--objectives 100]
 
 prints both calibrations (cluster bootstrap over subjects) and writes the rows to ``--out``.
 It reads the loop's private fitting helpers: a screen, not product code.
@@ -48,6 +51,9 @@ def one(k: int, mode: str, sd: float, trials: int, every: int) -> list[dict[str,
     rng, other_rng = np.random.default_rng(sure_ss), np.random.default_rng([99, k])
     span = float(u.max() - u.min())
     prior = dataclasses.replace(loop.prior, variance=LogNormal(loop.prior.variance.median, sd))
+    if mode == "config-variance":  # the lengthscales held at the config's
+        held = tuple(LogNormal(p.median, 0.0) for p in prior.lengthscale)
+        prior = dataclasses.replace(prior, lengthscale=held)
     hyper = loop.hyper  # the config's kernel
     rows = []
     for t in range(1, trials + 1):
@@ -56,8 +62,9 @@ def one(k: int, mode: str, sd: float, trials: int, every: int) -> list[dict[str,
         if t % every:
             continue
         product = confidence(loop.posterior, rng, tolerance=TOLERANCE, samples=SAMPLES)
-        if mode == "variance":
-            start = dataclasses.replace(loop.hyper, variance=hyper.variance)
+        if mode in ("variance", "config-variance"):
+            base = loop.hyper if mode == "variance" else hyper
+            start = dataclasses.replace(base, variance=hyper.variance)
             hyper = fit_hyperparameters(loop.space, start, loop._data(loop.answers), prior).after
         post = loop._fit(loop.answers, gp=loop._gp(hyper), hyper=hyper)
         other = confidence(post, other_rng, tolerance=TOLERANCE, samples=SAMPLES)
@@ -76,7 +83,7 @@ def one(k: int, mode: str, sd: float, trials: int, every: int) -> list[dict[str,
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("mode", choices=("variance", "config"))
+    parser.add_argument("mode", choices=("variance", "config", "config-variance"))
     parser.add_argument("sd", type=float, help="variance: the prior's log-sd (config: ignored)")
     parser.add_argument("--objectives", type=int, default=100)
     parser.add_argument("--trials", type=int, default=150)
