@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -19,7 +19,7 @@ import typer
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
 from gaitpref.cli.gaits import app as gaits_app
-from gaitpref.cli.output import console, err_console, fail, guard, read_array
+from gaitpref.cli.output import checked_config, console, err_console, fail, guard, read_array
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 from gaitpref.limits import MAX_SEED, MAX_TRIALS
@@ -84,19 +84,6 @@ def _load_config_or_fail(source: str) -> ExperimentConfig:
         return cfg
 
     return guard(load)
-
-
-def checked_config(
-    source: str, cfg: ExperimentConfig, check: Callable[[ExperimentConfig], None]
-) -> None:
-    """``check(cfg)``, its :class:`ConfigError` naming the config as a parse error does
-    (``config 'my.toml': [stop].samples: ...``): a new run's checks named the key only."""
-    from gaitpref.errors import ConfigError
-
-    try:
-        check(cfg)
-    except ConfigError as exc:
-        raise ConfigError(f"config {source!r}: {exc}", table=exc.table, key=exc.key) from None
 
 
 def _load_objective(path: Path) -> np.ndarray:

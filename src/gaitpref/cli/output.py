@@ -27,13 +27,16 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, NoReturn, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, TypeVar
 
 import typer
 from rich.console import Console
 from rich.markup import escape
 
 from gaitpref import errors
+
+if TYPE_CHECKING:
+    from gaitpref.config import ExperimentConfig
 
 T = TypeVar("T")
 
@@ -94,6 +97,19 @@ def guard(fn: Callable[[], T]) -> T:
         return fn()
     except HANDLED as exc:
         report(exc)
+
+
+def checked_config(
+    source: str, cfg: ExperimentConfig, check: Callable[[ExperimentConfig], None]
+) -> None:
+    """``check(cfg)``, its :class:`ConfigError` naming the config as a parse error does
+    (``config 'my.toml': [stop].samples: ...``): a new run's checks named the key only."""
+    try:
+        check(cfg)
+    except errors.ConfigError as exc:
+        raise errors.ConfigError(
+            f"config {source!r}: {exc}", table=exc.table, key=exc.key
+        ) from None
 
 
 def check_file_out(out: Path, option: str) -> None:

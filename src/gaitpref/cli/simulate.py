@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Annotated, TextIO, TypeVar
 
 import typer
 
-from gaitpref.cli.output import HANDLED, fail, guard, read_array, report
+from gaitpref.cli.output import HANDLED, checked_config, fail, guard, read_array, report
 from gaitpref.cli.output import err_console as _console
 from gaitpref.limits import (
     MAX_JOBS,
@@ -425,7 +425,6 @@ def _bench_config(source: str) -> ExperimentConfig:
     """A bench's config, with a new session's check of its largest draw against the sampling
     budget (``config/draws.py``): refused before any run, naming the key, rather than as every
     run's failure."""
-    from gaitpref.cli.main import checked_config
     from gaitpref.config import check_draws, load_config
 
     cfg = load_config(source)
