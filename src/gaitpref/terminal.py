@@ -147,6 +147,11 @@ def _move_words(feature: Feature) -> tuple[str, str, str, str]:
     return (up, f"slightly {up}", f"slightly {down}", down)
 
 
+def _trials(q: SessionQuery) -> str:
+    """``trial 5`` or ``trials 4, 5``: the query's trials as the prompts name them."""
+    return ("trial " if len(q.trials) == 1 else "trials ") + ", ".join(map(str, q.trials))
+
+
 class Terminal:
     """Runs a session interactively through ``read`` (default: ``input``) and a Rich console."""
 
@@ -498,8 +503,7 @@ class Terminal:
             ratings, rated = self._ratings(q)
             suggestions, words = self._suggestions(q)
             summary = "; ".join(said + rated + words) or "no comparison, no suggestion"
-            flag = "x write and flag " + ("trial " if len(q.trials) == 1 else "trials ")
-            flag += ", ".join(map(str, q.trials)) + " unsafe"
+            flag = f"x write and flag {_trials(q)} unsafe"
             while True:  # asked again while another writer holds the session (nothing written)
                 try:
                     key = self.ask(
@@ -533,9 +537,8 @@ class Terminal:
     def _not_written(self, q: SessionQuery, summary: str) -> None:
         """Quitting at the confirmation (or the unsafe reason) writes nothing: say so, since
         the answer was just shown as if about to be saved."""
-        trials = ("trial " if len(q.trials) == 1 else "trials ") + ", ".join(map(str, q.trials))
         self.console.print(
-            f"  not written: {summary} ({trials} asked again when the session resumes)",
+            f"  not written: {summary} ({_trials(q)} asked again when the session resumes)",
             markup=False,
         )
 
