@@ -125,3 +125,32 @@ def test_a_ray_address_where_nothing_listens_is_refused_before_the_output_folder
     text = " ".join(result.output.split())
     assert f"--address: could not reach the Ray cluster at '127.0.0.1:{port}'" in text
     assert not out.exists()
+
+
+@pytest.mark.parametrize("there", [False, True])
+def test_a_ray_runtime_that_cannot_start_removes_the_empty_output_folder_it_made(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, there: bool
+) -> None:
+    """``--address auto`` with no cluster fails once the runs start (Ray answers at once, so
+    it is not probed first): an --out the command made, still empty, is removed and said so;
+    one that was there is left as it was (an empty folder was left behind and not named)."""
+    pytest.importorskip("ray")
+    from gaitpref.simulate import sweep
+
+    def no_cluster(address: str | None = None, jobs: int | None = None) -> bool:
+        raise RuntimeError(f"could not start or reach the Ray cluster at {address!r}: none.")
+
+    monkeypatch.setattr(sweep, "start_ray", no_cluster)
+    out = tmp_path / "out"
+    if there:
+        out.mkdir()
+    args = ["bench", "paper-2d", "--runs", "1", "--trials", "2", "--out", str(out)]
+    result = CliRunner().invoke(app, [*args, "--backend", "ray", "--address", "auto"])
+    assert result.exit_code == 2, result.output
+    text = " ".join(result.output.split())
+    assert "could not start or reach the Ray cluster at 'auto': none" in text
+    if there:
+        assert "made by this command" not in text and list(out.iterdir()) == []
+    else:
+        assert f"none; --out '{out}', made by this command, was removed" in text
+        assert not out.exists()

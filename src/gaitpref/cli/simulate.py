@@ -22,7 +22,6 @@ so do ``bench continuous`` and ``bench population`` from their ``--partial`` fil
 
 from __future__ import annotations
 
-import contextlib
 import secrets
 import tempfile
 from collections.abc import Callable, Iterator
@@ -287,8 +286,9 @@ def _stopping(
         fail(f"{exc}{kept()}", 1)
     except HANDLED as exc:
         report(exc)
-    except RuntimeError as exc:  # a Ray runtime that cannot start
-        fail(str(exc))
+    except RuntimeError as exc:  # a Ray runtime that cannot start (before any run)
+        removed = "" if partial.exists() else _removed(out, made)
+        fail(f"{str(exc).rstrip('.')}{removed}" if removed else str(exc))
 
 
 def _partial(given: Path | None, command: str, resume: bool = False) -> Path:
@@ -375,16 +375,24 @@ def _kept(result: StudyResult) -> str:
     return f" ({result.kept} kept from {PARTIAL})" if result.kept else ""
 
 
+def _removed(out: Path | None, made: bool) -> str:
+    """After a failure before any run: ``out`` removed if this command ``made`` it and it is
+    still empty (``--address auto`` with no cluster left an empty folder), said; else nothing."""
+    if out is None or not made:
+        return ""
+    try:
+        out.rmdir()
+    except OSError:  # not empty (a gait library built first), or gone
+        return ""
+    return f"; --out {str(out)!r}, made by this command, was removed"
+
+
 def _left(out: Path | None, made: bool) -> str:
     """After an interrupt before any run finished: what became of ``out`` (removed if this
     command ``made`` it and it is empty; its parents, made too, are left)."""
     if out is None:
         return ""
-    if made:
-        with contextlib.suppress(OSError):  # not empty (a gait library built first), or gone
-            out.rmdir()
-            return f"; --out {str(out)!r}, made by this command, was removed"
-    return f"; --out {str(out)!r} is left as it was"
+    return _removed(out, made) or f"; --out {str(out)!r} is left as it was"
 
 
 #: The most ``--notes`` a summary takes: read whole, ``/dev/zero`` was a MemoryError traceback.
