@@ -463,7 +463,7 @@ def paper_2d(
     ] = None,
     resume: Resume = False,
 ) -> None:
-    """The paper's Fig. 4 study on the authors' 100 objectives, beside the published curves."""
+    """The paper's Figure 4 study on the authors' 100 objectives, beside the published curves."""
     from gaitpref.simulate.paper2d import paper_2d_study, published_curves
     from gaitpref.simulate.report import MachineInfo, load_average, paper_2d_summary
     from gaitpref.simulate.tables import write_curves, write_table
@@ -520,7 +520,7 @@ def compass_gait(
     table: TableFormat = "csv",
     resume: Resume = False,
 ) -> None:
-    """The paper's Fig. 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
+    """The paper's Figure 2 study: CoSpar (n = 2, b = 0) finds the step length of lowest COT."""
     from rich.markup import escape
 
     from gaitpref.simulate.compass import (
