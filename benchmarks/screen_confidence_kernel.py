@@ -9,11 +9,15 @@ confidence of a second posterior of the same answers:
   prior's sd ``SD``; the product holds it, ``docs/learning.md``), from the loop's current ones;
 - ``config``: the config's own kernel (lengthscales as written, never fitted);
 - ``config-variance SD``: the config's lengthscales held, the signal variance fitted (log-sd
-  ``SD``).
+  ``SD``);
+- ``dedupe``: the loop's own kernel, each distinct answered pair counted once (a pair answered
+  again the same way, as the gate's repeat of the best against the challenger it just beat,
+  adds no second term).
 
     python benchmarks/screen_confidence_kernel.py variance 3.0 [--objectives 100]
     python benchmarks/screen_confidence_kernel.py config 0 [--objectives 100]
     python benchmarks/screen_confidence_kernel.py config-variance 3.0 [--objectives 100]
+    python benchmarks/screen_confidence_kernel.py dedupe 0 [--objectives 100]
 
 prints both calibrations (cluster bootstrap over subjects) and writes the rows to ``--out``.
 It reads the loop's private fitting helpers: a screen, not product code.
@@ -66,7 +70,10 @@ def one(k: int, mode: str, sd: float, trials: int, every: int) -> list[dict[str,
             base = loop.hyper if mode == "variance" else hyper
             start = dataclasses.replace(base, variance=hyper.variance)
             hyper = fit_hyperparameters(loop.space, start, loop._data(loop.answers), prior).after
-        post = loop._fit(loop.answers, gp=loop._gp(hyper), hyper=hyper)
+        if mode == "dedupe":
+            post = loop._fit(_once(loop.answers), gp=loop.gp, hyper=loop.hyper)
+        else:
+            post = loop._fit(loop.answers, gp=loop._gp(hyper), hyper=hyper)
         other = confidence(post, other_rng, tolerance=TOLERANCE, samples=SAMPLES)
         rows.append(
             {
@@ -81,9 +88,23 @@ def one(k: int, mode: str, sd: float, trials: int, every: int) -> list[dict[str,
     return rows
 
 
+def _once(answers: list[Any]) -> list[Any]:
+    """``answers`` with each (winner, loser) pair's preference kept at its first answer only."""
+    seen: set[tuple[int, int]] = set()
+    kept = []
+    for answer in answers:
+        prefs = []
+        for p in answer.preferences:
+            if (p.winner, p.loser) not in seen:
+                seen.add((p.winner, p.loser))
+                prefs.append(p)
+        kept.append(dataclasses.replace(answer, preferences=tuple(prefs)))
+    return kept
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("mode", choices=("variance", "config", "config-variance"))
+    parser.add_argument("mode", choices=("variance", "config", "config-variance", "dedupe"))
     parser.add_argument("sd", type=float, help="variance: the prior's log-sd (config: ignored)")
     parser.add_argument("--objectives", type=int, default=100)
     parser.add_argument("--trials", type=int, default=150)
