@@ -48,7 +48,9 @@ def test_the_argmax_score_is_of_the_argmax_with_averaged_hypotheses(tmp_path: Pa
     assert out["posterior_argmax_normalized_objective"] == norm[best]
     assert out["best_objective"] == flat[best]
     xs = np.linspace(0.0, 1.0, 30)
-    assert np.allclose(out["best_point"], [xs[best // 30], xs[best % 30]])
+    best_point = out["best_point"]
+    assert isinstance(best_point, list)
+    assert np.allclose(best_point, [xs[best // 30], xs[best % 30]])
 
 
 def test_points_and_objective_are_per_query_on_a_grid(tmp_path: Path) -> None:
