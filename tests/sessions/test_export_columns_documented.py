@@ -23,9 +23,11 @@ FEATURES = ["step_length", "step_width"]
 def reference() -> dict[str, list[str]]:
     """The documented columns of each table, in order (FEATURES for the features)."""
     text = DOC.read_text(encoding="utf-8")
-    section = text.split("### The tables, column by column", 1)[1].split("\nWhat no table", 1)[0]
+    section = text.split("### The tables, column by column", 1)[1]
+    start = section.index("\n- ")
+    bullets = section[start : section.index("\n\n", start)]  # the list, to its blank line
     out: dict[str, list[str]] = {}
-    for item in re.split(r"\n- ", section)[1:]:
+    for item in re.split(r"\n- ", bullets)[1:]:
         name = re.match(r"`(\w+)`", item)
         assert name is not None, item[:40]
         found = re.findall(r"`(\w+)`|(FEATURES)", item[name.end() :])
@@ -89,3 +91,10 @@ def test_export_columns_are_documented_in_order(tmp_path: Path) -> None:
     assert moves == {"'+small"}
     last = rows(tmp_path / "csv", "confidence")[-1]
     assert int(last["trials"]) == 5
+    assert set(manifest) == {
+        "format", "format_version", "software_version", "exported_at", "config_name",
+        "config_sha256", "seed", "session", "features", "posterior", "files",
+    }  # fmt: skip
+    assert set(manifest["session"]) == {
+        "id", "subject", "status", "software_version", "created_at", "last_seq", "meta"
+    }  # fmt: skip
