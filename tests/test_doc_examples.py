@@ -16,6 +16,7 @@ import pytest
 
 import gaitpref
 from gaitpref.config import check_ignored, parse_config
+from tests.test_readme import printed_as_documented
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs"
@@ -26,7 +27,7 @@ def blocks(page: Path, lang: str) -> list[str]:
     return re.findall(rf"```{lang}\n(.*?)```", page.read_text(encoding="utf-8"), re.S)
 
 
-def test_getting_started_python_blocks_run() -> None:
+def test_getting_started_python_blocks_run(capsys: pytest.CaptureFixture[str]) -> None:
     scope: dict[str, object] = {}
     found = blocks(DOCS / "getting-started.md", "python")
     assert len(found) >= 2
@@ -35,6 +36,7 @@ def test_getting_started_python_blocks_run() -> None:
     posterior = scope["posterior"]
     assert isinstance(posterior, gaitpref.Posterior)
     assert posterior.mean.shape == (15,)
+    printed_as_documented(found, capsys.readouterr().out)  # it said "0.1371 m", printed 0.13
 
 
 def test_session_api_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -159,3 +159,12 @@ def small_machine() -> MachineInfo:
 def test_study_result_is_frozen(small_machine: MachineInfo) -> None:
     with pytest.raises(dataclasses.FrozenInstanceError):
         small_machine.cores = 4  # type: ignore[misc]
+
+
+def test_a_study_shorter_than_the_first_checkpoint_says_so(small_machine: MachineInfo) -> None:
+    """--trials 5: the table had no row and the floor's sentence read "(the floor): ."."""
+    study = paper_2d_study(runs=2, trials=5, settings=["n1_b1"])
+    result = run_study(study, jobs=1)
+    text = paper_2d_summary(result, published_curves(), small_machine)
+    assert "No row: the table's trials (10, 25, 50, 100, 150) are past the study's 5" in text
+    assert "Random selection (the floor)" not in text

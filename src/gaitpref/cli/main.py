@@ -302,13 +302,17 @@ def simulate(
     elapsed = time.perf_counter() - start
     if as_json:
         best = result.posterior_argmax
+        # per query, as over points (a query's n executed actions; the last query's trials
+        # past --trials left out): it was one list per trial, [[p1], [p2], ...], whatever n
+        actions = result.actions.tolist()
+        queries = [actions[i : i + cfg.n] for i in range(0, len(actions), cfg.n)]
         payload = {
             "config": cfg.name,
             "seed": use_seed,
             "seconds": elapsed,
             **result.to_json(),
-            "points": [[p] for p in cfg.space.points_of(result.actions.tolist()).tolist()],
-            "objective": [[float(v)] for v in obj.reshape(-1)[result.actions]],
+            "points": [cfg.space.points_of(q).tolist() for q in queries],
+            "objective": [[float(v) for v in obj.reshape(-1)[q]] for q in queries],
             "best_point": cfg.space.points_of([best])[0].tolist(),
             "best_objective": float(obj.reshape(-1)[best]),
         }

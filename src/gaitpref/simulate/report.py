@@ -94,15 +94,23 @@ def paper_2d_summary(
         "| setting | trial | ours | published | z |",
         "|---|---:|---:|---:|---:|",
     ]
-    for r in checkpoint_rows(ours, published, TABLE_TRIALS):
+    rows = checkpoint_rows(ours, published, TABLE_TRIALS)
+    for r in rows:
         lines.append(
             f"| {r.setting} | {r.trial} | {_f(r.mean)} +- {_f(r.se)} | "
             f"{_f(r.published_mean)} +- {_f(r.published_se)} | {r.z:+.1f} |"
         )
+    if not rows:  # a study shorter than the first checkpoint: an empty table said nothing
+        lines += [
+            "",
+            f"No row: the table's trials ({', '.join(map(str, TABLE_TRIALS))}) are past the "
+            f"study's {study.trials}; `curves.csv` has every trial.",
+        ]
     if RANDOM.name in ours.settings:
         last = int(ours.curve(RANDOM.name)[0].max())
         cells = [f"t={t}: {_f(ours.at(RANDOM.name, t)[0])}" for t in TABLE_TRIALS if t <= last]
-        lines += ["", f"Random selection (the floor): {', '.join(cells)}."]
+        if cells:  # "Random selection (the floor): ." before any checkpoint
+            lines += ["", f"Random selection (the floor): {', '.join(cells)}."]
     lines += ["", "## Checks against the paper", ""]
     if n_runs < 2:
         lines += [

@@ -30,13 +30,18 @@ class SimulationResult:
     actions: IntArray
     normalized_objective: FloatArray
     posterior: Posterior
-    argmax_normalized_objective: float  # of the final posterior mean's argmax
+    argmax_normalized_objective: float  # of the final posterior mean's argmax (recommended)
     ratings: IntArray | None = None  # per trial, when a rater rated (1 = worst category)
+    recommended: int | None = None  # the action scored by argmax_normalized_objective
 
     @property
     def posterior_argmax(self) -> int:
-        """Grid index of the final posterior mean's argmax."""
-        return self.posterior.argmax
+        """Grid index of the final posterior mean's argmax: the recommendation, the action
+        :attr:`argmax_normalized_objective` scores.  With ``[model] hyper = "average"`` it is
+        the argmax of the mixture mean over the lengthscale hypotheses
+        (:meth:`CoSpar.mixture_mean`), which may differ from :attr:`posterior`'s own argmax
+        (the MAP kernel's); before, this named the latter while the score was the former's."""
+        return self.posterior.argmax if self.recommended is None else self.recommended
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -81,12 +86,14 @@ def run_simulation(
             progress(min(len(executed), trials))
     actions = np.asarray(executed[:trials], dtype=np.intp)
     posterior = loop.posterior
+    best = _recommended(loop)
     return SimulationResult(
         actions=actions,
         normalized_objective=user.normalized(actions),
         posterior=posterior,
-        argmax_normalized_objective=float(user.normalized([_recommended(loop)])[0]),
+        argmax_normalized_objective=float(user.normalized([best])[0]),
         ratings=None if rater is None else np.asarray(rated[:trials], dtype=np.intp),
+        recommended=best,
     )
 
 
