@@ -483,3 +483,39 @@ def test_typed_digits_that_are_also_a_subjects_code_are_refused_not_read_as_a_se
     with pytest.raises(ValueError) as refused:
         read_prior_from([long])
     assert len(str(refused.value)) < 300  # a pasted megabyte is not echoed back whole
+
+
+def test_session_new_and_show_name_the_sessions_a_warm_start_read(tmp_path: Path) -> None:
+    """A subject code names every session of the subject: neither ``session new`` nor ``session
+    show`` (text or --json) said which sessions (and up to which event) the model took in, so an
+    operator could not tell what a warm start was made of without reading the events."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    ids = _earlier(url)
+    args = ["session", "new", "--config", CONFIG, "--subject", "S03", "--db", url]
+    made = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", str(ids[2])])
+    assert made.exit_code == 0, made.output
+    new_id = int(made.output.split()[1].rstrip(":"))
+    with Session.open(url, new_id) as s:
+        prior = s.record.meta["prior_from"]
+        rho = s.record.meta["prior_rho"]
+    said = ", ".join(
+        f"session {p['session']} ({p['subject']}) to event {p['last_seq']}" for p in prior
+    )
+    assert f"warm-started from {said}; rho {rho:.2f}" in made.output
+    show = ["session", "show", str(new_id), "--no-figure", "--db", url]
+    shown = CliRunner().invoke(app, show)
+    assert shown.exit_code == 0 and f"warm-started from {said}" in shown.output, shown.output
+    info = json.loads(CliRunner().invoke(app, [*show, "--json"]).output)
+    assert info["prior_from"] == prior and info["prior_rho"] == rho
+    cold = json.loads(
+        CliRunner()
+        .invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--json", "--db", url])
+        .output
+    )
+    assert cold["prior_from"] == [] and cold["prior_rho"] is None
+    text = CliRunner().invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--db", url])
+    assert "warm-started" not in text.output
