@@ -531,7 +531,7 @@ class Terminal:
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason, answered.stop_warning, answered.clipped)
+                self._written(q, reason, answered.stop_warning, answered.clipped, answered.stopped)
                 return
 
     def _not_written(self, q: SessionQuery, summary: str) -> None:
@@ -548,11 +548,14 @@ class Terminal:
         reason: str,
         stop_warning: str | None = None,
         clipped: Sequence[str] = (),
+        stopped: str | None = None,
     ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
         flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
         checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
-        went past the edge of their range (:attr:`Answered.clipped`), said after the save."""
+        went past the edge of their range (:attr:`Answered.clipped`), said after the save;
+        ``stopped``: the rule's reason when it opened blind validation after the answer
+        (:attr:`Answered.stopped`), said before the round is shown."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
         for note in clipped:
@@ -567,6 +570,12 @@ class Terminal:
                     line = sure.sentence(gait_name(s, sure.recommended))
                     self.console.print(f"  {line}", markup=False)
             self._say_stop_blocked()
+        if stopped is not None:
+            self.console.print(
+                f"  the [stop] rule says stop ({clip(stopped, MAX_MESSAGE)}): blind validation "
+                "opens",
+                markup=False,
+            )
         if not reason:
             return
         redrawn = False

@@ -12,6 +12,7 @@ from gaitpref import Rating, Session
 from gaitpref.config import ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.sessions import StopCheckWarning, export_session
+from gaitpref.sessions.demo import SimulatedSubject
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive, state_of
 
@@ -245,3 +246,24 @@ def test_the_terminal_says_a_failed_stop_check_after_saved(
     said = "saved: trial 1\n  warning: the answer to query "
     assert said in text and "could not be checked after it (FloatingPointError" in text
     assert "Trial 2: run" in text and len(s.trials()) == 1
+
+
+def test_the_answer_after_which_the_rule_opens_validation_says_why(
+    subject: SimulatedSubject,
+) -> None:
+    """The rule opened blind validation after an answer and nothing said so, or why: the
+    terminal showed a round straight after the saved answer, the console an open round."""
+    s = Session.create(MemoryStorage(), _config("max_trials = 3\n"), "S01")
+    said = []
+    for _ in range(4):
+        if s.validation_plan is not None:
+            break
+        q = s.next_query()
+        said.append(s.answer(q.id, *subject.respond(q)).stopped)
+    assert said == [None, None, "3 trials reached max_trials = 3"]
+    s.answer_validation(1, "ABC")
+    q = s.next_query()  # the rule does not reopen it: nothing to say
+    assert s.answer(q.id, *subject.respond(q)).stopped is None
+    cold = Session.create(MemoryStorage(), CONFIG, "S01")  # no rule: never
+    q = cold.next_query()
+    assert cold.answer(q.id, *subject.respond(q)).stopped is None

@@ -26,6 +26,10 @@ def test_the_terminal_shows_the_confidence_and_moves_to_validation(tmp_path: Pat
     _answer(child, "1", "0")
     child.expect("saved: trial 2")
     child.expect(r"\d+% that G\d+ is within 5% of the best")
+    # the rule says why it opens the round (nothing did: the round followed the saved answer)
+    child.expect_exact(
+        "the [stop] rule says stop (2 trials reached max_trials = 2): blind validation opens"
+    )
     child.expect("Blind validation, round 1")  # max_trials = 2: the rule opened it
     child.sendline("q")
     child.expect(pexpect.EOF)

@@ -150,6 +150,12 @@ class AnsweredOut(BaseModel):
         description="suggestions that asked to go past the edge of a feature's range and were "
         "clipped there (stored as given): one sentence each",
     )
+    stopped: str | None = Field(
+        default=None,
+        description="the [stop] rule's reason when it opened blind validation after this "
+        "answer (GET /api/sessions/{id}/validation lists it); null when it did not",
+        examples=["30 trials reached max_trials = 30"],
+    )
 
 
 class UndoIn(_Request):
