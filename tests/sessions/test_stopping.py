@@ -267,3 +267,26 @@ def test_the_answer_after_which_the_rule_opens_validation_says_why(
     cold = Session.create(MemoryStorage(), CONFIG, "S01")  # no rule: never
     q = cold.next_query()
     assert cold.answer(q.id, *subject.respond(q)).stopped is None
+
+
+def test_the_confidence_sentence_never_shows_a_threshold_it_has_not_reached() -> None:
+    """The probability was rounded to the nearest percent: 0.897 read "90%" while a
+    ``confidence = 0.9`` rule went on, and a tolerance of 0.025 read "within 2%" (2.5% used),
+    a ``confidence = 0.999`` "(confidence = 100%)"."""
+    from gaitpref.loop.stopping import Confidence, StopRule
+
+    def sure(p: float, tol: float = 0.05) -> Confidence:
+        return Confidence(3, p, 0.1, 0.1, tol, 2000)
+
+    assert sure(0.897).sentence("G3") == "89% that G3 is within 5% of the best"
+    assert StopRule(confidence=0.9).reason(5, sure(0.897)) is None
+    assert sure(0.9).sentence("G3").startswith("90% ")
+    assert sure(0.29).sentence("G3").startswith("29% ")  # 28.999... in floating point
+    assert sure(0.9995).sentence("G3").startswith("99% ") and sure(1.0).sentence("G3")[:4] == "100%"
+    assert sure(0.5, 0.025).sentence("G3") == "50% that G3 is within 2.5% of the best"
+    assert StopRule(confidence=0.999).reason(5, sure(0.9995), "G3") == (
+        "99% that G3 is within 5% of the best (confidence = 99.9%)"
+    )
+    assert StopRule(confidence=0.9).reason(5, sure(0.9), "G3") == (
+        "90% that G3 is within 5% of the best (confidence = 90%)"
+    )
