@@ -519,3 +519,23 @@ def test_session_new_and_show_name_the_sessions_a_warm_start_read(tmp_path: Path
     assert cold["prior_from"] == [] and cold["prior_rho"] is None
     text = CliRunner().invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--db", url])
     assert "warm-started" not in text.output
+
+
+def test_a_subject_code_over_two_grids_says_which_sessions_could_be_named() -> None:
+    """A subject walked in two protocols could not be named by code in either: the refusal
+    named one session on the other grid and left the operator to find the others by hand."""
+    db = MemoryStorage()
+    ids = _earlier(db)  # S01: ids[0], ids[1]; S02: ids[2], on CONFIG's grid
+    other = Session.create(db, "exo-2d-length-duration", "S01")
+    other.close()
+    with pytest.raises(
+        ValueError, match=rf"session {other.id} \(subject S01\) was run on another"
+    ) as e:
+        Session.create(db, CONFIG, "S03", prior_from=["S01"])
+    assert f"named by session id instead: {ids[0]}, {ids[1]})" in str(e.value)
+    with pytest.raises(ValueError, match="none of subject S02's sessions was run on this grid"):
+        Session.create(db, "exo-2d-length-duration", "S03", prior_from=["S02"])
+    with pytest.raises(ValueError, match=r"needs the same$"):  # an id names one: nothing to add
+        Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[2]])
+    made = Session.create(db, CONFIG, "S03", prior_from=ids[:2])  # as the refusal says
+    assert [p["session"] for p in made.record.meta["prior_from"]] == ids[:2]

@@ -193,13 +193,13 @@ def resolve_prior(
             records = storage.list_sessions(item)
             if not records:
                 raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
+        differ = {r.id: grid_difference(config_of(r).space, config.space) for r in records}
         for record in records:
-            differs = grid_difference(config_of(record).space, config.space)
-            if differs:
+            if differ[record.id]:
                 raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
-                    f"another grid (config {record.config_name!r}: {differs}); a warm start "
-                    "needs the same"
+                    f"another grid (config {record.config_name!r}: {differ[record.id]}); a warm "
+                    "start needs the same" + _by_id_instead(item, differ)
                 )
             found[record.id] = record
             if len(found) > MAX_PRIOR_SESSIONS:
@@ -209,6 +209,21 @@ def resolve_prior(
                     f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
                 )
     return [found[k] for k in sorted(found)]
+
+
+def _by_id_instead(item: int | str, differ: Mapping[int, str]) -> str:
+    """For a subject code whose sessions were run on several grids: which of them a warm start
+    could read, named by id (a subject seen in two protocols could not be named at all)."""
+    if isinstance(item, int):
+        return ""
+    same = [i for i, d in differ.items() if not d]
+    if not same:
+        return f" (none of subject {item}'s sessions was run on this grid)"
+    ids = ", ".join(map(str, same))
+    return (
+        f" (subject {item} names every session of the subject; those run on this grid can be "
+        f"named by session id instead: {ids})"
+    )
 
 
 def recorded_prior(record: SessionRecord) -> list[PriorSession]:
