@@ -124,8 +124,11 @@ def test_replay_refuses_when_an_earlier_session_changed(tmp_path: Path) -> None:
 def test_prior_from_names_what_it_cannot_use() -> None:
     db = MemoryStorage()
     ids = _earlier(db)
-    with pytest.raises(ValueError, match="subject 'S09' has no sessions"):
+    with pytest.raises(ValueError, match=r"subject 'S09' has no sessions$"):
         Session.create(db, CONFIG, "S03", prior_from=["S09"])
+    # codes match letter case: one typed otherwise said only that it had no sessions
+    with pytest.raises(ValueError, match=r"'s01' has no sessions \(.*did you mean 'S01'\?\)"):
+        Session.create(db, CONFIG, "S03", prior_from=["s01"])
     with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
 

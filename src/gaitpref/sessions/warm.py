@@ -192,7 +192,9 @@ def resolve_prior(
         else:
             records = storage.list_sessions(item)
             if not records:
-                raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
+                raise PriorFromError(
+                    f"prior_from: subject {item!r} has no sessions" + _other_case(storage, item)
+                )
         differ = {r.id: grid_difference(config_of(r).space, config.space) for r in records}
         for record in records:
             if differ[record.id]:
@@ -209,6 +211,14 @@ def resolve_prior(
                     f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
                 )
     return [found[k] for k in sorted(found)]
+
+
+def _other_case(storage: Storage, code: str) -> str:
+    """The subjects whose code is ``code`` in other letter case (codes are matched exactly:
+    ``s01`` is not ``S01``), as a hint; "" when there are none."""
+    like = [s.code for s in storage.list_subjects() if s.code.casefold() == code.casefold()]
+    shown = ", ".join(map(repr, like))
+    return "" if not like else f" (codes match letter case: did you mean {shown}?)"
 
 
 def _by_id_instead(item: int | str, differ: Mapping[int, str]) -> str:
