@@ -129,6 +129,9 @@ def test_prior_from_names_what_it_cannot_use() -> None:
     # codes match letter case: one typed otherwise said only that it had no sessions
     with pytest.raises(ValueError, match=r"'s01' has no sessions \(.*did you mean 'S01'\?\)"):
         Session.create(db, CONFIG, "S03", prior_from=["s01"])
+    # an id given as text (a JSON body's "3", a list read from a file) is a subject code
+    with pytest.raises(ValueError, match=rf"for session {ids[2]}, give the number"):
+        Session.create(db, CONFIG, "S03", prior_from=[str(ids[2])])
     with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
 

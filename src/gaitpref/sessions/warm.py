@@ -192,9 +192,8 @@ def resolve_prior(
         else:
             records = storage.list_sessions(item)
             if not records:
-                raise PriorFromError(
-                    f"prior_from: subject {item!r} has no sessions" + _other_case(storage, item)
-                )
+                hint = _no_sessions_hint(storage, item)
+                raise PriorFromError(f"prior_from: subject {item!r} has no sessions{hint}")
         differ = {r.id: grid_difference(config_of(r).space, config.space) for r in records}
         for record in records:
             if differ[record.id]:
@@ -213,9 +212,16 @@ def resolve_prior(
     return [found[k] for k in sorted(found)]
 
 
-def _other_case(storage: Storage, code: str) -> str:
-    """The subjects whose code is ``code`` in other letter case (codes are matched exactly:
-    ``s01`` is not ``S01``), as a hint; "" when there are none."""
+def _no_sessions_hint(storage: Storage, code: str) -> str:
+    """A hint for a subject code that has no sessions: the session it names when it is digits
+    given as text (``"7"`` from a JSON body or a Python list), or the subjects whose code is it
+    in other letter case (codes are matched exactly: ``s01`` is not ``S01``); "" for none."""
+    if code.isascii() and code.isdigit():  # digits given as text: a session id meant?
+        try:
+            storage.get_session(int(code))
+        except SessionNotFoundError:
+            return ""
+        return f" (a text is a subject code: for session {int(code)}, give the number)"
     like = [s.code for s in storage.list_subjects() if s.code.casefold() == code.casefold()]
     shown = ", ".join(map(repr, like))
     return "" if not like else f" (codes match letter case: did you mean {shown}?)"
