@@ -54,6 +54,7 @@ from rich.console import Console
 from gaitpref.errors import FeedbackError, GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
+from gaitpref.loop.stopping import preference_learned
 from gaitpref.sessions.confidence import StopCheckWarning
 from gaitpref.sessions.records import (
     InfeasibleGait,
@@ -563,8 +564,9 @@ class Terminal:
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
         with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
-            mean = s.posterior().mean
-            if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
+            # how sure, once it learnt (as the console and session show: before that the
+            # recommendation is the first gait for no reason), with or without a [stop] rule
+            if preference_learned(s.posterior().mean):
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
