@@ -511,10 +511,11 @@ def test_session_new_and_show_name_the_sessions_a_warm_start_read(tmp_path: Path
     said = ", ".join(
         f"session {p['session']} ({p['subject']}) to event {p['last_seq']}" for p in prior
     )
-    assert f"warm-started from {said}; rho {rho:.2f}" in made.output
+    assert f"warm-started from 3 earlier sessions: {said}; rho {rho:.2f}" in made.output
     show = ["session", "show", str(new_id), "--no-figure", "--db", url]
     shown = CliRunner().invoke(app, show)
-    assert shown.exit_code == 0 and f"warm-started from {said}" in shown.output, shown.output
+    assert shown.exit_code == 0, shown.output
+    assert f"warm-started from 3 earlier sessions: {said}" in shown.output
     info = json.loads(CliRunner().invoke(app, [*show, "--json"]).output)
     assert info["prior_from"] == prior and info["prior_rho"] == rho
     cold = json.loads(
@@ -525,6 +526,12 @@ def test_session_new_and_show_name_the_sessions_a_warm_start_read(tmp_path: Path
     assert cold["prior_from"] == [] and cold["prior_rho"] is None
     text = CliRunner().invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--db", url])
     assert "warm-started" not in text.output
+    for _ in range(13):  # a subject code may name 256: past 12 the rest are counted
+        Session.create(url, CONFIG, "S05").close()
+    many = CliRunner().invoke(app, [*args[:5], "S06", *args[6:], "--prior-from", "S05"])
+    assert many.exit_code == 0, many.output
+    assert "warm-started from 13 earlier sessions: session " in many.output
+    assert "and 1 more (session show --json lists them)" in many.output
 
 
 def test_a_subject_code_over_two_grids_says_which_sessions_could_be_named() -> None:

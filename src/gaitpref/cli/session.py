@@ -289,10 +289,18 @@ def _warm_start_line(session: Session) -> str | None:
     prior = recorded_prior(session.record)
     if not prior:
         return None
-    read = ", ".join(f"session {p.session} ({p.subject}) to event {p.last_seq}" for p in prior)
+    read = ", ".join(
+        f"session {p.session} ({p.subject}) to event {p.last_seq}" for p in prior[:_WARM_SHOWN]
+    )
+    if len(prior) > _WARM_SHOWN:  # up to 256: the rest in session show --json
+        read += f" and {len(prior) - _WARM_SHOWN} more (session show --json lists them)"
     rho = session.record.meta.get("prior_rho")
     shared = f"; rho {rho:.2f}" if isinstance(rho, float) else ""
-    return f"warm-started from {read}{shared}"
+    return f"warm-started from {plural(len(prior), 'earlier session')}: {read}{shared}"
+
+
+#: the earlier sessions a warm start's line names one by one (a subject code may name 256)
+_WARM_SHOWN = 12
 
 
 @session_app.command("run")
