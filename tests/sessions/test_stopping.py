@@ -290,3 +290,29 @@ def test_the_confidence_sentence_never_shows_a_threshold_it_has_not_reached() ->
     assert StopRule(confidence=0.9).reason(5, sure(0.9), "G3") == (
         "90% that G3 is within 5% of the best (confidence = 90%)"
     )
+
+
+def test_the_rule_reads_the_confidence_the_session_keeps(
+    drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``stop_reason()`` drew the samples again after ``confidence()`` on the same state (the
+    console's page with an open round asks both: about 1 s each on a large grid)."""
+    from gaitpref.sessions import confidence as module
+    from gaitpref.sessions import session as session_module
+
+    s = Session.create(MemoryStorage(), _config("confidence = 0.99\n"), "S01")
+    drive(s, 3)
+    calls = []
+    real = module.session_confidence
+
+    def counted(*args: object, **kwargs: object) -> object:
+        calls.append(1)
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(module, "session_confidence", counted)
+    monkeypatch.setattr(session_module, "session_confidence", counted)
+    sure = s.confidence()  # kept since the answer's own stop check, or drawn now
+    drawn = len(calls)
+    assert drawn <= 1
+    assert s.stop_reason() is None and s.stop_reason() is None
+    assert len(calls) == drawn and s.confidence() is sure

@@ -720,8 +720,10 @@ class Session:
         )
 
     def stop_reason(self) -> str | None:
-        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
-        return self._locked(lambda: stop_reason(self._state, self.config.stop))
+        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule); its
+        confidence is :meth:`confidence`'s, kept until the log moves on (the console's page asks
+        both: the samples were drawn twice)."""
+        return self._locked(lambda: stop_reason(self._state, self.config.stop, self.confidence))
 
     def stop_blocked(self) -> str | None:
         """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
