@@ -273,6 +273,14 @@ class RatingScaleOut(BaseModel):
     avoid: int = Field(description="the worst categories avoided by [safety] (0: none)")
 
 
+class EarlierSessionOut(BaseModel):
+    """An earlier session a warm start read, as its ``created`` event records it."""
+
+    session: int
+    subject: str
+    last_seq: int = Field(description="the last of its events read (those since are not used)")
+
+
 class SessionOut(BaseModel):
     """A session with what its log says now."""
 
@@ -297,6 +305,13 @@ class SessionOut(BaseModel):
         default=None,
         description="why the [stop] rule, which says stop, cannot open blind validation (fewer "
         "than three gaits may be shown, or nothing learnt); None otherwise",
+    )
+    prior_from: list[EarlierSessionOut] = Field(
+        default_factory=list,
+        description="the earlier sessions its warm start read (empty: a cold start)",
+    )
+    prior_rho: float | None = Field(
+        default=None, description="the shared fraction learnt from them (null: a cold start)"
     )
 
 
