@@ -16,7 +16,8 @@ is asked again), ``q`` pauses the session and quits (``gaitpref session run ID [
 resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a closed output
 (``gaitpref session run ID | head``: what is left to print is dropped).  A line that is
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
-The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
+The blind validation round the ``[stop]`` rule opens is asked (after the rule's reason, said
+when it opens the round and again when the runner resumes at it), unblinded, then the session
 pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
 written); when the rule says stop but no round can be drawn (fewer than three gaits may be
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
@@ -331,6 +332,12 @@ class Terminal:
             markup=False,
         )
         self._say_stop_blocked()
+        if s.validation_plan is not None:  # resumed at an open round: why it is there
+            stopped = s.stop_reason()
+            if stopped is not None:
+                self.console.print(
+                    f"  the [stop] rule says stop ({clip(stopped, MAX_MESSAGE)})", markup=False
+                )
         try:
             while True:
                 if s.validation_plan is not None:

@@ -33,6 +33,12 @@ def test_the_terminal_shows_the_confidence_and_moves_to_validation(tmp_path: Pat
     child.expect("Blind validation, round 1")  # max_trials = 2: the rule opened it
     child.sendline("q")
     child.expect(pexpect.EOF)
+    child = _spawn("session", "run", "1", "--db", url)  # resumed at the round: says why too
+    child.expect("2 trials so far")
+    child.expect_exact("the [stop] rule says stop (2 trials reached max_trials = 2)")
+    child.expect("Blind validation, round 1")
+    child.sendline("q")
+    child.expect(pexpect.EOF)
 
 
 def test_without_a_rule_the_terminal_still_shows_the_confidence(tmp_path: Path) -> None:
