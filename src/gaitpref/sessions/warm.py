@@ -194,13 +194,13 @@ def resolve_prior(
             if not records:
                 hint = _no_sessions_hint(storage, item)
                 raise PriorFromError(f"prior_from: subject {item!r} has no sessions{hint}")
-        differ = {r.id: grid_difference(config_of(r).space, config.space) for r in records}
         for record in records:
-            if differ[record.id]:
+            differs = grid_difference(config_of(record).space, config.space)
+            if differs:
                 raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
-                    f"another grid (config {record.config_name!r}: {differ[record.id]}); a warm "
-                    "start needs the same" + _by_id_instead(item, differ)
+                    f"another grid (config {record.config_name!r}: {differs}); a warm start "
+                    "needs the same" + _by_id_instead(item, records, config)
                 )
             found[record.id] = record
             if len(found) > MAX_PRIOR_SESSIONS:
@@ -227,12 +227,16 @@ def _no_sessions_hint(storage: Storage, code: str) -> str:
     return "" if not like else f" (codes match letter case: did you mean {shown}?)"
 
 
-def _by_id_instead(item: int | str, differ: Mapping[int, str]) -> str:
+def _by_id_instead(
+    item: int | str, records: Sequence[SessionRecord], config: ExperimentConfig
+) -> str:
     """For a subject code whose sessions were run on several grids: which of them a warm start
     could read, named by id (a subject seen in two protocols could not be named at all)."""
     if isinstance(item, int):
         return ""
-    same = [i for i, d in differ.items() if not d]
+    same = [r.id for r in records if not grid_difference(config_of(r).space, config.space)][
+        :MAX_PRIOR_SESSIONS
+    ]
     if not same:
         return f" (none of subject {item}'s sessions was run on this grid)"
     ids = ", ".join(map(str, same))
