@@ -316,3 +316,20 @@ def test_the_rule_reads_the_confidence_the_session_keeps(
     assert drawn <= 1
     assert s.stop_reason() is None and s.stop_reason() is None
     assert len(calls) == drawn and s.confidence() is sure
+
+
+def test_the_confidence_rule_does_not_act_before_a_preference_is_learned() -> None:
+    """After an answer that taught nothing the rule said stop on the flat posterior's
+    confidence ("23% that G0 ...": the first gait, for no reason), and stop_blocked reported it
+    after the answer, where no confidence is shown."""
+    s = Session.create(MemoryStorage(), _config("confidence = 0.2\n"), "S01")
+    q = s.next_query()
+    s.answer(q.id, [], [])  # a first trial with no suggestion: nothing learnt
+    assert np.ptp(s.posterior().mean) == 0.0
+    assert s.stop_reason() is None and s.stop_blocked() is None
+    both = Session.create(MemoryStorage(), _config("confidence = 0.2\nmax_trials = 1\n"), "S01")
+    q = both.next_query()
+    both.answer(q.id, [], [])  # max_trials still counts: said, and why no round can open
+    assert both.stop_reason() == "1 trials reached max_trials = 1"
+    blocked = both.stop_blocked()
+    assert blocked is not None and "posterior mean is flat" in blocked
