@@ -162,7 +162,8 @@ def test_max_trials_with_nothing_learnt_says_why_no_round_opens() -> None:
     s = Session.create(MemoryStorage(), _config("max_trials = 1\n"), "S01")
     q = s.next_query()
     s.answer(q.id, [])  # no comparison (no buffer yet), no suggestion: nothing learnt
-    assert s.stop_reason() == "1 trials reached max_trials = 1" and s.validation_plan is None
+    # one trial: "1 trial" (it said "1 trials")
+    assert s.stop_reason() == "1 trial reached max_trials = 1" and s.validation_plan is None
     blocked = s.stop_blocked()
     assert blocked is not None and "the posterior mean is flat" in blocked
     s.finish()  # the operator decided: nothing left to say
@@ -330,6 +331,6 @@ def test_the_confidence_rule_does_not_act_before_a_preference_is_learned() -> No
     both = Session.create(MemoryStorage(), _config("confidence = 0.2\nmax_trials = 1\n"), "S01")
     q = both.next_query()
     both.answer(q.id, [], [])  # max_trials still counts: said, and why no round can open
-    assert both.stop_reason() == "1 trials reached max_trials = 1"
+    assert both.stop_reason() == "1 trial reached max_trials = 1"
     blocked = both.stop_blocked()
     assert blocked is not None and "posterior mean is flat" in blocked

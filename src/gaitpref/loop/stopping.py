@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from gaitpref.checks import check_mask, is_count, is_number
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.share_mix import PosteriorMixture
+from gaitpref.wording import plural
 
 #: At most this many sampled values (``block x A``) are held at once: 32 MiB.
 BLOCK_ELEMENTS = 1 << 22
@@ -221,7 +222,7 @@ class StopRule:
         ``name``: the recommended gait's, as its confidence sentence names it (default
         ``gait <index>``)."""
         if self.max_trials is not None and trials >= self.max_trials:
-            return f"{trials} trials reached max_trials = {self.max_trials}"
+            return f"{plural(trials, 'trial')} reached max_trials = {self.max_trials}"
         if self.confidence is None or sure is None or sure.probability < self.confidence:
             return None
         gait = f"gait {sure.recommended}" if name is None else name
