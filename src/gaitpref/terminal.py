@@ -16,7 +16,8 @@ is asked again), ``q`` pauses the session and quits (``gaitpref session run ID [
 resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a closed output
 (``gaitpref session run ID | head``: what is left to print is dropped).  A line that is
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
-The blind validation round the ``[stop]`` rule opens is asked, unblinded, then the session
+The blind validation round the ``[stop]`` rule opens is asked (after the rule's reason, said
+when it opens the round and again when the runner resumes at it), unblinded, then the session
 pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
 written); when the rule says stop but no round can be drawn (fewer than three gaits may be
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
@@ -54,6 +55,7 @@ from rich.console import Console
 from gaitpref.errors import FeedbackError, GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
+from gaitpref.loop.stopping import preference_learned
 from gaitpref.sessions.confidence import StopCheckWarning
 from gaitpref.sessions.records import (
     InfeasibleGait,
@@ -330,6 +332,12 @@ class Terminal:
             markup=False,
         )
         self._say_stop_blocked()
+        if s.validation_plan is not None:  # resumed at an open round: why it is there
+            stopped = s.stop_reason()
+            if stopped is not None:
+                self.console.print(
+                    f"  the [stop] rule says stop ({clip(stopped, MAX_MESSAGE)})", markup=False
+                )
         try:
             while True:
                 if s.validation_plan is not None:
@@ -531,7 +539,7 @@ class Terminal:
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason, answered.stop_warning, answered.clipped)
+                self._written(q, reason, answered.stop_warning, answered.clipped, answered.stopped)
                 return
 
     def _not_written(self, q: SessionQuery, summary: str) -> None:
@@ -548,11 +556,14 @@ class Terminal:
         reason: str,
         stop_warning: str | None = None,
         clipped: Sequence[str] = (),
+        stopped: str | None = None,
     ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
         flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
         checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
-        went past the edge of their range (:attr:`Answered.clipped`), said after the save."""
+        went past the edge of their range (:attr:`Answered.clipped`), said after the save;
+        ``stopped``: the rule's reason when it opened blind validation after the answer
+        (:attr:`Answered.stopped`), said before the round is shown."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
         for note in clipped:
@@ -560,13 +571,20 @@ class Terminal:
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
         with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
-            mean = s.posterior().mean
-            if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
+            # how sure, once it learnt (as the console and session show: before that the
+            # recommendation is the first gait for no reason), with or without a [stop] rule
+            if preference_learned(s.posterior().mean):
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
                     self.console.print(f"  {line}", markup=False)
             self._say_stop_blocked()
+        if stopped is not None:
+            self.console.print(
+                f"  the [stop] rule says stop ({clip(stopped, MAX_MESSAGE)}): blind validation "
+                "opens",
+                markup=False,
+            )
         if not reason:
             return
         redrawn = False

@@ -334,7 +334,7 @@ def test_the_terminal_says_why_the_stop_rule_cannot_open_validation() -> None:
     terminal, console = _terminal(session, "0", "y")  # trial 1: no suggestion
     terminal.run()
     text = console.export_text()
-    assert "the [stop] rule says stop (1 trials reached max_trials = 1), but it cannot" in text
+    assert "the [stop] rule says stop (1 trial reached max_trials = 1), but it cannot" in text
     assert "open blind validation: the posterior mean is flat" in text
     assert "Finish the" in text and "go on with trials" in text
     assert session.validation_plan is None and session.status == "paused"

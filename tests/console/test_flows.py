@@ -167,3 +167,31 @@ def test_the_console_says_why_the_stop_rule_cannot_open_validation(client: TestC
     assert "max_trials = 1" in blocked and "the posterior mean is flat" in blocked
     page = client.get(f"/sessions/{sid}").text
     assert 'id="stop-blocked"' in page and "cannot open blind validation" in page
+
+
+def test_the_console_says_why_the_stop_rule_opened_validation(client: TestClient) -> None:
+    """When the rule opened blind validation after an answer, the answer's response and the
+    page with the open round said nothing of the rule: the round just appeared."""
+    from gaitpref import load_config
+
+    config = load_config("exo-1d-step-length").text + "\n[stop]\nmax_trials = 2\n"
+    sid = new_session(client, config)
+    said = []
+    for _ in range(2):
+        q = client.get(f"/api/sessions/{sid}/query").json()
+        action = q["actions"][0]["index"]
+        body = {
+            "query_id": q["query_id"],
+            "comparisons": [[i, j, "first"] for i, j in q["comparisons"]],
+            "suggestions": [[action, "step_length", "+small" if action < 14 else "-small"]],
+        }
+        r = client.post(f"/api/sessions/{sid}/answers", json=body)
+        assert r.status_code == 200, r.text
+        said.append(r.json()["stopped"])
+    assert said == [None, "2 trials reached max_trials = 2"]
+    page = client.get(f"/sessions/{sid}").text
+    assert "A blind validation round is open" in page
+    assert (
+        '<p id="stop-reason" role="status">The [stop] rule says stop: 2 trials reached '
+        "max_trials = 2.</p>" in page
+    )

@@ -93,6 +93,13 @@ def test_the_api_takes_prior_from(client: TestClient) -> None:
     sid = new_session(client, prior_from=[earlier])
     created = client.get(f"/api/sessions/{sid}/events").json()[0]["payload"]
     assert [p["session"] for p in created["prior_from"]] == [earlier]
+    # the session's JSON names them (only the first event did, as the page's words)
+    shown = client.get(f"/api/sessions/{sid}").json()
+    last = created["prior_from"][0]["last_seq"]
+    assert shown["prior_from"] == [{"session": earlier, "subject": "S01", "last_seq": last}]
+    assert shown["prior_rho"] == created["prior_rho"]
+    cold = client.get(f"/api/sessions/{earlier}").json()
+    assert cold["prior_from"] == [] and cold["prior_rho"] is None
     r = client.post(
         "/api/sessions",
         json={"config": "exo-1d-step-length", "subject": "S03", "prior_from": ["no name"]},

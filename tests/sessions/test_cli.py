@@ -57,6 +57,8 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "posterior",
         "validations",
         "figure",
+        "prior_from",
+        "prior_rho",
     }
     assert info["figure"] == str(figure) and info["status"] == "active"
     assert set(info["posterior"]) == {

@@ -12,6 +12,7 @@ from gaitpref import Rating, Session
 from gaitpref.config import ExperimentConfig, load_config, parse_config
 from gaitpref.errors import ConfigError, NoSafeGaitError
 from gaitpref.sessions import StopCheckWarning, export_session
+from gaitpref.sessions.demo import SimulatedSubject
 from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive, state_of
 
@@ -161,7 +162,8 @@ def test_max_trials_with_nothing_learnt_says_why_no_round_opens() -> None:
     s = Session.create(MemoryStorage(), _config("max_trials = 1\n"), "S01")
     q = s.next_query()
     s.answer(q.id, [])  # no comparison (no buffer yet), no suggestion: nothing learnt
-    assert s.stop_reason() == "1 trials reached max_trials = 1" and s.validation_plan is None
+    # one trial: "1 trial" (it said "1 trials")
+    assert s.stop_reason() == "1 trial reached max_trials = 1" and s.validation_plan is None
     blocked = s.stop_blocked()
     assert blocked is not None and "the posterior mean is flat" in blocked
     s.finish()  # the operator decided: nothing left to say
@@ -245,3 +247,90 @@ def test_the_terminal_says_a_failed_stop_check_after_saved(
     said = "saved: trial 1\n  warning: the answer to query "
     assert said in text and "could not be checked after it (FloatingPointError" in text
     assert "Trial 2: run" in text and len(s.trials()) == 1
+
+
+def test_the_answer_after_which_the_rule_opens_validation_says_why(
+    subject: SimulatedSubject,
+) -> None:
+    """The rule opened blind validation after an answer and nothing said so, or why: the
+    terminal showed a round straight after the saved answer, the console an open round."""
+    s = Session.create(MemoryStorage(), _config("max_trials = 3\n"), "S01")
+    said = []
+    for _ in range(4):
+        if s.validation_plan is not None:
+            break
+        q = s.next_query()
+        said.append(s.answer(q.id, *subject.respond(q)).stopped)
+    assert said == [None, None, "3 trials reached max_trials = 3"]
+    s.answer_validation(1, "ABC")
+    q = s.next_query()  # the rule does not reopen it: nothing to say
+    assert s.answer(q.id, *subject.respond(q)).stopped is None
+    cold = Session.create(MemoryStorage(), CONFIG, "S01")  # no rule: never
+    q = cold.next_query()
+    assert cold.answer(q.id, *subject.respond(q)).stopped is None
+
+
+def test_the_confidence_sentence_never_shows_a_threshold_it_has_not_reached() -> None:
+    """The probability was rounded to the nearest percent: 0.897 read "90%" while a
+    ``confidence = 0.9`` rule went on, and a tolerance of 0.025 read "within 2%" (2.5% used),
+    a ``confidence = 0.999`` "(confidence = 100%)"."""
+    from gaitpref.loop.stopping import Confidence, StopRule
+
+    def sure(p: float, tol: float = 0.05) -> Confidence:
+        return Confidence(3, p, 0.1, 0.1, tol, 2000)
+
+    assert sure(0.897).sentence("G3") == "89% that G3 is within 5% of the best"
+    assert StopRule(confidence=0.9).reason(5, sure(0.897)) is None
+    assert sure(0.9).sentence("G3").startswith("90% ")
+    assert sure(0.29).sentence("G3").startswith("29% ")  # 28.999... in floating point
+    assert sure(0.9995).sentence("G3").startswith("99% ") and sure(1.0).sentence("G3")[:4] == "100%"
+    assert sure(0.5, 0.025).sentence("G3") == "50% that G3 is within 2.5% of the best"
+    assert StopRule(confidence=0.999).reason(5, sure(0.9995), "G3") == (
+        "99% that G3 is within 5% of the best (confidence = 99.9%)"
+    )
+    assert StopRule(confidence=0.9).reason(5, sure(0.9), "G3") == (
+        "90% that G3 is within 5% of the best (confidence = 90%)"
+    )
+
+
+def test_the_rule_reads_the_confidence_the_session_keeps(
+    drive: Drive, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``stop_reason()`` drew the samples again after ``confidence()`` on the same state (the
+    console's page with an open round asks both: about 1 s each on a large grid)."""
+    from gaitpref.sessions import confidence as module
+    from gaitpref.sessions import session as session_module
+
+    s = Session.create(MemoryStorage(), _config("confidence = 0.99\n"), "S01")
+    drive(s, 3)
+    calls = []
+    real = module.session_confidence
+
+    def counted(*args: object, **kwargs: object) -> object:
+        calls.append(1)
+        return real(*args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(module, "session_confidence", counted)
+    monkeypatch.setattr(session_module, "session_confidence", counted)
+    sure = s.confidence()  # kept since the answer's own stop check, or drawn now
+    drawn = len(calls)
+    assert drawn <= 1
+    assert s.stop_reason() is None and s.stop_reason() is None
+    assert len(calls) == drawn and s.confidence() is sure
+
+
+def test_the_confidence_rule_does_not_act_before_a_preference_is_learned() -> None:
+    """After an answer that taught nothing the rule said stop on the flat posterior's
+    confidence ("23% that G0 ...": the first gait, for no reason), and stop_blocked reported it
+    after the answer, where no confidence is shown."""
+    s = Session.create(MemoryStorage(), _config("confidence = 0.2\n"), "S01")
+    q = s.next_query()
+    s.answer(q.id, [], [])  # a first trial with no suggestion: nothing learnt
+    assert np.ptp(s.posterior().mean) == 0.0
+    assert s.stop_reason() is None and s.stop_blocked() is None
+    both = Session.create(MemoryStorage(), _config("confidence = 0.2\nmax_trials = 1\n"), "S01")
+    q = both.next_query()
+    both.answer(q.id, [], [])  # max_trials still counts: said, and why no round can open
+    assert both.stop_reason() == "1 trial reached max_trials = 1"
+    blocked = both.stop_blocked()
+    assert blocked is not None and "posterior mean is flat" in blocked

@@ -124,8 +124,14 @@ def test_replay_refuses_when_an_earlier_session_changed(tmp_path: Path) -> None:
 def test_prior_from_names_what_it_cannot_use() -> None:
     db = MemoryStorage()
     ids = _earlier(db)
-    with pytest.raises(ValueError, match="subject 'S09' has no sessions"):
+    with pytest.raises(ValueError, match=r"subject 'S09' has no sessions$"):
         Session.create(db, CONFIG, "S03", prior_from=["S09"])
+    # codes match letter case: one typed otherwise said only that it had no sessions
+    with pytest.raises(ValueError, match=r"'s01' has no sessions \(.*did you mean 'S01'\?\)"):
+        Session.create(db, CONFIG, "S03", prior_from=["s01"])
+    # an id given as text (a JSON body's "3", a list read from a file) is a subject code
+    with pytest.raises(ValueError, match=rf"for session {ids[2]}, give the number"):
+        Session.create(db, CONFIG, "S03", prior_from=[str(ids[2])])
     with pytest.raises(ValueError, match=f"session {ids[0]} .*another grid"):
         Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[0]])
 
@@ -483,3 +489,66 @@ def test_typed_digits_that_are_also_a_subjects_code_are_refused_not_read_as_a_se
     with pytest.raises(ValueError) as refused:
         read_prior_from([long])
     assert len(str(refused.value)) < 300  # a pasted megabyte is not echoed back whole
+
+
+def test_session_new_and_show_name_the_sessions_a_warm_start_read(tmp_path: Path) -> None:
+    """A subject code names every session of the subject: neither ``session new`` nor ``session
+    show`` (text or --json) said which sessions (and up to which event) the model took in, so an
+    operator could not tell what a warm start was made of without reading the events."""
+    from typer.testing import CliRunner
+
+    from gaitpref.cli import app
+
+    url = f"sqlite:///{tmp_path / 's.db'}"
+    ids = _earlier(url)
+    args = ["session", "new", "--config", CONFIG, "--subject", "S03", "--db", url]
+    made = CliRunner().invoke(app, [*args, "--prior-from", "S01", "--prior-from", str(ids[2])])
+    assert made.exit_code == 0, made.output
+    new_id = int(made.output.split()[1].rstrip(":"))
+    with Session.open(url, new_id) as s:
+        prior = s.record.meta["prior_from"]
+        rho = s.record.meta["prior_rho"]
+    said = ", ".join(
+        f"session {p['session']} ({p['subject']}) to event {p['last_seq']}" for p in prior
+    )
+    assert f"warm-started from 3 earlier sessions: {said}; rho {rho:.2f}" in made.output
+    show = ["session", "show", str(new_id), "--no-figure", "--db", url]
+    shown = CliRunner().invoke(app, show)
+    assert shown.exit_code == 0, shown.output
+    assert f"warm-started from 3 earlier sessions: {said}" in shown.output
+    info = json.loads(CliRunner().invoke(app, [*show, "--json"]).output)
+    assert info["prior_from"] == prior and info["prior_rho"] == rho
+    cold = json.loads(
+        CliRunner()
+        .invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--json", "--db", url])
+        .output
+    )
+    assert cold["prior_from"] == [] and cold["prior_rho"] is None
+    text = CliRunner().invoke(app, ["session", "show", str(ids[0]), "--no-figure", "--db", url])
+    assert "warm-started" not in text.output
+    for _ in range(13):  # a subject code may name 256: past 12 the rest are counted
+        Session.create(url, CONFIG, "S05").close()
+    many = CliRunner().invoke(app, [*args[:5], "S06", *args[6:], "--prior-from", "S05"])
+    assert many.exit_code == 0, many.output
+    assert "warm-started from 13 earlier sessions: session " in many.output
+    assert "and 1 more (session show --json lists them)" in many.output
+
+
+def test_a_subject_code_over_two_grids_says_which_sessions_could_be_named() -> None:
+    """A subject walked in two protocols could not be named by code in either: the refusal
+    named one session on the other grid and left the operator to find the others by hand."""
+    db = MemoryStorage()
+    ids = _earlier(db)  # S01: ids[0], ids[1]; S02: ids[2], on CONFIG's grid
+    other = Session.create(db, "exo-2d-length-duration", "S01")
+    other.close()
+    with pytest.raises(
+        ValueError, match=rf"session {other.id} \(subject S01\) was run on another"
+    ) as e:
+        Session.create(db, CONFIG, "S03", prior_from=["S01"])
+    assert f"named by session id instead: {ids[0]}, {ids[1]})" in str(e.value)
+    with pytest.raises(ValueError, match="none of subject S02's sessions was run on this grid"):
+        Session.create(db, "exo-2d-length-duration", "S03", prior_from=["S02"])
+    with pytest.raises(ValueError, match=r"needs the same$"):  # an id names one: nothing to add
+        Session.create(db, "exo-2d-length-duration", "S03", prior_from=[ids[2]])
+    made = Session.create(db, CONFIG, "S03", prior_from=ids[:2])  # as the refusal says
+    assert [p["session"] for p in made.record.meta["prior_from"]] == ids[:2]

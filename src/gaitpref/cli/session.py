@@ -270,10 +270,37 @@ def new(
     session = guard(run)
     console.print(
         f"session {session.id}: subject {session.subject}, config {session.config.name}, "
-        f"seed {session.seed}, in {session.storage.url}\n"
-        f"run it with: {_resume_hint(session.id, db)}"
+        f"seed {session.seed}, in {session.storage.url}",
+        markup=False,
     )
+    warm = _warm_start_line(session)
+    if warm is not None:  # which sessions a subject code named: said before the first trial
+        console.print(warm, markup=False)
+    console.print(f"run it with: {_resume_hint(session.id, db)}", markup=False)
     session.close()
+
+
+def _warm_start_line(session: Session) -> str | None:
+    """The earlier sessions ``session``'s warm start read, as its row records them (None: a
+    cold start): each with its subject and the last of its events read (events it gained since
+    are not in this session's model), and the shared fraction ``rho`` learned from them."""
+    from gaitpref.sessions.warm import recorded_prior
+
+    prior = recorded_prior(session.record)
+    if not prior:
+        return None
+    read = ", ".join(
+        f"session {p.session} ({p.subject}) to event {p.last_seq}" for p in prior[:_WARM_SHOWN]
+    )
+    if len(prior) > _WARM_SHOWN:  # up to 256: the rest in session show --json
+        read += f" and {len(prior) - _WARM_SHOWN} more (session show --json lists them)"
+    rho = session.record.meta.get("prior_rho")
+    shared = f"; rho {rho:.2f}" if isinstance(rho, float) else ""
+    return f"warm-started from {plural(len(prior), 'earlier session')}: {read}{shared}"
+
+
+#: the earlier sessions a warm start's line names one by one (a subject code may name 256)
+_WARM_SHOWN = 12
 
 
 @session_app.command("run")
@@ -416,6 +443,7 @@ def show(
 ) -> None:
     """Summarize a session and plot its posterior and trials (as in the paper's figures)."""
     from gaitpref.sessions import posterior_summary
+    from gaitpref.sessions.warm import recorded_prior
 
     if figure is not None and not no_figure:
         check_file_out(figure, "--figure")  # its folder must exist: made by no one but you
@@ -457,6 +485,8 @@ def show(
                 for v in session.validations()
             ],
             "figure": None if path is None else str(path),
+            "prior_from": [p.model_dump() for p in recorded_prior(session.record)],
+            "prior_rho": session.record.meta.get("prior_rho"),
         }
         if as_json:
             typer.echo(json.dumps(info))
@@ -468,6 +498,9 @@ def show(
             f"{plural(len(trials), 'trial')} ({len(excluded)} excluded), "
             f"{plural(compared, 'comparison')}\n{so_far}"
         )
+        warm = _warm_start_line(session)
+        if warm is not None:
+            console.print(warm, markup=False)
         if flags:
             console.print(
                 "flagged unsafe: "

@@ -157,6 +157,7 @@ def answer(request: Request, session_id: SessionId, body: AnswerIn) -> AnsweredO
         next_query_id=pending,
         stop_warning=answered.stop_warning,
         clipped=list(answered.clipped),
+        stopped=answered.stopped,
     )
 
 

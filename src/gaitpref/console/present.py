@@ -9,6 +9,7 @@ import numpy as np
 from gaitpref.console import views
 from gaitpref.console.schemas import (
     ConfidenceOut,
+    EarlierSessionOut,
     FeatureOut,
     GaitOut,
     PosteriorOut,
@@ -26,6 +27,7 @@ from gaitpref.pointset import PointSet
 from gaitpref.sessions.records import ShownGait
 from gaitpref.sessions.session import Session, SessionQuery
 from gaitpref.sessions.validation import ValidationPlan, ValidationResult
+from gaitpref.sessions.warm import recorded_prior
 from gaitpref.storage import SessionRecord
 
 
@@ -106,6 +108,11 @@ def session_out(session: Session) -> SessionOut:
         rating=rating_scale_out(session),
         unsafe={t: reason for t, (_, reason) in session.unsafe_flags().items()},
         stop_blocked=session.stop_blocked(),
+        prior_from=[
+            EarlierSessionOut(session=p.session, subject=p.subject, last_seq=p.last_seq)
+            for p in recorded_prior(record)
+        ],
+        prior_rho=record.meta.get("prior_rho"),
     )
 
 

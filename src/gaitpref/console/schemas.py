@@ -150,6 +150,12 @@ class AnsweredOut(BaseModel):
         description="suggestions that asked to go past the edge of a feature's range and were "
         "clipped there (stored as given): one sentence each",
     )
+    stopped: str | None = Field(
+        default=None,
+        description="the [stop] rule's reason when it opened blind validation after this "
+        "answer (GET /api/sessions/{id}/validation lists it); null when it did not",
+        examples=["30 trials reached max_trials = 30"],
+    )
 
 
 class UndoIn(_Request):
@@ -267,6 +273,14 @@ class RatingScaleOut(BaseModel):
     avoid: int = Field(description="the worst categories avoided by [safety] (0: none)")
 
 
+class EarlierSessionOut(BaseModel):
+    """An earlier session a warm start read, as its ``created`` event records it."""
+
+    session: int
+    subject: str
+    last_seq: int = Field(description="the last of its events read (those since are not used)")
+
+
 class SessionOut(BaseModel):
     """A session with what its log says now."""
 
@@ -291,6 +305,13 @@ class SessionOut(BaseModel):
         default=None,
         description="why the [stop] rule, which says stop, cannot open blind validation (fewer "
         "than three gaits may be shown, or nothing learnt); None otherwise",
+    )
+    prior_from: list[EarlierSessionOut] = Field(
+        default_factory=list,
+        description="the earlier sessions its warm start read (empty: a cold start)",
+    )
+    prior_rho: float | None = Field(
+        default=None, description="the shared fraction learnt from them (null: a cold start)"
     )
 
 

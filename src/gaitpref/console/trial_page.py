@@ -142,6 +142,9 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,
         "stop_blocked": session.stop_blocked(),
+        # a round is open: why the [stop] rule says stop, if it does (it opened the round, or
+        # would have), so that the operator is told why validation comes now
+        "stop_reason": session.stop_reason() if pending.reason == "validation" else None,
         "prior_from": [p["session"] for p in session.record.meta.get("prior_from", [])],
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",

@@ -29,6 +29,7 @@ once the probability reaches ``confidence``, or after ``max_trials`` executed tr
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from gaitpref.checks import check_mask, is_count, is_number
 from gaitpref.model.posterior import Posterior
 from gaitpref.model.share_mix import PosteriorMixture
+from gaitpref.wording import plural
 
 #: At most this many sampled values (``block x A``) are held at once: 32 MiB.
 BLOCK_ELEMENTS = 1 << 22
@@ -65,8 +67,14 @@ class Confidence:
     samples: int
 
     def sentence(self, name: str) -> str:
-        """``"88% that G95 is within 5% of the best"`` with ``name`` for the gait."""
-        return f"{self.probability:.0%} that {name} is within {self.tolerance:.0%} of the best"
+        """``"88% that G95 is within 5% of the best"`` with ``name`` for the gait: the
+        probability in whole percent rounded down (:func:`whole_percent`, never shown as
+        reaching a ``[stop] confidence`` it has not reached), the tolerance as given
+        (:func:`percent`)."""
+        return (
+            f"{whole_percent(self.probability)} that {name} is within "
+            f"{percent(self.tolerance)} of the best"
+        )
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -77,6 +85,21 @@ class Confidence:
             "tolerance": self.tolerance,
             "samples": self.samples,
         }
+
+
+def whole_percent(fraction: float) -> str:
+    """``fraction`` in whole percent, rounded down: 0.897 is ``"89%"``, not the ``"90%"``
+    that rounding gave while a ``[stop] confidence = 0.9`` had not been reached (and 0.9995
+    ``"100%"``); a hair below a whole percent (0.29 is 28.999... in floating point) is that
+    percent."""
+    return f"{math.floor(fraction * 100 + 1e-9):d}%"
+
+
+def percent(fraction: float) -> str:
+    """``fraction`` in percent as given, to four significant digits: 0.05 is ``"5%"``, 0.025
+    ``"2.5%"`` (not ``"2%"``) and a ``[stop] confidence = 0.999`` ``"99.9%"`` (not
+    ``"100%"``)."""
+    return f"{fraction * 100:.4g}%"
 
 
 def _check_samples(samples: object) -> None:
@@ -199,11 +222,11 @@ class StopRule:
         ``name``: the recommended gait's, as its confidence sentence names it (default
         ``gait <index>``)."""
         if self.max_trials is not None and trials >= self.max_trials:
-            return f"{trials} trials reached max_trials = {self.max_trials}"
+            return f"{plural(trials, 'trial')} reached max_trials = {self.max_trials}"
         if self.confidence is None or sure is None or sure.probability < self.confidence:
             return None
         gait = f"gait {sure.recommended}" if name is None else name
-        return f"{sure.sentence(gait)} (confidence = {self.confidence:.0%})"
+        return f"{sure.sentence(gait)} (confidence = {percent(self.confidence)})"
 
 
 __all__ = [

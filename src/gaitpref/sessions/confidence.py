@@ -20,7 +20,13 @@ from typing import Any
 import numpy as np
 
 from gaitpref.errors import NoSafeGaitError
-from gaitpref.loop.stopping import Confidence, StopRule, confidence, recommendation
+from gaitpref.loop.stopping import (
+    Confidence,
+    StopRule,
+    confidence,
+    preference_learned,
+    recommendation,
+)
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
 from gaitpref.storage import EventRecord
@@ -88,12 +94,15 @@ def stop_reason(
 ) -> str | None:
     """Why ``state`` should move to blind validation now (None: go on, or no rule); ``sure``
     gives the confidence of ``state`` when the caller keeps it (default: worked out here).
-    The gait is named as the confidence sentence names it (:meth:`SessionState.gait_name`)."""
+    The gait is named as the confidence sentence names it (:meth:`SessionState.gait_name`).
+    The confidence counts only once a preference is learned (:func:`preference_learned`):
+    before, the recommendation is the first gait for no reason, and no confidence is shown."""
     if not rule.active:
         return None
     trials = len(state.loop.executed)
     stated = None
-    if rule.confidence is not None and recommends(state):
+    learned = preference_learned(state.loop.posterior.mean)
+    if rule.confidence is not None and learned and recommends(state):
         stated = session_confidence(state, rule) if sure is None else sure()
     name = None if stated is None else state.gait_name(stated.recommended)
     return rule.reason(trials, stated, name)

@@ -153,6 +153,10 @@ class Answered:
     #: as given): one sentence each for the operator
     #: (:func:`~gaitpref.feedback.suggestion.clipped_note`)
     clipped: tuple[str, ...] = ()
+    #: the ``[stop]`` rule's reason when the check after this answer opened blind validation
+    #: (``"30 trials reached max_trials = 30"``, or the confidence sentence), so that the
+    #: operator is told why a round opens; None when it did not
+    stopped: str | None = None
 
 
 def check_storable(text: str, what: str) -> str:

@@ -424,8 +424,8 @@ class Session:
         singles = len(answer.singles) - len(loop.excluded_singles.get(query.loop_id, ()))
         seqs = tuple(r.seq for r in records)
         clipped = self._clipped_after(seqs)
-        warning = self._stop_check_after(query, seqs)
-        return Answered(query.id, query.trials, seqs, kept, singles, warning, clipped)
+        warning, stopped = self._stop_check_after(query, seqs)
+        return Answered(query.id, query.trials, seqs, kept, singles, warning, clipped, stopped)
 
     def _clipped_after(self, seqs: tuple[int, ...]) -> tuple[str, ...]:
         """What to tell the operator of the suggestions just logged at ``seqs`` that went past
@@ -447,15 +447,18 @@ class Session:
         except Exception:  # a report only: the answer is stored
             return ()
 
-    def _stop_check_after(self, query: SessionQuery, seqs: tuple[int, ...]) -> str | None:
+    def _stop_check_after(
+        self, query: SessionQuery, seqs: tuple[int, ...]
+    ) -> tuple[str | None, str | None]:
         """:meth:`_stop_if_sure` after the answer to ``query`` (logged at ``seqs``) is stored
         and booked: nothing it raises (a numerical error in the confidence, a failed write of
         the round, Ctrl-C while the confidence is sampled) may turn the stored answer into a
         reported failure, which a caller would answer again.  A failure is issued as a
-        :class:`StopCheckWarning` and returned (why); the rule is checked again after the next
-        answer (it runs after every answer until a round is opened)."""
+        :class:`StopCheckWarning` and returned (why, first); the rule is checked again after
+        the next answer (it runs after every answer until a round is opened).  Second: the
+        rule's reason when it opened blind validation (None: it did not)."""
         try:
-            self._stop_if_sure()
+            stopped = self._stop_if_sure()
         except (Exception, KeyboardInterrupt) as exc:
             why = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
             warning = (
@@ -464,8 +467,8 @@ class Session:
                 "after the next answer"
             )
             warnings.warn(warning, StopCheckWarning, stacklevel=6)  # Session.answer's caller
-            return warning
-        return None
+            return warning, None
+        return None, stopped
 
     def _check_no_open_round(self, query: SessionQuery) -> None:
         """Refuse an answer while a blind validation round is open (the query was pending when
@@ -717,8 +720,10 @@ class Session:
         )
 
     def stop_reason(self) -> str | None:
-        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule)."""
-        return self._locked(lambda: stop_reason(self._state, self.config.stop))
+        """Why the config's ``[stop]`` rule says to stop now (None: go on, or no rule); its
+        confidence is :meth:`confidence`'s, kept until the log moves on (the console's page asks
+        both: the samples were drawn twice)."""
+        return self._locked(lambda: stop_reason(self._state, self.config.stop, self.confidence))
 
     def stop_blocked(self) -> str | None:
         """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
@@ -746,17 +751,22 @@ class Session:
 
         return self._locked(run)
 
-    def _stop_if_sure(self) -> None:
+    def _stop_if_sure(self) -> str | None:
         """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
-        (one round; the operator may go on afterwards, the rule does not reopen it).  When no
-        round can be drawn, nothing is written and :meth:`stop_blocked` says why."""
+        (one round; the operator may go on afterwards, the rule does not reopen it) and return
+        the rule's reason (None: no round was opened).  When no round can be drawn, nothing is
+        written and :meth:`stop_blocked` says why."""
         st = self._state
         if st.rounds or st.pending is not None or st.validation_blocked() is not None:
-            return
-        if stop_reason(st, self.config.stop, self.confidence) is None:
-            return
-        with contextlib.suppress(ConflictError):  # another writer moved on: it decides
+            return None
+        reason = stop_reason(st, self.config.stop, self.confidence)
+        if reason is None:
+            return None
+        try:
             self._append([st.validation_event()])
+        except ConflictError:  # another writer moved on: it decides
+            return None
+        return reason
 
     # -- blind validation ----------------------------------------------------------------------
     def start_validation(self) -> ValidationPlan:

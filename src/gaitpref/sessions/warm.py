@@ -192,14 +192,15 @@ def resolve_prior(
         else:
             records = storage.list_sessions(item)
             if not records:
-                raise PriorFromError(f"prior_from: subject {item!r} has no sessions")
+                hint = _no_sessions_hint(storage, item)
+                raise PriorFromError(f"prior_from: subject {item!r} has no sessions{hint}")
         for record in records:
             differs = grid_difference(config_of(record).space, config.space)
             if differs:
                 raise PriorFromError(
                     f"prior_from: session {record.id} (subject {record.subject}) was run on "
                     f"another grid (config {record.config_name!r}: {differs}); a warm start "
-                    "needs the same"
+                    "needs the same" + _by_id_instead(item, records, config)
                 )
             found[record.id] = record
             if len(found) > MAX_PRIOR_SESSIONS:
@@ -209,6 +210,40 @@ def resolve_prior(
                     f"{MAX_PRIOR_SESSIONS}, each replayed whenever the new session is opened"
                 )
     return [found[k] for k in sorted(found)]
+
+
+def _no_sessions_hint(storage: Storage, code: str) -> str:
+    """A hint for a subject code that has no sessions: the session it names when it is digits
+    given as text (``"7"`` from a JSON body or a Python list), or the subjects whose code is it
+    in other letter case (codes are matched exactly: ``s01`` is not ``S01``); "" for none."""
+    if code.isascii() and code.isdigit():  # digits given as text: a session id meant?
+        try:
+            storage.get_session(int(code))
+        except SessionNotFoundError:
+            return ""
+        return f" (a text is a subject code: for session {int(code)}, give the number)"
+    like = [s.code for s in storage.list_subjects() if s.code.casefold() == code.casefold()]
+    shown = ", ".join(map(repr, like))
+    return "" if not like else f" (codes match letter case: did you mean {shown}?)"
+
+
+def _by_id_instead(
+    item: int | str, records: Sequence[SessionRecord], config: ExperimentConfig
+) -> str:
+    """For a subject code whose sessions were run on several grids: which of them a warm start
+    could read, named by id (a subject seen in two protocols could not be named at all)."""
+    if isinstance(item, int):
+        return ""
+    same = [r.id for r in records if not grid_difference(config_of(r).space, config.space)][
+        :MAX_PRIOR_SESSIONS
+    ]
+    if not same:
+        return f" (none of subject {item}'s sessions was run on this grid)"
+    ids = ", ".join(map(str, same))
+    return (
+        f" (subject {item} names every session of the subject; those run on this grid can be "
+        f"named by session id instead: {ids})"
+    )
 
 
 def recorded_prior(record: SessionRecord) -> list[PriorSession]:
