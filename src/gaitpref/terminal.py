@@ -30,8 +30,10 @@ clipped there (``note: ...``, :attr:`Answered.clipped`) and, when the ``[stop]``
 be checked after the stored answer, why (``warning: ...``, :attr:`Answered.stop_warning`).
 A session another writer pauses or finishes while the runner waits at a prompt stops the
 runner, said so, nothing more written; an undo whose 'last answer' is no longer the last one
-is refused; a write refused as busy (another writer holds the session) is asked again (the
-answer, an unsafe flag) or pauses the session (the next trial, an undo).  Lines are at most
+is refused; a write refused as busy (another writer holds the session) or failed by the
+database (a SQLite file locked by another program past the busy timeout, a disk I/O error, a
+lost connection: nothing written) is asked again (the answer, an unsafe flag) or pauses the
+session (the next trial, an undo).  Lines are at most
 :data:`MAX_LINE` characters, and what is echoed back is printed without markup and cut
 (:func:`clip`).
 Gaits are named by their gait library id, or ``G<action>`` (as in the console) without a
@@ -64,10 +66,18 @@ from gaitpref.sessions.records import (
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import LABELS, ValidationPlan, check_ranking
 from gaitpref.space import Feature
-from gaitpref.storage import SessionBusyError
+from gaitpref.storage import SessionBusyError, StorageConnectError, StorageFailureError
 from gaitpref.wording import plural
 
 Reader = Callable[[str], str]
+
+#: A write that raised one of these wrote nothing: another writer held the session past the
+#: bounded wait (:class:`SessionBusyError`), or the database failed under it (a SQLite file
+#: locked by another program past the busy timeout, a disk I/O error, a file removed or
+#: replaced, a lost connection).  The runner handles them alike: the answer, an unsafe flag or
+#: a ranking is asked again, the next trial or an undo pauses the session, and a pause that
+#: cannot be written leaves it active, each said with the error.
+_UNWRITTEN = (SessionBusyError, StorageFailureError, StorageConnectError)
 _MOVES = ("+big", "+small", "-small", "-big")
 
 #: the longest line of input taken (characters): a longer one is refused and asked again
@@ -253,7 +263,7 @@ class Terminal:
     def _check_active(self) -> None:
         """Raise :class:`_ElsewhereError` when another writer paused or finished the session
         (a busy session is left to the write that follows, which says so)."""
-        with contextlib.suppress(SessionBusyError):
+        with contextlib.suppress(*_UNWRITTEN):
             self.session.sync()
         if self.session.status != "active":
             raise _ElsewhereError
@@ -339,7 +349,7 @@ class Terminal:
                         self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                         self._stopped_elsewhere()
                         continue
-                    except SessionBusyError as exc:  # the round could not be opened: pause
+                    except _UNWRITTEN as exc:  # the round could not be opened: pause
                         self.console.print(
                             f"The validation round could not be opened: {clip(exc, MAX_MESSAGE)}",
                             markup=False,
@@ -362,7 +372,7 @@ class Terminal:
                         f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False
                     )
                     raise _QuitError from None
-                except SessionBusyError as exc:  # nothing written: pause, say so
+                except _UNWRITTEN as exc:  # nothing written: pause, say so
                     self.console.print(
                         f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
                         markup=False,
@@ -438,7 +448,7 @@ class Terminal:
                 raise
             self._say_elsewhere()
             return
-        except SessionBusyError as exc:
+        except _UNWRITTEN as exc:
             line = (
                 f"The session could not be paused ({clip(exc, MAX_MESSAGE)}); it is left active: "
                 f"continue it with {self.resume}"
@@ -472,7 +482,7 @@ class Terminal:
             self.console.print(f"  cannot undo: {clip(exc, MAX_MESSAGE)}", markup=False)
             self._stopped_elsewhere()
             return
-        except SessionBusyError as exc:  # nothing written: pause, say so
+        except _UNWRITTEN as exc:  # nothing written: pause, say so
             self.console.print(f"  not undone: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except NoSafeGaitError as exc:
@@ -521,7 +531,7 @@ class Terminal:
                     with warnings.catch_warnings():  # said by _written, not as a Python warning
                         warnings.simplefilter("ignore", StopCheckWarning)
                         answered = s.answer(q.id, [*comparisons, *ratings], suggestions)
-                except SessionBusyError as exc:
+                except _UNWRITTEN as exc:
                     self.console.print(
                         f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
                     )
@@ -559,7 +569,7 @@ class Terminal:
             self.console.print(f"  note: {clip(note, MAX_MESSAGE)}", markup=False)
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
-        with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
+        with contextlib.suppress(*_UNWRITTEN):  # only a report: the answer is written
             mean = s.posterior().mean
             if s.config.stop.active or mean.max() > mean.min():  # how sure, once it learnt
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
@@ -598,7 +608,7 @@ class Terminal:
         while True:
             try:
                 return s.flag_unsafe(trial, reason)
-            except SessionBusyError as exc:
+            except _UNWRITTEN as exc:
                 self.console.print(
                     f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",
                     markup=False,
@@ -817,7 +827,7 @@ class Terminal:
             try:  # refused if the round was drawn again since its gaits were shown
                 result = s.answer_validation(plan.round, given, shown=shown)
                 break
-            except SessionBusyError as exc:  # nothing written: the ranking is asked again
+            except _UNWRITTEN as exc:  # nothing written: the ranking is asked again
                 if ranking is not None:
                     raise
                 self.console.print(

@@ -7,6 +7,7 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 from __future__ import annotations
 
 import re
+import sqlite3
 from collections.abc import Callable
 from pathlib import Path
 
@@ -639,3 +640,79 @@ def test_the_shipped_rated_config_runs_from_the_cli_with_a_rating(tmp_path: Path
         rated = [e.payload for e in session.events() if e.kind == "rating_given"]
         assert [(r["trial"], r["category"]) for r in rated] == [(1, "very bad")]
         assert len(session.trials()) == 2 and session.config.name == "exo-2d-rated"
+
+
+def _locked_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> tuple[Session, sqlite3.Connection]:
+    """A SQLite session with trial 1 answered, and another program's connection to its file
+    (it takes the write lock with ``BEGIN EXCLUSIVE``); the busy timeout cut to 0.2 s."""
+    import gaitpref.storage.sql as sql
+    from gaitpref.storage import SQLStorage
+
+    monkeypatch.setattr(sql, "BUSY_TIMEOUT_S", 0.2)
+    session = Session.create(SQLStorage(f"sqlite:///{tmp_path / 'lab.db'}"), CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    return session, sqlite3.connect(tmp_path / "lab.db", isolation_level=None)
+
+
+def test_an_answer_the_locked_database_refuses_is_confirmed_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Another program holding the SQLite file's write lock past the busy timeout: the answer
+    the operator confirmed is said not written and asked again (it was a 'storage error'
+    ending the runner, the answer lost with no word of it); confirmed once the lock is gone,
+    it is written, and the session replays to the state of one that never met the lock."""
+    session, other = _locked_session(tmp_path, monkeypatch)
+
+    def lock() -> str:
+        other.execute("BEGIN EXCLUSIVE")
+        return "y"
+
+    def unlock() -> str:
+        other.execute("ROLLBACK")
+        return "y"
+
+    terminal, console = _terminal(session, "1", "0", lock, unlock)
+    terminal.run()
+    text = console.export_text()
+    assert "not written: sqlite:///" in text and "database is locked; confirm it again" in text
+    assert "saved: trial 2" in text and "Paused.  Resume with:" in text
+    other.close()
+    reopened = Session.open(session.storage, session.id)
+    plain = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    q = plain.next_query()
+    plain.answer(q.id, [], [])
+    _terminal(plain, "1", "0", "y")[0].run()
+    assert [(t.number, t.action) for t in reopened.trials()] == [
+        (t.number, t.action) for t in plain.trials()
+    ]
+    assert reopened.comparisons() == plain.comparisons()
+    assert reopened.status == plain.status == "paused"
+    assert reopened.pending == plain.pending
+    assert (reopened.posterior().mean == plain.posterior().mean).all()
+
+
+def test_quitting_while_the_database_is_locked_leaves_the_session_active_saying_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Quitting while the lock is still held: the answer is said not written, the pause that
+    cannot be written either is said so (the session left active) with the command to go on,
+    and that command asks the same trial again."""
+    session, other = _locked_session(tmp_path, monkeypatch)
+
+    def lock() -> str:
+        other.execute("BEGIN EXCLUSIVE")
+        return "y"
+
+    terminal, console = _terminal(session, "1", "0", lock, "q")
+    terminal.run()
+    text = console.export_text()
+    assert "not written: trial 2 preferred to trial 1 (trial 2 asked again" in text
+    assert "could not be paused (sqlite:///" in text and "it is left active: continue" in text
+    other.execute("ROLLBACK")
+    other.close()
+    reopened = Session.open(session.storage, session.id)
+    assert reopened.status == "active" and [t.number for t in reopened.trials()] == [1]
+    assert reopened.next_query().trials == (2,)
