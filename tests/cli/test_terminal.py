@@ -677,7 +677,8 @@ def test_an_answer_the_locked_database_refuses_is_confirmed_again(
     terminal, console = _terminal(session, "1", "0", lock, unlock)
     terminal.run()
     text = console.export_text()
-    assert "not written: sqlite:///" in text and "database is locked; confirm it again" in text
+    assert "not written: sqlite:///" in text
+    assert "database is locked; nothing was written; confirm it again" in text
     assert "saved: trial 2" in text and "Paused.  Resume with:" in text
     other.close()
     reopened = Session.open(session.storage, session.id)

@@ -310,7 +310,7 @@ def test_a_database_another_program_is_writing_opens_to_read(
         other.execute("INSERT INTO subjects VALUES ('S99', '2026-01-01 00:00:00')")
         reader = SQLStorage(_sqlite(tmp_path), create=False)
         assert [r.id for r in reader.list_sessions()] == [sid]
-        with pytest.raises(StorageError, match="database is locked"):
+        with pytest.raises(StorageError, match=r"database is locked; nothing was written$"):
             reader.append(sid, 0, [NewEvent("note", {"text": "waits its turn"})])
         other.execute("ROLLBACK")
     reader.append(sid, 0, [NewEvent("note", {"text": "after"})])

@@ -323,8 +323,10 @@ class SQLStorage(CheckedCreation):
     def _write(self) -> Iterator[Connection]:
         """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving, and rolled
         back if the SQLite file was deleted or replaced since it was opened: the open connection
-        would commit into the unlinked file, and the write would be lost."""
-        with self._errors(), self.engine.connect() as conn:
+        would commit into the unlinked file, and the write would be lost.  A database error
+        in it (locked past the busy timeout, a disk I/O error) rolls it back: the
+        :class:`StorageFailureError` says nothing was written."""
+        with self._errors(writing=True), self.engine.connect() as conn:
             conn.execution_options(gaitpref_write=True)
             with conn.begin():
                 yield conn
@@ -353,7 +355,7 @@ class SQLStorage(CheckedCreation):
             yield conn
 
     @contextmanager
-    def _errors(self) -> Iterator[None]:
+    def _errors(self, writing: bool = False) -> Iterator[None]:
         try:
             yield
         except IntegrityError:
@@ -368,7 +370,11 @@ class SQLStorage(CheckedCreation):
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
             said = f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}"
             if isinstance(exc, DatabaseError):  # OperationalError (disk I/O, locked, ...) too
-                raise StorageFailureError(said) from None
+                # a write's transaction was rolled back: say so, so that the operator who
+                # confirmed an answer knows to give it again (a lost connection is not said:
+                # whether a commit it cut short was applied is not known here)
+                unwritten = "; nothing was written" if writing else ""
+                raise StorageFailureError(said + unwritten) from None
             raise StorageError(said) from None
 
 
