@@ -508,6 +508,7 @@ class Terminal:
             self.console.print(f"Trial {t}: run {self._gait(a)}", markup=False)
         for t, a in zip(q.buffer_trials, q.buffer, strict=True):
             self.console.print(f"  compare with trial {t}: {self._gait(a)}", markup=False)
+        lost = False  # a write cut short by a lost connection: whether it was stored is unknown
         while True:
             comparisons, said = self._comparisons(q)
             ratings, rated = self._ratings(q)
@@ -532,11 +533,27 @@ class Terminal:
                         warnings.simplefilter("ignore", StopCheckWarning)
                         answered = s.answer(q.id, [*comparisons, *ratings], suggestions)
                 except _UNWRITTEN as exc:
-                    self.console.print(
-                        f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
-                    )
+                    if isinstance(exc, StorageConnectError):  # a commit it cut short may stand
+                        lost = True
+                        self.console.print(
+                            f"  perhaps not written: {clip(exc, MAX_MESSAGE)}; confirm it again "
+                            "(an answer the database did store is found, not written twice)",
+                            markup=False,
+                        )
+                    else:
+                        self.console.print(
+                            f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again",
+                            markup=False,
+                        )
                     continue
                 except (QueryError, FeedbackError, SessionStateError) as exc:
+                    if lost and any(t.query == q.id for t in s.trials()):
+                        self.console.print(
+                            "  the answer confirmed before the connection was lost was stored",
+                            markup=False,
+                        )
+                        self._written(q, reason)
+                        return
                     # a round another writer opened meanwhile: the loop asks its ranking next
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()

@@ -10,6 +10,7 @@ import re
 import sqlite3
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rich.console import Console
@@ -717,3 +718,34 @@ def test_quitting_while_the_database_is_locked_leaves_the_session_active_saying_
     reopened = Session.open(session.storage, session.id)
     assert reopened.status == "active" and [t.number for t in reopened.trials()] == [1]
     assert reopened.next_query().trials == (2,)
+
+
+def test_an_answer_whose_connection_was_lost_at_commit_is_found_stored_not_written_twice() -> None:
+    """A lost connection (PostgreSQL restarted) may cut a commit short after it applied: the
+    runner says the answer is perhaps not written and asks it again; confirmed again, it finds
+    the answer stored and says so (it said 'not written: query 4 was already answered' of the
+    operator's own stored answer), writing it once."""
+    from gaitpref.storage import StorageConnectError
+
+    storage = MemoryStorage()
+    session = Session.create(storage, CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    append = storage.append
+    lost: list[int] = []
+
+    def cut_short(*args: Any, **kwargs: Any) -> Any:
+        written = append(*args, **kwargs)  # committed, then the connection is gone
+        if not lost and any(e.kind == "comparison_answered" for e in args[2]):
+            lost.append(1)
+            raise StorageConnectError("cannot connect to postgresql://lab: server closed")
+        return written
+
+    storage.append = cut_short  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "1", "0", "y", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "perhaps not written: cannot connect to postgresql://lab: server closed; " in text
+    assert "the answer confirmed before the connection was lost was stored" in text
+    assert "saved: trial 2" in text and "already answered" not in text
+    assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
