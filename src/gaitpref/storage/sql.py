@@ -139,7 +139,7 @@ class SQLStorage(CheckedCreation):
             path = Path(parsed.database or "").resolve()
             self._file = path
             self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
-        self.engine = _engine(parsed)
+        self.engine = _engine(parsed, create)
         self._identity: tuple[int, int] | None = None  # the file's (device, inode) once open
         try:
             # a read transaction unless the schema is to be made: opening a database to read it
@@ -676,7 +676,9 @@ def _plain_engine(url: URL, **options: Any) -> Engine:
         ) from None
 
 
-def _engine(url: URL) -> Engine:
+def _engine(url: URL, create: bool = True) -> Engine:
+    """The engine for ``url``; ``create=False``: an empty SQLite file is left as it is (a
+    reader that finds no schema refuses it; setting WAL would have written its first page)."""
     serializer = functools.partial(json.dumps, allow_nan=False)
     if url.get_backend_name() == "postgresql":
         return _plain_engine(
@@ -700,14 +702,15 @@ def _engine(url: URL) -> Engine:
         cursor.execute("PRAGMA foreign_keys = ON")
         cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         if not memory:
-            # WAL only in a new file or a gaitpref database of a revision this gaitpref knows: a
-            # connection about to find another program's file is not a gaitpref database, or
-            # that a newer gaitpref wrote it, must leave its journal alone
+            # WAL only in a new file (when making one) or a gaitpref database of a revision
+            # this gaitpref knows: a connection about to find another program's file is not a
+            # gaitpref database, or that a newer gaitpref wrote it, must leave its journal
+            # alone, and a reader of an empty file its bytes
             tables = {
                 row[0]
                 for row in cursor.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
             }
-            if not tables or (
+            if (not tables and create) or (
                 "alembic_version" in tables
                 and {r[0] for r in cursor.execute("SELECT version_num FROM alembic_version")}
                 <= set(migrate.known_revisions())
