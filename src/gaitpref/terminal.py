@@ -461,6 +461,15 @@ class Terminal:
             else:
                 self.console.print(line, markup=False)
 
+    def _undone(self, query: int) -> bool | None:
+        """Whether the answer to ``query`` is no longer in force, as the log says now (an undo
+        whose withdrawn query's replacement failed to be written is written itself); None when
+        the log cannot be read."""
+        try:
+            return all(t.query != query for t in self.session.trials())
+        except _UNWRITTEN:
+            return None
+
     def _undo(self) -> None:
         answered = self.session.trials()
         last = f" (trial {answered[-1].number})" if answered else ""
@@ -482,8 +491,17 @@ class Terminal:
             self.console.print(f"  cannot undo: {clip(exc, MAX_MESSAGE)}", markup=False)
             self._stopped_elsewhere()
             return
-        except _UNWRITTEN as exc:  # nothing written: pause, say so
-            self.console.print(f"  not undone: {clip(exc, MAX_MESSAGE)}", markup=False)
+        except _UNWRITTEN as exc:  # pause, saying whether the undo was written
+            undone = self._undone(answered[-1].query)
+            if undone:  # the query in its place (its own was withdrawn) could not be written
+                self.console.print("Undone.", markup=False)
+                self.console.print(
+                    f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+            else:
+                said = "not undone" if undone is False else "perhaps not undone"
+                self.console.print(f"  {said}: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except NoSafeGaitError as exc:
             self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)

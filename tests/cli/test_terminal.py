@@ -749,3 +749,39 @@ def test_an_answer_whose_connection_was_lost_at_commit_is_found_stored_not_writt
     assert "the answer confirmed before the connection was lost was stored" in text
     assert "saved: trial 2" in text and "already answered" not in text
     assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
+
+
+def test_an_undo_written_whose_replacement_query_the_database_refuses_says_undone() -> None:
+    """An undo whose query proposes a gait flagged unsafe since is withdrawn and a new query
+    written in its place: when the database fails that second write, the undo stands, and the
+    runner says 'Undone.' and why no trial follows, not 'not undone' (nothing was undone, it
+    said, of an answer the log no longer holds)."""
+    from gaitpref.storage import StorageFailureError
+
+    storage = MemoryStorage()
+    session = Session.create(storage, CONFIG, "S01", seed=8)  # trial 3 walks trial 1's gait
+    for _ in range(3):
+        q = session.next_query()
+        session.answer(q.id, [], [])
+    assert session.trials()[2].action == session.trials()[0].action
+    session.flag_unsafe(1, "knee gave way")  # trial 3's query now proposes a flagged gait
+    append = storage.append
+    undone: list[int] = []
+
+    def fails_after_the_undo(*args: Any, **kwargs: Any) -> Any:
+        if undone and len(undone) < 2 and any(e.kind == "query_issued" for e in args[2]):
+            undone.append(1)  # once: the pause after it is written
+            raise StorageFailureError("sqlite:///lab.db: disk I/O error; nothing was written")
+        written = append(*args, **kwargs)
+        if any(e.kind == "undo" for e in args[2]):
+            undone.append(1)
+        return written
+
+    storage.append = fails_after_the_undo  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    text = console.export_text()
+    assert len(undone) == 2, text  # the undo was written, its replacement query refused
+    assert "Undone.\nThe next trial could not be proposed: sqlite:///lab.db: disk I/O" in text
+    assert "not undone" not in text and "Paused.  Resume with:" in text
+    assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
