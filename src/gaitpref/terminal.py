@@ -461,6 +461,14 @@ class Terminal:
             else:
                 self.console.print(line, markup=False)
 
+    def _flagged(self, trial: int) -> bool:
+        """Whether ``trial`` is flagged unsafe, as the log says now (False when it cannot be
+        read)."""
+        try:
+            return trial in self.session.unsafe_flags()
+        except _UNWRITTEN:
+            return False
+
     def _undone(self, query: int) -> bool | None:
         """Whether the answer to ``query`` is no longer in force, as the log says now (an undo
         whose withdrawn query's replacement failed to be written is written itself); None when
@@ -644,6 +652,13 @@ class Terminal:
             try:
                 return s.flag_unsafe(trial, reason)
             except _UNWRITTEN as exc:
+                if self._flagged(trial):  # written; the round it withdrew was not drawn again
+                    self.console.print(
+                        f"  trial {trial} is flagged unsafe, but the blind validation round it "
+                        f"withdrew could not be drawn again: {clip(exc, MAX_MESSAGE)}",
+                        markup=False,
+                    )
+                    return False
                 self.console.print(
                     f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",
                     markup=False,

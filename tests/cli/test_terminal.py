@@ -785,3 +785,45 @@ def test_an_undo_written_whose_replacement_query_the_database_refuses_says_undon
     assert "Undone.\nThe next trial could not be proposed: sqlite:///lab.db: disk I/O" in text
     assert "not undone" not in text and "Paused.  Resume with:" in text
     assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
+
+
+def test_a_flag_written_whose_round_the_database_refuses_to_draw_again_says_flagged(
+    tmp_path: Path,
+) -> None:
+    """The answer that opens a blind validation round ([stop] max_trials) written with an
+    unsafe flag on a gait the round shows: the flag withdraws the round and draws it again.
+    When the database fails that second write the flag stands, and the runner says so; it
+    said 'trial 2 is not flagged unsafe yet', then, asked again, 'was not flagged unsafe:
+    trial 2 is already flagged unsafe; flag it later with ...'."""
+    from gaitpref.storage import StorageFailureError
+
+    config = tmp_path / "stop.toml"
+    config.write_text(load_config(CONFIG).text + "\n[stop]\nmax_trials = 2\n", encoding="utf-8")
+    storage = MemoryStorage()
+    session = Session.create(storage, config, "S01", seed=0)  # the round shows trial 2's gait
+    append = storage.append
+    flagged: list[int] = []
+
+    def fails_after_the_flag(*args: Any, **kwargs: Any) -> Any:
+        kinds = {e.kind for e in args[2]}
+        if flagged and len(flagged) < 2 and "validation_started" in kinds:
+            flagged.append(1)  # once
+            raise StorageFailureError("sqlite:///lab.db: disk I/O error; nothing was written")
+        if "trial_flagged_unsafe" in kinds:
+            flagged.append(1)
+        return append(*args, **kwargs)
+
+    storage.append = fails_after_the_flag  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "0", "y", "1", "0", "x", "knee gave way")
+    terminal.run()
+    text = console.export_text()
+    assert len(flagged) == 2, text  # the flag was written, the round's redraw refused
+    assert (
+        "trial 2 is flagged unsafe, but the blind validation round it withdrew could not be "
+        "drawn again: sqlite:///lab.db: disk I/O error" in text
+    )
+    assert "flagged unsafe: trial 2 (knee gave way)" in text
+    assert "not flagged" not in text and "Paused.  Resume with:" in text
+    reopened = Session.open(storage, session.id)
+    assert reopened.unsafe_flags() == {2: (session.trials()[1].action, "knee gave way")}
+    assert reopened.validation_plan is None
