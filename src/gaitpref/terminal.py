@@ -653,11 +653,7 @@ class Terminal:
                 return s.flag_unsafe(trial, reason)
             except _UNWRITTEN as exc:
                 if self._flagged(trial):  # written; the round it withdrew was not drawn again
-                    self.console.print(
-                        f"  trial {trial} is flagged unsafe, but the blind validation round it "
-                        f"withdrew could not be drawn again: {clip(exc, MAX_MESSAGE)}",
-                        markup=False,
-                    )
+                    self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                     return False
                 self.console.print(
                     f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",

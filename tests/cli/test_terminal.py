@@ -782,7 +782,10 @@ def test_an_undo_written_whose_replacement_query_the_database_refuses_says_undon
     terminal.run()
     text = console.export_text()
     assert len(undone) == 2, text  # the undo was written, its replacement query refused
-    assert "Undone.\nThe next trial could not be proposed: sqlite:///lab.db: disk I/O" in text
+    assert (
+        "Undone.\nThe next trial could not be proposed: the undo is written; the query drawn in "
+        "place of the one it withdrew was not: sqlite:///lab.db: disk I/O" in text
+    )
     assert "not undone" not in text and "Paused.  Resume with:" in text
     assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
 
@@ -819,7 +822,7 @@ def test_a_flag_written_whose_round_the_database_refuses_to_draw_again_says_flag
     text = console.export_text()
     assert len(flagged) == 2, text  # the flag was written, the round's redraw refused
     assert (
-        "trial 2 is flagged unsafe, but the blind validation round it withdrew could not be "
+        "trial 2 is flagged unsafe (written); the blind validation round it withdrew was not "
         "drawn again: sqlite:///lab.db: disk I/O error" in text
     )
     assert "flagged unsafe: trial 2 (knee gave way)" in text
