@@ -31,8 +31,10 @@ clipped there (``note: ...``, :attr:`Answered.clipped`) and, when the ``[stop]``
 be checked after the stored answer, why (``warning: ...``, :attr:`Answered.stop_warning`).
 A session another writer pauses or finishes while the runner waits at a prompt stops the
 runner, said so, nothing more written; an undo whose 'last answer' is no longer the last one
-is refused; a write refused as busy (another writer holds the session) is asked again (the
-answer, an unsafe flag) or pauses the session (the next trial, an undo).  Lines are at most
+is refused; a write refused as busy (another writer holds the session) or failed by the
+database (a SQLite file locked by another program past the busy timeout, a disk I/O error, a
+lost connection: nothing written) is asked again (the answer, an unsafe flag) or pauses the
+session (the next trial, an undo).  Lines are at most
 :data:`MAX_LINE` characters, and what is echoed back is printed without markup and cut
 (:func:`clip`).
 Gaits are named by their gait library id, or ``G<action>`` (as in the console) without a
@@ -66,10 +68,18 @@ from gaitpref.sessions.records import (
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.validation import LABELS, ValidationPlan, check_ranking
 from gaitpref.space import Feature
-from gaitpref.storage import SessionBusyError
+from gaitpref.storage import SessionBusyError, StorageConnectError, StorageFailureError
 from gaitpref.wording import plural
 
 Reader = Callable[[str], str]
+
+#: A write that raised one of these wrote nothing: another writer held the session past the
+#: bounded wait (:class:`SessionBusyError`), or the database failed under it (a SQLite file
+#: locked by another program past the busy timeout, a disk I/O error, a file removed or
+#: replaced, a lost connection).  The runner handles them alike: the answer, an unsafe flag or
+#: a ranking is asked again, the next trial or an undo pauses the session, and a pause that
+#: cannot be written leaves it active, each said with the error.
+_UNWRITTEN = (SessionBusyError, StorageFailureError, StorageConnectError)
 _MOVES = ("+big", "+small", "-small", "-big")
 
 #: the longest line of input taken (characters): a longer one is refused and asked again
@@ -255,7 +265,7 @@ class Terminal:
     def _check_active(self) -> None:
         """Raise :class:`_ElsewhereError` when another writer paused or finished the session
         (a busy session is left to the write that follows, which says so)."""
-        with contextlib.suppress(SessionBusyError):
+        with contextlib.suppress(*_UNWRITTEN):
             self.session.sync()
         if self.session.status != "active":
             raise _ElsewhereError
@@ -347,7 +357,7 @@ class Terminal:
                         self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                         self._stopped_elsewhere()
                         continue
-                    except SessionBusyError as exc:  # the round could not be opened: pause
+                    except _UNWRITTEN as exc:  # the round could not be opened: pause
                         self.console.print(
                             f"The validation round could not be opened: {clip(exc, MAX_MESSAGE)}",
                             markup=False,
@@ -370,7 +380,7 @@ class Terminal:
                         f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False
                     )
                     raise _QuitError from None
-                except SessionBusyError as exc:  # nothing written: pause, say so
+                except _UNWRITTEN as exc:  # nothing written: pause, say so
                     self.console.print(
                         f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
                         markup=False,
@@ -446,7 +456,7 @@ class Terminal:
                 raise
             self._say_elsewhere()
             return
-        except SessionBusyError as exc:
+        except _UNWRITTEN as exc:
             line = (
                 f"The session could not be paused ({clip(exc, MAX_MESSAGE)}); it is left active: "
                 f"continue it with {self.resume}"
@@ -458,6 +468,23 @@ class Terminal:
                 print(f"output closed; {line}", file=sys.stderr)
             else:
                 self.console.print(line, markup=False)
+
+    def _flagged(self, trial: int) -> bool:
+        """Whether ``trial`` is flagged unsafe, as the log says now (False when it cannot be
+        read)."""
+        try:
+            return trial in self.session.unsafe_flags()
+        except _UNWRITTEN:
+            return False
+
+    def _undone(self, query: int) -> bool | None:
+        """Whether the answer to ``query`` is no longer in force, as the log says now (an undo
+        whose withdrawn query's replacement failed to be written is written itself); None when
+        the log cannot be read."""
+        try:
+            return all(t.query != query for t in self.session.trials())
+        except _UNWRITTEN:
+            return None
 
     def _undo(self) -> None:
         answered = self.session.trials()
@@ -480,8 +507,17 @@ class Terminal:
             self.console.print(f"  cannot undo: {clip(exc, MAX_MESSAGE)}", markup=False)
             self._stopped_elsewhere()
             return
-        except SessionBusyError as exc:  # nothing written: pause, say so
-            self.console.print(f"  not undone: {clip(exc, MAX_MESSAGE)}", markup=False)
+        except _UNWRITTEN as exc:  # pause, saying whether the undo was written
+            undone = self._undone(answered[-1].query)
+            if undone:  # the query in its place (its own was withdrawn) could not be written
+                self.console.print("Undone.", markup=False)
+                self.console.print(
+                    f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+            else:
+                said = "not undone" if undone is False else "perhaps not undone"
+                self.console.print(f"  {said}: {clip(exc, MAX_MESSAGE)}", markup=False)
             raise _QuitError from None
         except NoSafeGaitError as exc:
             self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)
@@ -506,6 +542,7 @@ class Terminal:
             self.console.print(f"Trial {t}: run {self._gait(a)}", markup=False)
         for t, a in zip(q.buffer_trials, q.buffer, strict=True):
             self.console.print(f"  compare with trial {t}: {self._gait(a)}", markup=False)
+        lost = False  # a write cut short by a lost connection: whether it was stored is unknown
         while True:
             comparisons, said = self._comparisons(q)
             ratings, rated = self._ratings(q)
@@ -529,12 +566,28 @@ class Terminal:
                     with warnings.catch_warnings():  # said by _written, not as a Python warning
                         warnings.simplefilter("ignore", StopCheckWarning)
                         answered = s.answer(q.id, [*comparisons, *ratings], suggestions)
-                except SessionBusyError as exc:
-                    self.console.print(
-                        f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again", markup=False
-                    )
+                except _UNWRITTEN as exc:
+                    if isinstance(exc, StorageConnectError):  # a commit it cut short may stand
+                        lost = True
+                        self.console.print(
+                            f"  perhaps not written: {clip(exc, MAX_MESSAGE)}; confirm it again "
+                            "(an answer the database did store is found, not written twice)",
+                            markup=False,
+                        )
+                    else:
+                        self.console.print(
+                            f"  not written: {clip(exc, MAX_MESSAGE)}; confirm it again",
+                            markup=False,
+                        )
                     continue
                 except (QueryError, FeedbackError, SessionStateError) as exc:
+                    if lost and any(t.query == q.id for t in s.trials()):
+                        self.console.print(
+                            "  the answer confirmed before the connection was lost was stored",
+                            markup=False,
+                        )
+                        self._written(q, reason)
+                        return
                     # a round another writer opened meanwhile: the loop asks its ranking next
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
@@ -570,7 +623,7 @@ class Terminal:
             self.console.print(f"  note: {clip(note, MAX_MESSAGE)}", markup=False)
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
-        with contextlib.suppress(SessionBusyError):  # only a report: the answer is written
+        with contextlib.suppress(*_UNWRITTEN):  # only a report: the answer is written
             # how sure, once it learnt (as the console and session show: before that the
             # recommendation is the first gait for no reason), with or without a [stop] rule
             if preference_learned(s.posterior().mean):
@@ -616,7 +669,10 @@ class Terminal:
         while True:
             try:
                 return s.flag_unsafe(trial, reason)
-            except SessionBusyError as exc:
+            except _UNWRITTEN as exc:
+                if self._flagged(trial):  # written; the round it withdrew was not drawn again
+                    self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
+                    return False
                 self.console.print(
                     f"  trial {trial} is not flagged unsafe yet: {clip(exc, MAX_MESSAGE)}; {later}",
                     markup=False,
@@ -835,7 +891,7 @@ class Terminal:
             try:  # refused if the round was drawn again since its gaits were shown
                 result = s.answer_validation(plan.round, given, shown=shown)
                 break
-            except SessionBusyError as exc:  # nothing written: the ranking is asked again
+            except _UNWRITTEN as exc:  # nothing written: the ranking is asked again
                 if ranking is not None:
                     raise
                 self.console.print(

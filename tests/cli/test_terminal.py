@@ -7,8 +7,10 @@ The pseudo-terminal tests (keys, Ctrl-C, a closed terminal) are in
 from __future__ import annotations
 
 import re
+import sqlite3
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rich.console import Console
@@ -639,3 +641,192 @@ def test_the_shipped_rated_config_runs_from_the_cli_with_a_rating(tmp_path: Path
         rated = [e.payload for e in session.events() if e.kind == "rating_given"]
         assert [(r["trial"], r["category"]) for r in rated] == [(1, "very bad")]
         assert len(session.trials()) == 2 and session.config.name == "exo-2d-rated"
+
+
+def _locked_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> tuple[Session, sqlite3.Connection]:
+    """A SQLite session with trial 1 answered, and another program's connection to its file
+    (it takes the write lock with ``BEGIN EXCLUSIVE``); the busy timeout cut to 0.2 s."""
+    import gaitpref.storage.sql as sql
+    from gaitpref.storage import SQLStorage
+
+    monkeypatch.setattr(sql, "BUSY_TIMEOUT_S", 0.2)
+    session = Session.create(SQLStorage(f"sqlite:///{tmp_path / 'lab.db'}"), CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    return session, sqlite3.connect(tmp_path / "lab.db", isolation_level=None)
+
+
+def test_an_answer_the_locked_database_refuses_is_confirmed_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Another program holding the SQLite file's write lock past the busy timeout: the answer
+    the operator confirmed is said not written and asked again (it was a 'storage error'
+    ending the runner, the answer lost with no word of it); confirmed once the lock is gone,
+    it is written, and the session replays to the state of one that never met the lock."""
+    session, other = _locked_session(tmp_path, monkeypatch)
+
+    def lock() -> str:
+        other.execute("BEGIN EXCLUSIVE")
+        return "y"
+
+    def unlock() -> str:
+        other.execute("ROLLBACK")
+        return "y"
+
+    terminal, console = _terminal(session, "1", "0", lock, unlock)
+    terminal.run()
+    text = console.export_text()
+    assert "not written: sqlite:///" in text
+    assert "database is locked; nothing was written; confirm it again" in text
+    assert "saved: trial 2" in text and "Paused.  Resume with:" in text
+    other.close()
+    reopened = Session.open(session.storage, session.id)
+    plain = Session.create(MemoryStorage(), CONFIG, "S01", seed=1)
+    q = plain.next_query()
+    plain.answer(q.id, [], [])
+    _terminal(plain, "1", "0", "y")[0].run()
+    assert [(t.number, t.action) for t in reopened.trials()] == [
+        (t.number, t.action) for t in plain.trials()
+    ]
+    assert reopened.comparisons() == plain.comparisons()
+    assert reopened.status == plain.status == "paused"
+    assert reopened.pending == plain.pending
+    assert (reopened.posterior().mean == plain.posterior().mean).all()
+
+
+def test_quitting_while_the_database_is_locked_leaves_the_session_active_saying_so(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Quitting while the lock is still held: the answer is said not written, the pause that
+    cannot be written either is said so (the session left active) with the command to go on,
+    and that command asks the same trial again."""
+    session, other = _locked_session(tmp_path, monkeypatch)
+
+    def lock() -> str:
+        other.execute("BEGIN EXCLUSIVE")
+        return "y"
+
+    terminal, console = _terminal(session, "1", "0", lock, "q")
+    terminal.run()
+    text = console.export_text()
+    assert "not written: trial 2 preferred to trial 1 (trial 2 asked again" in text
+    assert "could not be paused (sqlite:///" in text and "it is left active: continue" in text
+    other.execute("ROLLBACK")
+    other.close()
+    reopened = Session.open(session.storage, session.id)
+    assert reopened.status == "active" and [t.number for t in reopened.trials()] == [1]
+    assert reopened.next_query().trials == (2,)
+
+
+def test_an_answer_whose_connection_was_lost_at_commit_is_found_stored_not_written_twice() -> None:
+    """A lost connection (PostgreSQL restarted) may cut a commit short after it applied: the
+    runner says the answer is perhaps not written and asks it again; confirmed again, it finds
+    the answer stored and says so (it said 'not written: query 4 was already answered' of the
+    operator's own stored answer), writing it once."""
+    from gaitpref.storage import StorageConnectError
+
+    storage = MemoryStorage()
+    session = Session.create(storage, CONFIG, "S01", seed=1)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    append = storage.append
+    lost: list[int] = []
+
+    def cut_short(*args: Any, **kwargs: Any) -> Any:
+        written = append(*args, **kwargs)  # committed, then the connection is gone
+        if not lost and any(e.kind == "comparison_answered" for e in args[2]):
+            lost.append(1)
+            raise StorageConnectError("cannot connect to postgresql://lab: server closed")
+        return written
+
+    storage.append = cut_short  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "1", "0", "y", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "perhaps not written: cannot connect to postgresql://lab: server closed; " in text
+    assert "the answer confirmed before the connection was lost was stored" in text
+    assert "saved: trial 2" in text and "already answered" not in text
+    assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
+
+
+def test_an_undo_written_whose_replacement_query_the_database_refuses_says_undone() -> None:
+    """An undo whose query proposes a gait flagged unsafe since is withdrawn and a new query
+    written in its place: when the database fails that second write, the undo stands, and the
+    runner says 'Undone.' and why no trial follows, not 'not undone' (nothing was undone, it
+    said, of an answer the log no longer holds)."""
+    from gaitpref.storage import StorageFailureError
+
+    storage = MemoryStorage()
+    session = Session.create(storage, CONFIG, "S01", seed=8)  # trial 3 walks trial 1's gait
+    for _ in range(3):
+        q = session.next_query()
+        session.answer(q.id, [], [])
+    assert session.trials()[2].action == session.trials()[0].action
+    session.flag_unsafe(1, "knee gave way")  # trial 3's query now proposes a flagged gait
+    append = storage.append
+    undone: list[int] = []
+
+    def fails_after_the_undo(*args: Any, **kwargs: Any) -> Any:
+        if undone and len(undone) < 2 and any(e.kind == "query_issued" for e in args[2]):
+            undone.append(1)  # once: the pause after it is written
+            raise StorageFailureError("sqlite:///lab.db: disk I/O error; nothing was written")
+        written = append(*args, **kwargs)
+        if any(e.kind == "undo" for e in args[2]):
+            undone.append(1)
+        return written
+
+    storage.append = fails_after_the_undo  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    text = console.export_text()
+    assert len(undone) == 2, text  # the undo was written, its replacement query refused
+    assert (
+        "Undone.\nThe next trial could not be proposed: the undo is written; the query drawn in "
+        "place of the one it withdrew was not: sqlite:///lab.db: disk I/O" in text
+    )
+    assert "not undone" not in text and "Paused.  Resume with:" in text
+    assert [t.number for t in Session.open(storage, session.id).trials()] == [1, 2]
+
+
+def test_a_flag_written_whose_round_the_database_refuses_to_draw_again_says_flagged(
+    tmp_path: Path,
+) -> None:
+    """The answer that opens a blind validation round ([stop] max_trials) written with an
+    unsafe flag on a gait the round shows: the flag withdraws the round and draws it again.
+    When the database fails that second write the flag stands, and the runner says so; it
+    said 'trial 2 is not flagged unsafe yet', then, asked again, 'was not flagged unsafe:
+    trial 2 is already flagged unsafe; flag it later with ...'."""
+    from gaitpref.storage import StorageFailureError
+
+    config = tmp_path / "stop.toml"
+    config.write_text(load_config(CONFIG).text + "\n[stop]\nmax_trials = 2\n", encoding="utf-8")
+    storage = MemoryStorage()
+    session = Session.create(storage, config, "S01", seed=0)  # the round shows trial 2's gait
+    append = storage.append
+    flagged: list[int] = []
+
+    def fails_after_the_flag(*args: Any, **kwargs: Any) -> Any:
+        kinds = {e.kind for e in args[2]}
+        if flagged and len(flagged) < 2 and "validation_started" in kinds:
+            flagged.append(1)  # once
+            raise StorageFailureError("sqlite:///lab.db: disk I/O error; nothing was written")
+        if "trial_flagged_unsafe" in kinds:
+            flagged.append(1)
+        return append(*args, **kwargs)
+
+    storage.append = fails_after_the_flag  # type: ignore[method-assign]
+    terminal, console = _terminal(session, "0", "y", "1", "0", "x", "knee gave way")
+    terminal.run()
+    text = console.export_text()
+    assert len(flagged) == 2, text  # the flag was written, the round's redraw refused
+    assert (
+        "trial 2 is flagged unsafe (written); the blind validation round it withdrew was not "
+        "drawn again: sqlite:///lab.db: disk I/O error" in text
+    )
+    assert "flagged unsafe: trial 2 (knee gave way)" in text
+    assert "not flagged" not in text and "Paused.  Resume with:" in text
+    reopened = Session.open(storage, session.id)
+    assert reopened.unsafe_flags() == {2: (session.trials()[1].action, "knee gave way")}
+    assert reopened.validation_plan is None

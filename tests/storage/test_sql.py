@@ -209,6 +209,24 @@ def test_read_only_open_does_not_create_a_database(tmp_path: Path) -> None:
     assert not (tmp_path / "g.db").exists()
 
 
+def test_a_reader_leaves_an_empty_file_empty(tmp_path: Path) -> None:
+    """An empty file (a creation cut short, a truncated copy) is refused by a reader (session
+    list, show, db check) and left as it was: setting WAL on it wrote a 4,096-byte first page,
+    though db check says it leaves the file's bytes as they were.  A writer makes it a
+    database."""
+    (tmp_path / "g.db").write_bytes(b"")
+    with pytest.raises(SchemaError, match="holds no gaitpref database"):
+        open_storage(_sqlite(tmp_path), create=False)
+    assert (tmp_path / "g.db").read_bytes() == b""
+    assert not (tmp_path / "g.db-wal").exists()
+    store = open_storage(_sqlite(tmp_path))
+    sid = store.create_session(SPEC).id
+    store.close()
+    reader = open_storage(_sqlite(tmp_path), create=False)
+    assert [r.id for r in reader.list_sessions()] == [sid]
+    reader.close()
+
+
 def test_sqlite_url_parameters_are_refused_by_name_not_ignored(tmp_path: Path) -> None:
     """``sqlite:///g.db?mode=ro`` opened the file read-write: the driver ignored ``mode``."""
     SQLStorage(_sqlite(tmp_path)).close()
@@ -310,7 +328,7 @@ def test_a_database_another_program_is_writing_opens_to_read(
         other.execute("INSERT INTO subjects VALUES ('S99', '2026-01-01 00:00:00')")
         reader = SQLStorage(_sqlite(tmp_path), create=False)
         assert [r.id for r in reader.list_sessions()] == [sid]
-        with pytest.raises(StorageError, match="database is locked"):
+        with pytest.raises(StorageError, match=r"database is locked; nothing was written$"):
             reader.append(sid, 0, [NewEvent("note", {"text": "waits its turn"})])
         other.execute("ROLLBACK")
     reader.append(sid, 0, [NewEvent("note", {"text": "after"})])

@@ -97,6 +97,8 @@ from gaitpref.storage import (
     SessionSpec,
     Status,
     Storage,
+    StorageConnectError,
+    StorageFailureError,
     SubjectRecord,
     open_storage,
 )
@@ -530,6 +532,11 @@ class Session:
                 return None
             try:
                 return self._next_query()
+            except (StorageFailureError, StorageConnectError) as e:  # the undo stands
+                raise type(e)(
+                    f"the undo is written; the query drawn in place of the one it withdrew "
+                    f"was not: {e}"
+                ) from e
             except InfeasibleProposalsError as e:
                 raise InfeasibleProposalsError(
                     f"{_WITHDRAWN}; {e}",
@@ -570,7 +577,7 @@ class Session:
                 raise
             if before is not None and st.open_round is None:  # it showed a gait in the region
                 with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
-                    self._append([st.validation_event()])
+                    self._redraw(st, f"trial {trial} is excluded")
             return next(t for t in self.trials() if t.number == trial)
 
         return self._locked(run)
@@ -596,10 +603,20 @@ class Session:
             if before is None or st.open_round is not None:
                 return False
             with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
-                self._append([st.validation_event()])
+                self._redraw(st, f"trial {trial} is flagged unsafe")
             return True
 
         return self._locked(run)
+
+    def _redraw(self, st: SessionState, done: str) -> None:
+        """Draw again the blind validation round that the change ``done`` (written) withdrew;
+        a storage failure of that write says the change stands."""
+        try:
+            self._append([st.validation_event()])
+        except (StorageFailureError, StorageConnectError) as e:
+            raise type(e)(
+                f"{done} (written); the blind validation round it withdrew was not drawn again: {e}"
+            ) from e
 
     def withdraw_unsafe(self, trial: int) -> None:
         """Take back the unsafe flag of ``trial`` (its undo)."""

@@ -139,7 +139,7 @@ class SQLStorage(CheckedCreation):
             path = Path(parsed.database or "").resolve()
             self._file = path
             self._turns = FileTurns(path.with_name(path.name + ".turns"), self.url)
-        self.engine = _engine(parsed)
+        self.engine = _engine(parsed, create)
         self._identity: tuple[int, int] | None = None  # the file's (device, inode) once open
         try:
             # a read transaction unless the schema is to be made: opening a database to read it
@@ -323,8 +323,10 @@ class SQLStorage(CheckedCreation):
     def _write(self) -> Iterator[Connection]:
         """A write transaction (``BEGIN IMMEDIATE`` on SQLite), committed on leaving, and rolled
         back if the SQLite file was deleted or replaced since it was opened: the open connection
-        would commit into the unlinked file, and the write would be lost."""
-        with self._errors(), self.engine.connect() as conn:
+        would commit into the unlinked file, and the write would be lost.  A database error
+        in it (locked past the busy timeout, a disk I/O error) rolls it back: the
+        :class:`StorageFailureError` says nothing was written."""
+        with self._errors(writing=True), self.engine.connect() as conn:
             conn.execution_options(gaitpref_write=True)
             with conn.begin():
                 yield conn
@@ -353,7 +355,7 @@ class SQLStorage(CheckedCreation):
             yield conn
 
     @contextmanager
-    def _errors(self) -> Iterator[None]:
+    def _errors(self, writing: bool = False) -> Iterator[None]:
         try:
             yield
         except IntegrityError:
@@ -368,7 +370,11 @@ class SQLStorage(CheckedCreation):
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
             said = f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}"
             if isinstance(exc, DatabaseError):  # OperationalError (disk I/O, locked, ...) too
-                raise StorageFailureError(said) from None
+                # a write's transaction was rolled back: say so, so that the operator who
+                # confirmed an answer knows to give it again (a lost connection is not said:
+                # whether a commit it cut short was applied is not known here)
+                unwritten = "; nothing was written" if writing else ""
+                raise StorageFailureError(said + unwritten) from None
             raise StorageError(said) from None
 
 
@@ -670,7 +676,9 @@ def _plain_engine(url: URL, **options: Any) -> Engine:
         ) from None
 
 
-def _engine(url: URL) -> Engine:
+def _engine(url: URL, create: bool = True) -> Engine:
+    """The engine for ``url``; ``create=False``: an empty SQLite file is left as it is (a
+    reader that finds no schema refuses it; setting WAL would have written its first page)."""
     serializer = functools.partial(json.dumps, allow_nan=False)
     if url.get_backend_name() == "postgresql":
         return _plain_engine(
@@ -694,14 +702,15 @@ def _engine(url: URL) -> Engine:
         cursor.execute("PRAGMA foreign_keys = ON")
         cursor.execute(f"PRAGMA busy_timeout = {int(BUSY_TIMEOUT_S * 1000)}")
         if not memory:
-            # WAL only in a new file or a gaitpref database of a revision this gaitpref knows: a
-            # connection about to find another program's file is not a gaitpref database, or
-            # that a newer gaitpref wrote it, must leave its journal alone
+            # WAL only in a new file (when making one) or a gaitpref database of a revision
+            # this gaitpref knows: a connection about to find another program's file is not a
+            # gaitpref database, or that a newer gaitpref wrote it, must leave its journal
+            # alone, and a reader of an empty file its bytes
             tables = {
                 row[0]
                 for row in cursor.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
             }
-            if not tables or (
+            if (not tables and create) or (
                 "alembic_version" in tables
                 and {r[0] for r in cursor.execute("SELECT version_num FROM alembic_version")}
                 <= set(migrate.known_revisions())
