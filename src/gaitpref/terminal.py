@@ -59,6 +59,7 @@ from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
 from gaitpref.loop.stopping import preference_learned
 from gaitpref.sessions.confidence import StopCheckWarning
+from gaitpref.sessions.gaits import NOT_MADE
 from gaitpref.sessions.records import (
     InfeasibleGait,
     SessionQuery,
@@ -592,6 +593,8 @@ class Terminal:
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
+                    if s.gait_made(sure.recommended) is False:  # a point no query proposed
+                        line += f" ({NOT_MADE})"
                     self.console.print(f"  {line}", markup=False)
             self._say_stop_blocked()
         if stopped is not None:
