@@ -81,3 +81,18 @@ def test_the_terminal_says_so_with_the_confidence(tmp_path: Path) -> None:
         lines = [line for line in out.getvalue().splitlines() if "of the best" in line]
         assert len(lines) == 1 and lines[0].endswith(f"is within 5% of the best ({NOT_MADE})")
         assert f"% that {s.gait_name(best)} is within" in lines[0]
+
+
+def test_the_api_says_whether_a_gait_is_made(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with Session.create(url, parse_config(CONTINUOUS), "S01") as s:
+        q = s.next_query()
+        s.answer(q.id, [], [(q.actions[0], "step_length", "+big")])
+        sid = s.id
+    with TestClient(create_app(url)) as client:
+        post = client.get(f"/api/sessions/{sid}/posterior").json()
+        query = client.get(f"/api/sessions/{sid}/query").json()
+        trials = client.get(f"/api/sessions/{sid}/trials").json()
+    assert post["recommended"]["made"] is False
+    assert [g["made"] for g in query["actions"] + query["buffer"]] == [True, True]
+    assert [t["gait"]["made"] for t in trials] == [True]
