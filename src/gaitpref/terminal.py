@@ -23,9 +23,10 @@ written); when the rule says stop but no round can be drawn (fewer than three ga
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
 gaits were shown is refused and the round shown again, as the console refuses it.  A gait
 the generator fails to make (gaits on demand; after an undo too) is said and the session
-paused.  A signal (or a closed output) that comes while an answer is being written lets the
-write finish first.  Nothing is written before the operator confirms (answers, undo and a
-validation ranking alike), and the answer is committed before the next trial is shown.
+paused; while an ask makes gaits on demand a terminal shows a spinner saying so.  A signal
+(or a closed output) that comes while an answer is being written lets the write finish first.
+Nothing is written before the operator confirms (answers, undo and a validation ranking
+alike), and the answer is committed before the next trial is shown.
 After ``saved:`` the runner says which suggestions went past the edge of their range and were
 clipped there (``note: ...``, :attr:`Answered.clipped`) and, when the ``[stop]`` rule could not
 be checked after the stored answer, why (``warning: ...``, :attr:`Answered.stop_warning`).
@@ -53,12 +54,14 @@ from collections.abc import Callable, Iterator, Sequence
 from types import FrameType
 
 from rich.console import Console
+from rich.text import Text
 
 from gaitpref.errors import FeedbackError, GaitError, NoSafeGaitError, SessionStateError
 from gaitpref.feedback import Rating
 from gaitpref.loop.cospar import QueryError
 from gaitpref.loop.stopping import preference_learned
 from gaitpref.sessions.confidence import StopCheckWarning
+from gaitpref.sessions.gaits import NOT_MADE
 from gaitpref.sessions.records import (
     InfeasibleGait,
     SessionQuery,
@@ -372,7 +375,8 @@ class Terminal:
                     raise _QuitError
                 skipped = len(s.infeasible_gaits())
                 try:
-                    query = s.next_query()
+                    with self._making():
+                        query = s.next_query()
                     self._say_infeasible(s.infeasible_gaits()[skipped:])
                 except NoSafeGaitError as exc:  # an ask that stopped logged its skipped gaits
                     self._say_infeasible(s.infeasible_gaits()[skipped:])
@@ -401,6 +405,18 @@ class Terminal:
             self._pause()
         except _ElsewhereError:
             self._say_elsewhere()
+
+    def _making(self) -> contextlib.AbstractContextManager[object]:
+        """While an ask may make gaits on demand (a generator config, no query pending: each
+        gait is an optimisation, and an ask may try up to ``[gaits] max_infeasible`` that cannot
+        be made), a spinner saying so on a terminal; before, the runner showed nothing, seconds
+        at a time.  Rich draws it on a terminal only and erases it: nothing else is printed."""
+        spec = self.session.config.generator
+        if spec is None or self.session.pending is not None or not self.console.is_terminal:
+            return contextlib.nullcontext()
+        return self.console.status(
+            Text(f"making gaits on demand ({clip(spec.name)}); infeasible ones are skipped ...")
+        )
 
     def _stopped_elsewhere(self) -> None:
         """Raise :class:`_ElsewhereError` if the session is no longer active (as this object
@@ -630,6 +646,8 @@ class Terminal:
                 with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
                     sure = s.confidence()
                     line = sure.sentence(gait_name(s, sure.recommended))
+                    if s.gait_made(sure.recommended) is False:  # a point no query proposed
+                        line += f" ({NOT_MADE})"
                     self.console.print(f"  {line}", markup=False)
             self._say_stop_blocked()
         if stopped is not None:

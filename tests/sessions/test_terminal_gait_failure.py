@@ -62,3 +62,30 @@ def test_an_undo_whose_new_query_cannot_be_made_says_it_was_undone_and_pauses(
     again = Session.open(url, s.id)
     assert "undo" in [e.kind for e in again.events()]
     assert len(again.trials()) == 1 and again.status == "paused"
+
+
+def test_an_ask_that_makes_gaits_shows_a_spinner_on_a_terminal_and_nothing_elsewhere(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Each gait made on demand is an optimisation (an ask may try up to max_infeasible that
+    cannot be made): the runner showed nothing meanwhile, seconds at a time.  On a terminal a
+    spinner now says so while the ask runs; Rich erases it, and prints nothing of it elsewhere."""
+    import time
+
+    made = FakeSteps.make
+
+    def slow(self: FakeSteps, vector: object, warm_start: object = None) -> object:
+        time.sleep(0.3)
+        return made(self, vector, warm_start)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(FakeSteps, "make", slow)
+    for terminal in (True, False):
+        url = f"sqlite:///{tmp_path / f'lab{terminal}.db'}"
+        s = Session.create(url, parse_config(CONFIG), "S01")
+        out = StringIO()
+        console = Console(file=out, width=300, force_terminal=terminal, highlight=False)
+        Terminal(s, console, read=lambda _: "q").run()
+        text = out.getvalue()
+        said = "making gaits on demand (test-steps); infeasible ones are skipped ..."
+        assert (said in text) is terminal
+        assert "Trial 1: run" in text and "Paused." in text

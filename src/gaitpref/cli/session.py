@@ -538,6 +538,10 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
         f"posterior mean {summary['mean_at_recommended']:.4g} ± "
         f"{summary['sd_at_recommended']:.2g}"
     )
+    if session.gait_made(rec) is False:  # gaits on demand: a point no query proposed
+        from gaitpref.sessions.gaits import NOT_MADE
+
+        line += f"\n  ({NOT_MADE})"
     if best != rec:
         line += (
             f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), may not "

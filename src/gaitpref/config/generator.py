@@ -81,6 +81,25 @@ def check_ask_cost(max_iterations: int | None, max_infeasible: int) -> None:
         )
 
 
+def check_units(spec: GeneratorSpec, space: Space) -> None:
+    """Refuse a ``[space.F] unit`` that is not the unit the generator reads ``F`` in
+    (:meth:`~gaitpref.gaits.generator.GaitGenerator.units`; an empty unit is taken as it): the
+    generator takes a point's values as they are, so ``step_length`` from 4 to 16 with ``unit =
+    "cm"`` asked ``compass-hzd`` for steps of 4 to 16 m, which it could not pose, and a duration
+    in ms for steps of minutes.  Made for a new session or run only (:func:`check_ask_cost`)."""
+    units = spec.make(space).units()
+    for feature in space:
+        want = units.get(feature.name)
+        if want is not None and feature.unit not in ("", want):
+            fail(
+                f"space.{feature.name}",
+                "unit",
+                f"[gaits] generator {spec.name!r} reads {feature.name} in {want!r}, got "
+                f"{feature.unit!r}: give min and max (or values) in {want} with unit = "
+                f"{want!r}",
+            )
+
+
 def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     """The checked ``[gaits]`` table of a generator config, tried on ``space``."""
     from gaitpref.errors import GaitGeneratorError
@@ -112,4 +131,10 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
     return spec
 
 
-__all__ = ["GENERATOR_SETTINGS", "GeneratorSpec", "check_ask_cost", "parse_generator"]
+__all__ = [
+    "GENERATOR_SETTINGS",
+    "GeneratorSpec",
+    "check_ask_cost",
+    "check_units",
+    "parse_generator",
+]

@@ -40,6 +40,7 @@ def gait_out(session: Session, action: int, trial: int | None = None) -> GaitOut
         values={k: float(v) for k, v in values.items()},
         units={f.name: f.unit for f in space.features},
         trial=trial,
+        made=session.gait_made(action),
     )
 
 

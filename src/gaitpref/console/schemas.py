@@ -85,6 +85,13 @@ class GaitOut(BaseModel):
     values: dict[str, float]
     units: dict[str, str]
     trial: int | None = Field(default=None, description="the trial number it runs (or ran) as")
+    made: bool | None = Field(
+        default=None,
+        description="with gaits made on demand, whether this session made its gait (false: a "
+        "point no query proposed, such as a coactive suggestion's, never walked, which may prove "
+        "infeasible; recommended may be one); null when gaits are not made on demand, and for a "
+        "blind validation round's gaits (made, as the round showed them)",
+    )
 
 
 class QueryOut(BaseModel):

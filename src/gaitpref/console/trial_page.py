@@ -13,6 +13,7 @@ from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.sessions import preference_learned
+from gaitpref.sessions.gaits import NOT_MADE
 from gaitpref.sessions.records import SuggestionRecord
 from gaitpref.sessions.session import Session
 from gaitpref.space import Space
@@ -138,6 +139,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         if best is None
         else views.gait_view(space, best, gait_id=session.gait_name(best)),
         "best_mean": None if best is None else float(mean[best]),
+        "best_not_made": None if best is None or session.gait_made(best) is not False else NOT_MADE,
         "learned": learned,
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,

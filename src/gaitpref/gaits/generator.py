@@ -56,6 +56,12 @@ class GaitGenerator(ABC):
     def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
         """The gait of ``vector`` (flagged infeasible, with the reason, when there is none)."""
 
+    def units(self) -> dict[str, str]:
+        """The unit each feature that decides a gait is read in, by name: a new session refuses
+        a ``[space.F] unit`` other than this (an empty unit is taken as this one).  Default:
+        none, nothing checked."""
+        return {}
+
     def document(self, vector: FloatArray) -> dict[str, Any]:
         """What decides ``vector``'s gait: the generator's name, settings and the parameters."""
         return {
@@ -157,6 +163,10 @@ class CompassHZD(GaitGenerator):
 
     def gait_id(self, vector: FloatArray) -> str:
         return gait_id_of(self._values(vector), self.speed)
+
+    def units(self) -> dict[str, str]:
+        """Metres and seconds (the library's axes); ``step_width`` is a label, in any unit."""
+        return {n: AXES[n].unit for n in self.features if n != "step_width"}
 
     def make(self, vector: FloatArray, warm_start: Gait | None = None) -> Gait:
         p = self.parameters(vector)

@@ -326,4 +326,12 @@ def _infeasible(
     )
 
 
-__all__ = ["RecordedGaits", "propose_with_gaits", "stopped_error", "unlogged_error"]
+#: what ``session show`` and the console say of a recommended gait that is not made
+#: (:meth:`~gaitpref.sessions.session.Session.gait_made` is False): on the line path the
+#: posterior's highest is often a point no query proposed, a coactive suggestion's
+NOT_MADE = (
+    "its gait is not made yet: no query has proposed it, so the subject has not walked it; a "
+    "query that proposes it makes it, or skips it if it cannot be made"
+)
+
+__all__ = ["NOT_MADE", "RecordedGaits", "propose_with_gaits", "stopped_error", "unlogged_error"]

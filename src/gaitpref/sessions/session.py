@@ -942,6 +942,14 @@ class Session:
         ``G<action>`` without a library."""
         return self._state.gait_name(action)
 
+    def gait_made(self, action: int) -> bool | None:
+        """Whether ``action``'s gait was made by this session (gaits on demand: a query proposed
+        it and it could be made); False for a point whose gait is not made (a coactive
+        suggestion's, on the line path, which the recommendation may be: it is made, or found
+        infeasible and skipped, when a query proposes it); None when gaits are not made on
+        demand (a library's, or none)."""
+        return self._state.gait_made(action)
+
     def describe(self, action: int) -> str:
         """Feature values with units, and the gait id when there is a library."""
         text = self.space.describe(action)

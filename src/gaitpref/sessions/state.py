@@ -160,6 +160,15 @@ class SessionState:
             if a < size and self.gait_id(a) in self.made_ids
         ]
 
+    def gait_made(self, action: int) -> bool | None:
+        """Whether ``action``'s gait is one this session made (feasible: a ``gait_made`` event
+        logged it), so that a query has proposed it and it may be walked; None without gaits
+        made on demand.  On the line path the posterior's highest is often a point no query
+        proposed (a coactive suggestion's), whose gait is not made and may prove infeasible."""
+        if self.on_demand is None:
+            return None
+        return self.gait_id(action) in self.made_ids
+
     @property
     def open_round(self) -> _Round | None:
         return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None

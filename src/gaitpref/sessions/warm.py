@@ -283,7 +283,18 @@ def new_warm_start(
     start read, cannot be rebuilt from the database (its log or row altered, its config no longer
     parses, its gait library gone): the message names it and says why, as opening it would
     (:class:`~gaitpref.errors.ReplayError`); the new session is not created.
+    A config on the line path (continuous features, a grid past the limit, ``subspace =
+    "line"``) is refused first, naming ``prior_from``: the loop takes no warm start there (it
+    was the loop's :class:`~gaitpref.errors.QueryError`, which the CLI called "answer refused"
+    and the console a stale query, 409).
     """
+    if config.subspace == "line":
+        raise PriorFromError(
+            f"prior_from: warm starts from earlier subjects need the full grid; config "
+            f"{config.name!r} runs on the line path (continuous features, or a grid past the "
+            'limit, or subspace = "line"), which takes none: start the session without '
+            "prior_from (nothing was created)"
+        )
     try:
         prior = describe_prior(storage, resolve_prior(storage, config, prior_from))
         return prior, make_warm_start(storage, config, prior, seed, memo).rho
