@@ -282,8 +282,9 @@ class PointEngine:
             columns: FloatArray = np.take(square, visited, axis=1)  # C order, as the kernel's
             return DenseCross(self.space, self.kernel, visited, columns)
         matrix: FloatArray = np.take(self.plain, visited, axis=1)  # C order, as the kernel's
-        if self.kernel.jitter:
-            matrix += self.kernel.jitter * (np.arange(len(self.space))[:, None] == visited[None, :])
+        if self.kernel.jitter:  # where a row is its column (the kernel adds 0.0 elsewhere: an
+            # entry s^2 exp(.) >= +0.0, or NaN, plus +0.0 is itself)
+            matrix[visited, np.arange(visited.shape[0])] += self.kernel.jitter
         return DenseCross(self.space, self.kernel, visited, matrix)
 
     def _known_square(self) -> FloatArray | None:
