@@ -143,26 +143,42 @@ A whole 150-trial run on an 8-D box (Hartmann-6 on six features, with coactive f
 median {r["median_s"]:.2f} s over {r["runs"]} seeds (max {r["max_s"]:.2f} s), including the
 simulated subject and its finite-difference gradients.
 
-Where the time goes (cProfile, same case, per ask + tell, load 7.9 from other work): the
-Laplace fit's Newton steps on the visited points (~26 ms in `fit_laplace`, ~6.5 ms of it
-Cholesky factors), the kernel from coordinates (~12 ms over four blocks: the table's `K[:, V]`
-at the ask, the line's rows of the prior matrix, `K_VV` of the fit, the old posterior read over
-the grown table), and the prior root of table + line (about 340 points, ~3.5 ms).  The root is
-LAPACK's pivoted Cholesky factor (`dpstrf`, `engines.psd_root_t`): it stops at the numerical
-rank, so it is exact for the jitter-free, semi-definite and rank-deficient matrix of a line's
-close points (`R^T R` equals the matrix to about 1e-14, `tests/model/test_psd_root.py`), where
-the eigendecomposition it replaced took ~15-18 ms (single-threaded on the same 339-point
-matrix: 13-27 ms against 1.1-1.8 ms).  Its draws differ from the eigendecomposition's for the
-same seed: the study in `docs/results/continuous/` is rerun with it.  Reused rather than
-recomputed, with the same floats (checked bit for bit): the line's `K[:, V]` is taken from the
-prior matrix behind its root, that matrix starts from the table's `K_VV` when every table point
-is visited, the kernel fills preallocated buffers, and a grown point set extends its row lookup
-instead of rebuilding it.  Before the root change (load 1.5): median 67 ms, ask 29 ms; before
-the reuse (load 3.5): 79 ms, ask 35 ms.  A run's table differs between the roots (other draws,
-other lines): at 300 comparisons it holds 288 points with this root and 342 with the
-eigendecomposition, so the fit and the kernels are on smaller matrices here too.  Interleaved
-runs at load 7.2-7.8 (same conditions): the eigendecomposition's code a median 78-120 ms (ask
-34-53 ms), this one 50-64 ms (ask 16-23 ms).
+Where the time goes in the second row's case (cProfile, per ask + tell, 30 iterations from
+300 comparisons leaving out the refits, load 3.4 from other work; CPU-bound, one BLAS thread):
+the Laplace fit's Newton steps on the ~300 visited points (~11 ms in `fit_laplace`, ~8.5 ms of
+it forming and factoring `I + H^T H`; Cholesky factors ~3.5 ms in all), and gated EUBO's
+posterior over table + star (about 500 points): the variance's two triangular solves (~5.5
+ms), the prior root (LAPACK's pivoted Cholesky `dpstrf`, ~3.5 ms) after the star's rows of the
+prior matrix (~2 ms); the kernel from coordinates is now ~1.6 ms in all (the star's rows and
+the grown table's new points), the lines' drawing ~1.8 ms.  Every 20th answer refits the
+lengthscales by the evidence, ~0.4 s on that trial (the p95).  Reused rather than recomputed,
+with the same floats (checked bit for bit: `tests/model/test_point_engine_reuse.py`, and
+recorded runs replayed with `np.array_equal` on every query, line, posterior mean, fit and
+refit): a fit's `K_VV` is kept as the table's `K` when every table point is visited, and the
+engine of a grown table assembles its `K` from the table's before plus the kernel's rows for
+the new points, so the next fit's `K_VV`, the Newton start (the old posterior read over the
+grown table) and the posterior's `K[:, V]` are taken from it; EUBO's covariance with the
+reference reads the posterior's `K[:, V]` rather than recomputing it over the star; a
+continuous feature's coordinates are clipped a column at a time (`lines._snapped`); as before,
+the line's `K[:, V]` is taken from the prior matrix behind its root, that matrix starts from
+the table's `K`, and the kernel fills preallocated buffers.  Before this reuse, interleaved
+with it (same process conditions, this benchmark's 30 timed iterations): at load 0.7-0.9 a
+median of 34.7-34.9 ms (ask 20.4-20.7 ms) before, 24.7-25.4 ms (ask 13.5-13.8 ms) after, CPU
+time 33.6-34.3 ms against 25.1-25.4 ms; at load 3.7-4.3 CPU time 35.0-36.5 ms against
+24.6-27.8 ms (wall 46-55 ms against 25-46 ms: the wall clock follows the other work on the 2
+cores).  The first row's case under cProfile (one run each, load 3.5
+and 3.8): the kernel from coordinates 3.8 -> 0.6 ms per ask + tell, the lines' drawing 1.8 ->
+0.7 ms.
+
+The root is `dpstrf` (`engines.psd_root_t`): it stops at the numerical rank, so it is exact for
+the jitter-free, semi-definite and rank-deficient matrix of a line's close points (`R^T R`
+equals the matrix to about 1e-14, `tests/model/test_psd_root.py`), where the eigendecomposition
+it replaced took ~15-18 ms on the first row's 339-point matrix (single-threaded: 13-27 ms
+against 1.1-1.8 ms).  Its draws differ from the eigendecomposition's for the same seed: the
+study in `docs/results/continuous/` is rerun with it.  In the first row's case, before the root
+change (load 1.5): median 67 ms, ask 29 ms; before the first reuse (load 3.5): 79 ms, ask 35
+ms; interleaved at load 7.2-7.8, the eigendecomposition's code 78-120 ms (ask 34-53 ms), the
+root's 50-64 ms (ask 16-23 ms).
 
 Machine:
 

@@ -138,9 +138,13 @@ class PointSet(Space):
         rows: list[list[float]] = []
         seen: dict[tuple[float, ...], int] = {}
         ids = np.empty(new.shape[0], dtype=np.intp)
+        index: dict[tuple[float, ...], int] = self._rows  # type: ignore[attr-defined]
+        size = len(self)
         for k, row in enumerate(new.tolist()):
             key = tuple(row)
-            found = self.find(row)
+            found = index.get(key)  # as find(row): a lineage's index holds later sets' rows
+            if found is not None and found >= size:
+                found = None
             if found is None:
                 found = seen.get(key)
             if found is None:

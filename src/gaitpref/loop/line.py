@@ -118,6 +118,14 @@ class LineCoSpar(CoSpar):
             self.space = table
             self.gp = self._gp(self.hyper)
         self.posterior = on_points(self.posterior, table)
+        engine = self.posterior.engine
+        if (
+            "engine" not in self.gp.__dict__
+            and isinstance(engine, PointEngine)
+            and engine.space is table
+            and engine.kernel == self.gp.kernel
+        ):  # the model's fits read the K its posterior's engine has from the table before
+            self.gp.engine = engine
 
     def best_point(self) -> FloatArray | None:
         """The posterior mean's argmax over the table (None before the first query)."""

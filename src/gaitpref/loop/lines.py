@@ -232,9 +232,7 @@ def line_points(space: Space, origin: FloatArray, v: FloatArray, count: int) -> 
     t_lo, t_hi = _t_range(u0, v)
     ts = np.union1d(np.linspace(min(t_lo, 0.0), max(t_hi, 0.0), count), [0.0])
     raw = lo + (u0[None, :] + ts[:, None] * v[None, :]) * span
-    snapped = np.array(
-        [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
-    )
+    snapped = _snapped(space, raw)
     snapped[ts == 0.0] = origin  # exactly the best point, not a rounding of it
     return _distinct(snapped)
 
@@ -255,9 +253,28 @@ def cloud_points(
         ]
     )
     raw = lo + np.clip(u0 + np.where(span > 0, steps, 0.0), 0.0, 1.0) * span
-    out: FloatArray = np.array(
-        [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
-    ).reshape(count, space.ndim)
+    return _snapped(space, raw).reshape(count, space.ndim)
+
+
+def _snapped(space: Space, raw: FloatArray) -> FloatArray:
+    """Each row of ``raw`` (``k x d``) snapped feature by feature as
+    :meth:`~gaitpref.space.Feature.snap` does, the same floats: a continuous feature's column
+    at once, ``min(max(x, lo), hi)`` as Python takes them (``lo`` only where it is greater,
+    ``hi`` only where it is less), a discrete one's value by value.  A NaN goes to
+    ``Feature.snap``, row by row, for its error."""
+    if raw.ndim != 2 or raw.shape[0] == 0 or np.isnan(raw).any():
+        return np.array(
+            [[f.snap(x) for f, x in zip(space.features, row, strict=True)] for row in raw]
+        )
+    out: FloatArray = np.empty(raw.shape)
+    for j, f in enumerate(space.features):
+        x = raw[:, j]
+        if f.continuous:
+            low, high = f.values[0], f.values[-1]
+            above = np.where(low > x, low, x)
+            out[:, j] = np.where(high < above, high, above)
+        else:
+            out[:, j] = [f.snap(v) for v in x.tolist()]
     return out
 
 

@@ -203,11 +203,16 @@ class PointEngine:
         self, space: PointSet, kernel: SquaredExponential, base: PointEngine | None = None
     ) -> None:
         """``base`` is an engine over the first points of ``space`` with the same kernel
-        (a line's points appended to the table): :attr:`plain` starts from its ``K_VV`` when
-        its visited set was all its points."""
+        (a line's points appended to the table, the table grown by a query's points): ``K``
+        over its points, when it holds it, is not computed again (:attr:`plain`,
+        :meth:`cross`, :meth:`prior_block`).  A base that holds none but was made from one
+        passes its own on (a table grown twice, by a query's point and then by its answer's
+        suggestions)."""
         self.space, self.kernel = space, kernel
         self.jitter_scale = float(np.sqrt(kernel.jitter))
-        self._base = base
+        if base is not None and base._square is None and base._base is not None:
+            base = base._base
+        self._base: PointEngine | None = base
         self._square: FloatArray | None = None  # K over every point, jitter included
 
     @cached_property
@@ -226,13 +231,18 @@ class PointEngine:
         out = np.empty((size, size))
         out[:start, :start] = known
         out[np.diag_indices(start)] = self.kernel.variance
-        new = plain.cross(self.space, np.arange(size), rows=np.arange(start, size))
-        out[start:] = new
-        out[:start, start:] = new[:, :start].T
+        if start < size:
+            new = plain.cross(self.space, np.arange(size), rows=np.arange(start, size))
+            out[start:] = new
+            out[:start, start:] = new[:, :start].T
         return out
 
     def _known_block(self) -> FloatArray | None:
-        """The base engine's ``K`` over all its points, when it has one and is a prefix."""
+        """``K`` over the first points (jitter included): this engine's over all of them when
+        it holds it, else the base engine's over all its points, when it has one and is a
+        prefix."""
+        if self._square is not None:
+            return self._square
         base = self._base
         if base is None or base._square is None or base.kernel != self.kernel:
             return None
@@ -264,17 +274,74 @@ class PointEngine:
         """``K_{:,V}``; once :attr:`plain` is computed, its columns plus the jitter where a row
         is its column: each entry the same floating-point operations as the kernel's."""
         if "plain" not in self.__dict__:
-            return self._remember(DenseCross(self.space, self.kernel, visited))
+            square = self._known_square()
+            if square is None:
+                return self._remember(DenseCross(self.space, self.kernel, visited))
+            if _all_points(visited, len(self.space)):
+                return DenseCross(self.space, self.kernel, visited, square)
+            columns: FloatArray = np.take(square, visited, axis=1)  # C order, as the kernel's
+            return DenseCross(self.space, self.kernel, visited, columns)
         matrix: FloatArray = np.take(self.plain, visited, axis=1)  # C order, as the kernel's
-        if self.kernel.jitter:
-            matrix += self.kernel.jitter * (np.arange(len(self.space))[:, None] == visited[None, :])
+        if self.kernel.jitter:  # where a row is its column (the kernel adds 0.0 elsewhere: an
+            # entry s^2 exp(.) >= +0.0, or NaN, plus +0.0 is itself)
+            matrix[visited, np.arange(visited.shape[0])] += self.kernel.jitter
         return DenseCross(self.space, self.kernel, visited, matrix)
+
+    def _known_square(self) -> FloatArray | None:
+        """``K`` over every point (jitter included) when this engine holds it, or when a base
+        engine holds it over the first points: then its block, and the kernel's rows for the
+        points past them (their transpose the block above: ``(a - b)^2 = (b - a)^2`` and
+        ``x + 0.0 = x`` off the diagonal), each entry the kernel's floats; kept.  None
+        otherwise (nothing is computed)."""
+        if self._square is not None:
+            return self._square
+        known = self._known_block()
+        if known is None:
+            return None
+        size, start = len(self.space), known.shape[0]
+        out = np.empty((size, size))
+        out[:start, :start] = known
+        if start < size:
+            new = self.kernel.cross(self.space, np.arange(size), rows=np.arange(start, size))
+            out[start:] = new
+            out[:start, start:] = new[:, :start].T
+        out.setflags(write=False)
+        self._square = out
+        self._base = None
+        return out
+
+    def prior_block(self, visited: IntArray) -> FloatArray | None:
+        """``K[V, V]`` (jitter included) from the ``K`` over every point this engine holds or
+        has from its base (:meth:`_known_square`), the same floats as
+        ``kernel.cross(space, V, rows=V)``, read-only; None when it has none."""
+        square = self._known_square()
+        if square is None:
+            return None
+        if _all_points(visited, len(self.space)):
+            return square
+        block: FloatArray = np.take(np.take(square, visited, axis=0), visited, axis=1)
+        return block
+
+    def offer_square(self, matrix: FloatArray) -> None:
+        """Keep ``matrix`` as ``K`` over every point (jitter included) unless one is kept: a
+        fit's ``K_VV`` when every point is visited (``kernel.cross(space, V, rows=V)`` with
+        ``V`` all the points: the same floating-point operations as ``kernel.cross(space, V)``,
+        so the same floats), read by :meth:`cross` and by a line's engine (:attr:`plain`)
+        instead of computing it again.  Made read-only: the posterior's cross reads it."""
+        if self._square is None and matrix.shape == (len(self.space), len(self.space)):
+            matrix.setflags(write=False)
+            self._square = matrix
 
     def _remember(self, cross: DenseCross) -> DenseCross:
         """Keep ``K`` over every point when ``cross`` is it (a line's engine starts there)."""
-        if np.array_equal(cross.visited, np.arange(len(self.space))):
+        if _all_points(cross.visited, len(self.space)):
             self._square = cross.matrix
         return cross
+
+
+def _all_points(visited: IntArray, size: int) -> bool:
+    """Whether ``visited`` is every point, ``0..size-1`` in order."""
+    return visited.shape == (size,) and bool(np.array_equal(visited, np.arange(size)))
 
 
 GridEngine = DenseEngine | ScalableEngine | PointEngine

@@ -16,7 +16,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from gaitpref.checks import MAX_NOISE, is_noise
-from gaitpref.model.engines import GridEngine, check_grid_size, make_engine, resolve_sampler
+from gaitpref.model.engines import (
+    GridEngine,
+    PointEngine,
+    check_grid_size,
+    make_engine,
+    resolve_sampler,
+)
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.laplace import check_visited, fit_laplace
 from gaitpref.model.likelihood import ActionLikelihood, PairLikelihood, Probit
@@ -166,11 +172,18 @@ class PreferenceGP:
             return k_vv
 
         start = None if init is None else init.mean_at(visited)
+        engine = self.engine
+        # K_VV from the K over every point the engine holds (the same floats), else the kernel
+        k_vv = engine.prior_block(visited) if isinstance(engine, PointEngine) else None
+        if k_vv is None:
+            k_vv = prior()
         fit = fit_laplace(
-            prior(), visited, a, b, likelihood, start, single=s,
+            k_vv, visited, a, b, likelihood, start, single=s,
             single_likelihood=single_likelihood, prior=prior,
         )  # fmt: skip
-        return Posterior(self.space, self.kernel, fit, self.engine, self.noise, self.ordinal)
+        if isinstance(engine, PointEngine) and visited.size == len(space):
+            engine.offer_square(k_vv)  # every point visited: K_VV is the posterior's K_{:,V}
+        return Posterior(self.space, self.kernel, fit, engine, self.noise, self.ordinal)
 
 
 def _comparison_noise(noise: ArrayLike, size: int) -> FloatArray:

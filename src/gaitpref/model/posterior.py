@@ -31,8 +31,8 @@ from scipy.linalg import cho_solve, solve_triangular
 from scipy.special import ndtr
 
 from gaitpref.checks import check_mask, is_noise
-from gaitpref.model.cross import CrossCovariance
-from gaitpref.model.engines import GridEngine
+from gaitpref.model.cross import CrossCovariance, DenseCross
+from gaitpref.model.engines import GridEngine, PointEngine
 from gaitpref.model.kernels import SquaredExponential
 from gaitpref.model.kronecker import KroneckerPriorSampler, check_sample_budget
 from gaitpref.model.laplace import LaplaceMode
@@ -110,10 +110,36 @@ class Posterior:
 
     def visited_cross(self, actions: ArrayLike) -> FloatArray:
         """``K[actions, V]``, the prior covariance of ``actions`` with the visited set, from the
-        kernel (the strategies' covariances; ``population.py`` overrides it)."""
+        kernel (the strategies' covariances; ``population.py`` overrides it).  On a point set
+        whose :attr:`cross` is already computed, its rows: the same floats as the kernel's
+        (``PointEngine.cross``), without computing them again from the coordinates."""
         idx = np.asarray(actions, dtype=np.intp)
+        cross = self._point_cross()
+        if cross is not None and (idx.size == 0 or int(idx.min()) >= 0):
+            return cross.rows(idx)
         out: FloatArray = self.kernel.cross(self.space, self.visited, rows=idx)
         return out
+
+    def _point_cross(self) -> DenseCross | None:
+        """:attr:`cross` on a point set once computed (``K_{:,V}``, each entry the kernel's
+        floats: ``PointEngine.cross``), else None."""
+        if not isinstance(self.engine, PointEngine) or "cross" not in self.__dict__:
+            return None
+        cross = self.cross
+        return cross if isinstance(cross, DenseCross) else None
+
+    def kernel_column(self, action: int) -> FloatArray:
+        """``K[:, action]`` (a new array), from the kernel; on a point set whose :attr:`cross`
+        is computed and has ``action`` among the visited, its column: the same floats."""
+        cross = self._point_cross()
+        visited = self.visited
+        k = int(np.searchsorted(visited, action)) if cross is not None else visited.size
+        if cross is not None and action >= 0 and k < visited.size and visited[k] == action:
+            out: FloatArray = cross.matrix[:, k].copy()
+            return out
+        col = np.array([action], dtype=np.intp)
+        column: FloatArray = self.kernel.cross(self.space, col)[:, 0].copy()
+        return column
 
     @cached_property
     def variance(self) -> FloatArray:

@@ -48,9 +48,9 @@ def eubo_pair(
 
 def covariance_with(posterior: Posterior, action: int) -> FloatArray:
     """``cov(f_x, f_action)`` for every action ``x`` (length ``A``)."""
-    space, kernel = posterior.space, posterior.kernel
+    space = posterior.space
     col = np.array([space.check_index(action)], dtype=np.intp)  # -1 wrapped, 2.5 truncated
-    out = kernel.cross(space, col)[:, 0].copy()
+    out = posterior.kernel_column(int(col[0]))
     if posterior.fit is None:
         return out
     w = posterior.visited_solve(posterior.visited_cross(col).T)[:, 0]
