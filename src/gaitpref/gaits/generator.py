@@ -121,9 +121,15 @@ class CompassHZD(GaitGenerator):
             )
         timed = "step_duration" in self.features
         if timed == (speed is not None):
+            what = (
+                f"the step_duration feature times each gait, so speed = {speed!r} has no use: "
+                "remove [gaits] speed"
+                if timed
+                else "give [gaits] speed (m/s) or a step_duration feature"
+            )
             raise GaitGeneratorError(
                 f"{self.name} needs a fixed speed or a step_duration feature, exactly one "
-                f"(speed = {speed!r}; features {', '.join(self.features)})"
+                f"(features {', '.join(self.features)}): {what}"
             )
         if speed is not None and not (np.isfinite(speed) and speed > 0):
             raise GaitGeneratorError(f"{self.name}: speed must be positive, got {speed!r}")
