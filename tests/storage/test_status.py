@@ -7,7 +7,8 @@ import sys
 import textwrap
 from pathlib import Path
 
-from gaitpref.storage.sql import database_status, upgrade_database
+from gaitpref.storage import SessionSpec
+from gaitpref.storage.sql import SQLStorage, database_status, upgrade_database
 
 KILLED_UPGRADE = textwrap.dedent(
     """
@@ -94,4 +95,29 @@ def test_a_file_that_is_not_a_database_with_leftovers_is_named(tmp_path: Path) -
     (tmp_path / "x.db").write_text("not a database, a page of text " * 40)
     (tmp_path / "x.db-journal").touch()
     code, out = _db_status(f"sqlite:///{tmp_path / 'x.db'}")
-    assert code == 0 and out.endswith("x.db: file is not a database"), out
+    assert code == 0 and "x.db: file is not a database (the file is not a SQLite" in out, out
+    assert out.endswith(
+        "restore it from a backup (gaitpref db backup makes them) and keep this file as it is)"
+    ), out
+
+
+def test_a_damaged_database_says_to_restore_it_from_a_backup(tmp_path: Path) -> None:
+    """A file cut short (a copy interrupted, a disk fault) read as 'database disk image is
+    malformed' and a text file as 'file is not a database', and nothing more: each now says what
+    to do, for every command, and the file is left as it was."""
+    db = tmp_path / "lab.db"
+    upgrade_database(f"sqlite:///{db}")
+    storage = SQLStorage(f"sqlite:///{db}")
+    for k in range(40):  # enough pages that cutting the file leaves their index pointing past it
+        storage.create_session(SessionSpec(f"S{k:02d}", "c", "x" * 2000, "0" * 64, 0, "t"), [])
+    storage.close()
+    size = db.stat().st_size
+    with open(db, "r+b") as f:
+        f.truncate(size // 2)
+    cut = db.read_bytes()
+    for args in (("session", "list"), ("session", "show", "1", "--no-figure"), ("db", "check")):
+        code, out = _db_status(f"sqlite:///{db}", *args)
+        assert code == 2, (args, out)
+        assert "database disk image is malformed (the file is damaged: restore it from a " in out
+        assert "backup (gaitpref db backup makes them) and keep this file as it is)" in out
+    assert db.read_bytes() == cut

@@ -625,10 +625,31 @@ def _has_tables(url: URL) -> bool:
 
 
 # -- helpers -----------------------------------------------------------------------------------
+#: What to do with a file SQLite cannot read as a database (by its message's words).
+DAMAGED = {
+    "file is not a database": (
+        "the file is not a SQLite database, or its first page is damaged: check that --db "
+        "names the database; if it does, restore it from a backup (gaitpref db backup makes "
+        "them) and keep this file as it is"
+    ),
+    "database disk image is malformed": (
+        "the file is damaged: restore it from a backup (gaitpref db backup makes them) and "
+        "keep this file as it is"
+    ),
+}
+
+
 def _hint(file: Path | None, exc: BaseException) -> str:
     """Why SQLite could not open the file: its folder is read-only (an existing file's -wal and
-    -shm files, or a new database, cannot be made there)."""
-    if file is None or "unable to open database file" not in _reason(exc):
+    -shm files, or a new database, cannot be made there), or the file is not a database or is
+    damaged (:data:`DAMAGED`: what to do)."""
+    if file is None:
+        return ""
+    reason = _reason(exc)
+    for words, what in DAMAGED.items():
+        if words in reason:
+            return f" ({what})"
+    if "unable to open database file" not in reason:
         return ""
     folder = file.resolve().parent
     if not folder.is_dir() or os.access(folder, os.W_OK):
