@@ -17,7 +17,9 @@ key line just above it), so that a setting added to a strategy is not documented
 
 Every TOML block of docs/*.md is a config snippet (``tests/test_doc_examples.py`` parses them as
 written); here each example line, ``# key = value`` uncommented, must name a key its table
-declares, and its value, where the line is TOML by itself, must pass that key's own check.
+declares, and its value, where the line is TOML by itself, must pass that key's own check.  A
+number a key's comment states as its default (``default 20``) or a range (``0..100``) must be
+the declared default and bounds.
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ import pytest
 
 from gaitpref.config import schema
 from gaitpref.config.schema import STRATEGY_TABLES, TABLES, Key
-from gaitpref.config.specs import Number, Spec, Table
+from gaitpref.config.specs import Integer, Number, Spec, Table
 from gaitpref.errors import ConfigError
 from gaitpref.strategies import STRATEGIES
 
@@ -255,3 +257,45 @@ def test_a_setting_documented_for_another_strategy_is_found() -> None:
         table = f"{SETTINGS} ({strategy})"
         probe = {**TABLES, table: {**TABLES[table], "beta": beta}}
         assert undocumented(tables=probe) == [f"[{table}] beta"]
+
+
+# A number as the docs write one: 0.05, 1e-12, 1e6, 1,000,000 (not 2 of 2**63, nor "64," whole).
+NUMBER = r"-?\d(?:\d|,(?=\d{3}))*(?:\.\d+)?(?:e-?\d+)?(?![\d*])"
+
+
+def stated(notes: str) -> tuple[list[float], list[tuple[float, float]]]:
+    """The numeric defaults (``default 20``, ``default: 0.05``) and ranges (``0..100``) that a
+    key's comment states."""
+
+    def value(text: str) -> float:
+        return float(text.replace(",", ""))
+
+    defaults = [value(d) for d in re.findall(rf"default:?\s+({NUMBER})", notes)]
+    ranges = re.findall(rf"({NUMBER})\s*\.\.\s*({NUMBER})", notes)
+    return defaults, [(value(lo), value(hi)) for lo, hi in ranges]
+
+
+@pytest.mark.parametrize("page", doc_pages(), ids=lambda p: p.name)
+def test_the_numeric_defaults_and_ranges_the_docs_state_are_the_declared_ones(page: Path) -> None:
+    """Where a key's comment states a number as its default, or a range ``lo..hi``, they are the
+    key's declared default (a strategy setting's: one of its strategies') and bounds."""
+    wrong, checked = [], 0
+    for line in key_lines(page):
+        tables = [t for n, t in TABLES.items() if n.startswith(SETTINGS)]
+        if line.table == SETTINGS:
+            keys = [t[line.key] for t in tables if line.key in t]
+        else:
+            keys = [(declared(line.table) or {})[line.key]]
+        defaults, ranges = stated(line.notes)
+        numbers = [k.default for k in keys if type(k.default) in (int, float)]
+        for default in defaults if numbers else []:
+            checked += 1
+            if default not in numbers:
+                wrong.append(f"[{line.table}] {line.key}: default {default:g}, declared {numbers}")
+        for lo, hi in ranges:
+            checked += 1
+            spec = keys[0].spec
+            if not isinstance(spec, Integer | Number) or (lo, hi) != (spec.lo, spec.hi):
+                wrong.append(f"[{line.table}] {line.key}: {lo:g}..{hi:g}, declared {spec}")
+    assert wrong == []
+    assert checked >= 30 or page.name != "configs.md"
