@@ -136,7 +136,7 @@ TOP: Final[dict[str, Key]] = {
     "cospar": Key(Table("the loop's settings"), {}),
     "feedback": Key(Table("[feedback.rating]: ordinal ratings"), {}),
     "safety": Key(Table("the region of avoidance and unsafe flags"), {}),
-    "stop": Key(Table("the stopping rule: confidence, max_trials, tolerance"), {}),
+    "stop": Key(Table("the stopping rule: confidence, max_trials, tolerance, samples"), {}),
 }
 FEEDBACK: Final[dict[str, Key]] = {
     "rating": Key(Table("labels, thresholds, noise"), None),
