@@ -22,11 +22,11 @@ clinics recorded before (``defaults-0.10``: objectives 1-24, seed 0; ``fresh-0.8
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _usage import positional
 
 from gaitpref.simulate.population import cluster_bootstrap
 
@@ -48,7 +48,8 @@ def _mean_se(x: np.ndarray) -> tuple[float, float]:
 
 
 def main() -> None:
-    out, paths = Path(sys.argv[1]), [Path(p) for p in sys.argv[2:]]
+    args = positional(__doc__, 2)
+    out, paths = Path(args[0]), [Path(p) for p in args[1:]]
     lines = [
         "# Warm starts at rho = 0: four clinics pooled (issue 14)",
         "",
