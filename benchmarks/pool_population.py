@@ -16,7 +16,14 @@ cold and warm answers as one cluster of the bootstrap (``cluster_bootstrap``).
 writes ``OUT/summary.md``.  Run for ``docs/results/population/rho0-clinics/`` with the two
 clinics recorded before (``defaults-0.10``: objectives 1-24, seed 0; ``fresh-0.8``: objectives
 25-48, seed 1) and two run for it (``clinic3``: objectives 49-72, shared objective 98, seed 2;
-``clinic4``: objectives 73-96, shared objective 97, seed 3).
+``clinic4``: objectives 73-96, shared objective 97, seed 3); this remakes its ``summary.md``
+byte for byte from the committed results::
+
+    python benchmarks/pool_population.py docs/results/population/rho0-clinics \
+        docs/results/population/defaults-0.10/results.json \
+        docs/results/population/fresh-0.8/results.json \
+        docs/results/population/rho0-clinics/clinic3/results.json \
+        docs/results/population/rho0-clinics/clinic4/results.json
 """
 
 from __future__ import annotations
