@@ -17,6 +17,7 @@ Writes benchmarks/results/stopping.md.
 
 from __future__ import annotations
 
+import argparse
 import time
 from pathlib import Path
 
@@ -40,6 +41,10 @@ def _timed(post: object, samples: int) -> float:
 
 
 def main() -> None:
+    # no options: --help shows the docstring, anything else is refused before the timing
+    argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    ).parse_args()
     cfg = load_config("synthetic-2d")
     cases = [("30 x 30 (synthetic-2d)", cfg.space, cfg.kernel, cfg.noise)]
     cases += [(label, *_case(name)) for label, name in (("synthetic-6d", "6d"), ("32^4", "4d"))]

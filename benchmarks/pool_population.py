@@ -16,17 +16,24 @@ cold and warm answers as one cluster of the bootstrap (``cluster_bootstrap``).
 writes ``OUT/summary.md``.  Run for ``docs/results/population/rho0-clinics/`` with the two
 clinics recorded before (``defaults-0.10``: objectives 1-24, seed 0; ``fresh-0.8``: objectives
 25-48, seed 1) and two run for it (``clinic3``: objectives 49-72, shared objective 98, seed 2;
-``clinic4``: objectives 73-96, shared objective 97, seed 3).
+``clinic4``: objectives 73-96, shared objective 97, seed 3); this remakes its ``summary.md``
+byte for byte from the committed results::
+
+    python benchmarks/pool_population.py docs/results/population/rho0-clinics \
+        docs/results/population/defaults-0.10/results.json \
+        docs/results/population/fresh-0.8/results.json \
+        docs/results/population/rho0-clinics/clinic3/results.json \
+        docs/results/population/rho0-clinics/clinic4/results.json
 """
 
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _usage import positional
 
 from gaitpref.simulate.population import cluster_bootstrap
 
@@ -48,7 +55,8 @@ def _mean_se(x: np.ndarray) -> tuple[float, float]:
 
 
 def main() -> None:
-    out, paths = Path(sys.argv[1]), [Path(p) for p in sys.argv[2:]]
+    args = positional(__doc__, 2)
+    out, paths = Path(args[0]), [Path(p) for p in args[1:]]
     lines = [
         "# Warm starts at rho = 0: four clinics pooled (issue 14)",
         "",

@@ -3,6 +3,7 @@ gaits, large, sessions, startup, sweeps, threads, ...); each records its results
 
 from __future__ import annotations
 
+import argparse
 import subprocess
 import sys
 from pathlib import Path
@@ -11,6 +12,8 @@ HERE = Path(__file__).parent
 
 
 def main() -> int:
+    # no options: --help shows the docstring, anything else is refused before any benchmark
+    argparse.ArgumentParser(description=__doc__).parse_args()
     failed = []
     for script in sorted(HERE.glob("bench_*.py")):
         print(f"== {script.name}", flush=True)

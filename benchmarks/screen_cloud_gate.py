@@ -26,12 +26,12 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import study_continuous as sc
+from _usage import positional
 
 import gaitpref.loop.line as line_mod
 from gaitpref.strategies import hybrid
@@ -79,8 +79,9 @@ line_mod.LineCoSpar._on_line = _on_line  # type: ignore[method-assign]
 if not os.environ.get("PLAIN"):  # PLAIN=1: the shipped cloud, to check the patches
     hybrid.GatedEubo.propose = _propose  # type: ignore[method-assign]
 
-SEEDS = int(sys.argv[1]) if len(sys.argv) > 1 else 12
-CELLS = sys.argv[2:] or [
+ARGS = positional(__doc__, 0)
+SEEDS = int(ARGS[0]) if ARGS else 12
+CELLS = ARGS[1:] or [
     "random-gp:12:0.0",
     "random-gp:12:0.2",
     "random-gp:8:0.0",

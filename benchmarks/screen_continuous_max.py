@@ -18,12 +18,12 @@ Result (2026-12-04, 12-D random GP without coactive feedback, seeds 0-11):
 from __future__ import annotations
 
 import json
-import sys
 import time
 from collections.abc import Callable
 
 import numpy as np
 import study_continuous as sc
+from _usage import positional
 from numpy.typing import NDArray
 from scipy.optimize import minimize
 
@@ -93,9 +93,10 @@ def run(d: int, noise: float, seed: int, trials: int = 60) -> dict[str, float]:
 
 
 def main() -> None:
-    d, noise = int(sys.argv[1]), float(sys.argv[2])
+    args = positional(__doc__, 4, 4)
+    d, noise = int(args[0]), float(args[1])
     rows = []
-    for seed in range(int(sys.argv[3]), int(sys.argv[4])):
+    for seed in range(int(args[2]), int(args[3])):
         start = time.perf_counter()
         rows.append(run(d, noise, seed))
         print(json.dumps(rows[-1]), f"{time.perf_counter() - start:.1f} s", flush=True)

@@ -15,21 +15,24 @@ too).  Prints the best@60 fraction of each seed.
 from __future__ import annotations
 
 import dataclasses
-import sys
 
 import numpy as np
 import study_continuous as sc
+from _usage import positional
 
 import gaitpref.loop.line as line_mod
 from gaitpref.loop import lines as line_geometry
 
 sc.TRIALS = 60
 real = line_mod.draw_line
-SCALES = [float(x) for x in sys.argv[2].split(",")] if len(sys.argv) > 2 else [0.05, 0.1, 0.2]
-PER = int(sys.argv[3]) if len(sys.argv) > 3 else 60
-FIRST = int(sys.argv[4]) if len(sys.argv) > 4 else 0
-LINES = int(sys.argv[5]) if len(sys.argv) > 5 else 4
-SEEDS = int(sys.argv[6]) if len(sys.argv) > 6 else 12
+ARGS = positional(__doc__, 1, 6)
+if ARGS[0] not in ("base", "cloud"):
+    raise SystemExit(f"screen_line_cloud.py: {ARGS[0]!r}: the variant is base or cloud")
+SCALES = [float(x) for x in ARGS[1].split(",")] if len(ARGS) > 1 else [0.05, 0.1, 0.2]
+PER = int(ARGS[2]) if len(ARGS) > 2 else 60
+FIRST = int(ARGS[3]) if len(ARGS) > 3 else 0
+LINES = int(ARGS[4]) if len(ARGS) > 4 else 4
+SEEDS = int(ARGS[5]) if len(ARGS) > 5 else 12
 
 
 def cloud(space, settings, seed, origin, towards=None):
@@ -46,7 +49,7 @@ def cloud(space, settings, seed, origin, towards=None):
     return dataclasses.replace(ln, points=pts)
 
 
-variant = sys.argv[1]
+variant = ARGS[0]
 if variant == "cloud":
     line_mod.draw_line = cloud
 for noise in (0.0, 0.2):

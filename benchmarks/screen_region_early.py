@@ -17,9 +17,9 @@ objective difference.  Results: ``docs/results/ordinal/notes.md``.
 from __future__ import annotations
 
 import dataclasses
-import sys
 
 import numpy as np
+from _usage import positional
 from joblib import Parallel, delayed
 from study_ordinal import LABELS, Arm, run_one
 
@@ -48,10 +48,11 @@ def measure(arm: Arm, grid: str, scenario: str, n: int) -> tuple[np.ndarray, ...
 
 
 def main() -> None:
-    grid, scenario, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    args = positional(__doc__, 3)
+    grid, scenario, n = args[0], args[1], int(args[2])
     base_w, base_f, base_o = measure(Arm("rated"), grid, scenario, n)
     print(f"rated: worst/run {base_w.mean():.2f} (1-5 {base_f.mean():.2f}) obj {base_o.mean():.3f}")
-    for spec in sys.argv[4:]:
+    for spec in args[3:]:
         kw = dict(kv.split("=") for kv in spec.split(","))
         arm = RatedArm(
             spec, risk=kw.get("region", "1") == "1", cautious=float(kw.get("cautious", 0.6)),
