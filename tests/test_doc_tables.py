@@ -10,6 +10,7 @@ Each backticked ``name(args) -> ret`` of the table's member column is held to
 from __future__ import annotations
 
 import ast
+import dataclasses
 import inspect
 import re
 from pathlib import Path
@@ -107,3 +108,25 @@ def test_create_example_names_every_parameter() -> None:
     )
     named = ["db", "config"][: len(call.args)] + [k.arg for k in call.keywords]
     assert named == [p for p, _, _ in code_params(Session.create)]
+
+
+def test_records_fields_match_the_code() -> None:
+    """``SessionQuery(...)`` and the fields of ``Answered`` and ``ShownGait`` as the table says."""
+    from gaitpref.sessions import Answered, SessionQuery, ShownGait
+
+    section = api_section()
+    query = re.search(r"`SessionQuery\(([^)]*)\)`", section)
+    assert query, "docs/sessions.md no longer spells SessionQuery(...)"
+    assert [a.strip() for a in query.group(1).split(",")] == [
+        f.name for f in dataclasses.fields(SessionQuery)
+    ]
+    answered = re.search(r"`Answered` has (.*?) \|", section)
+    assert answered
+    assert set(re.findall(r"`(\w+)`", answered.group(1))) == {
+        f.name for f in dataclasses.fields(Answered)
+    }
+    shown = re.search(r"as the round showed them \((.*?)\) \|", section)
+    assert shown
+    assert set(re.findall(r"`(\w+)`", shown.group(1))) == {
+        f.name for f in dataclasses.fields(ShownGait)
+    }
