@@ -130,3 +130,10 @@ def test_records_fields_match_the_code() -> None:
     assert set(re.findall(r"`(\w+)`", shown.group(1))) == {
         f.name for f in dataclasses.fields(ShownGait)
     }
+
+
+def test_every_public_member_of_session_is_in_the_table() -> None:
+    documented = {MEMBER.match(item.strip()).group(1) for item in members()}  # type: ignore[union-attr]
+    documented |= {"create", "open"}  # the example above the table
+    public = [name for name in vars(Session) if not name.startswith("_")]
+    assert [name for name in public if name not in documented] == []
