@@ -9,6 +9,7 @@ under ``CI=true`` that skip is a failure, as ``tests/ci_rule.py`` does for Postg
 from __future__ import annotations
 
 import html
+import importlib
 import importlib.util
 import os
 import re
@@ -81,6 +82,33 @@ def page(site: Path, uri: str) -> str:
 )
 def test_api_reference_documents_the_public_surface(site: Path, uri: str, anchor: str) -> None:
     assert f'id="{anchor}"' in page(site, uri)
+
+
+#: each package whose ``__all__`` is the public API, and its reference page
+REFERENCE_PAGES = {
+    "gaitpref": "reference/gaitpref",
+    "gaitpref.config": "reference/config",
+    "gaitpref.errors": "reference/errors",
+    "gaitpref.feedback": "reference/feedback",
+    "gaitpref.gaits": "reference/gaits",
+    "gaitpref.loop": "reference/loop",
+    "gaitpref.model": "reference/model",
+    "gaitpref.sessions": "reference/sessions",
+    "gaitpref.simulate": "reference/simulate",
+    "gaitpref.storage": "reference/storage",
+    "gaitpref.strategies": "reference/strategies",
+}
+
+
+@pytest.mark.parametrize("package", sorted(REFERENCE_PAGES))
+def test_every_public_name_is_on_its_reference_page(site: Path, package: str) -> None:
+    """Every name of the package's ``__all__`` (dunders aside) imports and has its anchor."""
+    module = importlib.import_module(package)
+    names = [n for n in module.__all__ if not n.startswith("__")]
+    assert all(hasattr(module, n) for n in names), [n for n in names if not hasattr(module, n)]
+    text = page(site, REFERENCE_PAGES[package])
+    missing = [n for n in names if f'id="{package}.{n}"' not in text]
+    assert not missing, f"{REFERENCE_PAGES[package]} does not document {missing}"
 
 
 def test_storage_reference_has_the_contract_suite_when_it_exists(site: Path) -> None:

@@ -52,6 +52,7 @@ def kinds() -> tuple[FeedbackKind[Any], ...]:
 
 
 def kind_named(name: str) -> FeedbackKind[Any]:
+    """The registered kind called ``name``; a ``KeyError`` listing the registered kinds if none."""
     try:
         return _BY_NAME[name]
     except KeyError:

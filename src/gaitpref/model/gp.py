@@ -37,6 +37,23 @@ class PreferenceGP:
     ``sampler`` picks how posteriors reach all actions: ``"dense"``, ``"scalable"`` or
     ``"auto"`` (by grid size; ``engines.py``).  Both give the same draws for the same seed up to
     rounding.
+
+    ``ordinal`` (an :class:`Ordinal`) lets :meth:`posterior` take ratings ``(action, label)``,
+    labels ``1..K`` or category names, in the same fit as the preferences; the posterior then
+    gives each action's rating probabilities (``n x K``)::
+
+        >>> import gaitpref
+        >>> space = gaitpref.Space([gaitpref.Feature("x", [0.0, 0.25, 0.5, 0.75, 1.0])])
+        >>> gp = gaitpref.PreferenceGP(
+        ...     space, gaitpref.SquaredExponential(0.3, 1.0), 0.1,
+        ...     ordinal=gaitpref.Ordinal(["bad", "ok", "good"]),
+        ... )
+        >>> post = gp.posterior([4], [0], ratings=[(4, "good"), (0, 1)])
+        >>> post.rating_probabilities([0, 4]).round(2)
+        array([[0.67, 0.33, 0.  ],
+               [0.  , 0.33, 0.67]])
+        >>> post.preference_probability(4, 0) > 0.9
+        True
     """
 
     def __init__(

@@ -54,6 +54,9 @@ MAX_CATEGORIES = 100
 class Ordinal:
     """Ordinal ratings: ``categories`` labels (worst first), thresholds and rating noise.
 
+    ``categories`` is the labels or their number ``K`` (labels ``"1"`` .. ``"K"``); a rating names
+    its category by label or by its number ``1..K``.
+
     ``thresholds=None``: set from the signal variance at the prior predictive's quantiles (see
     :meth:`thresholds_for`).  ``noise`` is the rating noise ``s`` in utility units.
     """

@@ -34,6 +34,7 @@ GaitLibraryLike: TypeAlias = "GaitLibrary | Sequence[str] | Mapping[int, str]"
 
 
 def software_version() -> str:
+    """The gaitpref version a new session records (``gaitpref.__version__``)."""
     from gaitpref import __version__
 
     return __version__
