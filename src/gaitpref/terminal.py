@@ -766,7 +766,10 @@ class Terminal:
                         markup=False,
                     )
                     continue
-                other = "the previous one" if c >= len(q.actions) else f"trial {tj}"
+                # "the previous one" only when one trial is buffered: with b > 1 the buffer
+                # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
+                previous = c >= len(q.actions) and len(q.buffer) == 1
+                other = "the previous one" if previous else f"trial {tj}"
                 this = "this one" if len(q.actions) == 1 else f"trial {ti}"
                 answer = self.ask(
                     f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",

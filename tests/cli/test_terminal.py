@@ -830,3 +830,26 @@ def test_a_flag_written_whose_round_the_database_refuses_to_draw_again_says_flag
     reopened = Session.open(storage, session.id)
     assert reopened.unsafe_flags() == {2: (session.trials()[1].action, "knee gave way")}
     assert reopened.validation_plan is None
+
+
+def test_with_two_buffered_trials_each_is_named_by_its_number_not_the_previous_one() -> None:
+    """n = 1, b = 2: trial 3 is compared with trials 1 and 2; trial 1 was called "the previous
+    one" as trial 2 was, and the operator could not tell which key meant which walk."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "buffer = 2\nn = 1"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.buffer[0], "first")], [])
+    q = session.next_query()
+    assert q.buffer_trials == (1, 2)
+    terminal, console = _terminal(session, "1", "2", "", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Trial 3 against trial 1: 1 this one, 2 trial 1, 0 no preference" in text
+    assert "Trial 3 against trial 2: 1 this one, 2 trial 2, 0 no preference" in text
+    assert "the previous one" not in text
+    told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()][-2:]
+    assert told == [(3, 1, "first"), (3, 2, "second")]
