@@ -162,9 +162,11 @@ def _move_words(feature: Feature) -> tuple[str, str, str, str]:
     return (up, f"slightly {up}", f"slightly {down}", down)
 
 
-def _trials(q: SessionQuery) -> str:
-    """``trial 5`` or ``trials 4, 5``: the query's trials as the prompts name them."""
-    return ("trial " if len(q.trials) == 1 else "trials ") + ", ".join(map(str, q.trials))
+def _trials(q: SessionQuery | Sequence[int]) -> str:
+    """``trial 5`` or ``trials 4, 5``: the query's trials (or these trial numbers) as the
+    prompts name them."""
+    numbers = q.trials if isinstance(q, SessionQuery) else q
+    return ("trial " if len(numbers) == 1 else "trials ") + ", ".join(map(str, numbers))
 
 
 class Terminal:
@@ -504,10 +506,11 @@ class Terminal:
 
     def _undo(self) -> None:
         answered = self.session.trials()
-        last = f" (trial {answered[-1].number})" if answered else ""
         if not answered:
             self.console.print("  cannot undo: no answer is in force", markup=False)
             return
+        # every trial of the last answer's query (n > 1): the undo takes them all back
+        last = f" ({_trials([t.number for t in answered if t.query == answered[-1].query])})"
         while True:
             try:
                 key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
@@ -549,8 +552,9 @@ class Terminal:
                 markup=False,
             )
             return
-        trials = ", ".join(map(str, pending.trials))
-        self.console.print(f"Undone: the answer to trial {trials} is asked again.", markup=False)
+        self.console.print(
+            f"Undone: the answer to {_trials(pending)} is asked again.", markup=False
+        )
 
     def _one(self, q: SessionQuery) -> None:
         s = self.session

@@ -853,3 +853,22 @@ def test_with_two_buffered_trials_each_is_named_by_its_number_not_the_previous_o
     assert "the previous one" not in text
     told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()][-2:]
     assert told == [(3, 1, "first"), (3, 2, "second")]
+
+
+def test_the_undo_of_a_query_of_two_trials_names_both() -> None:
+    """n = 2: the undo takes back the whole query; it asked 'Undo the last answer (trial 4)?',
+    naming only the query's last trial."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "n = 2\nbuffer = 0"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.actions[1], "first")], [])
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.actions[1], "second")], [])
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Undo the last answer (trials 3, 4)?  y yes, n no" in text
+    assert "Undone: the answer to trials 3, 4 is asked again." in text
+    assert [t.number for t in session.trials()] == [1, 2]
