@@ -169,6 +169,16 @@ def _trials(q: SessionQuery | Sequence[int]) -> str:
     return ("trial " if len(numbers) == 1 else "trials ") + ", ".join(map(str, numbers))
 
 
+def _trials_of(q: SessionQuery) -> dict[int, list[int]]:
+    """The query's executed gaits, each with its trials: a gait proposed twice in one query
+    (n > 1) ran in two trials, and takes one rating and one suggestion per feature (the
+    session refuses a second: ``action 89 is rated twice``)."""
+    out: dict[int, list[int]] = {}
+    for t, a in zip(q.trials, q.actions, strict=True):
+        out.setdefault(a, []).append(t)
+    return out
+
+
 class Terminal:
     """Runs a session interactively through ``read`` (default: ``input``) and a Rich console."""
 
@@ -741,13 +751,14 @@ class Terminal:
         said: list[str] = []
         keys = {str(k + 1): label for k, label in enumerate(scale.categories)}
         options = ", ".join(f"{k} {label}" for k, label in keys.items())
-        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+        for a, numbers in _trials_of(q).items():  # a gait run twice in the query: rated once
+            which = _trials(numbers) + (" (the same gait)" if len(numbers) > 1 else "")
             key = self.ask(
-                f"Rating of trial {t}: {options}, Enter to skip", {**keys, "": ""}, default=""
+                f"Rating of {which}: {options}, Enter to skip", {**keys, "": ""}, default=""
             )
             if key:
                 out.append(Rating(a, keys[key]))
-                said.append(f"trial {t} rated {keys[key]}")
+                said.append(f"{_trials(numbers)} rated {keys[key]}")
         return out, said
 
     def _gait(self, action: int) -> str:
@@ -793,11 +804,12 @@ class Terminal:
         out: list[tuple[int, str, str]] = []
         said: list[str] = []
         space = self.session.space
-        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+        for a, numbers in _trials_of(q).items():  # a gait run twice: one suggestion per feature
+            same = ", the same gait" if len(numbers) > 1 else ""
             for f in space.features:
                 words = _move_words(f)
                 options = ", ".join(f"{k + 1} {w}" for k, w in enumerate(words))
-                where = f" (trial {t})" if len(q.actions) > 1 else ""
+                where = f" ({_trials(numbers)}{same})" if len(q.actions) > 1 else ""
                 key = self.ask(
                     f"Suggestion for {f.name}{where}: {options}, 0 none",
                     {"0": "", "1": "", "2": "", "3": "", "4": ""},

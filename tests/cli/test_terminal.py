@@ -872,3 +872,39 @@ def test_the_undo_of_a_query_of_two_trials_names_both() -> None:
     assert "Undo the last answer (trials 3, 4)?  y yes, n no" in text
     assert "Undone: the answer to trials 3, 4 is asked again." in text
     assert [t.number for t in session.trials()] == [1, 2]
+
+
+def _query_with_a_gait_twice(config: str) -> Session:
+    """A session (n = 2) whose pending query proposes one gait for both of its trials."""
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(config), "S01", seed=0)
+    for _ in range(40):
+        q = session.next_query()
+        if len(set(q.actions)) < len(q.actions):
+            return session
+        pairs = [(a, b, "first" if a > b else "second") for k, a in enumerate(q.actions)
+                 for b in q.members[k + 1 :]]  # fmt: skip
+        session.answer(q.id, pairs, [])
+    raise AssertionError("no query proposed a gait twice")
+
+
+def test_a_gait_run_twice_in_one_query_is_rated_and_suggested_once() -> None:
+    """n = 2, one gait for trials 3 and 4: a rating and a suggestion per trial were asked, and
+    the session refused the answer ('action 89 is rated twice'), asked again the same way."""
+    shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
+    config = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 2\nbuffer = 0")
+    session = _query_with_a_gait_twice(config)
+    q = session.next_query()
+    (t3, t4), a = q.trials, q.actions[0]
+    terminal, console = _terminal(session, "4", "1", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert f"trials {t3} and {t4} are the same gait: nothing to compare" in text
+    assert f"Rating of trials {t3}, {t4} (the same gait): 1 very bad" in text
+    assert f"Suggestion for step_length (trials {t3}, {t4}, the same gait): 1 longer" in text
+    assert "not written" not in text
+    rated = [e.payload for e in session.events() if e.kind == "rating_given"]
+    assert [(r["action"], r["category"]) for r in rated] == [(a, "good")]
+    assert [s.action for s in session.suggestions()] == [a]
+    assert [t.number for t in session.trials()][-2:] == [t3, t4]
