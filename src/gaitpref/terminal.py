@@ -768,6 +768,7 @@ class Terminal:
         out: list[tuple[int, int, str]] = []
         said: list[str] = []
         seen: set[tuple[int, int]] = set()
+        asked: dict[frozenset[int], tuple[int, int]] = {}  # the trials a pair of gaits was asked as
         members = list(zip(q.member_trials, q.members, strict=True))
         for r, (ti, ai) in enumerate(zip(q.trials, q.actions, strict=True)):
             for c, (tj, aj) in enumerate(members):
@@ -781,6 +782,15 @@ class Terminal:
                         markup=False,
                     )
                     continue
+                if frozenset((ai, aj)) in asked:  # a gait run twice (b > 1, n > 1): asked once
+                    pi, pj = asked[frozenset((ai, aj))]
+                    self.console.print(
+                        f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
+                        f"trial {pj}, compared once",
+                        markup=False,
+                    )
+                    continue
+                asked[frozenset((ai, aj))] = (ti, tj)
                 # "the previous one" only when one trial is buffered: with b > 1 the buffer
                 # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
                 previous = c >= len(q.actions) and len(q.buffer) == 1

@@ -908,3 +908,32 @@ def test_a_gait_run_twice_in_one_query_is_rated_and_suggested_once() -> None:
     assert [(r["action"], r["category"]) for r in rated] == [(a, "good")]
     assert [s.action for s in session.suggestions()] == [a]
     assert [t.number for t in session.trials()][-2:] == [t3, t4]
+
+
+def test_a_buffer_holding_one_gait_twice_is_compared_with_it_once() -> None:
+    """n = 1, b = 2, trials 14 and 15 ran one gait: trial 16 was asked against both, both
+    answers were stored as against trial 14 (the session names a gait by its first trial) and
+    the model took the pair twice; the console asks it once."""
+    shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
+    config = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 1\nbuffer = 2")
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(config), "S01", seed=0)
+    for _ in range(40):
+        q = session.next_query()
+        if len(set(q.buffer)) < len(q.buffer) and q.actions[0] not in q.buffer:
+            break
+        pairs = [(q.actions[0], b, "first" if q.actions[0] > b else "second") for b in q.buffer]
+        session.answer(q.id, pairs, [])
+    else:
+        raise AssertionError("no buffer held one gait twice")
+    (t,), (b1, b2) = q.trials, q.buffer_trials
+    before = len(session.comparisons())
+    terminal, console = _terminal(session, "1", "", "0", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert f"Trial {t} against trial {b1}: 1 this one, 2 trial {b1}" in text
+    assert f"Trial {t} against trial {b2}:" not in text
+    assert f"trial {t} against trial {b2}: the same gaits as trial {t} against trial {b1}" in text
+    told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()[before:]]
+    assert told == [(t, b1, "first")]
