@@ -8,7 +8,7 @@ One iteration (n = 1, b = 1, the paper's protocol)::
     Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
     Rating of trial 5: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip     (with [feedback.rating])
     Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter,
-      x write and flag trial 5 unsafe
+      x write and flag trial 5 unsafe                         (n > 1: which trial, or a all)
     saved: trial 5
 
 Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
@@ -578,7 +578,9 @@ class Terminal:
             ratings, rated = self._ratings(q)
             suggestions, words = self._suggestions(q)
             summary = "; ".join(said + rated + words) or "no comparison, no suggestion"
-            flag = f"x write and flag {_trials(q)} unsafe"
+            several = len(set(q.trials)) > 1
+            flag = f"x write and flag {'one or all of ' if several else ''}{_trials(q)} unsafe"
+            unsafe: tuple[int, ...] = ()
             while True:  # asked again while another writer holds the session (nothing written)
                 try:
                     key = self.ask(
@@ -588,6 +590,7 @@ class Terminal:
                     )
                     if key == "n":
                         break
+                    unsafe = self._which_unsafe(q) if key == "x" else ()
                     reason = self._reason() if key == "x" else ""
                 except _QuitError:  # the answer was shown in full: say it was not kept
                     self._not_written(q, summary)
@@ -616,13 +619,15 @@ class Terminal:
                             "  the answer confirmed before the connection was lost was stored",
                             markup=False,
                         )
-                        self._written(q, reason)
+                        self._written(q, reason, unsafe=unsafe)
                         return
                     # a round another writer opened meanwhile: the loop asks its ranking next
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason, answered.stop_warning, answered.clipped, answered.stopped)
+                self._written(
+                    q, reason, answered.stop_warning, answered.clipped, answered.stopped, unsafe
+                )
                 return
 
     def _not_written(self, q: SessionQuery, summary: str) -> None:
@@ -640,13 +645,15 @@ class Terminal:
         stop_warning: str | None = None,
         clipped: Sequence[str] = (),
         stopped: str | None = None,
+        unsafe: Sequence[int] = (),
     ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
-        flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
-        checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
-        went past the edge of their range (:attr:`Answered.clipped`), said after the save;
-        ``stopped``: the rule's reason when it opened blind validation after the answer
-        (:attr:`Answered.stopped`), said before the round is shown."""
+        flag asked with it (``reason``, on the trials ``unsafe``, default every trial of
+        ``q``); ``stop_warning``: why the ``[stop]`` rule could not be checked after it
+        (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that went past the
+        edge of their range (:attr:`Answered.clipped`), said after the save; ``stopped``: the
+        rule's reason when it opened blind validation after the answer (:attr:`Answered.stopped`),
+        said before the round is shown."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
         for note in clipped:
@@ -674,7 +681,7 @@ class Terminal:
             return
         redrawn = False
         flagged: list[int] = []
-        for t in dict.fromkeys(q.trials):
+        for t in dict.fromkeys(unsafe or q.trials):
             done = self._flag(t, reason)
             if done is not None:
                 flagged.append(t)
@@ -723,6 +730,18 @@ class Terminal:
             if key == "n":
                 self.console.print(f"  trial {trial} not flagged; {later}", markup=False)
                 return None
+
+    def _which_unsafe(self, q: SessionQuery) -> tuple[int, ...]:
+        """The trials of ``q`` to flag unsafe: asked when it ran several (n > 1), so that one
+        unsafe gait does not take the query's other gaits away too."""
+        trials = tuple(dict.fromkeys(q.trials))
+        if len(trials) == 1:
+            return trials
+        keys = {str(t): "" for t in trials}
+        key = self.ask(
+            f"Which trial is unsafe? {', '.join(keys)}, a all of them", {**keys, "a": ""}
+        )
+        return trials if key == "a" else (int(key),)
 
     def _reason(self) -> str:
         """Why the trial is unsafe (asked until given; ``q`` pauses and ``u`` undoes, as at

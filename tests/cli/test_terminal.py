@@ -937,3 +937,24 @@ def test_a_buffer_holding_one_gait_twice_is_compared_with_it_once() -> None:
     assert f"trial {t} against trial {b2}: the same gaits as trial {t} against trial {b1}" in text
     told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()[before:]]
     assert told == [(t, b1, "first")]
+
+
+def test_x_on_a_query_of_two_trials_asks_which_one_is_unsafe() -> None:
+    """n = 2: x flagged both trials of the query, so one unsafe gait took the other (and, with
+    a radius, its neighbours) away too; it now asks which, or a for all."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "n = 2\nbuffer = 0"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    terminal, console = _terminal(session, "1", "", "", "0", "0", "x", "7", "2", "knee buckled")
+    terminal.run()
+    text = console.export_text()
+    assert "x write and flag one or all of trials 1, 2 unsafe" in text
+    assert "Which trial is unsafe? 1, 2, a all of them" in text
+    assert "flagged unsafe: trial 2 (knee buckled)" in text
+    assert session.unsafe_flags() == {2: (session.trials()[1].action, "knee buckled")}
+
+    both = Session.create(MemoryStorage(), config, "S01", seed=2)
+    terminal, console = _terminal(both, "1", "", "", "0", "0", "x", "a", "fell")
+    terminal.run()
+    assert sorted(both.unsafe_flags()) == [1, 2]
