@@ -911,9 +911,9 @@ def test_a_gait_run_twice_in_one_query_is_rated_and_suggested_once() -> None:
 
 
 def test_a_buffer_holding_one_gait_twice_is_compared_with_it_once() -> None:
-    """n = 1, b = 2, trials 14 and 15 ran one gait: trial 16 was asked against both, both
-    answers were stored as against trial 14 (the session names a gait by its first trial) and
-    the model took the pair twice; the console asks it once."""
+    """n = 1, b = 2, trials 14 and 15 ran one gait: trial 16 was asked against both and the
+    session refused the answer ('the pair (86, 89) is compared twice'), asked again the same
+    way; the console asks the pair once."""
     shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
     config = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 1\nbuffer = 2")
     from gaitpref.config import parse_config
