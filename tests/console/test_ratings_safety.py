@@ -329,3 +329,26 @@ def test_a_gait_run_twice_in_one_query_has_one_rating_and_suggestion_group(
     assert done.status_code == 303
     rated = [t["rating"] for t in client.get(f"/api/sessions/{session.id}/trials").json()]
     assert rated[t3 - 1] == "good"
+
+
+def test_the_undo_of_a_query_of_two_trials_names_both(client: TestClient) -> None:
+    """n = 2: the undo takes back both trials of the last query; its button and confirm step
+    said 'Take back the answer to trial 2', the last trial alone."""
+    text = rated_config().replace("[cospar]\n", "[cospar]\nn = 2\nbuffer = 0\n", 1)
+    sid = new_session(client, text)
+    q = query(client, sid)
+    (a, b), = q["comparisons"]  # fmt: skip
+    answered = client.post(
+        f"/api/sessions/{sid}/answers",
+        json={"query_id": q["query_id"], "comparisons": [[a, b, "first"]]},
+    )
+    assert answered.status_code == 200, answered.text
+    html = client.get(f"/sessions/{sid}").text
+    assert 'data-say="Take back the answer to trials 1, 2, one query"' in html
+    form = form_to(html, f"/sessions/{sid}/undo")
+    confirm = post(client, form.action, form.fields)
+    assert confirm.status_code == 200, confirm.text
+    assert "Take back the answer to trials 1, 2, one query:" in confirm.text
+    assert (
+        "<li>trial 1 (step_length=" in confirm.text and "<li>trial 2 (step_length=" in confirm.text
+    )
