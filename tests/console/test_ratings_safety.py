@@ -352,3 +352,24 @@ def test_the_undo_of_a_query_of_two_trials_names_both(client: TestClient) -> Non
     assert (
         "<li>trial 1 (step_length=" in confirm.text and "<li>trial 2 (step_length=" in confirm.text
     )
+
+
+def test_the_confirm_step_names_the_pairs_a_form_leaves_unanswered(client: TestClient) -> None:
+    """n = 2, b = 1: three pairs.  Posted without the page's script (which asks every pair
+    first) with one answered, the confirm step listed that one alone and saved it: two pairs
+    went missing unsaid."""
+    text = rated_config().replace("[cospar]\n", "[cospar]\nn = 2\nbuffer = 1\n", 1)
+    sid = new_session(client, text)
+    q = query(client, sid)
+    (a, b), = q["comparisons"]  # fmt: skip
+    body = {"query_id": q["query_id"], "comparisons": [[a, b, "first"]]}
+    assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+    form = forms_of(client.get(f"/sessions/{sid}").text)["answer-form"]
+    pairs = sorted(k for k in form.radios if k.startswith("cmp-"))
+    assert len(pairs) == 3
+    confirm = post(client, f"/sessions/{sid}/answer", {**form.fields, pairs[0]: "first"})
+    assert confirm.status_code == 200, confirm.text
+    assert confirm.text.count("Not answered, not saved: trial ") == 2
+    every = {**form.fields, **dict.fromkeys(pairs, "none")}
+    confirm = post(client, f"/sessions/{sid}/answer", every)
+    assert "Not answered" not in confirm.text

@@ -344,7 +344,9 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
                 raise session_query_error(session, query_id)
             space = session.space
             said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
-            return views.answer_summary(
+            return views.unanswered(
+                space, pending, comparisons, session.gait_name
+            ) + views.answer_summary(
                 space, pending, comparisons, suggestions, session.gait_name, said
             )
 

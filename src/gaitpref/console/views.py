@@ -293,6 +293,31 @@ def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
     return value
 
 
+def unanswered(
+    space: Space,
+    query: SessionQuery,
+    comparisons: Sequence[tuple[int, int, str]],
+    gait_id: Callable[[int], str | None] | None = None,
+) -> list[str]:
+    """The confirm step's words for each pair the trial page asks (:func:`comparison_groups`)
+    that ``comparisons`` leaves out: a form posted without the page's script saves the pairs
+    it answers only (the script asks every one first)."""
+
+    def view(a: int, t: int) -> GaitView:
+        return gait_view(space, a, trial=t, gait_id=gait_id(a) if gait_id is not None else None)
+
+    groups = comparison_groups(
+        [view(a, t) for a, t in zip(query.actions, query.trials, strict=True)],
+        [view(a, t) for a, t in zip(query.buffer, query.buffer_trials, strict=True)],
+    )
+    given = {frozenset((i, j)) for i, j, _ in comparisons}
+    return [
+        f"Not answered, not saved: {g.first.name} or {g.second.name}? (Back to answer it)"
+        for g in groups
+        if frozenset((g.first.index, g.second.index)) not in given
+    ]
+
+
 def answer_summary(
     space: Space,
     query: SessionQuery,
