@@ -8,7 +8,7 @@ One iteration (n = 1, b = 1, the paper's protocol)::
     Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
     Rating of trial 5: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip     (with [feedback.rating])
     Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter,
-      x write and flag trial 5 unsafe
+      x write and flag trial 5 unsafe                         (n > 1: which trial, or a all)
     saved: trial 5
 
 Each answer is one key and Enter.  ``u`` undoes the last answer after a confirmation (its trial
@@ -162,9 +162,21 @@ def _move_words(feature: Feature) -> tuple[str, str, str, str]:
     return (up, f"slightly {up}", f"slightly {down}", down)
 
 
-def _trials(q: SessionQuery) -> str:
-    """``trial 5`` or ``trials 4, 5``: the query's trials as the prompts name them."""
-    return ("trial " if len(q.trials) == 1 else "trials ") + ", ".join(map(str, q.trials))
+def _trials(q: SessionQuery | Sequence[int]) -> str:
+    """``trial 5`` or ``trials 4, 5``: the query's trials (or these trial numbers) as the
+    prompts name them."""
+    numbers = q.trials if isinstance(q, SessionQuery) else q
+    return ("trial " if len(numbers) == 1 else "trials ") + ", ".join(map(str, numbers))
+
+
+def _trials_of(q: SessionQuery) -> dict[int, list[int]]:
+    """The query's executed gaits, each with its trials: a gait proposed twice in one query
+    (n > 1) ran in two trials, and takes one rating and one suggestion per feature (the
+    session refuses a second: ``action 89 is rated twice``)."""
+    out: dict[int, list[int]] = {}
+    for t, a in zip(q.trials, q.actions, strict=True):
+        out.setdefault(a, []).append(t)
+    return out
 
 
 class Terminal:
@@ -504,10 +516,11 @@ class Terminal:
 
     def _undo(self) -> None:
         answered = self.session.trials()
-        last = f" (trial {answered[-1].number})" if answered else ""
         if not answered:
             self.console.print("  cannot undo: no answer is in force", markup=False)
             return
+        # every trial of the last answer's query (n > 1): the undo takes them all back
+        last = f" ({_trials([t.number for t in answered if t.query == answered[-1].query])})"
         while True:
             try:
                 key = self.ask(f"Undo the last answer{last}?  y yes, n no", {"y": "", "n": ""})
@@ -549,8 +562,9 @@ class Terminal:
                 markup=False,
             )
             return
-        trials = ", ".join(map(str, pending.trials))
-        self.console.print(f"Undone: the answer to trial {trials} is asked again.", markup=False)
+        self.console.print(
+            f"Undone: the answer to {_trials(pending)} is asked again.", markup=False
+        )
 
     def _one(self, q: SessionQuery) -> None:
         s = self.session
@@ -564,7 +578,9 @@ class Terminal:
             ratings, rated = self._ratings(q)
             suggestions, words = self._suggestions(q)
             summary = "; ".join(said + rated + words) or "no comparison, no suggestion"
-            flag = f"x write and flag {_trials(q)} unsafe"
+            several = len(set(q.trials)) > 1
+            flag = f"x write and flag {'one or all of ' if several else ''}{_trials(q)} unsafe"
+            unsafe: tuple[int, ...] = ()
             while True:  # asked again while another writer holds the session (nothing written)
                 try:
                     key = self.ask(
@@ -574,6 +590,7 @@ class Terminal:
                     )
                     if key == "n":
                         break
+                    unsafe = self._which_unsafe(q) if key == "x" else ()
                     reason = self._reason() if key == "x" else ""
                 except _QuitError:  # the answer was shown in full: say it was not kept
                     self._not_written(q, summary)
@@ -602,13 +619,15 @@ class Terminal:
                             "  the answer confirmed before the connection was lost was stored",
                             markup=False,
                         )
-                        self._written(q, reason)
+                        self._written(q, reason, unsafe=unsafe)
                         return
                     # a round another writer opened meanwhile: the loop asks its ranking next
                     self.console.print(f"  not written: {clip(exc, MAX_MESSAGE)}", markup=False)
                     self._stopped_elsewhere()
                     return
-                self._written(q, reason, answered.stop_warning, answered.clipped, answered.stopped)
+                self._written(
+                    q, reason, answered.stop_warning, answered.clipped, answered.stopped, unsafe
+                )
                 return
 
     def _not_written(self, q: SessionQuery, summary: str) -> None:
@@ -626,13 +645,15 @@ class Terminal:
         stop_warning: str | None = None,
         clipped: Sequence[str] = (),
         stopped: str | None = None,
+        unsafe: Sequence[int] = (),
     ) -> None:
         """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
-        flag asked with it (``reason``); ``stop_warning``: why the ``[stop]`` rule could not be
-        checked after it (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that
-        went past the edge of their range (:attr:`Answered.clipped`), said after the save;
-        ``stopped``: the rule's reason when it opened blind validation after the answer
-        (:attr:`Answered.stopped`), said before the round is shown."""
+        flag asked with it (``reason``, on the trials ``unsafe``, default every trial of
+        ``q``); ``stop_warning``: why the ``[stop]`` rule could not be checked after it
+        (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that went past the
+        edge of their range (:attr:`Answered.clipped`), said after the save; ``stopped``: the
+        rule's reason when it opened blind validation after the answer (:attr:`Answered.stopped`),
+        said before the round is shown."""
         s = self.session
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
         for note in clipped:
@@ -660,7 +681,7 @@ class Terminal:
             return
         redrawn = False
         flagged: list[int] = []
-        for t in dict.fromkeys(q.trials):
+        for t in dict.fromkeys(unsafe or q.trials):
             done = self._flag(t, reason)
             if done is not None:
                 flagged.append(t)
@@ -710,6 +731,18 @@ class Terminal:
                 self.console.print(f"  trial {trial} not flagged; {later}", markup=False)
                 return None
 
+    def _which_unsafe(self, q: SessionQuery) -> tuple[int, ...]:
+        """The trials of ``q`` to flag unsafe: asked when it ran several (n > 1), so that one
+        unsafe gait does not take the query's other gaits away too."""
+        trials = tuple(dict.fromkeys(q.trials))
+        if len(trials) == 1:
+            return trials
+        keys = {str(t): "" for t in trials}
+        key = self.ask(
+            f"Which trial is unsafe? {', '.join(keys)}, a all of them", {**keys, "a": ""}
+        )
+        return trials if key == "a" else (int(key),)
+
     def _reason(self) -> str:
         """Why the trial is unsafe (asked until given; ``q`` pauses and ``u`` undoes, as at
         every prompt, so neither is ever taken for the reason).  A reason the flag would refuse
@@ -737,13 +770,14 @@ class Terminal:
         said: list[str] = []
         keys = {str(k + 1): label for k, label in enumerate(scale.categories)}
         options = ", ".join(f"{k} {label}" for k, label in keys.items())
-        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+        for a, numbers in _trials_of(q).items():  # a gait run twice in the query: rated once
+            which = _trials(numbers) + (" (the same gait)" if len(numbers) > 1 else "")
             key = self.ask(
-                f"Rating of trial {t}: {options}, Enter to skip", {**keys, "": ""}, default=""
+                f"Rating of {which}: {options}, Enter to skip", {**keys, "": ""}, default=""
             )
             if key:
                 out.append(Rating(a, keys[key]))
-                said.append(f"trial {t} rated {keys[key]}")
+                said.append(f"{_trials(numbers)} rated {keys[key]}")
         return out, said
 
     def _gait(self, action: int) -> str:
@@ -753,6 +787,7 @@ class Terminal:
         out: list[tuple[int, int, str]] = []
         said: list[str] = []
         seen: set[tuple[int, int]] = set()
+        asked: dict[frozenset[int], tuple[int, int]] = {}  # the trials a pair of gaits was asked as
         members = list(zip(q.member_trials, q.members, strict=True))
         for r, (ti, ai) in enumerate(zip(q.trials, q.actions, strict=True)):
             for c, (tj, aj) in enumerate(members):
@@ -766,7 +801,19 @@ class Terminal:
                         markup=False,
                     )
                     continue
-                other = "the previous one" if c >= len(q.actions) else f"trial {tj}"
+                if frozenset((ai, aj)) in asked:  # a gait run twice (b > 1, n > 1): asked once
+                    pi, pj = asked[frozenset((ai, aj))]
+                    self.console.print(
+                        f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
+                        f"trial {pj}, compared once",
+                        markup=False,
+                    )
+                    continue
+                asked[frozenset((ai, aj))] = (ti, tj)
+                # "the previous one" only when one trial is buffered: with b > 1 the buffer
+                # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
+                previous = c >= len(q.actions) and len(q.buffer) == 1
+                other = "the previous one" if previous else f"trial {tj}"
                 this = "this one" if len(q.actions) == 1 else f"trial {ti}"
                 answer = self.ask(
                     f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
@@ -786,11 +833,12 @@ class Terminal:
         out: list[tuple[int, str, str]] = []
         said: list[str] = []
         space = self.session.space
-        for t, a in dict(zip(q.trials, q.actions, strict=True)).items():
+        for a, numbers in _trials_of(q).items():  # a gait run twice: one suggestion per feature
+            same = ", the same gait" if len(numbers) > 1 else ""
             for f in space.features:
                 words = _move_words(f)
                 options = ", ".join(f"{k + 1} {w}" for k, w in enumerate(words))
-                where = f" (trial {t})" if len(q.actions) > 1 else ""
+                where = f" ({_trials(numbers)}{same})" if len(q.actions) > 1 else ""
                 key = self.ask(
                     f"Suggestion for {f.name}{where}: {options}, 0 none",
                     {"0": "", "1": "", "2": "", "3": "", "4": ""},

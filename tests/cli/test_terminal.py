@@ -830,3 +830,131 @@ def test_a_flag_written_whose_round_the_database_refuses_to_draw_again_says_flag
     reopened = Session.open(storage, session.id)
     assert reopened.unsafe_flags() == {2: (session.trials()[1].action, "knee gave way")}
     assert reopened.validation_plan is None
+
+
+def test_with_two_buffered_trials_each_is_named_by_its_number_not_the_previous_one() -> None:
+    """n = 1, b = 2: trial 3 is compared with trials 1 and 2; trial 1 was called "the previous
+    one" as trial 2 was, and the operator could not tell which key meant which walk."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "buffer = 2\nn = 1"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    session.answer(q.id, [], [])
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.buffer[0], "first")], [])
+    q = session.next_query()
+    assert q.buffer_trials == (1, 2)
+    terminal, console = _terminal(session, "1", "2", "", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Trial 3 against trial 1: 1 this one, 2 trial 1, 0 no preference" in text
+    assert "Trial 3 against trial 2: 1 this one, 2 trial 2, 0 no preference" in text
+    assert "the previous one" not in text
+    told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()][-2:]
+    assert told == [(3, 1, "first"), (3, 2, "second")]
+
+
+def test_the_undo_of_a_query_of_two_trials_names_both() -> None:
+    """n = 2: the undo takes back the whole query; it asked 'Undo the last answer (trial 4)?',
+    naming only the query's last trial."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "n = 2\nbuffer = 0"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.actions[1], "first")], [])
+    q = session.next_query()
+    session.answer(q.id, [(q.actions[0], q.actions[1], "second")], [])
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    text = console.export_text()
+    assert "Undo the last answer (trials 3, 4)?  y yes, n no" in text
+    assert "Undone: the answer to trials 3, 4 is asked again." in text
+    assert [t.number for t in session.trials()] == [1, 2]
+
+
+def _query_with_a_gait_twice(config: str) -> Session:
+    """A session (n = 2) whose pending query proposes one gait for both of its trials."""
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(config), "S01", seed=0)
+    for _ in range(40):
+        q = session.next_query()
+        if len(set(q.actions)) < len(q.actions):
+            return session
+        pairs = [(a, b, "first" if a > b else "second") for k, a in enumerate(q.actions)
+                 for b in q.members[k + 1 :]]  # fmt: skip
+        session.answer(q.id, pairs, [])
+    raise AssertionError("no query proposed a gait twice")
+
+
+def test_a_gait_run_twice_in_one_query_is_rated_and_suggested_once() -> None:
+    """n = 2, one gait for trials 3 and 4: a rating and a suggestion per trial were asked, and
+    the session refused the answer ('action 89 is rated twice'), asked again the same way."""
+    shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
+    config = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 2\nbuffer = 0")
+    session = _query_with_a_gait_twice(config)
+    q = session.next_query()
+    (t3, t4), a = q.trials, q.actions[0]
+    terminal, console = _terminal(session, "4", "1", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert f"trials {t3} and {t4} are the same gait: nothing to compare" in text
+    assert f"Rating of trials {t3}, {t4} (the same gait): 1 very bad" in text
+    assert f"Suggestion for step_length (trials {t3}, {t4}, the same gait): 1 longer" in text
+    assert "not written" not in text
+    rated = [e.payload for e in session.events() if e.kind == "rating_given"]
+    assert [(r["action"], r["category"]) for r in rated] == [(a, "good")]
+    assert [s.action for s in session.suggestions()] == [a]
+    assert [t.number for t in session.trials()][-2:] == [t3, t4]
+
+
+def test_a_buffer_holding_one_gait_twice_is_compared_with_it_once() -> None:
+    """n = 1, b = 2, trials 14 and 15 ran one gait: trial 16 was asked against both and the
+    session refused the answer ('the pair (86, 89) is compared twice'), asked again the same
+    way; the console asks the pair once."""
+    shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
+    config = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 1\nbuffer = 2")
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(config), "S01", seed=0)
+    for _ in range(40):
+        q = session.next_query()
+        if len(set(q.buffer)) < len(q.buffer) and q.actions[0] not in q.buffer:
+            break
+        pairs = [(q.actions[0], b, "first" if q.actions[0] > b else "second") for b in q.buffer]
+        session.answer(q.id, pairs, [])
+    else:
+        raise AssertionError("no buffer held one gait twice")
+    (t,), (b1, b2) = q.trials, q.buffer_trials
+    before = len(session.comparisons())
+    terminal, console = _terminal(session, "1", "", "0", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    assert f"Trial {t} against trial {b1}: 1 this one, 2 trial {b1}" in text
+    assert f"Trial {t} against trial {b2}:" not in text
+    assert f"trial {t} against trial {b2}: the same gaits as trial {t} against trial {b1}" in text
+    told = [(c.first_trial, c.second_trial, c.outcome) for c in session.comparisons()[before:]]
+    assert told == [(t, b1, "first")]
+
+
+def test_x_on_a_query_of_two_trials_asks_which_one_is_unsafe() -> None:
+    """n = 2: x flagged both trials of the query, so one unsafe gait took the other (and, with
+    a radius, its neighbours) away too; it now asks which, or a for all."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED.replace('strategy = "self-sparring"', "n = 2\nbuffer = 0"))
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    terminal, console = _terminal(session, "1", "", "", "0", "0", "x", "7", "2", "knee buckled")
+    terminal.run()
+    text = console.export_text()
+    assert "x write and flag one or all of trials 1, 2 unsafe" in text
+    assert "Which trial is unsafe? 1, 2, a all of them" in text
+    assert "flagged unsafe: trial 2 (knee buckled)" in text
+    assert session.unsafe_flags() == {2: (session.trials()[1].action, "knee buckled")}
+
+    both = Session.create(MemoryStorage(), config, "S01", seed=2)
+    terminal, console = _terminal(both, "1", "", "", "0", "0", "x", "a", "fell")
+    terminal.run()
+    assert sorted(both.unsafe_flags()) == [1, 2]

@@ -293,3 +293,83 @@ def test_an_undo_after_which_no_gait_is_safe_says_it_was_undone(client: TestClie
     assert event_count(client, sid) == before + 1  # the undo, once
     assert client.get(f"/api/sessions/{sid}").json()["trials"] == 1
     assert client.get(f"/api/sessions/{sid}/query").status_code == 409
+
+
+def test_a_gait_run_twice_in_one_query_has_one_rating_and_suggestion_group(
+    client: TestClient, db_url: str
+) -> None:
+    """n = 2, one gait for trials 3 and 4: the page showed a rating row per trial, both one
+    radio group ``rate-<a>`` (rating trial 4 cleared trial 3's); one row now names both."""
+    from pathlib import Path
+
+    from gaitpref import Session
+
+    shipped = Path(__file__).parents[2] / "src/gaitpref/config/shipped/exo-2d-rated.toml"
+    text = shipped.read_text(encoding="utf-8").replace("n = 1\nbuffer = 1", "n = 2\nbuffer = 0")
+    session = Session.create(db_url, parse_config(text), "S01", seed=0)
+    for _ in range(40):
+        q = session.next_query()
+        if q.actions[0] == q.actions[1]:
+            break
+        session.answer(q.id, [(q.actions[0], q.actions[1], "first")], [])
+    else:
+        raise AssertionError("no query proposed a gait twice")
+    session.close()
+    (t3, t4), a = q.trials, q.actions[0]
+    html = client.get(f"/sessions/{session.id}").text
+    assert html.count('data-kind="rating"') == 1
+    assert f"How did the subject rate trials {t3}, {t4} (G{a})?" in html
+    assert html.count(f"trials {t3}, {t4} (G{a}): step length") == 1
+    form = forms_of(html)["answer-form"]
+    data = {**form.fields, f"rate-{a}": "4", f"sug-{a}-step_width": "-small"}
+    confirm = post(client, f"/sessions/{session.id}/answer", data)
+    assert confirm.status_code == 200, confirm.text
+    assert f"trial {t3} (G{a}) rated &#39;good&#39;" in confirm.text
+    done = post(client, f"/sessions/{session.id}/answer", forms_of(confirm.text)["form1"].fields)
+    assert done.status_code == 303
+    rated = [t["rating"] for t in client.get(f"/api/sessions/{session.id}/trials").json()]
+    assert rated[t3 - 1] == "good"
+
+
+def test_the_undo_of_a_query_of_two_trials_names_both(client: TestClient) -> None:
+    """n = 2: the undo takes back both trials of the last query; its button and confirm step
+    said 'Take back the answer to trial 2', the last trial alone."""
+    text = rated_config().replace("[cospar]\n", "[cospar]\nn = 2\nbuffer = 0\n", 1)
+    sid = new_session(client, text)
+    q = query(client, sid)
+    (a, b), = q["comparisons"]  # fmt: skip
+    answered = client.post(
+        f"/api/sessions/{sid}/answers",
+        json={"query_id": q["query_id"], "comparisons": [[a, b, "first"]]},
+    )
+    assert answered.status_code == 200, answered.text
+    html = client.get(f"/sessions/{sid}").text
+    assert 'data-say="Take back the answer to trials 1, 2, one query"' in html
+    form = form_to(html, f"/sessions/{sid}/undo")
+    confirm = post(client, form.action, form.fields)
+    assert confirm.status_code == 200, confirm.text
+    assert "Take back the answer to trials 1, 2, one query:" in confirm.text
+    assert (
+        "<li>trial 1 (step_length=" in confirm.text and "<li>trial 2 (step_length=" in confirm.text
+    )
+
+
+def test_the_confirm_step_names_the_pairs_a_form_leaves_unanswered(client: TestClient) -> None:
+    """n = 2, b = 1: three pairs.  Posted without the page's script (which asks every pair
+    first) with one answered, the confirm step listed that one alone and saved it: two pairs
+    went missing unsaid."""
+    text = rated_config().replace("[cospar]\n", "[cospar]\nn = 2\nbuffer = 1\n", 1)
+    sid = new_session(client, text)
+    q = query(client, sid)
+    (a, b), = q["comparisons"]  # fmt: skip
+    body = {"query_id": q["query_id"], "comparisons": [[a, b, "first"]]}
+    assert client.post(f"/api/sessions/{sid}/answers", json=body).status_code == 200
+    form = forms_of(client.get(f"/sessions/{sid}").text)["answer-form"]
+    pairs = sorted(k for k in form.radios if k.startswith("cmp-"))
+    assert len(pairs) == 3
+    confirm = post(client, f"/sessions/{sid}/answer", {**form.fields, pairs[0]: "first"})
+    assert confirm.status_code == 200, confirm.text
+    assert confirm.text.count("Not answered, not saved: trial ") == 2
+    every = {**form.fields, **dict.fromkeys(pairs, "none")}
+    confirm = post(client, f"/sessions/{sid}/answer", every)
+    assert "Not answered" not in confirm.text

@@ -344,7 +344,9 @@ async def post_answer(request: Request, session_id: SessionId) -> Response:
                 raise session_query_error(session, query_id)
             space = session.space
             said = [(r.action, categories[int(r.label) - 1]) for r in ratings]
-            return views.answer_summary(
+            return views.unanswered(
+                space, pending, comparisons, session.gait_name
+            ) + views.answer_summary(
                 space, pending, comparisons, suggestions, session.gait_name, said
             )
 
@@ -427,9 +429,16 @@ async def post_undo(request: Request, session_id: SessionId) -> Response:
         def summary(session: Session) -> list[str]:
             check_undo_query(session, query_id)  # stale (another tab moved on): 409 now
             session.check_change("undo")  # nothing to undo, a flagged or excluded trial: 409
-            last = session.trials()[-1]
-            return [
-                f"Take back the answer to trial {last.number} ({session.describe(last.action)})"
+            trials = session.trials()
+            last = [t for t in trials if t.query == trials[-1].query]  # n > 1: the whole query
+            if len(last) == 1:
+                return [
+                    f"Take back the answer to trial {last[0].number} "
+                    f"({session.describe(last[0].action)})"
+                ]
+            numbers = ", ".join(str(t.number) for t in last)
+            return [f"Take back the answer to trials {numbers}, one query:"] + [
+                f"trial {t.number} ({session.describe(t.action)})" for t in last
             ]
 
         lines = await run_in_threadpool(service.read, session_id, summary)

@@ -131,6 +131,13 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "categories": categories,
         "unsafe": unsafe,
         "undoable": undoable,
+        # the undo takes back the last answer's whole query (n > 1: several trials)
+        "undo_say": "Take back the answer to "
+        + (
+            f"trial {last[0].number} ({session.gait_name(last[0].action)})"
+            if len(last) == 1
+            else f"trials {', '.join(str(t.number) for t in last)}, one query"
+        ),
         "infeasible": list(reversed(session.infeasible_gaits()))[:20],
         "multi": len(actions) > 1,
         "chronology": chronology(session),

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from gaitpref.console.answers import is_rating_field
 from gaitpref.console.errors import InputError, quoted
@@ -65,6 +65,8 @@ class GaitView:
     gait_id: str
     trial: int | None
     values: tuple[FeatureValue, ...]
+    #: the query's other trials that ran this gait (n > 1 may propose one gait twice)
+    also: tuple[int, ...] = ()
 
     @property
     def text(self) -> str:
@@ -72,8 +74,24 @@ class GaitView:
 
     @property
     def name(self) -> str:
-        """``trial 5 (G12)`` or ``G12``."""
+        """``trial 5 (G12)``, ``trials 4, 5 (G12)`` (:attr:`also`) or ``G12``."""
+        if self.also and self.trial:
+            return f"trials {', '.join(map(str, (self.trial, *self.also)))} ({self.gait_id})"
         return f"trial {self.trial} ({self.gait_id})" if self.trial else self.gait_id
+
+
+def executed_once(actions: Sequence[GaitView]) -> list[GaitView]:
+    """The query's executed gaits, a gait run in two trials once (naming both: :attr:`also`):
+    the session takes one rating and one suggestion per feature for it, and its form fields
+    (``rate-<a>``, ``sug-<a>-<feature>``) are one group."""
+    out: dict[int, GaitView] = {}
+    for gait in actions:
+        first = out.get(gait.index)
+        if first is None:
+            out[gait.index] = gait
+        elif gait.trial is not None:
+            out[gait.index] = replace(first, also=(*first.also, gait.trial))
+    return list(out.values())
 
 
 def gait_view(
@@ -152,7 +170,7 @@ def rating_groups(categories: Sequence[str], actions: Sequence[GaitView]) -> lis
     if not categories:
         return []
     groups = []
-    for pos, gait in enumerate(actions):
+    for pos, gait in enumerate(executed_once(actions)):
         choices = tuple(
             Choice(str(k), word, str(k) if k <= 9 else "", f"{gait.name} rated {word!r}")
             for k, word in enumerate(categories, start=1)
@@ -199,7 +217,7 @@ def comparison_groups(
 def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[SuggestionGroup]:
     """One row of five buttons per executed action and feature."""
     groups: list[SuggestionGroup] = []
-    for pos, gait in enumerate(actions):
+    for pos, gait in enumerate(executed_once(actions)):
         for row, feature in enumerate(space.features):
             words = move_words(feature)
             keys = SUGGESTION_ROWS[row] if row < len(SUGGESTION_ROWS) else ""
@@ -275,6 +293,31 @@ def read_int(form: Mapping[str, str], field: str, *, minimum: int = 1) -> int:
     return value
 
 
+def unanswered(
+    space: Space,
+    query: SessionQuery,
+    comparisons: Sequence[tuple[int, int, str]],
+    gait_id: Callable[[int], str | None] | None = None,
+) -> list[str]:
+    """The confirm step's words for each pair the trial page asks (:func:`comparison_groups`)
+    that ``comparisons`` leaves out: a form posted without the page's script saves the pairs
+    it answers only (the script asks every one first)."""
+
+    def view(a: int, t: int) -> GaitView:
+        return gait_view(space, a, trial=t, gait_id=gait_id(a) if gait_id is not None else None)
+
+    groups = comparison_groups(
+        [view(a, t) for a, t in zip(query.actions, query.trials, strict=True)],
+        [view(a, t) for a, t in zip(query.buffer, query.buffer_trials, strict=True)],
+    )
+    given = {frozenset((i, j)) for i, j, _ in comparisons}
+    return [
+        f"Not answered, not saved: {g.first.name} or {g.second.name}? (Back to answer it)"
+        for g in groups
+        if frozenset((g.first.index, g.second.index)) not in given
+    ]
+
+
 def answer_summary(
     space: Space,
     query: SessionQuery,
@@ -285,8 +328,9 @@ def answer_summary(
 ) -> list[str]:
     """The answer in words, for the confirm step (``gait_id``: a library's gait ids;
     ``ratings``: ``(action, category)``)."""
-    trial_of = dict(zip(query.buffer, query.buffer_trials, strict=True))
-    trial_of.update(zip(query.actions, query.trials, strict=True))
+    trial_of: dict[int, int] = {}  # a gait's first trial in the query, as the session logs it
+    for a, t in zip(query.members, query.member_trials, strict=True):
+        trial_of.setdefault(a, t)
 
     def name(a: int) -> str:
         gait = (gait_id(a) if gait_id is not None else None) or f"G{a}"
