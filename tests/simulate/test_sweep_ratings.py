@@ -151,6 +151,26 @@ def test_random_selection_takes_no_region_of_avoidance() -> None:
         Setting("r", strategy="random", config=AVOID)
 
 
+def test_a_setting_s_start_gaits_are_walked_first_and_checked_on_the_study_s_grid() -> None:
+    """[safety] start in a setting's config names gaits of the study's grid (by action index or
+    feature values): walked first, as a config's.  It was refused by every setting as on the
+    line path ('the line path (subspace = 'line') has none'), the setting having no grid."""
+    space = load_config("synthetic-2d").space
+    at = space.points_of([7])[0]
+    pairs = zip(space.features, at, strict=True)
+    by_values = ", ".join(f"{f.name} = {float(v)!r}" for f, v in pairs)
+    for start in ("[7]", f"[{{{by_values}}}]"):
+        setting = Setting(
+            "start", 1, 1, rating_quantiles=QUARTILES, config=AVOID + f"start = {start}\n"
+        )
+        for task in _study(setting, trials=3).tasks():
+            assert run_one(task).actions[0] == 7
+    with pytest.raises(ConfigError, match=r"setting 'start': \[safety\].start: gait 1 \(10000\)"):
+        _study(Setting("start", 1, 1, config=AVOID + "start = [10000]\n"))
+    with pytest.raises(ValueError, match="random selection takes no"):
+        Setting("r", strategy="random", config=RATING + "[safety]\nstart = [7]\n")
+
+
 def _rated_study() -> Study:
     return _study(
         Setting("plain", 1, 1),
