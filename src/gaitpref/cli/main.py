@@ -160,8 +160,11 @@ def rating_quantiles_for(config: ExperimentConfig, text: str | None, noise: floa
         if noise != 0:
             raise ValueError("--rating-noise needs --rating-quantiles (the simulated rater)")
         return []
+    parts = text.split(",")
     try:
-        q = [float(v) for v in text.split(",") if v.strip()]
+        if text.strip() and any(not v.strip() for v in parts):  # "0.25,,0.75" was 2 quantiles
+            raise ValueError
+        q = [float(v) for v in parts if v.strip()]
     except ValueError:
         raise ValueError(
             f"--rating-quantiles must be comma-separated numbers, got {text!r}"
