@@ -179,3 +179,19 @@ def test_with_minimize_the_worst_rating_is_the_highest_cost(
     truth = 1 + np.searchsorted(np.quantile(norm, [0.25, 0.5, 0.75]), norm, "right")
     assert payload["ratings"] == truth[payload["actions"]].tolist()
     assert set(np.flatnonzero(truth == 1)) == set(np.argsort(obj)[-int((truth == 1).sum()) :])
+
+
+def test_a_region_of_avoidance_left_without_a_gait_is_an_error_line(
+    tmp_path: Path, objective_file: Path
+) -> None:
+    """No gait left to propose stops the run with the error and the trial it reached (it was a
+    traceback of NoSafeGaitError)."""
+    strict = '[safety]\navoid = ["very bad", "bad"]\nlambda = 0.0\n'
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n{strict}")
+    args = ("--rating-quantiles", "0.25,0.5,0.75", "--trials", "40", "--json")
+    code, out, err = _run(cfg, objective_file, *args)
+    assert code == 1 and out == ""
+    assert "Traceback" not in err
+    message = " ".join(err.split())
+    assert message.startswith("model error: the simulation stopped after ")
+    assert "of 40 trials: no gait may be proposed" in message
