@@ -122,6 +122,10 @@ def test_the_safety_table_reaches_the_loop() -> None:
         ({"rating_quantiles": QUARTILES}, ValueError, "need a [feedback.rating] table with 4"),
         ({"rating_quantiles": (0.5,), "config": RATING}, ValueError, "which has 4 labels"),
         ({"rating_quantiles": (0.5, 0.2), "config": RATING}, ValueError, "must increase"),
+        # one number, None or text: a TypeError naming no setting, or '0', '.', '5'
+        ({"rating_quantiles": 0.5, "config": RATING}, ValueError, "a sequence of numbers"),
+        ({"rating_quantiles": None}, ValueError, "a sequence of numbers, got None"),
+        ({"rating_quantiles": "0.5", "config": RATING}, ValueError, "got '0.5'"),
         ({"rating_noise": 0.1}, ValueError, "rating_noise needs rating_quantiles"),
         ({"config": "[model]\nnoise = 1\n"}, ConfigError, "only [feedback.rating] and [safety]"),
         ({"config": "[safety\n"}, ConfigError, "config is not valid TOML"),

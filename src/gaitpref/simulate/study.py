@@ -134,7 +134,13 @@ class Setting:
             )
         if not _real(self.rating_noise):
             raise ValueError(f"{where}: rating_noise must be a number, got {self.rating_noise!r}")
-        quantiles = tuple(self.rating_quantiles)
+        given = self.rating_quantiles
+        if isinstance(given, str | bytes) or not hasattr(given, "__iter__"):
+            # a float or None: a TypeError naming no setting; "0.5": three characters
+            raise ValueError(
+                f"{where}: rating_quantiles must be a sequence of numbers, got {given!r}"
+            )
+        quantiles = tuple(given)
         if not all(_real(q) for q in quantiles):
             raise ValueError(f"{where}: rating_quantiles must be numbers, got {quantiles!r}")
         object.__setattr__(self, "rating_quantiles", tuple(float(q) for q in quantiles))
