@@ -131,6 +131,9 @@ def test_the_safety_table_reaches_the_loop() -> None:
         ({"config": "[safety\n"}, ConfigError, "config is not valid TOML"),
         ({"config": '[safety]\navoid = ["very bad"]\n'}, ConfigError, "[safety].avoid"),
         ({"config": RATING.replace("labels", "lables")}, ConfigError, "[feedback.rating]"),
+        # risk or lambda without avoid: no region, the key ignored (a new session refuses it)
+        ({"config": RATING + "[safety]\nrisk = 0.4\n"}, ConfigError, "[safety].risk: is a"),
+        ({"config": RATING + "[safety]\nlambda = 1.0\n"}, ConfigError, "lambda = 1.0 would"),
     ],
 )
 def test_bad_rating_settings_are_refused_naming_the_setting(

@@ -182,7 +182,17 @@ class Setting:
                 f"{where}: {len(q)} rating_quantiles need a [feedback.rating] table with "
                 f"{len(q) + 1} labels in config, which has {has}"
             )
-        starts = "start" in (read_toml(self.config).get("safety") or {})
+        raw = read_toml(self.config).get("safety") or {}
+        starts = "start" in raw
+        for key in ("risk", "lambda"):  # as a new session's config (config.check_ignored)
+            if key in raw and not raw.get("avoid"):
+                raise ConfigError(
+                    f"{where}: [safety].{key}: is a setting of the region of avoidance, which is "
+                    f'off without avoid = ["..."] (the worst [feedback.rating] labels): {key} = '
+                    f"{raw[key]!r} would be ignored; give avoid, or leave {key} out",
+                    table="safety",
+                    key=key,
+                )
         if self.strategy == "random" and (safety.avoid or safety.unsafe_radius or starts):
             raise ValueError(f"{where}: random selection takes no [safety] settings")
 
