@@ -107,6 +107,12 @@ def test_the_human_output_counts_the_ratings(tmp_path: Path, objective_file: Pat
             ["--rating-quantiles", "a,b,c"],
             "comma-separated numbers",
         ),
+        (  # an empty entry was skipped: "0.25,,0.75" gave 2 quantiles (refused as 3 labels'
+            # worth with 4, taken with 3)
+            '[feedback.rating]\nlabels = ["bad", "okay", "good"]\n',
+            ["--rating-quantiles", "0.25,,0.75"],
+            "--rating-quantiles must be comma-separated numbers, got '0.25,,0.75'",
+        ),
         (f"[feedback.rating]\nlabels = {LABELS}\n", ["--rating-noise", "0.1"], "needs"),
         (
             f"[feedback.rating]\nlabels = {LABELS}\n",
@@ -157,3 +163,35 @@ def test_ratings_on_the_line_path_are_refused_by_name(tmp_path: Path) -> None:
     assert "--rating-quantiles: config 'compass-continuous-3d' runs on the line path" in " ".join(
         result.stderr.split()
     )
+
+
+def test_with_minimize_the_worst_rating_is_the_highest_cost(
+    tmp_path: Path, objective_file: Path
+) -> None:
+    """--minimize: the objective is a cost, so category 1 (the worst) holds its highest values."""
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n")
+    args = ("--rating-quantiles", "0.25,0.5,0.75", "--minimize", "--json")
+    code, out, err = _run(cfg, objective_file, *args)
+    assert code == 0, err
+    payload = json.loads(out)
+    obj = paper_objectives()[7].reshape(-1)
+    norm = (obj.max() - obj) / (obj.max() - obj.min())
+    truth = 1 + np.searchsorted(np.quantile(norm, [0.25, 0.5, 0.75]), norm, "right")
+    assert payload["ratings"] == truth[payload["actions"]].tolist()
+    assert set(np.flatnonzero(truth == 1)) == set(np.argsort(obj)[-int((truth == 1).sum()) :])
+
+
+def test_a_region_of_avoidance_left_without_a_gait_is_an_error_line(
+    tmp_path: Path, objective_file: Path
+) -> None:
+    """No gait left to propose stops the run with the error and the trial it reached (it was a
+    traceback of NoSafeGaitError)."""
+    strict = '[safety]\navoid = ["very bad", "bad"]\nlambda = 0.0\n'
+    cfg = _config(tmp_path, f"[feedback.rating]\nlabels = {LABELS}\n{strict}")
+    args = ("--rating-quantiles", "0.25,0.5,0.75", "--trials", "40", "--json")
+    code, out, err = _run(cfg, objective_file, *args)
+    assert code == 1 and out == ""
+    assert "Traceback" not in err
+    message = " ".join(err.split())
+    assert message.startswith("model error: the simulation stopped after ")
+    assert "of 40 trials: no gait may be proposed" in message

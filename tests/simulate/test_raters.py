@@ -60,3 +60,28 @@ def test_a_simulation_rates_every_trial_and_the_ratings_enter_the_model() -> Non
     assert with_ratings.to_json()["ratings"] == with_ratings.ratings.tolist()
     assert without.ratings is None and "ratings" not in without.to_json()
     assert not np.allclose(with_ratings.posterior.mean, without.posterior.mean)
+
+
+@pytest.mark.parametrize(
+    ("labels", "quantiles", "message"),
+    [
+        (None, (0.5,), "the loop has no rating scale"),
+        # 2 categories on a scale of 4: every gait the rater found worse than the median was
+        # told "very bad" and the region of avoidance closed over the grid (NoSafeGaitError)
+        (["very bad", "bad", "okay", "good"], (0.5,), "gives 2 categories (1 quantiles)"),
+        (["bad", "good"], (0.25, 0.5, 0.75), "but the loop has 2 categories"),
+    ],
+)
+def test_a_rater_and_a_loop_of_different_scales_are_refused_before_any_trial(
+    labels: list[str] | None, quantiles: tuple[float, ...], message: str
+) -> None:
+    cfg = load_config("exo-1d-step-length")
+    objective = -((cfg.space.points[:, 0] - 0.12) ** 2)
+    ordinal = None if labels is None else Ordinal(labels, noise=0.02)
+    loop = CoSpar(cfg.space, cfg.kernel, cfg.noise, n=1, buffer=1, seed=3, ordinal=ordinal)
+    user = SimulatedUser(cfg.space, objective, np.random.default_rng(4))
+    rater = OrdinalRater(cfg.space, objective, quantiles, np.random.default_rng(5))
+    with pytest.raises(ValueError, match="the rater gives") as info:
+        run_simulation(loop, user, 12, rater=rater)
+    assert message in str(info.value)
+    assert len(loop.executed) == 0

@@ -122,11 +122,18 @@ def test_the_safety_table_reaches_the_loop() -> None:
         ({"rating_quantiles": QUARTILES}, ValueError, "need a [feedback.rating] table with 4"),
         ({"rating_quantiles": (0.5,), "config": RATING}, ValueError, "which has 4 labels"),
         ({"rating_quantiles": (0.5, 0.2), "config": RATING}, ValueError, "must increase"),
+        # one number, None or text: a TypeError naming no setting, or '0', '.', '5'
+        ({"rating_quantiles": 0.5, "config": RATING}, ValueError, "a sequence of numbers"),
+        ({"rating_quantiles": None}, ValueError, "a sequence of numbers, got None"),
+        ({"rating_quantiles": "0.5", "config": RATING}, ValueError, "got '0.5'"),
         ({"rating_noise": 0.1}, ValueError, "rating_noise needs rating_quantiles"),
         ({"config": "[model]\nnoise = 1\n"}, ConfigError, "only [feedback.rating] and [safety]"),
         ({"config": "[safety\n"}, ConfigError, "config is not valid TOML"),
         ({"config": '[safety]\navoid = ["very bad"]\n'}, ConfigError, "[safety].avoid"),
         ({"config": RATING.replace("labels", "lables")}, ConfigError, "[feedback.rating]"),
+        # risk or lambda without avoid: no region, the key ignored (a new session refuses it)
+        ({"config": RATING + "[safety]\nrisk = 0.4\n"}, ConfigError, "[safety].risk: is a"),
+        ({"config": RATING + "[safety]\nlambda = 1.0\n"}, ConfigError, "lambda = 1.0 would"),
     ],
 )
 def test_bad_rating_settings_are_refused_naming_the_setting(
@@ -149,6 +156,26 @@ def test_a_run_left_without_a_safe_gait_fails_naming_the_run() -> None:
 def test_random_selection_takes_no_region_of_avoidance() -> None:
     with pytest.raises(ValueError, match="random selection takes no"):
         Setting("r", strategy="random", config=AVOID)
+
+
+def test_a_setting_s_start_gaits_are_walked_first_and_checked_on_the_study_s_grid() -> None:
+    """[safety] start in a setting's config names gaits of the study's grid (by action index or
+    feature values): walked first, as a config's.  It was refused by every setting as on the
+    line path ('the line path (subspace = 'line') has none'), the setting having no grid."""
+    space = load_config("synthetic-2d").space
+    at = space.points_of([7])[0]
+    pairs = zip(space.features, at, strict=True)
+    by_values = ", ".join(f"{f.name} = {float(v)!r}" for f, v in pairs)
+    for start in ("[7]", f"[{{{by_values}}}]"):
+        setting = Setting(
+            "start", 1, 1, rating_quantiles=QUARTILES, config=AVOID + f"start = {start}\n"
+        )
+        for task in _study(setting, trials=3).tasks():
+            assert run_one(task).actions[0] == 7
+    with pytest.raises(ConfigError, match=r"setting 'start': \[safety\].start: gait 1 \(10000\)"):
+        _study(Setting("start", 1, 1, config=AVOID + "start = [10000]\n"))
+    with pytest.raises(ValueError, match="random selection takes no"):
+        Setting("r", strategy="random", config=RATING + "[safety]\nstart = [7]\n")
 
 
 def _rated_study() -> Study:

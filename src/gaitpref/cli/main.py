@@ -112,6 +112,7 @@ def simulate_once(
     """
     import numpy as np
 
+    from gaitpref.errors import NoSafeGaitError
     from gaitpref.simulate.raters import OrdinalRater
     from gaitpref.simulate.run import run_simulation
     from gaitpref.simulate.users import GradientCoactive, SimulatedUser
@@ -132,18 +133,23 @@ def simulate_once(
             noise=rating_noise,
             minimize=minimize,
         )
-    if not show_progress:
-        return run_simulation(loop, user, trials, helper, rater=rater)
-    with progress_bar(transient=True) as bar:
-        task = bar.add_task("trials", total=trials)
-        return run_simulation(
-            loop,
-            user,
-            trials,
-            helper,
-            progress=lambda done: bar.update(task, completed=done),
-            rater=rater,
-        )
+    try:
+        if not show_progress:
+            return run_simulation(loop, user, trials, helper, rater=rater)
+        with progress_bar(transient=True) as bar:
+            task = bar.add_task("trials", total=trials)
+            return run_simulation(
+                loop,
+                user,
+                trials,
+                helper,
+                progress=lambda done: bar.update(task, completed=done),
+                rater=rater,
+            )
+    except NoSafeGaitError as exc:  # the region of avoidance emptied: say at which trial
+        raise NoSafeGaitError(
+            f"the simulation stopped after {len(loop.executed)} of {trials} trials: {exc}"
+        ) from None
 
 
 def rating_quantiles_for(config: ExperimentConfig, text: str | None, noise: float) -> list[float]:
@@ -160,8 +166,11 @@ def rating_quantiles_for(config: ExperimentConfig, text: str | None, noise: floa
         if noise != 0:
             raise ValueError("--rating-noise needs --rating-quantiles (the simulated rater)")
         return []
+    parts = text.split(",")
     try:
-        q = [float(v) for v in text.split(",") if v.strip()]
+        if text.strip() and any(not v.strip() for v in parts):  # "0.25,,0.75" was 2 quantiles
+            raise ValueError
+        q = [float(v) for v in parts if v.strip()]
     except ValueError:
         raise ValueError(
             f"--rating-quantiles must be comma-separated numbers, got {text!r}"
@@ -288,16 +297,18 @@ def simulate(
         fail(f"objective {str(objective)!r}: {exc}")
     quantiles = guard(lambda: rating_quantiles_for(cfg, rating_quantiles, rating_noise))
     start = time.perf_counter()
-    result = simulate_once(
-        cfg,
-        obj,
-        trials=trials,
-        seed=use_seed,
-        minimize=minimize,
-        coactive=coactive,
-        show_progress=not as_json,
-        rating_quantiles=quantiles,
-        rating_noise=rating_noise,
+    result = guard(  # a region of avoidance left no gait: an error line, not a traceback
+        lambda: simulate_once(
+            cfg,
+            obj,
+            trials=trials,
+            seed=use_seed,
+            minimize=minimize,
+            coactive=coactive,
+            show_progress=not as_json,
+            rating_quantiles=quantiles,
+            rating_noise=rating_noise,
+        )
     )
     elapsed = time.perf_counter() - start
     if as_json:

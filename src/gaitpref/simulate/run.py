@@ -66,10 +66,20 @@ def run_simulation(
     :data:`~gaitpref.limits.MAX_TRIALS`).
 
     ``rater`` also rates every executed action (the loop needs a rating scale with as many
-    categories).  ``progress`` is called with the number of trials done after every iteration.
+    categories: another scale, or none, is refused before the first trial).
+    ``progress`` is called with the number of trials done after every iteration.
     """
     if not is_count(trials) or not 1 <= trials <= MAX_TRIALS:  # 10**12 ran until memory ran out
         raise ValueError(f"trials must be an integer >= 1 and at most {MAX_TRIALS}, got {trials!r}")
+    if rater is not None:  # a rater of 2 categories on a scale of 4 rated every gait "very bad"
+        scale = loop.gp.ordinal
+        if scale is None or scale.size != rater.categories:
+            has = "no rating scale" if scale is None else f"{scale.size} categories"
+            raise ValueError(
+                f"the rater gives {rater.categories} categories ({rater.categories - 1} "
+                f"quantiles), but the loop has {has}: give its [feedback.rating] one label more "
+                "than the quantiles"
+            )
     executed: list[int] = []
     rated: list[int] = []
     while len(executed) < trials:

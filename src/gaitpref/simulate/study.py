@@ -56,12 +56,16 @@ Strategy = Literal["cospar", "random"]
 _CONFIG_TABLES = ("feedback", "safety")
 
 
-def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal | None, Safety]:
+def parse_setting_config(
+    text: str, noise: float, where: str, space: Space | None = None
+) -> tuple[Ordinal | None, Safety]:
     """The rating scale and safety settings of a setting's ``config`` text.
 
     ``text`` holds only ``[feedback.rating]`` and ``[safety]`` tables; ``noise`` is the default
-    rating noise (the study's).  Errors are :class:`~gaitpref.errors.ConfigError` naming
-    ``where`` (the setting) and the table and key.
+    rating noise (the study's).  ``[safety] start`` names gaits of ``space``, the study's grid
+    (by feature values or action index); without ``space`` (a setting alone, before it joins a
+    study) its start gaits are left out here and checked by the study.  Errors are
+    :class:`~gaitpref.errors.ConfigError` naming ``where`` (the setting) and the table and key.
     """
     try:
         top = read_toml(text)
@@ -76,7 +80,11 @@ def parse_setting_config(text: str, noise: float, where: str) -> tuple[Ordinal |
         )
     try:
         ordinal = parse_rating(top.get("feedback", {}), noise)
-        return ordinal, parse_safety(top.get("safety", {}), ordinal)[0]
+        safety = top.get("safety", {})
+        if space is None and isinstance(safety, dict) and "start" in safety:
+            # it names gaits of the study's grid: refused before as on the line path
+            safety = {k: v for k, v in safety.items() if k != "start"}
+        return ordinal, parse_safety(safety, ordinal, space=space)[0]
     except ConfigError as exc:
         raise ConfigError(f"{where}: {exc}", table=exc.table, key=exc.key) from None
 
@@ -126,7 +134,13 @@ class Setting:
             )
         if not _real(self.rating_noise):
             raise ValueError(f"{where}: rating_noise must be a number, got {self.rating_noise!r}")
-        quantiles = tuple(self.rating_quantiles)
+        given = self.rating_quantiles
+        if isinstance(given, str | bytes) or not hasattr(given, "__iter__"):
+            # a float or None: a TypeError naming no setting; "0.5": three characters
+            raise ValueError(
+                f"{where}: rating_quantiles must be a sequence of numbers, got {given!r}"
+            )
+        quantiles = tuple(given)
         if not all(_real(q) for q in quantiles):
             raise ValueError(f"{where}: rating_quantiles must be numbers, got {quantiles!r}")
         object.__setattr__(self, "rating_quantiles", tuple(float(q) for q in quantiles))
@@ -168,7 +182,18 @@ class Setting:
                 f"{where}: {len(q)} rating_quantiles need a [feedback.rating] table with "
                 f"{len(q) + 1} labels in config, which has {has}"
             )
-        if self.strategy == "random" and (safety.avoid or safety.unsafe_radius):
+        raw = read_toml(self.config).get("safety") or {}
+        starts = "start" in raw
+        for key in ("risk", "lambda"):  # as a new session's config (config.check_ignored)
+            if key in raw and not raw.get("avoid"):
+                raise ConfigError(
+                    f"{where}: [safety].{key}: is a setting of the region of avoidance, which is "
+                    f'off without avoid = ["..."] (the worst [feedback.rating] labels): {key} = '
+                    f"{raw[key]!r} would be ignored; give avoid, or leave {key} out",
+                    table="safety",
+                    key=key,
+                )
+        if self.strategy == "random" and (safety.avoid or safety.unsafe_radius or starts):
             raise ValueError(f"{where}: random selection takes no [safety] settings")
 
     @classmethod
@@ -245,7 +270,7 @@ def run_one(task: RunTask) -> RunResult:
     user = SimulatedUser(
         task.space, task.objective, np.random.default_rng(user_ss), task.minimize, task.user_noise
     )
-    ordinal, safety = parse_setting_config(s.config, task.noise, f"setting {s.name!r}")
+    ordinal, safety = parse_setting_config(s.config, task.noise, f"setting {s.name!r}", task.space)
     rater = None
     if s.rating_quantiles:
         rater = OrdinalRater(
@@ -386,6 +411,8 @@ class Study:
                 raise ValueError(
                     f"{where}: setting {s.name!r}: n = {s.n} is more actions than the grid's {A}"
                 )
+            # [safety] start names gaits of this grid: checked here (a setting has no grid)
+            parse_setting_config(s.config, self.noise, f"{where}: setting {s.name!r}", self.space)
         object.__setattr__(self, "settings", settings)
         object.__setattr__(self, "objectives", obj)
         object.__setattr__(self, "objective_ids", ids)
