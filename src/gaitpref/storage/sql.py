@@ -89,7 +89,8 @@ def parse_url(url: str) -> URL:
     except (ArgumentError, ValueError) as exc:  # ValueError: a port that is not a number
         why = "" if isinstance(exc, ArgumentError) else f": {exc}"
         raise StorageConnectError(
-            f"{url!r} is not a database URL{why} (expected e.g. sqlite:///gaitpref.db or "
+            f"{_unparsed_masked(url)!r} is not a database URL{why} (expected e.g. "
+            "sqlite:///gaitpref.db or "
             "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
     if parsed.drivername in ("postgresql", "postgres"):
@@ -112,6 +113,21 @@ def parse_url(url: str) -> URL:
 
 def _masked(url: URL) -> str:
     return url.render_as_string(hide_password=True)
+
+
+def _unparsed_masked(url: str) -> str:
+    """``url``, which could not be parsed, with what may be a password (between ``user:`` and
+    the last ``@`` of its authority) shown as ``***``: a URL with a port that is not a number
+    was printed whole, password and all."""
+    scheme, sep, rest = url.partition("://")
+    if not sep:
+        return url
+    authority, slash, path = rest.partition("/")
+    userinfo, at, host = authority.rpartition("@")
+    if not at or ":" not in userinfo:
+        return url
+    user = userinfo.split(":", 1)[0]
+    return f"{scheme}://{user}:***@{host}{slash}{path}"
 
 
 class SQLStorage(CheckedCreation):
@@ -434,6 +450,10 @@ def database_status(url: str) -> str:
     try:
         store = SQLStorage(url, create=False)
     except StorageError as exc:
+        if isinstance(exc, StorageConnectError) and parsed.get_backend_name() == "postgresql":
+            # the server down, a wrong password, no database of that name: no state was read,
+            # so an error (exit status 2), not a status line (exit status 0, the URL twice)
+            raise
         text = str(exc)  # most name the database already
         return text if text.startswith(where) else f"{where}: {text}"
     try:
