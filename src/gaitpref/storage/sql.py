@@ -115,6 +115,15 @@ def _masked(url: URL) -> str:
     return url.render_as_string(hide_password=True)
 
 
+def masked_url(url: str) -> str:
+    """``url`` to print: its password (if any) shown as ``***``, whether it parses or not."""
+    try:
+        parsed = make_url(url)
+    except (ArgumentError, ValueError):
+        return _unparsed_masked(url)
+    return _masked(parsed) if parsed.password is not None else url
+
+
 def _unparsed_masked(url: str) -> str:
     """``url``, which could not be parsed, with what may be a password (between ``user:`` and
     the last ``@`` of its authority) shown as ``***``: a URL with a port that is not a number
