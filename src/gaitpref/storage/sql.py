@@ -625,11 +625,18 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
     """The ``pg_dump`` command for ``url``'s database (the password never shown)."""
     import shlex
 
+    def given(key: str) -> str | None:  # ?host=/run/postgresql (a socket folder), ?port=5433
+        value = url.query.get(key)
+        return value if isinstance(value, str) and value else None
+
     parts = ["pg_dump", "--format=custom", f"--file={shlex.quote(str(out))}"]
-    if url.host:
-        parts.append(f"--host={shlex.quote(url.host)}")
-    if url.port:
-        parts.append(f"--port={url.port}")
+    # the host and port of a socket URL (postgresql+psycopg://lab@/gaitlab?host=/run/...) are
+    # its parameters: left out, pg_dump dumped the database of the default socket's server
+    host, port = url.host or given("host"), url.port or given("port")
+    if host:
+        parts.append(f"--host={shlex.quote(host)}")
+    if port:
+        parts.append(f"--port={shlex.quote(str(port))}")
     if url.username:
         parts.append(f"--username={shlex.quote(url.username)}")
     parts.append(shlex.quote(url.database or ""))
