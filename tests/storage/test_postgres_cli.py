@@ -78,3 +78,17 @@ def test_a_session_on_postgres_from_the_command_line(postgres_url: str) -> None:
     outputs.append(out)
     for out in outputs:
         assert ENCODED not in out and "p%40ss" not in out and PASSWORD not in out, out
+
+
+def test_without_psycopg_the_install_command_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    """psycopg is the ``postgres`` extra: without it every command said the driver could not
+    be loaded, and not how to install it."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "psycopg", None)  # an import of it fails
+    for url in ("postgresql+psycopg://lab:topsecret@db.example/lab", "postgresql://u@h/lab"):
+        for command in (("session", "list"), ("db", "upgrade"), ("db", "status")):
+            code, out = _run(*command, "--db", url)
+            assert code == 2, (command, out)
+            text = " ".join(out.split())
+            assert "pip install 'gaitpref[postgres]'" in text and "topsecret" not in text, text

@@ -727,9 +727,16 @@ def _plain_engine(url: URL, **options: Any) -> Engine:
     try:
         return create_engine(url, **options)
     except (ImportError, ArgumentError) as exc:
+        # psycopg is an extra: the docs' `pip install 'gaitpref[postgres]'` was not said
+        missing = isinstance(exc, ImportError) and url.drivername == "postgresql+psycopg"
+        advice = (
+            "install PostgreSQL support with `pip install 'gaitpref[postgres]'`"
+            if missing
+            else "gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+        )
         raise StorageConnectError(
             f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
-            f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+            f"({exc}); {advice}"
         ) from None
 
 
