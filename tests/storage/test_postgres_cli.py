@@ -92,3 +92,9 @@ def test_without_psycopg_the_install_command_is_named(monkeypatch: pytest.Monkey
             assert code == 2, (command, out)
             text = " ".join(out.split())
             assert "pip install 'gaitpref[postgres]'" in text and "topsecret" not in text, text
+
+
+def test_a_traceback_lists_no_local_variables() -> None:
+    """Older typer releases (``typer>=0.12`` is allowed) could print every local variable of
+    an unexpected error's traceback by default, ``--db`` and its password among them."""
+    assert app.pretty_exceptions_show_locals is False
