@@ -18,6 +18,7 @@ the URL (password masked).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -34,6 +35,7 @@ from sqlalchemy import (
     Text,
     create_engine,
     event,
+    func,
     insert,
     select,
     type_coerce,
@@ -47,6 +49,7 @@ from sqlalchemy.exc import (
     DatabaseError,
     DBAPIError,
     IntegrityError,
+    OperationalError,
     SQLAlchemyError,
 )
 from sqlalchemy.pool import StaticPool
@@ -59,6 +62,7 @@ from gaitpref.storage.base import (
     EventRecord,
     NewEvent,
     SchemaError,
+    SessionBusyError,
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
@@ -109,6 +113,11 @@ def parse_url(url: str) -> URL:
             "(to read a database without writing to it, export its sessions or copy the file)"
         )
     return parsed
+
+
+#: the first key of every session's advisory lock (``pg_advisory_lock(space, session id)``):
+#: "gait" in ASCII, so that other users of the server's advisory locks are not waited on
+_TURN_SPACE = 0x67616974
 
 
 def _masked(url: URL) -> str:
@@ -329,13 +338,49 @@ class SQLStorage(CheckedCreation):
     def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
         """SQLite files: a fair turn shared by every process (lock files in ``<db>.turns/``).
 
-        PostgreSQL: none yet (the row lock and the compare-and-set keep the data right).
+        PostgreSQL: the server's advisory lock of the session (``pg_advisory_lock``, waiters
+        served in turn, the wait bounded by ``lock_timeout``), held on a connection of its own
+        and let go when the turn ends or the connection is lost.  Without it two writers of one
+        session (the console and the terminal) raced: the one whose append lost the
+        compare-and-set raised ``ConflictError`` ("another writer appended to it; reload it").
         """
-        if self._turns is None:
+        wait = base.WRITER_WAIT_S if wait_s is None else wait_s
+        if self._turns is not None:
+            with self._turns.turn(_sid(session_id), wait):
+                yield
+        elif self._sqlite:  # in memory: one process, the Session's own lock is enough
             yield
-            return
-        with self._turns.turn(_sid(session_id), base.WRITER_WAIT_S if wait_s is None else wait_s):
+        else:
+            with self._pg_turn(_sid(session_id), wait):
+                yield
+
+    @contextmanager
+    def _pg_turn(self, session_id: int, wait_s: float) -> Iterator[None]:
+        with self._errors():  # only the taking: what the turn's holder raises passes as it is
+            conn = self.engine.connect()
+            try:
+                timeout = f"{max(1, int(wait_s * 1000))}ms"
+                conn.execute(select(func.set_config("lock_timeout", timeout, True)))
+                conn.execute(select(func.pg_advisory_lock(_TURN_SPACE, session_id)))
+                conn.commit()  # the lock is the connection's: it outlives the transaction
+            except OperationalError as exc:
+                conn.close()
+                if getattr(exc.orig, "sqlstate", None) != "55P03":  # lock_not_available
+                    raise
+                raise SessionBusyError(
+                    f"session {session_id} in {self.url} is busy: another writer held it for "
+                    f"{wait_s:.1f} s (the most this one waits); nothing was written, try again"
+                ) from None
+            except BaseException:
+                conn.close()
+                raise
+        try:
             yield
+        finally:
+            with contextlib.suppress(DBAPIError):  # a lost connection let it go already
+                conn.execute(select(func.pg_advisory_unlock(_TURN_SPACE, session_id)))
+                conn.commit()
+            conn.close()
 
     def folder_beside(self, suffix: str) -> Path | None:
         return None if self._file is None else self._file.with_name(self._file.name + suffix)
