@@ -115,7 +115,7 @@ def parse_url(url: str) -> URL:
     return parsed
 
 
-#: the first key of every session's advisory lock (``pg_advisory_lock(space, session id)``):
+#: the first key of every session's advisory lock (``pg_advisory_xact_lock(space, session id)``):
 #: "gait" in ASCII, so that other users of the server's advisory locks are not waited on
 _TURN_SPACE = 0x67616974
 
@@ -338,11 +338,12 @@ class SQLStorage(CheckedCreation):
     def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
         """SQLite files: a fair turn shared by every process (lock files in ``<db>.turns/``).
 
-        PostgreSQL: the server's advisory lock of the session (``pg_advisory_lock``, waiters
-        served in turn, the wait bounded by ``lock_timeout``), held on a connection of its own
-        and let go when the turn ends or the connection is lost.  Without it two writers of one
-        session (the console and the terminal) raced: the one whose append lost the
-        compare-and-set raised ``ConflictError`` ("another writer appended to it; reload it").
+        PostgreSQL: the server's advisory lock of the session (``pg_advisory_xact_lock``,
+        waiters served in turn, the wait bounded by ``lock_timeout``), held by a transaction of
+        its own, which ends with the turn (or when its connection is lost).  Without it two
+        writers of one session (the console and the terminal) raced: the one whose append lost
+        the compare-and-set raised ``ConflictError`` ("another writer appended to it; reload
+        it").
         """
         wait = base.WRITER_WAIT_S if wait_s is None else wait_s
         if self._turns is not None:
@@ -356,13 +357,15 @@ class SQLStorage(CheckedCreation):
 
     @contextmanager
     def _pg_turn(self, session_id: int, wait_s: float) -> Iterator[None]:
+        # a transaction's lock (pg_advisory_xact_lock), in a transaction of its own kept open
+        # for the turn and rolled back to end it: it cannot outlive the turn, and a pooler in
+        # transaction mode (PgBouncer) keeps the turn's server connection for that transaction
         with self._errors():  # only the taking: what the turn's holder raises passes as it is
             conn = self.engine.connect()
             try:
                 timeout = f"{max(1, int(wait_s * 1000))}ms"
                 conn.execute(select(func.set_config("lock_timeout", timeout, True)))
-                conn.execute(select(func.pg_advisory_lock(_TURN_SPACE, session_id)))
-                conn.commit()  # the lock is the connection's: it outlives the transaction
+                conn.execute(select(func.pg_advisory_xact_lock(_TURN_SPACE, session_id)))
             except OperationalError as exc:
                 conn.close()
                 if getattr(exc.orig, "sqlstate", None) != "55P03":  # lock_not_available
@@ -378,8 +381,7 @@ class SQLStorage(CheckedCreation):
             yield
         finally:
             with contextlib.suppress(DBAPIError):  # a lost connection let it go already
-                conn.execute(select(func.pg_advisory_unlock(_TURN_SPACE, session_id)))
-                conn.commit()
+                conn.rollback()  # ends the transaction: the lock is let go
             conn.close()
 
     def folder_beside(self, suffix: str) -> Path | None:
