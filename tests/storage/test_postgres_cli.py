@@ -98,3 +98,15 @@ def test_a_traceback_lists_no_local_variables() -> None:
     """Older typer releases (``typer>=0.12`` is allowed) could print every local variable of
     an unexpected error's traceback by default, ``--db`` and its password among them."""
     assert app.pretty_exceptions_show_locals is False
+
+
+def test_a_wrong_password_says_how_to_encode_one() -> None:
+    """'password authentication failed' alone: a password with @ or : typed into the URL as it
+    is reads as another user and host, and nothing said so."""
+    from sqlalchemy.exc import OperationalError
+
+    from gaitpref.storage.sql import _reason
+
+    failed = OperationalError("connect", {}, Exception("FATAL:  password authentication failed"))
+    assert "%40 for @" in _reason(failed)
+    assert "%40" not in _reason(OperationalError("x", {}, Exception("Connection refused")))

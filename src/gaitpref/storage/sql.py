@@ -923,4 +923,11 @@ def _conflict(session_id: int, last: int | None, after: int) -> ConflictError:
 def _reason(exc: BaseException) -> str:
     orig = getattr(exc, "orig", None)
     text = str(orig if orig is not None else exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
+    reason = text[0] if text else type(exc).__name__
+    if "password authentication failed" in reason:
+        # a password typed into the URL as it is: "p@ss" is read as user "p", host "ss@..."
+        reason += (
+            " (in the URL, a password's @ : / ? # % and spaces are URL-encoded: %40 for @, "
+            "%3A for :, %2F for /, %3F for ?, %23 for #, %25 for %, %20 for a space)"
+        )
+    return reason
