@@ -110,3 +110,12 @@ def test_a_wrong_password_says_how_to_encode_one() -> None:
     failed = OperationalError("connect", {}, Exception("FATAL:  password authentication failed"))
     assert "%40 for @" in _reason(failed)
     assert "%40" not in _reason(OperationalError("x", {}, Exception("Connection refused")))
+
+
+def test_a_password_given_as_a_url_parameter_is_hidden_too() -> None:
+    """libpq takes ``?password=``: the URL was printed with it, in errors and hints."""
+    url = "postgresql://lab@127.0.0.1:1/lab?sslmode=disable&password=topsecret"
+    for command in (("db", "status"), ("session", "list"), ("db", "backup", "x.dump")):
+        code, out = _run(*command, "--db", url)
+        assert code == 2 and "topsecret" not in out and "password=***" in out, (command, out)
+    assert "topsecret" not in _resume_hint(1, url) and "password=***" in _resume_hint(1, url)

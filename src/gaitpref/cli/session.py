@@ -100,17 +100,9 @@ def _shown_db(db: str) -> str:
     """``db`` for a command printed to be typed again, shell-quoted, its password (if any)
     shown as ``***``: the hints of ``session new`` and the terminal runner printed the
     PostgreSQL password in the URL as it was given."""
-    from sqlalchemy.engine import make_url
-    from sqlalchemy.exc import ArgumentError
+    from gaitpref.storage.sql import masked_url
 
-    if "://" in db:
-        try:
-            parsed = make_url(db)
-        except (ArgumentError, ValueError):
-            parsed = None
-        if parsed is not None and parsed.password is not None:
-            db = parsed.render_as_string(hide_password=True)
-    return shlex.quote(db)
+    return shlex.quote(masked_url(db) if "://" in db else db)
 
 
 def _resume_hint(session_id: int, db: str | None) -> str:

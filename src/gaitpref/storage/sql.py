@@ -121,7 +121,12 @@ _TURN_SPACE = 0x67616974
 
 
 def _masked(url: URL) -> str:
-    return url.render_as_string(hide_password=True)
+    """``url`` to print: its password as ``***``, that of a ``?password=`` parameter too
+    (libpq takes one there, and it was printed whole)."""
+    if "password" not in url.query:
+        return url.render_as_string(hide_password=True)
+    hidden = url.update_query_dict({"password": "***"}).render_as_string(hide_password=True)
+    return hidden.replace("password=%2A%2A%2A", "password=***")
 
 
 def masked_url(url: str) -> str:
@@ -130,7 +135,8 @@ def masked_url(url: str) -> str:
         parsed = make_url(url)
     except (ArgumentError, ValueError):
         return _unparsed_masked(url)
-    return _masked(parsed) if parsed.password is not None else url
+    secret = parsed.password is not None or "password" in parsed.query
+    return _masked(parsed) if secret else url
 
 
 def _unparsed_masked(url: str) -> str:
@@ -687,7 +693,8 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
     if url.username:
         parts.append(f"--username={shlex.quote(url.username)}")
     parts.append(shlex.quote(url.database or ""))
-    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if url.password else ""
+    secret_given = url.password is not None or "password" in url.query
+    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if secret_given else ""
     return (
         f"back a PostgreSQL database up with its own tool, e.g. `{' '.join(parts)}`{secret}; "
         "restore with pg_restore"
