@@ -89,6 +89,17 @@ def test_postgresql_is_refused_with_the_pg_dump_command(tmp_path: Path) -> None:
     assert not out.exists()
 
 
+def test_the_pg_dump_command_of_a_socket_url_names_its_socket_and_port(tmp_path: Path) -> None:
+    """The host and port of a URL through a Unix socket are its parameters: the command left
+    them out, so that it dumped the database of the default socket's server, or none."""
+    url = "postgresql+psycopg://lab:s3cret@/gaitlab?host=/run/lab%20pg&port=5433"
+    result = CliRunner().invoke(app, ["db", "backup", str(tmp_path / "lab.dump"), "--db", url])
+    assert result.exit_code == 2
+    err = " ".join(result.stderr.split())
+    assert "--host='/run/lab pg' --port=5433 --username=lab gaitlab`" in err, err
+    assert "s3cret" not in err
+
+
 def test_upgrade_of_an_old_database_backs_it_up_first(tmp_path: Path) -> None:
     old = tmp_path / "old.db"
     shutil.copy(FIXTURES / "gaitpref-0.1.0.db", old)

@@ -164,3 +164,56 @@ def test_a_busy_session_is_refused_after_the_bounded_wait(sqlite_url: str) -> No
     b.note("after the turn was given back")  # nothing was left held
     a.sync()
     assert [n for _, n in a.notes()] == ["after the turn was given back"]
+
+
+@pytest.mark.postgres
+def test_two_writer_processes_take_turns_on_postgres(postgres_url: str, tmp_path: Path) -> None:
+    """On PostgreSQL writers held no turn: two processes writing notes to one session at once
+    (the console and the terminal) raced, and the one whose append lost the compare-and-set
+    raised ConflictError ('another writer appended to it; reload it').  The session's advisory
+    lock is their turn now: every note and answer gets in, none twice."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    from tests.sessions.writerkit import answer_loop, note_loop
+
+    first = Session.create(postgres_url, CONFIG, "S01", seed=3)
+    notes, attempts = 15, 20
+    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as pool:
+        barrier = [str(tmp_path / "notes")] * 2
+        (tmp_path / "notes").mkdir()
+        noted = list(pool.map(note_loop, [postgres_url] * 2, [first.id] * 2, [notes] * 2, barrier))
+        barrier = [str(tmp_path / "answers")] * 2
+        (tmp_path / "answers").mkdir()
+        answered = list(
+            pool.map(answer_loop, [postgres_url] * 2, [first.id] * 2, [attempts] * 2, barrier)
+        )
+    assert noted == [{"written": notes, "busy": 0}] * 2
+    for run in answered:
+        assert run["busy"] == 0 and run["accepted"] + run["stale"] == attempts, answered
+    first.refresh()
+    assert len(first.notes()) == 2 * notes
+    executed = [e for e in first.events() if e.kind == "trial_executed"]
+    assert len(executed) == sum(r["accepted"] for r in answered) >= attempts
+    assert len({e.payload["query"] for e in executed}) == len(executed)  # none answered twice
+    first.close()
+    Session.open(postgres_url, first.id).close()  # the log replays
+
+
+@pytest.mark.postgres
+def test_a_busy_session_on_postgres_is_refused_after_the_bounded_wait(postgres_url: str) -> None:
+    a = Session.create(postgres_url, CONFIG, "S01")
+    b = Session.open(postgres_url, a.id)
+    with (
+        a.storage.writer_turn(a.id),
+        pytest.raises(SessionBusyError, match=f"session {a.id} in postgresql.* is busy"),
+        b.storage.writer_turn(b.id, wait_s=0.05),
+    ):
+        pass  # pragma: no cover - never reached
+    b.note("after the turn was given back")  # nothing was left held
+    a.sync()
+    assert [n for _, n in a.notes()] == ["after the turn was given back"]
+    with a.storage.writer_turn(a.id), a.storage.writer_turn(a.id + 1, wait_s=0.05):
+        pass  # another session's turn is another lock
+    a.close()
+    b.close()

@@ -120,6 +120,7 @@ def serve(
             f"{INSTALL_HINT}"
         )
     from gaitpref.storage import ENV_VAR, resolve_url
+    from gaitpref.storage.sql import masked_url
 
     if libraries is not None and libraries.exists() and not libraries.is_dir():
         fail(  # taken before: the console served, and each upload failed to make its folder
@@ -136,7 +137,8 @@ def serve(
     hosts = None if host not in LOOPBACK else list(LOOPBACK)
     new_file = new_sqlite_file(resolve_url(db))
     app = create_app(db, use_token, allowed_hosts=hosts, library_dir=libraries)
-    _out.print(f"[bold]gaitpref console[/] on {escape(resolve_url(db))}", markup=True)
+    shown = masked_url(resolve_url(db))  # its password (if any) as ***: it printed it
+    _out.print(f"[bold]gaitpref console[/] on {escape(shown)}", markup=True)
     if new_file is not None and new_file.is_file():
         # a mistyped --db or $GAITPREF_DB served an empty list: the sessions looked lost
         _out.print(

@@ -38,6 +38,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     rich_markup_mode=None,
+    # a traceback never lists local variables: they hold --db, whose PostgreSQL URL may carry
+    # a password (typer >= 0.12 is allowed, and older typer releases listed them by default)
+    pretty_exceptions_show_locals=False,
 )
 # one command, not a group: `gaitpref console --help` lists its options, not `COMMAND [ARGS]`
 app.command(

@@ -46,7 +46,8 @@ def _kept_db(db: str | None) -> str | None:
     if not memory:
         try:
             parsed = make_url(url)
-        except ArgumentError:  # refused, naming it, when the command opens it
+        except (ArgumentError, ValueError):  # refused, naming it, when the command opens it
+            # ValueError: a port that is not a number (a traceback, before)
             return db
         memory = parsed.get_backend_name() == "sqlite" and parsed.database in (None, "", ":memory:")
     if memory:
@@ -95,15 +96,24 @@ def _confirm(question: str, yes: bool) -> None:
         raise typer.Exit(1)
 
 
+def _shown_db(db: str) -> str:
+    """``db`` for a command printed to be typed again, shell-quoted, its password (if any)
+    shown as ``***``: the hints of ``session new`` and the terminal runner printed the
+    PostgreSQL password in the URL as it was given."""
+    from gaitpref.storage.sql import masked_url
+
+    return shlex.quote(masked_url(db) if "://" in db else db)
+
+
 def _resume_hint(session_id: int, db: str | None) -> str:
-    return f"gaitpref session run {session_id}" + (f" --db {shlex.quote(db)}" if db else "")
+    return f"gaitpref session run {session_id}" + (f" --db {_shown_db(db)}" if db else "")
 
 
 def _flag_hint(session_id: int, db: str | None) -> Callable[[int, str], str]:
     """The command that flags a trial unsafe, given its number and the reason (shell-quoted)."""
 
     def command(trial: int, reason: str) -> str:
-        where = f" --db {shlex.quote(db)}" if db else ""
+        where = f" --db {_shown_db(db)}" if db else ""
         return f"gaitpref session unsafe {session_id} {trial} --reason {shlex.quote(reason)}{where}"
 
     return command

@@ -94,10 +94,15 @@ class SessionService:
             self.storage = db
             self.url = db.url
         else:
-            self.url = resolve_url(db)
-            self.storage = open_storage(self.url)
+            url = resolve_url(db)
+            self.storage = open_storage(url)
+            # shown on the sessions page: the storage's, its password (if any) as ***, which
+            # the page showed as given
+            self.url = self.storage.url
         self.library_dir = (
-            Path(library_dir) if library_dir is not None else default_library_dir(self.url)
+            Path(library_dir)
+            if library_dir is not None
+            else default_library_dir(self.url if isinstance(db, Storage) else url)
         )
         self._open: dict[int, Session] = {}
         self._locks = tuple(threading.RLock() for _ in range(LOCK_STRIPES))

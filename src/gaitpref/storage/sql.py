@@ -18,6 +18,7 @@ the URL (password masked).
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -34,6 +35,7 @@ from sqlalchemy import (
     Text,
     create_engine,
     event,
+    func,
     insert,
     select,
     type_coerce,
@@ -47,6 +49,7 @@ from sqlalchemy.exc import (
     DatabaseError,
     DBAPIError,
     IntegrityError,
+    OperationalError,
     SQLAlchemyError,
 )
 from sqlalchemy.pool import StaticPool
@@ -59,6 +62,7 @@ from gaitpref.storage.base import (
     EventRecord,
     NewEvent,
     SchemaError,
+    SessionBusyError,
     SessionFinishedError,
     SessionNotFoundError,
     SessionRecord,
@@ -89,7 +93,8 @@ def parse_url(url: str) -> URL:
     except (ArgumentError, ValueError) as exc:  # ValueError: a port that is not a number
         why = "" if isinstance(exc, ArgumentError) else f": {exc}"
         raise StorageConnectError(
-            f"{url!r} is not a database URL{why} (expected e.g. sqlite:///gaitpref.db or "
+            f"{_unparsed_masked(url)!r} is not a database URL{why} (expected e.g. "
+            "sqlite:///gaitpref.db or "
             "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
     if parsed.drivername in ("postgresql", "postgres"):
@@ -110,8 +115,43 @@ def parse_url(url: str) -> URL:
     return parsed
 
 
+#: the first key of every session's advisory lock (``pg_advisory_xact_lock(space, session id)``):
+#: "gait" in ASCII, so that other users of the server's advisory locks are not waited on
+_TURN_SPACE = 0x67616974
+
+
 def _masked(url: URL) -> str:
-    return url.render_as_string(hide_password=True)
+    """``url`` to print: its password as ``***``, that of a ``?password=`` parameter too
+    (libpq takes one there, and it was printed whole)."""
+    if "password" not in url.query:
+        return url.render_as_string(hide_password=True)
+    hidden = url.update_query_dict({"password": "***"}).render_as_string(hide_password=True)
+    return hidden.replace("password=%2A%2A%2A", "password=***")
+
+
+def masked_url(url: str) -> str:
+    """``url`` to print: its password (if any) shown as ``***``, whether it parses or not."""
+    try:
+        parsed = make_url(url)
+    except (ArgumentError, ValueError):
+        return _unparsed_masked(url)
+    secret = parsed.password is not None or "password" in parsed.query
+    return _masked(parsed) if secret else url
+
+
+def _unparsed_masked(url: str) -> str:
+    """``url``, which could not be parsed, with what may be a password (between ``user:`` and
+    the last ``@`` of its authority) shown as ``***``: a URL with a port that is not a number
+    was printed whole, password and all."""
+    scheme, sep, rest = url.partition("://")
+    if not sep:
+        return url
+    authority, slash, path = rest.partition("/")
+    userinfo, at, host = authority.rpartition("@")
+    if not at or ":" not in userinfo:
+        return url
+    user = userinfo.split(":", 1)[0]
+    return f"{scheme}://{user}:***@{host}{slash}{path}"
 
 
 class SQLStorage(CheckedCreation):
@@ -304,13 +344,51 @@ class SQLStorage(CheckedCreation):
     def writer_turn(self, session_id: int, wait_s: float | None = None) -> Iterator[None]:
         """SQLite files: a fair turn shared by every process (lock files in ``<db>.turns/``).
 
-        PostgreSQL: none yet (the row lock and the compare-and-set keep the data right).
+        PostgreSQL: the server's advisory lock of the session (``pg_advisory_xact_lock``,
+        waiters served in turn, the wait bounded by ``lock_timeout``), held by a transaction of
+        its own, which ends with the turn (or when its connection is lost).  Without it two
+        writers of one session (the console and the terminal) raced: the one whose append lost
+        the compare-and-set raised ``ConflictError`` ("another writer appended to it; reload
+        it").
         """
-        if self._turns is None:
+        wait = base.WRITER_WAIT_S if wait_s is None else wait_s
+        if self._turns is not None:
+            with self._turns.turn(_sid(session_id), wait):
+                yield
+        elif self._sqlite:  # in memory: one process, the Session's own lock is enough
             yield
-            return
-        with self._turns.turn(_sid(session_id), base.WRITER_WAIT_S if wait_s is None else wait_s):
+        else:
+            with self._pg_turn(_sid(session_id), wait):
+                yield
+
+    @contextmanager
+    def _pg_turn(self, session_id: int, wait_s: float) -> Iterator[None]:
+        # a transaction's lock (pg_advisory_xact_lock), in a transaction of its own kept open
+        # for the turn and rolled back to end it: it cannot outlive the turn, and a pooler in
+        # transaction mode (PgBouncer) keeps the turn's server connection for that transaction
+        with self._errors():  # only the taking: what the turn's holder raises passes as it is
+            conn = self.engine.connect()
+            try:
+                timeout = f"{max(1, int(wait_s * 1000))}ms"
+                conn.execute(select(func.set_config("lock_timeout", timeout, True)))
+                conn.execute(select(func.pg_advisory_xact_lock(_TURN_SPACE, session_id)))
+            except OperationalError as exc:
+                conn.close()
+                if getattr(exc.orig, "sqlstate", None) != "55P03":  # lock_not_available
+                    raise
+                raise SessionBusyError(
+                    f"session {session_id} in {self.url} is busy: another writer held it for "
+                    f"{wait_s:.1f} s (the most this one waits); nothing was written, try again"
+                ) from None
+            except BaseException:
+                conn.close()
+                raise
+        try:
             yield
+        finally:
+            with contextlib.suppress(DBAPIError):  # a lost connection let it go already
+                conn.rollback()  # ends the transaction: the lock is let go
+            conn.close()
 
     def folder_beside(self, suffix: str) -> Path | None:
         return None if self._file is None else self._file.with_name(self._file.name + suffix)
@@ -434,6 +512,10 @@ def database_status(url: str) -> str:
     try:
         store = SQLStorage(url, create=False)
     except StorageError as exc:
+        if isinstance(exc, StorageConnectError) and parsed.get_backend_name() == "postgresql":
+            # the server down, a wrong password, no database of that name: no state was read,
+            # so an error (exit status 2), not a status line (exit status 0, the URL twice)
+            raise
         text = str(exc)  # most name the database already
         return text if text.startswith(where) else f"{where}: {text}"
     try:
@@ -596,15 +678,23 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
     """The ``pg_dump`` command for ``url``'s database (the password never shown)."""
     import shlex
 
+    def given(key: str) -> str | None:  # ?host=/run/postgresql (a socket folder), ?port=5433
+        value = url.query.get(key)
+        return value if isinstance(value, str) and value else None
+
     parts = ["pg_dump", "--format=custom", f"--file={shlex.quote(str(out))}"]
-    if url.host:
-        parts.append(f"--host={shlex.quote(url.host)}")
-    if url.port:
-        parts.append(f"--port={url.port}")
+    # the host and port of a socket URL (postgresql+psycopg://lab@/gaitlab?host=/run/...) are
+    # its parameters: left out, pg_dump dumped the database of the default socket's server
+    host, port = url.host or given("host"), url.port or given("port")
+    if host:
+        parts.append(f"--host={shlex.quote(host)}")
+    if port:
+        parts.append(f"--port={shlex.quote(str(port))}")
     if url.username:
         parts.append(f"--username={shlex.quote(url.username)}")
     parts.append(shlex.quote(url.database or ""))
-    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if url.password else ""
+    secret_given = url.password is not None or "password" in url.query
+    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if secret_given else ""
     return (
         f"back a PostgreSQL database up with its own tool, e.g. `{' '.join(parts)}`{secret}; "
         "restore with pg_restore"
@@ -691,9 +781,16 @@ def _plain_engine(url: URL, **options: Any) -> Engine:
     try:
         return create_engine(url, **options)
     except (ImportError, ArgumentError) as exc:
+        # psycopg is an extra: the docs' `pip install 'gaitpref[postgres]'` was not said
+        missing = isinstance(exc, ImportError) and url.drivername == "postgresql+psycopg"
+        advice = (
+            "install PostgreSQL support with `pip install 'gaitpref[postgres]'`"
+            if missing
+            else "gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+        )
         raise StorageConnectError(
             f"cannot open {_masked(url)}: its driver {url.drivername!r} cannot be loaded "
-            f"({exc}); gaitpref uses sqlite:///PATH or postgresql+psycopg://user@host/dbname"
+            f"({exc}); {advice}"
         ) from None
 
 
@@ -833,4 +930,11 @@ def _conflict(session_id: int, last: int | None, after: int) -> ConflictError:
 def _reason(exc: BaseException) -> str:
     orig = getattr(exc, "orig", None)
     text = str(orig if orig is not None else exc).strip().splitlines()
-    return text[0] if text else type(exc).__name__
+    reason = text[0] if text else type(exc).__name__
+    if "password authentication failed" in reason:
+        # a password typed into the URL as it is: "p@ss" is read as user "p", host "ss@..."
+        reason += (
+            " (in the URL, a password's @ : / ? # % and spaces are URL-encoded: %40 for @, "
+            "%3A for :, %2F for /, %3F for ?, %23 for #, %25 for %, %20 for a space)"
+        )
+    return reason

@@ -16,6 +16,9 @@ Waiting is bounded (``wait_s``): past it :class:`SessionBusyError` names the ses
 is written.  ``flock`` locks belong to an open file, so two threads (each with its own open) and
 two processes take turns alike.  Where ``fcntl`` is missing (Windows) or the lock folder cannot
 be written, there are no turns and the optimistic append alone keeps the data right.
+
+This module serves SQLite files; on PostgreSQL the turn is the server's advisory lock of the
+session (``SQLStorage.writer_turn``), whose waiters the server serves in turn.
 """
 
 from __future__ import annotations
