@@ -152,18 +152,25 @@ def test_two_writer_processes_both_get_their_writes_in(sqlite_url: str, tmp_path
     assert len(first.notes()) == 2 * notes
 
 
-def test_a_busy_session_is_refused_after_the_bounded_wait(sqlite_url: str) -> None:
-    a = Session.create(sqlite_url, CONFIG, "S01")
-    b = Session.open(sqlite_url, a.id)
+def _refused_after_the_wait(url: str, busy: str) -> tuple[Session, Session]:
+    """A second writer of a session whose turn is held is refused as busy (``busy``, a
+    pattern with ``{id}``) after its bounded wait, and nothing is left held."""
+    a = Session.create(url, CONFIG, "S01")
+    b = Session.open(url, a.id)
     with (
         a.storage.writer_turn(a.id),
-        pytest.raises(SessionBusyError, match=f"session {a.id}"),
+        pytest.raises(SessionBusyError, match=busy.format(id=a.id)),
         b.storage.writer_turn(b.id, wait_s=0.05),
     ):
         pass  # pragma: no cover - never reached
     b.note("after the turn was given back")  # nothing was left held
     a.sync()
     assert [n for _, n in a.notes()] == ["after the turn was given back"]
+    return a, b
+
+
+def test_a_busy_session_is_refused_after_the_bounded_wait(sqlite_url: str) -> None:
+    _refused_after_the_wait(sqlite_url, "session {id}")
 
 
 @pytest.mark.postgres
@@ -202,17 +209,7 @@ def test_two_writer_processes_take_turns_on_postgres(postgres_url: str, tmp_path
 
 @pytest.mark.postgres
 def test_a_busy_session_on_postgres_is_refused_after_the_bounded_wait(postgres_url: str) -> None:
-    a = Session.create(postgres_url, CONFIG, "S01")
-    b = Session.open(postgres_url, a.id)
-    with (
-        a.storage.writer_turn(a.id),
-        pytest.raises(SessionBusyError, match=f"session {a.id} in postgresql.* is busy"),
-        b.storage.writer_turn(b.id, wait_s=0.05),
-    ):
-        pass  # pragma: no cover - never reached
-    b.note("after the turn was given back")  # nothing was left held
-    a.sync()
-    assert [n for _, n in a.notes()] == ["after the turn was given back"]
+    a, b = _refused_after_the_wait(postgres_url, "session {id} in postgresql.* is busy")
     with a.storage.writer_turn(a.id), a.storage.writer_turn(a.id + 1, wait_s=0.05):
         pass  # another session's turn is another lock
     a.close()
