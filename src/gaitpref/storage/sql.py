@@ -135,8 +135,12 @@ def masked_url(url: str) -> str:
         parsed = make_url(url)
     except (ArgumentError, ValueError):
         return _unparsed_masked(url)
-    secret = parsed.password is not None or "password" in parsed.query
-    return _masked(parsed) if secret else url
+    return _masked(parsed) if _has_password(parsed) else url
+
+
+def _has_password(url: URL) -> bool:
+    """Whether ``url`` holds a password: in its authority, or a ``?password=`` parameter."""
+    return url.password is not None or "password" in url.query
 
 
 def _unparsed_masked(url: str) -> str:
@@ -693,8 +697,7 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
     if url.username:
         parts.append(f"--username={shlex.quote(url.username)}")
     parts.append(shlex.quote(url.database or ""))
-    secret_given = url.password is not None or "password" in url.query
-    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if secret_given else ""
+    secret = " (the password: $PGPASSWORD or ~/.pgpass)" if _has_password(url) else ""
     return (
         f"back a PostgreSQL database up with its own tool, e.g. `{' '.join(parts)}`{secret}; "
         "restore with pg_restore"
