@@ -191,6 +191,20 @@ def psd_root_t(matrix: FloatArray) -> FloatArray:
     return root
 
 
+def _grown(known: FloatArray, kernel: SquaredExponential, space: PointSet) -> FloatArray:
+    """``kernel``'s matrix over every point of ``space`` whose first block, over the first
+    points, is ``known`` (taken as it is), with ``kernel``'s rows for the points past it and
+    their transpose above (``(a - b)^2 = (b - a)^2``): each entry the kernel's floats."""
+    size, start = len(space), known.shape[0]
+    out = np.empty((size, size))
+    out[:start, :start] = known
+    if start < size:
+        new = kernel.cross(space, np.arange(size), rows=np.arange(start, size))
+        out[start:] = new
+        out[:start, start:] = new[:, :start].T
+    return out
+
+
 class PointEngine:
     """The dense path on a :class:`~gaitpref.pointset.PointSet` (no grid, no Kronecker
     structure): the prior's square root from the pivoted Cholesky factor of the points'
@@ -227,14 +241,8 @@ class PointEngine:
         self._base = None
         if known is None:
             return plain.cross(self.space, np.arange(size))
-        start = known.shape[0]
-        out = np.empty((size, size))
-        out[:start, :start] = known
-        out[np.diag_indices(start)] = self.kernel.variance
-        if start < size:
-            new = plain.cross(self.space, np.arange(size), rows=np.arange(start, size))
-            out[start:] = new
-            out[:start, start:] = new[:, :start].T
+        out = _grown(known, plain, self.space)
+        out[np.diag_indices(known.shape[0])] = self.kernel.variance
         return out
 
     def _known_block(self) -> FloatArray | None:
@@ -298,13 +306,7 @@ class PointEngine:
         known = self._known_block()
         if known is None:
             return None
-        size, start = len(self.space), known.shape[0]
-        out = np.empty((size, size))
-        out[:start, :start] = known
-        if start < size:
-            new = self.kernel.cross(self.space, np.arange(size), rows=np.arange(start, size))
-            out[start:] = new
-            out[:start, start:] = new[:, :start].T
+        out = _grown(known, self.kernel, self.space)
         out.setflags(write=False)
         self._square = out
         self._base = None
