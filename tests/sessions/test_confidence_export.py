@@ -13,8 +13,8 @@ from gaitpref.storage import MemoryStorage
 from tests.sessions.sessionkit import CONFIG, Drive
 
 COLUMNS = {
-    "seq", "answers", "trials", "action", "gait", "probability", "regret", "relative_regret",
-    "tolerance", "samples", "at",
+    "seq", "answers", "trials", "action", "gait", "made", "probability", "regret",
+    "relative_regret", "tolerance", "samples", "at",
 }  # fmt: skip
 
 
@@ -50,6 +50,7 @@ def test_the_confidence_table_repeats_what_was_stated_after_every_step(
     assert {k: float(table[0][k]) for k in features} == s.space.values_of(rows[0]["action"])
     assert [float(r["probability"]) for r in table] == [r["probability"] for r in rows]
     assert table[0]["gait"] == s.gait_name(rows[0]["action"]) and table[0]["at"]
+    assert {r["made"] for r in rows} == {None}  # no gaits made on demand: nothing to make
     export_session(s, tmp_path / "json", "json")
     assert (
         json.loads((tmp_path / "json" / "confidence.json").read_text())[-1]["seq"]

@@ -117,8 +117,10 @@ def confidence_history(
     """Replay ``events`` into the fresh ``state`` and, after every step whose posterior differs
     from the one before, the confidence then (the same numbers the terminal and the console
     showed): one row per step with ``seq`` (its last event), ``answers`` and ``trials`` in
-    force, the recommended ``action``, its ``gait`` name and feature ``values`` then (on the
-    line path a row may name another point later), ``probability``, ``regret``,
+    force, the recommended ``action``, its ``gait`` name, ``made`` (with gaits made on demand,
+    whether the session had made its gait then: :meth:`SessionState.gait_made`, as the terminal
+    and the console say it; None without) and feature ``values`` then (on the line path a row
+    may name another point later), ``probability``, ``regret``,
     ``relative_regret``, ``tolerance`` and ``samples``.  ``progress(done, total)``: called
     after each step with the events replayed so far and their number (an export of a long
     session on a large grid takes minutes: the CLI shows a bar)."""
@@ -142,6 +144,7 @@ def confidence_history(
                 "trials": len(st.loop.executed),
                 "action": sure.recommended,
                 "gait": st.gait_name(sure.recommended),
+                "made": st.gait_made(sure.recommended),
                 "values": st.loop.space.values_of(sure.recommended),
                 "probability": sure.probability,
                 "regret": sure.regret,
