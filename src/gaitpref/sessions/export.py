@@ -16,7 +16,8 @@ An export folder is readable without gaitpref:
   ``comparisons`` (with ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``,
   ``posterior`` (mean and standard deviation of every action), ``validation`` and ``confidence``
   (after every answer, undo and exclusion: ``seq`` of its last event, ``answers`` and ``trials``
-  in force, the recommended ``action`` and ``gait``, whether its gait was ``made`` (gaits made
+  in force, whether a preference is ``learned`` (false: no confidence stated, the fields after
+  it empty), the recommended ``action`` and ``gait``, whether its gait was ``made`` (gaits made
   on demand), the ``probability`` that it is within ``tolerance`` of the range of the best, the
   expected shortfall ``regret`` in utility units and ``relative_regret`` as a fraction of the
   range, the posterior ``samples`` behind them, ``at``); and one table per
