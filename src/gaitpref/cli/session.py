@@ -88,11 +88,35 @@ def _opened(db: str | None, session_id: int) -> Iterator[Session]:
 
 
 def _confirm(question: str, yes: bool) -> None:
-    """Ask ``question`` (y/N) unless ``--yes`` was given; exit 1 with nothing done on no."""
+    """Ask ``question`` (y/N) unless ``--yes`` was given; exit 1 with nothing done on no.
+
+    The question and the answer's outcome go to stderr: on stdout a script capturing the
+    output (``out=$(gaitpref session finish 3)``) hid the question, and the command seemed to
+    hang.  A stdin that ends before an answer (``</dev/null``, a closed pipe) is a no, said so
+    with how to skip the question (it printed click's bare ``Aborted!``)."""
     if yes:
         return
-    if not typer.confirm(question, default=False):
-        console.print("nothing done")
+    import sys
+
+    while True:  # the question on stderr, as typed (typer.confirm put its last space on stdout)
+        typer.echo(f"{question} [y/N]: ", nl=False, err=True)
+        try:
+            line, typed = sys.stdin.readline(), sys.stdin.isatty()
+        except (AttributeError, OSError, ValueError):  # no stdin at all (closed: `<&-`)
+            line, typed = "", False
+        if not line or not typed:  # a typed answer ended the line; a piped one did not
+            typer.echo(err=True)
+        if not line:  # the end of stdin: no answer will come
+            err_console.print(
+                "no answer (stdin ended): nothing done; give --yes to skip the question"
+            )
+            raise typer.Exit(1)
+        answer = line.strip().lower()
+        if answer in ("y", "yes", "n", "no", ""):
+            break
+        typer.echo("answer y or n", err=True)
+    if answer not in ("y", "yes"):
+        err_console.print("nothing done")
         raise typer.Exit(1)
 
 
