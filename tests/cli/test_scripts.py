@@ -1,0 +1,80 @@
+"""The CLI as a lab's scripts drive it (nightly exports, a clinic's batch of simulate and bench
+runs, a cron job that backs up and checks the database): what a command found goes to stdout,
+progress, notes, questions and errors to stderr; ``--json`` prints JSON alone on stdout; the
+exit status says how it went (docs/getting-started.md, "In scripts")."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+from typer.testing import CliRunner
+
+from gaitpref.cli import app
+from gaitpref.config import load_config
+
+runner = CliRunner()
+POPULATION = "exo-1d-step-length"
+
+
+def _population_objectives(tmp_path: Path) -> Path:
+    x = np.linspace(0, 1, len(load_config(POPULATION).space))
+    path = tmp_path / "objectives.npy"
+    np.save(path, np.array([-((x - p) ** 2) for p in (0.6, 0.65)]))
+    return path
+
+
+def test_a_bench_summary_goes_to_stdout_and_its_bar_to_stderr(tmp_path: Path) -> None:
+    """``bench continuous`` and ``population`` printed their summaries on stderr: ``> out.txt``
+    kept nothing, and ``2> /dev/null`` hid the results."""
+    args = ["bench", "continuous", POPULATION, "--objective", "random-gp", "--runs", "2"]
+    result = runner.invoke(app, [*args, "--trials", "3"])
+    assert result.exit_code == 0, result.output
+    assert "trials 1-3: " in result.stdout and "final best point's objective" in result.stdout
+    assert "6/6" in result.stderr and "trials 1-3" not in result.stderr
+    path = _population_objectives(tmp_path)
+    args = ["bench", "population", "--objectives", str(path), "--trials", "2"]
+    result = runner.invoke(app, [*args, "--config", POPULATION])
+    assert result.exit_code == 0, result.output
+    assert "trials 1-2: cold " in result.stdout and "warm" in result.stdout
+    assert "4/4" in result.stderr and "trials 1-2" not in result.stderr
+
+
+def test_json_is_alone_on_stdout_and_stderr_is_empty(tmp_path: Path) -> None:
+    path = _population_objectives(tmp_path)
+    commands = [
+        ["bench", "continuous", POPULATION, "--objective", "random-gp", "--runs", "2",
+         "--trials", "3", "--json"],
+        ["bench", "population", "--objectives", str(path), "--trials", "2", "--config",
+         POPULATION, "--json"],
+        ["simulate", POPULATION, "--objective", "random-gp", "--trials", "3", "--json"],
+    ]  # fmt: skip
+    for command in commands:
+        result = runner.invoke(app, command)
+        assert result.exit_code == 0, (command, result.output)
+        assert isinstance(json.loads(result.stdout), dict), command
+        assert result.stdout.count("\n") == 1 and result.stderr == "", command
+
+
+def test_a_study_says_what_it_wrote_on_stdout(tmp_path: Path) -> None:
+    args = ["--runs", "1", "--trials", "3", "--settings", "n1_b1", "--no-baseline", "--jobs", "1"]
+    result = runner.invoke(app, ["bench", "paper-2d", *args, "--out", str(tmp_path / "o")])
+    assert result.exit_code == 0, result.output
+    assert "1 run in " in result.stdout and "curves.csv" in result.stdout
+    assert " run in " not in result.stderr
+
+
+def test_an_error_under_json_prints_no_json_and_a_line_on_stderr(tmp_path: Path) -> None:
+    for command, status in (
+        (["simulate", POPULATION, "--objective", str(tmp_path / "no.npy"), "--json"], 2),
+        (["simulate", "no-such-config", "--objective", "random-gp", "--json"], 2),
+        (["bench", "continuous", POPULATION, "--objective", "random-gp", "--runs", "0",
+          "--json"], 2),
+        (["session", "show", "1", "--json", "--no-figure", "--db", str(tmp_path / "no.db")], 2),
+        (["db", "check", "--json", "--db", str(tmp_path / "no.db")], 2),
+    ):  # fmt: skip
+        result = runner.invoke(app, command)
+        assert result.exit_code == status, (command, result.output)
+        assert result.stdout == "", command
+        assert result.stderr.strip(), command
