@@ -78,3 +78,37 @@ def test_an_error_under_json_prints_no_json_and_a_line_on_stderr(tmp_path: Path)
         assert result.exit_code == status, (command, result.output)
         assert result.stdout == "", command
         assert result.stderr.strip(), command
+
+
+def test_session_list_json_names_every_session_whatever_the_width(tmp_path: Path) -> None:
+    """A nightly export loops over the sessions: the table folded a long config name onto two
+    lines at 80 columns (the width off a terminal), and had no --json to read instead."""
+    from gaitpref import Session
+
+    db = f"sqlite:///{tmp_path / 'lab.db'}"
+    text = load_config(POPULATION).text.replace(
+        f'name = "{POPULATION}"', 'name = "' + "x" * 90 + '"'
+    )
+    config = tmp_path / "long.toml"
+    config.write_text(text)
+    Session.create(db, str(config), "S01", seed=3).close()
+    Session.create(db, POPULATION, "S02", seed=4).close()
+    result = runner.invoke(app, ["session", "list", "--json", "--db", db])
+    assert result.exit_code == 0, result.output
+    assert result.stderr == ""
+    rows = json.loads(result.stdout)
+    assert [list(row) for row in rows] == [
+        ["id", "subject", "config", "seed", "status", "imported_from", "events", "created",
+         "updated"]
+    ] * 2  # fmt: skip
+    assert [(r["id"], r["subject"], r["config"], r["seed"]) for r in rows] == [
+        (1, "S01", "x" * 90, 3),
+        (2, "S02", POPULATION, 4),
+    ]
+    assert rows[0]["imported_from"] is None and rows[0]["created"].endswith("+00:00")
+    only = runner.invoke(app, ["session", "list", "--json", "--subject", "S02", "--db", db])
+    assert [r["id"] for r in json.loads(only.stdout)] == [2]
+    empty = tmp_path / "empty.db"
+    assert runner.invoke(app, ["db", "upgrade", "--db", str(empty)]).exit_code == 0
+    none = runner.invoke(app, ["session", "list", "--json", "--db", str(empty)])
+    assert none.exit_code == 0 and json.loads(none.stdout) == []

@@ -24,6 +24,7 @@ from gaitpref.wording import plural
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
     from gaitpref.sessions.records import SessionQuery, Trial
+    from gaitpref.storage import SessionRecord
 
 session_app = typer.Typer(
     name="session", help="Experiment sessions with real subjects.", no_args_is_help=True
@@ -416,6 +417,14 @@ def _validate_command(session_id: int, db: str | None, gaits: Sequence[str]) -> 
 @session_app.command("list")
 def list_sessions(
     subject: Annotated[str | None, typer.Option(help="Only this subject's sessions.")] = None,
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON array, a session per object: id, subject, config, seed, "
+            "status, imported_from, events, created, updated (UTC, ISO 8601).",
+        ),
+    ] = False,
     db: DbOption = None,
 ) -> None:
     """List the sessions in the database."""
@@ -423,7 +432,7 @@ def list_sessions(
     # quickly, without SciPy's optimizers (tests/cli/test_startup.py).
     from rich.table import Table
 
-    from gaitpref.storage import SessionRecord, open_storage
+    from gaitpref.storage import open_storage
 
     def run() -> list[SessionRecord]:
         storage = open_storage(db, create=False)
@@ -433,6 +442,9 @@ def list_sessions(
             storage.close()
 
     rows = guard(run)
+    if as_json:  # for scripts: the table folds long names at 80 columns off a terminal
+        typer.echo(json.dumps([_listed(r) for r in rows]))
+        return
     table = Table(title="sessions")
     # times are stored in UTC: the headers say so (the console writes "... UTC" after each)
     # every cell folded onto more lines, never cut with an ellipsis: on 80 columns
@@ -453,6 +465,26 @@ def list_sessions(
             _utc(r.updated_at),
         )
     console.print(table)
+
+
+def _listed(record: SessionRecord) -> dict[str, object]:
+    """A row of ``session list --json``: ``imported_from`` is the id the session had in the
+    database it was exported from (None: not imported), ``events`` the sequence number of its
+    last event, the times in UTC (``2026-12-02T14:40:05.123456+00:00``)."""
+    from gaitpref.storage.base import as_utc
+
+    origin = record.meta.get("imported_from")
+    return {
+        "id": record.id,
+        "subject": record.subject,
+        "config": record.config_name,
+        "seed": record.seed,
+        "status": record.status,
+        "imported_from": origin.get("session_id") if isinstance(origin, dict) else None,
+        "events": record.last_seq,
+        "created": as_utc(record.created_at).isoformat(),
+        "updated": as_utc(record.updated_at).isoformat(),
+    }
 
 
 def _utc(when: datetime) -> str:
