@@ -9,6 +9,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 from gaitpref.cli import app
@@ -112,3 +113,34 @@ def test_session_list_json_names_every_session_whatever_the_width(tmp_path: Path
     assert runner.invoke(app, ["db", "upgrade", "--db", str(empty)]).exit_code == 0
     none = runner.invoke(app, ["session", "list", "--json", "--db", str(empty)])
     assert none.exit_code == 0 and json.loads(none.stdout) == []
+
+
+def _documented_statuses() -> dict[int, str]:
+    page = Path(__file__).resolve().parents[2] / "docs" / "getting-started.md"
+    section = page.read_text(encoding="utf-8").split("### In scripts: exit statuses and output")[1]
+    rows = (line.split("|") for line in section.split("\n## ")[0].splitlines())
+    return {int(r[1]): r[2] for r in rows if len(r) > 3 and r[1].strip().isdigit()}
+
+
+def test_the_documented_statuses_are_the_ones_the_error_helper_uses() -> None:
+    """Every status and error label of ``cli/output.py`` is in the docs' table, in its row."""
+    from gaitpref.cli.output import FAMILIES
+
+    documented = _documented_statuses()
+    assert sorted(documented) == [0, 1, 2, 130]
+    for _, label, status in FAMILIES:
+        assert f"`{label}" in documented[status], (label, status)
+
+
+def test_an_interrupt_exits_130(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
+    """As documented: a script can tell Ctrl-C from a check that failed (``db check``: 1)."""
+    import gaitpref.sessions.check as check
+
+    def interrupted(*args: object, **kwargs: object) -> None:
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(check, "check_database", interrupted)
+    db = tmp_path / "lab.db"
+    assert runner.invoke(app, ["db", "upgrade", "--db", str(db)]).exit_code == 0
+    result = runner.invoke(app, ["db", "check", "--db", str(db)])
+    assert result.exit_code == 130 and result.stdout == ""

@@ -18,8 +18,11 @@ any other :class:`~gaitpref.errors.GaitprefError`, ``error: ...``      2
 ==============================================  =====================  ======
 
 Status 2 means "the input was refused; nothing was written"; status 1 means a computation could
-not finish.  The message is always ``str(exc)``: the error classes name the table, key, session or
-event themselves, so the CLI never re-formats their arguments.
+not finish (or a check found a problem, or a question was answered no); 130, an interrupt.  The
+statuses, and what goes to stdout and to stderr, are documented for scripts in
+``docs/getting-started.md`` ("In scripts: exit statuses and output"), held to this table by
+``tests/cli/test_scripts.py``.  The message is always ``str(exc)``: the error classes name the
+table, key, session or event themselves, so the CLI never re-formats their arguments.
 """
 
 from __future__ import annotations
