@@ -144,3 +144,33 @@ def test_an_interrupt_exits_130(monkeypatch: pytest.MonkeyPatch, tmp_path: Path)
     assert runner.invoke(app, ["db", "upgrade", "--db", str(db)]).exit_code == 0
     result = runner.invoke(app, ["db", "check", "--db", str(db)])
     assert result.exit_code == 130 and result.stdout == ""
+
+
+def test_session_new_json_gives_the_id_to_a_script(tmp_path: Path) -> None:
+    """A clinic's script creates a session and runs commands on it: the id was in a sentence
+    (``session 1: subject S01, ...``) to parse."""
+    db = str(tmp_path / "lab.db")
+    args = ["session", "new", "--config", POPULATION, "--json", "--db", db]
+    first = runner.invoke(app, [*args, "--subject", "S01", "--seed", "5"])
+    assert first.exit_code == 0, first.output
+    assert first.stderr == ""
+    info = json.loads(first.stdout)
+    assert info == {
+        "id": 1,
+        "subject": "S01",
+        "config": POPULATION,
+        "seed": 5,
+        "db": f"sqlite:///{db}",
+        "prior_from": [],
+        "prior_rho": None,
+    }
+    second = runner.invoke(app, [*args, "--subject", "S02", "--prior-from", "S01"])
+    assert second.exit_code == 0, second.output
+    warm = json.loads(second.stdout)
+    assert warm["id"] == 2 and [p["session"] for p in warm["prior_from"]] == [1]
+    shown = json.loads(
+        runner.invoke(app, ["session", "show", "2", "--json", "--no-figure", "--db", db]).stdout
+    )
+    assert shown["prior_from"] == warm["prior_from"] and shown["prior_rho"] == warm["prior_rho"]
+    refused = runner.invoke(app, [*args, "--subject", "Jane Doe"])
+    assert refused.exit_code == 2 and refused.stdout == "" and refused.stderr

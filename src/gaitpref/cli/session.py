@@ -268,6 +268,13 @@ def new(
             "'session:7' or 'subject:07' where digits could be either).",
         ),
     ] = None,
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON object: id, subject, config, seed, db, prior_from, prior_rho.",
+        ),
+    ] = False,
     db: DbOption = None,
 ) -> None:
     """Start a session of SUBJECT with CONFIG; prints its id."""
@@ -303,6 +310,21 @@ def new(
         return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
     session = guard(run)
+    if as_json:  # for scripts: the id without parsing a sentence
+        from gaitpref.sessions.warm import recorded_prior
+
+        info = {
+            "id": session.id,
+            "subject": session.subject,
+            "config": session.config.name,
+            "seed": session.seed,
+            "db": session.storage.url,  # its password (if any) as ***
+            "prior_from": [p.model_dump() for p in recorded_prior(session.record)],
+            "prior_rho": session.record.meta.get("prior_rho"),
+        }
+        session.close()
+        typer.echo(json.dumps(info))
+        return
     console.print(
         f"session {session.id}: subject {session.subject}, config {session.config.name}, "
         f"seed {session.seed}, in {session.storage.url}",
