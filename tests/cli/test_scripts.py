@@ -174,3 +174,30 @@ def test_session_new_json_gives_the_id_to_a_script(tmp_path: Path) -> None:
     assert shown["prior_from"] == warm["prior_from"] and shown["prior_rho"] == warm["prior_rho"]
     refused = runner.invoke(app, [*args, "--subject", "Jane Doe"])
     assert refused.exit_code == 2 and refused.stdout == "" and refused.stderr
+
+
+def test_off_a_terminal_nothing_is_coloured_and_long_paths_are_not_wrapped(
+    tmp_path: Path,
+) -> None:
+    """Run as a script runs it (pipes, ``COLUMNS`` unset, a colour ``TERM``): no ANSI codes on
+    stdout or stderr, a path longer than 80 columns on one line, tables included."""
+    from tests.cli.scriptkit import run_script
+
+    folder = tmp_path / ("a" * 70) / ("b" * 70)
+    folder.mkdir(parents=True)
+    db = str(folder / "lab.db")
+    runs = [
+        run_script("session", "new", "--config", POPULATION, "--subject", "S01", "--db", db),
+        run_script("session", "list", "--db", db),
+        run_script("db", "check", "--db", db),
+        run_script("session", "show", "9", "--no-figure", "--db", db),  # an error line
+        run_script("configs"),
+    ]
+    for run in runs:
+        assert "\x1b[" not in run.stdout + run.stderr, run.args
+    new, listed, checked, missing, _ = runs
+    assert new.returncode == 0 and f"--db {db}\n" in new.stdout  # one line, not folded
+    assert listed.returncode == 0 and "S01" in listed.stdout
+    assert checked.returncode == 0 and "the one session replays" in checked.stdout
+    assert missing.returncode == 2 and missing.stdout == ""
+    assert missing.stderr == f"storage error: no session 9 in sqlite:///{db}\n"
