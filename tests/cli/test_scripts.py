@@ -201,3 +201,17 @@ def test_off_a_terminal_nothing_is_coloured_and_long_paths_are_not_wrapped(
     assert checked.returncode == 0 and "the one session replays" in checked.stdout
     assert missing.returncode == 2 and missing.stdout == ""
     assert missing.stderr == f"storage error: no session 9 in sqlite:///{db}\n"
+
+
+def test_configs_json_lists_every_shipped_config() -> None:
+    from gaitpref.config import shipped_configs
+
+    result = runner.invoke(app, ["configs", "--json"])
+    assert result.exit_code == 0 and result.stderr == ""
+    rows = json.loads(result.stdout)
+    assert [r["name"] for r in rows] == list(shipped_configs())
+    assert all(list(r) == ["name", "space", "n", "b", "description"] for r in rows)
+    compass = next(r for r in rows if r["name"] == "compass-gait")
+    assert (compass["n"], compass["b"]) == (2, 0) and compass["space"] == "24"
+    table = runner.invoke(app, ["configs"])
+    assert table.exit_code == 0 and "compass-gait" in table.stdout  # long names fold at 80

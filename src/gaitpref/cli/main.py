@@ -353,18 +353,40 @@ def simulate(
 
 
 @app.command("configs")
-def list_configs() -> None:
+def list_configs(
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON array, a config per object: name, space, n, b, description.",
+        ),
+    ] = False,
+) -> None:
     """List the shipped experiment configs."""
     from rich.table import Table
 
     from gaitpref.config import load_config, shipped_configs
 
+    rows: list[dict[str, str | int]] = []
+    for name in shipped_configs():
+        cfg = load_config(name)
+        rows.append(
+            {
+                "name": name,
+                "space": cfg.space.words,
+                "n": cfg.n,
+                "b": cfg.buffer,
+                "description": cfg.description,
+            }
+        )
+    if as_json:  # for scripts: the table folds its descriptions at 80 columns off a terminal
+        typer.echo(json.dumps(rows))
+        return
     table = Table(title="shipped configs")
     for col in ("name", "space", "n", "b", "description"):
         table.add_column(col)
-    for name in shipped_configs():
-        cfg = load_config(name)
-        table.add_row(name, cfg.space.words, str(cfg.n), str(cfg.buffer), cfg.description)
+    for row in rows:
+        table.add_row(*(str(value) for value in row.values()))
     console.print(table)
 
 
