@@ -215,3 +215,32 @@ def test_configs_json_lists_every_shipped_config() -> None:
     assert (compass["n"], compass["b"]) == (2, 0) and compass["space"] == "24"
     table = runner.invoke(app, ["configs"])
     assert table.exit_code == 0 and "compass-gait" in table.stdout  # long names fold at 80
+
+
+def test_an_objective_that_prints_does_not_break_the_json(tmp_path: Path) -> None:
+    """A lab's objective (``PATH.py:NAME``) that prints when imported or called put its lines
+    on stdout before the JSON: ``json.loads`` of the output failed.  They go to stderr now."""
+    source = tmp_path / "chatty.py"
+    source.write_text(
+        "import numpy as np\n"
+        "print('loading chatty')\n"
+        "def f(x):\n"
+        "    print('evaluating', len(x))\n"
+        "    return -np.sum((np.asarray(x) - 0.12) ** 2, axis=1)\n"
+    )
+    spec = f"{source}:f"
+    for command in (
+        ["simulate", POPULATION, "--objective", spec, "--trials", "3", "--json"],
+        ["bench", "continuous", POPULATION, "--objective", spec, "--runs", "2", "--trials", "3",
+         "--json"],
+    ):  # fmt: skip
+        result = runner.invoke(app, command)
+        assert result.exit_code == 0, (command, result.output)
+        assert isinstance(json.loads(result.stdout), dict), command
+        assert "loading chatty" in result.stderr and "evaluating" in result.stderr, command
+    grid = ["simulate", "exo-2d-rated", "--objective", spec, "--trials", "3", "--json"]
+    rated = runner.invoke(app, [*grid, "--rating-quantiles", "0.25,0.5,0.75"])
+    assert rated.exit_code == 0, rated.output  # a function over the grid's points, rated
+    assert isinstance(json.loads(rated.stdout), dict) and "evaluating 90" in rated.stderr
+    plain = runner.invoke(app, ["simulate", POPULATION, "--objective", spec, "--trials", "3"])
+    assert plain.exit_code == 0 and "evaluating" in plain.stdout  # without --json, as before

@@ -19,7 +19,15 @@ import typer
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
 from gaitpref.cli.gaits import app as gaits_app
-from gaitpref.cli.output import checked_config, console, err_console, fail, guard, read_array
+from gaitpref.cli.output import (
+    checked_config,
+    console,
+    err_console,
+    fail,
+    guard,
+    json_only,
+    read_array,
+)
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 from gaitpref.limits import MAX_SEED, MAX_TRIALS
@@ -291,9 +299,10 @@ def simulate(
     else:  # a function of points, evaluated over the grid: its quantiles are the grid's
         import numpy as np
 
-        fn = load_point_objective(objective, cfg)
         shape = tuple(len(f) for f in cfg.space.features)
-        obj = guard(lambda: np.asarray(fn(cfg.space.points), dtype=np.float64).reshape(shape))
+        with json_only(as_json):  # the function's own prints kept off the JSON
+            fn = load_point_objective(objective, cfg)
+            obj = guard(lambda: np.asarray(fn(cfg.space.points), dtype=np.float64).reshape(shape))
     try:
         objective_on_grid(cfg.space, obj)
     except ValueError as exc:

@@ -166,6 +166,21 @@ def read_array(path: Path, what: str) -> Any:
 
 
 @contextmanager
+def json_only(as_json: bool) -> Iterator[None]:
+    """A block whose prints to stdout go to stderr when ``as_json`` (``--json``: stdout holds
+    the JSON printed after it, alone).  A user's objective (``PATH.py:NAME``) that printed, when
+    imported or called, broke the JSON a script read."""
+    if not as_json:
+        yield
+        return
+    import sys
+    from contextlib import redirect_stdout
+
+    with redirect_stdout(sys.stderr):
+        yield
+
+
+@contextmanager
 def reported() -> Iterator[None]:
     """A block whose handled errors are reported (:func:`report`) instead of raised."""
     try:

@@ -40,6 +40,7 @@ from gaitpref.cli.output import (
     console,
     fail,
     guard,
+    json_only,
     read_array,
     report,
 )
@@ -714,9 +715,16 @@ def continuous(
 
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "continuous", resume)
-    # refused before the bar shows
-    checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
-    with progress_bar(shown=not as_json) as bar, _warnings_shown():  # it said nothing till the end
+    # refused before the bar shows; the objective's own prints kept off the JSON
+    with json_only(as_json):
+        checked = guard(
+            lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise)
+        )
+    with (
+        json_only(as_json),
+        progress_bar(shown=not as_json) as bar,  # it said nothing till the end
+        _warnings_shown(),
+    ):
         task = bar.add_task(plural(runs, "run"), total=runs * trials)
         results = _stopping(
             lambda: bench_points(
