@@ -144,6 +144,17 @@ def test_an_interrupt_exits_130(monkeypatch: pytest.MonkeyPatch, tmp_path: Path)
     assert runner.invoke(app, ["db", "upgrade", "--db", str(db)]).exit_code == 0
     result = runner.invoke(app, ["db", "check", "--db", str(db)])
     assert result.exit_code == 130 and result.stdout == ""
+    # the root group says so itself: earlier typer releases exited 1 ("Aborted!")
+    import typer
+
+    from gaitpref.cli.main import RootGroup
+
+    group = typer.main.get_command(app)
+    assert isinstance(group, RootGroup)
+    ctx = group.make_context("gaitpref", ["db", "check", "--db", str(db)])
+    with ctx, pytest.raises(typer.Exit) as stopped:
+        group.invoke(ctx)
+    assert stopped.value.exit_code == 130
 
 
 def test_session_new_json_gives_the_id_to_a_script(tmp_path: Path) -> None:

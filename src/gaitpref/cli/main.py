@@ -12,9 +12,10 @@ import json
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from typer.core import TyperGroup
 
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
@@ -40,7 +41,22 @@ if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
     from gaitpref.simulate.run import SimulationResult
 
+
+class RootGroup(TyperGroup):
+    """The root group: an interrupt (Ctrl-C) anywhere exits with status 130, as documented
+    (``docs/getting-started.md``, "In scripts: exit statuses and output"), whatever the typer
+    release: typer 0.29 does so itself, earlier releases that pyproject allows printed
+    ``Aborted!`` and exited with status 1, the status of a check that failed (``db check``)."""
+
+    def invoke(self, ctx: Any) -> Any:  # a click.Context (typer 0.29: its own copy of click)
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise typer.Exit(130) from None
+
+
 app = typer.Typer(
+    cls=RootGroup,
     name="gaitpref",
     help="Personalize exoskeleton gaits from user preferences (CoSpar).",
     no_args_is_help=True,
