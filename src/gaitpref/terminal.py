@@ -784,49 +784,45 @@ class Terminal:
         return f"{gait_name(self.session, action)} ({self.session.space.describe(action)})"
 
     def _comparisons(self, q: SessionQuery) -> tuple[list[tuple[int, int, str]], list[str]]:
+        """Each pair the query asks (:attr:`SessionQuery.pairs`, the console's and the
+        simulated users' too); a pair it does not ask is said, with why."""
         out: list[tuple[int, int, str]] = []
         said: list[str] = []
-        seen: set[tuple[int, int]] = set()
-        asked: dict[frozenset[int], tuple[int, int]] = {}  # the trials a pair of gaits was asked as
-        members = list(zip(q.member_trials, q.members, strict=True))
-        for r, (ti, ai) in enumerate(zip(q.trials, q.actions, strict=True)):
-            for c, (tj, aj) in enumerate(members):
-                key = (min(r, c), max(r, c))
-                if r == c or key in seen:
-                    continue
-                seen.add(key)
-                if ai == aj:
-                    self.console.print(
-                        f"  trials {ti} and {tj} are the same gait: nothing to compare",
-                        markup=False,
-                    )
-                    continue
-                if frozenset((ai, aj)) in asked:  # a gait run twice (b > 1, n > 1): asked once
-                    pi, pj = asked[frozenset((ai, aj))]
-                    self.console.print(
-                        f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
-                        f"trial {pj}, compared once",
-                        markup=False,
-                    )
-                    continue
-                asked[frozenset((ai, aj))] = (ti, tj)
-                # "the previous one" only when one trial is buffered: with b > 1 the buffer
-                # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
-                previous = c >= len(q.actions) and len(q.buffer) == 1
-                other = "the previous one" if previous else f"trial {tj}"
-                this = "this one" if len(q.actions) == 1 else f"trial {ti}"
-                answer = self.ask(
-                    f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
-                    {"1": "first", "2": "second", "0": "none"},
+        members, numbers = q.members, q.member_trials
+        for pair in q.pairs:
+            r, c = pair.first, pair.second
+            ti, tj, ai, aj = numbers[r], numbers[c], members[r], members[c]
+            if pair.same_gait:
+                self.console.print(
+                    f"  trials {ti} and {tj} are the same gait: nothing to compare",
+                    markup=False,
                 )
-                outcome = {"1": "first", "2": "second", "0": "none"}[answer]
-                out.append((ai, aj, outcome))
-                said.append(
-                    f"no preference between trials {ti} and {tj}"
-                    if outcome == "none"
-                    else f"trial {ti if outcome == 'first' else tj} preferred to trial "
-                    f"{tj if outcome == 'first' else ti}"
+                continue
+            if pair.repeats is not None:  # a gait run twice (b > 1, n > 1): asked once
+                pi, pj = (numbers[k] for k in pair.repeats)
+                self.console.print(
+                    f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
+                    f"trial {pj}, compared once",
+                    markup=False,
                 )
+                continue
+            # "the previous one" only when one trial is buffered: with b > 1 the buffer
+            # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
+            previous = c >= len(q.actions) and len(q.buffer) == 1
+            other = "the previous one" if previous else f"trial {tj}"
+            this = "this one" if len(q.actions) == 1 else f"trial {ti}"
+            answer = self.ask(
+                f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
+                {"1": "first", "2": "second", "0": "none"},
+            )
+            outcome = {"1": "first", "2": "second", "0": "none"}[answer]
+            out.append((ai, aj, outcome))
+            said.append(
+                f"no preference between trials {ti} and {tj}"
+                if outcome == "none"
+                else f"trial {ti if outcome == 'first' else tj} preferred to trial "
+                f"{tj if outcome == 'first' else ti}"
+            )
         return out, said
 
     def _suggestions(self, q: SessionQuery) -> tuple[list[tuple[int, str, str]], list[str]]:

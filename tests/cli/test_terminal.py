@@ -958,3 +958,48 @@ def test_x_on_a_query_of_two_trials_asks_which_one_is_unsafe() -> None:
     terminal, console = _terminal(both, "1", "", "", "0", "0", "x", "a", "fell")
     terminal.run()
     assert sorted(both.unsafe_flags()) == [1, 2]
+
+
+@pytest.mark.parametrize(
+    ("actions", "buffer"),
+    [
+        ((5,), (9,)),
+        ((5,), (5,)),
+        ((5, 9, 7), (3,)),
+        ((7,), (3, 3)),
+        ((5, 5, 7), (9, 5)),
+        ((4, 9), (9,)),
+    ],
+)
+def test_the_terminal_the_console_and_the_simulated_users_ask_the_same_pairs(
+    actions: tuple[int, ...], buffer: tuple[int, ...]
+) -> None:
+    """One rule (``SessionQuery.pairs``): the console asked a gait against itself and ordered
+    n >= 3's pairs its own way; the terminal and the simulated users had one rule each."""
+    from gaitpref import SessionQuery
+    from gaitpref.console import views
+    from gaitpref.loop import Query
+    from gaitpref.simulate.users import query_pairs
+
+    n = len(actions)
+    q = SessionQuery(
+        2, 2, actions, buffer, tuple(range(10, 10 + n)), tuple(range(1, 1 + len(buffer)))
+    )
+    session = Session.create(MemoryStorage(), load_config("exo-2d-rated"), "S01", seed=0)
+    terminal, console = _terminal(session, *["1"] * len(q.compared))
+    told, _ = terminal._comparisons(q)
+    assert [(i, j) for i, j, _ in told] == list(q.compared)
+    space = session.space
+    groups = views.comparison_groups(
+        [views.gait_view(space, a, trial=t) for a, t in zip(actions, q.trials, strict=True)],
+        [views.gait_view(space, a, trial=t) for a, t in zip(buffer, q.buffer_trials, strict=True)],
+    )
+    assert [(g.first.index, g.second.index) for g in groups] == list(q.compared)
+    assert [(g.first.trial, g.second.trial) for g in groups] == [
+        (q.member_trials[p.first], q.member_trials[p.second]) for p in q.pairs if p.asked
+    ]
+    assert query_pairs(Query(2, actions, buffer)) == list(q.compared)
+    text = console.export_text()
+    same = sum(p.same_gait for p in q.pairs)
+    assert text.count(": nothing to compare") == same
+    assert text.count("compared once") == sum(not p.asked for p in q.pairs) - same

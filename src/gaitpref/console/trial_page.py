@@ -126,6 +126,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "actions": actions,
         "buffer": buffer,
         "comparisons": views.comparison_groups(actions, buffer),
+        "comparison_notes": views.comparison_notes(actions, buffer),
         "suggestions": views.suggestion_groups(space, actions),
         "ratings": views.rating_groups(categories, actions),
         "categories": categories,

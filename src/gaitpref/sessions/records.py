@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from gaitpref.checks import char_name, hidden_in
+from gaitpref.feedback import QueryPair, compared_actions, comparison_pairs
 
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
 REASONS: tuple[Reason, ...] = get_args(Reason)
@@ -35,6 +36,18 @@ class SessionQuery:
     @property
     def member_trials(self) -> tuple[int, ...]:
         return self.trials + self.buffer_trials
+
+    @property
+    def pairs(self) -> tuple[QueryPair, ...]:
+        """The pairs of members it asks to compare, and those it does not (and why), by
+        position in :attr:`members` and :attr:`member_trials`:
+        :func:`~gaitpref.feedback.comparison_pairs`."""
+        return comparison_pairs(self.actions, self.buffer)
+
+    @property
+    def compared(self) -> tuple[tuple[int, int], ...]:
+        """The pairs of actions it asks to compare, ``(executed, other)``, in order."""
+        return compared_actions(self.actions, self.buffer)
 
     def trial_of(self, action: int) -> int:
         """The trial number of ``action`` in this query (the first, if it appears twice)."""
