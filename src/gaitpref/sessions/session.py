@@ -330,7 +330,7 @@ class Session:
         if st.open_round is not None:
             raise SessionStateError(
                 f"blind validation round {st.open_round.plan.round} is open: "
-                "record its ranking first"
+                "record its ranking first, or withdraw it"
             )
         if st.pending is not None:
             return st.pending
