@@ -616,7 +616,7 @@ class Session:
 
         return self._locked(run)
 
-    def _redraw(self, st: SessionState, done: str, opened_by: str | None) -> None:
+    def _redraw(self, st: SessionState, done: str, opened_by: log.Opener | None) -> None:
         """Draw again the blind validation round that the change ``done`` (written) withdrew,
         opened by whoever opened it (``opened_by``); a storage failure of that write says the
         change stands."""

@@ -97,7 +97,7 @@ class _Round:
     shown: dict[str, ShownGait]  # label -> the gait as the round showed it (rows move on)
     result: ValidationResult | None = None
     version: int = 1  # its validation_started payload's: 2 chose among proposable gaits
-    opened_by: str | None = None  # version 3: "rule" or "operator"; None before
+    opened_by: log.Opener | None = None  # version 3: "rule" or "operator"; None before
     opened_after: int | None = None  # the rule's: the query whose answer made it open
     withdrawn: tuple[int, str] | None = None  # (seq, reason) of its validation_withdrawn
 
@@ -191,7 +191,7 @@ class SessionState:
             ValidationRound(
                 round=r.plan.round,
                 seq=r.seq,
-                opened_by=r.opened_by,  # type: ignore[arg-type]  # checked by its payload
+                opened_by=r.opened_by,
                 opened_after=r.opened_after,
                 answered=r.result is not None,
                 withdrawn=None if r.withdrawn is None else r.withdrawn[1],
@@ -420,7 +420,7 @@ class SessionState:
 
     # -- derive: validation --------------------------------------------------------------------
     def validation_event(
-        self, version: int | None = None, opened_by: str | None = "operator"
+        self, version: int | None = None, opened_by: log.Opener | None = "operator"
     ) -> NewEvent:
         """The next blind round, its gaits chosen as payload ``version`` (default: the newest)
         chose them (1: among every gait or made gait; 2 and later: among those a query could
@@ -444,13 +444,7 @@ class SessionState:
         older = {1: log.ValidationStartedV1, 2: log.ValidationStartedV2}.get(version)
         if older is not None:
             return log.new_event(older(round=round_, gaits=gaits))  # who opened it: not logged
-        if opened_by not in ("rule", "operator", None):
-            raise SessionStateError(
-                f"a validation round is opened by 'rule' or 'operator', got {opened_by!r}"
-            )
-        return log.new_event(
-            log.ValidationStarted(round=round_, gaits=gaits, opened_by=opened_by)  # type: ignore[arg-type]
-        )
+        return log.new_event(log.ValidationStarted(round=round_, gaits=gaits, opened_by=opened_by))
 
     def withdraw_validation_event(self, round_: int, reason: str) -> NewEvent:
         """Withdraw the open, unanswered round ``round_`` (``reason``: why, 1..2000 characters);
