@@ -13,7 +13,7 @@ import pytest
 
 from gaitpref import Session, SessionStateError
 from gaitpref.config import ExperimentConfig, load_config, parse_config
-from gaitpref.sessions import export_session
+from gaitpref.sessions import export_session, import_session
 from gaitpref.sessions.demo import SimulatedSubject
 from gaitpref.storage import MemoryStorage, Storage
 from gaitpref.storage.sql import upgrade_database
@@ -88,6 +88,23 @@ def test_withdraw_then_replay_equals_live_state(db: str | Storage, drive: Drive)
     assert again.round == 2  # the next number: round 1 stays in the log, withdrawn
     s.answer_validation(2, "BCA")
     _same(s, Session.open(db, s.id))
+
+
+def test_a_withdrawn_round_exports_and_imports_as_logged(tmp_path: Path, drive: Drive) -> None:
+    with Session.create(MemoryStorage(), CONFIG, "S01", seed=3) as s:
+        drive(s, 6)
+        s.withdraw_validation(s.start_validation().round, "unwell")
+        drive(s, 1)
+        s.answer_validation(s.start_validation().round, "ABC")
+        export_session(s, tmp_path / "out")
+        with import_session(f"sqlite:///{tmp_path / 'copy.db'}", tmp_path / "out") as copy:
+            _same(copy, s)
+            assert [(e.kind, e.version, e.payload) for e in copy.events()] == [
+                (e.kind, e.version, e.payload) for e in s.events()
+            ]
+    with (tmp_path / "out" / "validation.csv").open(newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert {(r["round"], r["opened_by"]) for r in rows} == {("2", "operator")}  # 1 withdrawn
 
 
 def test_withdraw_with_undo_takes_back_the_answer_that_opened_the_round(
