@@ -899,8 +899,14 @@ class Terminal:
         trials = [t.number for t in s.trials() if t.query == info.opened_after]
         try:
             s.check_withdraw_validation(round_, undo=undo)
-        except SessionStateError:
-            undo = False  # the answer is gone (undone elsewhere): the round alone
+        except SessionStateError as exc:  # undone since, flagged unsafe...: the round alone
+            if undo:
+                self.console.print(
+                    f"  the answer that opened it cannot be undone with it: "
+                    f"{clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+            undo = False
         if undo:
             question = (
                 f"The [stop] rule opened round {round_} after the answer to "

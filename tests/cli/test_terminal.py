@@ -16,7 +16,7 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from gaitpref import Session, load_config
+from gaitpref import Rating, Session, load_config
 from gaitpref.cli import app
 from gaitpref.storage import MemoryStorage
 from gaitpref.terminal import Terminal, gait_name
@@ -1010,3 +1010,21 @@ def test_u_inside_an_operators_round_withdraws_it_alone() -> None:
     assert session.validation_plan is None and session.trials() == before  # nothing undone
     (info,) = session.validation_rounds()
     assert info.withdrawn == "u at the terminal" and info.opened_by == "operator"
+
+
+def test_u_inside_the_rules_round_whose_answer_was_undone_withdraws_it_alone_saying_why() -> None:
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED + "\n[stop]\nmax_trials = 1\n")
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    assert session.answer(q.id, [Rating(q.actions[0], "very bad")]).stopped is not None
+    session.undo()  # elsewhere (session undo): the round stays open, its answer gone
+    terminal, console = _terminal(session, "u", "y")
+    with pytest.raises(Exception) as raised:
+        terminal.validate()
+    assert type(raised.value).__name__ == "_WithdrawnError"
+    text = console.export_text()
+    assert "the answer that opened it cannot be undone with it: the answer to query" in text
+    assert "Withdraw validation round 1 unanswered?" in text and "Round 1 withdrawn." in text
+    assert [e.kind for e in session.events()][-1] == "validation_withdrawn"
