@@ -18,7 +18,9 @@ resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a cl
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
 The blind validation round the ``[stop]`` rule opens is asked (after the rule's reason, said
 when it opens the round and again when the runner resumes at it), unblinded, then the session
-pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
+pauses; ``u`` inside a round offers to withdraw it, with the answer after which the rule opened
+it undone (a mis-keyed answer: its trial is asked again), or alone for a round opened by hand
+(a round another writer opens is asked the same way; the answer typed meanwhile is not
 written); when the rule says stop but no round can be drawn (fewer than three gaits may be
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
 gaits were shown is refused and the round shown again, as the console refuses it.  A gait
@@ -142,6 +144,10 @@ class _QuitError(Exception):
 
 class _UndoError(Exception):
     """The operator pressed u."""
+
+
+class _WithdrawnError(Exception):
+    """The operator withdrew the open validation round (``u`` inside it, confirmed)."""
 
 
 class _ElsewhereError(Exception):
@@ -368,6 +374,8 @@ class Terminal:
                 if s.validation_plan is not None:
                     try:
                         self.validate()
+                    except _WithdrawnError:  # the trials go on (the undone one asked again)
+                        continue
                     except SessionStateError as exc:  # the round is gone: go on
                         self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                         self._stopped_elsewhere()
@@ -874,6 +882,81 @@ class Terminal:
                 markup=False,
             )
 
+    def _withdraw(self, round_: int) -> None:
+        """``u`` inside a round: offer to withdraw it, and to undo the answer after which the
+        ``[stop]`` rule opened it when it did (and that answer is still the last); confirmed
+        with ``y``.  Withdrawn: :class:`_WithdrawnError` (the loop goes on with the trials);
+        refused or not confirmed: said, and the ranking is asked again."""
+        s = self.session
+        info = next((r for r in s.validation_rounds() if r.round == round_ and r.open), None)
+        if info is None:
+            raise SessionStateError(f"validation round {round_} is no longer open")
+        undo = info.opened_by == "rule"
+        trials = [t.number for t in s.trials() if t.query == info.opened_after]
+        try:
+            s.check_withdraw_validation(round_, undo=undo)
+        except SessionStateError as exc:  # undone since, flagged unsafe...: the round alone
+            if undo:
+                self.console.print(
+                    f"  the answer that opened it cannot be undone with it: "
+                    f"{clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+            undo = False
+        if undo:
+            question = (
+                f"The [stop] rule opened round {round_} after the answer to "
+                f"{_trials(trials)}.  Withdraw the round and undo that answer (it is asked "
+                "again)?  y yes, n no"
+            )
+            reason = f"u at the terminal: the answer to {_trials(trials)} that opened it is undone"
+        else:
+            question = f"Withdraw validation round {round_} unanswered?  y yes, n no"
+            reason = "u at the terminal"
+        while True:
+            try:
+                key = self.ask(question, {"y": "", "n": ""})
+                break
+            except _UndoError:  # u again: the question stands
+                self.console.print("  withdrawing is being asked: y yes, n no", markup=False)
+        if key == "n":
+            self.console.print(
+                "  not withdrawn: the subject's ranking, best first, as before", markup=False
+            )
+            return
+        try:
+            pending = s.withdraw_validation(round_, reason, undo=undo)
+        except SessionStateError as exc:  # another writer answered or withdrew it meanwhile
+            self.console.print(f"  cannot withdraw: {clip(exc, MAX_MESSAGE)}", markup=False)
+            if s.validation_plan is None or s.validation_plan.round != round_:
+                raise
+            return
+        except _UNWRITTEN as exc:  # nothing written: the ranking is asked again
+            self.console.print(f"  not withdrawn: {clip(exc, MAX_MESSAGE)}", markup=False)
+            return
+        except NoSafeGaitError as exc:  # written; no gait left for the query in its place
+            self.console.print(f"Round {round_} withdrawn.", markup=False)
+            self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)
+            raise _QuitError from None
+        except GaitError as exc:  # written; the query in its place could not be made
+            self.console.print(f"Round {round_} withdrawn.", markup=False)
+            self._say_no_gait(exc)
+            raise _QuitError from None
+        line = f"Round {round_} withdrawn"
+        if undo:
+            again = pending is not None and pending.id == info.opened_after
+            line += (
+                f"; undone: the answer to {_trials(trials)} is asked again."
+                if again
+                else f"; undone the answer to {_trials(trials)}: its query proposed a gait "
+                "flagged unsafe since, or in the region of avoidance now, and was withdrawn: "
+                "a new query is proposed in its place."
+            )
+        else:
+            line += "."
+        self.console.print(line, markup=False)
+        raise _WithdrawnError
+
     def validate(self, ranking: str | None = None, gaits: Sequence[str] | None = None) -> None:
         """Run (or resume) a blind validation round and report the unblinded result.
 
@@ -927,10 +1010,8 @@ class Terminal:
                 given = self.read().strip()
                 if given.lower() == "q":
                     raise _QuitError
-                if given.lower() == "u":  # no answer to undo inside a round
-                    self.console.print(
-                        "  a validation round is open: record its ranking first", markup=False
-                    )
+                if given.lower() == "u":  # offers to withdraw the round (and undo its answer)
+                    self._withdraw(plan.round)
                     continue
                 try:  # refused before the confirmation is asked
                     check_ranking(given, plan.labels)
@@ -941,10 +1022,8 @@ class Terminal:
                     key = self.ask(
                         f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""}
                     )
-                except _UndoError:  # no answer to undo inside a round: ask the ranking again
-                    self.console.print(
-                        "  a validation round is open: record its ranking first", markup=False
-                    )
+                except _UndoError:  # offers to withdraw the round, then asks the ranking again
+                    self._withdraw(plan.round)
                     continue
                 if key == "n":
                     continue
@@ -1015,6 +1094,8 @@ def run_validation(
     try:
         with terminal.pause_on_signals():
             terminal.validate(ranking, gaits)
+    except _WithdrawnError:
+        return False
     except (_QuitError, _UndoError):
         if record_with is not None and terminal.shown_gaits is not None:
             terminal.console.print(

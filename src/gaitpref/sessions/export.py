@@ -310,7 +310,7 @@ FIXED_COLUMNS: Final = frozenset(
         *("exclusion_reason", "exclusion_detail", "undone", "seq", "at", "mean", "sd", "round"),
         *("label", "role", "posterior_mean", "subject_rank", "model_rank", "agrees"),
         *("kendall_tau", "answers", "trials", "probability", "regret", "relative_regret"),
-        *("tolerance", "samples"),
+        *("tolerance", "samples", "opened_by"),
     }
 )
 
@@ -432,6 +432,8 @@ def _tables(
         }
         for a in range(len(space))
     ]
+    # who opened each answered round: "rule", "operator", or None (logged before it was recorded)
+    opened_by = {r.round: r.opened_by for r in session.validation_rounds() if r.answered}
     validation = [
         {
             "round": r.round,
@@ -445,6 +447,7 @@ def _tables(
             "model_rank": r.model_ranking.index(label) + 1,
             "agrees": r.agrees,
             "kendall_tau": r.kendall_tau,
+            "opened_by": opened_by.get(r.round),
         }
         for r in session.validations()
         for shown in [{g.label: g for g in session.validation_gaits(r.round)}]

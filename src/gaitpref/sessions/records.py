@@ -213,3 +213,41 @@ def check_unsafe_reason(reason: str) -> str:
             f"an unsafe flag needs a reason: a text of 1 to {MAX_UNSAFE_REASON} characters"
         )
     return check_storable(reason, "the unsafe flag's reason")
+
+
+#: the longest reason a withdrawn validation round takes (the terminal, the CLI and the API)
+MAX_WITHDRAW_REASON = 2000
+
+
+def check_withdraw_reason(reason: str) -> str:
+    """``reason`` if a withdrawn validation round may hold it: a text of 1 to
+    :data:`MAX_WITHDRAW_REASON` characters that a database can store and a terminal shows as
+    it is; a ValueError saying which rule it breaks."""
+    what = "the withdrawn round's reason"
+    if not isinstance(reason, str) or not reason.strip() or len(reason) > MAX_WITHDRAW_REASON:
+        raise ValueError(
+            f"withdrawing a validation round needs a reason: a text of 1 to "
+            f"{MAX_WITHDRAW_REASON} characters"
+        )
+    return check_printable(check_storable(reason, what), what)
+
+
+@dataclass(frozen=True)
+class ValidationRound:
+    """A blind validation round as the log has it: its number, the seq of its
+    ``validation_started``, who opened it (``"rule"``, ``"operator"``; None: logged before
+    that was recorded), the query whose answer made the ``[stop]`` rule open it (None: not the
+    rule's), and what became of it: ``answered``, or ``withdrawn`` (the reason) at
+    ``withdrawn_seq``; an open round is neither."""
+
+    round: int
+    seq: int
+    opened_by: Literal["rule", "operator"] | None
+    opened_after: int | None
+    answered: bool = False
+    withdrawn: str | None = None
+    withdrawn_seq: int | None = None
+
+    @property
+    def open(self) -> bool:
+        return not self.answered and self.withdrawn is None
