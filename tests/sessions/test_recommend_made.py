@@ -24,6 +24,7 @@ from gaitpref.config import DEFAULTS_VERSION, ConfigError, parse_config, shipped
 from gaitpref.config.schema import EARLIER_DEFAULTS
 from gaitpref.loop.stopping import confidence
 from gaitpref.sessions.confidence import CONFIDENCE_STREAM
+from gaitpref.sessions.gaits import NOT_MADE
 from gaitpref.sessions.stored_config import library_meta
 from gaitpref.storage import MemoryStorage
 from tests.sessions.gaitkit import CONFIG, CONTINUOUS
@@ -212,3 +213,27 @@ def test_among_must_name_a_gait() -> None:
         only_first[0] = True
         with pytest.raises(ValueError, match="no gait of among is allowed"):
             confidence(post, np.random.default_rng(5), allowed=allowed, among=only_first)
+
+
+def test_session_show_and_the_console_name_the_made_gait(tmp_path: Path) -> None:
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with _session(url) as s:
+        _drive(s)
+        rec = s.recommended()
+        top = int(np.argmax(np.asarray(s.posterior().mean)))
+        assert rec is not None and rec != top
+        sid, name, unmade = s.id, s.gait_name(rec), s.gait_name(top)
+    out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--db", url])
+    assert out.exit_code == 0, out.output
+    text = " ".join(out.output.split())
+    assert f"best so far: {name} (action {rec}:" in text
+    assert f"the highest posterior mean, {unmade} (action {top}), is a point whose gait" in text
+    assert NOT_MADE not in text
+    from fastapi.testclient import TestClient
+
+    from gaitpref.console.app import create_app
+
+    with TestClient(create_app(url)) as client:
+        page = " ".join(client.get(f"/sessions/{sid}").text.split())
+    assert "among the gaits made so far that may be proposed" in page
+    assert "best-not-made" not in page
