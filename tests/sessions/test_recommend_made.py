@@ -199,6 +199,15 @@ def test_a_library_takes_no_recommend_key() -> None:
         parse_config(CONTINUOUS.replace("avoid_radius = 0.1\n", 'recommend = "best"\n'))
 
 
+def test_a_generator_spec_checks_recommend() -> None:
+    from gaitpref.config.generator import GeneratorSpec
+
+    assert GeneratorSpec("x", recommend="any").recommends_made is False
+    assert GeneratorSpec("x").recommends_made is True
+    with pytest.raises(ValueError, match="recommend must be one of made, any, got 'best'"):
+        GeneratorSpec("x", recommend="best")
+
+
 def test_among_must_name_a_gait() -> None:
     with _session(MemoryStorage()) as s:
         _drive(s)

@@ -34,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from gaitpref.config.schema import DEFAULT_MAX_INFEASIBLE, MAX_ASK_ITERATIONS
+from gaitpref.config.schema import DEFAULT_MAX_INFEASIBLE, MAX_ASK_ITERATIONS, RECOMMEND
 from gaitpref.config.specs import fail
 from gaitpref.space import Space
 
@@ -57,6 +57,12 @@ class GeneratorSpec:
     #: ``[gaits] recommend``: "made", a session recommends the best gait it made (defaults 0.13
     #: on), or "any", the best point of the model, made or not (``sessions/confidence.py``)
     recommend: str = "made"
+
+    def __post_init__(self) -> None:
+        if self.recommend not in RECOMMEND:
+            raise ValueError(
+                f"recommend must be one of {', '.join(RECOMMEND)}, got {self.recommend!r}"
+            )
 
     @property
     def recommends_made(self) -> bool:
