@@ -168,6 +168,13 @@ def test_no_gait_made_yet_is_said_rather_than_a_recommendation(tmp_path: Path) -
     out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--db", url])
     assert out.exit_code == 0, out.output
     assert f"best so far: none may be recommended ({why})" in " ".join(out.output.split())
+    from fastapi.testclient import TestClient
+
+    from gaitpref.console.app import create_app
+
+    with TestClient(create_app(url)) as client:
+        post = client.get(f"/api/sessions/{sid}/posterior").json()
+    assert post["recommended"] is None and post["no_recommendation"] == why
     with _session(MemoryStorage(), OLD, CONFIG) as s:  # before: the flat prior's first gait
         assert s.recommended() == 0 and s.no_recommendation() is None
 
