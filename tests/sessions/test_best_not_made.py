@@ -102,3 +102,51 @@ def test_the_api_says_whether_a_gait_is_made(tmp_path: Path) -> None:
     assert post["recommended"]["made"] is False
     assert [g["made"] for g in query["actions"] + query["buffer"]] == [True, True]
     assert [t["gait"]["made"] for t in trials] == [True]
+
+
+def test_show_json_and_the_export_say_whether_the_best_is_made(tmp_path: Path) -> None:
+    """``session show --json``'s and the manifest's posterior carry ``recommended_made`` and
+    ``argmax_made``, and the confidence table ``made``: the console API's fact, from
+    ``Session.gait_made``."""
+    import csv
+    import json
+
+    from gaitpref.sessions.export import export_session
+
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with Session.create(url, parse_config(CONTINUOUS), "S01") as s:
+        q = s.next_query()
+        s.answer(q.id, [], [(q.actions[0], "step_length", "+big")])  # the best: not made
+        best = s.recommended()
+        assert best is not None and s.gait_made(best) is False
+        argmax = s.posterior().argmax
+        export_session(s, tmp_path / "out", "csv")
+        sid = s.id
+    out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--json", "--db", url])
+    assert out.exit_code == 0, out.output
+    shown = json.loads(out.output)["posterior"]
+    assert shown["recommended"] == best and shown["recommended_made"] is False
+    with Session.open(url, sid) as s:
+        assert shown["argmax_made"] is s.gait_made(argmax)
+    manifest = json.loads((tmp_path / "out" / "manifest.json").read_text(encoding="utf-8"))
+    assert manifest["posterior"]["recommended_made"] is False
+    with (tmp_path / "out" / "confidence.csv").open(newline="", encoding="utf-8") as f:
+        (row,) = list(csv.DictReader(f))  # the one answer's row
+    assert row["action"] == str(best) and row["made"] == "false"
+
+
+def test_a_walked_best_is_made_in_show_json(tmp_path: Path) -> None:
+    import json
+
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    with Session.create(url, parse_config(CONTINUOUS), "S01") as s:
+        for _ in range(3):  # comparisons only: the best is a point a query proposed
+            q = s.next_query()
+            a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
+            s.answer(q.id, [] if a == b else [(a, b, "first")])
+        sid = s.id
+        rows = s.confidence_history()
+    out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--json", "--db", url])
+    assert out.exit_code == 0, out.output
+    assert json.loads(out.output)["posterior"]["recommended_made"] is True
+    assert rows and rows[-1]["made"] is True

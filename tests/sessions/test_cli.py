@@ -67,11 +67,13 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "argmax_gait_id",
         "mean_at_argmax",
         "sd_at_argmax",
+        "argmax_made",
         "recommended",
         "recommended_values",
         "recommended_gait_id",
         "mean_at_recommended",
         "sd_at_recommended",
+        "recommended_made",
         "learned",
         "trials_in_force",
         "pending_query",
@@ -80,6 +82,8 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
     assert info["posterior"]["argmax"] == reopened.posterior().argmax
     assert info["posterior"]["recommended"] == reopened.recommended()
     assert info["posterior"]["learned"] is True  # answers given: a best so far is named
+    # no gaits made on demand: nothing to make, as the console API's made says it (null)
+    assert info["posterior"]["recommended_made"] is None is info["posterior"]["argmax_made"]
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--yes", "--db", db)
     assert "Unblinded" in _ok("session", "validate", "1", "--ranking", "ABC", "--yes", "--db", db)
     _ok("session", "finish", "1", "--yes", "--db", db)

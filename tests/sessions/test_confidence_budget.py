@@ -82,12 +82,15 @@ def test_sessions_read_the_bounded_count_stored_ones_too(monkeypatch: pytest.Mon
     with monkeypatch.context() as m:
         m.setattr(gaitpref.config.new, "check_draws", lambda config: None)
         made = Session.create(db, parse_config(GRID + "\n[stop]\nsamples = 2000\n"), "S01")
-    q = made.next_query()
-    made.answer(q.id, [(q.actions[0], q.actions[1])] if len(q.actions) > 1 else [])
+    for _ in range(2):  # a first trial (nothing to compare), then a preference: one stated
+        q = made.next_query()
+        pair = [*q.actions, *q.buffer][:2]
+        made.answer(q.id, [(pair[0], pair[1], "first")] if len(pair) > 1 else [])
     again = Session.open(db, made.id)
     assert again.config.stop.samples == 2000
     assert again.confidence().samples == 150
-    assert [row["samples"] for row in again.confidence_history()] == [150]
+    history = again.confidence_history()
+    assert [row["samples"] for row in history if row["learned"]] == [150]
     # within the budget the rule's own count is read, as before
     fresh = Session.create(db, parse_config(GRID + "\n[stop]\nsamples = 120\n"), "S02")
     q = fresh.next_query()

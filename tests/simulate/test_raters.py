@@ -85,3 +85,61 @@ def test_a_rater_and_a_loop_of_different_scales_are_refused_before_any_trial(
         run_simulation(loop, user, 12, rater=rater)
     assert message in str(info.value)
     assert len(loop.executed) == 0
+
+
+def _shares(rater: OrdinalRater) -> list[int]:
+    return np.bincount(rater.true_categories(), minlength=rater.categories + 1)[1:].tolist()
+
+
+def test_a_flat_objective_is_rated_in_one_middle_category() -> None:
+    """Every gait ties: they were all rated the best ('good'); now all in the category where
+    the middle of the grid lies (the position 0.5: at or above the median, below the top
+    quartile)."""
+    space = load_config("synthetic-2d").space
+    flat = np.full(len(space), 2.5)
+    quartiles = OrdinalRater(space, flat, (0.25, 0.5, 0.75), np.random.default_rng(0))
+    assert {quartiles.rate(a) for a in range(len(space))} == {3}
+    tertiles = OrdinalRater(space, flat, (1 / 3, 2 / 3), np.random.default_rng(0))
+    assert _shares(tertiles) == [0, len(space), 0]
+
+
+def test_a_flat_objective_with_noise_is_refused_naming_it() -> None:
+    space = load_config("synthetic-2d").space
+    with pytest.raises(ValueError, match=r"objective: the same at every gait \(2\.5\)"):
+        OrdinalRater(space, np.full(len(space), 2.5), (0.5,), np.random.default_rng(0), 0.05)
+
+
+def test_a_plateau_on_a_boundary_goes_where_its_middle_lies() -> None:
+    """A bottom plateau of 30% of the grid spans the lower quartile: it is rated worst (it went
+    up to 'bad' and no gait was rated worst); a top plateau of 30% is rated best."""
+    space = load_config("synthetic-2d").space
+    objective = np.random.default_rng(0).normal(size=len(space))
+    bottom = np.maximum(objective, np.quantile(objective, 0.3))
+    top = np.minimum(objective, np.quantile(objective, 0.7))
+    q = (0.25, 0.5, 0.75)
+    low = OrdinalRater(space, bottom, q, np.random.default_rng(0))
+    assert _shares(low) == [270, 180, 225, 225]
+    assert low.rate(int(np.argmin(bottom))) == 1
+    high = OrdinalRater(space, top, q, np.random.default_rng(0))
+    assert _shares(high) == [225, 225, 180, 270]
+    # minimised, the same plateau is at the bottom of the utility: rated worst
+    assert _shares(OrdinalRater(space, top, q, np.random.default_rng(0), minimize=True))[0] == 270
+
+
+def test_a_gait_alone_on_a_boundary_goes_up_as_before() -> None:
+    """Five distinct values with the median a gait's own: it is in the upper category."""
+    space = load_config("exo-1d-step-length").space
+    objective = np.arange(len(space), dtype=float)
+    assert len(space) % 2 == 1  # an odd count: the median is a gait's value
+    rater = OrdinalRater(space, objective, (0.5,), np.random.default_rng(0))
+    middle = len(space) // 2
+    assert rater.boundaries[0] == rater.utility[middle]
+    assert rater.rate(middle) == 2 and rater.rate(middle - 1) == 1
+
+
+def test_noiseless_rate_is_the_true_category() -> None:
+    space = load_config("synthetic-2d").space
+    objective = np.round(np.random.default_rng(3).normal(size=len(space)), 1)  # many ties
+    rater = OrdinalRater(space, objective, (0.25, 0.5, 0.75), np.random.default_rng(0))
+    rated = [rater.rate(a) for a in range(len(space))]
+    assert rated == rater.true_categories().tolist()

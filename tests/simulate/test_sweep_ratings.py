@@ -134,6 +134,22 @@ def test_the_safety_table_reaches_the_loop() -> None:
         # risk or lambda without avoid: no region, the key ignored (a new session refuses it)
         ({"config": RATING + "[safety]\nrisk = 0.4\n"}, ConfigError, "[safety].risk: is a"),
         ({"config": RATING + "[safety]\nlambda = 1.0\n"}, ConfigError, "lambda = 1.0 would"),
+        # a simulated subject flags no trial unsafe: the radius around a flag did nothing
+        (
+            {"config": AVOID + "unsafe_radius = 0.1\n", "rating_quantiles": QUARTILES},
+            ConfigError,
+            "[safety].unsafe_radius: is the neighbourhood kept away from a trial flagged unsafe",
+        ),
+        (
+            {"config": "[safety]\nunsafe_radius = 0.0\n"},
+            ConfigError,
+            "a simulated subject never flags a trial, so it would do nothing",
+        ),
+        (
+            {"config": "[safety]\nunsafe_radius = 0.2\n", "strategy": "random"},
+            ConfigError,
+            "(unsafe_radius = 0.2); leave it out",
+        ),
     ],
 )
 def test_bad_rating_settings_are_refused_naming_the_setting(

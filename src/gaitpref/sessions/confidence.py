@@ -5,7 +5,9 @@ The probability comes from posterior samples drawn with a generator of its own,
 the loop's generator (so replay is unaffected) and gives the same number for the same session
 state, whoever asks (terminal, console, export).  :func:`confidence_history` replays a log and
 states the confidence after every step that changed the model (an answer, an undo, an
-exclusion): the export's ``confidence`` table.  When no gait may be proposed (the region of
+exclusion): the export's ``confidence`` table, whose row says ``learned`` false and names no gait
+while no preference is learned (:func:`preference_learned`), as the terminal and the console
+then state no confidence.  When no gait may be proposed (the region of
 avoidance and the unsafe flags cover the grid) there is nothing to recommend: the session states
 no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the rule does not act on one and the
 table has no row for that step.  :func:`recommended` names the same gait without sampling (what
@@ -165,6 +167,15 @@ def stop_reason(
     return rule.reason(trials, stated, name)
 
 
+#: a ``confidence_history`` row's fields when no confidence is stated (no preference learned)
+_UNSTATED: dict[str, Any] = dict.fromkeys(
+    (
+        "action", "gait", "made", "probability", "regret", "relative_regret", "tolerance",
+        "samples",
+    )
+)  # fmt: skip
+
+
 def confidence_history(
     state: SessionState,
     events: Sequence[EventRecord],
@@ -174,12 +185,18 @@ def confidence_history(
     """Replay ``events`` into the fresh ``state`` and, after every step whose posterior differs
     from the one before, the confidence then (the same numbers the terminal and the console
     showed): one row per step with ``seq`` (its last event), ``answers`` and ``trials`` in
-    force, the recommended ``action``, its ``gait`` name and feature ``values`` then (on the
-    line path a row may name another point later), ``probability``, ``regret``,
+    force, ``learned`` (:func:`preference_learned`: False while the posterior mean is flat,
+    before any answer tells gaits apart and after ties only, when the terminal and the console
+    state no confidence and every field below is None, the feature values too), the recommended
+    ``action``, its ``gait`` name, ``made`` (with gaits made on demand,
+    whether the session had made its gait then: :meth:`SessionState.gait_made`, as the terminal
+    and the console say it; None without) and feature ``values`` then (on the line path a row
+    may name another point later), ``probability``, ``regret``,
     ``relative_regret``, ``tolerance`` and ``samples``.  ``progress(done, total)``: called
     after each step with the events replayed so far and their number (an export of a long
     session on a large grid takes minutes: the CLI shows a bar)."""
     rows: list[dict[str, Any]] = []
+    unstated_values = {f.name: None for f in state.config.space.features}
     seen = [state.loop.posterior]
     first = events[0].seq if events else 0
 
@@ -191,14 +208,24 @@ def confidence_history(
         seen[0] = st.loop.posterior
         if not recommends(st):  # nothing may be proposed: no confidence was stated
             return
+        counts = {
+            "seq": last.seq,
+            "answers": len(st.loop.answers),
+            "trials": len(st.loop.executed),
+        }
+        if not preference_learned(st.loop.posterior.mean):
+            # the mean is flat (no answer yet told gaits apart): the recommendation would be
+            # the first gait for no reason, and the terminal and the console state nothing
+            rows.append({**counts, "learned": False, **_UNSTATED, "values": unstated_values})
+            return
         sure = session_confidence(st, rule)
         rows.append(
             {
-                "seq": last.seq,
-                "answers": len(st.loop.answers),
-                "trials": len(st.loop.executed),
+                **counts,
+                "learned": True,
                 "action": sure.recommended,
                 "gait": st.gait_name(sure.recommended),
+                "made": st.gait_made(sure.recommended),
                 "values": st.loop.space.values_of(sure.recommended),
                 "probability": sure.probability,
                 "regret": sure.regret,

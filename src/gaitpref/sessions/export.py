@@ -15,11 +15,12 @@ An export folder is readable without gaitpref:
   ``unsafe`` flags and their reasons; values and gait id as the trial's event logged them),
   ``comparisons`` (with ``tie``, ``undone`` and ``excluded`` flags), ``suggestions``,
   ``posterior`` (mean and standard deviation of every action), ``validation`` and ``confidence``
-  (after every answer, undo and
-  exclusion: ``seq`` of its last event, ``answers`` and ``trials`` in force, the recommended
-  ``action`` and ``gait``, the ``probability`` that it is within ``tolerance`` of the range of
-  the best, the expected shortfall ``regret`` in utility units and ``relative_regret`` as a
-  fraction of the range, the posterior ``samples`` behind them, ``at``); and one table per
+  (after every answer, undo and exclusion: ``seq`` of its last event, ``answers`` and ``trials``
+  in force, whether a preference is ``learned`` (false: no confidence stated, the fields after
+  it empty), the recommended ``action`` and ``gait``, whether its gait was ``made`` (gaits made
+  on demand), the ``probability`` that it is within ``tolerance`` of the range of the best, the
+  expected shortfall ``regret`` in utility units and ``relative_regret`` as a fraction of the
+  range, the posterior ``samples`` behind them, ``at``); and one table per
   other feedback kind the session holds (its kind's
   :attr:`~gaitpref.feedback.FeedbackKind.export` table: ``seq``, ``query``, the kind's
   columns, ``undone``, ``excluded``, ``at``).
@@ -269,7 +270,14 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     posterior mean tells some gaits apart), exactly when ``session show`` names a best gait
     rather than "none yet": while it is False, ``argmax`` and ``recommended`` still name the flat
     prior's argmax (the first gait, the first that may be proposed) for no reason.  An import
-    reads none of it (exports written before it was added lack it)."""
+    reads none of it (exports written before it was added lack it).
+
+    ``argmax_made`` and ``recommended_made`` say, with gaits made on demand, whether this
+    session made that gait (:meth:`Session.gait_made`, as the console API's ``made``): False for
+    a point no query proposed (a coactive suggestion's), never walked, which may prove
+    infeasible; None without gaits made on demand (a library's gaits, or none: nothing to
+    make), and with the action they describe (exports and ``session show --json`` written
+    before they were added lack them)."""
     post = session.posterior()
     pending = session.pending
     best: int | None = post.argmax if len(session.space) else None
@@ -281,11 +289,13 @@ def posterior_summary(session: Session) -> dict[str, Any]:
         "argmax_gait_id": None if best is None else session.gait_id(best),
         "mean_at_argmax": None if best is None else float(post.mean[best]),
         "sd_at_argmax": None if best is None else float(post.std[best]),
+        "argmax_made": None if best is None else session.gait_made(best),
         "recommended": rec,
         "recommended_values": None if rec is None else session.space.values_of(rec),
         "recommended_gait_id": None if rec is None else session.gait_id(rec),
         "mean_at_recommended": None if rec is None else float(post.mean[rec]),
         "sd_at_recommended": None if rec is None else float(post.std[rec]),
+        "recommended_made": None if rec is None else session.gait_made(rec),
         "learned": learned,
         "trials_in_force": len(session.trials()),
         "pending_query": None

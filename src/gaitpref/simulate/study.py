@@ -17,7 +17,8 @@ every executed gait (:class:`~gaitpref.simulate.raters.OrdinalRater`, boundaries
 quantiles of the objective, ordinal noise ``rating_noise``), and ``config`` carries the
 ``[feedback.rating]`` and ``[safety]`` tables of a config as TOML text (parsed as a config's,
 with the study's ``noise`` as the default rating noise): the loop's rating scale and its region
-of avoidance.  A run's ratings go to the run table's ``rating`` column.
+of avoidance.  ``[safety] unsafe_radius`` is refused there: simulated subjects never flag a
+trial unsafe, so it would do nothing.  A run's ratings go to the run table's ``rating`` column.
 
 Notation: ``A`` grid actions, ``K`` objectives (rows of ``Study.objectives``, ``K x A``),
 ``T`` trials per run (a trial is one executed action).
@@ -96,7 +97,8 @@ class Setting:
     ``rating_quantiles``: the simulated subject rates every executed gait, category boundaries
     at these quantiles of the objective (ordinal noise ``rating_noise`` on the normalised
     objective).  ``config``: ``[feedback.rating]`` (needed with ratings, one label more than
-    quantiles) and ``[safety]`` tables as TOML text, e.g. ``[safety] avoid = ["very bad"]``.
+    quantiles) and ``[safety]`` tables as TOML text, e.g. ``[safety] avoid = ["very bad"]``
+    (not ``unsafe_radius``: a simulated subject flags no trial unsafe, so it is refused).
     ``n`` and ``buffer`` are at most :data:`~gaitpref.config.schema.MAX_QUERY`, as a config's.
     """
 
@@ -184,6 +186,14 @@ class Setting:
             )
         raw = read_toml(self.config).get("safety") or {}
         starts = "start" in raw
+        if "unsafe_radius" in raw:  # a setting that silently did nothing
+            raise ConfigError(
+                f"{where}: [safety].unsafe_radius: is the neighbourhood kept away from a trial "
+                "flagged unsafe, and a simulated subject never flags a trial, so it would do "
+                f"nothing here (unsafe_radius = {raw['unsafe_radius']!r}); leave it out",
+                table="safety",
+                key="unsafe_radius",
+            )
         for key in ("risk", "lambda"):  # as a new session's config (config.check_ignored)
             if key in raw and not raw.get("avoid"):
                 raise ConfigError(
@@ -193,7 +203,7 @@ class Setting:
                     table="safety",
                     key=key,
                 )
-        if self.strategy == "random" and (safety.avoid or safety.unsafe_radius or starts):
+        if self.strategy == "random" and (safety.avoid or starts):
             raise ValueError(f"{where}: random selection takes no [safety] settings")
 
     @classmethod
