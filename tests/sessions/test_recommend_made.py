@@ -12,6 +12,7 @@ point whose gait is not made and which the model ranks highest."""
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
@@ -128,14 +129,15 @@ def test_the_export_table_and_the_stop_rule_read_the_made_gait() -> None:
         assert _drive(s) == [None, None, None]
         assert s.validation_plan is None and s.stop_reason() is None
         made = set(_made(s))
-        rows = s.confidence_history()
-        assert rows and all(r["action"] in made for r in rows)
+        rows = [r for r in s.confidence_history() if r["learned"]]
+        assert rows and all(r["action"] in made and r["made"] is True for r in rows)
     with _session(MemoryStorage(), OLD, CONTINUOUS + stop) as s:
         stopped = _drive(s)
         assert stopped[-1] is not None  # the rule opened blind validation at the third answer
         top = s.recommended()
         assert top is not None and s.gait_made(top) is False and s.gait_name(top) in stopped[-1]
-        assert s.confidence_history()[-1]["action"] == top
+        last = s.confidence_history()[-1]
+        assert last["action"] == top and last["made"] is False
 
 
 def test_the_stop_rule_names_the_made_gait_and_validation_shows_it_as_max() -> None:
@@ -245,6 +247,11 @@ def test_session_show_and_the_console_name_the_made_gait(tmp_path: Path) -> None
     assert f"best so far: {name} (action {rec}:" in text
     assert f"the highest posterior mean, {unmade} (action {top}), is a point whose gait" in text
     assert NOT_MADE not in text
+    out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--json", "--db", url])
+    assert out.exit_code == 0, out.output
+    shown = json.loads(out.output)["posterior"]
+    assert shown["recommended"] == rec and shown["recommended_made"] is True
+    assert shown["argmax"] == top and shown["argmax_made"] is False
     from fastapi.testclient import TestClient
 
     from gaitpref.console.app import create_app

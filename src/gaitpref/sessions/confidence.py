@@ -8,10 +8,11 @@ states the confidence after every step that changed the model (an answer, an und
 exclusion): the export's ``confidence`` table, whose row says ``learned`` false and names no gait
 while no preference is learned (:func:`preference_learned`), as the terminal and the console
 then state no confidence.  When no gait may be proposed (the region of
-avoidance and the unsafe flags cover the grid) there is nothing to recommend: the session states
-no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the rule does not act on one and the
-table has no row for that step.  :func:`recommended` names the same gait without sampling (what
-``session show``, the console and exports call the best so far).
+avoidance and the unsafe flags cover the grid, or no gait was made yet: below) there is nothing
+to recommend: the session states no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the
+rule does not act on one and the table has no row for that step.  :func:`recommended` names
+the same gait without sampling (what ``session show``, the console and exports call the best so
+far).
 
 With gaits made on demand (``[gaits] generator``) the model's points are not all gaits: on a
 continuous space the posterior's highest is often a point only a coactive suggestion named, whose
