@@ -585,9 +585,10 @@ def show(
 
 def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
     """The ``best so far`` line of ``session show``: the recommended gait (the highest posterior
-    mean among the gaits that may be proposed, as the confidence names it), never one flagged
-    unsafe or in the region of avoidance; the unrestricted highest is named as not to walk when
-    it is another."""
+    mean among the gaits that may be proposed, as the confidence names it; with gaits made on
+    demand under ``[gaits] recommend = "made"``, among the gaits made), never one flagged unsafe
+    or in the region of avoidance; the unrestricted highest is named as not to walk when it is
+    another."""
     best, rec = summary["argmax"], summary["recommended"]
     if best is None:
         return "best so far: none yet (the line path's posterior lives on the points walked)"
@@ -597,10 +598,10 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
             "the best)"
         )
     if rec is None:
-        return (
-            "best so far: none may be recommended (every gait is in the region of avoidance or "
-            "near a gait flagged unsafe)"
+        why = session.no_recommendation() or (
+            "every gait is in the region of avoidance or near a gait flagged unsafe"
         )
+        return f"best so far: none may be recommended ({why})"
     line = (
         f"best so far: {session.gait_name(rec)} (action {rec}: {session.space.describe(rec)}), "
         f"posterior mean {summary['mean_at_recommended']:.4g} ± "
@@ -610,7 +611,14 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
         from gaitpref.sessions.gaits import NOT_MADE
 
         line += f"\n  ({NOT_MADE})"
-    if best != rec:
+    spec = session.config.generator
+    made_only = spec is not None and spec.recommends_made
+    if best != rec and made_only and session.gait_made(best) is False:
+        line += (  # [gaits] recommend = "made": the model's highest is a point not made
+            f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), is "
+            "a point whose gait is not made: only a gait made may be recommended)"
+        )
+    elif best != rec:
         line += (
             f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), may not "
             "be proposed: flagged unsafe, near a gait flagged unsafe, or in the region of "

@@ -154,6 +154,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,
         recommended=None if rec is None else gait_out(session, rec),
+        no_recommendation=None if rec is not None or not mean.size else session.no_recommendation(),
         learned=learned,
         trials=[t.action for t in session.trials()],
         confidence=confidence,

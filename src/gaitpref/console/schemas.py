@@ -243,9 +243,17 @@ class PosteriorOut(BaseModel):
     recommended: GaitOut | None = Field(
         default=None,
         description="the best gait so far to walk: the highest posterior mean among the gaits "
-        "that may be proposed, the one confidence is about (None while there is no point, and "
-        "when no gait may be proposed). Before a preference is learned (learned false) it is "
-        "still the flat prior's argmax, the first gait that may be proposed, for no reason",
+        "that may be proposed (with gaits made on demand under [gaits] recommend = 'made', "
+        "defaults 0.13 on, among the gaits made), the one confidence is about (None while there "
+        "is no point, and when no gait may be recommended: see no_recommendation). Before a "
+        "preference is learned (learned false) it is still the flat prior's argmax, the first "
+        "gait that may be proposed, for no reason",
+    )
+    no_recommendation: str | None = Field(
+        default=None,
+        description="why no gait is recommended (None: one is, or the posterior has no point "
+        "yet): every gait is in the region of avoidance or near a gait flagged unsafe, or, with "
+        "gaits made on demand, no gait was made yet or every gait made is",
     )
     learned: bool = Field(
         description="whether a preference has been learned: the posterior mean tells some gaits "

@@ -260,9 +260,11 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     ``argmax`` is the highest posterior mean over every gait, which may be one that may not be
     proposed (flagged unsafe, near one, in the region of avoidance); ``recommended`` is the
     highest among those that may be (:meth:`Session.recommended`: the gait the confidence
-    recommends, the best so far to walk).  The ``argmax`` fields are None while the posterior
-    has no point (the line path before a query: it lives on the points present); the
-    ``recommended`` fields then too, and when no gait may be proposed.
+    recommends, the best so far to walk; with gaits made on demand under ``[gaits] recommend =
+    "made"``, the highest among the gaits made).  The ``argmax`` fields are None while the
+    posterior has no point (the line path before a query: it lives on the points present); the
+    ``recommended`` fields then too, and when no gait may be recommended
+    (:meth:`Session.no_recommendation`).
 
     ``learned`` says whether a preference has been learned (:func:`preference_learned`: the
     posterior mean tells some gaits apart), exactly when ``session show`` names a best gait

@@ -48,6 +48,7 @@ from gaitpref.sessions import events as log
 from gaitpref.sessions.confidence import (
     StopCheckWarning,
     confidence_history,
+    no_recommendation,
     recommended,
     session_confidence,
     stop_reason,
@@ -727,11 +728,20 @@ class Session:
 
     def recommended(self) -> int | None:
         """The gait to walk as the best so far: the posterior mean's highest among the gaits that
-        may be proposed (never one flagged unsafe, near one, or in the region of avoidance), the
-        gait :meth:`confidence` recommends.  None while the posterior has no point (the line
-        path before its first query) and when no gait may be proposed.
+        may be proposed (never one flagged unsafe, near one, or in the region of avoidance) and,
+        with gaits made on demand under ``[gaits] recommend = "made"`` (defaults 0.13 on), were
+        made: the gait :meth:`confidence` recommends.  None while the posterior has no point
+        (the line path before its first query) and when no gait may be recommended
+        (:meth:`no_recommendation` says why).
         ``posterior().argmax`` is the unrestricted highest, which may be a gait not to walk."""
         return self._locked(lambda: recommended(self._state))
+
+    def no_recommendation(self) -> str | None:
+        """Why the session recommends no gait now (None: it recommends one, or will once the
+        posterior has a point): every gait is in the region of avoidance or near a gait flagged
+        unsafe, or, with gaits made on demand and ``[gaits] recommend = "made"`` (defaults 0.13
+        on), no gait was made yet, or every gait made is avoided."""
+        return self._locked(lambda: no_recommendation(self._state))
 
     def confidence_history(
         self, progress: Callable[[int, int], None] | None = None
