@@ -18,7 +18,9 @@ resumes it); so do Ctrl-C, a closed terminal (SIGHUP), the end of input and a cl
 not text, an unsafe reason the flag would refuse and a ranking that is not one are asked again.
 The blind validation round the ``[stop]`` rule opens is asked (after the rule's reason, said
 when it opens the round and again when the runner resumes at it), unblinded, then the session
-pauses (a round another writer opens is asked the same way; the answer typed meanwhile is not
+pauses; ``u`` inside a round offers to withdraw it, with the answer after which the rule opened
+it undone (a mis-keyed answer: its trial is asked again), or alone for a round opened by hand
+(a round another writer opens is asked the same way; the answer typed meanwhile is not
 written); when the rule says stop but no round can be drawn (fewer than three gaits may be
 shown), the runner says why after each answer.  A ranking of a round drawn again since its
 gaits were shown is refused and the round shown again, as the console refuses it.  A gait
@@ -142,6 +144,10 @@ class _QuitError(Exception):
 
 class _UndoError(Exception):
     """The operator pressed u."""
+
+
+class _WithdrawnError(Exception):
+    """The operator withdrew the open validation round (``u`` inside it, confirmed)."""
 
 
 class _ElsewhereError(Exception):
@@ -368,6 +374,8 @@ class Terminal:
                 if s.validation_plan is not None:
                     try:
                         self.validate()
+                    except _WithdrawnError:  # the trials go on (the undone one asked again)
+                        continue
                     except SessionStateError as exc:  # the round is gone: go on
                         self.console.print(f"  {clip(exc, MAX_MESSAGE)}", markup=False)
                         self._stopped_elsewhere()
@@ -784,49 +792,45 @@ class Terminal:
         return f"{gait_name(self.session, action)} ({self.session.space.describe(action)})"
 
     def _comparisons(self, q: SessionQuery) -> tuple[list[tuple[int, int, str]], list[str]]:
+        """Each pair the query asks (:attr:`SessionQuery.pairs`, the console's and the
+        simulated users' too); a pair it does not ask is said, with why."""
         out: list[tuple[int, int, str]] = []
         said: list[str] = []
-        seen: set[tuple[int, int]] = set()
-        asked: dict[frozenset[int], tuple[int, int]] = {}  # the trials a pair of gaits was asked as
-        members = list(zip(q.member_trials, q.members, strict=True))
-        for r, (ti, ai) in enumerate(zip(q.trials, q.actions, strict=True)):
-            for c, (tj, aj) in enumerate(members):
-                key = (min(r, c), max(r, c))
-                if r == c or key in seen:
-                    continue
-                seen.add(key)
-                if ai == aj:
-                    self.console.print(
-                        f"  trials {ti} and {tj} are the same gait: nothing to compare",
-                        markup=False,
-                    )
-                    continue
-                if frozenset((ai, aj)) in asked:  # a gait run twice (b > 1, n > 1): asked once
-                    pi, pj = asked[frozenset((ai, aj))]
-                    self.console.print(
-                        f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
-                        f"trial {pj}, compared once",
-                        markup=False,
-                    )
-                    continue
-                asked[frozenset((ai, aj))] = (ti, tj)
-                # "the previous one" only when one trial is buffered: with b > 1 the buffer
-                # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
-                previous = c >= len(q.actions) and len(q.buffer) == 1
-                other = "the previous one" if previous else f"trial {tj}"
-                this = "this one" if len(q.actions) == 1 else f"trial {ti}"
-                answer = self.ask(
-                    f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
-                    {"1": "first", "2": "second", "0": "none"},
+        members, numbers = q.members, q.member_trials
+        for pair in q.pairs:
+            r, c = pair.first, pair.second
+            ti, tj, ai, aj = numbers[r], numbers[c], members[r], members[c]
+            if pair.same_gait:
+                self.console.print(
+                    f"  trials {ti} and {tj} are the same gait: nothing to compare",
+                    markup=False,
                 )
-                outcome = {"1": "first", "2": "second", "0": "none"}[answer]
-                out.append((ai, aj, outcome))
-                said.append(
-                    f"no preference between trials {ti} and {tj}"
-                    if outcome == "none"
-                    else f"trial {ti if outcome == 'first' else tj} preferred to trial "
-                    f"{tj if outcome == 'first' else ti}"
+                continue
+            if pair.repeats is not None:  # a gait run twice (b > 1, n > 1): asked once
+                pi, pj = (numbers[k] for k in pair.repeats)
+                self.console.print(
+                    f"  trial {ti} against trial {tj}: the same gaits as trial {pi} against "
+                    f"trial {pj}, compared once",
+                    markup=False,
                 )
+                continue
+            # "the previous one" only when one trial is buffered: with b > 1 the buffer
+            # holds earlier ones too, and trial 1 of 1, 2 is not "the previous one"
+            previous = c >= len(q.actions) and len(q.buffer) == 1
+            other = "the previous one" if previous else f"trial {tj}"
+            this = "this one" if len(q.actions) == 1 else f"trial {ti}"
+            answer = self.ask(
+                f"Trial {ti} against trial {tj}: 1 {this}, 2 {other}, 0 no preference",
+                {"1": "first", "2": "second", "0": "none"},
+            )
+            outcome = {"1": "first", "2": "second", "0": "none"}[answer]
+            out.append((ai, aj, outcome))
+            said.append(
+                f"no preference between trials {ti} and {tj}"
+                if outcome == "none"
+                else f"trial {ti if outcome == 'first' else tj} preferred to trial "
+                f"{tj if outcome == 'first' else ti}"
+            )
         return out, said
 
     def _suggestions(self, q: SessionQuery) -> tuple[list[tuple[int, str, str]], list[str]]:
@@ -877,6 +881,81 @@ class Terminal:
                 "by then)",
                 markup=False,
             )
+
+    def _withdraw(self, round_: int) -> None:
+        """``u`` inside a round: offer to withdraw it, and to undo the answer after which the
+        ``[stop]`` rule opened it when it did (and that answer is still the last); confirmed
+        with ``y``.  Withdrawn: :class:`_WithdrawnError` (the loop goes on with the trials);
+        refused or not confirmed: said, and the ranking is asked again."""
+        s = self.session
+        info = next((r for r in s.validation_rounds() if r.round == round_ and r.open), None)
+        if info is None:
+            raise SessionStateError(f"validation round {round_} is no longer open")
+        undo = info.opened_by == "rule"
+        trials = [t.number for t in s.trials() if t.query == info.opened_after]
+        try:
+            s.check_withdraw_validation(round_, undo=undo)
+        except SessionStateError as exc:  # undone since, flagged unsafe...: the round alone
+            if undo:
+                self.console.print(
+                    f"  the answer that opened it cannot be undone with it: "
+                    f"{clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+            undo = False
+        if undo:
+            question = (
+                f"The [stop] rule opened round {round_} after the answer to "
+                f"{_trials(trials)}.  Withdraw the round and undo that answer (it is asked "
+                "again)?  y yes, n no"
+            )
+            reason = f"u at the terminal: the answer to {_trials(trials)} that opened it is undone"
+        else:
+            question = f"Withdraw validation round {round_} unanswered?  y yes, n no"
+            reason = "u at the terminal"
+        while True:
+            try:
+                key = self.ask(question, {"y": "", "n": ""})
+                break
+            except _UndoError:  # u again: the question stands
+                self.console.print("  withdrawing is being asked: y yes, n no", markup=False)
+        if key == "n":
+            self.console.print(
+                "  not withdrawn: the subject's ranking, best first, as before", markup=False
+            )
+            return
+        try:
+            pending = s.withdraw_validation(round_, reason, undo=undo)
+        except SessionStateError as exc:  # another writer answered or withdrew it meanwhile
+            self.console.print(f"  cannot withdraw: {clip(exc, MAX_MESSAGE)}", markup=False)
+            if s.validation_plan is None or s.validation_plan.round != round_:
+                raise
+            return
+        except _UNWRITTEN as exc:  # nothing written: the ranking is asked again
+            self.console.print(f"  not withdrawn: {clip(exc, MAX_MESSAGE)}", markup=False)
+            return
+        except NoSafeGaitError as exc:  # written; no gait left for the query in its place
+            self.console.print(f"Round {round_} withdrawn.", markup=False)
+            self.console.print(f"No gait to propose: {clip(exc, MAX_MESSAGE)}", markup=False)
+            raise _QuitError from None
+        except GaitError as exc:  # written; the query in its place could not be made
+            self.console.print(f"Round {round_} withdrawn.", markup=False)
+            self._say_no_gait(exc)
+            raise _QuitError from None
+        line = f"Round {round_} withdrawn"
+        if undo:
+            again = pending is not None and pending.id == info.opened_after
+            line += (
+                f"; undone: the answer to {_trials(trials)} is asked again."
+                if again
+                else f"; undone the answer to {_trials(trials)}: its query proposed a gait "
+                "flagged unsafe since, or in the region of avoidance now, and was withdrawn: "
+                "a new query is proposed in its place."
+            )
+        else:
+            line += "."
+        self.console.print(line, markup=False)
+        raise _WithdrawnError
 
     def validate(self, ranking: str | None = None, gaits: Sequence[str] | None = None) -> None:
         """Run (or resume) a blind validation round and report the unblinded result.
@@ -931,10 +1010,8 @@ class Terminal:
                 given = self.read().strip()
                 if given.lower() == "q":
                     raise _QuitError
-                if given.lower() == "u":  # no answer to undo inside a round
-                    self.console.print(
-                        "  a validation round is open: record its ranking first", markup=False
-                    )
+                if given.lower() == "u":  # offers to withdraw the round (and undo its answer)
+                    self._withdraw(plan.round)
                     continue
                 try:  # refused before the confirmation is asked
                     check_ranking(given, plan.labels)
@@ -945,10 +1022,8 @@ class Terminal:
                     key = self.ask(
                         f"Write the ranking {given}?  y yes, n re-enter", {"y": "", "n": ""}
                     )
-                except _UndoError:  # no answer to undo inside a round: ask the ranking again
-                    self.console.print(
-                        "  a validation round is open: record its ranking first", markup=False
-                    )
+                except _UndoError:  # offers to withdraw the round, then asks the ranking again
+                    self._withdraw(plan.round)
                     continue
                 if key == "n":
                     continue
@@ -1019,6 +1094,8 @@ def run_validation(
     try:
         with terminal.pause_on_signals():
             terminal.validate(ranking, gaits)
+    except _WithdrawnError:
+        return False
     except (_QuitError, _UndoError):
         if record_with is not None and terminal.shown_gaits is not None:
             terminal.console.print(

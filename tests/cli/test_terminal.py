@@ -16,7 +16,7 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from gaitpref import Session, load_config
+from gaitpref import Rating, Session, load_config
 from gaitpref.cli import app
 from gaitpref.storage import MemoryStorage
 from gaitpref.terminal import Terminal, gait_name
@@ -162,11 +162,13 @@ def _answered(n: int) -> Session:
 
 def test_a_ranking_is_checked_before_its_confirmation_and_u_does_not_become_one() -> None:
     session = _answered(3)
-    terminal, console = _terminal(session, "", "u", "ABD", "bac", "y")
+    terminal, console = _terminal(session, "", "u", "n", "ABD", "bac", "y")
     terminal.validate()
     text = console.export_text()
     assert "got nothing" in text and "got ABD" in text
-    assert "a validation round is open: record its ranking first" in text
+    # u offers to withdraw the round (opened by hand: no answer to undo); n keeps it
+    assert "Withdraw validation round 1 unanswered?  y yes, n no" in text
+    assert "not withdrawn: the subject's ranking, best first, as before" in text
     assert text.count("Write the ranking") == 1  # 'Write the ranking u?' and the others before
     assert ["".join(v.ranking) for v in session.validations()] == ["BAC"]
 
@@ -958,3 +960,116 @@ def test_x_on_a_query_of_two_trials_asks_which_one_is_unsafe() -> None:
     terminal, console = _terminal(both, "1", "", "", "0", "0", "x", "a", "fell")
     terminal.run()
     assert sorted(both.unsafe_flags()) == [1, 2]
+
+
+@pytest.mark.parametrize(
+    ("actions", "buffer"),
+    [
+        ((5,), (9,)),
+        ((5,), (5,)),
+        ((5, 9, 7), (3,)),
+        ((7,), (3, 3)),
+        ((5, 5, 7), (9, 5)),
+        ((4, 9), (9,)),
+    ],
+)
+def test_the_terminal_the_console_and_the_simulated_users_ask_the_same_pairs(
+    actions: tuple[int, ...], buffer: tuple[int, ...]
+) -> None:
+    """One rule (``SessionQuery.pairs``): the console asked a gait against itself and ordered
+    n >= 3's pairs its own way; the terminal and the simulated users had one rule each."""
+    from gaitpref import SessionQuery
+    from gaitpref.console import views
+    from gaitpref.loop import Query
+    from gaitpref.simulate.users import query_pairs
+
+    n = len(actions)
+    q = SessionQuery(
+        2, 2, actions, buffer, tuple(range(10, 10 + n)), tuple(range(1, 1 + len(buffer)))
+    )
+    session = Session.create(MemoryStorage(), load_config("exo-2d-rated"), "S01", seed=0)
+    terminal, console = _terminal(session, *["1"] * len(q.compared))
+    told, _ = terminal._comparisons(q)
+    assert [(i, j) for i, j, _ in told] == list(q.compared)
+    space = session.space
+    groups = views.comparison_groups(
+        [views.gait_view(space, a, trial=t) for a, t in zip(actions, q.trials, strict=True)],
+        [views.gait_view(space, a, trial=t) for a, t in zip(buffer, q.buffer_trials, strict=True)],
+    )
+    assert [(g.first.index, g.second.index) for g in groups] == list(q.compared)
+    assert [(g.first.trial, g.second.trial) for g in groups] == [
+        (q.member_trials[p.first], q.member_trials[p.second]) for p in q.pairs if p.asked
+    ]
+    assert query_pairs(Query(2, actions, buffer)) == list(q.compared)
+    text = console.export_text()
+    same = sum(p.same_gait for p in q.pairs)
+    assert text.count(": nothing to compare") == same
+    assert text.count("compared once") == sum(not p.asked for p in q.pairs) - same
+
+
+def test_u_inside_the_stop_rules_round_withdraws_it_and_undoes_the_answer_that_opened_it() -> None:
+    """A mis-keyed last answer made the [stop] rule open the round: u offers to withdraw the
+    round and undo that answer; confirmed, the trial is asked again, and the rule opens a new
+    round after the next answer.  Replay gives the same state."""
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED + "\n[stop]\nmax_trials = 1\n")
+    db = MemoryStorage()
+    session = Session.create(db, config, "S01", seed=2)
+    lines = ("1", "0", "y", "u", "u", "y", "4", "0", "y", "ABC", "y")
+    terminal, console = _terminal(session, *lines)
+    terminal.run()
+    text = console.export_text()
+    assert (
+        "The [stop] rule opened round 1 after the answer to trial 1.  Withdraw the round and "
+        "undo that answer (it is asked again)?  y yes, n no"
+    ) in text
+    assert "withdrawing is being asked: y yes, n no" in text  # u again: the question stands
+    assert "Round 1 withdrawn; undone: the answer to trial 1 is asked again." in text
+    assert text.count("Trial 1: run") == 2  # asked again
+    kinds = [e.kind for e in session.events()]
+    assert kinds.count("validation_withdrawn") == 1
+    assert kinds[kinds.index("validation_withdrawn") + 1] == "undo"
+    rounds = session.validation_rounds()
+    assert [(r.round, r.opened_by, r.withdrawn is not None, r.answered) for r in rounds] == [
+        (1, "rule", True, False),
+        (2, "rule", False, True),
+    ]
+    assert session.status == "paused" and "Unblinded" in text
+    again = Session.open(db, session.id)
+    assert again.validation_rounds() == rounds
+    assert again.trials(include_undone=True) == session.trials(include_undone=True)
+    assert str(again.posterior().mean) == str(session.posterior().mean)
+
+
+def test_u_inside_an_operators_round_withdraws_it_alone() -> None:
+    from gaitpref.terminal import run_validation
+
+    session = _answered(3)
+    before = session.trials()
+    console = Console(record=True, width=200, highlight=False)
+    keys = iter(["u", "y"])
+    assert run_validation(session, None, console, lambda _: next(keys)) is False
+    text = console.export_text()
+    assert "Withdraw validation round 1 unanswered?" in text and "Round 1 withdrawn." in text
+    assert session.validation_plan is None and session.trials() == before  # nothing undone
+    (info,) = session.validation_rounds()
+    assert info.withdrawn == "u at the terminal" and info.opened_by == "operator"
+
+
+def test_u_inside_the_rules_round_whose_answer_was_undone_withdraws_it_alone_saying_why() -> None:
+    from gaitpref.config import parse_config
+
+    config = parse_config(RATED + "\n[stop]\nmax_trials = 1\n")
+    session = Session.create(MemoryStorage(), config, "S01", seed=2)
+    q = session.next_query()
+    assert session.answer(q.id, [Rating(q.actions[0], "very bad")]).stopped is not None
+    session.undo()  # elsewhere (session undo): the round stays open, its answer gone
+    terminal, console = _terminal(session, "u", "y")
+    with pytest.raises(Exception) as raised:
+        terminal.validate()
+    assert type(raised.value).__name__ == "_WithdrawnError"
+    text = console.export_text()
+    assert "the answer that opened it cannot be undone with it: the answer to query" in text
+    assert "Withdraw validation round 1 unanswered?" in text and "Round 1 withdrawn." in text
+    assert [e.kind for e in session.events()][-1] == "validation_withdrawn"

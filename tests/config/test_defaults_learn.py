@@ -52,7 +52,7 @@ def test_the_0_1_defaults_give_the_old_loop() -> None:
 
 def test_a_session_records_the_defaults_its_config_relies_on() -> None:
     bare = parse_config(BARE)
-    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.12"}
+    assert bare.relies_on_changed_defaults and library_meta(bare) == {"config_defaults": "0.13"}
     assert config_of(stored_record(BARE, library_meta(bare))).buffer == 1
     explicit = parse_config(BARE + SHARE + "[cospar]\nbuffer = 1\n")
     assert not explicit.relies_on_changed_defaults and library_meta(explicit) == {}
@@ -72,7 +72,7 @@ def test_a_region_of_avoidance_records_the_defaults_of_its_rule() -> None:
     cfg = parse_config(RATED + AVOID)  # the rule left to the defaults: risk since 0.3,
     assert cfg.safety.risk == pytest.approx(1 / 3 + 0.1)  # its cautious level since 0.4
     assert cfg.safety.cautious == 0.6
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.12"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.13"}
     assert config_of(stored_record(RATED + AVOID, library_meta(cfg))).safety == cfg.safety
     for explicit in (
         "lambda = 1.0\n",

@@ -34,7 +34,7 @@ EXPLICIT = 'share = "average"\nwarm_first = "recommended"\n'
 def test_a_line_config_draws_a_star_of_four_lines_and_records_it() -> None:
     cfg = parse_config(LINE + EXPLICIT)
     assert cfg.subspace == "line" and cfg.line.lines == 4
-    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.12"}
+    assert cfg.relies_on_changed_defaults and library_meta(cfg) == {"config_defaults": "0.13"}
     assert config_of(stored_record(LINE + EXPLICIT, library_meta(cfg))).line.lines == 4
 
 

@@ -299,7 +299,9 @@ def test_a_gait_run_twice_in_one_query_has_one_rating_and_suggestion_group(
     client: TestClient, db_url: str
 ) -> None:
     """n = 2, one gait for trials 3 and 4: the page showed a rating row per trial, both one
-    radio group ``rate-<a>`` (rating trial 4 cleared trial 3's); one row now names both."""
+    radio group ``rate-<a>`` (rating trial 4 cleared trial 3's); one row now names both.  The
+    gait is not compared with itself (the page asked it, 'kept, not modelled'; the terminal
+    never did): the page says why, and the API lists no pair."""
     from pathlib import Path
 
     from gaitpref import Session
@@ -320,11 +322,19 @@ def test_a_gait_run_twice_in_one_query_has_one_rating_and_suggestion_group(
     assert html.count('data-kind="rating"') == 1
     assert f"How did the subject rate trials {t3}, {t4} (G{a})?" in html
     assert html.count(f"trials {t3}, {t4} (G{a}): step length") == 1
+    assert 'data-kind="comparison"' not in html
+    assert (
+        f"Not asked: trial {t3} (G{a}) and trial {t4} (G{a}) are the same gait: nothing to "
+        "compare" in html
+    )
+    assert client.get(f"/api/sessions/{session.id}/query").json()["comparisons"] == []
     form = forms_of(html)["answer-form"]
+    assert not [k for k in form.radios if k.startswith("cmp-")]
     data = {**form.fields, f"rate-{a}": "4", f"sug-{a}-step_width": "-small"}
     confirm = post(client, f"/sessions/{session.id}/answer", data)
     assert confirm.status_code == 200, confirm.text
     assert f"trial {t3} (G{a}) rated &#39;good&#39;" in confirm.text
+    assert "Not answered" not in confirm.text
     done = post(client, f"/sessions/{session.id}/answer", forms_of(confirm.text)["form1"].fields)
     assert done.status_code == 303
     rated = [t["rating"] for t in client.get(f"/api/sessions/{session.id}/trials").json()]

@@ -30,11 +30,29 @@ def test_one_new_gait_and_one_buffered_use_this_one_and_previous_one() -> None:
     assert group.choices[1].say == "trial 1 (G9) preferred to trial 2 (G5)"
 
 
-def test_several_gaits_ask_each_pair_once() -> None:
-    groups = views.comparison_groups([g(5, 3), g(9, 4)], [g(9, 2)])
-    assert [x.field for x in groups] == ["cmp-5-9", "cmp-9-9"]  # (5, 9) twice is asked once
-    assert groups[1].same_gait
+def test_several_gaits_ask_each_pair_once_and_not_a_gait_against_itself() -> None:
+    """Trials 4 and 2 ran G9: the pair (5, 9) is asked once, and G9 is not compared with itself
+    (it was asked, 'kept, not modelled'; the terminal never asked it); the page says why."""
+    actions, buffer = [g(5, 3), g(9, 4)], [g(9, 2)]
+    groups = views.comparison_groups(actions, buffer)
+    assert [x.field for x in groups] == ["cmp-5-9"]
+    assert (groups[0].first.trial, groups[0].second.trial) == (3, 4)
     assert groups[0].choices[0].label == "trial 3 (G5)"
+    assert views.comparison_notes(actions, buffer) == [
+        "trial 3 (G5) against trial 2 (G9): the same gaits as trial 3 (G5) against trial 4 (G9), "
+        "compared once",
+        "trial 4 (G9) and trial 2 (G9) are the same gait: nothing to compare",
+    ]
+
+
+def test_a_new_gait_that_is_the_buffered_one_is_not_compared() -> None:
+    """n = 1, b = 1 and the new trial runs the buffered gait: nothing is asked (the console
+    asked it, kept and not modelled), as the terminal and the simulated users do."""
+    assert views.comparison_groups([g(5, 3)], [g(5, 2)]) == []
+    assert views.comparison_notes([g(5, 3)], [g(5, 2)]) == [
+        "trial 3 (G5) and trial 2 (G5) are the same gait: nothing to compare"
+    ]
+    assert views.comparison_notes([g(5, 3)], [g(9, 2)]) == []
 
 
 def test_suggestion_rows_use_the_features_words_and_keys() -> None:

@@ -98,7 +98,7 @@ def test_a_config_left_to_the_defaults_records_the_budgets_version() -> None:
     assert library_meta(cfg) == {"config_defaults": DEFAULTS_VERSION}  # 0.5 or later
     again = config_of(stored_record(CONFIG, library_meta(cfg)))
     assert again.generator == cfg.generator
-    given = CONFIG.replace("speed = 0.2", "speed = 0.2\nmax_iterations = 40")
+    given = CONFIG.replace("speed = 0.2", 'speed = 0.2\nmax_iterations = 40\nrecommend = "made"')
     assert "jitter = 0.0" in given  # COMPASS gives its jitter; share, warm_first: the others
     model = '[model]\nshare = "average"\nwarm_first = "recommended"\n'
     explicit = parse_config(given.replace("[model]\n", model))

@@ -93,7 +93,7 @@ def test_a_new_config_reads_the_kept_suggestions_and_records_it() -> None:
     assert config_of(stored_record(TEXT, {})).line.coactive == "recorded"  # no version: 0.1's
     new = parse_config(TEXT)
     assert new.line.coactive == "kept" and new.relies_on_changed_defaults
-    assert library_meta(new) == {"config_defaults": "0.12"}
+    assert library_meta(new) == {"config_defaults": "0.13"}
     assert config_of(stored_record(TEXT, library_meta(new))).line.coactive == "kept"
     given = parse_config(TEXT + '\nline_coactive = "recorded"')
     assert given.line.coactive == "recorded"

@@ -3,7 +3,9 @@ suggestion's ("longer") is a point of the model, and often its highest.  ``sessi
 the console named it as they name a walked gait, with a gait id, although its gait was never
 made and may not be feasible (on ``compass-continuous-3d`` a subject who asked for shorter steps
 had the best so far at 0.04 m, which has no gait); blind validation shows made gaits only.  Both
-now say when its gait is not made (``Session.gait_made``); the recommendation is unchanged."""
+now say when its gait is not made (``Session.gait_made``).  Since defaults 0.13 the
+recommendation is the best gait made (``test_recommend_made.py``); these tests keep the earlier
+rule with ``[gaits] recommend = "any"``, which sessions recorded before 0.13 replay with."""
 
 from __future__ import annotations
 
@@ -17,7 +19,11 @@ from gaitpref.cli import app
 from gaitpref.config import parse_config
 from gaitpref.console.app import create_app
 from gaitpref.sessions.gaits import NOT_MADE
-from tests.sessions.gaitkit import CONTINUOUS
+from tests.sessions.gaitkit import CONTINUOUS as MADE_ONLY
+
+#: the earlier rule: the best point of the model, made or not
+CONTINUOUS = MADE_ONLY.replace("avoid_radius = 0.1\n", 'avoid_radius = 0.1\nrecommend = "any"\n')
+assert CONTINUOUS != MADE_ONLY
 
 runner = CliRunner()
 

@@ -446,6 +446,25 @@ class SessionMachine(RuleBasedStateMachine):
         assert result.round == plan.round and self.s.validation_plan is None
         assert len(self.s.validations()) == done + 1
 
+    @precondition(lambda self: self.s.validation_plan is not None)
+    @rule(undo=st.booleans())
+    def withdraw_validation(self, undo: bool) -> None:
+        """Withdraw the open round (with the answer after which the [stop] rule opened it:
+        refused, writing nothing, for a round opened by hand or whose answer is gone)."""
+        s = self.s
+        plan = s.validation_plan
+        assert plan is not None
+        before, rounds = len(s.events()), len(s.validation_rounds())
+        try:
+            s.withdraw_validation(plan.round, "withdrawn", undo=undo)
+        except SessionStateError:
+            assert undo
+            self._unchanged(before)
+            assert s.validation_plan == plan
+            return
+        assert s.validation_plan is None and len(s.validation_rounds()) == rounds
+        assert s.validation_rounds()[-1].withdrawn == "withdrawn"
+
     @rule(go_on_with_it=st.booleans())
     def reopen(self, go_on_with_it: bool) -> None:
         """A fresh ``Session.open`` replays the log to the live session's state; then either
@@ -535,6 +554,7 @@ def _same(copy: Session, live: Session) -> None:
     assert copy.unsafe_flags() == live.unsafe_flags() and copy.notes() == live.notes()
     assert copy.validation_plan == live.validation_plan
     assert copy.validations() == live.validations()
+    assert copy.validation_rounds() == live.validation_rounds()
     assert copy._state.loop.rng.bit_generator.state == live._state.loop.rng.bit_generator.state
     sure: list[object] = []
     for s in (copy, live):

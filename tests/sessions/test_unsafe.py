@@ -247,6 +247,10 @@ def test_a_flag_on_a_gait_the_open_round_shows_draws_the_round_again(tmp_path: P
         assert not any(banned[g.action] for g in again.gaits)
         kinds = [e.kind for e in s.events()][-3:]
         assert kinds == ["validation_started", "trial_flagged_unsafe", "validation_started"]
+        # drawn again, the round keeps who opened it: the rule
+        opened = [e.payload["opened_by"] for e in s.events() if e.kind == "validation_started"]
+        assert opened == ["rule", "rule"]
+        assert [r.opened_by for r in s.validation_rounds()] == ["rule"]
         plan, sid = s.validation_plan, s.id
     with Session.open(url, sid) as reopened:
         assert reopened.validation_plan == plan

@@ -390,12 +390,41 @@ def validate(
             "refused if the open round shows other gaits now (drawn again meanwhile)."
         ),
     ] = None,
+    withdraw: Annotated[
+        bool,
+        typer.Option(
+            "--withdraw",
+            help="Withdraw the open, unanswered round instead (give --reason); asks first "
+            "unless --yes.",
+        ),
+    ] = False,
+    reason: Annotated[
+        str, typer.Option(help="With --withdraw: why the round is withdrawn (logged).")
+    ] = "",
+    undo: Annotated[
+        bool,
+        typer.Option(
+            "--undo",
+            help="With --withdraw: also undo the answer after which the [stop] rule opened "
+            "the round (a mis-keyed answer); its trial is asked again.",
+        ),
+    ] = False,
     db: DbOption = None,
     yes: YesOption = False,
 ) -> None:
-    """Blind validation: the max/mean/min gaits in a logged random order, then unblinding."""
+    """Blind validation: the max/mean/min gaits in a logged random order, then unblinding
+    (--withdraw withdraws the open round instead)."""
     from gaitpref.terminal import run_validation
 
+    if withdraw:
+        if ranking is not None or gaits is not None:
+            fail("--withdraw withdraws the open round: it takes no --ranking or --gaits")
+        if not reason.strip():
+            fail("give --reason: why the validation round is withdrawn")
+        _withdraw_round(session_id, reason, undo, db, yes)
+        return
+    if undo or reason:
+        fail("--undo and --reason go with --withdraw")
     names = None if gaits is None else _gait_names(gaits, ranking)
     with _opened(db, session_id) as session:
         if ranking is not None:
@@ -408,6 +437,35 @@ def validate(
         guard(
             lambda: run_validation(session, ranking, console, gaits=names, record_with=record_with)
         )
+
+
+def _withdraw_round(session_id: int, reason: str, undo: bool, db: str | None, yes: bool) -> None:
+    """``session validate ID --withdraw``: withdraw the open round (checked, then confirmed)."""
+    with _opened(db, session_id) as session:
+        plan = session.validation_plan
+        if plan is None:
+            fail(f"session {session_id} has no open blind validation round: nothing to withdraw")
+        number = plan.round
+        guard(lambda: session.check_withdraw_validation(number, undo=undo))
+        opened = session.validation_rounds()[-1]
+        trials = [t.number for t in session.trials() if t.query == opened.opened_after]
+        what = f"Withdraw blind validation round {number} of session {session_id}"
+        if undo:
+            what += (
+                f" and undo the answer to trial {', '.join(map(str, trials))}, after which the "
+                "[stop] rule opened it"
+            )
+        _confirm(f"{what}?", yes)
+        pending = guard(lambda: session.withdraw_validation(number, reason, undo=undo))
+        console.print(f"validation round {number} withdrawn; its log stays")
+        if undo:
+            line = f"undone: the answer to trial {', '.join(map(str, trials))}"
+            if pending is not None and pending.id != opened.opened_after:
+                line += (
+                    "; its query proposed a gait flagged unsafe since, or in the region of "
+                    "avoidance now, and was withdrawn: a new query is proposed in its place"
+                )
+            console.print(line)
 
 
 def _gait_names(gaits: str, ranking: str | None) -> list[str]:
@@ -605,9 +663,10 @@ def show(
 
 def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
     """The ``best so far`` line of ``session show``: the recommended gait (the highest posterior
-    mean among the gaits that may be proposed, as the confidence names it), never one flagged
-    unsafe or in the region of avoidance; the unrestricted highest is named as not to walk when
-    it is another."""
+    mean among the gaits that may be proposed, as the confidence names it; with gaits made on
+    demand under ``[gaits] recommend = "made"``, among the gaits made), never one flagged unsafe
+    or in the region of avoidance; the unrestricted highest is named as not to walk when it is
+    another."""
     best, rec = summary["argmax"], summary["recommended"]
     if best is None:
         return "best so far: none yet (the line path's posterior lives on the points walked)"
@@ -617,10 +676,10 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
             "the best)"
         )
     if rec is None:
-        return (
-            "best so far: none may be recommended (every gait is in the region of avoidance or "
-            "near a gait flagged unsafe)"
+        why = session.no_recommendation() or (
+            "every gait is in the region of avoidance or near a gait flagged unsafe"
         )
+        return f"best so far: none may be recommended ({why})"
     line = (
         f"best so far: {session.gait_name(rec)} (action {rec}: {session.space.describe(rec)}), "
         f"posterior mean {summary['mean_at_recommended']:.4g} ± "
@@ -630,7 +689,14 @@ def _best_so_far(session: Session, summary: dict[str, Any]) -> str:
         from gaitpref.sessions.gaits import NOT_MADE
 
         line += f"\n  ({NOT_MADE})"
-    if best != rec:
+    spec = session.config.generator
+    made_only = spec is not None and spec.recommends_made
+    if best != rec and made_only and session.gait_made(best) is False:
+        line += (  # [gaits] recommend = "made": the model's highest is a point not made
+            f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), is "
+            "a point whose gait is not made: only a gait made may be recommended)"
+        )
+    elif best != rec:
         line += (
             f"\n  (the highest posterior mean, {session.gait_name(best)} (action {best}), may not "
             "be proposed: flagged unsafe, near a gait flagged unsafe, or in the region of "
@@ -655,6 +721,13 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
         done, last, pending = guard(lambda: session.read(undo_last, turn=True))
         trials = ", ".join(str(t.number) for t in done if t.query == last)
         console.print(f"undone: the answer to trial {trials}")
+        if session.validation_plan is not None:
+            number = session.validation_plan.round
+            console.print(
+                f"blind validation round {number} stays open (an undo takes back answers only): "
+                f"record its ranking, or withdraw it with gaitpref session validate {session_id} "
+                "--withdraw --reason TEXT"
+            )
         if pending is None or pending.id != last:
             console.print(
                 "its query proposed a gait flagged unsafe since, or in the region of avoidance "

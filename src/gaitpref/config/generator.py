@@ -8,7 +8,9 @@ a default since defaults version 0.5, and configs recorded before get ``None``: 
 unsafe_radius``) that a proposal whose gait cannot be made takes out of every later query;
 ``max_infeasible`` bounds how many such proposals one ask makes before it stops proposing
 (``sessions/gaits.py``), and their product, the solver iterations one ask may spend on gaits
-that cannot be made, is at most :data:`~gaitpref.config.schema.MAX_ASK_ITERATIONS`::
+that cannot be made, is at most :data:`~gaitpref.config.schema.MAX_ASK_ITERATIONS`;
+``recommend`` says which gaits a session may recommend (``"made"``, the default since defaults
+version 0.13: the best gait it made; ``"any"``: the best point of the model, as before)::
 
     [space.step_length]
     min = 0.08
@@ -21,6 +23,7 @@ that cannot be made, is at most :data:`~gaitpref.config.schema.MAX_ASK_ITERATION
     avoid_radius = 0.05
     max_iterations = 60
     max_infeasible = 20
+    recommend = "made"
 
 The generator is built once here to check that it understands the features; gaits/ (SciPy's
 optimizers) is imported only when a config names a generator.
@@ -31,7 +34,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from gaitpref.config.schema import DEFAULT_MAX_INFEASIBLE, MAX_ASK_ITERATIONS
+from gaitpref.config.schema import DEFAULT_MAX_INFEASIBLE, MAX_ASK_ITERATIONS, RECOMMEND
 from gaitpref.config.specs import fail
 from gaitpref.space import Space
 
@@ -51,6 +54,20 @@ class GeneratorSpec:
     settings: dict[str, Any] = field(default_factory=dict)
     avoid_radius: float = 0.0
     max_infeasible: int = DEFAULT_MAX_INFEASIBLE
+    #: ``[gaits] recommend``: "made", a session recommends the best gait it made (defaults 0.13
+    #: on), or "any", the best point of the model, made or not (``sessions/confidence.py``)
+    recommend: str = "made"
+
+    def __post_init__(self) -> None:
+        if self.recommend not in RECOMMEND:
+            raise ValueError(
+                f"recommend must be one of {', '.join(RECOMMEND)}, got {self.recommend!r}"
+            )
+
+    @property
+    def recommends_made(self) -> bool:
+        """Whether the recommendation is restricted to the gaits made (``recommend = "made"``)."""
+        return self.recommend == "made"
 
     def make(self, space: Space) -> GaitGenerator:
         """The generator over ``space``'s features."""
@@ -106,7 +123,11 @@ def parse_generator(gaits: dict[str, Any], space: Space) -> GeneratorSpec:
 
     settings = {k: gaits[k] for k in GENERATOR_SETTINGS if gaits[k] is not None}
     spec = GeneratorSpec(
-        gaits["generator"], settings, gaits["avoid_radius"], gaits["max_infeasible"]
+        gaits["generator"],
+        settings,
+        gaits["avoid_radius"],
+        gaits["max_infeasible"],
+        gaits["recommend"],
     )
     try:
         generator = spec.make(space)

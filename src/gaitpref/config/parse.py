@@ -61,6 +61,8 @@ made when first proposed (``generator.py``; ``docs/gaits.md``, "Gaits on demand"
     max_iterations = 60            # optional: solver iterations one gait may take (defaults 0.5)
     max_infeasible = 20            # optional: proposals without a gait one ask may make (1..1000;
                                    # max_iterations x max_infeasible at most 200,000)
+    recommend = "made"             # optional: recommend the best gait made (defaults 0.13), or
+                                   # "any" point of the model, made or not
 
 Every key, its type, default and allowed values are declared once in ``schema.py``
 (:data:`~gaitpref.config.schema.DEFAULTS` is the table of defaults); every error is a
@@ -500,7 +502,7 @@ def parse_config(
             fail("gaits", None, 'needs library = "FILE" or generator = "NAME"')
         given = [
             k
-            for k in ("speed", "avoid_radius", "max_iterations", "max_infeasible")
+            for k in ("speed", "avoid_radius", "max_iterations", "max_infeasible", "recommend")
             if k not in gaits_defaulted
         ]
         if given:

@@ -176,6 +176,9 @@ FEATURE: Final[dict[str, Key]] = {
     "coactive": Key(Coactive(), (0.1, 0.2)),
     "words": Key(Words(), ("more", "less")),
 }
+#: ``[gaits] recommend``: with gaits made on demand, the recommendation is the best gait made
+#: (and feasible), or the best point of the model, made or not (before defaults 0.13)
+RECOMMEND: Final = ("made", "any")
 GAITS: Final[dict[str, Key]] = {
     "library": Key(Text(4096), None),  # a gait library file, or:
     "generator": Key(Text(MAX_NAME), None),  # a gait generator (gaits made on demand)
@@ -187,6 +190,9 @@ GAITS: Final[dict[str, Key]] = {
     # nothing (only live asks: replay follows the log, so every earlier session replays as it ran)
     # max_iterations x max_infeasible at most MAX_ASK_ITERATIONS (config/generator.py)
     "max_infeasible": Key(Integer(1, MAX_INFEASIBLE), DEFAULT_MAX_INFEASIBLE),
+    # the gaits a session may recommend: "made" (the best of the gaits it made, defaults 0.13
+    # on) or "any" point of the model (a coactive suggestion's too, whose gait may not exist)
+    "recommend": Key(Choice(RECOMMEND), "made"),
 }
 MODEL: Final[dict[str, Key]] = {
     "lengthscale": Key(ScaleOrTable()),
@@ -272,7 +278,7 @@ TABLES: Final[dict[str, dict[str, Key]]] = {
 
 #: The version of the defaults below.  A session records it when its config relies on a default
 #: that changed since an earlier version, and replays with the defaults it was recorded with.
-DEFAULTS_VERSION: Final = "0.12"
+DEFAULTS_VERSION: Final = "0.13"
 #: What an earlier version's defaults differ in (0.1: a bare config got ``buffer = 0``; 0.1 and
 #: 0.2: a region of avoidance without ``lambda`` or ``risk`` got ROIAL's bound, ``risk = None``;
 #: 0.1 to 0.3: the ``risk`` rule had no cautious level, ``cautious = 0``; 0.1 to 0.4: a gait
@@ -284,10 +290,13 @@ DEFAULTS_VERSION: Final = "0.12"
 #: the box's boundary that left it at once both ways held that point alone,
 #: ``[cospar] line_boundary = "clip"``; 0.1 to 0.11: the coactive line direction followed the
 #: last answer's suggestions even when its trial was excluded since,
-#: ``[cospar] line_coactive = "recorded"``).  "0.9" is not a version: a commit
-#: named it for a default that was withdrawn before release, and it stays unknown, so that a
-#: database written in between fails to open instead of replaying with other defaults.
-_UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None}
+#: ``[cospar] line_coactive = "recorded"``; 0.1 to 0.12: a session with gaits made on demand
+#: recommended the best point of the model, made or not, ``[gaits] recommend = "any"``).
+#: "0.9" is not a version: a commit named it for a default that was withdrawn before release,
+#: and it stays unknown, so that a database written in between fails to open instead of
+#: replaying with other defaults.
+_ANY_POINT: Final[dict[str, Any]] = {"recommend": "any"}
+_UNBOUNDED_GAITS: Final[dict[str, Any]] = {"max_iterations": None, **_ANY_POINT}
 _MODEL_BEFORE_0_6: Final[dict[str, Any]] = {
     "share": "map",
     "jitter": 0.0,
@@ -316,12 +325,17 @@ EARLIER_DEFAULTS: Final[dict[str, dict[str, dict[str, Any]]]] = {
         "model": _MODEL_BEFORE_0_6,
     },
     "0.4": {"cospar": _ONE_LINE, "gaits": _UNBOUNDED_GAITS, "model": _MODEL_BEFORE_0_6},
-    "0.5": {"cospar": _ONE_LINE, "model": _MODEL_BEFORE_0_6},
-    "0.6": {"cospar": _ONE_LINE, "model": {"jitter": 0.0, "warm_first": "strategy"}},
-    "0.7": {"cospar": _ONE_LINE, "model": {"warm_first": "strategy"}},
-    "0.8": {"cospar": _ONE_LINE},
-    "0.10": {"cospar": _CLIPPED},
-    "0.11": {"cospar": _RECORDED},
+    "0.5": {"cospar": _ONE_LINE, "gaits": _ANY_POINT, "model": _MODEL_BEFORE_0_6},
+    "0.6": {
+        "cospar": _ONE_LINE,
+        "gaits": _ANY_POINT,
+        "model": {"jitter": 0.0, "warm_first": "strategy"},
+    },
+    "0.7": {"cospar": _ONE_LINE, "gaits": _ANY_POINT, "model": {"warm_first": "strategy"}},
+    "0.8": {"cospar": _ONE_LINE, "gaits": _ANY_POINT},
+    "0.10": {"cospar": _CLIPPED, "gaits": _ANY_POINT},
+    "0.11": {"cospar": _RECORDED, "gaits": _ANY_POINT},
+    "0.12": {"gaits": _ANY_POINT},
 }
 
 #: The one table of defaults: table -> key -> default (``None``: see the key's documentation).

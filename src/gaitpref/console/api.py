@@ -44,6 +44,8 @@ from gaitpref.console.schemas import (
     UndoneOut,
     UnsafeIn,
     ValidationOut,
+    WithdrawnRoundOut,
+    WithdrawRoundIn,
 )
 from gaitpref.console.service import SessionService
 from gaitpref.sessions.session import Session
@@ -295,6 +297,30 @@ def rank(
     service = service_of(request)
     result = service.rank(session_id, round_, body.ranking, body.shown)
     return service.read(session_id, lambda s: present.result_out(s, result))
+
+
+@router.post(
+    "/sessions/{session_id}/validation/{round_}/withdraw", response_model=WithdrawnRoundOut
+)
+def withdraw_round(
+    request: Request,
+    session_id: SessionId,
+    round_: Annotated[int, Path(ge=1, le=MAX_ID)],
+    body: WithdrawRoundIn,
+) -> WithdrawnRoundOut:
+    """Withdraw the open, unanswered round (``reason`` logged); with ``undo``, also take back
+    the answer after which the ``[stop]`` rule opened it (a mis-keyed answer).  409 for a round
+    answered, withdrawn, not started or not the open one, and for ``undo`` of a round the rule
+    did not open or whose answer is no longer the last in force."""
+    done = service_of(request).withdraw_validation(session_id, round_, body.reason, body.undo)
+    pending = done.pending
+    return WithdrawnRoundOut(
+        round=done.round,
+        undone_query_id=done.undone_query,
+        trials=list(done.trials),
+        pending_query_id=None if pending is None else pending.id,
+        next_query_error=done.detail or None,
+    )
 
 
 @router.get(

@@ -554,11 +554,21 @@ def _validation_page(request: Request, session: Session) -> Response:
         (r, {g.label: views.shown_view(space, g) for g in session.validation_gaits(r.round)})
         for r in session.validations()
     ]
+    opened = session.validation_rounds()[-1] if plan is not None else None
+    undo_trials: list[int] = []  # the answer after which the [stop] rule opened it, if undoable
+    if plan is not None and opened is not None and opened.opened_by == "rule":
+        try:
+            session.check_withdraw_validation(plan.round, undo=True)
+            undo_trials = [t.number for t in session.trials() if t.query == opened.opened_after]
+        except SessionStateError:
+            pass  # undone since, or the session is finished: the round alone
     return render(
         request,
         "validation.html",
         session=session,
         plan=plan,
+        opened_by=None if opened is None else opened.opened_by,
+        undo_trials=", ".join(map(str, undo_trials)),
         gaits=gaits,
         shown=json.dumps([g.gait_id for _, g in gaits]),  # checked when the ranking is posted
         results=list(reversed(results)),
@@ -609,6 +619,50 @@ async def post_ranking(
         )
     await run_in_threadpool(service.rank, session_id, round_, ranking, shown)
     return see_other(f"/sessions/{session_id}/validation")
+
+
+@router.post("/sessions/{session_id}/validation/{round_}/withdraw")
+async def post_withdraw_round(
+    request: Request, session_id: SessionId, round_: Annotated[int, Path(ge=1, le=MAX_ID)]
+) -> Response:
+    """Withdraw the open round, saying why (``undo``: with the answer after which the
+    ``[stop]`` rule opened it); confirmed first.  Then the trial page: the trials go on."""
+    fields, _ = await read_form(request)
+    reason = fields.get("reason", "").strip()
+    if not reason:
+        raise InputError("reason", "say why the round is withdrawn (the reason is required)")
+    if len(reason) > 2000:
+        raise InputError("reason", "a reason has at most 2000 characters")
+    views.free_text(reason, "reason", "the reason")
+    undo = fields.get("undo") == "1"
+    service = service_of(request)
+    if fields.get("confirmed") != "1":
+
+        def summary(session: Session) -> list[str]:
+            session.check_withdraw_validation(round_, undo=undo)  # answered since...: 409 now
+            lines = [f"Withdraw blind validation round {round_} unanswered: {reason}"]
+            if undo:
+                after = session.validation_rounds()[-1].opened_after
+                trials = ", ".join(str(t.number) for t in session.trials() if t.query == after)
+                lines.append(
+                    f"Undo the answer to trial {trials}, after which the [stop] rule opened the "
+                    "round: it is asked again."
+                )
+            lines.append("The round's log stays; the next round takes the next number.")
+            return lines
+
+        lines = await run_in_threadpool(service.read, session_id, summary)
+        return confirm_page(
+            request,
+            session_id,
+            "withdraw-round",
+            lines,
+            fields,
+            f"/sessions/{session_id}/validation/{round_}/withdraw",
+            back=f"/sessions/{session_id}/validation",
+        )
+    await run_in_threadpool(service.withdraw_validation, session_id, round_, reason, undo)
+    return see_other(f"/sessions/{session_id}")
 
 
 #: the most characters of a validation label (the JSON API's bound too: A, B, C are drawn)

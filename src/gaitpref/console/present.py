@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+from typing import Literal
 
 import numpy as np
 
@@ -153,6 +154,7 @@ def posterior_out(session: Session) -> PosteriorOut:
         sd=sd.tolist(),
         argmax=gait_out(session, int(np.argmax(mean))) if mean.size else None,
         recommended=None if rec is None else gait_out(session, rec),
+        no_recommendation=None if rec is not None or not mean.size else session.no_recommendation(),
         learned=learned,
         trials=[t.action for t in session.trials()],
         confidence=confidence,
@@ -194,9 +196,16 @@ def shown_out(session: Session, shown: ShownGait) -> GaitOut:
     )
 
 
+def _opened_by(session: Session, round_: int) -> Literal["rule", "operator"] | None:
+    """Who opened round ``round_`` (its last draw): None when its log does not say."""
+    found = [r.opened_by for r in session.validation_rounds() if r.round == round_]
+    return found[-1] if found else None
+
+
 def plan_out(session: Session, plan: ValidationPlan) -> ValidationOut:
     return ValidationOut(
         round=plan.round,
+        opened_by=_opened_by(session, plan.round),
         gaits=[
             ValidationGaitOut(label=g.label, gait=shown_out(session, g))
             for g in session.validation_gaits(plan.round)
@@ -217,4 +226,5 @@ def result_out(session: Session, result: ValidationResult) -> ValidationOut:
         roles=dict(result.roles),
         agrees=result.agrees,
         kendall_tau=result.kendall_tau,
+        opened_by=_opened_by(session, result.round),
     )

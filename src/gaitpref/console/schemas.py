@@ -243,9 +243,17 @@ class PosteriorOut(BaseModel):
     recommended: GaitOut | None = Field(
         default=None,
         description="the best gait so far to walk: the highest posterior mean among the gaits "
-        "that may be proposed, the one confidence is about (None while there is no point, and "
-        "when no gait may be proposed). Before a preference is learned (learned false) it is "
-        "still the flat prior's argmax, the first gait that may be proposed, for no reason",
+        "that may be proposed (with gaits made on demand under [gaits] recommend = 'made', "
+        "defaults 0.13 on, among the gaits made), the one confidence is about (None while there "
+        "is no point, and when no gait may be recommended: see no_recommendation). Before a "
+        "preference is learned (learned false) it is still the flat prior's argmax, the first "
+        "gait that may be proposed, for no reason",
+    )
+    no_recommendation: str | None = Field(
+        default=None,
+        description="why no gait is recommended (None: one is, or the posterior has no point "
+        "yet): every gait is in the region of avoidance or near a gait flagged unsafe, or, with "
+        "gaits made on demand, no gait was made yet or every gait made is",
     )
     learned: bool = Field(
         description="whether a preference has been learned: the posterior mean tells some gaits "
@@ -386,6 +394,42 @@ class ValidationOut(BaseModel):
     roles: dict[str, str] | None = None
     agrees: bool | None = None
     kendall_tau: float | None = None
+    opened_by: Literal["rule", "operator"] | None = Field(
+        default=None,
+        description="who opened the round: the [stop] rule after an answer, or the operator; "
+        "null for a round logged before releases recorded it",
+    )
+
+
+class WithdrawRoundIn(_Request):
+    reason: StrictStr = Field(
+        min_length=1, max_length=2000, description="why the round is withdrawn (logged)"
+    )
+    undo: bool = Field(
+        default=False,
+        description="also take back the answer after which the [stop] rule opened the round "
+        "(refused, 409, for a round the rule did not open or whose answer is no longer the last)",
+    )
+
+
+class WithdrawnRoundOut(BaseModel):
+    round: int = Field(
+        description="the round withdrawn (its log stays; the next takes the next number)"
+    )
+    undone_query_id: int | None = Field(
+        description="the query whose answer was taken back with it (null without undo)"
+    )
+    trials: list[int] = Field(description="that answer's trial numbers (empty without undo)")
+    pending_query_id: int | None = Field(
+        description="the query pending now (with undo: the undone one asked again, or a new one "
+        "in its place when it proposed a gait flagged unsafe since or in the region of avoidance "
+        "now; null while paused, or when none could be proposed: next_query_error says why)"
+    )
+    next_query_error: str | None = Field(
+        default=None,
+        description="the withdrawal and undo stand, but no query could be proposed in place of "
+        "the undone one, withdrawn: why; null otherwise",
+    )
 
 
 class RankingIn(_Request):
@@ -439,4 +483,6 @@ __all__ = [
     "UnsafeIn",
     "ValidationGaitOut",
     "ValidationOut",
+    "WithdrawRoundIn",
+    "WithdrawnRoundOut",
 ]

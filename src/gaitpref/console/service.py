@@ -86,6 +86,20 @@ class Undone:
         return self.pending is None or self.pending.id != self.undone_query
 
 
+@dataclass(frozen=True)
+class WithdrawnRound:
+    """A blind validation round withdrawn, read under the session's lock: its number, the
+    query whose answer was undone with it (``trials``; None and empty without undo), the query
+    pending now, and, when none could be proposed in place of a withdrawn one, why."""
+
+    round: int
+    undone_query: int | None
+    trials: tuple[int, ...]
+    pending: SessionQuery | None
+    unproposed: str = ""
+    detail: str = ""
+
+
 class SessionService:
     """Sessions of one database, opened once and shared by all requests (thread-safe)."""
 
@@ -317,6 +331,40 @@ class SessionService:
             check_ranking_labels(session, round_, ranking)
             # shown: checked by the session in the turn of the write (Session.answer_validation)
             return session.answer_validation(round_, list(ranking), shown=shown)
+
+    def withdraw_validation(
+        self, session_id: int, round_: int, reason: str, undo: bool = False
+    ) -> WithdrawnRound:
+        """Withdraw the open, unanswered round ``round_`` (``reason`` required); with ``undo``,
+        also take back the answer after which the ``[stop]`` rule opened it.  When the undone
+        query, withdrawn (a gait flagged or in the region of avoidance since), has no query to
+        take its place, the withdrawal and the undo stand, and ``unproposed`` says why."""
+        text = reason.strip()
+        if not text:
+            raise InputError("reason", "say why the round is withdrawn (the reason is required)")
+        if len(text) > 2000:
+            raise InputError("reason", "a reason has at most 2000 characters")
+        with self.locked(session_id) as session:
+            rounds = session.validation_rounds()
+            opened = next((r for r in rounds if r.round == round_ and r.open), None)
+            after = None if opened is None or not undo else opened.opened_after
+            trials = tuple(t.number for t in session.trials() if t.query == after)
+            unproposed = Pending(None, "")
+            try:
+                pending = session.withdraw_validation(round_, text, undo=undo)
+            except (NoSafeGaitError, GaitError) as exc:  # written, or not: the log says which
+                session.sync()
+                if session.validation_plan is not None:
+                    raise
+                pending, unproposed = None, no_query(exc)
+            return WithdrawnRound(
+                round=round_,
+                undone_query=after,
+                trials=trials if undo else (),
+                pending=pending,
+                unproposed=unproposed.reason,
+                detail=unproposed.detail,
+            )
 
     # -- export --------------------------------------------------------------------------------
     def export_zip(self, session_id: int, fmt: ExportFormat) -> bytes:

@@ -105,6 +105,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     post = session.posterior()
     mean = np.asarray(post.mean)  # the marginal sd is left to the figure: it costs O(A m^2)
     best = session.recommended()  # among the gaits that may be proposed, as the confidence's
+    spec = session.config.generator
     trials = session.trials()
     learned = preference_learned(mean)  # as session show says it
     sure = None
@@ -126,6 +127,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "actions": actions,
         "buffer": buffer,
         "comparisons": views.comparison_groups(actions, buffer),
+        "comparison_notes": views.comparison_notes(actions, buffer),
         "suggestions": views.suggestion_groups(space, actions),
         "ratings": views.rating_groups(categories, actions),
         "categories": categories,
@@ -147,6 +149,9 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         else views.gait_view(space, best, gait_id=session.gait_name(best)),
         "best_mean": None if best is None else float(mean[best]),
         "best_not_made": None if best is None or session.gait_made(best) is not False else NOT_MADE,
+        "no_best": session.no_recommendation() if best is None else None,
+        # gaits made on demand, [gaits] recommend = "made": the best is among the gaits made
+        "made_only": spec is not None and spec.recommends_made,
         "learned": learned,
         "confidence": None if sure is None else sure.sentence(session.gait_name(sure.recommended)),
         "regret": None if sure is None else sure.relative_regret,

@@ -26,6 +26,7 @@ from dataclasses import dataclass, replace
 
 from gaitpref.console.answers import is_rating_field
 from gaitpref.console.errors import InputError, quoted
+from gaitpref.feedback import QueryPair, comparison_pairs
 from gaitpref.sessions.records import SessionQuery, ShownGait, check_printable, check_storable
 from gaitpref.space import MOVES, Feature, Space
 
@@ -139,10 +140,6 @@ class ComparisonGroup:
     second: GaitView
     choices: tuple[Choice, ...]
 
-    @property
-    def same_gait(self) -> bool:
-        return self.first.index == self.second.index
-
 
 @dataclass(frozen=True)
 class SuggestionGroup:
@@ -183,17 +180,17 @@ def rating_groups(categories: Sequence[str], actions: Sequence[GaitView]) -> lis
 def comparison_groups(
     actions: Sequence[GaitView], buffer: Sequence[GaitView]
 ) -> list[ComparisonGroup]:
-    """The pairs a query asks about: new actions among themselves, then each with the buffer."""
+    """The pairs a query asks about (:func:`~gaitpref.feedback.comparison_pairs`, as the
+    terminal asks them): each executed gait against the later ones, then against the buffer;
+    two trials of one gait are not compared, a pair of gaits is asked once
+    (:func:`comparison_notes` says so)."""
     single = len(actions) == 1 and len(buffer) == 1
-    pairs = [(a, b) for k, a in enumerate(actions) for b in actions[k + 1 :]]
-    pairs += [(a, b) for a in actions for b in buffer]
+    members = (*actions, *buffer)
     groups: list[ComparisonGroup] = []
-    seen: set[frozenset[int]] = set()
-    for a, b in pairs:
-        key = frozenset((a.index, b.index))
-        if key in seen and a.index != b.index:
+    for pair in _pairs(actions, buffer):
+        if not pair.asked:
             continue
-        seen.add(key)
+        a, b = members[pair.first], members[pair.second]
         first_label = "this one" if single else a.name
         second_label = "previous one" if single else b.name
         choices = (
@@ -212,6 +209,28 @@ def comparison_groups(
         )
         groups.append(ComparisonGroup(f"cmp-{a.index}-{b.index}", a, b, choices))
     return groups
+
+
+def comparison_notes(actions: Sequence[GaitView], buffer: Sequence[GaitView]) -> list[str]:
+    """Why the page does not ask a pair of the query's trials, in the terminal's words: two
+    trials of one gait (nothing to compare), or the same two gaits as a pair asked above."""
+    members = (*actions, *buffer)
+    notes: list[str] = []
+    for pair in _pairs(actions, buffer):
+        a, b = members[pair.first], members[pair.second]
+        if pair.same_gait:
+            notes.append(f"{a.name} and {b.name} are the same gait: nothing to compare")
+        elif pair.repeats is not None:
+            pa, pb = (members[k] for k in pair.repeats)
+            notes.append(
+                f"{a.name} against {b.name}: the same gaits as {pa.name} against {pb.name}, "
+                "compared once"
+            )
+    return notes
+
+
+def _pairs(actions: Sequence[GaitView], buffer: Sequence[GaitView]) -> tuple[QueryPair, ...]:
+    return comparison_pairs([g.index for g in actions], [g.index for g in buffer])
 
 
 def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[SuggestionGroup]:

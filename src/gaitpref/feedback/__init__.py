@@ -31,6 +31,9 @@ from gaitpref.feedback.comparison import (
     ComparisonAnswered,
     ComparisonKind,
     Outcome,
+    QueryPair,
+    compared_actions,
+    comparison_pairs,
 )
 from gaitpref.feedback.rating import Rating, RatingGiven, RatingKind
 from gaitpref.feedback.registry import (
@@ -60,6 +63,7 @@ __all__ = [
     "Observations",
     "Outcome",
     "Preference",
+    "QueryPair",
     "QueryView",
     "Rating",
     "RatingGiven",
@@ -70,6 +74,8 @@ __all__ = [
     "SuggestionKind",
     "Tie",
     "TrialQuery",
+    "compared_actions",
+    "comparison_pairs",
     "expect_fields",
     "grid_index",
     "kind_for_event",

@@ -5,6 +5,12 @@ with another member (executed or buffered).  A preference enters the model as th
 ``P(w > l) = Phi((f_w - f_l) / (sqrt(2) sigma))`` (Chu & Ghahramani 2005, eq. (3)); a "no
 preference" is a :class:`~gaitpref.feedback.base.Tie` (stored; modelled with ``ties = "model"``).
 Stored as a ``comparison_answered`` event.
+
+:func:`comparison_pairs` is the one rule for which pairs a query asks (the terminal, the
+console and the simulated users all follow it): every executed action against every later
+member, a pair of two trials of one gait not asked (nothing to compare), a pair of gaits asked
+once (``check_all`` refuses it twice).  A comparison of a gait with itself is still taken (an
+earlier console asked it, and its logs replay as they were): stored, not modelled.
 """
 
 from __future__ import annotations
@@ -51,6 +57,54 @@ class Comparison:
         if self.outcome == "first":
             return self.first, self.second
         return self.second, self.first
+
+
+@dataclass(frozen=True)
+class QueryPair:
+    """Two members of a query by their positions in its members (executed actions, then
+    buffered ones): ``first`` executed, ``second`` after it.  Not :attr:`asked` when both are
+    one gait (:attr:`same_gait`) or when the same two gaits were asked earlier in the query
+    (:attr:`repeats`: that pair's positions)."""
+
+    first: int
+    second: int
+    same_gait: bool = False
+    repeats: tuple[int, int] | None = None
+
+    @property
+    def asked(self) -> bool:
+        return not self.same_gait and self.repeats is None
+
+
+def comparison_pairs(actions: Sequence[int], buffer: Sequence[int]) -> tuple[QueryPair, ...]:
+    """Every pair of a query's members with an executed one first, in the order they are asked:
+    each executed action (``actions``, in order) against each member after it (the later
+    executed ones, then ``buffer``); those that are not asked are kept, marked why.
+
+    The paper's ``R`` (``n (n - 1) / 2 + n b`` pairs) when the query's gaits are distinct, as
+    in its ``n = 1, b = 1`` runs whenever the new gait is not the buffered one.
+    """
+    members = (*actions, *buffer)
+    out: list[QueryPair] = []
+    asked: dict[frozenset[int], tuple[int, int]] = {}
+    for r in range(len(actions)):
+        for c in range(r + 1, len(members)):
+            key = frozenset((members[r], members[c]))
+            if len(key) == 1:
+                out.append(QueryPair(r, c, same_gait=True))
+            elif key in asked:
+                out.append(QueryPair(r, c, repeats=asked[key]))
+            else:
+                asked[key] = (r, c)
+                out.append(QueryPair(r, c))
+    return tuple(out)
+
+
+def compared_actions(actions: Sequence[int], buffer: Sequence[int]) -> tuple[tuple[int, int], ...]:
+    """The pairs of actions :func:`comparison_pairs` asks, ``(executed, other)``."""
+    members = (*actions, *buffer)
+    pairs = comparison_pairs(actions, buffer)
+    return tuple((members[p.first], members[p.second]) for p in pairs if p.asked)
 
 
 class ComparisonAnswered(EventPayload):

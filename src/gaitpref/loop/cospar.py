@@ -42,8 +42,11 @@ from gaitpref.feedback import (
     ModelContext,
     Observations,
     Preference,
+    QueryPair,
     Suggestion,
     Tie,
+    compared_actions,
+    comparison_pairs,
     kind_named,
     kind_of,
     kinds,
@@ -95,6 +98,17 @@ class Query:
     def members(self) -> tuple[int, ...]:
         """Every action a comparison of this query may name (executed, then buffered)."""
         return self.actions + self.buffer
+
+    @property
+    def pairs(self) -> tuple[QueryPair, ...]:
+        """The pairs of members it asks to compare, and those it does not (and why):
+        :func:`~gaitpref.feedback.comparison_pairs`."""
+        return comparison_pairs(self.actions, self.buffer)
+
+    @property
+    def compared(self) -> tuple[tuple[int, int], ...]:
+        """The pairs of actions it asks to compare, ``(executed, other)``, in order."""
+        return compared_actions(self.actions, self.buffer)
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,8 @@
 
 From joint posterior samples ``f^(1..S)`` of the smooth utility (pathwise,
 ``model/posterior.py``, ``nugget=False``) and the recommended gait ``r`` (the posterior mean's
-argmax, the gait blind validation calls "max"):
+argmax, the gait blind validation calls "max"; with gaits made on demand, the argmax among the
+gaits made, while ``max f`` is still over every gait: ``among`` in :func:`confidence`):
 
 - the probability that ``r`` is within a tolerance of the subject's best,
   ``P(max f - f_r <= tol (max f - min f))``, with the tolerance a fraction of the utility's
@@ -143,14 +144,20 @@ def confidence(
     allowed: NDArray[np.bool_] | None = None,
     block: int | None = None,
     draws: PosteriorMixture | None = None,
+    among: NDArray[np.bool_] | None = None,
 ) -> Confidence:
     """The :class:`Confidence` of ``posterior`` from ``samples`` joint draws with ``rng``.
 
     ``allowed`` restricts both the recommendation and "the best" to the gaits that may be
-    proposed (a region of avoidance, unsafe flags); None: all.  ``block`` samples are held at
-    a time (default: as many as fit in :data:`BLOCK_ELEMENTS` values, at most 256).
-    ``draws``: a mixture the samples come from instead (a warm start's share hypotheses,
-    ``model/share_mix.py``); the recommendation is still ``posterior``'s.
+    proposed (a region of avoidance, unsafe flags); None: all.  ``among`` restricts the
+    recommendation alone, further, to the gaits that may be recommended (gaits made on demand:
+    the gaits made), while "the best" is still sought among all the ``allowed`` gaits: the
+    probability is that of the best gait one may walk now being within the tolerance of the
+    best anywhere (None: the recommendation is chosen among the ``allowed`` gaits, as "the
+    best").  ``block`` samples are held at a time (default: as many as fit in
+    :data:`BLOCK_ELEMENTS` values, at most 256).  ``draws``: a mixture the samples come from
+    instead (a warm start's share hypotheses, ``model/share_mix.py``); the recommendation is
+    still ``posterior``'s.
     """
     tolerance = check_tolerance(tolerance)
     if block is None:
@@ -158,12 +165,26 @@ def confidence(
     _check_samples(samples)
     if not is_count(block) or block < 1:
         raise ValueError(f"block must be an integer >= 1, got {block!r}")
+    gaits = len(posterior.space)
     if allowed is not None:
         empty = "no gait is allowed: there is nothing to recommend"
-        allowed = check_mask(
-            allowed, len(posterior.space), what="gaits", optional=True, empty=empty
-        )
-    rec = recommendation(posterior.mean, allowed)
+        allowed = check_mask(allowed, gaits, what="gaits", optional=True, empty=empty)
+    chosen_from = allowed
+    if among is not None:
+        among = np.asarray(among)
+        if among.dtype != np.bool_ or among.shape != (gaits,):
+            raise ValueError(
+                f"among must be None or a boolean mask over the {gaits} gaits, got dtype "
+                f"{among.dtype} and shape {among.shape}"
+            )
+        chosen_from = among if allowed is None else among & allowed
+        if not chosen_from.any():
+            raise ValueError(
+                "no gait of among is allowed: there is nothing to recommend"
+                if among.any()
+                else "among names no gait: there is nothing to recommend"
+            )
+    rec = recommendation(posterior.mean, chosen_from)
     hits = 0
     shortfall = relative = 0.0
     done = 0

@@ -6,7 +6,8 @@ versioned events (``events.py``).  Its state is never stored: it is rebuilt by r
 
 - :class:`Session` (``session.py``): create, open, next query, answer, undo, exclude, validate.
 - records (``records.py``): :class:`SessionQuery`, :class:`Trial`, :class:`ComparisonRecord`,
-  :class:`SuggestionRecord`, :class:`Answered`, :class:`ShownGait` (a validation gait as shown).
+  :class:`SuggestionRecord`, :class:`Answered`, :class:`ShownGait` (a validation gait as shown),
+  :class:`ValidationRound` (a blind validation round: who opened it, what became of it).
 - warm starts from earlier sessions (``warm.py``; :func:`read_prior_from` reads typed ids
   and subject codes), the confidence after every answer and the recommended gait
   (``confidence.py``; :class:`StopCheckWarning` when the ``[stop]`` rule could not be checked
@@ -30,6 +31,7 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    ValidationRound,
 )
 from gaitpref.sessions.session import Session
 from gaitpref.sessions.stored_config import GaitLibraryLike, software_version
@@ -56,6 +58,7 @@ __all__ = [
     "Trial",
     "ValidationPlan",
     "ValidationResult",
+    "ValidationRound",
     "export_session",
     "import_session",
     "posterior_summary",

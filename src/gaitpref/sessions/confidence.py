@@ -8,10 +8,23 @@ states the confidence after every step that changed the model (an answer, an und
 exclusion): the export's ``confidence`` table, whose row says ``learned`` false and names no gait
 while no preference is learned (:func:`preference_learned`), as the terminal and the console
 then state no confidence.  When no gait may be proposed (the region of
-avoidance and the unsafe flags cover the grid) there is nothing to recommend: the session states
-no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the rule does not act on one and the
-table has no row for that step.  :func:`recommended` names the same gait without sampling (what
-``session show``, the console and exports call the best so far).
+avoidance and the unsafe flags cover the grid, or no gait was made yet: below) there is nothing
+to recommend: the session states no confidence (:class:`~gaitpref.errors.NoSafeGaitError`), the
+rule does not act on one and the table has no row for that step.  :func:`recommended` names
+the same gait without sampling (what ``session show``, the console and exports call the best so
+far).
+
+With gaits made on demand (``[gaits] generator``) the model's points are not all gaits: on a
+continuous space the posterior's highest is often a point only a coactive suggestion named, whose
+gait was never made and may not exist.  Under ``[gaits] recommend = "made"`` (the default since
+defaults version 0.13) the recommendation is the best gait the session made (feasible: a
+``gait_made`` event), by posterior mean, among those that may be proposed: an operator can only
+put the subject in a gait that exists.  The confidence is then that this gait is within the
+tolerance of the best of every gait that may be proposed, made or not (so more exploration shows
+as a lower probability, and the ``[stop]`` rule waits for it), and blind validation's "max" is the
+same gait.  Before any gait is made there is nothing to recommend (:func:`no_recommendation`
+says why).  Sessions recorded under earlier defaults (``recommend = "any"``) recommend the best
+point, made or not, as they did.
 """
 
 from __future__ import annotations
@@ -20,6 +33,7 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from gaitpref.errors import NoSafeGaitError
 from gaitpref.loop.stopping import (
@@ -42,18 +56,59 @@ class StopCheckWarning(UserWarning):
 
 
 CONFIDENCE_STREAM = 0xC0F1DE7CE  # the confidence's generator: (seed, this, answers in force)
+Mask = NDArray[np.bool_]  # over the posterior's gaits (rows)
+
+
+def _made(state: SessionState) -> Mask | None:
+    """The gaits (rows) this session made, when its recommendation is restricted to them
+    (``[gaits] recommend = "made"``); None when it is not (no generator, or ``"any"``)."""
+    spec = state.config.generator
+    if spec is None or not spec.recommends_made:
+        return None
+    made = np.zeros(len(state.loop.space), dtype=bool)
+    made[state.walkable] = True
+    return made
+
+
+def no_recommendation(state: SessionState) -> str | None:
+    """Why ``state`` recommends no gait (None: it recommends one): every gait is in the region
+    of avoidance or near a gait flagged unsafe, or, with ``[gaits] recommend = "made"``, no gait
+    was made yet, or every gait made is."""
+    return _masks(state)[2]
+
+
+def _masks(state: SessionState) -> tuple[Mask | None, Mask | None, str | None]:
+    """``loop.allowed()``, :func:`_made` and :func:`no_recommendation`'s reason (one
+    ``allowed()``: the region of avoidance reads the posterior's variance)."""
+    allowed = state.loop.allowed()
+    if allowed is not None and not allowed.any():
+        return (
+            allowed,
+            None,
+            "every gait is in the region of avoidance or near a gait flagged unsafe",
+        )
+    made = _made(state)
+    why = None
+    if made is not None and not made.any():
+        why = (
+            "no gait has been made yet (gaits made on demand: only a gait a query proposed and "
+            "the generator made may be recommended)"
+        )
+    elif made is not None and allowed is not None and not (made & allowed).any():
+        why = "every gait made so far is in the region of avoidance or near a gait flagged unsafe"
+    return allowed, made, why
 
 
 def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
     """The confidence of ``state``'s posterior with the rule's tolerance and sample count (fewer
     samples on large grids: :meth:`StopRule.samples_for`);
-    :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be proposed (none to recommend)."""
+    :class:`~gaitpref.errors.NoSafeGaitError` when no gait may be recommended
+    (:func:`no_recommendation` says why)."""
     loop = state.loop
-    allowed = loop.allowed()
-    if allowed is not None and not allowed.any():
+    allowed, made, why = _masks(state)
+    if why is not None:
         raise NoSafeGaitError(
-            "no gait may be recommended: every gait is in the region of avoidance or near a "
-            "gait flagged unsafe, so there is no confidence to state"
+            f"no gait may be recommended: {why}, so there is no confidence to state"
         )
     answers = len(loop.answers)
     rng = np.random.default_rng(
@@ -66,29 +121,32 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
         samples=rule.samples_for(len(loop.posterior.space)),
         allowed=allowed,
         draws=loop.share_mixture(),
+        among=made,
     )
 
 
 def recommended(state: SessionState) -> int | None:
     """The gait the session recommends: the posterior mean's argmax among the gaits that may be
     proposed (``loop.allowed()``: the region of avoidance, gaits flagged unsafe and their
-    radius), the lowest index among exact ties, as :func:`session_confidence` recommends it.
-    None while the posterior has no point (the line path before its first query) and when no
-    gait may be proposed.  Unlike ``Posterior.argmax`` it never names a gait that may not be
-    walked."""
+    radius) and, with ``[gaits] recommend = "made"``, were made, the lowest index among exact
+    ties, as :func:`session_confidence` recommends it.  None while the posterior has no point
+    (the line path before its first query) and when no gait may be recommended
+    (:func:`no_recommendation`).  Unlike ``Posterior.argmax`` it never names a gait that may
+    not be walked."""
     loop = state.loop
     if not len(loop.space):
         return None
-    allowed = loop.allowed()
-    if allowed is not None and not allowed.any():
+    allowed, made, why = _masks(state)
+    if why is not None:
         return None
+    if made is not None:
+        allowed = made if allowed is None else made & allowed
     return recommendation(loop.posterior.mean, allowed)
 
 
 def recommends(state: SessionState) -> bool:
-    """Whether some gait may be proposed, so recommended (else no confidence is stated)."""
-    allowed = state.loop.allowed()
-    return allowed is None or bool(allowed.any())
+    """Whether some gait may be recommended (else no confidence is stated)."""
+    return no_recommendation(state) is None
 
 
 def stop_reason(
@@ -186,6 +244,7 @@ __all__ = [
     "CONFIDENCE_STREAM",
     "StopCheckWarning",
     "confidence_history",
+    "no_recommendation",
     "recommended",
     "recommends",
     "session_confidence",

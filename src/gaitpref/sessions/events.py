@@ -389,13 +389,41 @@ class ValidationStartedV1(EventPayload):
     gaits: list[BlindGaitShown]
 
 
-class ValidationStarted(ValidationStartedV1):
-    """``validation_started``: the paper's blind validation (``validation.py``).  Version 2
-    chooses its three gaits among the gaits a query could propose when the round starts: none
-    near a gait flagged unsafe, avoided, or in the region of avoidance (a subject never walks a
-    gait the operator stopped); the payload is unchanged."""
+class ValidationStartedV2(ValidationStartedV1):
+    """``validation_started`` as written by version 2: the paper's blind validation
+    (``validation.py``), its three gaits chosen among the gaits a query could propose when the
+    round starts: none near a gait flagged unsafe, avoided, or in the region of avoidance (a
+    subject never walks a gait the operator stopped); the payload is version 1's."""
 
     version: ClassVar[int] = 2
+
+
+#: who opened a blind validation round: the ``[stop]`` rule after an answer, or the operator
+Opener = Literal["rule", "operator"]
+
+
+class ValidationStarted(ValidationStartedV2):
+    """``validation_started``: the paper's blind validation, its gaits chosen as version 2
+    chooses them.  Version 3 also records who opened the round, ``opened_by``: ``"rule"`` (the
+    ``[stop]`` rule, right after an answer) or ``"operator"`` (by hand; a round drawn again
+    after a flag keeps its opener, and is None when that round's log did not say: one of an
+    earlier release).  Written for the reader: replay takes it from the log; rounds of
+    versions 1 and 2 read as opened by an unknown hand (None)."""
+
+    version: ClassVar[int] = 3
+    opened_by: Annotated[Opener | None, Recorded] = None
+
+
+class ValidationWithdrawn(EventPayload):
+    """``validation_withdrawn``: the operator withdrew the open, unanswered blind validation
+    ``round`` (a mis-keyed answer made the ``[stop]`` rule open it, say), saying why
+    (``reason``).  Its ``validation_started`` stays as written; the round is closed unanswered,
+    queries and answers go on, and the next round takes the next number.  When the rule opened
+    it, an ``undo`` of the answer that opened it may follow in the same transaction."""
+
+    kind: ClassVar[str] = "validation_withdrawn"
+    round: int
+    reason: Annotated[str, Recorded]
 
 
 class ValidationAnswered(EventPayload):
@@ -442,6 +470,7 @@ SESSION_PAYLOADS: tuple[type[EventPayload], ...] = (
     TrialFlaggedUnsafe,
     UnsafeFlagWithdrawn,
     ValidationStarted,
+    ValidationWithdrawn,
     ValidationAnswered,
     Note,
     Paused,
@@ -457,6 +486,7 @@ OLDER_PAYLOADS: dict[tuple[str, int], type[EventPayload]] = {
         GaitMadeV1,
         GaitInfeasibleV1,
         ValidationStartedV1,
+        ValidationStartedV2,
         UndoV1,
         TrialExcludedV1,
     )
@@ -476,6 +506,7 @@ UNSAFE = TrialFlaggedUnsafe.kind
 UNSAFE_WITHDRAWN = UnsafeFlagWithdrawn.kind
 VALIDATION_STARTED = ValidationStarted.kind
 VALIDATION_ANSWERED = ValidationAnswered.kind
+VALIDATION_WITHDRAWN = ValidationWithdrawn.kind
 NOTE = Note.kind
 PAUSED = Paused.kind
 RESUMED = Resumed.kind
@@ -645,6 +676,7 @@ __all__ = [
     "HyperparametersRefit",
     "LineDrawn",
     "Note",
+    "Opener",
     "Paused",
     "PriorSession",
     "QueryIssued",
@@ -661,6 +693,8 @@ __all__ = [
     "ValidationAnswered",
     "ValidationStarted",
     "ValidationStartedV1",
+    "ValidationStartedV2",
+    "ValidationWithdrawn",
     "check_new",
     "describe_mismatch",
     "is_answer_part",

@@ -260,9 +260,11 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     ``argmax`` is the highest posterior mean over every gait, which may be one that may not be
     proposed (flagged unsafe, near one, in the region of avoidance); ``recommended`` is the
     highest among those that may be (:meth:`Session.recommended`: the gait the confidence
-    recommends, the best so far to walk).  The ``argmax`` fields are None while the posterior
-    has no point (the line path before a query: it lives on the points present); the
-    ``recommended`` fields then too, and when no gait may be proposed.
+    recommends, the best so far to walk; with gaits made on demand under ``[gaits] recommend =
+    "made"``, the highest among the gaits made).  The ``argmax`` fields are None while the
+    posterior has no point (the line path before a query: it lives on the points present); the
+    ``recommended`` fields then too, and when no gait may be recommended
+    (:meth:`Session.no_recommendation`).
 
     ``learned`` says whether a preference has been learned (:func:`preference_learned`: the
     posterior mean tells some gaits apart), exactly when ``session show`` names a best gait
@@ -310,7 +312,7 @@ FIXED_COLUMNS: Final = frozenset(
         *("exclusion_reason", "exclusion_detail", "undone", "seq", "at", "mean", "sd", "round"),
         *("label", "role", "posterior_mean", "subject_rank", "model_rank", "agrees"),
         *("kendall_tau", "answers", "trials", "probability", "regret", "relative_regret"),
-        *("tolerance", "samples"),
+        *("tolerance", "samples", "opened_by"),
     }
 )
 
@@ -432,6 +434,8 @@ def _tables(
         }
         for a in range(len(space))
     ]
+    # who opened each answered round: "rule", "operator", or None (logged before it was recorded)
+    opened_by = {r.round: r.opened_by for r in session.validation_rounds() if r.answered}
     validation = [
         {
             "round": r.round,
@@ -445,6 +449,7 @@ def _tables(
             "model_rank": r.model_ranking.index(label) + 1,
             "agrees": r.agrees,
             "kendall_tau": r.kendall_tau,
+            "opened_by": opened_by.get(r.round),
         }
         for r in session.validations()
         for shown in [{g.label: g for g in session.validation_gaits(r.round)}]

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
 from gaitpref.checks import char_name, hidden_in
+from gaitpref.feedback import QueryPair, compared_actions, comparison_pairs
 
 Reason = Literal["device_fault", "stumble", "distracted", "other"]
 REASONS: tuple[Reason, ...] = get_args(Reason)
@@ -35,6 +36,18 @@ class SessionQuery:
     @property
     def member_trials(self) -> tuple[int, ...]:
         return self.trials + self.buffer_trials
+
+    @property
+    def pairs(self) -> tuple[QueryPair, ...]:
+        """The pairs of members it asks to compare, and those it does not (and why), by
+        position in :attr:`members` and :attr:`member_trials`:
+        :func:`~gaitpref.feedback.comparison_pairs`."""
+        return comparison_pairs(self.actions, self.buffer)
+
+    @property
+    def compared(self) -> tuple[tuple[int, int], ...]:
+        """The pairs of actions it asks to compare, ``(executed, other)``, in order."""
+        return compared_actions(self.actions, self.buffer)
 
     def trial_of(self, action: int) -> int:
         """The trial number of ``action`` in this query (the first, if it appears twice)."""
@@ -200,3 +213,41 @@ def check_unsafe_reason(reason: str) -> str:
             f"an unsafe flag needs a reason: a text of 1 to {MAX_UNSAFE_REASON} characters"
         )
     return check_storable(reason, "the unsafe flag's reason")
+
+
+#: the longest reason a withdrawn validation round takes (the terminal, the CLI and the API)
+MAX_WITHDRAW_REASON = 2000
+
+
+def check_withdraw_reason(reason: str) -> str:
+    """``reason`` if a withdrawn validation round may hold it: a text of 1 to
+    :data:`MAX_WITHDRAW_REASON` characters that a database can store and a terminal shows as
+    it is; a ValueError saying which rule it breaks."""
+    what = "the withdrawn round's reason"
+    if not isinstance(reason, str) or not reason.strip() or len(reason) > MAX_WITHDRAW_REASON:
+        raise ValueError(
+            f"withdrawing a validation round needs a reason: a text of 1 to "
+            f"{MAX_WITHDRAW_REASON} characters"
+        )
+    return check_printable(check_storable(reason, what), what)
+
+
+@dataclass(frozen=True)
+class ValidationRound:
+    """A blind validation round as the log has it: its number, the seq of its
+    ``validation_started``, who opened it (``"rule"``, ``"operator"``; None: logged before
+    that was recorded), the query whose answer made the ``[stop]`` rule open it (None: not the
+    rule's), and what became of it: ``answered``, or ``withdrawn`` (the reason) at
+    ``withdrawn_seq``; an open round is neither."""
+
+    round: int
+    seq: int
+    opened_by: Literal["rule", "operator"] | None
+    opened_after: int | None
+    answered: bool = False
+    withdrawn: str | None = None
+    withdrawn_seq: int | None = None
+
+    @property
+    def open(self) -> bool:
+        return not self.answered and self.withdrawn is None

@@ -96,7 +96,9 @@ def _replay_one(state: SessionState, r: EventRecord) -> None:
         elif r.kind == log.UNSAFE_WITHDRAWN:
             _check(r, state.withdraw_unsafe_event(p["trial"]))
         elif r.kind == log.VALIDATION_STARTED:
-            _check(r, state.validation_event(r.version))
+            _check(r, state.validation_event(r.version, p.get("opened_by")))
+        elif r.kind == log.VALIDATION_WITHDRAWN:
+            _check(r, state.withdraw_validation_event(p["round"], p["reason"]))
         elif r.kind == log.VALIDATION_ANSWERED:
             _check(r, state.validation_answer_event(p["round"], p["ranking"]))
     except (SessionStateError, QueryError, ValueError, KeyError) as exc:

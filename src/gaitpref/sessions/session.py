@@ -48,6 +48,7 @@ from gaitpref.sessions import events as log
 from gaitpref.sessions.confidence import (
     StopCheckWarning,
     confidence_history,
+    no_recommendation,
     recommended,
     session_confidence,
     stop_reason,
@@ -64,8 +65,10 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    ValidationRound,
     check_printable,
     check_storable,
+    check_withdraw_reason,
 )
 from gaitpref.sessions.replay import replay
 from gaitpref.sessions.state import SessionState
@@ -328,7 +331,7 @@ class Session:
         if st.open_round is not None:
             raise SessionStateError(
                 f"blind validation round {st.open_round.plan.round} is open: "
-                "record its ranking first"
+                "record its ranking first, or withdraw it"
             )
         if st.pending is not None:
             return st.pending
@@ -485,8 +488,10 @@ class Session:
         raise SessionStateError(
             f"blind validation round {number} is open: record its ranking before answering "
             f"query {query.id} (gaitpref session validate {self.id}, the console's validation "
-            f"page, or Session.answer_validation({number}, ...); a round is not cancelled, "
-            f"only answered).  Query {query.id} stays pending; nothing was written"
+            f"page, or Session.answer_validation({number}, ...)), or withdraw it (gaitpref "
+            f"session validate {self.id} --withdraw --reason TEXT, or "
+            f"Session.withdraw_validation({number}, reason)).  Query {query.id} stays pending; "
+            "nothing was written"
         )
 
     def undo(self, *, query: int | None = None) -> SessionQuery | None:
@@ -525,28 +530,32 @@ class Session:
                         f"writer answered or undid meanwhile and {now} now; nothing was undone"
                     )
             self._append([st.undo_event()])
-            st = self._state
-            if st.pending is not None:
-                return st.pending
-            if st.status == "paused" or st.open_round is not None:
-                return None
-            try:
-                return self._next_query()
-            except (StorageFailureError, StorageConnectError) as e:  # the undo stands
-                raise type(e)(
-                    f"the undo is written; the query drawn in place of the one it withdrew "
-                    f"was not: {e}"
-                ) from e
-            except InfeasibleProposalsError as e:
-                raise InfeasibleProposalsError(
-                    f"{_WITHDRAWN}; {e}",
-                    infeasible=e.infeasible,
-                    limit=e.limit,
-                ) from e
-            except NoSafeGaitError as e:
-                raise NoSafeGaitError(f"{_WITHDRAWN}; {e}") from e
+            return self._after_undo()
 
         return self._locked(run)
+
+    def _after_undo(self) -> SessionQuery | None:
+        """After an undo is written and booked: the query pending again, or the one proposed
+        and logged in place of a withdrawn one (None while paused or a round is open)."""
+        st = self._state
+        if st.pending is not None:
+            return st.pending
+        if st.status == "paused" or st.open_round is not None:
+            return None
+        try:
+            return self._next_query()
+        except (StorageFailureError, StorageConnectError) as e:  # the undo stands
+            raise type(e)(
+                f"the undo is written; the query drawn in place of the one it withdrew was not: {e}"
+            ) from e
+        except InfeasibleProposalsError as e:
+            raise InfeasibleProposalsError(
+                f"{_WITHDRAWN}; {e}",
+                infeasible=e.infeasible,
+                limit=e.limit,
+            ) from e
+        except NoSafeGaitError as e:
+            raise NoSafeGaitError(f"{_WITHDRAWN}; {e}") from e
 
     def exclude(self, trial: int, reason: str, detail: str = "") -> Trial:
         """Exclude an answered trial (``reason`` in ``REASONS``): its comparisons and
@@ -577,7 +586,7 @@ class Session:
                 raise
             if before is not None and st.open_round is None:  # it showed a gait in the region
                 with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
-                    self._redraw(st, f"trial {trial} is excluded")
+                    self._redraw(st, f"trial {trial} is excluded", before.opened_by)
             return next(t for t in self.trials() if t.number == trial)
 
         return self._locked(run)
@@ -603,16 +612,17 @@ class Session:
             if before is None or st.open_round is not None:
                 return False
             with contextlib.suppress(SessionStateError):  # fewer than 3 gaits left to show
-                self._redraw(st, f"trial {trial} is flagged unsafe")
+                self._redraw(st, f"trial {trial} is flagged unsafe", before.opened_by)
             return True
 
         return self._locked(run)
 
-    def _redraw(self, st: SessionState, done: str) -> None:
-        """Draw again the blind validation round that the change ``done`` (written) withdrew;
-        a storage failure of that write says the change stands."""
+    def _redraw(self, st: SessionState, done: str, opened_by: log.Opener | None) -> None:
+        """Draw again the blind validation round that the change ``done`` (written) withdrew,
+        opened by whoever opened it (``opened_by``); a storage failure of that write says the
+        change stands."""
         try:
-            self._append([st.validation_event()])
+            self._append([st.validation_event(opened_by=opened_by)])
         except (StorageFailureError, StorageConnectError) as e:
             raise type(e)(
                 f"{done} (written); the blind validation round it withdrew was not drawn again: {e}"
@@ -718,11 +728,20 @@ class Session:
 
     def recommended(self) -> int | None:
         """The gait to walk as the best so far: the posterior mean's highest among the gaits that
-        may be proposed (never one flagged unsafe, near one, or in the region of avoidance), the
-        gait :meth:`confidence` recommends.  None while the posterior has no point (the line
-        path before its first query) and when no gait may be proposed.
+        may be proposed (never one flagged unsafe, near one, or in the region of avoidance) and,
+        with gaits made on demand under ``[gaits] recommend = "made"`` (defaults 0.13 on), were
+        made: the gait :meth:`confidence` recommends.  None while the posterior has no point
+        (the line path before its first query) and when no gait may be recommended
+        (:meth:`no_recommendation` says why).
         ``posterior().argmax`` is the unrestricted highest, which may be a gait not to walk."""
         return self._locked(lambda: recommended(self._state))
+
+    def no_recommendation(self) -> str | None:
+        """Why the session recommends no gait now (None: it recommends one, or will once the
+        posterior has a point): every gait is in the region of avoidance or near a gait flagged
+        unsafe, or, with gaits made on demand and ``[gaits] recommend = "made"`` (defaults 0.13
+        on), no gait was made yet, or every gait made is avoided."""
+        return self._locked(lambda: no_recommendation(self._state))
 
     def confidence_history(
         self, progress: Callable[[int, int], None] | None = None
@@ -754,7 +773,7 @@ class Session:
 
         def run() -> str | None:
             st = self._state
-            if st.rounds or st.status == "finished":
+            if st.rounds_in_force or st.status == "finished":
                 return None
             reason = stop_reason(st, self.config.stop, self.confidence)
             why = None if reason is None else st.validation_blocked()
@@ -774,13 +793,13 @@ class Session:
         the rule's reason (None: no round was opened).  When no round can be drawn, nothing is
         written and :meth:`stop_blocked` says why."""
         st = self._state
-        if st.rounds or st.pending is not None or st.validation_blocked() is not None:
+        if st.rounds_in_force or st.pending is not None or st.validation_blocked() is not None:
             return None
         reason = stop_reason(st, self.config.stop, self.confidence)
         if reason is None:
             return None
         try:
-            self._append([st.validation_event()])
+            self._append([st.validation_event(opened_by="rule")])
         except ConflictError:  # another writer moved on: it decides
             return None
         return reason
@@ -861,6 +880,76 @@ class Session:
                     "written, run the round's gaits as shown now"
                 )
         return st.validation_answer_event(round_, ranking)
+
+    def withdraw_validation(
+        self, round_: int, reason: str, *, undo: bool = False
+    ) -> SessionQuery | None:
+        """Withdraw the open, unanswered blind validation round ``round_``, saying why
+        (``reason``: 1 to 2000 characters); its ``validation_started`` event stays as written,
+        a ``validation_withdrawn`` event closes it unanswered.  Queries and answers go on, the
+        ``[stop]`` rule may open a round again (it opens one while no round is open or answered),
+        and the next round takes the next number.
+
+        ``undo``: also take back the answer that opened the round, in the same transaction (an
+        ``undo`` event after it): only for a round the ``[stop]`` rule opened (``opened_by`` is
+        ``"rule"``) while that answer is still the last in force.  Returns the query pending
+        then (as :meth:`undo` does: the undone one asked again, or one proposed in place of it),
+        or the pending query, if any, without ``undo``.
+
+        Refused (:class:`SessionStateError` naming the problem, nothing written): a finished
+        session, a round that is answered, withdrawn, never started or not the open one, and
+        ``undo`` of a round the rule did not open or whose answer is no longer the last one (or
+        cannot be undone: excluded, flagged unsafe); a reason that is empty, over-long or holds
+        a control character is a ValueError naming the rule it breaks."""
+        reason = check_withdraw_reason(reason)
+
+        def run() -> SessionQuery | None:
+            self._append(self._withdraw_events(round_, reason, undo))
+            return self._after_undo() if undo else self._state.pending
+
+        return self._locked(run)
+
+    def check_withdraw_validation(self, round_: int, *, undo: bool = False) -> None:
+        """Refuse, writing nothing, as :meth:`withdraw_validation` would now: for a confirm
+        step, so that a stale withdrawal is refused before the operator confirms it."""
+
+        def run() -> None:
+            self._withdraw_events(round_, "(checked)", undo)
+
+        self._locked(run)
+
+    def _withdraw_events(self, round_: int, reason: str, undo: bool) -> list[NewEvent]:
+        st = self._state
+        st.check_open("validation")
+        events = [st.withdraw_validation_event(round_, reason)]
+        if undo:
+            current = st.open_round
+            assert current is not None  # the withdrawal is of the open round
+            if current.opened_by != "rule":
+                who = (
+                    "by the operator"
+                    if current.opened_by == "operator"
+                    else "by an unknown hand (logged before rounds recorded who opened them)"
+                )
+                raise SessionStateError(
+                    f"validation round {round_} was opened {who}, not by the [stop] rule: no "
+                    "answer opened it, so none is undone with it; withdraw it without undo"
+                )
+            last = st.told[-1].query.id if st.told else None
+            if current.opened_after is None or last != current.opened_after:
+                raise SessionStateError(
+                    f"the answer to query {current.opened_after} that made the [stop] rule open "
+                    f"validation round {round_} is no longer the last answer in force; nothing "
+                    "was written (withdraw the round without undo, then undo as usual)"
+                )
+            events.append(st.undo_event())
+        return events
+
+    def validation_rounds(self) -> list[ValidationRound]:
+        """Every blind validation round logged, open, answered or withdrawn, with who opened it
+        (``opened_by``: ``"rule"``, ``"operator"``, or None for rounds logged before it was
+        recorded)."""
+        return self._state.validation_rounds()
 
     def validations(self) -> list[ValidationResult]:
         """The answered validation rounds, unblinded."""

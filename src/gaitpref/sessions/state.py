@@ -50,8 +50,10 @@ from gaitpref.sessions.records import (
     ShownGait,
     SuggestionRecord,
     Trial,
+    ValidationRound,
     check_storable,
     check_unsafe_reason,
+    check_withdraw_reason,
 )
 from gaitpref.sessions.validation import (
     BlindGait,
@@ -95,6 +97,9 @@ class _Round:
     shown: dict[str, ShownGait]  # label -> the gait as the round showed it (rows move on)
     result: ValidationResult | None = None
     version: int = 1  # its validation_started payload's: 2 chose among proposable gaits
+    opened_by: log.Opener | None = None  # version 3: "rule" or "operator"; None before
+    opened_after: int | None = None  # the rule's: the query whose answer made it open
+    withdrawn: tuple[int, str] | None = None  # (seq, reason) of its validation_withdrawn
 
 
 @dataclass
@@ -171,7 +176,40 @@ class SessionState:
 
     @property
     def open_round(self) -> _Round | None:
-        return self.rounds[-1] if self.rounds and self.rounds[-1].result is None else None
+        last = self.rounds[-1] if self.rounds else None
+        return last if last is not None and last.result is None and last.withdrawn is None else None
+
+    @property
+    def rounds_in_force(self) -> list[_Round]:
+        """The rounds not withdrawn (open or answered): the ``[stop]`` rule opens one only
+        while there is none."""
+        return [r for r in self.rounds if r.withdrawn is None]
+
+    def validation_rounds(self) -> list[ValidationRound]:
+        """Every round logged (a round drawn again after a flag once, under its number)."""
+        return [
+            ValidationRound(
+                round=r.plan.round,
+                seq=r.seq,
+                opened_by=r.opened_by,
+                opened_after=r.opened_after,
+                answered=r.result is not None,
+                withdrawn=None if r.withdrawn is None else r.withdrawn[1],
+                withdrawn_seq=None if r.withdrawn is None else r.withdrawn[0],
+            )
+            for r in self.rounds
+        ]
+
+    def _not_open(self, round_: object) -> str:
+        """Why validation round ``round_`` is not open (for a refusal naming the problem)."""
+        found = [r for r in self.rounds if r.plan.round == round_]
+        current = self.open_round
+        now = "none is open" if current is None else f"round {current.plan.round} is open"
+        if not found:
+            return f"validation round {round_!r} is not open: it was never started ({now})"
+        if found[-1].result is not None:
+            return f"validation round {round_} is not open: it is already answered ({now})"
+        return f"validation round {round_} is not open: it was withdrawn ({now})"
 
     # -- derive: queries -----------------------------------------------------------------------
     def derive_query(self, recorded: RecordedGaits | None = None) -> list[NewEvent]:
@@ -381,9 +419,12 @@ class SessionState:
                 self._flag_exclusions(told)
 
     # -- derive: validation --------------------------------------------------------------------
-    def validation_event(self, version: int | None = None) -> NewEvent:
+    def validation_event(
+        self, version: int | None = None, opened_by: log.Opener | None = "operator"
+    ) -> NewEvent:
         """The next blind round, its gaits chosen as payload ``version`` (default: the newest)
-        chose them (1: among every gait or made gait; 2: among those a query could propose)."""
+        chose them (1: among every gait or made gait; 2 and later: among those a query could
+        propose); ``opened_by`` (version 3): ``"rule"`` or ``"operator"``."""
         version = log.ValidationStarted.version if version is None else version
         round_ = len(self.rounds) + 1
         mean = np.asarray(self.loop.posterior.mean)
@@ -400,7 +441,21 @@ class SessionState:
             )
             for g in plan.gaits
         ]
-        return log.new_event(log.ValidationStarted(round=round_, gaits=gaits))
+        older = {1: log.ValidationStartedV1, 2: log.ValidationStartedV2}.get(version)
+        if older is not None:
+            return log.new_event(older(round=round_, gaits=gaits))  # who opened it: not logged
+        return log.new_event(log.ValidationStarted(round=round_, gaits=gaits, opened_by=opened_by))
+
+    def withdraw_validation_event(self, round_: int, reason: str) -> NewEvent:
+        """Withdraw the open, unanswered round ``round_`` (``reason``: why, 1..2000 characters);
+        refused for a round that is answered, withdrawn, not started, or not the open one."""
+        check_withdraw_reason(reason)  # a ValueError naming the rule it breaks
+        current = self.open_round
+        if isinstance(round_, bool) or current is None or current.plan.round != round_:
+            raise SessionStateError(
+                f"{self._not_open(round_)}: only an open, unanswered round can be withdrawn"
+            )
+        return log.new_event(log.ValidationWithdrawn(round=round_, reason=reason))
 
     def validation_blocked(self) -> str | None:
         """Why no blind validation round can be drawn now (fewer than three gaits may be shown,
@@ -431,8 +486,7 @@ class SessionState:
     def validation_answer_event(self, round_: int, ranking: Sequence[str] | str) -> NewEvent:
         current = self.open_round
         if current is None or current.plan.round != round_:
-            open_ = "none is open" if current is None else f"round {current.plan.round} is open"
-            raise SessionStateError(f"validation round {round_!r} is not open ({open_})")
+            raise SessionStateError(f"{self._not_open(round_)}: it takes no ranking")
         try:
             result = unblind(current.plan, current.roles, current.values, ranking)
         except ValueError as exc:
@@ -554,8 +608,18 @@ class SessionState:
                     r.seq,
                     {g["label"]: self.shown_gait(g["label"], g["action"]) for g in gaits},
                     version=r.version,
+                    opened_by=p.get("opened_by"),
+                    opened_after=(
+                        self.told[-1].query.id
+                        if p.get("opened_by") == "rule" and self.told
+                        else None
+                    ),
                 )
             )
+        elif r.kind == log.VALIDATION_WITHDRAWN:
+            current = self.open_round
+            assert current is not None and current.plan.round == p["round"]
+            current.withdrawn = (r.seq, p["reason"])
         elif r.kind == log.VALIDATION_ANSWERED:
             current = self.open_round
             assert current is not None

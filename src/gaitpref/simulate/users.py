@@ -3,7 +3,8 @@
 - :class:`SimulatedUser` prefers the action with the higher objective (lower with ``minimize``),
   breaks exact ties at random and, with ``noise > 0``, answers like a probit subject:
   ``P(i preferred) = Phi((f_i - f_j) / (sqrt(2) noise))``.  It compares every executed action with
-  every other query member once (the paper's ``R``: ``n x (n + b)`` without repeated pairs).
+  every other query member once (the paper's ``R``: ``n x (n + b)`` without repeated pairs, a gait
+  not against itself), the pairs a session's operator is asked (:attr:`Query.compared`).
 - :class:`GradientCoactive` is the paper's simulated coactive feedback (Section "Optimizing
   Synthetic Two-Dimensional Functions"; ``docs/results/large-6d/README.md``, "Setting"):
   the gradient by ``numpy.gradient`` over the grid (second-order central differences inside,
@@ -96,18 +97,10 @@ class SimulatedUser:
 
 
 def query_pairs(query: Query) -> list[tuple[int, int]]:
-    """The pairs a simulated user compares: every executed action against every other member of
-    the query, each pair of actions once (the loop accepts each pair once)."""
-    out: list[tuple[int, int]] = []
-    seen: set[tuple[int, int]] = set()
-    for i in query.actions:
-        for j in query.members:
-            key = (min(i, j), max(i, j))
-            if key in seen or i == j:
-                continue
-            seen.add(key)
-            out.append((i, j))
-    return out
+    """The pairs a simulated user compares: those the query asks (:attr:`Query.compared`, the
+    terminal's and the console's rule), every executed action against every other member, each
+    pair of actions once (the loop accepts each pair once), a gait not against itself."""
+    return list(query.compared)
 
 
 @dataclass

@@ -1,0 +1,90 @@
+"""``gaitpref session validate ID --withdraw --reason TEXT [--undo]``: an open, unanswered blind
+validation round withdrawn from the command line (with the answer after which the ``[stop]``
+rule opened it, given ``--undo``), refused naming the problem otherwise."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from gaitpref import Session
+from gaitpref.config import load_config, parse_config
+from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+
+CONFIG = "exo-1d-step-length"
+runner = CliRunner()
+
+
+def _invoke(*args: str, answer: str | None = None) -> tuple[int, str]:
+    from gaitpref.cli import app
+
+    result = runner.invoke(app, list(args), input=answer)
+    return result.exit_code, " ".join(result.output.split())  # Rich wraps long lines
+
+
+@pytest.fixture
+def db(tmp_path: Path) -> str:
+    """Session 1, whose ``[stop]`` rule (max_trials = 4) opened round 1 after its last answer."""
+    url = f"sqlite:///{tmp_path / 'lab.db'}"
+    config = parse_config(
+        load_config(CONFIG).text + "\n[stop]\nmax_trials = 4\n", default_name=CONFIG
+    )
+    subject = SimulatedSubject(config.space, bump_utility(config.space), seed=1)
+    with Session.create(url, config, "S01") as s:
+        while s.validation_plan is None:
+            q = s.next_query()
+            s.answer(q.id, *subject.respond(q))
+    return url
+
+
+def test_withdraw_with_undo_from_the_cli(db: str) -> None:
+    with Session.open(db, 1) as s:
+        last = s.trials()[-1]
+        seq = s.last_seq
+    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "typo", "--db", db,
+                        answer="n\n")  # fmt: skip
+    assert code == 1 and "nothing done" in out
+    code, out = _invoke(
+        "session", "validate", "1", "--withdraw", "--reason", "mis-keyed", "--undo", "--db", db,
+        answer="y\n",
+    )  # fmt: skip
+    assert code == 0, out
+    assert f"and undo the answer to trial {last.number}, after which the [stop] rule" in out
+    assert "validation round 1 withdrawn" in out
+    assert f"undone: the answer to trial {last.number}" in out
+    with Session.open(db, 1) as s:
+        kinds = [(e.kind, e.payload) for e in s.events()[seq:]]
+        assert kinds[0] == ("validation_withdrawn", {"round": 1, "reason": "mis-keyed"})
+        assert kinds[1][0] == "undo"
+        assert s.validation_plan is None and s.pending is not None
+        assert s.pending.id == last.query  # its trial is asked again
+
+
+def test_withdraw_without_a_round_or_reason_is_refused(db: str) -> None:
+    code, out = _invoke("session", "validate", "1", "--withdraw", "--db", db, "-y")
+    assert code == 2 and "give --reason" in out
+    code, out = _invoke("session", "validate", "1", "--undo", "--db", db, "-y")
+    assert code == 2 and "go with --withdraw" in out
+    code, out = _invoke(
+        "session", "validate", "1", "--withdraw", "--reason", "x", "--ranking", "ABC", "--db", db
+    )
+    assert code == 2 and "takes no --ranking" in out
+    code, out = _invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, "-y")
+    assert code == 0, out
+    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
+    assert code == 2 and "no open blind validation round: nothing to withdraw" in out
+
+
+def test_undo_inside_a_round_says_how_to_withdraw_it(db: str) -> None:
+    code, out = _invoke("session", "undo", "1", "--db", db, "-y")
+    assert code == 0, out
+    assert "round 1 stays open" in out and "--withdraw --reason TEXT" in out
+    # the answer that opened it is gone: --undo is refused, naming why; without it, taken
+    code, out = _invoke(
+        "session", "validate", "1", "--withdraw", "--reason", "x", "--undo", "--db", db, "-y"
+    )
+    assert code == 2 and "no longer the last answer in force" in out
+    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
+    assert code == 0 and "validation round 1 withdrawn" in out
