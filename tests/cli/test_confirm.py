@@ -82,3 +82,37 @@ def test_quitting_the_ranking_prompt_says_the_round_stays_open(db: str) -> None:
     assert f"Record it with: gaitpref session validate 1 --db {db}" in " ".join(out.split())
     with Session.open(db, 1) as s:
         assert s.validations() == [] and s.validation_plan is not None
+
+
+def test_the_question_goes_to_stderr_and_a_closed_stdin_is_a_no(db: str) -> None:
+    """A script capturing stdout (``out=$(gaitpref session finish 1)``) hid the question, and
+    the command seemed to hang; with stdin at its end it printed click's bare ``Aborted!``."""
+    from gaitpref.cli import app
+
+    result = runner.invoke(app, ["session", "finish", "1", "--db", db])  # stdin: empty
+    assert result.exit_code == 1
+    assert result.stdout == ""
+    assert "Finish session 1? It will take no more answers. [y/N]: " in result.stderr
+    assert "no answer (stdin ended): nothing done; give --yes" in result.stderr
+    assert "Aborted" not in result.output
+    assert Session.open(db, 1).status != "finished"
+    result = runner.invoke(app, ["session", "undo", "1", "--db", db], input="maybe\nn\n")
+    assert result.exit_code == 1 and result.stdout == ""
+    assert "answer y or n" in result.stderr and result.stderr.count("[y/N]") == 2
+    assert result.stderr.endswith("nothing done\n")
+
+
+def test_a_script_without_stdin_is_refused_at_once_and_stdout_holds_only_the_result(
+    db: str,
+) -> None:
+    """Run as a script runs it (``subprocess``, stdin ``/dev/null``): no hang, status 1, nothing
+    done; with ``--yes`` status 0 and stdout holds the result line alone."""
+    from tests.cli.scriptkit import run_script
+
+    run = run_script("session", "finish", "1", "--db", db)
+    assert run.returncode == 1 and run.stdout == ""
+    assert "give --yes" in run.stderr
+    assert Session.open(db, 1).status != "finished"
+    run = run_script("session", "finish", "1", "--db", db, "--yes")
+    assert run.returncode == 0, run.stderr
+    assert run.stdout == "session 1 finished\n" and run.stderr == ""

@@ -28,7 +28,7 @@ def built(tmp_path_factory: pytest.TempPathFactory) -> Path:
         app, ["build", "--step-length", "0.10:0.14:3", "--speed", "0.2", "--out", str(out)]
     )
     assert result.exit_code == 0, result.output
-    assert "3 feasible" in result.output
+    assert "wrote" in result.stdout and "3 feasible" in result.stdout  # the result, not stderr
     return out
 
 

@@ -173,7 +173,9 @@ def build(
     with reported():
         lib.save(out)
     bad = lib.infeasible()
-    err_console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
+    # on stdout, as `gaits plot`'s and every other command's result (the bar and the
+    # infeasible gaits, the reason for status 1, on stderr)
+    console.print(f"wrote {out}: {len(lib)} gaits, {len(lib) - len(bad)} feasible")
     if bad:
         for i in bad:
             err_console.print(

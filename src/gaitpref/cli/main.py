@@ -12,14 +12,23 @@ import json
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+from typer.core import TyperGroup
 
 from gaitpref import __version__
 from gaitpref.cli.console import serve as serve_console
 from gaitpref.cli.gaits import app as gaits_app
-from gaitpref.cli.output import checked_config, console, err_console, fail, guard, read_array
+from gaitpref.cli.output import (
+    checked_config,
+    console,
+    err_console,
+    fail,
+    guard,
+    json_only,
+    read_array,
+)
 from gaitpref.cli.session import db_app, session_app
 from gaitpref.cli.simulate import bench_app
 from gaitpref.limits import MAX_SEED, MAX_TRIALS
@@ -32,7 +41,22 @@ if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
     from gaitpref.simulate.run import SimulationResult
 
+
+class RootGroup(TyperGroup):
+    """The root group: an interrupt (Ctrl-C) anywhere exits with status 130, as documented
+    (``docs/getting-started.md``, "In scripts: exit statuses and output"), whatever the typer
+    release: typer 0.29 does so itself, earlier releases that pyproject allows printed
+    ``Aborted!`` and exited with status 1, the status of a check that failed (``db check``)."""
+
+    def invoke(self, ctx: Any) -> Any:  # a click.Context (typer 0.29: its own copy of click)
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            raise typer.Exit(130) from None
+
+
 app = typer.Typer(
+    cls=RootGroup,
     name="gaitpref",
     help="Personalize exoskeleton gaits from user preferences (CoSpar).",
     no_args_is_help=True,
@@ -291,9 +315,10 @@ def simulate(
     else:  # a function of points, evaluated over the grid: its quantiles are the grid's
         import numpy as np
 
-        fn = load_point_objective(objective, cfg)
         shape = tuple(len(f) for f in cfg.space.features)
-        obj = guard(lambda: np.asarray(fn(cfg.space.points), dtype=np.float64).reshape(shape))
+        with json_only(as_json):  # the function's own prints kept off the JSON
+            fn = load_point_objective(objective, cfg)
+            obj = guard(lambda: np.asarray(fn(cfg.space.points), dtype=np.float64).reshape(shape))
     try:
         objective_on_grid(cfg.space, obj)
     except ValueError as exc:
@@ -353,18 +378,40 @@ def simulate(
 
 
 @app.command("configs")
-def list_configs() -> None:
+def list_configs(
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON array, a config per object: name, space, n, b, description.",
+        ),
+    ] = False,
+) -> None:
     """List the shipped experiment configs."""
     from rich.table import Table
 
     from gaitpref.config import load_config, shipped_configs
 
+    rows: list[dict[str, str | int]] = []
+    for name in shipped_configs():
+        cfg = load_config(name)
+        rows.append(
+            {
+                "name": name,
+                "space": cfg.space.words,
+                "n": cfg.n,
+                "b": cfg.buffer,
+                "description": cfg.description,
+            }
+        )
+    if as_json:  # for scripts: the table folds its descriptions at 80 columns off a terminal
+        typer.echo(json.dumps(rows))
+        return
     table = Table(title="shipped configs")
     for col in ("name", "space", "n", "b", "description"):
         table.add_column(col)
-    for name in shipped_configs():
-        cfg = load_config(name)
-        table.add_row(name, cfg.space.words, str(cfg.n), str(cfg.buffer), cfg.description)
+    for row in rows:
+        table.add_row(*(str(value) for value in row.values()))
     console.print(table)
 
 

@@ -18,8 +18,11 @@ any other :class:`~gaitpref.errors.GaitprefError`, ``error: ...``      2
 ==============================================  =====================  ======
 
 Status 2 means "the input was refused; nothing was written"; status 1 means a computation could
-not finish.  The message is always ``str(exc)``: the error classes name the table, key, session or
-event themselves, so the CLI never re-formats their arguments.
+not finish (or a check found a problem, or a question was answered no); 130, an interrupt.  The
+statuses, and what goes to stdout and to stderr, are documented for scripts in
+``docs/getting-started.md`` ("In scripts: exit statuses and output"), held to this table by
+``tests/cli/test_scripts.py``.  The message is always ``str(exc)``: the error classes name the
+table, key, session or event themselves, so the CLI never re-formats their arguments.
 """
 
 from __future__ import annotations
@@ -160,6 +163,21 @@ def read_array(path: Path, what: str) -> Any:
     if arr.dtype.kind not in "biuf":
         fail(f"{where} holds {arr.dtype} values; give an array of real numbers (numpy.save)")
     return np.array(arr)
+
+
+@contextmanager
+def json_only(as_json: bool) -> Iterator[None]:
+    """A block whose prints to stdout go to stderr when ``as_json`` (``--json``: stdout holds
+    the JSON printed after it, alone).  A user's objective (``PATH.py:NAME``) that printed, when
+    imported or called, broke the JSON a script read."""
+    if not as_json:
+        yield
+        return
+    import sys
+    from contextlib import redirect_stdout
+
+    with redirect_stdout(sys.stderr):
+        yield
 
 
 @contextmanager

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from gaitpref.cli.output import console, guard
+from gaitpref.cli.output import console, guard, json_only
 
 if TYPE_CHECKING:
     from gaitpref.config import ExperimentConfig
@@ -270,9 +270,13 @@ def run_command(cfg: ExperimentConfig, spec: str, trials: int, seed: int, coacti
     from gaitpref.cli.main import progress_bar
 
     guard(lambda: check_noise(noise, "--noise"))
-    objective = load_point_objective(spec, cfg)
+    with json_only(as_json):  # the objective's own prints kept off the JSON
+        objective = load_point_objective(spec, cfg)
     start = time.perf_counter()
-    with progress_bar(transient=True, shown=not as_json) as bar:  # trials: it said nothing
+    with (
+        json_only(as_json),
+        progress_bar(transient=True, shown=not as_json) as bar,  # trials: it said nothing
+    ):
         task = bar.add_task("trials", total=trials)
         result = guard(
             lambda: simulate_points(

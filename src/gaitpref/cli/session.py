@@ -24,6 +24,7 @@ from gaitpref.wording import plural
 if TYPE_CHECKING:
     from gaitpref.sessions import Session
     from gaitpref.sessions.records import SessionQuery, Trial
+    from gaitpref.storage import SessionRecord
 
 session_app = typer.Typer(
     name="session", help="Experiment sessions with real subjects.", no_args_is_help=True
@@ -88,11 +89,35 @@ def _opened(db: str | None, session_id: int) -> Iterator[Session]:
 
 
 def _confirm(question: str, yes: bool) -> None:
-    """Ask ``question`` (y/N) unless ``--yes`` was given; exit 1 with nothing done on no."""
+    """Ask ``question`` (y/N) unless ``--yes`` was given; exit 1 with nothing done on no.
+
+    The question and the answer's outcome go to stderr: on stdout a script capturing the
+    output (``out=$(gaitpref session finish 3)``) hid the question, and the command seemed to
+    hang.  A stdin that ends before an answer (``</dev/null``, a closed pipe) is a no, said so
+    with how to skip the question (it printed click's bare ``Aborted!``)."""
     if yes:
         return
-    if not typer.confirm(question, default=False):
-        console.print("nothing done")
+    import sys
+
+    while True:  # the question on stderr, as typed (typer.confirm put its last space on stdout)
+        typer.echo(f"{question} [y/N]: ", nl=False, err=True)
+        try:
+            line, typed = sys.stdin.readline(), sys.stdin.isatty()
+        except (AttributeError, OSError, ValueError):  # no stdin at all (closed: `<&-`)
+            line, typed = "", False
+        if not line or not typed:  # a typed answer ended the line; a piped one did not
+            typer.echo(err=True)
+        if not line:  # the end of stdin: no answer will come
+            err_console.print(
+                "no answer (stdin ended): nothing done; give --yes to skip the question"
+            )
+            raise typer.Exit(1)
+        answer = line.strip().lower()
+        if answer in ("y", "yes", "n", "no", ""):
+            break
+        typer.echo("answer y or n", err=True)
+    if answer not in ("y", "yes"):
+        err_console.print("nothing done")
         raise typer.Exit(1)
 
 
@@ -243,6 +268,13 @@ def new(
             "'session:7' or 'subject:07' where digits could be either).",
         ),
     ] = None,
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON object: id, subject, config, seed, db, prior_from, prior_rho.",
+        ),
+    ] = False,
     db: DbOption = None,
 ) -> None:
     """Start a session of SUBJECT with CONFIG; prints its id."""
@@ -278,6 +310,21 @@ def new(
         return Session.create(db, config, subject, seed=seed, library=library, prior_from=prior)
 
     session = guard(run)
+    if as_json:  # for scripts: the id without parsing a sentence
+        from gaitpref.sessions.warm import recorded_prior
+
+        info = {
+            "id": session.id,
+            "subject": session.subject,
+            "config": session.config.name,
+            "seed": session.seed,
+            "db": session.storage.url,  # its password (if any) as ***
+            "prior_from": [p.model_dump() for p in recorded_prior(session.record)],
+            "prior_rho": session.record.meta.get("prior_rho"),
+        }
+        session.close()
+        typer.echo(json.dumps(info))
+        return
     console.print(
         f"session {session.id}: subject {session.subject}, config {session.config.name}, "
         f"seed {session.seed}, in {session.storage.url}",
@@ -450,6 +497,14 @@ def _validate_command(session_id: int, db: str | None, gaits: Sequence[str]) -> 
 @session_app.command("list")
 def list_sessions(
     subject: Annotated[str | None, typer.Option(help="Only this subject's sessions.")] = None,
+    as_json: Annotated[
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON array, a session per object: id, subject, config, seed, "
+            "status, imported_from, events, created, updated (UTC, ISO 8601).",
+        ),
+    ] = False,
     db: DbOption = None,
 ) -> None:
     """List the sessions in the database."""
@@ -457,7 +512,7 @@ def list_sessions(
     # quickly, without SciPy's optimizers (tests/cli/test_startup.py).
     from rich.table import Table
 
-    from gaitpref.storage import SessionRecord, open_storage
+    from gaitpref.storage import open_storage
 
     def run() -> list[SessionRecord]:
         storage = open_storage(db, create=False)
@@ -467,6 +522,9 @@ def list_sessions(
             storage.close()
 
     rows = guard(run)
+    if as_json:  # for scripts: the table folds long names at 80 columns off a terminal
+        typer.echo(json.dumps([_listed(r) for r in rows]))
+        return
     table = Table(title="sessions")
     # times are stored in UTC: the headers say so (the console writes "... UTC" after each)
     # every cell folded onto more lines, never cut with an ellipsis: on 80 columns
@@ -487,6 +545,26 @@ def list_sessions(
             _utc(r.updated_at),
         )
     console.print(table)
+
+
+def _listed(record: SessionRecord) -> dict[str, object]:
+    """A row of ``session list --json``: ``imported_from`` is the id the session had in the
+    database it was exported from (None: not imported), ``events`` the sequence number of its
+    last event, the times in UTC (``2026-12-02T14:40:05.123456+00:00``)."""
+    from gaitpref.storage.base import as_utc
+
+    origin = record.meta.get("imported_from")
+    return {
+        "id": record.id,
+        "subject": record.subject,
+        "config": record.config_name,
+        "seed": record.seed,
+        "status": record.status,
+        "imported_from": origin.get("session_id") if isinstance(origin, dict) else None,
+        "events": record.last_seq,
+        "created": as_utc(record.created_at).isoformat(),
+        "updated": as_utc(record.updated_at).isoformat(),
+    }
 
 
 def _utc(when: datetime) -> str:

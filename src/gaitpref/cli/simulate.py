@@ -11,7 +11,10 @@
                               [--partial FILE.jsonl [--resume]]
 
 Thin commands over :mod:`gaitpref.simulate` (studies in ``paper2d``/``compass``, execution in
-``sweep``, files in ``tables``/``report``/``figures``).  A run that fails stops every command
+``sweep``, files in ``tables``/``report``/``figures``).  What a command found (a bench's
+summary, a study's ``N runs in T s; wrote ...``) goes to stdout, progress bars, notes and
+warnings to stderr (``_console``): the summaries were on stderr, and ``> results.txt`` kept
+nothing.  A run that fails stops every command
 with status 1 and an error naming the run and where the finished runs are (a study's in
 ``OUT/runs.partial.csv``, a bench's in its ``--partial`` file: :mod:`gaitpref.simulate.partial`).
 A study that stopped continues with the same command and ``--resume``: the runs in
@@ -31,7 +34,16 @@ from typing import TYPE_CHECKING, Annotated, TextIO, TypeVar
 
 import typer
 
-from gaitpref.cli.output import HANDLED, checked_config, fail, guard, read_array, report
+from gaitpref.cli.output import (
+    HANDLED,
+    checked_config,
+    console,
+    fail,
+    guard,
+    json_only,
+    read_array,
+    report,
+)
 from gaitpref.cli.output import err_console as _console
 from gaitpref.limits import (
     MAX_JOBS,
@@ -487,7 +499,7 @@ def paper_2d(
         plot_paper_2d(result.curves, published, out / "curves.png")
         summary = paper_2d_summary(result, published, MachineInfo.now(load_before), note_text)
         (out / "summary.md").write_text(summary, encoding="utf-8")
-    _console.print(
+    console.print(
         f"{plural(len(study), 'run')}{_kept(result)} in {result.seconds:.1f} s ({result.backend}, "
         f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, curves.png, "
         "summary.md"
@@ -587,7 +599,7 @@ def compass_gait(
             obj.label,
         )
     built = ", gait-library.json" if rebuilt else ""  # it was saved, and said nowhere
-    _console.print(
+    console.print(
         f"{plural(len(study), 'run')}{_kept(result)} in {result.seconds:.1f} s ({result.backend}, "
         f"{plural(result.jobs, 'job')}); wrote {out}/curves.csv, {table_path.name}, posterior.png"
         f"{built}"
@@ -669,7 +681,7 @@ def population(
     for part, (lo, hi) in [*parts, (f"1-{trials}", (0, trials))]:
         cold = np.mean([np.mean(s["cold"][lo:hi]) for s in subjects])
         warm = np.mean([np.mean(s["warm"][lo:hi]) for s in subjects])
-        _console.print(f"trials {part}: cold {cold:.3f}, warm {warm:.3f} ({warm - cold:+.3f})")
+        console.print(f"trials {part}: cold {cold:.3f}, warm {warm:.3f} ({warm - cold:+.3f})")
 
 
 @bench_app.command("continuous")
@@ -703,9 +715,16 @@ def continuous(
 
     cfg = guard(lambda: _bench_config(config))
     kept = _partial(partial, "continuous", resume)
-    # refused before the bar shows
-    checked = guard(lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise))
-    with progress_bar(shown=not as_json) as bar, _warnings_shown():  # it said nothing till the end
+    # refused before the bar shows; the objective's own prints kept off the JSON
+    with json_only(as_json):
+        checked = guard(
+            lambda: check_bench_points(cfg, objective, runs, trials=trials, noise=noise)
+        )
+    with (
+        json_only(as_json),
+        progress_bar(shown=not as_json) as bar,  # it said nothing till the end
+        _warnings_shown(),
+    ):
         task = bar.add_task(plural(runs, "run"), total=runs * trials)
         results = _stopping(
             lambda: bench_points(
@@ -733,8 +752,8 @@ def continuous(
         return
     for lo, hi in [(1, 10), (11, 50), (51, 100), (101, trials)]:
         if lo <= trials:
-            _console.print(f"trials {lo}-{min(hi, trials)}: {curves[:, lo - 1 : hi].mean():.4g}")
-    _console.print(
+            console.print(f"trials {lo}-{min(hi, trials)}: {curves[:, lo - 1 : hi].mean():.4g}")
+    console.print(
         f"final best point's objective: {out['best_objective_mean']:.4g} "
         f"+- {out['best_objective_se']:.2g} (SE, {plural(runs, 'run')}, {cfg.subspace} path)"
     )
