@@ -10,22 +10,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 from gaitpref import Session
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
+from tests.cli.invokekit import invoke
 from tests.sessions.test_unsafe import CONFIG as UNSAFE
 from tests.sessions.test_unsafe import _answer
-
-runner = CliRunner()
-
-
-def _invoke(*args: str, answer: str | None = None) -> tuple[int, str]:
-    from gaitpref.cli import app
-
-    result = runner.invoke(app, list(args), input=answer)
-    return result.exit_code, " ".join(result.output.split())  # Rich wraps long lines
 
 
 @pytest.fixture
@@ -50,7 +41,7 @@ def _command(db: str, gaits: list[str]) -> str:
 def _show(db: str) -> str:
     """Show the round (opened now) and quit at the ranking prompt, as an operator who goes to
     walk the gaits first."""
-    code, out = _invoke("session", "validate", "1", "--db", db, answer="q\n")
+    code, out = invoke("session", "validate", "1", "--db", db, answer="q\n")
     assert code == 0 and "Blind validation, round 1" in out
     return out
 
@@ -77,7 +68,7 @@ def test_the_round_shown_prints_the_command_that_records_its_ranking(db: str) ->
 def test_the_ranking_of_the_gaits_shown_is_recorded(db: str) -> None:
     _show(db)
     gaits = ",".join(_shown(db))
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "BCA", "--gaits", gaits, "--db", db, "-y"
     )
     assert code == 0 and "Unblinded" in out, out
@@ -94,7 +85,7 @@ def test_a_ranking_of_a_round_drawn_again_since_it_was_shown_is_refused(db: str)
     assert now != walked
     with Session.open(db, 1) as s:
         before = len(s.events())
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "BCA", "--gaits", ",".join(walked), "--db", db,
         "-y",
     )  # fmt: skip
@@ -107,7 +98,7 @@ def test_a_ranking_of_a_round_drawn_again_since_it_was_shown_is_refused(db: str)
     with Session.open(db, 1) as s:
         assert len(s.events()) == before and s.validations() == []
     # the command shown records the ranking of the gaits as they are now
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "CAB", "--gaits", ",".join(now), "--db", db, "-y"
     )
     assert code == 0 and "Unblinded" in out, out
@@ -118,7 +109,7 @@ def test_without_gaits_the_redrawn_round_is_ranked_unnoticed(db: str) -> None:
     the command runs, which is why --gaits is there."""
     _show(db)
     _flag_a_shown_gait(db)
-    code, out = _invoke("session", "validate", "1", "--ranking", "BCA", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--ranking", "BCA", "--db", db, "-y")
     assert code == 0 and "Unblinded" in out
     with Session.open(db, 1) as s:
         assert len(s.validations()) == 1
@@ -130,7 +121,7 @@ def test_gaits_with_no_round_open_opens_none_and_writes_nothing(db: str) -> None
     with Session.open(db, 1) as other:  # another writer answered the round meanwhile
         other.answer_validation(1, "CBA")
         before = len(other.events())
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "BCA", "--gaits", ",".join(walked), "--db", db,
         "-y",
     )  # fmt: skip
@@ -141,9 +132,9 @@ def test_gaits_with_no_round_open_opens_none_and_writes_nothing(db: str) -> None
 
 
 def test_gaits_need_a_ranking_and_names(db: str) -> None:
-    code, out = _invoke("session", "validate", "1", "--gaits", "G1,G2,G3", "--db", db)
+    code, out = invoke("session", "validate", "1", "--gaits", "G1,G2,G3", "--db", db)
     assert code == 2 and "--gaits checks the ranking given with --ranking" in out
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "ABC", "--gaits", "G1,,G3", "--db", db
     )
     assert code == 2 and "separated by commas" in out
@@ -154,7 +145,7 @@ def test_gaits_need_a_ranking_and_names(db: str) -> None:
 def test_the_confirmation_names_the_gaits(db: str) -> None:
     _show(db)
     gaits = _shown(db)
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--ranking", "ABC", "--gaits", ",".join(gaits), "--db", db,
         answer="n\n",
     )  # fmt: skip

@@ -7,21 +7,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 from gaitpref import Session
 from gaitpref.config import load_config, parse_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
+from tests.cli.invokekit import invoke
 
 CONFIG = "exo-1d-step-length"
-runner = CliRunner()
-
-
-def _invoke(*args: str, answer: str | None = None) -> tuple[int, str]:
-    from gaitpref.cli import app
-
-    result = runner.invoke(app, list(args), input=answer)
-    return result.exit_code, " ".join(result.output.split())  # Rich wraps long lines
 
 
 @pytest.fixture
@@ -43,10 +35,10 @@ def test_withdraw_with_undo_from_the_cli(db: str) -> None:
     with Session.open(db, 1) as s:
         last = s.trials()[-1]
         seq = s.last_seq
-    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "typo", "--db", db,
+    code, out = invoke("session", "validate", "1", "--withdraw", "--reason", "typo", "--db", db,
                         answer="n\n")  # fmt: skip
     assert code == 1 and "nothing done" in out
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--withdraw", "--reason", "mis-keyed", "--undo", "--db", db,
         answer="y\n",
     )  # fmt: skip
@@ -63,28 +55,28 @@ def test_withdraw_with_undo_from_the_cli(db: str) -> None:
 
 
 def test_withdraw_without_a_round_or_reason_is_refused(db: str) -> None:
-    code, out = _invoke("session", "validate", "1", "--withdraw", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--withdraw", "--db", db, "-y")
     assert code == 2 and "give --reason" in out
-    code, out = _invoke("session", "validate", "1", "--undo", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--undo", "--db", db, "-y")
     assert code == 2 and "go with --withdraw" in out
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--withdraw", "--reason", "x", "--ranking", "ABC", "--db", db
     )
     assert code == 2 and "takes no --ranking" in out
-    code, out = _invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, "-y")
     assert code == 0, out
-    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
     assert code == 2 and "no open blind validation round: nothing to withdraw" in out
 
 
 def test_undo_inside_a_round_says_how_to_withdraw_it(db: str) -> None:
-    code, out = _invoke("session", "undo", "1", "--db", db, "-y")
+    code, out = invoke("session", "undo", "1", "--db", db, "-y")
     assert code == 0, out
     assert "round 1 stays open" in out and "--withdraw --reason TEXT" in out
     # the answer that opened it is gone: --undo is refused, naming why; without it, taken
-    code, out = _invoke(
+    code, out = invoke(
         "session", "validate", "1", "--withdraw", "--reason", "x", "--undo", "--db", db, "-y"
     )
     assert code == 2 and "no longer the last answer in force" in out
-    code, out = _invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
+    code, out = invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
     assert code == 0 and "validation round 1 withdrawn" in out
