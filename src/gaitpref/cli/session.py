@@ -459,13 +459,8 @@ def _withdraw_round(session_id: int, reason: str, undo: bool, db: str | None, ye
         pending = guard(lambda: session.withdraw_validation(number, reason, undo=undo))
         console.print(f"validation round {number} withdrawn; its log stays")
         if undo:
-            line = f"undone: the answer to trial {', '.join(map(str, trials))}"
-            if pending is not None and pending.id != opened.opened_after:
-                line += (
-                    "; its query proposed a gait flagged unsafe since, or in the region of "
-                    "avoidance now, and was withdrawn: a new query is proposed in its place"
-                )
-            console.print(line)
+            console.print(f"undone: the answer to trial {', '.join(map(str, trials))}")
+            _say_undone_withdrawn(pending, opened.opened_after, session, db)
 
 
 def _gait_names(gaits: str, ranking: str | None) -> list[str]:
@@ -728,11 +723,33 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
                 f"record its ranking, or withdraw it with gaitpref session validate {session_id} "
                 "--withdraw --reason TEXT"
             )
-        if pending is None or pending.id != last:
-            console.print(
-                "its query proposed a gait flagged unsafe since, or in the region of avoidance "
-                "now, and was withdrawn: a new query is proposed in its place"
-            )
+        _say_undone_withdrawn(pending, last, session, db)
+
+
+def _say_undone_withdrawn(
+    pending: SessionQuery | None, undone: int | None, session: Session, db: str | None
+) -> None:
+    """After an undo of query ``undone``'s answer, whose query is pending again unless it was
+    withdrawn (``pending``: what the undo returned): say so, and what is pending in its place;
+    none is proposed while the session is paused or a blind validation round is open."""
+    if pending is not None and pending.id == undone:
+        return
+    line = (
+        "its query proposed a gait flagged unsafe since, or in the region of avoidance now, "
+        "and was withdrawn: "
+    )
+    if pending is not None:
+        console.print(f"{line}a new query is proposed in its place (query {pending.id})")
+        return
+    until = []
+    if session.validation_plan is not None:
+        until.append(
+            f"blind validation round {session.validation_plan.round} is ranked or withdrawn"
+        )
+    if session.status == "paused":
+        until.append(f"the session is resumed ({_resume_hint(session.id, db)})")
+    when = f": the next is proposed once {' and '.join(until)}" if until else ""
+    console.print(f"{line}no query is proposed in its place yet{when}", markup=False)
 
 
 @session_app.command("exclude")
