@@ -605,6 +605,8 @@ def show(
         ]
         excluded = [t.number for t in trials if t.excluded]
         compared = sum(not c.undone for c in session.comparisons())
+        rounds = session.validation_rounds()
+        opened_by = {r.round: r.opened_by for r in rounds}
         info = {
             "id": session.id,
             "subject": session.subject,
@@ -622,8 +624,19 @@ def show(
                     "ranking": "".join(v.ranking),
                     "agrees": v.agrees,
                     "kendall_tau": v.kendall_tau,
+                    "opened_by": opened_by.get(v.round),
                 }
                 for v in session.validations()
+            ],
+            # every round logged, the open and the withdrawn ones too, as validation_rounds()
+            "validation_rounds": [
+                {
+                    "round": r.round,
+                    "opened_by": r.opened_by,
+                    "status": "answered" if r.answered else "open" if r.open else "withdrawn",
+                    "withdrawn_reason": r.withdrawn,
+                }
+                for r in rounds
             ],
             "figure": None if path is None else str(path),
             "prior_from": [p.model_dump() for p in recorded_prior(session.record)],
