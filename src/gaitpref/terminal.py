@@ -672,12 +672,16 @@ class Terminal:
             # how sure, once it learnt (as the console and session show: before that the
             # recommendation is the first gait for no reason), with or without a [stop] rule
             if preference_learned(s.posterior().mean):
-                with contextlib.suppress(NoSafeGaitError):  # no gait left to recommend
+                try:
                     sure = s.confidence()
+                except NoSafeGaitError as exc:  # no gait to recommend: say why, as show does
+                    why = s.no_recommendation() or str(exc)
+                    line = f"no gait may be recommended now ({why}), so no confidence is stated"
+                else:
                     line = sure.sentence(gait_name(s, sure.recommended))
                     if s.gait_made(sure.recommended) is False:  # a point no query proposed
                         line += f" ({NOT_MADE})"
-                    self.console.print(f"  {line}", markup=False)
+                self.console.print(f"  {clip(line, MAX_MESSAGE)}", markup=False)
             self._say_stop_blocked()
         if stopped is not None:
             self.console.print(

@@ -1073,3 +1073,24 @@ def test_u_inside_the_rules_round_whose_answer_was_undone_withdraws_it_alone_say
     assert "the answer that opened it cannot be undone with it: the answer to query" in text
     assert "Withdraw validation round 1 unanswered?" in text and "Round 1 withdrawn." in text
     assert [e.kind for e in session.events()][-1] == "validation_withdrawn"
+
+
+def test_after_an_answer_that_leaves_no_gait_to_recommend_the_terminal_says_why() -> None:
+    """Every gait rated "very bad" is avoided (``[safety] avoid``): after trial 2's answer the
+    region of avoidance covers the grid, so no gait may be recommended; the runner said nothing
+    there before (no confidence line, no reason), then that no gait may be proposed."""
+    from gaitpref.config import parse_config
+
+    config = RATED.replace("[safety]\n", '[safety]\navoid = ["very bad"]\n')
+    session = Session.create(MemoryStorage(), parse_config(config), "S01", seed=2)
+    # trial 1: rated very bad, no suggestion; trial 2: no preference, very bad, no suggestion
+    terminal, console = _terminal(session, "1", "0", "y", "0", "1", "0", "y")
+    terminal.run()
+    text = console.export_text()
+    why = "every gait is in the region of avoidance or near a gait flagged unsafe"
+    assert session.no_recommendation() == why and len(session.trials()) == 2
+    after = text.split("saved: trial 2", 1)[1]
+    assert f"no gait may be recommended now ({why}), so no confidence is stated" in after
+    assert "% that G" not in after
+    # the answer before it still states the confidence in its recommendation
+    assert re.search(r"saved: trial 1\n  \d+% that G\d+ is within 5% of the best", text)

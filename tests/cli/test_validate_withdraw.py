@@ -4,6 +4,7 @@ rule opened it, given ``--undo``), refused naming the problem otherwise."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -80,3 +81,26 @@ def test_undo_inside_a_round_says_how_to_withdraw_it(db: str) -> None:
     assert code == 2 and "no longer the last answer in force" in out
     code, out = invoke("session", "validate", "1", "--withdraw", "--reason", "x", "--db", db, "-y")
     assert code == 0 and "validation round 1 withdrawn" in out
+
+
+def test_show_json_lists_who_opened_each_round_and_the_withdrawn_ones(db: str) -> None:
+    """``validations`` (answered rounds) carry ``opened_by``; ``validation_rounds`` lists every
+    round logged, the withdrawn one marked with its reason, the open one as open."""
+    code, out = invoke("session", "validate", "1", "--withdraw", "--reason", "mis-keyed",
+                       "--db", db, "-y")  # fmt: skip
+    assert code == 0, out
+    with Session.open(db, 1) as s:
+        s.start_validation()  # round 2, the operator's
+    code, out = invoke("session", "validate", "1", "--ranking", "ABC", "--db", db, "-y")
+    assert code == 0, out
+    with Session.open(db, 1) as s:
+        s.start_validation()  # round 3, open
+    code, out = invoke("session", "show", "1", "--json", "--no-figure", "--db", db)
+    assert code == 0, out
+    info = json.loads(out)
+    assert [(v["round"], v["opened_by"]) for v in info["validations"]] == [(2, "operator")]
+    assert info["validation_rounds"] == [
+        {"round": 1, "opened_by": "rule", "status": "withdrawn", "withdrawn_reason": "mis-keyed"},
+        {"round": 2, "opened_by": "operator", "status": "answered", "withdrawn_reason": None},
+        {"round": 3, "opened_by": "operator", "status": "open", "withdrawn_reason": None},
+    ]

@@ -129,3 +129,45 @@ def test_the_validation_page_withdraws_the_round_in_a_browser(
         assert s.validation_rounds()[0].withdrawn == "abc: a mis-keyed answer cab"
         assert s.pending is not None and s.pending.id == last
     assert errors == []
+
+
+@pytest.mark.browser
+def test_enter_on_the_withdraw_forms_controls_never_records_a_ranking(
+    chromium: Any, live: str, tmp_path: Path
+) -> None:
+    """The ranking is picked (the ranking form would submit on Enter), then Enter is pressed on
+    the withdraw form's "also undo" checkbox: the page's Enter shortcut treated the checkbox as
+    not typing and opened "Record this ranking?", a second Enter recording it.  Enter there is
+    the withdraw form's own now: nothing is ranked; Enter on its button withdraws, after the
+    confirm page."""
+    url = f"sqlite:///{tmp_path / 'live.db'}"
+    sid, last, _ = _ruled(url)
+    page = chromium.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(f"{live}/sessions/{sid}/validation")
+    for key in "ABC":
+        page.keyboard.press(key)
+    assert [page.input_value(f"#rank{k}") for k in (1, 2, 3)] == ["A", "B", "C"]
+    page.fill("#withdraw-round-form input[name=reason]", "mis-keyed")
+    page.focus("#withdraw-undo")
+    page.keyboard.press("Enter")
+    page.keyboard.press("Enter")
+    page.wait_for_timeout(500)  # what the keys set off (a dialog, a post) has happened by now
+    assert not page.locator("#confirm-dialog[open]").count()
+    with Session.open(url, sid) as s:
+        assert s.validations() == [] and s.validation_plan is not None  # nothing ranked
+    page.goto(f"{live}/sessions/{sid}/validation")
+    page.fill("#withdraw-round-form input[name=reason]", "mis-keyed")
+    page.check("#withdraw-undo")
+    page.focus("#withdraw-round")
+    page.keyboard.press("Enter")  # the button's own form: withdraw, after its confirm page
+    page.wait_for_selector("text=Withdraw this validation round?")
+    with Session.open(url, sid) as s:
+        assert s.validations() == [] and s.validation_plan is not None
+    page.click("text=Confirm")
+    page.wait_for_url(f"{live}/sessions/{sid}")
+    with Session.open(url, sid) as s:
+        assert s.validations() == [] and s.validation_rounds()[0].withdrawn == "mis-keyed"
+        assert s.pending is not None and s.pending.id == last
+    assert errors == []

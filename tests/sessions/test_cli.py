@@ -56,6 +56,7 @@ def test_new_list_show_note_finish(tmp_path: Path, drive: Drive) -> None:
         "unsafe",
         "posterior",
         "validations",
+        "validation_rounds",
         "figure",
         "prior_from",
         "prior_rho",

@@ -459,13 +459,8 @@ def _withdraw_round(session_id: int, reason: str, undo: bool, db: str | None, ye
         pending = guard(lambda: session.withdraw_validation(number, reason, undo=undo))
         console.print(f"validation round {number} withdrawn; its log stays")
         if undo:
-            line = f"undone: the answer to trial {', '.join(map(str, trials))}"
-            if pending is not None and pending.id != opened.opened_after:
-                line += (
-                    "; its query proposed a gait flagged unsafe since, or in the region of "
-                    "avoidance now, and was withdrawn: a new query is proposed in its place"
-                )
-            console.print(line)
+            console.print(f"undone: the answer to trial {', '.join(map(str, trials))}")
+            _say_undone_withdrawn(pending, opened.opened_after, session, db)
 
 
 def _gait_names(gaits: str, ranking: str | None) -> list[str]:
@@ -610,6 +605,8 @@ def show(
         ]
         excluded = [t.number for t in trials if t.excluded]
         compared = sum(not c.undone for c in session.comparisons())
+        rounds = session.validation_rounds()
+        opened_by = {r.round: r.opened_by for r in rounds}
         info = {
             "id": session.id,
             "subject": session.subject,
@@ -627,8 +624,19 @@ def show(
                     "ranking": "".join(v.ranking),
                     "agrees": v.agrees,
                     "kendall_tau": v.kendall_tau,
+                    "opened_by": opened_by.get(v.round),
                 }
                 for v in session.validations()
+            ],
+            # every round logged, the open and the withdrawn ones too, as validation_rounds()
+            "validation_rounds": [
+                {
+                    "round": r.round,
+                    "opened_by": r.opened_by,
+                    "status": "answered" if r.answered else "open" if r.open else "withdrawn",
+                    "withdrawn_reason": r.withdrawn,
+                }
+                for r in rounds
             ],
             "figure": None if path is None else str(path),
             "prior_from": [p.model_dump() for p in recorded_prior(session.record)],
@@ -728,11 +736,33 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
                 f"record its ranking, or withdraw it with gaitpref session validate {session_id} "
                 "--withdraw --reason TEXT"
             )
-        if pending is None or pending.id != last:
-            console.print(
-                "its query proposed a gait flagged unsafe since, or in the region of avoidance "
-                "now, and was withdrawn: a new query is proposed in its place"
-            )
+        _say_undone_withdrawn(pending, last, session, db)
+
+
+def _say_undone_withdrawn(
+    pending: SessionQuery | None, undone: int | None, session: Session, db: str | None
+) -> None:
+    """After an undo of query ``undone``'s answer, whose query is pending again unless it was
+    withdrawn (``pending``: what the undo returned): say so, and what is pending in its place;
+    none is proposed while the session is paused or a blind validation round is open."""
+    if pending is not None and pending.id == undone:
+        return
+    line = (
+        "its query proposed a gait flagged unsafe since, or in the region of avoidance now, "
+        "and was withdrawn: "
+    )
+    if pending is not None:
+        console.print(f"{line}a new query is proposed in its place (query {pending.id})")
+        return
+    until = []
+    if session.validation_plan is not None:
+        until.append(
+            f"blind validation round {session.validation_plan.round} is ranked or withdrawn"
+        )
+    if session.status == "paused":
+        until.append(f"the session is resumed ({_resume_hint(session.id, db)})")
+    when = f": the next is proposed once {' and '.join(until)}" if until else ""
+    console.print(f"{line}no query is proposed in its place yet{when}", markup=False)
 
 
 @session_app.command("exclude")

@@ -12,6 +12,13 @@
     return tag === "INPUT" && !["radio", "checkbox", "button", "submit", "hidden"].includes(target.type);
   }
 
+  // a control of a form other than ``form`` (the validation page's withdraw form: its "also
+  // undo" checkbox, its button): Enter there is that form's, never ``form``'s shortcut
+  function ofAnotherForm(target, form) {
+    const own = target && target.closest ? target.closest("form") : null;
+    return own !== null && own !== form;
+  }
+
   function lock(form) {
     for (const b of document.querySelectorAll("button")) b.disabled = true;
     form.setAttribute("aria-busy", "true");
@@ -233,7 +240,12 @@
     if (ranking) {
       if (["a", "b", "c"].includes(key)) { pick(key.toUpperCase()); showPicks(); event.preventDefault(); return; }
       if (key === "Backspace") { unpick(); showPicks(); event.preventDefault(); return; }
-      if (key === "Enter") { event.preventDefault(); ranking.requestSubmit(); return; }
+      if (key === "Enter") {
+        if (ofAnotherForm(event.target, ranking)) return; // the browser's: a button is pressed
+        event.preventDefault();
+        ranking.requestSubmit();
+        return;
+      }
     }
   });
   mark();
