@@ -258,17 +258,16 @@ def test_undo_names_the_answer_it_undid_when_another_writer_answered_meanwhile(
 ) -> None:
     """Before: the trials were read when the command opened the session, so an answer recorded
     by another writer during the confirmation was undone and an earlier trial named."""
-    import typer
+    from gaitpref.cli import session as session_cli
 
     db = str(tmp_path / "lab.db")
     drive(Session.create(db, CONFIG, "S01", seed=4), 5)
     other = Session.open(db, 1)
 
-    def answered_meanwhile(*args: object, **kwargs: object) -> bool:
-        drive(other, 1)  # trial 6, while the operator reads the question
-        return True
+    def answered_meanwhile(question: str, yes: bool) -> None:
+        drive(other, 1)  # trial 6, while the operator reads the question (then: yes)
 
-    monkeypatch.setattr(typer, "confirm", answered_meanwhile)
+    monkeypatch.setattr(session_cli, "_confirm", answered_meanwhile)
     assert "undone: the answer to trial 6" in _ok("session", "undo", "1", "--db", db)
     assert [t.number for t in Session.open(db, 1).trials()] == [1, 2, 3, 4, 5]
 
