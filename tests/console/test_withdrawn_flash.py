@@ -84,3 +84,24 @@ def test_an_unsafe_flag_that_withdrew_the_pending_query_says_so(
     assert WITHDRAWN in page
     page = client.get(f"/sessions/{sid}?excluded=1&replaced=1").text  # not excluded: nothing
     assert "excluded: its answers" not in page
+
+
+def test_an_undo_whose_query_was_withdrawn_says_when_a_new_one_comes() -> None:
+    """Paused, or with a blind validation round open, no query is proposed in the withdrawn
+    one's place until then: the page said "a new query is proposed in its place" regardless."""
+    from types import SimpleNamespace
+
+    from gaitpref.console.pages import _flash
+
+    rows = [SimpleNamespace(trial=t, excluded=False) for t in (1, 2)]
+
+    def said(reason: str) -> str:
+        context = {"chronology": rows, "unsafe": set(), "reason": reason}
+        return _flash(context, None, "3", 1, None, None)
+
+    assert said("").endswith("so a new query is proposed in its place.")
+    assert said("paused").endswith("in its place once the session is resumed.")
+    validation = said("validation")
+    assert validation.endswith("in its place once blind validation is ranked or withdrawn.")
+    assert "so a new query is proposed" not in said("paused") + validation
+    assert said("no-safe").endswith("no new query could be proposed in its place.")

@@ -299,6 +299,17 @@ def _flash(
                 "flagged unsafe since, or in the region of avoidance now, and was withdrawn, but "
                 "no new query could be proposed in its place."
             )
+        if replaced and context["reason"] in ("paused", "validation"):  # no query asked yet
+            when = (
+                "the session is resumed"
+                if context["reason"] == "paused"
+                else "blind validation is ranked or withdrawn"
+            )
+            return (
+                f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
+                "flagged unsafe since, or in the region of avoidance now, and was withdrawn: a "
+                f"new query is proposed in its place once {when}."
+            )
         if replaced:
             return (
                 f"Undone: the answer to trial {names} was taken back; its query proposed a gait "
