@@ -132,6 +132,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "categories": categories,
         "unsafe": unsafe,
         "undoable": undoable,
+        "undo_key": views.undo_key(space),
         # the undo takes back the last answer's whole query (n > 1: several trials)
         "undo_say": "Take back the answer to "
         + (

@@ -199,10 +199,17 @@
   }
 
   // -- keyboard ------------------------------------------------------------------------------
+  // a control outside the answer and ranking forms that Enter activates itself (Tab, then Enter
+  // on "Flag trial 3 unsafe", "Pause", a link); inside those forms Enter reviews the form
+  const activates = (target) => !!(target && target.closest
+    && target.closest("button, a[href], summary") && !target.closest("#answer-form, #ranking-form"));
+
   document.addEventListener("keydown", (event) => {
     if (event.ctrlKey || event.metaKey || event.altKey) return;
     if (dialog && dialog.open) {
       const onBack = document.activeElement && document.activeElement.hasAttribute("data-confirm-no");
+      // a held Enter repeats: the repeats never confirm (nor click the focused Confirm)
+      if (event.key === "Enter" && event.repeat) { event.preventDefault(); return; }
       if (event.key === "Enter" && !onBack) {
         event.preventDefault();
         if (pendingForm) confirmAndSend(pendingForm);
@@ -214,6 +221,12 @@
       return;
     }
     const key = event.key.length === 1 ? event.key.toLowerCase() : event.key;
+    // a held key acts once: its repeats choose, review, undo or rank nothing more
+    if (event.repeat && (key.length === 1 || key === "Enter" || key === "Backspace")) {
+      event.preventDefault();
+      return;
+    }
+    if (key === "Enter" && activates(event.target)) return;
     if (answer) {
       if (key === "Enter") { event.preventDefault(); answer.requestSubmit(); return; }
       if (key === "m") { event.preventDefault(); document.getElementById("note").focus(); return; }

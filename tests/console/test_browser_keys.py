@@ -1,0 +1,151 @@
+"""The trial page from the keyboard alone, as an operator at the bench uses it (one hand on the
+exoskeleton, the other on the keys), in a real headless Chromium: a held key stores nothing
+twice and never confirms for the operator, Enter on a focused control does what that control
+does (flag unsafe by Tab and Enter), typed reasons fire no shortcut, a rating is skipped with
+``0``, and the page works without JavaScript."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import httpx
+import pytest
+
+from tests.console.test_ratings_safety import rated_config
+
+pytestmark = pytest.mark.browser
+
+
+def trials(live: str, sid: int) -> list[dict[str, Any]]:
+    return list(httpx.get(f"{live}/api/sessions/{sid}/trials").json())
+
+
+def open_page(chromium: Any, url: str, **options: Any) -> tuple[Any, Any, list[str]]:
+    context = chromium.new_context(viewport={"width": 1280, "height": 900}, **options)
+    page = context.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(url)
+    return context, page, errors
+
+
+def test_a_held_enter_reviews_but_never_confirms(chromium: Any, live: str) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S01"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    # Enter held down: the first press opens the review, the repeats confirm nothing
+    page.keyboard.down("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    for _ in range(5):
+        page.keyboard.down("Enter")  # auto-repeat (KeyboardEvent.repeat)
+    page.keyboard.up("Enter")
+    page.wait_for_timeout(300)
+    assert page.is_visible("#confirm-dialog")
+    assert trials(live, sid) == []
+    # a fresh press confirms: one answer
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    # a held digit is one choice; a held U opens the undo's review and undoes nothing
+    page.keyboard.down("u")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.down("u")
+    page.keyboard.down("Enter")  # Enter pressed while U is held: that one is a real press
+    page.keyboard.down("Enter")
+    page.keyboard.up("Enter")
+    page.keyboard.up("u")
+    page.wait_for_selector("#flash:has-text('Undone')")
+    assert trials(live, sid) == []
+    assert errors == []
+    context.close()
+
+
+def test_flag_unsafe_by_tab_and_enter_while_typing_fires_no_shortcut(
+    chromium: Any, live: str
+) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S02"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    for key in ("Enter", "Enter"):
+        page.keyboard.press(key)
+        page.wait_for_timeout(50)
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    # Enter on the focused "Flag trial 1 unsafe" opens it (and does not review the answer)
+    page.focus("#unsafe-last summary")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#unsafe-last[open]")
+    assert not page.is_visible("#confirm-dialog")
+    page.keyboard.press("Tab")
+    assert page.evaluate("document.activeElement.name") == "reason"
+    # the reason's letters and digits are text, not shortcuts (q, w, e, 1, 2, u, m)
+    page.keyboard.type("knee went 12 deg past; queue a rest, mum")
+    assert page.input_value("#unsafe-last input[name=reason]") == (
+        "knee went 12 deg past; queue a rest, mum"
+    )
+    assert page.locator("#answer-form input[type=radio]:checked:not([value=''])").count() == 0
+    assert not page.is_visible("#confirm-dialog")
+    page.keyboard.press("Enter")  # submits the flag's form: its review
+    page.wait_for_selector("#confirm-dialog[open]")
+    assert "Reason: knee went 12 deg past" in page.inner_text("#confirm-dialog ul")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Trial 1 flagged unsafe')")
+    info = httpx.get(f"{live}/api/sessions/{sid}").json()
+    assert info["unsafe"] == {"1": "knee went 12 deg past; queue a rest, mum"}
+    # the note: typed text is no shortcut either, Esc leaves it and the keys work again
+    page.keyboard.press("m")
+    page.keyboard.type("1 2 0 u")
+    page.keyboard.press("Escape")
+    assert page.input_value("#note") == "1 2 0 u"
+    assert page.locator("#answer-form input[type=radio]:checked:not([value=''])").count() == 0
+    assert errors == []
+    context.close()
+
+
+def test_a_rating_is_skipped_with_0(chromium: Any, live: str) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S03"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    skip = "fieldset[data-kind=rating] label.choice:has-text('no rating')"
+    assert page.inner_text(f"{skip} kbd") == "0"
+    page.keyboard.press("3")
+    assert page.is_checked("fieldset[data-kind=rating] input[value='3']")
+    page.keyboard.press("0")  # changed their mind: the trial goes unrated
+    assert page.is_checked(f"{skip} input")
+    # the review's Confirm takes the focus; Esc goes back to where it was
+    page.click("fieldset[data-kind=rating] label.choice:has(input[value='2'])")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    assert page.evaluate("document.activeElement.hasAttribute('data-confirm-yes')")
+    page.keyboard.press("Escape")
+    assert page.evaluate("document.activeElement.value") == "2"
+    page.keyboard.press("0")
+    assert page.is_checked(f"{skip} input")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    assert [t["rating"] for t in trials(live, sid)] == [None]
+    assert errors == []
+    context.close()
+
+
+def test_the_trial_page_without_javascript(chromium: Any, live: str) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S05"})
+    sid = sid.json()["id"]
+    context, page, _ = open_page(chromium, f"{live}/sessions/{sid}", java_script_enabled=False)
+    # the shortcuts are listed, the buttons show their keys, and the page still answers
+    assert "Keyboard shortcuts" in page.inner_text("details.shortcuts summary")
+    page.click("fieldset[data-kind=rating] label.choice:has-text('good')")
+    page.click("#review")
+    page.wait_for_selector("h1:has-text('Save this answer?')")
+    assert "rated 'good'" in page.inner_text("ul.summary")
+    page.click("button:has-text('Confirm')")
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    page.click("#unsafe-last summary")
+    page.fill("#unsafe-last input[name=reason]", "stumbled")
+    page.click("#unsafe-last button[type=submit]")
+    page.wait_for_selector("h1:has-text('Flag this trial unsafe?')")
+    page.click("button:has-text('Confirm')")
+    page.wait_for_selector("#flash:has-text('Trial 1 flagged unsafe')")
+    assert [t["rating"] for t in trials(live, sid)] == ["good"]
+    assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {"1": "stumbled"}
+    context.close()
