@@ -2,7 +2,7 @@
 exoskeleton, the other on the keys), in a real headless Chromium: a held key stores nothing
 twice and never confirms for the operator, Enter on a focused control does what that control
 does (flag unsafe by Tab and Enter), typed reasons fire no shortcut, a rating is skipped with
-``0``, and the page works without JavaScript."""
+``0``, every control has an accessible name, and the page works without JavaScript."""
 
 from __future__ import annotations
 
@@ -14,6 +14,22 @@ import pytest
 from tests.console.test_ratings_safety import rated_config
 
 pytestmark = pytest.mark.browser
+
+#: every control of the page without an accessible name: a label, aria-label or its own text
+#: (a placeholder is not a name: it goes when the operator types)
+UNNAMED = """() => {
+  const bad = [];
+  for (const el of document.querySelectorAll('button, summary, a, input, select, textarea, img')) {
+    if (el.type === 'hidden' || el.closest('dialog:not([open])')) continue;
+    let name = (el.getAttribute('aria-label') || '').trim();
+    if (!name && el.tagName === 'IMG') name = (el.getAttribute('alt') || '').trim();
+    if (!name && ['INPUT', 'SELECT', 'TEXTAREA'].includes(el.tagName)) {
+      name = [...(el.labels || [])].map((l) => l.textContent.trim()).join(' ');
+    } else if (!name) name = el.textContent.trim();
+    if (!name) bad.push(el.outerHTML.slice(0, 120));
+  }
+  return bad;
+}"""
 
 
 def trials(live: str, sid: int) -> list[dict[str, Any]]:
@@ -124,6 +140,52 @@ def test_a_rating_is_skipped_with_0(chromium: Any, live: str) -> None:
     page.keyboard.press("Enter")
     page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
     assert [t["rating"] for t in trials(live, sid)] == [None]
+    assert errors == []
+    context.close()
+
+
+def test_every_control_is_named_and_the_figure_described(chromium: Any, live: str) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S04"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    page.keyboard.press("4")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    page.evaluate("for (const d of document.querySelectorAll('details')) d.open = true")
+    assert page.evaluate(UNNAMED) == []
+    # the history's per-trial controls say which trial they act on
+    row = "tr[data-trial='1']"
+    assert page.get_attribute(f"{row} details.unsafe summary", "aria-label") == (
+        "Flag trial 1 unsafe"
+    )
+    assert page.get_attribute(f"{row} details.exclude summary", "aria-label") == "Exclude trial 1"
+    # the figure's text alternative says what it shows, the best gait included
+    alt = page.get_attribute("#posterior", "alt") or ""
+    assert alt.startswith("The model's utility over step length after 1 trial;")
+    if page.locator("b#best").count():
+        assert f"the best so far, {page.inner_text('b#best')}, is starred" in alt
+    else:
+        assert "no preference learned yet" in alt
+    assert "region of avoidance are shaded grey and hatched" in alt  # the config avoids
+    page.goto(f"{live}/sessions/{sid}/validation")
+    page.click("#start-validation")
+    page.wait_for_selector("#ranking-form")
+    assert page.evaluate(UNNAMED) == []
+    # picked by clicks, then Enter on the focused pick button reviews the ranking (as documented)
+    for label in ("B", "A", "C"):
+        page.click(f"[data-pick={label}]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.press("Escape")
+    assert not page.is_visible("#confirm-dialog")
+    # Enter on a focused link outside the form follows it (it reviewed the ranking)
+    page.focus("a:has-text('Back to the trials')")
+    page.keyboard.press("Enter")
+    page.wait_for_url(f"{live}/sessions/{sid}")
+    page.goto(f"{live}/")  # the sessions page and its create form
+    assert page.evaluate(UNNAMED) == []
     assert errors == []
     context.close()
 
