@@ -214,3 +214,44 @@ def test_the_trial_page_without_javascript(chromium: Any, live: str) -> None:
     assert [t["rating"] for t in trials(live, sid)] == ["good"]
     assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {"1": "stumbled"}
     context.close()
+
+
+#: WCAG's contrast ratio of two CSS rgb() colours
+CONTRAST = """([a, b]) => {
+  const lum = (c) => {
+    const [r, g, bl] = c.match(/\\d+/g).slice(0, 3).map((v) => {
+      const s = Number(v) / 255;
+      return s <= 0.03928 ? s / 12.92 : ((s + 0.055) / 1.055) ** 2.4;
+    });
+    return 0.2126 * r + 0.7152 * g + 0.0722 * bl;
+  };
+  const [hi, lo] = [lum(a), lum(b)].sort((x, y) => y - x);
+  return (hi + 0.05) / (lo + 0.05);
+}"""
+
+
+def test_the_row_the_keys_answer_and_a_missing_one_are_seen_from_afar(
+    chromium: Any, live: str
+) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S06"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    for key in ("Enter", "Enter"):
+        page.keyboard.press(key)
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    group = "fieldset[data-kind=comparison]"
+    style = "(el) => [getComputedStyle(el).borderTopColor, getComputedStyle(el).backgroundColor, "
+    style += "getComputedStyle(el).borderTopStyle]"
+    border, background, _ = page.eval_on_selector(f"{group}.active", style)
+    # the highlighted row (where 1, 2, 0 go) stands out: WCAG's 3:1 for a control's boundary
+    assert page.evaluate(CONTRAST, [border, background]) >= 3
+    page.keyboard.press("Enter")  # not answered: the row is marked, by more than its colour
+    assert page.is_visible("#hint")
+    _, _, line = page.eval_on_selector(f"{group}.missing", style)
+    assert line == "dashed"
+    assert page.get_attribute(f"{group}.missing", "aria-invalid") == "true"
+    page.keyboard.press("1")
+    assert page.locator(f"{group}.missing").count() == 0
+    assert page.get_attribute(group, "aria-invalid") is None
+    assert errors == []
+    context.close()

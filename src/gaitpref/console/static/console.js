@@ -121,7 +121,10 @@
   function ready(form) {
     if (form !== answer) return true;
     const missing = cmpGroups.filter((g) => !answered(g));
-    cmpGroups.forEach((g) => g.classList.toggle("missing", missing.includes(g)));
+    cmpGroups.forEach((g) => {
+      g.classList.toggle("missing", missing.includes(g));
+      if (missing.includes(g)) g.setAttribute("aria-invalid", "true"); else g.removeAttribute("aria-invalid");
+    });
     const hint = document.getElementById("hint");
     if (missing.length) {
       activeCmp = cmpGroups.indexOf(missing[0]);
@@ -140,6 +143,7 @@
       if (!group) return;
       if (group.dataset.kind === "comparison") {
         group.classList.remove("missing");
+        group.removeAttribute("aria-invalid");
         activeCmp = cmpGroups.indexOf(group);
         const next = cmpGroups.findIndex((g) => !answered(g));
         if (next >= 0) activeCmp = next;
