@@ -255,3 +255,34 @@ def test_the_row_the_keys_answer_and_a_missing_one_are_seen_from_afar(
     assert page.get_attribute(group, "aria-invalid") is None
     assert errors == []
     context.close()
+
+
+def test_two_gaits_a_query_answered_by_keys_alone(chromium: Any, live: str) -> None:
+    """compass-gait asks two new gaits a query (n = 2): 2 answers the comparison, the letters
+    suggest for the highlighted gait, . and , move between the gaits; a tie is 0."""
+    sid = httpx.post(f"{live}/api/sessions", json={"config": "compass-gait", "subject": "S07"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    assert page.locator("fieldset[data-kind=comparison]").count() == 1
+    assert page.locator("fieldset[data-kind=suggestion]").count() == 2
+    active = "fieldset[data-kind=suggestion].active"
+    page.keyboard.press("0")  # no preference ...
+    assert page.is_checked("fieldset[data-kind=comparison] input[value=none]")
+    page.keyboard.press("2")  # ... then the second after all
+    page.keyboard.press("w")  # first gait: slightly longer
+    assert page.get_attribute(active, "data-position") == "0"
+    page.keyboard.press(".")  # the next gait
+    assert page.get_attribute(active, "data-position") == "1"
+    page.keyboard.press("t")  # second gait: shorter
+    page.keyboard.press(",")  # back to the first
+    page.keyboard.press("q")  # first gait: longer after all
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Saved: trial 1, 2.')")
+    first, second = (page.locator(f"tr[data-trial='{t}'] td") for t in (1, 2))
+    assert first.nth(2).inner_text() == "< trial 2"
+    assert first.nth(3).inner_text().startswith("step length: longer")
+    assert second.nth(3).inner_text().startswith("step length: shorter")
+    assert errors == []
+    context.close()
