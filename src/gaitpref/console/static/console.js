@@ -98,6 +98,14 @@
     });
   }
 
+  // "Flag trial N unsafe" or "exclude" opened: the focus goes to its reason, to be typed at once
+  for (const details of document.querySelectorAll("details.unsafe, details.exclude")) {
+    details.addEventListener("toggle", () => {
+      const field = details.querySelector("[name=reason]");
+      if (details.open && field) field.focus();
+    });
+  }
+
   // -- the answer form -----------------------------------------------------------------------
   const answer = document.getElementById("answer-form");
   const cmpGroups = answer ? [...answer.querySelectorAll("fieldset[data-kind=comparison]")] : [];
