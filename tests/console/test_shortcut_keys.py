@@ -29,6 +29,7 @@ def test_the_undo_shows_its_key_where_it_has_one(client: TestClient) -> None:
     html = client.get(f"/sessions/{sid}").text
     assert undo_button(html) == "Undo last answer <kbd>U</kbd>"
     assert "<kbd>U</kbd> undo the last answer" in html
+    assert "the keys type; <kbd>Esc</kbd> leaves it. A held key acts once" in html
 
 
 def test_with_four_features_u_is_a_suggestion_and_the_undo_a_button(client: TestClient) -> None:
