@@ -104,13 +104,20 @@ def test_the_figure_shades_and_names_them(session: Session) -> None:
     assert {AVOID_LABEL, FLAG_LABEL, NEAR_LABEL} <= texts
     ax = fig.axes[0]
     if post.space.ndim == 1:
-        bands = [c for c in ax.collections if isinstance(c, PolyCollection)]
-        assert any(c.get_label() == AVOID_LABEL for c in bands)
-        assert any(c.get_label() == NEAR_LABEL for c in bands)
+        bands = {c.get_label(): c for c in ax.collections if isinstance(c, PolyCollection)}
+        # told apart without colour: each band hatched, one way and the other
+        hatches = {bands[AVOID_LABEL].get_hatch(), bands[NEAR_LABEL].get_hatch()}
+        assert None not in hatches and len(hatches) == 2
     else:
         ellipses = [p for p in ax.patches if isinstance(p, Ellipse)]
         assert len(ellipses) == len(unsafe)
-        assert len([c for c in ax.collections if isinstance(c, QuadMesh)]) == 2  # mean + cover
+        assert len([c for c in ax.collections if isinstance(c, QuadMesh)]) == 1  # the mean
+        cover = [c for c in ax.collections if isinstance(c, PolyCollection)]
+        assert [c.get_hatch() for c in cover] == ["//"]  # the avoided cells, hatched
+        legend = ax.get_legend()
+        assert legend is not None
+        proxy = legend.legend_handles[[t.get_text() for t in legend.texts].index(AVOID_LABEL)]
+        assert proxy is not None and proxy.get_hatch() == "//"
     plt.close(fig)
 
 

@@ -12,6 +12,7 @@ from gaitpref.console import views
 from gaitpref.console.present import ratings_by_trial
 from gaitpref.console.service import Pending
 from gaitpref.errors import NoSafeGaitError
+from gaitpref.plots.trials import on_a_grid
 from gaitpref.sessions import preference_learned
 from gaitpref.sessions.gaits import NOT_MADE
 from gaitpref.sessions.records import SuggestionRecord
@@ -87,6 +88,29 @@ def chronology(session: Session) -> list[ChronoRow]:
     return list(reversed(rows))
 
 
+def figure_alt(session: Session, trials: int, best: str | None, learned: bool) -> str:
+    """The posterior figure's text alternative: what it plots, the gait it stars (``best``, as
+    the page states it) and what its shading and marks mean, in words rather than colours."""
+    space = session.space
+    names = [views.pretty(f.name) for f in space.features]
+    over = " and ".join(names) if len(names) <= 2 else f"{len(names)} features"
+    where = "over" if on_a_grid(space) else "at the tried gaits of"
+    text = f"The model's utility {where} {over} after {trials} trial{'s' if trials != 1 else ''}"
+    if not learned:
+        text += "; no preference learned yet, no gait starred"
+    elif best is not None:
+        text += f"; the best so far, {best}, is starred"
+    else:
+        text += "; no gait may be recommended, none starred"
+    if on_a_grid(space) and (session.config.safety.avoid or session.unsafe_flags()):
+        text += (
+            "; gaits in the region of avoidance are shaded grey and hatched, gaits flagged unsafe "
+            "are marked X and the gaits near them hatched the other way (1-D) or ringed by a "
+            "dashed line (2-D)"
+        )
+    return text + "."
+
+
 def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     """Everything ``trial.html`` renders."""
     space = session.space
@@ -133,6 +157,7 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "categories": categories,
         "unsafe": unsafe,
         "undoable": undoable,
+        "undo_key": views.undo_key(space),
         # the undo takes back the last answer's whole query (n > 1: several trials)
         "undo_say": "Take back the answer to "
         + (
@@ -162,5 +187,8 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "prior_from": [p["session"] for p in session.record.meta.get("prior_from", [])],
         "trials_done": len(trials),
         "figure_url": f"/sessions/{session.id}/posterior.png?v={session.last_seq}",
+        "figure_alt": figure_alt(
+            session, len(trials), None if best is None else session.gait_name(best), learned
+        ),
         "features": space.features,
     }

@@ -31,6 +31,18 @@ from gaitpref.sessions.records import SessionQuery, ShownGait, check_printable, 
 from gaitpref.space import MOVES, Feature, Space
 
 COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
+#: leaves a gait unrated (after the comparisons, as the digits 1..K rate it)
+RATING_SKIP_KEY = "0"
+UNDO_KEY = "u"
+
+
+def undo_key(space: Space) -> str | None:
+    """The undo's shortcut, or None where a suggestion row takes its key (a fourth feature's
+    ``Y U I O P``: the suggestion goes first, and the undo is the button's)."""
+    rows = SUGGESTION_ROWS[: space.ndim]
+    return None if any(UNDO_KEY in row for row in rows) else UNDO_KEY
+
+
 SUGGESTION_ROWS = ("qwert", "asdfg", "zxcvb", "yuiop", "hjkl;")
 _BUTTON_MOVES: tuple[str, ...] = ("+big", "+small", "", "-small", "-big")
 _CMP = re.compile(r"^cmp-(\d{1,10})-(\d{1,10})$")
@@ -163,7 +175,8 @@ class RatingGroup:
 
 def rating_groups(categories: Sequence[str], actions: Sequence[GaitView]) -> list[RatingGroup]:
     """One row of buttons per executed gait (none without a rating scale): the categories with
-    the digits ``1..K`` as shortcuts, and "no rating" (the default: a trial may go unrated)."""
+    the digits ``1..K`` as shortcuts, and "no rating" with ``0`` (the default: a trial may go
+    unrated)."""
     if not categories:
         return []
     groups = []
@@ -172,7 +185,7 @@ def rating_groups(categories: Sequence[str], actions: Sequence[GaitView]) -> lis
             Choice(str(k), word, str(k) if k <= 9 else "", f"{gait.name} rated {word!r}")
             for k, word in enumerate(categories, start=1)
         )
-        skip = Choice("", "no rating", "", "")
+        skip = Choice("", "no rating", RATING_SKIP_KEY, "")
         groups.append(RatingGroup(f"rate-{gait.index}", gait, pos, (*choices, skip)))
     return groups
 

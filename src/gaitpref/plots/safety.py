@@ -31,6 +31,10 @@ NEAR_LABEL = "within the unsafe radius"
 FLAG_LABEL = "flagged unsafe"
 AVOID_COLOUR = "0.45"
 UNSAFE_COLOUR = "#b91c1c"
+#: the shadings differ by pattern as well as by colour (a reader without colour vision, a
+#: grey print): the region of avoidance hatched one way, the gaits near a flag the other
+AVOID_HATCH = "//"
+NEAR_HATCH = "\\\\"
 
 
 @dataclass(frozen=True)
@@ -72,19 +76,22 @@ def safety_shading(
 
 
 def draw_1d(ax: Axes, x: FloatArray, mean: FloatArray, shade: SafetyShading) -> None:
-    """Grey bands over the avoided gaits, red ones near a flag, a red X on each flag."""
+    """Grey bands hatched ``//`` over the avoided gaits, red ones hatched ``\\`` near a flag, a
+    red X on each flag."""
     band = ax.get_xaxis_transform()
     if shade.avoid.any():
         ax.fill_between(
             x, 0, 1, where=shade.avoid, transform=band, step="mid",
-            color=AVOID_COLOUR, alpha=0.25, lw=0, label=AVOID_LABEL,
+            facecolor=AVOID_COLOUR, edgecolor=AVOID_COLOUR, hatch=AVOID_HATCH, alpha=0.3, lw=0,
+            label=AVOID_LABEL,
         )  # fmt: skip
     if shade.threshold is not None:
         ax.axhline(shade.threshold, color=AVOID_COLOUR, ls=":", lw=1, label="avoidance threshold")
     if shade.unsafe.size:
         ax.fill_between(
             x, 0, 1, where=shade.near, transform=band, step="mid",
-            color=UNSAFE_COLOUR, alpha=0.15, lw=0, label=NEAR_LABEL,
+            facecolor=UNSAFE_COLOUR, edgecolor=UNSAFE_COLOUR, hatch=NEAR_HATCH, alpha=0.2, lw=0,
+            label=NEAR_LABEL,
         )  # fmt: skip
         ax.scatter(
             x[shade.unsafe], mean[shade.unsafe], marker="X", s=90, c=UNSAFE_COLOUR,
@@ -99,11 +106,14 @@ def draw_2d(ax: Axes, space: Space, shade: SafetyShading) -> list[Patch]:
     proxies: list[Patch] = []
     if shade.avoid.any():
         cover = np.ma.masked_where(~shade.avoid.reshape(space.shape), np.ones(space.shape))
-        ax.pcolormesh(
+        ax.pcolor(
             fy.array, fx.array, cover, shading="nearest", cmap="Greys", vmin=0, vmax=1.5,
-            alpha=0.55, zorder=2,
+            alpha=0.55, zorder=2, edgecolors="k", linewidths=0, hatch=AVOID_HATCH,
         )  # fmt: skip
-        proxies.append(Patch(facecolor=AVOID_COLOUR, alpha=0.55, label=AVOID_LABEL))
+        proxies.append(
+            Patch(facecolor=AVOID_COLOUR, edgecolor="k", hatch=AVOID_HATCH, alpha=0.55,
+                  label=AVOID_LABEL)
+        )  # fmt: skip
     if shade.unsafe.size:
         pts = space.points[shade.unsafe]
         span = np.ptp(space.points, axis=0)

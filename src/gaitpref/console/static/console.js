@@ -105,6 +105,14 @@
     });
   }
 
+  // "Flag trial N unsafe" or "exclude" opened: the focus goes to its reason, to be typed at once
+  for (const details of document.querySelectorAll("details.unsafe, details.exclude")) {
+    details.addEventListener("toggle", () => {
+      const field = details.querySelector("[name=reason]");
+      if (details.open && field) field.focus();
+    });
+  }
+
   // -- the answer form -----------------------------------------------------------------------
   const answer = document.getElementById("answer-form");
   const cmpGroups = answer ? [...answer.querySelectorAll("fieldset[data-kind=comparison]")] : [];
@@ -128,7 +136,10 @@
   function ready(form) {
     if (form !== answer) return true;
     const missing = cmpGroups.filter((g) => !answered(g));
-    cmpGroups.forEach((g) => g.classList.toggle("missing", missing.includes(g)));
+    cmpGroups.forEach((g) => {
+      g.classList.toggle("missing", missing.includes(g));
+      if (missing.includes(g)) g.setAttribute("aria-invalid", "true"); else g.removeAttribute("aria-invalid");
+    });
     const hint = document.getElementById("hint");
     if (missing.length) {
       activeCmp = cmpGroups.indexOf(missing[0]);
@@ -147,6 +158,7 @@
       if (!group) return;
       if (group.dataset.kind === "comparison") {
         group.classList.remove("missing");
+        group.removeAttribute("aria-invalid");
         activeCmp = cmpGroups.indexOf(group);
         const next = cmpGroups.findIndex((g) => !answered(g));
         if (next >= 0) activeCmp = next;
@@ -206,10 +218,17 @@
   }
 
   // -- keyboard ------------------------------------------------------------------------------
+  // a control outside the answer and ranking forms that Enter activates itself (Tab, then Enter
+  // on "Flag trial 3 unsafe", "Pause", a link); inside those forms Enter reviews the form
+  const activates = (target) => !!(target && target.closest
+    && target.closest("button, a[href], summary") && !target.closest("#answer-form, #ranking-form"));
+
   document.addEventListener("keydown", (event) => {
     if (event.ctrlKey || event.metaKey || event.altKey) return;
     if (dialog && dialog.open) {
       const onBack = document.activeElement && document.activeElement.hasAttribute("data-confirm-no");
+      // a held Enter repeats: the repeats never confirm (nor click the focused Confirm)
+      if (event.key === "Enter" && event.repeat) { event.preventDefault(); return; }
       if (event.key === "Enter" && !onBack) {
         event.preventDefault();
         if (pendingForm) confirmAndSend(pendingForm);
@@ -221,6 +240,12 @@
       return;
     }
     const key = event.key.length === 1 ? event.key.toLowerCase() : event.key;
+    // a held key acts once: its repeats choose, review, undo or rank nothing more
+    if (event.repeat && (key.length === 1 || key === "Enter" || key === "Backspace")) {
+      event.preventDefault();
+      return;
+    }
+    if (key === "Enter" && activates(event.target)) return;
     if (answer) {
       if (key === "Enter") { event.preventDefault(); answer.requestSubmit(); return; }
       if (key === "m") { event.preventDefault(); document.getElementById("note").focus(); return; }
