@@ -1034,9 +1034,10 @@ class Session:
     def gait_made(self, action: int) -> bool | None:
         """Whether ``action``'s gait was made by this session (gaits on demand: a query proposed
         it and it could be made); False for a point whose gait is not made (a coactive
-        suggestion's, on the line path, which the recommendation may be: it is made, or found
-        infeasible and skipped, when a query proposes it); None when gaits are not made on
-        demand (a library's, or none)."""
+        suggestion's, on the line path, which the posterior's argmax may be, and under
+        ``[gaits] recommend = "any"`` the recommendation: it is made, or found infeasible and
+        skipped, when a query proposes it); None when gaits are not made on demand (a
+        library's, or none)."""
         return self._state.gait_made(action)
 
     def describe(self, action: int) -> str:
