@@ -1104,7 +1104,9 @@ def run_validation(
         if record_with is not None and terminal.shown_gaits is not None:
             terminal.console.print(
                 "No ranking recorded; the round stays open (no trials are proposed until it is "
-                f"answered).  Record it with: {record_with(terminal.shown_gaits)}",
+                "answered or withdrawn: gaitpref session validate "
+                f"{session.id} --withdraw --reason TEXT).  Record it with: "
+                f"{record_with(terminal.shown_gaits)}",
                 markup=False,
             )
         return False
