@@ -385,8 +385,8 @@ class Session:
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, a session that is finished or paused, and while a blind validation
-        round is open (:class:`SessionStateError`: record its ranking first; the query stays
-        pending).
+        round is open (:class:`SessionStateError`: record its ranking first, or withdraw the
+        round; the query stays pending).
         """
         if not is_count(query_id):
             raise QueryError(
