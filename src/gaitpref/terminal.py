@@ -1008,7 +1008,8 @@ class Terminal:
         while True:
             if ranking is None:
                 self.console.print(
-                    f"The subject's ranking, best first (e.g. {''.join(plan.labels)}):",
+                    f"The subject's ranking, best first (e.g. {''.join(plan.labels)}; "
+                    "u withdraw the round, q quit):",
                     markup=False,
                 )
                 given = self.read().strip()
