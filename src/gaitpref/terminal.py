@@ -655,42 +655,33 @@ class Terminal:
         stopped: str | None = None,
         unsafe: Sequence[int] = (),
     ) -> None:
-        """Say the answer to ``q`` is saved, how sure the model is now, and write the unsafe
-        flag asked with it (``reason``, on the trials ``unsafe``, default every trial of
-        ``q``); ``stop_warning``: why the ``[stop]`` rule could not be checked after it
-        (:attr:`Answered.stop_warning`), and ``clipped``: the suggestions that went past the
-        edge of their range (:attr:`Answered.clipped`), said after the save; ``stopped``: the
-        rule's reason when it opened blind validation after the answer (:attr:`Answered.stopped`),
-        said before the round is shown."""
-        s = self.session
+        """Say the answer to ``q`` is saved, write the unsafe flag asked with it (``reason``,
+        on the trials ``unsafe``, default every trial of ``q``), then say how sure the model is
+        now: after the flag, so that the recommendation is never the gait about to be flagged
+        (it said so before, then flagged it).  ``stop_warning``: why the ``[stop]`` rule could
+        not be checked after the answer (:attr:`Answered.stop_warning`), and ``clipped``: the
+        suggestions that went past the edge of their range (:attr:`Answered.clipped`), said
+        after the save; ``stopped``: the rule's reason when it opened blind validation after the
+        answer (:attr:`Answered.stopped`), said last, before the round is shown."""
         self.console.print(f"saved: trial {', '.join(map(str, q.trials))}", markup=False)
         for note in clipped:
             self.console.print(f"  note: {clip(note, MAX_MESSAGE)}", markup=False)
         if stop_warning is not None:
             self.console.print(f"  warning: {clip(stop_warning, MAX_MESSAGE)}", markup=False)
-        with contextlib.suppress(*_UNWRITTEN):  # only a report: the answer is written
-            # how sure, once it learnt (as the console and session show: before that the
-            # recommendation is the first gait for no reason), with or without a [stop] rule
-            if preference_learned(s.posterior().mean):
-                try:
-                    sure = s.confidence()
-                except NoSafeGaitError as exc:  # no gait to recommend: say why, as show does
-                    why = s.no_recommendation() or str(exc)
-                    line = f"no gait may be recommended now ({why}), so no confidence is stated"
-                else:
-                    line = sure.sentence(gait_name(s, sure.recommended))
-                    if s.gait_made(sure.recommended) is False:  # a point no query proposed
-                        line += f" ({NOT_MADE})"
-                self.console.print(f"  {clip(line, MAX_MESSAGE)}", markup=False)
-            self._say_stop_blocked()
+        if reason:
+            self._flag_all(q, reason, unsafe)
+        self._say_confidence()
         if stopped is not None:
             self.console.print(
                 f"  the [stop] rule says stop ({clip(stopped, MAX_MESSAGE)}): blind validation "
                 "opens",
                 markup=False,
             )
-        if not reason:
-            return
+
+    def _flag_all(self, q: SessionQuery, reason: str, unsafe: Sequence[int]) -> None:
+        """Flag the trials ``unsafe`` of ``q`` (default every trial) for ``reason``: say which
+        were, what the flag does, and a validation round drawn again for it."""
+        s = self.session
         redrawn = False
         flagged: list[int] = []
         for t in dict.fromkeys(unsafe or q.trials):
@@ -710,6 +701,25 @@ class Terminal:
                 "again among the gaits still allowed",
                 markup=False,
             )
+
+    def _say_confidence(self) -> None:
+        """How sure the model is of its recommendation, once it learnt (as the console and
+        session show: before that the recommendation is the first gait for no reason), with or
+        without a ``[stop]`` rule; and why the rule cannot open validation, if so."""
+        s = self.session
+        with contextlib.suppress(*_UNWRITTEN):  # only a report: the answer is written
+            if preference_learned(s.posterior().mean):
+                try:
+                    sure = s.confidence()
+                except NoSafeGaitError as exc:  # no gait to recommend: say why, as show does
+                    why = s.no_recommendation() or str(exc)
+                    line = f"no gait may be recommended now ({why}), so no confidence is stated"
+                else:
+                    line = sure.sentence(gait_name(s, sure.recommended))
+                    if s.gait_made(sure.recommended) is False:  # a point no query proposed
+                        line += f" ({NOT_MADE})"
+                self.console.print(f"  {clip(line, MAX_MESSAGE)}", markup=False)
+            self._say_stop_blocked()
 
     def _flag(self, trial: int, reason: str) -> bool | None:
         """Flag ``trial`` unsafe: what :meth:`Session.flag_unsafe` returns, or None when it could

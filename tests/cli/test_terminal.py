@@ -123,6 +123,26 @@ def test_x_writes_the_answer_and_flags_the_trial_unsafe() -> None:
     assert session.unsafe_flags() == {1: (action, "knee buckled")}
 
 
+def test_x_states_the_confidence_after_the_flag_never_in_the_gait_about_to_be_flagged() -> None:
+    """Trial 1 rated good and flagged unsafe with ``x``: the runner printed the confidence line
+    before it wrote the flag, recommending trial 1's gait (the best so far) just before flagging
+    it; now the flag comes first, and the recommendation is a gait that may still be proposed."""
+    from gaitpref.config import parse_config
+
+    session = Session.create(MemoryStorage(), parse_config(RATED), "S01", seed=2)
+    terminal, console = _terminal(session, "4", "0", "x", "knee buckled")
+    terminal.run()
+    text = console.export_text()
+    flagged = gait_name(session, session.trials()[0].action)
+    after = text.split("saved: trial 1\n", 1)[1]
+    assert after.startswith("flagged unsafe: trial 1 (knee buckled)")
+    sure = re.search(r"\n  \d+% that (\S+) is within", after)
+    assert sure is not None, after
+    assert sure.group(1) != flagged
+    assert sure.group(1) == gait_name(session, session.recommended())
+    assert f"that {flagged} is" not in text
+
+
 def test_a_line_that_is_not_text_is_read_again() -> None:
     """A terminal whose encoding is strict (LANG=en_US.UTF-8) raises on undecodable bytes: the
     runner ended with 'error: utf-8 codec can't decode' before."""

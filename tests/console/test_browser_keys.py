@@ -117,6 +117,62 @@ def test_flag_unsafe_by_tab_and_enter_while_typing_fires_no_shortcut(
     context.close()
 
 
+def test_n_opens_the_last_trials_flag_which_still_takes_a_reason_and_the_confirm_step(
+    chromium: Any, live: str
+) -> None:
+    sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S08"})
+    sid = sid.json()["id"]
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    page.keyboard.press("n")  # no trial yet: nothing to flag, the key does nothing
+    assert page.locator("#unsafe-last").count() == 0
+    for key in ("Enter", "Enter"):
+        page.keyboard.press(key)
+        page.wait_for_timeout(50)
+    page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    # the button shows its key (a flex item of its own: on a line of its own in innerText)
+    assert " ".join(page.inner_text("#unsafe-last summary").split()) == "Flag trial 1 unsafe N"
+    assert "N flag trial 1 unsafe" in (page.text_content("details.shortcuts ul") or "")
+    # N while typing in a field is a letter: the note takes it, the flag stays shut
+    page.keyboard.press("m")
+    page.keyboard.type("no need")
+    assert page.input_value("#note") == "no need"
+    assert not page.is_visible("#unsafe-last input[name=reason]")
+    page.keyboard.press("Escape")
+    # N held down: the flag opens, the focus in its reason, and the repeats type nothing
+    page.keyboard.down("n")
+    page.keyboard.down("n")
+    page.keyboard.down("n")
+    page.keyboard.up("n")
+    page.wait_for_selector("#unsafe-last[open]")
+    page.wait_for_function("document.activeElement.name === 'reason'")
+    assert page.evaluate("document.activeElement.closest('details').id") == "unsafe-last"
+    assert page.input_value("#unsafe-last input[name=reason]") == ""
+    assert not page.is_visible("#confirm-dialog")
+    assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {}  # nothing flagged
+    # typed in the reason, n is a letter (it neither reopens nor leaves the field)
+    page.keyboard.type("knee buckled on landing")
+    assert page.input_value("#unsafe-last input[name=reason]") == "knee buckled on landing"
+    page.keyboard.press("Enter")  # the flag's review
+    page.wait_for_selector("#confirm-dialog[open]")
+    assert page.get_by_role("dialog", name="Flag this trial unsafe?").is_visible()
+    assert "Reason: knee buckled on landing" in page.inner_text("#confirm-dialog ul")
+    assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {}
+    page.keyboard.press("Enter")  # confirmed
+    page.wait_for_selector("#flash:has-text('Trial 1 flagged unsafe')")
+    info = httpx.get(f"{live}/api/sessions/{sid}").json()
+    assert info["unsafe"] == {"1": "knee buckled on landing"}
+    assert page.input_value("#note") == ""  # the reload: the note was never sent
+    # the last trial is flagged: no button, no key listed, N does nothing
+    assert page.locator("#unsafe-last").count() == 0
+    assert "flag trial" not in (page.text_content("details.shortcuts ul") or "")
+    page.keyboard.press("n")
+    page.wait_for_timeout(100)
+    assert not page.is_visible("#confirm-dialog")
+    assert page.locator("details.unsafe[open]").count() == 0
+    assert errors == []
+    context.close()
+
+
 def test_a_rating_is_skipped_with_0(chromium: Any, live: str) -> None:
     sid = httpx.post(f"{live}/api/sessions", json={"config": rated_config(), "subject": "S03"})
     sid = sid.json()["id"]

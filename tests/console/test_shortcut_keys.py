@@ -1,6 +1,7 @@
 """The trial page's shortcuts as rendered (no browser): the undo's ``U`` is shown only where no
-suggestion row takes it (a fourth feature's ``Y U I O P`` does), and a rating is skipped with
-``0``; the browser checks are in ``test_browser_keys.py``."""
+suggestion row takes it (a fourth feature's ``Y U I O P`` does), a rating is skipped with
+``0``, and ``N`` (the last trial's unsafe flag) is no suggestion's key and is shown where its
+button is; the browser checks are in ``test_browser_keys.py``."""
 
 from __future__ import annotations
 
@@ -8,6 +9,9 @@ import re
 
 from fastapi.testclient import TestClient
 
+from gaitpref.config.schema import MAX_FEATURES
+from gaitpref.console import views
+from gaitpref.space import Feature, Space
 from tests.console.conftest import answer_once, new_session
 
 FOUR_FEATURES = (
@@ -39,3 +43,48 @@ def test_with_four_features_u_is_a_suggestion_and_the_undo_a_button(client: Test
     assert undo_button(html) == "Undo last answer"
     assert "undo with its button (<kbd>U</kbd> is a suggestion's key here)" in html
     assert re.search(r'name="sug-\d+-f4" value="\+small" data-key="u"', html)
+
+
+def flag_summary(html: str) -> str | None:
+    last = r'<details class="unsafe" id="unsafe-last"[^>]*><summary[^>]*>(.*?)</summary>'
+    m = re.search(last, html)
+    return m.group(1) if m else None
+
+
+FLAG_LISTED = "<kbd>N</kbd> flag trial"
+
+
+def test_n_is_taken_by_no_suggestion_row_with_as_many_features_as_a_config_may_have() -> None:
+    for ndim in range(1, MAX_FEATURES + 1):
+        space = Space([Feature(f"f{k}", [0.0]) for k in range(ndim)])
+        groups = views.suggestion_groups(space, [views.gait_view(space, 0, trial=1)])
+        keys = {ch.key for g in groups for ch in g.choices}
+        assert views.FLAG_KEY not in keys, ndim
+    # nor by the other keys of the trial page: digits, the undo, the note, . and ,
+    assert views.FLAG_KEY not in "0123456789" + views.UNDO_KEY + "m.,"
+
+
+def test_the_flag_key_is_shown_on_its_button_and_listed_only_where_the_button_is(
+    client: TestClient,
+) -> None:
+    sid = new_session(client)
+    html = client.get(f"/sessions/{sid}").text
+    assert flag_summary(html) is None and FLAG_LISTED not in html  # no trial yet
+    answer_once(client, sid)
+    html = client.get(f"/sessions/{sid}").text
+    assert flag_summary(html) == "Flag trial 1 unsafe <kbd>N</kbd>"
+    assert 'id="unsafe-last" data-key="n"' in html
+    assert "<kbd>N</kbd> flag trial 1 unsafe: opens its reason" in html
+    # the chronology's "unsafe" of each row has no key
+    assert html.count('data-key="n"') == 1
+    r = client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": "knee buckled"})
+    assert r.status_code == 200, r.text
+    html = client.get(f"/sessions/{sid}").text
+    assert flag_summary(html) is None and FLAG_LISTED not in html  # trial 1 is flagged
+    answer_once(client, sid)
+    html = client.get(f"/sessions/{sid}").text
+    assert flag_summary(html) == "Flag trial 2 unsafe <kbd>N</kbd>"
+    r = client.post(f"/api/sessions/{sid}/status", json={"status": "finished"})
+    assert r.status_code == 200, r.text
+    html = client.get(f"/sessions/{sid}").text
+    assert flag_summary(html) is None and FLAG_LISTED not in html

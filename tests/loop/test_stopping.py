@@ -173,3 +173,29 @@ def test_the_confidence_is_about_the_smooth_utility_not_the_jitter() -> None:
     p, hit, low = np.mean(stated), np.mean(observed), np.mean(with_jitter)
     assert abs(p - hit) < 0.03, (p, hit)  # measured: 0.156 stated, 0.135 observed
     assert hit - low > 0.05, (low, hit)  # measured: 0.070 with the jitter
+
+
+def test_the_confidence_draws_its_samples_on_one_blas_thread(monkeypatch: Any) -> None:
+    """As ask and tell do (``model/threads.py``): with BLAS's default threads a session's
+    confidence took 0.4-0.8 s on two loaded cores against 9 ms on one, after every answer and
+    for every row of an export (``benchmarks/results/long.md``)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from gaitpref.model.posterior import Posterior
+
+    loop, user = _subject(4)
+    for _ in range(6):
+        q = loop.ask()
+        loop.tell(q, user.answer(q))
+    seen: list[int] = []
+    sample = Posterior.sample
+
+    def spy(self: Posterior, *args: Any, **kwargs: Any) -> np.ndarray:
+        seen.append(max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"))
+        return sample(self, *args, **kwargs)
+
+    monkeypatch.setattr(Posterior, "sample", spy)
+    with threadpool_limits(limits=2, user_api="blas"):
+        confidence(loop.posterior, np.random.default_rng(5), samples=300, block=100)
+        seen.append(max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"))
+    assert seen == [1, 1, 1, 2]  # restored afterwards

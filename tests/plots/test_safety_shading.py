@@ -1,6 +1,6 @@
 """The posterior figure shades the region of avoidance and marks unsafe flags (issue 12, item 3):
 the shaded gaits are exactly those the loop keeps out of its queries, in 1-D and 2-D, each with
-a legend entry."""
+a legend entry; so does the paper-style session figure."""
 
 from __future__ import annotations
 
@@ -15,7 +15,15 @@ from gaitpref import Rating, Session
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
 from gaitpref.plots.posterior import posterior_picture, render
-from gaitpref.plots.safety import AVOID_LABEL, FLAG_LABEL, NEAR_LABEL, safety_shading
+from gaitpref.plots.safety import (
+    AVOID_HATCH,
+    AVOID_LABEL,
+    FLAG_LABEL,
+    NEAR_HATCH,
+    NEAR_LABEL,
+    safety_shading,
+)
+from gaitpref.plots.session import render_session, session_picture
 from gaitpref.storage import MemoryStorage
 
 SPACE_1D = """
@@ -125,3 +133,75 @@ def test_without_safety_nothing_is_shaded(session: Session) -> None:
     fig = render(posterior_picture(session.posterior(), [], samples=0))
     assert not {AVOID_LABEL, FLAG_LABEL, NEAR_LABEL} & _legend_texts(fig)
     plt.close(fig)
+
+
+def _hatches(fig: Figure) -> set[str]:
+    """Every hatch pattern drawn (the bands and cells; not the legend's proxies)."""
+    drawn = [c for ax in fig.axes for c in ax.collections]
+    drawn += [p for ax in fig.axes for p in ax.patches]
+    return {h for h in (d.get_hatch() for d in drawn) if h}
+
+
+def _drawn(s: Session) -> tuple[set[str], int, int, set[str]]:
+    """The session figure's hatches, flag marks, dashed ellipses and legend entries."""
+    fig = render_session(session_picture(s, samples=0))
+    marks = [c for ax in fig.axes for c in ax.collections if c.get_label() == FLAG_LABEL]
+    ellipses = [p for ax in fig.axes for p in ax.patches if isinstance(p, Ellipse)]
+    out = (_hatches(fig), len(marks), len(ellipses), _legend_texts(fig))
+    plt.close(fig)
+    return out
+
+
+def test_the_session_figure_shades_and_marks_them_as_the_posterior_figure(
+    session: Session,
+) -> None:
+    """The paper-style session figure shaded neither the region of avoidance nor the flags."""
+    pic = session_picture(session, samples=0)
+    fig = render_session(pic)
+    assert {AVOID_LABEL, FLAG_LABEL, NEAR_LABEL} <= _legend_texts(fig)
+    ax = fig.axes[0]  # the posterior (1-D) or the heat map (2-D)
+    flagged = [a for a, _ in session.unsafe_flags().values()]
+    marks = [c for c in ax.collections if c.get_label() == FLAG_LABEL]
+    assert len(marks) == 1 and len(marks[0].get_offsets()) == len(flagged)
+    if session.space.ndim == 1:
+        assert _hatches(fig) == {AVOID_HATCH, NEAR_HATCH}
+    else:
+        assert _hatches(fig) == {AVOID_HATCH}
+        assert len([p for p in ax.patches if isinstance(p, Ellipse)]) == len(flagged)
+    # the same masks as the console's posterior figure (one helper: plots/safety.py)
+    post, cfg = session.posterior(), session.config
+    shade = safety_shading(post, cfg.safety, cfg.ordinal, flagged)
+    assert pic.safety is not None
+    assert np.array_equal(pic.safety.avoid, shade.avoid)
+    assert np.array_equal(pic.safety.near, shade.near)
+    plt.close(fig)
+
+
+@pytest.mark.parametrize("space", [SPACE_1D, SPACE_2D], ids=["1d", "2d"])
+def test_the_session_figure_marks_a_flag_while_it_stands_and_nothing_without_one(
+    space: str,
+) -> None:
+    """No region of avoidance: no hatch and no mark until a trial is flagged, the flag's marks
+    (its X; 1-D: its band hatched ``\\``, 2-D: its dashed ellipse) while it stands, and none
+    again once it is withdrawn."""
+    config = parse_config(
+        f'name = "flags"\n{space}[model]\nlengthscale = 0.05\nsignal_variance = 0.005\n'
+        "noise = 0.02\n[cospar]\nseed = 2\n[safety]\nunsafe_radius = 0.15\n"
+    )
+    s = Session.create(MemoryStorage(), config, "S01", seed=5)
+    for _ in range(4):
+        q = s.next_query()
+        other = q.buffer[0] if q.buffer else q.actions[-1]
+        s.answer(q.id, [(q.actions[0], other, "first")] if q.actions[0] != other else [])
+    labels = {AVOID_LABEL, FLAG_LABEL, NEAR_LABEL}
+    hatches, marks, ellipses, texts = _drawn(s)
+    assert (hatches, marks, ellipses) == (set(), 0, 0) and not labels & texts
+    assert session_picture(s, samples=0).safety is None
+    s.flag_unsafe(2, "stumbled")
+    hatches, marks, ellipses, texts = _drawn(s)
+    assert marks == 1 and {FLAG_LABEL, NEAR_LABEL} <= texts and AVOID_LABEL not in texts
+    one_d = s.space.ndim == 1
+    assert (hatches, ellipses) == (({NEAR_HATCH}, 0) if one_d else (set(), 1))
+    s.withdraw_unsafe(2)
+    hatches, marks, ellipses, texts = _drawn(s)
+    assert (hatches, marks, ellipses) == (set(), 0, 0) and not labels & texts

@@ -30,8 +30,12 @@ from matplotlib.figure import Figure
 
 from gaitpref.model import Posterior
 from gaitpref.plots.posterior import PosteriorPicture, posterior_picture, render
-from gaitpref.plots.safety import safety_shading
-from gaitpref.plots.session import SessionPicture, render_session, session_picture
+from gaitpref.plots.session import (
+    SessionPicture,
+    render_session,
+    session_picture,
+    session_shading,
+)
 from gaitpref.plots.trials import TrialsPicture, on_a_grid, render_trials, trials_picture
 from gaitpref.sessions.session import Session
 
@@ -76,17 +80,12 @@ def picture_of(session: Session, kind: str) -> Picture:
         return trials_picture(post, trials, recommended=session.recommended(), title=title)
     if kind == "session":
         return session_picture(session)
-    config = session.config
-    unsafe = [action for action, _ in session.unsafe_flags().values()]
-    shade = None
-    if config.safety.avoid or unsafe:  # the region of avoidance and the unsafe flags, shaded
-        shade = safety_shading(post, config.safety, config.ordinal, unsafe)
     return posterior_picture(
         post,
         trials,
         samples=0,
         title=title,
-        safety=shade,
+        safety=session_shading(session, post),  # the region of avoidance and the unsafe flags
         recommending=True,
         recommended=session.recommended(),
     )

@@ -142,6 +142,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
     last = [t for t in trials if t.query == trials[-1].query] if trials else []
     # the session refuses to undo an answer whose trial was excluded or flagged since
     undoable = bool(last) and not any(t.excluded or t.number in unsafe for t in last)
+    rows = chronology(session)
+    # "Flag trial N unsafe" beside the undo: the last trial's, unless flagged (or finished)
+    flaggable = session.status != "finished"
+    flag_last = rows[0] if rows and flaggable and rows[0].unsafe is None else None
     return {
         "session": session,
         "status": session.status,
@@ -167,7 +171,10 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         ),
         "infeasible": list(reversed(session.infeasible_gaits()))[:20],
         "multi": len(actions) > 1,
-        "chronology": chronology(session),
+        "chronology": rows,
+        "flag_last": flag_last,
+        # its shortcut, shown (on its button, in the list) only where the button is
+        "flag_key": None if flag_last is None else views.FLAG_KEY,
         "notes": list(reversed(session.notes()))[:20],
         "best": None
         if best is None

@@ -15,7 +15,8 @@ by the session):
 
 Keyboard: comparisons ``1`` (first), ``2`` (second), ``0`` (no preference); once every
 comparison is answered the digits ``1..K`` rate the gait; suggestions per feature row
-``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less").
+``Q W E R T`` / ``A S D F G`` / ``Z X C V B`` (from "more" to "less"); ``N`` opens the last
+trial's unsafe flag (:data:`FLAG_KEY`).
 """
 
 from __future__ import annotations
@@ -34,6 +35,11 @@ COMPARISON_KEYS = {"first": "1", "second": "2", "none": "0"}
 #: leaves a gait unrated (after the comparisons, as the digits 1..K rate it)
 RATING_SKIP_KEY = "0"
 UNDO_KEY = "u"
+#: opens "Flag trial N unsafe" (the last trial's) with the focus in its reason; it flags nothing
+#: by itself. ``N`` is the one letter besides the note's ``M`` that no suggestion row takes, with
+#: any number of features (rows past the fifth have no keys); the terminal's ``x`` is the third
+#: feature's "slightly more" here
+FLAG_KEY = "n"
 
 
 def undo_key(space: Space) -> str | None:

@@ -12,7 +12,10 @@ an ask on the scalable path is mostly memory-bound (normal draws, axis-wise prio
 the argmax) around ``2 A m`` flops of matrix products.  At 1,048,576 actions and 300 comparisons
 an ask + tell took a median 0.059 s with one thread against 0.155 s with two (p95 0.065 s
 against 1.2 s) at load 2.2, and 0.06-0.13 s against 0.19-0.78 s at load 5 (the same script's
-first run, commit 717ee57).  So the loop uses :func:`one_blas_thread` at every size.
+first run, commit 717ee57).  So the loop uses :func:`one_blas_thread` at every size, and so
+does the confidence (``loop/stopping.py``): 2000 draws over the 90 gaits of the paper's 2-D
+grid took 0.4-0.8 s with BLAS's default threads at load 4 on 2 cores and 9 ms with one, after
+every answer and for every row of an export (``benchmarks/results/long.md``).
 
 Independent fits of one step (a warm start's share hypotheses, ``share_mix.py``) may instead run
 side by side in threads (:func:`in_threads`), each on one BLAS thread: NumPy and LAPACK release

@@ -14,6 +14,9 @@
   it gets a hollow circle, "highest mean (may not be proposed)".  Neither is drawn while the
   posterior mean is flat (nothing learned yet).  A legend names the marks and the crosses.
 - With a blind validation: the subject's ranking of gaits A/B/C against their posterior mean.
+- With ``[safety] avoid`` or gaits flagged unsafe: the posterior (1-D) and the heat map (2-D)
+  shade the region of avoidance and mark each flag with its radius, as the console's posterior
+  figure does (:mod:`gaitpref.plots.safety`, whose helpers both call: :func:`session_shading`).
 
 Excluded trials are drawn as crosses.  :func:`session_picture` collects plain arrays from a
 session; :func:`render_session` draws them (matplotlib, Agg).
@@ -38,10 +41,12 @@ from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
 from gaitpref.plots import BAND_LABEL, BAND_SD, mark_best, plain
+from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d, safety_shading
 from gaitpref.plots.trials import on_a_grid, render_trials, trials_picture
 from gaitpref.space import FloatArray, IntArray, Space
 
 if TYPE_CHECKING:
+    from gaitpref.model.posterior import Posterior
     from gaitpref.sessions.session import Session
 
 
@@ -59,6 +64,19 @@ class SessionPicture:
     validation: tuple[tuple[str, int, int, float], ...]  # (label, action, subject rank, mean)
     title: str
     recommended: int | None = None  # Session.recommended(): None when no gait may be proposed
+    safety: SafetyShading | None = None  # region of avoidance and unsafe flags, if any
+
+
+def session_shading(session: Session, posterior: Posterior) -> SafetyShading | None:
+    """What a session's figures shade over its ``posterior`` (the console's posterior figure,
+    the session figure): its region of avoidance and its unsafe flags, by the loop's own rule;
+    None when its config avoids nothing and no gait is flagged (nothing to shade, no legend
+    entry)."""
+    config = session.config
+    unsafe = [action for action, _ in session.unsafe_flags().values()]
+    if not (config.safety.avoid or unsafe):
+        return None
+    return safety_shading(posterior, config.safety, config.ordinal, unsafe)
 
 
 def session_picture(session: Session, samples: int = 3, seed: int = 0) -> SessionPicture:
@@ -89,6 +107,7 @@ def session_picture(session: Session, samples: int = 3, seed: int = 0) -> Sessio
         title=f"session {session.id}: subject {session.subject}, {session.config.name}, "
         f"{len(trials)} trials",
         recommended=session.recommended(),
+        safety=session_shading(session, post),
     )
 
 
@@ -110,6 +129,8 @@ def _posterior_1d(ax: Axes, pic: SessionPicture) -> None:
     if pic.excluded.any():
         ax.scatter(x[pic.trials[~kept]], pic.mean[pic.trials[~kept]], marker="x", c="r", s=30,
                    zorder=3, label="excluded")  # fmt: skip
+    if pic.safety is not None:
+        draw_1d(ax, x, pic.mean, pic.safety)
     mark_best(ax, pic.space.points, pic.mean, pic.recommended)
     ax.set_xlabel(_label(pic.space, 0))
     ax.set_ylabel("utility")
@@ -150,8 +171,10 @@ def _heat_2d(ax: Axes, pic: SessionPicture) -> None:
             ax.scatter(bad[:, 1], bad[:, 0], marker="x", c="r", s=50, zorder=4,
                        label="excluded trial")  # fmt: skip
     mark_best(ax, pic.space.points, pic.mean, pic.recommended)
-    if ax.get_legend_handles_labels()[0]:  # nothing to name before a trial and a preference
-        ax.legend(loc="upper left", fontsize=7, framealpha=0.85)
+    proxies = draw_2d(ax, pic.space, pic.safety) if pic.safety is not None else []
+    handles = [*ax.get_legend_handles_labels()[0], *proxies]
+    if handles:  # nothing to name before a trial, a preference or a flag
+        ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
     ax.set_xlabel(_label(pic.space, 1))
     ax.set_ylabel(_label(pic.space, 0))
     ax.set_title("posterior mean and trials (numbered)")

@@ -223,7 +223,20 @@
   const activates = (target) => !!(target && target.closest
     && target.closest("button, a[href], summary") && !target.closest("#answer-form, #ranking-form"));
 
+  // N (its data-key): "Flag trial N unsafe" opened, the focus in its reason; the flag still
+  // takes the reason, Enter (its review) and Enter (confirm). The key's own repeats, until it
+  // is released, are swallowed: a held N types nothing into the reason
+  const flagLast = document.getElementById("unsafe-last");
+  let flagHeld = null;
+  function openFlag() {
+    flagLast.open = true;
+    const field = flagLast.querySelector("[name=reason]");
+    if (field) field.focus();
+  }
+  document.addEventListener("keyup", (event) => { if (event.code === flagHeld) flagHeld = null; });
+
   document.addEventListener("keydown", (event) => {
+    if (flagHeld !== null && event.code === flagHeld && event.repeat) { event.preventDefault(); return; }
     if (event.ctrlKey || event.metaKey || event.altKey) return;
     if (dialog && dialog.open) {
       const onBack = document.activeElement && document.activeElement.hasAttribute("data-confirm-no");
@@ -246,6 +259,12 @@
       return;
     }
     if (key === "Enter" && activates(event.target)) return;
+    if (flagLast && flagLast.dataset.key && key === flagLast.dataset.key) {
+      event.preventDefault();
+      flagHeld = event.code;
+      openFlag();
+      return;
+    }
     if (answer) {
       if (key === "Enter") { event.preventDefault(); answer.requestSubmit(); return; }
       if (key === "m") { event.preventDefault(); document.getElementById("note").focus(); return; }
