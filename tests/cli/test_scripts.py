@@ -225,7 +225,7 @@ def test_configs_json_lists_every_shipped_config() -> None:
     compass = next(r for r in rows if r["name"] == "compass-gait")
     assert (compass["n"], compass["b"]) == (2, 0) and compass["space"] == "24"
     table = runner.invoke(app, ["configs"])
-    assert table.exit_code == 0 and "compass-gait" in table.stdout  # long names fold at 80
+    assert table.exit_code == 0 and "compass-gait" in table.stdout  # names whole at 80: below
 
 
 def test_an_objective_that_prints_does_not_break_the_json(tmp_path: Path) -> None:
