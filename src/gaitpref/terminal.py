@@ -1018,7 +1018,8 @@ class Terminal:
         while True:
             if ranking is None:
                 self.console.print(
-                    f"The subject's ranking, best first (e.g. {''.join(plan.labels)}):",
+                    f"The subject's ranking, best first (e.g. {''.join(plan.labels)}; "
+                    "u withdraw the round, q quit):",
                     markup=False,
                 )
                 given = self.read().strip()
@@ -1114,7 +1115,9 @@ def run_validation(
         if record_with is not None and terminal.shown_gaits is not None:
             terminal.console.print(
                 "No ranking recorded; the round stays open (no trials are proposed until it is "
-                f"answered).  Record it with: {record_with(terminal.shown_gaits)}",
+                "answered or withdrawn: gaitpref session validate "
+                f"{session.id} --withdraw --reason TEXT).  Record it with: "
+                f"{record_with(terminal.shown_gaits)}",
                 markup=False,
             )
         return False

@@ -78,6 +78,7 @@ def test_quitting_the_ranking_prompt_says_the_round_stays_open(db: str) -> None:
     """It ended silently with status 0, the round left open."""
     code, out = _invoke("session", "validate", "1", "--db", db, answer="q\n")
     assert code == 0 and "The subject's ranking, best first" in out
+    assert "u withdraw the round, q quit" in " ".join(out.split())  # the prompt's keys
     assert "No ranking recorded; the round stays open" in out
     assert f"Record it with: gaitpref session validate 1 --db {db}" in " ".join(out.split())
     with Session.open(db, 1) as s:

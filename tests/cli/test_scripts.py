@@ -225,7 +225,7 @@ def test_configs_json_lists_every_shipped_config() -> None:
     compass = next(r for r in rows if r["name"] == "compass-gait")
     assert (compass["n"], compass["b"]) == (2, 0) and compass["space"] == "24"
     table = runner.invoke(app, ["configs"])
-    assert table.exit_code == 0 and "compass-gait" in table.stdout  # long names fold at 80
+    assert table.exit_code == 0 and "compass-gait" in table.stdout  # names whole at 80: below
 
 
 def test_an_objective_that_prints_does_not_break_the_json(tmp_path: Path) -> None:
@@ -255,3 +255,17 @@ def test_an_objective_that_prints_does_not_break_the_json(tmp_path: Path) -> Non
     assert isinstance(json.loads(rated.stdout), dict) and "evaluating 90" in rated.stderr
     plain = runner.invoke(app, ["simulate", POPULATION, "--objective", spec, "--trials", "3"])
     assert plain.exit_code == 0 and "evaluating" in plain.stdout  # without --json, as before
+
+
+def test_the_configs_table_names_every_config_whole_off_a_terminal() -> None:
+    """At 80 columns off a terminal (a pipe), the configs table cut a long name to
+    ``exo-2d-length-durati…``: a name that cannot be typed as shown.  Each is whole on its row."""
+    from gaitpref.config import shipped_configs
+    from tests.cli.scriptkit import run_script
+
+    result = run_script("configs")
+    assert result.returncode == 0 and result.stderr == ""
+    assert "…" not in result.stdout
+    assert max(len(line) for line in result.stdout.splitlines()) <= 80
+    rows = [line.split("│")[1].strip() for line in result.stdout.splitlines() if "│" in line]
+    assert set(shipped_configs()) <= set(rows)

@@ -62,6 +62,8 @@ def test_the_round_shown_prints_the_command_that_records_its_ranking(db: str) ->
     command = _command(db, _shown(db))
     assert f"To record the ranking later: {command}" in out
     assert "No ranking recorded; the round stays open" in out
+    # a round is answered or withdrawn (the rounds branch): it said "until it is answered"
+    assert "until it is answered or withdrawn: gaitpref session validate 1 --withdraw" in out
     assert f"Record it with: {command}" in out
 
 

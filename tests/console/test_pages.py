@@ -203,7 +203,9 @@ def test_validation_pages(client: TestClient) -> None:
     assert post(client, f"/sessions/{sid}/validation", start.fields).status_code == 303
     page = client.get(f"/sessions/{sid}/validation").text
     assert re.findall(r'data-label="([ABC])"', page) == ["A", "B", "C"]
-    assert "A blind validation round is open" in client.get(f"/sessions/{sid}").text
+    trial_page = client.get(f"/sessions/{sid}").text
+    assert "A blind validation round is open" in trial_page
+    assert "or withdraw the round there, unanswered" in trial_page  # not the ranking alone
     rank = forms_of(page)["ranking-form"]
     assert rank.selects["rank1"] == ["", "A", "B", "C"]
     r = post(client, rank.action, {**rank.fields, "rank1": "C", "rank2": "", "rank3": "A"})

@@ -568,3 +568,27 @@ def test_an_export_into_a_link_to_an_empty_folder_fills_that_folder(
     imported = import_session(MemoryStorage(), target)
     assert imported.last_seq == n
     imported.close()
+
+
+def test_features_named_learned_or_made_keep_the_confidence_columns(tmp_path: Path) -> None:
+    """The confidence table's ``learned`` and ``made`` columns (added after the rule above) were
+    not among the names a feature's column is renamed from: a feature named ``learned`` wrote its
+    value over the column (and ``made`` likewise), so a row said a preference was learned where
+    it held a step length."""
+    from gaitpref.config import parse_config
+
+    text = NAMED_LIKE_COLUMNS.replace("[space.mean]", "[space.learned]").replace(
+        "[space.action]", "[space.made]"
+    )
+    s = Session.create(MemoryStorage(), parse_config(text), "S01", seed=1)
+    for _ in range(2):
+        q = s.next_query()
+        s.answer(q.id, [(a, b, "first") for a, b in q.compared])
+    export_session(s, tmp_path / "out", "json")
+    rows = json.loads((tmp_path / "out" / "confidence.json").read_text())
+    assert rows and all(isinstance(row["learned"], bool) for row in rows)
+    assert all(row["made"] is None for row in rows)  # no gaits made on demand
+    for row in rows:
+        if row["learned"]:
+            values = s.space.values_of(row["action"])
+            assert (row["learned_value"], row["made_value"]) == (values["learned"], values["made"])

@@ -404,12 +404,15 @@ def list_configs(
                 "description": cfg.description,
             }
         )
-    if as_json:  # for scripts: the table folds its descriptions at 80 columns off a terminal
+    if as_json:  # for scripts: the table is 80 columns wide off a terminal
         typer.echo(json.dumps(rows))
         return
     table = Table(title="shipped configs")
-    for col in ("name", "space", "n", "b", "description"):
-        table.add_column(col)
+    # a name is what one types: kept whole on one line (at 80 columns, off a terminal,
+    # exo-2d-length-duration was cut to "exo-2d-length-durati…"); the other cells fold
+    table.add_column("name", no_wrap=True, min_width=max(len(str(r["name"])) for r in rows))
+    for col in ("space", "n", "b", "description"):
+        table.add_column(col, overflow="fold")
     for row in rows:
         table.add_row(*(str(value) for value in row.values()))
     console.print(table)

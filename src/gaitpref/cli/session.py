@@ -362,7 +362,8 @@ _WARM_SHOWN = 12
 
 @session_app.command("run")
 def run_session(session_id: IdArgument, db: DbOption = None) -> None:
-    """The interactive loop: show each trial, ask the answer, confirm, write (u undo, q quit)."""
+    """The interactive loop: show each trial, ask the answer, confirm, write (u undo, q pause
+    and quit; inside a blind validation round u withdraws it)."""
     from gaitpref.terminal import run_terminal
 
     with _opened(db, session_id) as session:

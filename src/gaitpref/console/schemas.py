@@ -89,8 +89,9 @@ class GaitOut(BaseModel):
         default=None,
         description="with gaits made on demand, whether this session made its gait (false: a "
         "point no query proposed, such as a coactive suggestion's, never walked, which may prove "
-        "infeasible; recommended may be one); null when gaits are not made on demand, and for a "
-        "blind validation round's gaits (made, as the round showed them)",
+        "infeasible; argmax may be one, and under [gaits] recommend = 'any' recommended); null "
+        "when gaits are not made on demand, and for a blind validation round's gaits (made, as "
+        "the round showed them)",
     )
 
 

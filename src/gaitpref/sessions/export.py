@@ -312,7 +312,7 @@ FIXED_COLUMNS: Final = frozenset(
         *("exclusion_reason", "exclusion_detail", "undone", "seq", "at", "mean", "sd", "round"),
         *("label", "role", "posterior_mean", "subject_rank", "model_rank", "agrees"),
         *("kendall_tau", "answers", "trials", "probability", "regret", "relative_regret"),
-        *("tolerance", "samples", "opened_by"),
+        *("tolerance", "samples", "opened_by", "learned", "made"),
     }
 )
 

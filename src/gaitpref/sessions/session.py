@@ -385,8 +385,8 @@ class Session:
 
         Refuses (and writes nothing) for a stale or unknown ``query_id``, actions off the grid or
         not in the query, a session that is finished or paused, and while a blind validation
-        round is open (:class:`SessionStateError`: record its ranking first; the query stays
-        pending).
+        round is open (:class:`SessionStateError`: record its ranking first, or withdraw the
+        round; the query stays pending).
         """
         if not is_count(query_id):
             raise QueryError(
@@ -765,11 +765,10 @@ class Session:
         """Why the ``[stop]`` rule, which says to stop now, cannot open blind validation: no
         round can be drawn (fewer than three gaits may be shown: unsafe flags, the region of
         avoidance, gaits made so far; or the posterior mean is flat).  None when there is no
-        rule, it says go on, a round was opened before, one can be drawn, or the session is
-        finished.  The terminal and
-        the console show it after each answer: the rule cannot act, and the operator decides
-        (finish the session, or go on: the rule opens the round after the first answer that
-        lets one be drawn)."""
+        rule, it says go on, a round is open or answered (a withdrawn one does not count), one
+        can be drawn, or the session is finished.  The terminal and the console show it after
+        each answer: the rule cannot act, and the operator decides (finish the session, or go
+        on: the rule opens the round after the first answer that lets one be drawn)."""
 
         def run() -> str | None:
             st = self._state
@@ -789,7 +788,8 @@ class Session:
 
     def _stop_if_sure(self) -> str | None:
         """After an answer: the first time the ``[stop]`` rule says stop, open blind validation
-        (one round; the operator may go on afterwards, the rule does not reopen it) and return
+        (while no round is open or answered: the operator may go on afterwards, and the rule
+        opens none again unless that round is withdrawn) and return
         the rule's reason (None: no round was opened).  When no round can be drawn, nothing is
         written and :meth:`stop_blocked` says why."""
         st = self._state
@@ -1034,9 +1034,10 @@ class Session:
     def gait_made(self, action: int) -> bool | None:
         """Whether ``action``'s gait was made by this session (gaits on demand: a query proposed
         it and it could be made); False for a point whose gait is not made (a coactive
-        suggestion's, on the line path, which the recommendation may be: it is made, or found
-        infeasible and skipped, when a query proposes it); None when gaits are not made on
-        demand (a library's, or none)."""
+        suggestion's, on the line path, which the posterior's argmax may be, and under
+        ``[gaits] recommend = "any"`` the recommendation: it is made, or found infeasible and
+        skipped, when a query proposes it); None when gaits are not made on demand (a
+        library's, or none)."""
         return self._state.gait_made(action)
 
     def describe(self, action: int) -> str:
