@@ -1,10 +1,11 @@
 """The operator's terminal loop: show the trial, ask the answer with single keys, confirm, write.
 
-One iteration (n = 1, b = 1, the paper's protocol)::
+One iteration (n = 1, b = 1, the paper's protocol), after the opening line that names the keys
+(``Keys: u undo the last answer, q pause and quit.``)::
 
     Trial 5: run g08 (step_length=0.1371 m)
       compare with trial 4: g07 (step_length=0.1229 m)
-    Trial 5 against trial 4: 1 this one, 2 the previous one, 0 no preference  (u undo, q quit)
+    Trial 5 against trial 4: 1 this one, 2 the previous one, 0 no preference
     Suggestion for step_length: 1 longer, 2 slightly longer, 3 slightly shorter, 4 shorter, 0 none
     Rating of trial 5: 1 very bad, 2 bad, 3 okay, 4 good, Enter to skip     (with [feedback.rating])
     Write: trial 5 preferred to trial 4; step_length slightly longer.  y yes, n re-enter,

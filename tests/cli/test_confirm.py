@@ -117,3 +117,12 @@ def test_a_script_without_stdin_is_refused_at_once_and_stdout_holds_only_the_res
     run = run_script("session", "finish", "1", "--db", db, "--yes")
     assert run.returncode == 0, run.stderr
     assert run.stdout == "session 1 finished\n" and run.stderr == ""
+
+
+def test_undo_with_nothing_to_undo_says_so_before_asking(tmp_path: Path) -> None:
+    """It asked "Undo the last answer of session 1?" and only after a yes said nothing was
+    there to undo."""
+    url = f"sqlite:///{tmp_path / 'empty.db'}"
+    Session.create(url, CONFIG, "S01").close()
+    code, out = _invoke("session", "undo", "1", "--db", url, answer="y\n")
+    assert code == 2 and "nothing to undo" in out and "Undo the last answer" not in out

@@ -720,6 +720,7 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
     with _opened(db, session_id) as session:
         if session.status == "finished":
             fail(f"session {session_id} is finished: nothing can be undone")
+        guard(lambda: session.check_change("undo"))  # nothing to undo: said before the question
         _confirm(f"Undo the last answer of session {session_id}?", yes)
 
         def undo_last(s: Session) -> tuple[list[Trial], int | None, SessionQuery | None]:
@@ -865,7 +866,9 @@ def export(
     fmt: Annotated[str, typer.Option("--format", help="csv or json.")] = "csv",
     db: DbOption = None,
 ) -> None:
-    """Export events, trials, comparisons and the posterior, with a manifest."""
+    """Export a session to a folder: its event log, config and manifest, and one table each of
+    trials, comparisons, suggestions, ratings (with [feedback.rating]), the posterior, blind
+    validation and the confidence after every answer (docs/sessions.md lists the columns)."""
     from gaitpref.cli.main import progress_bar
     from gaitpref.sessions import export_session
 
