@@ -264,3 +264,18 @@ def test_a_1d_posterior_figure_without_a_session_marks_no_best() -> None:
     fig = render(pic)
     assert not {RECOMMENDED_LABEL, HIGHEST_LABEL} & set(_marks(fig))
     plt.close(fig)
+
+
+def test_the_trials_colour_bar_label_clears_the_posterior_means_bar(two_d: Session) -> None:
+    """The trials' bar is carved out of the gap next to the axes; at matplotlib's default gap
+    its label "trial" was drawn over the posterior mean's bar (the console's screenshot)."""
+    post = two_d.posterior()
+    fig = render(posterior_picture(post, [t.action for t in two_d.trials()], samples=0))
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    bars = {ax.get_ylabel(): ax for ax in fig.axes if ax.get_label() == "<colorbar>"}
+    label = bars["trial"].yaxis.label.get_window_extent(renderer)
+    ticks = bars["trial"].get_tightbbox(renderer)
+    mean_bar = bars["posterior mean"].get_window_extent(renderer)
+    assert label.x1 <= mean_bar.x0 and ticks is not None and ticks.x1 <= mean_bar.x0
+    plt.close(fig)

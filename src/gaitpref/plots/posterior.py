@@ -125,11 +125,19 @@ def _draw_1d(pic: PosteriorPicture, fig: Figure) -> None:
     ax.legend(loc="best", fontsize=8)
 
 
-def _heat(ax: Axes, pic: PosteriorPicture, values: FloatArray, title: str) -> None:
+#: the gap between the posterior mean's colour bar and its axes when the trials' colour bar is
+#: carved out of that gap's left (next to the axes): room for the trials' ticks and label, which
+#: overlapped the posterior mean's bar at matplotlib's default 0.05
+TRIALS_BAR_ROOM = 0.15
+
+
+def _heat(
+    ax: Axes, pic: PosteriorPicture, values: FloatArray, title: str, pad: float = 0.05
+) -> None:
     fx, fy = pic.space.features
     grid = values.reshape(pic.space.shape)
     mesh = ax.pcolormesh(fy.array, fx.array, grid, shading="nearest", cmap="viridis")
-    plt.colorbar(mesh, ax=ax, fraction=0.046, label=title)
+    plt.colorbar(mesh, ax=ax, fraction=0.046, pad=pad, label=title)
     ax.set_xlabel(_axis_label(pic.space, 1))
     ax.set_ylabel(_axis_label(pic.space, 0))
     ax.set_title(title)
@@ -141,7 +149,7 @@ def _draw_2d(pic: PosteriorPicture, fig: Figure) -> None:
     if pic.objective is not None:
         _heat(axes[0], pic, pic.objective, "true objective")
     ax = axes[-1]
-    _heat(ax, pic, pic.mean, "posterior mean")
+    _heat(ax, pic, pic.mean, "posterior mean", TRIALS_BAR_ROOM if pic.trials.size else 0.05)
     if pic.trials.size:
         pts = pic.space.points[pic.trials]
         ax.plot(pts[:, 1], pts[:, 0], color="w", lw=0.6, alpha=0.6)
