@@ -350,7 +350,8 @@ class SQLStorage(CheckedCreation):
 
         PostgreSQL: the server's advisory lock of the session (``pg_advisory_xact_lock``,
         waiters served in turn, the wait bounded by ``lock_timeout``), held by a transaction of
-        its own, which ends with the turn (or when its connection is lost).  Without it two
+        its own, which ends with the turn (or when its connection is lost; the server's
+        ``idle_in_transaction_session_timeout`` is off for it).  Without it two
         writers of one session (the console and the terminal) raced: the one whose append lost
         the compare-and-set raised ``ConflictError`` ("another writer appended to it; reload
         it").
@@ -374,7 +375,15 @@ class SQLStorage(CheckedCreation):
             conn = self.engine.connect()
             try:
                 timeout = f"{max(1, int(wait_s * 1000))}ms"
-                conn.execute(select(func.set_config("lock_timeout", timeout, True)))
+                # the transaction is idle while the session computes (a refit, a replay): a
+                # server's idle_in_transaction_session_timeout ended it, and the turn with it,
+                # mid-operation (another writer then wrote first); off for it alone (SET LOCAL)
+                conn.execute(
+                    select(
+                        func.set_config("lock_timeout", timeout, True),
+                        func.set_config("idle_in_transaction_session_timeout", "0", True),
+                    )
+                )
                 conn.execute(select(func.pg_advisory_xact_lock(_TURN_SPACE, session_id)))
             except OperationalError as exc:
                 conn.close()
