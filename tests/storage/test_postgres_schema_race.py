@@ -99,6 +99,29 @@ def test_a_second_creation_waits_for_the_first_and_finds_the_schema(
         store.close()
 
 
+def test_a_second_migration_waits_for_the_first(postgres_url: str) -> None:
+    """A database at the first revision migrated by two ``db upgrade`` at once: the second read
+    the old revision, then failed adding the column the first had added."""
+    engine = create_engine(postgres_url)
+    try:
+        with engine.begin() as conn:
+            migrate.upgrade(conn, migrate.known_revisions()[0])
+        with engine.connect() as first:
+            first.begin()
+            migrate.upgrade(first)  # the first migration, not committed yet
+            second = _gaitpref("db", "upgrade", "--db", postgres_url)
+            try:
+                _waiting_on_a_lock(postgres_url, second)
+            finally:
+                first.commit()
+            out = second.communicate(timeout=WAIT_S)[0]
+        assert second.returncode == 0 and "already exists" not in out, out
+        with engine.connect() as conn:
+            assert migrate.current_revision(conn) == migrate.head_revision()
+    finally:
+        engine.dispose()
+
+
 def test_two_threads_upgrading_one_empty_database_both_succeed(postgres_url: str) -> None:
     """Two threads (each its own engine) hung: Alembic's proxies are module globals, so one's
     migrations ran on the other's connection, which waited on the first's transaction."""
