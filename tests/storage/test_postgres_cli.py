@@ -3,6 +3,10 @@ database that cannot be reached is an error (exit status 2), for ``db status`` t
 
 from __future__ import annotations
 
+import shlex
+import subprocess
+from pathlib import Path
+
 import pytest
 from typer.testing import CliRunner
 
@@ -119,3 +123,42 @@ def test_a_password_given_as_a_url_parameter_is_hidden_too() -> None:
         code, out = _run(*command, "--db", url)
         assert code == 2 and "topsecret" not in out and "password=***" in out, (command, out)
     assert "topsecret" not in _resume_hint(1, url) and "password=***" in _resume_hint(1, url)
+
+
+@pytest.mark.postgres
+def test_the_pg_dump_command_keeps_the_urls_parameters_and_works(
+    postgres_url: str, tmp_path: Path
+) -> None:
+    """The command printed for a URL with ``?sslmode=...`` and other libpq parameters left them
+    out (a lab whose server requires SSL got a command that could not connect); it now carries
+    them, never the password, and it dumps the database as printed."""
+    from tests.conftest import _pg_bindir
+
+    bindir = _pg_bindir()
+    if bindir is None or not (bindir / "pg_dump").exists():
+        pytest.skip("no pg_dump on this machine (Debian's postgresql package has it)")
+    query = "sslmode=disable&connect_timeout=10&application_name=gait%27s%20lab&password=s3cret"
+    url = postgres_url.replace("gaitpref@", f"gaitpref:{ENCODED}@") + "?" + query
+    code, _ = _run("db", "upgrade", "--db", url)
+    assert code == 0
+    out = tmp_path / "lab dump"
+    code, said = _run("db", "backup", str(out), "--db", url)
+    assert code == 2, said
+    said = " ".join(said.split())
+    assert "s3cret" not in said and ENCODED not in said and PASSWORD not in said, said
+    command = said.split("`")[1]
+    words = shlex.split(command)
+    assert words[0] == "pg_dump" and f"--file={out}" in words, command
+    assert words[-1] == (
+        f"dbname={postgres_url.rsplit('/', 1)[1]} sslmode=disable connect_timeout=10 "
+        "application_name='gait\\'s lab'"
+    ), command
+    done = subprocess.run(
+        ["bash", "-c", str(bindir / "pg_dump") + command.removeprefix("pg_dump")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes().startswith(b"PGDMP")  # pg_dump's custom format

@@ -5,10 +5,22 @@ accepts a database at the newest revision this gaitpref knows; an empty database
 (when allowed); anything else raises :class:`~gaitpref.storage.base.SchemaError` that says what
 to do (a revision this gaitpref does not know was written by a newer gaitpref; an older one needs
 ``gaitpref db upgrade``).
+
+Creating or migrating the schema is done by one process at a time: on PostgreSQL the transaction
+first takes the server's advisory lock :data:`SCHEMA_LOCK` (``pg_advisory_xact_lock``, let go at
+commit or rollback), and only then reads the revision, so two ``gaitpref db upgrade`` (or first
+``gaitpref session new``) at once on an empty database no longer both created the tables (the
+second failed with ``duplicate key value violates unique constraint "pg_type_typname_nsp_index"``
+or ``relation "alembic_version" already exists``): the second waits for the first to commit and
+finds the schema made.  SQLite's ``BEGIN IMMEDIATE`` write transaction serialises them already.
+Within one process Alembic's ``context`` and ``op`` are module globals, so its runs are
+serialised by a thread lock too (two threads upgrading at once wired one's migrations to the
+other's connection and hung).
 """
 
 from __future__ import annotations
 
+import threading
 from functools import cache
 from importlib import resources
 from typing import TYPE_CHECKING
@@ -22,6 +34,13 @@ if TYPE_CHECKING:  # alembic is imported when first needed: it costs a tenth of 
     from alembic.script import ScriptDirectory
 
 _TABLES = {"subjects", "sessions", "events"}
+
+#: PostgreSQL's advisory lock held while the schema is created or migrated: one 64-bit key,
+#: "gaitpref" in ASCII (a key space apart from the two-key locks of the writers' turns)
+SCHEMA_LOCK = 0x6761697470726566
+
+#: Alembic's ``context``/``op`` proxies are module globals: one run in this process at a time
+_ALEMBIC = threading.Lock()
 
 
 def _config(connection: Connection | None = None) -> Config:
@@ -63,22 +82,38 @@ def current_revision(connection: Connection) -> str | None:
     return str(rows[0])
 
 
+def lock_schema(connection: Connection) -> None:
+    """On PostgreSQL, wait for (then hold, until the transaction ends) :data:`SCHEMA_LOCK`:
+    the schema is read after another process's creation or migration committed."""
+    if connection.dialect.name == "postgresql":
+        connection.execute(text("SELECT pg_advisory_xact_lock(:key)"), {"key": SCHEMA_LOCK})
+
+
+def _run_upgrade(connection: Connection, revision: str) -> None:
+    from alembic import command
+
+    with _ALEMBIC:
+        command.upgrade(_config(connection), revision)
+
+
 def upgrade(connection: Connection, revision: str = "head") -> None:
     """Migrate the database on ``connection`` (inside its transaction) to ``revision``."""
+    lock_schema(connection)
     current = current_revision(connection)
     _check_known(current)
     if current is None:
         _check_empty(connection)
-    from alembic import command
-
-    command.upgrade(_config(connection), revision)
+    _run_upgrade(connection, revision)
 
 
 def check_schema(connection: Connection, where: str, create: bool) -> bool:
     """Check the schema on open; create it in an empty database if ``create``.
 
-    Returns True when it created the schema.
+    Returns True when it created the schema.  With ``create`` it waits first for another
+    process's creation or migration (:func:`lock_schema`).
     """
+    if create:
+        lock_schema(connection)
     current = current_revision(connection)
     if current is None:
         _check_empty(connection)
@@ -87,9 +122,7 @@ def check_schema(connection: Connection, where: str, create: bool) -> bool:
                 f"{where} holds no gaitpref database; create one with "
                 "`gaitpref db upgrade` or `gaitpref session new`"
             )
-        from alembic import command
-
-        command.upgrade(_config(connection), "head")
+        _run_upgrade(connection, "head")
         return True
     _check_known(current)
     head = head_revision()

@@ -350,7 +350,8 @@ class SQLStorage(CheckedCreation):
 
         PostgreSQL: the server's advisory lock of the session (``pg_advisory_xact_lock``,
         waiters served in turn, the wait bounded by ``lock_timeout``), held by a transaction of
-        its own, which ends with the turn (or when its connection is lost).  Without it two
+        its own, which ends with the turn (or when its connection is lost; the server's
+        ``idle_in_transaction_session_timeout`` is off for it).  Without it two
         writers of one session (the console and the terminal) raced: the one whose append lost
         the compare-and-set raised ``ConflictError`` ("another writer appended to it; reload
         it").
@@ -374,7 +375,15 @@ class SQLStorage(CheckedCreation):
             conn = self.engine.connect()
             try:
                 timeout = f"{max(1, int(wait_s * 1000))}ms"
-                conn.execute(select(func.set_config("lock_timeout", timeout, True)))
+                # the transaction is idle while the session computes (a refit, a replay): a
+                # server's idle_in_transaction_session_timeout ended it, and the turn with it,
+                # mid-operation (another writer then wrote first); off for it alone (SET LOCAL)
+                conn.execute(
+                    select(
+                        func.set_config("lock_timeout", timeout, True),
+                        func.set_config("idle_in_transaction_session_timeout", "0", True),
+                    )
+                )
                 conn.execute(select(func.pg_advisory_xact_lock(_TURN_SPACE, session_id)))
             except OperationalError as exc:
                 conn.close()
@@ -696,12 +705,30 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
         parts.append(f"--port={shlex.quote(str(port))}")
     if url.username:
         parts.append(f"--username={shlex.quote(url.username)}")
-    parts.append(shlex.quote(url.database or ""))
+    # the URL's other libpq parameters (?sslmode=require&sslrootcert=...) were left out, and
+    # pg_dump has no flag for most: the database is then a conninfo string that carries them
+    # (its values override nothing the flags give); the password is never among them
+    extra = {k: v for k, v in url.query.items() if k not in ("host", "port", "password")}
+    if extra:
+        pairs = {"dbname": url.database or "", **extra}
+        parts.append(shlex.quote(" ".join(f"{k}={_conninfo_value(v)}" for k, v in pairs.items())))
+    else:
+        parts.append(shlex.quote(url.database or ""))
     secret = " (the password: $PGPASSWORD or ~/.pgpass)" if _has_password(url) else ""
     return (
         f"back a PostgreSQL database up with its own tool, e.g. `{' '.join(parts)}`{secret}; "
         "restore with pg_restore"
     )
+
+
+def _conninfo_value(value: str | tuple[str, ...]) -> str:
+    """A libpq ``key=value`` connection string's value, quoted where it must be (empty, or with
+    a space, ``'`` or ``\\``); a repeated URL parameter: its values joined by commas, as libpq
+    reads several hosts."""
+    joined = value if isinstance(value, str) else ",".join(value)
+    if joined and not any(c.isspace() or c in "'\\" for c in joined):
+        return joined
+    return "'" + joined.replace("\\", "\\\\").replace("'", "\\'") + "'"
 
 
 def _has_tables(url: URL) -> bool:
