@@ -210,5 +210,5 @@ def trial_context(
         "figure_alt": figure_alt(
             session, len(trials), None if best is None else session.gait_name(best), learned
         ),
-        "features": space.features,
+        "suggestion_keys": views.suggestion_shortcuts(space),
     }
