@@ -11,6 +11,7 @@ from typing import Any
 import httpx
 import pytest
 
+from gaitpref.console.trial_page import RECENT_TRIALS
 from tests.console.test_ratings_safety import rated_config
 
 pytestmark = pytest.mark.browser
@@ -341,5 +342,41 @@ def test_two_gaits_a_query_answered_by_keys_alone(chromium: Any, live: str) -> N
     assert first.nth(2).inner_text() == "< trial 2"
     assert first.nth(3).inner_text().startswith("step length: longer")
     assert second.nth(3).inner_text().startswith("step length: shorter")
+    assert errors == []
+    context.close()
+
+
+def test_an_old_trial_is_excluded_from_the_list_of_every_trial(chromium: Any, live: str) -> None:
+    """A long session's page lists the recent trials; "Show all" lists every one, and an old
+    trial's exclusion (the confirm dialog) goes back to that list."""
+    sid = httpx.post(
+        f"{live}/api/sessions", json={"config": "exo-1d-step-length", "subject": "S06"}
+    )
+    sid = sid.json()["id"]
+    for _ in range(RECENT_TRIALS + 2):
+        q = httpx.get(f"{live}/api/sessions/{sid}/query").json()
+        body = {
+            "query_id": q["query_id"],
+            "comparisons": [[i, j, "first"] for i, j in q["comparisons"]],
+        }
+        assert httpx.post(f"{live}/api/sessions/{sid}/answers", json=body).status_code == 200
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    assert page.locator("#chronology tr[data-trial]").count() == RECENT_TRIALS
+    page.click("#all-trials")
+    page.wait_for_selector("#recent-trials")
+    assert page.locator("#chronology tr[data-trial]").count() == RECENT_TRIALS + 2
+    row = "#chronology tr[data-trial='1']"
+    page.click(f"{row} details.exclude summary")
+    page.select_option(f"{row} select[name=reason]", "stumble")
+    page.click(f"{row} .exclude-form button[type=submit]")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.click("#confirm-dialog [data-confirm-yes]")
+    page.wait_for_selector("#flash:has-text('Trial 1 excluded')")
+    assert "trials=all" in page.url
+    assert page.locator("#chronology tr[data-trial]").count() == RECENT_TRIALS + 2
+    assert [t["excluded"] for t in trials(live, sid) if t["trial"] == 1] == ["stumble"]
+    page.click("#recent-trials")
+    page.wait_for_selector("#all-trials")
+    assert page.locator("#chronology tr[data-trial]").count() == RECENT_TRIALS
     assert errors == []
     context.close()

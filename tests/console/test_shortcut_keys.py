@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 
+import pytest
 from fastapi.testclient import TestClient
 
 from gaitpref.config.schema import MAX_FEATURES
@@ -88,3 +89,33 @@ def test_the_flag_key_is_shown_on_its_button_and_listed_only_where_the_button_is
     assert r.status_code == 200, r.text
     html = client.get(f"/sessions/{sid}").text
     assert flag_summary(html) is None and FLAG_LISTED not in html
+
+
+def listed_rows(html: str) -> list[tuple[str, str]]:
+    """The suggestion rows of the page's list of shortcuts: (feature, its keys) in order."""
+    m = re.search(r'<details class="shortcuts">(.*?)</details>', html, re.S)
+    assert m, "no list of shortcuts"
+    found = re.findall(r"<li>([\w ]+): ((?:<kbd>[^<]</kbd> )+)\(from", m.group(1))
+    return [(name, "".join(re.findall(r"<kbd>([^<])</kbd>", keys))) for name, keys in found]
+
+
+def test_the_listed_suggestion_keys_are_views_suggestion_rows(client: TestClient) -> None:
+    """The list of shortcuts is rendered from ``views.SUGGESTION_ROWS``, the keys the suggestion
+    buttons take, never written out again (they could drift apart)."""
+    sid = new_session(client, config=FOUR_FEATURES)
+    html = client.get(f"/sessions/{sid}").text
+    expected = [(f"f{k + 1}", row.upper()) for k, row in enumerate(views.SUGGESTION_ROWS[:4])]
+    assert listed_rows(html) == expected
+    for name, keys in expected:  # the buttons' keys, from "more" to "less"
+        pressed = re.findall(rf'name="sug-\d+-{name}" value="[^"]*" data-key="(.)"', html)
+        assert "".join(pressed).upper() == keys
+
+
+def test_the_list_of_shortcuts_follows_a_change_of_the_rows(
+    client: TestClient, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(views, "SUGGESTION_ROWS", ("zxcvb", "qwert", "asdfg"))
+    sid = new_session(client, config=FOUR_FEATURES)
+    html = client.get(f"/sessions/{sid}").text
+    assert listed_rows(html) == [("f1", "ZXCVB"), ("f2", "QWERT"), ("f3", "ASDFG")]  # f4: none
+    assert not re.search(r'name="sug-\d+-f4" value="[^"]*" data-key="."', html)

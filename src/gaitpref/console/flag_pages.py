@@ -16,7 +16,14 @@ from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import Response
 
 from gaitpref.console.errors import InputError
-from gaitpref.console.pages import SessionId, read_form, see_other, service_of
+from gaitpref.console.pages import (
+    SessionId,
+    read_form,
+    see_other,
+    service_of,
+    trial_list,
+    trial_page_url,
+)
 from gaitpref.console.schemas import MAX_ID
 from gaitpref.console.templating import confirm_page
 from gaitpref.console.views import free_text
@@ -35,6 +42,7 @@ async def post_unsafe(
     if not reason:
         raise InputError("reason", "say why the trial was unsafe (the reason is required)")
     free_text(reason, "reason", "the reason")
+    listing = trial_list(fields)  # from the page listing every trial: back to it
     service = service_of(request)
     if fields.get("confirmed") != "1":
 
@@ -61,9 +69,11 @@ async def post_unsafe(
             lines,
             fields,
             f"/sessions/{session_id}/trials/{trial}/unsafe",
+            back=trial_page_url(session_id, listing),
         )
     replaced = await run_in_threadpool(service.flag_unsafe, session_id, trial, reason)
-    return see_other(f"/sessions/{session_id}?flagged={trial}&replaced={int(replaced)}")
+    done = f"flagged={trial}&replaced={int(replaced)}"
+    return see_other(trial_page_url(session_id, done, listing))
 
 
 @router.post("/sessions/{session_id}/trials/{trial}/unsafe/withdraw")
@@ -72,15 +82,17 @@ async def post_withdraw_unsafe(
 ) -> Response:
     """Withdraw the unsafe flag of a trial (confirmed first)."""
     fields, _ = await read_form(request)
+    listing = trial_list(fields)
     if fields.get("confirmed") != "1":
         await run_in_threadpool(  # withdrawn since (another tab), finished: 409 now
             service_of(request).read, session_id, lambda s: s.check_change("withdraw", trial)
         )
         lines = [f"Withdraw the unsafe flag of trial {trial}: its gait may be proposed again."]
         action = f"/sessions/{session_id}/trials/{trial}/unsafe/withdraw"
-        return confirm_page(request, session_id, "withdraw", lines, fields, action)
+        back = trial_page_url(session_id, listing)
+        return confirm_page(request, session_id, "withdraw", lines, fields, action, back=back)
     await run_in_threadpool(service_of(request).withdraw_unsafe, session_id, trial)
-    return see_other(f"/sessions/{session_id}?withdrawn={trial}")
+    return see_other(trial_page_url(session_id, f"withdrawn={trial}", listing))
 
 
 __all__ = ["router"]

@@ -61,6 +61,8 @@ SessionId = Annotated[int, Path(ge=1, le=MAX_ID)]
 #: that the redirect after an answer of n = 40 gaits from trial 1000 on was a 422)
 MAX_FLASH_TRIALS = 64
 MAX_FLASH_TEXT = MAX_FLASH_TRIALS * 19
+#: ``?trials=all``: the trial page lists every trial, not only the recent ones
+ALL_TRIALS = "all"
 
 
 def service_of(request: Request) -> SessionService:
@@ -243,7 +245,10 @@ async def trial_page(
     excluded: Annotated[int | None, Query(ge=1, le=MAX_ID)] = None,
     stop_unchecked: Annotated[int | None, Query(ge=1, le=1)] = None,
     again: Annotated[int | None, Query(ge=1, le=1)] = None,
+    trials: Annotated[str | None, Query(pattern=f"^{ALL_TRIALS}$")] = None,
 ) -> Response:
+    """The trial page; it lists the last ``RECENT_TRIALS`` trials, or every one with
+    ``?trials=all``."""
     for name, text in (("answered", answered), ("undone", undone)):
         if text is not None and text.count(",") >= MAX_FLASH_TRIALS:
             raise InputError(
@@ -251,8 +256,11 @@ async def trial_page(
                 f"names {text.count(',') + 1:,} trials; a query runs at most "
                 f"{MAX_FLASH_TRIALS} gaits ([cospar] n), so a redirect names at most as many",
             )
+    every = trials == ALL_TRIALS
     context = await run_in_threadpool(
-        service_of(request).read, session_id, lambda s: trial_context(s, pending_of(s))
+        service_of(request).read,
+        session_id,
+        lambda s: trial_context(s, pending_of(s), all_trials=every),
     )
     flash = _flash(context, answered, undone, replaced, flagged, withdrawn, excluded, again)
     if stop_unchecked and flash.startswith("Saved:"):
@@ -261,6 +269,23 @@ async def trial_page(
             "warning of the gaitpref.console logger); it is checked again after the next answer."
         )
     return render(request, "trial.html", flash=flash, reasons=REASONS, **context)
+
+
+def trial_list(fields: dict[str, str]) -> str:
+    """The query string that takes a trial's form (flag, withdraw, exclude) back to the list it
+    was posted from: ``trials=all`` from the page listing every trial (its forms carry the field
+    ``trials``), empty from the page of the recent ones."""
+    value = fields.get("trials", "")
+    if value not in ("", ALL_TRIALS):
+        what = f"must be {ALL_TRIALS!r} (the list of every trial) or absent"
+        raise InputError("trials", f"{what}; got {quoted(value)}")
+    return f"trials={ALL_TRIALS}" if value else ""
+
+
+def trial_page_url(session_id: int, *queries: str) -> str:
+    """The trial page with the query strings ``queries`` (empty ones left out)."""
+    parts = "&".join(q for q in queries if q)
+    return f"/sessions/{session_id}" + (f"?{parts}" if parts else "")
 
 
 def _numbers(text: str | None) -> set[int]:
@@ -501,6 +526,7 @@ async def post_exclude(
     detail = views.free_text(fields.get("detail", "").strip(), "detail", "the detail")
     if len(detail) > 500:
         raise InputError("detail", f"at most 500 characters, got {len(detail)}")
+    listing = trial_list(fields)
     service = service_of(request)
     if fields.get("confirmed") != "1":  # an exclusion cannot be taken back: confirmed first
 
@@ -516,9 +542,11 @@ async def post_exclude(
 
         lines = await run_in_threadpool(service.read, session_id, summary)
         action = f"/sessions/{session_id}/trials/{trial}/exclude"
-        return confirm_page(request, session_id, "exclude", lines, fields, action)
+        back = trial_page_url(session_id, listing)
+        return confirm_page(request, session_id, "exclude", lines, fields, action, back=back)
     replaced = await run_in_threadpool(service.exclude, session_id, trial, reason, detail)
-    return see_other(f"/sessions/{session_id}?excluded={trial}&replaced={int(replaced)}")
+    done = f"excluded={trial}&replaced={int(replaced)}"
+    return see_other(trial_page_url(session_id, done, listing))
 
 
 @router.get("/sessions/{session_id}/posterior.png")

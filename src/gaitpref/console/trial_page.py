@@ -19,6 +19,12 @@ from gaitpref.sessions.records import SuggestionRecord
 from gaitpref.sessions.session import Session
 from gaitpref.space import Space
 
+#: the trials the trial page lists with their forms, newest first (as many as its notes and its
+#: gaits that could not be made); the rest are behind "show all" (``?trials=all``): every row
+#: has two forms, about 1.8 kB, and the page is sent again after every answer (762 kB at 400
+#: trials before the cut, benchmarks/results/long.md)
+RECENT_TRIALS = 20
+
 
 @dataclass(frozen=True)
 class ChronoRow:
@@ -111,8 +117,12 @@ def figure_alt(session: Session, trials: int, best: str | None, learned: bool) -
     return text + "."
 
 
-def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
-    """Everything ``trial.html`` renders."""
+def trial_context(
+    session: Session, pending: Pending, *, all_trials: bool = False
+) -> dict[str, Any]:
+    """Everything ``trial.html`` renders: ``chronology`` is every trial in force (what the page
+    says is derived from it: the flash, the last trial's flag), ``listed`` the rows the page
+    lists, the last :data:`RECENT_TRIALS` unless ``all_trials``."""
     space = session.space
     query = pending.query
     actions: list[views.GaitView] = []
@@ -172,6 +182,9 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "infeasible": list(reversed(session.infeasible_gaits()))[:20],
         "multi": len(actions) > 1,
         "chronology": rows,
+        "listed": rows if all_trials else rows[:RECENT_TRIALS],
+        "all_trials": all_trials,
+        "recent_trials": RECENT_TRIALS,
         "flag_last": flag_last,
         # its shortcut, shown (on its button, in the list) only where the button is
         "flag_key": None if flag_last is None else views.FLAG_KEY,
@@ -197,5 +210,5 @@ def trial_context(session: Session, pending: Pending) -> dict[str, Any]:
         "figure_alt": figure_alt(
             session, len(trials), None if best is None else session.gait_name(best), learned
         ),
-        "features": space.features,
+        "suggestion_keys": views.suggestion_shortcuts(space),
     }

@@ -281,6 +281,13 @@ def suggestion_groups(space: Space, actions: Sequence[GaitView]) -> list[Suggest
     return groups
 
 
+def suggestion_shortcuts(space: Space) -> list[tuple[Feature, str]]:
+    """Each feature with its suggestion row's keys (:data:`SUGGESTION_ROWS`, from "more" to
+    "less", as :func:`suggestion_groups` gives its buttons), for the page's list of shortcuts;
+    features past the last row have no keys and are left out."""
+    return list(zip(space.features, SUGGESTION_ROWS, strict=False))
+
+
 def read_answer_form(
     form: Mapping[str, str],
 ) -> tuple[list[tuple[int, int, str]], list[tuple[int, str, str]]]:
