@@ -56,13 +56,19 @@ def test_a_best_so_far_whose_gait_is_not_made_is_said_so(tmp_path: Path) -> None
     assert f'<span id="best-not-made">({NOT_MADE})</span>' in page
 
 
+def _compare_only(s: Session, answers: int) -> None:
+    """``answers`` queries answered with comparisons alone (the new gait preferred), no
+    suggestion: every gait the model knows was proposed, and so made."""
+    for _ in range(answers):
+        q = s.next_query()
+        a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
+        s.answer(q.id, [] if a == b else [(a, b, "first")])
+
+
 def test_a_best_so_far_that_was_walked_says_nothing_more(tmp_path: Path) -> None:
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     with Session.create(url, parse_config(CONTINUOUS), "S01") as s:
-        for _ in range(3):  # comparisons only: the best is a point a query proposed
-            q = s.next_query()
-            a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
-            s.answer(q.id, [] if a == b else [(a, b, "first")])
+        _compare_only(s, 3)  # the best is a point a query proposed
         best = s.recommended()
         assert best is not None and s.gait_made(best) is True
         sid = s.id
@@ -140,10 +146,7 @@ def test_a_walked_best_is_made_in_show_json(tmp_path: Path) -> None:
 
     url = f"sqlite:///{tmp_path / 'lab.db'}"
     with Session.create(url, parse_config(CONTINUOUS), "S01") as s:
-        for _ in range(3):  # comparisons only: the best is a point a query proposed
-            q = s.next_query()
-            a, b = q.actions[0], q.buffer[0] if q.buffer else q.actions[0]
-            s.answer(q.id, [] if a == b else [(a, b, "first")])
+        _compare_only(s, 3)  # the best is a point a query proposed
         sid = s.id
         rows = s.confidence_history()
     out = runner.invoke(app, ["session", "show", str(sid), "--no-figure", "--json", "--db", url])
