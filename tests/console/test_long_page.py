@@ -134,3 +134,26 @@ def test_a_trial_form_naming_another_list_is_refused_before_anything_is_written(
         r = post(client, form.action, bad)
         assert r.status_code == 422 and "trials" in r.text and "&#39;all&#39;" in r.text
     assert event_count(client, sid) == before
+
+
+def test_the_notes_are_cut_as_the_trials_and_every_one_is_behind_show_all(
+    client: TestClient,
+) -> None:
+    """The page showed the last 20 notes and no way to the older ones."""
+    sid = new_session(client)
+    for k in range(1, RECENT_TRIALS + 4):
+        posted = client.post(f"/api/sessions/{sid}/notes", json={"text": f"note number {k}"})
+        assert posted.status_code in (200, 201), posted.text
+    html = client.get(f"/sessions/{sid}").text
+    shown = [int(k) for k in re.findall(r"note number (\d+)<", html)]
+    assert shown == list(range(RECENT_TRIALS + 3, 3, -1))  # the newest 20, newest first
+    assert f"The last {RECENT_TRIALS} of {RECENT_TRIALS + 3} notes" in html
+    assert f'href="/sessions/{sid}?trials=all#notes"' in html
+    every = client.get(f"/sessions/{sid}?trials=all").text
+    assert [int(k) for k in re.findall(r"note number (\d+)<", every)] == list(
+        range(RECENT_TRIALS + 3, 0, -1)
+    )
+    assert 'id="notes-recent"' not in every
+    few = new_session(client)
+    client.post(f"/api/sessions/{few}/notes", json={"text": "one note"})
+    assert 'id="notes-recent"' not in client.get(f"/sessions/{few}").text

@@ -19,8 +19,8 @@ from gaitpref.sessions.records import SuggestionRecord
 from gaitpref.sessions.session import Session
 from gaitpref.space import Space
 
-#: the trials the trial page lists with their forms, newest first (as many as its notes and its
-#: gaits that could not be made); the rest are behind "show all" (``?trials=all``): every row
+#: the trials the trial page lists with their forms, newest first (and as many of its notes and of
+#: its gaits that could not be made); the rest are behind "show all" (``?trials=all``): every row
 #: has two forms, about 1.8 kB, and the page is sent again after every answer (762 kB at 400
 #: trials before the cut, benchmarks/results/long.md)
 RECENT_TRIALS = 20
@@ -156,6 +156,8 @@ def trial_context(
     # "Flag trial N unsafe" beside the undo: the last trial's, unless flagged (or finished)
     flaggable = session.status != "finished"
     flag_last = rows[0] if rows and flaggable and rows[0].unsafe is None else None
+    # newest first, cut as the trials are (every one with ?trials=all)
+    notes, infeasible = list(reversed(session.notes())), list(reversed(session.infeasible_gaits()))
     return {
         "session": session,
         "status": session.status,
@@ -179,7 +181,8 @@ def trial_context(
             if len(last) == 1
             else f"trials {', '.join(str(t.number) for t in last)}, one query"
         ),
-        "infeasible": list(reversed(session.infeasible_gaits()))[:20],
+        "infeasible": infeasible if all_trials else infeasible[:RECENT_TRIALS],
+        "infeasible_count": len(infeasible),
         "multi": len(actions) > 1,
         "chronology": rows,
         "listed": rows if all_trials else rows[:RECENT_TRIALS],
@@ -188,7 +191,8 @@ def trial_context(
         "flag_last": flag_last,
         # its shortcut, shown (on its button, in the list) only where the button is
         "flag_key": None if flag_last is None else views.FLAG_KEY,
-        "notes": list(reversed(session.notes()))[:20],
+        "notes": notes if all_trials else notes[:RECENT_TRIALS],
+        "notes_count": len(notes),
         "best": None
         if best is None
         else views.gait_view(space, best, gait_id=session.gait_name(best)),
