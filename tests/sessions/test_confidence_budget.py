@@ -2,7 +2,9 @@
 
 Every sample covers every gait, so ``[stop] samples = 2000`` (the default) cost 7.5 s (idle) to
 15 s (loaded) after each answer on the shipped 57,750-gait ``synthetic-6d`` grid and 2 minutes on
-2**20 gaits, and as much again for every row of an export.  A session now reads at most
+2**20 gaits (BLAS's default threads, as the confidence drew then; on one thread, as now, 21.7 s
+on 57,750 gaits at load 4-5: ``benchmarks/results/stopping.md``), and as much again for every
+row of an export.  A session now reads at most
 ``CONFIDENCE_VALUES`` values (fewer samples on large grids, never fewer than 100); a ``[stop]
 samples`` given past that is refused when a session is created, naming the key, and a session
 stored with one still opens and reads the bounded count.

@@ -48,9 +48,11 @@ BLOCK_ELEMENTS = 1 << 22
 #: over every gait, so 10**12 ran for days, one block at a time.
 MAX_SAMPLES = 100_000
 #: The most sampled values (``samples x gaits``) a session's confidence reads after an answer:
-#: 2000 samples took 7.5 s over 57,750 gaits and 2 minutes over 2**20 (2 cores), after every
-#: answer and for every row of an export; this budget is about 1 s
-#: (``benchmarks/results/stopping.md``).
+#: 2000 samples took 7.5 s over 57,750 gaits and 2 minutes over 2**20 (2 cores, nearly idle,
+#: BLAS's default threads), after every answer and for every row of an export.  This budget
+#: (290 samples over 57,750 gaits, 100 over 2**20) took 1.0 s and 5.9 s there; on one BLAS
+#: thread, as the confidence runs now, 2.0 s and 5.2 s at load 4-5, where BLAS's default
+#: threads took 3.7 s and 5.9 s (medians of 3; ``benchmarks/results/stopping.md``).
 CONFIDENCE_VALUES = 1 << 24
 #: The fewest samples a rule reads however large the grid (``[stop] samples``' least value):
 #: the probability's standard error stays at most 0.05.

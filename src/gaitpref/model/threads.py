@@ -15,7 +15,12 @@ against 1.2 s) at load 2.2, and 0.06-0.13 s against 0.19-0.78 s at load 5 (the s
 first run, commit 717ee57).  So the loop uses :func:`one_blas_thread` at every size, and so
 does the confidence (``loop/stopping.py``): 2000 draws over the 90 gaits of the paper's 2-D
 grid took 0.4-0.8 s with BLAS's default threads at load 4 on 2 cores and 9 ms with one, after
-every answer and for every row of an export (``benchmarks/results/long.md``).
+every answer and for every row of an export (``benchmarks/results/long.md``).  The session
+figure (``plots/session.py``) and the export's posterior and summary (``sessions/export.py``)
+too: the same bytes (grid and line-path sessions), and an export of 100 trials of
+``exo-2d-rated`` in 1.9 s against 6.2 s with the default threads at load 1.3 (its figure 0.31 s
+against 0.39 s; no difference for ``synthetic-2d`` or the line path,
+``benchmarks/results/blas_outputs.md``).
 
 Independent fits of one step (a warm start's share hypotheses, ``share_mix.py``) may instead run
 side by side in threads (:func:`in_threads`), each on one BLAS thread: NumPy and LAPACK release

@@ -40,6 +40,7 @@ from matplotlib.figure import Figure
 from matplotlib.patheffects import withStroke
 from matplotlib.ticker import MaxNLocator
 
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.plots import BAND_LABEL, BAND_SD, mark_best, plain
 from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d, safety_shading
 from gaitpref.plots.trials import on_a_grid, render_trials, trials_picture
@@ -80,7 +81,13 @@ def session_shading(session: Session, posterior: Posterior) -> SafetyShading | N
 
 
 def session_picture(session: Session, samples: int = 3, seed: int = 0) -> SessionPicture:
-    """Collect a session's picture (``samples`` posterior draws with generator ``seed``)."""
+    """Collect a session's picture (``samples`` posterior draws with generator ``seed``), on
+    one BLAS thread as ask, tell and the confidence (``model/threads.py``)."""
+    with one_blas_thread():
+        return _session_picture(session, samples, seed)
+
+
+def _session_picture(session: Session, samples: int, seed: int) -> SessionPicture:
     post = session.posterior()
     space = session.config.space
     if space.ndim > 2:
@@ -238,7 +245,8 @@ def save_session_figure(session: Session, path: str | Path) -> Path:
     else:
         trials = [t.action for t in session.trials()]
         title = f"session {session.id} ({session.subject}): posterior after {len(trials)} trials"
-        pic = trials_picture(post, trials, recommended=session.recommended(), title=title)
+        with one_blas_thread():
+            pic = trials_picture(post, trials, recommended=session.recommended(), title=title)
         fig = render_trials(pic)
     fig.savefig(out, dpi=110)
     plt.close(fig)

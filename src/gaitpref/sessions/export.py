@@ -66,6 +66,7 @@ from gaitpref.errors import ExportError, ReplayError, StorageError
 from gaitpref.feedback import kind_for_event
 from gaitpref.gaits.library_io import MAX_LIBRARY_BYTES as MAX_LIBRARY_BYTES
 from gaitpref.loop.stopping import preference_learned
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.sessions import events as log
 from gaitpref.sessions.records import Trial
 from gaitpref.sessions.session import Session
@@ -164,7 +165,8 @@ def _write_export(
 ) -> None:
     events = [e for e in session.events() if e.seq <= session.last_seq]  # as the state holds
     walked = {e.seq: e.payload for e in events if e.kind == log.TRIAL}
-    tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked, progress)
+    with one_blas_thread():  # the posterior's sd, as ask, tell and the confidence (threads.py)
+        tables = _tables(session, {e.seq: e.at.isoformat() for e in events}, walked, progress)
     written: dict[str, str] = {}
 
     def put(name: str, text: str) -> None:
@@ -198,7 +200,7 @@ def _write_export(
     library = _copy_library(session, out, written)
     if library is not None:
         written[library[0]] = library[1]
-    manifest = _manifest(session, written)
+    manifest = _manifest(session, written)  # posterior_summary: on one BLAS thread too
     if library is not None:
         manifest["gait_library"] = {"file": library[0], "sha256": library[1]}
     put("manifest.json", json.dumps(manifest, indent=2) + "\n")
@@ -277,7 +279,15 @@ def posterior_summary(session: Session) -> dict[str, Any]:
     a point no query proposed (a coactive suggestion's), never walked, which may prove
     infeasible; None without gaits made on demand (a library's gaits, or none: nothing to
     make), and with the action they describe (exports and ``session show --json`` written
-    before they were added lack them)."""
+    before they were added lack them).
+
+    Its numbers are computed on one BLAS thread, as ask, tell and the confidence are
+    (``model/threads.py``)."""
+    with one_blas_thread():
+        return _posterior_summary(session)
+
+
+def _posterior_summary(session: Session) -> dict[str, Any]:
     post = session.posterior()
     pending = session.pending
     best: int | None = post.argmax if len(session.space) else None

@@ -64,8 +64,9 @@ if TYPE_CHECKING:
 #: The most distinct (gait, earlier subject) pairs a new warm start's earlier sessions may visit:
 #: each answer of the new session refits the population model over them (and the share's
 #: hypotheses), dense in their number; 1,501 took 6.1 s an answer (and 1.0 s for the confidence
-#: after it) on two cores (``benchmarks/results/warm.md``).  Checked when a session is created;
-#: sessions recorded with more replay as they were.
+#: after it, then drawn with BLAS's default threads) on two cores
+#: (``benchmarks/results/warm.md``).  Checked when a session is created; sessions recorded with
+#: more replay as they were.
 MAX_PRIOR_NODES = 2000
 #: The most earlier sessions a new warm start may read (a subject code counts each of the
 #: subject's sessions): every opening of the new session replays each of them from its log.
