@@ -431,12 +431,16 @@ class CoSpar:
         return self._buffer
 
     def allowed(self) -> NDArray[np.bool_] | None:
-        """The actions the next query may propose (None: all; ``loop/safety.py``)."""
-        if self._avoided_mask is None:
-            return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
-        makeable = ~self._avoided_mask
-        mask = self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe, makeable)
-        return makeable if mask is None else mask & makeable
+        """The actions the next query may propose (None: all; ``loop/safety.py``).  On one BLAS
+        thread, as ask and tell: the region of avoidance reads the posterior's variance, and
+        sessions ask for this after every answer (the recommendation, the confidence): 16 ms
+        on default threads against 0.4 ms on one for exo-2d-rated at 60 answers, same masks."""
+        with one_blas_thread():
+            if self._avoided_mask is None:
+                return self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe)
+            makeable = ~self._avoided_mask
+            mask = self.safety.allowed(self.posterior, self.gp.ordinal, self.unsafe, makeable)
+            return makeable if mask is None else mask & makeable
 
     def flag_unsafe(self, action: int) -> bool:
         """Never propose ``action`` again, nor the actions within ``safety.unsafe_radius``.
