@@ -33,6 +33,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from gaitpref.model.posterior import Posterior
+from gaitpref.model.threads import one_blas_thread
 from gaitpref.plots import BAND_LABEL, BAND_SD, mark_best, plain
 from gaitpref.plots.safety import SafetyShading, draw_1d, draw_2d
 from gaitpref.space import FloatArray, IntArray, Space
@@ -73,11 +74,13 @@ def posterior_picture(
     if posterior.space.ndim > 2:
         raise ValueError("posterior figures are drawn for 1-D and 2-D spaces only")
     gen = rng if rng is not None else np.random.default_rng(0)
-    draws = posterior.sample(gen, samples) if samples else np.zeros((0, len(posterior.space)))
+    with one_blas_thread():  # as the session figure (plots/session.py): the same floats
+        draws = posterior.sample(gen, samples) if samples else np.zeros((0, len(posterior.space)))
+        std = np.asarray(posterior.std).copy()
     return PosteriorPicture(
         space=posterior.space,
         mean=np.asarray(posterior.mean).copy(),
-        std=np.asarray(posterior.std).copy(),
+        std=std,
         samples=draws,
         trials=np.asarray(trials, dtype=np.intp),
         objective=None if objective is None else np.asarray(objective, dtype=float).reshape(-1),
