@@ -523,6 +523,17 @@ class Terminal:
         except _UNWRITTEN:
             return None
 
+    def _withdrawn(self, round_: int) -> bool | None:
+        """Whether validation round ``round_`` is withdrawn, as the log says now (a withdrawal
+        with an undo whose query in place of the undone one failed to be written is written
+        itself); None when the log cannot be read."""
+        try:
+            self.session.sync()
+            rounds = [r for r in self.session.validation_rounds() if r.round == round_]
+        except _UNWRITTEN:
+            return None
+        return bool(rounds) and rounds[-1].withdrawn is not None
+
     def _undo(self) -> None:
         answered = self.session.trials()
         if not answered:
@@ -946,8 +957,18 @@ class Terminal:
             if s.validation_plan is None or s.validation_plan.round != round_:
                 raise
             return
-        except _UNWRITTEN as exc:  # nothing written: the ranking is asked again
-            self.console.print(f"  not withdrawn: {clip(exc, MAX_MESSAGE)}", markup=False)
+        except _UNWRITTEN as exc:  # the ranking is asked again, unless the round is withdrawn
+            withdrawn = self._withdrawn(round_)
+            if withdrawn:  # the query in place of the undone one's could not be written
+                done = f"; undone: the answer to {_trials(trials)}" if undo else ""
+                self.console.print(f"Round {round_} withdrawn{done}.", markup=False)
+                self.console.print(
+                    f"The next trial could not be proposed: {clip(exc, MAX_MESSAGE)}",
+                    markup=False,
+                )
+                raise _QuitError from None
+            said = "not withdrawn" if withdrawn is False else "perhaps not withdrawn"
+            self.console.print(f"  {said}: {clip(exc, MAX_MESSAGE)}", markup=False)
             return
         except NoSafeGaitError as exc:  # written; no gait left for the query in its place
             self.console.print(f"Round {round_} withdrawn.", markup=False)
@@ -1113,7 +1134,13 @@ def run_validation(
     except _WithdrawnError:
         return False
     except (_QuitError, _UndoError):
-        if record_with is not None and terminal.shown_gaits is not None:
+        # not after a withdrawal that was written (the query in place of the answer it undid
+        # could not be proposed): no round stays open then
+        if (
+            record_with is not None
+            and terminal.shown_gaits is not None
+            and session.validation_plan is not None
+        ):
             terminal.console.print(
                 "No ranking recorded; the round stays open (no trials are proposed until it is "
                 "answered or withdrawn: gaitpref session validate "

@@ -167,3 +167,20 @@ def test_one_session_and_one_event_are_counted_in_the_singular(tmp_path: Path) -
     check = CliRunner().invoke(app, ["db", "check", "--db", str(lab)])
     assert check.exit_code == 0, check.output
     assert "session 1: subject S01, exo-1d-step-length, 1 event, active: OK" in check.stdout
+
+
+def test_the_pg_dump_command_never_shows_the_client_keys_password(tmp_path: Path) -> None:
+    """The URL's libpq parameters travel in the command's conninfo, but ``sslpassword`` (the
+    client key's password) is a secret as the password is: the command showed it.  (The URL
+    named before the command still shows it: its masking hides the password alone.)"""
+    url = (
+        "postgresql+psycopg://lab@db.example/gaitlab?sslmode=verify-full&sslkey=/k/c.key"
+        "&sslpassword=k3ypass"
+    )
+    result = CliRunner().invoke(app, ["db", "backup", str(tmp_path / "lab.dump"), "--db", url])
+    assert result.exit_code == 2
+    err = " ".join(result.stderr.split())
+    command = err.split("e.g. `", 1)[1].split("`", 1)[0]
+    assert command.startswith("pg_dump --format=custom") and "sslmode=verify-full" in command
+    assert "sslkey=/k/c.key" in command
+    assert "k3ypass" not in command and "sslpassword" not in command, command

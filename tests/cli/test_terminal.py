@@ -1114,3 +1114,80 @@ def test_after_an_answer_that_leaves_no_gait_to_recommend_the_terminal_says_why(
     assert "% that G" not in after
     # the answer before it still states the confidence in its recommendation
     assert re.search(r"saved: trial 1\n  \d+% that G\d+ is within 5% of the best", text)
+
+
+def _rule_round_whose_replacement_fails(tmp_path: Path) -> tuple[Session, list[int]]:
+    """Round 1 opened by the [stop] rule after trial 3, whose query proposes a gait flagged
+    unsafe since (trial 1's); the database fails the query written in its place once."""
+    from gaitpref.storage import StorageFailureError
+
+    config = tmp_path / "stop.toml"
+    config.write_text(load_config(CONFIG).text + "\n[stop]\nmax_trials = 3\n", encoding="utf-8")
+    storage = MemoryStorage()
+    session = Session.create(storage, config, "S01", seed=35)  # trial 3 walks trial 1's gait
+    for _ in range(3):
+        q = session.next_query()
+        a = q.actions[0]
+        session.answer(
+            q.id, [(a, q.buffer[0], "first")] if q.buffer and q.buffer[0] != a else [], []
+        )
+    assert session.trials()[2].action == session.trials()[0].action
+    assert session.validation_plan is not None  # opened by the rule after trial 3
+    session.flag_unsafe(1, "knee gave way")  # trial 3's query now proposes a flagged gait
+    assert session.validation_plan is not None
+    append = storage.append
+    withdrawn: list[int] = []
+
+    def fails_after_the_withdrawal(*args: Any, **kwargs: Any) -> Any:
+        if withdrawn and len(withdrawn) < 2 and any(e.kind == "query_issued" for e in args[2]):
+            withdrawn.append(1)  # once: the pause after it is written
+            raise StorageFailureError("sqlite:///lab.db: disk I/O error; nothing was written")
+        written = append(*args, **kwargs)
+        if any(e.kind == "validation_withdrawn" for e in args[2]):
+            withdrawn.append(1)
+        return written
+
+    storage.append = fails_after_the_withdrawal  # type: ignore[method-assign]
+    return session, withdrawn
+
+
+def test_u_inside_the_rules_round_whose_replacement_query_the_database_refuses_says_withdrawn(
+    tmp_path: Path,
+) -> None:
+    """u inside the round the [stop] rule opened withdraws it and undoes the answer that
+    opened it; that answer's query proposes a gait flagged unsafe since, so a new query is
+    written in its place.  When the database fails that last write, the withdrawal and the
+    undo stand: the runner says the round is withdrawn and why no trial follows, and pauses.
+    It said 'not withdrawn' and asked the ranking of the withdrawn round again."""
+    session, withdrawn = _rule_round_whose_replacement_fails(tmp_path)
+    terminal, console = _terminal(session, "u", "y")
+    terminal.run()
+    text = console.export_text()
+    assert len(withdrawn) == 2, text  # withdrawn and undone, the query in its place refused
+    assert "Round 1 withdrawn; undone: the answer to trial 3." in text
+    assert "not withdrawn" not in text
+    assert (
+        "The next trial could not be proposed: the undo is written; the query drawn in place of "
+        "the one it withdrew was not: sqlite:///lab.db: disk I/O" in text
+    )
+    assert "Paused.  Resume with:" in text
+    again = Session.open(session.storage, session.id)
+    assert [r.withdrawn is not None for r in again.validation_rounds()] == [True]
+    assert [t.number for t in again.trials()] == [1, 2]
+
+
+def test_session_validate_after_a_withdrawal_it_wrote_never_says_the_round_stays_open(
+    tmp_path: Path,
+) -> None:
+    """The same at ``session validate`` (run_validation): the round is withdrawn, so the
+    runner does not say 'No ranking recorded; the round stays open' with a command to rank it."""
+    from gaitpref.terminal import run_validation
+
+    session, withdrawn = _rule_round_whose_replacement_fails(tmp_path)
+    console = Console(record=True, width=200, highlight=False)
+    keys = iter(["u", "y"])
+    assert run_validation(session, None, console, lambda _: next(keys), record_with=str) is False
+    text = console.export_text()
+    assert len(withdrawn) == 2, text
+    assert "Round 1 withdrawn; undone: the answer to trial 3." in text
+    assert "stays open" not in text and session.validation_plan is None

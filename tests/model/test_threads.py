@@ -119,3 +119,62 @@ def test_share_hypotheses_weighed_in_threads_equal_one_after_the_other(
     parallel = weigh_shares(TINY, HYPER, RHO, share_prior(RHO), data)
     assert names and all(n.startswith("gaitpref-fit") for n in names)
     assert parallel == serial  # every objective and weight bit for bit
+
+
+def test_one_blas_thread_holds_in_a_thread_while_another_leaves_its_block(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two threads inside :func:`one_blas_thread` at once (the console computes one session's
+    confidence while another's tell runs): the first to leave restored BLAS's threads under the
+    second, which then ran on them, and the last to leave set the process's BLAS to one thread
+    for good.  The limit holds while any thread is inside, and is restored once none is.  (A
+    stand-in for threadpoolctl's controller: how OpenBLAS shows a limit set in another thread
+    varies by release.)"""
+    blas = {"threads": 2}  # the process's BLAS threads
+
+    class Limiter:
+        def __init__(self) -> None:
+            self.original = blas["threads"]
+            blas["threads"] = 1
+
+        def restore_original_limits(self) -> None:
+            blas["threads"] = self.original
+
+        def __enter__(self) -> Limiter:
+            return self
+
+        def __exit__(self, *exc: object) -> None:
+            self.restore_original_limits()
+
+    class Controller:
+        def limit(self, *, limits: int, user_api: str) -> Limiter:
+            assert (limits, user_api) == (1, "blas")
+            return Limiter()
+
+    monkeypatch.setattr(threads, "_controller", Controller)
+    seen: list[int] = []
+    first_in, second_in, first_out = threading.Event(), threading.Event(), threading.Event()
+
+    def first() -> None:
+        with threads.one_blas_thread():
+            first_in.set()
+            second_in.wait(5)
+        first_out.set()
+
+    def second() -> None:
+        first_in.wait(5)
+        with threads.one_blas_thread():
+            second_in.set()
+            first_out.wait(5)
+            seen.append(blas["threads"])
+
+    workers = [threading.Thread(target=first), threading.Thread(target=second)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(10)
+    assert seen == [1]  # still one thread, though the first thread left its block
+    assert blas["threads"] == 2  # restored once neither is inside
+    with threads.one_blas_thread(), threads.one_blas_thread():  # nested in one thread
+        assert blas["threads"] == 1
+    assert blas["threads"] == 2

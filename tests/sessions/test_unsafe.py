@@ -276,3 +276,32 @@ def test_a_ranking_of_the_gaits_a_redrawn_round_showed_before_is_refused(tmp_pat
         assert f"now shows {', '.join(now)}, not {', '.join(walked)}" in str(err.value)
         assert len(s.events()) == before and s.validations() == []
         assert s.answer_validation(1, "ABC", shown=now).round == 1
+
+
+def test_a_round_drawn_again_keeps_the_answer_that_opened_it(tmp_path: Path) -> None:
+    """The rule opens round 1 after the last answer; that answer is undone (the round stays
+    open), then a flag draws the round again.  The redrawn round was still opened by the
+    undone answer, not by the one now last: withdrawing it with undo is refused, and takes
+    back no answer that did not open it (it undid the earlier answer), live and replayed."""
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    with Session.create(url, parse_config(CONFIG + "[stop]\nmax_trials = 6\n"), "S01") as s:
+        for k in range(6):
+            _answer(s, k)
+        first = s.validation_plan
+        assert first is not None  # opened by the stop rule
+        opener = s.trials()[-1].query
+        s.undo(query=opener)
+        assert s.validation_plan == first  # still open
+        shown = {g.action for g in first.gaits}
+        space = s.config.space
+        trial = next(t for t in s.trials() if near(space, {t.action}, 0.15)[list(shown)].any())
+        assert s.trials()[-1].query != trial.query  # the last answer stays undoable
+        assert s.flag_unsafe(trial.number, "knee") is True
+        assert [r.opened_after for r in s.validation_rounds()] == [opener]
+        seq = s.last_seq
+        with pytest.raises(SessionStateError, match="no longer the last answer in force"):
+            s.withdraw_validation(1, "mis-keyed", undo=True)
+        assert s.last_seq == seq
+        sid = s.id
+    with Session.open(url, sid) as again:
+        assert [r.opened_after for r in again.validation_rounds()] == [opener]

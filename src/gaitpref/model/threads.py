@@ -32,11 +32,12 @@ from __future__ import annotations
 
 import contextvars
 import os
-from collections.abc import Callable, Sequence
+import threading
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import AbstractContextManager
+from contextlib import contextmanager
 from functools import cache
-from typing import TypeVar
+from typing import Any, TypeVar
 
 from threadpoolctl import ThreadpoolController
 
@@ -46,10 +47,32 @@ def _controller() -> ThreadpoolController:
     return ThreadpoolController()
 
 
-def one_blas_thread() -> AbstractContextManager[object]:
-    """One BLAS thread inside the block, whatever the grid's size; restored after."""
-    limit: AbstractContextManager[object] = _controller().limit(limits=1, user_api="blas")
-    return limit
+#: the blocks inside :func:`one_blas_thread` now, in every thread, and the limit they share
+_BLAS_LOCK = threading.Lock()
+_blas_held = 0
+_blas_limit: Any = None
+
+
+@contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """One BLAS thread inside the block, whatever the grid's size; restored after.
+
+    The limit is the process's: it is set when the first block (of any thread) begins and
+    restored when the last one ends, so that a thread leaving its block does not give BLAS its
+    threads back under another still inside (the console computes sessions side by side)."""
+    global _blas_held, _blas_limit
+    with _BLAS_LOCK:
+        if _blas_held == 0:
+            _blas_limit = _controller().limit(limits=1, user_api="blas")
+        _blas_held += 1
+    try:
+        yield
+    finally:
+        with _BLAS_LOCK:
+            _blas_held -= 1
+            if _blas_held == 0:
+                limit, _blas_limit = _blas_limit, None
+                limit.restore_original_limits()
 
 
 _T = TypeVar("_T")

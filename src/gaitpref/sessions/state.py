@@ -121,6 +121,7 @@ class SessionState:
     excluded: dict[int, tuple[Reason, str]] = field(default_factory=dict)
     unsafe: dict[int, tuple[int, str]] = field(default_factory=dict)  # trial -> (action, reason)
     rounds: list[_Round] = field(default_factory=list)
+    banned: tuple[int, _Round] | None = None  # (seq, round) a flag or exclusion last withdrew
     notes: list[tuple[int, str]] = field(default_factory=list)
     gait_cache: GaitCache | None = field(default=None, repr=False)  # gaits made on demand
     on_demand: OnDemandGaits | None = field(init=False, default=None)
@@ -585,18 +586,28 @@ class SessionState:
             if self.loop.pending is None:
                 self.pending = None
             if r.version > log.TrialExcludedV1.version:
-                self._withdraw_banned_round()  # showing a gait in the region now
+                self._withdraw_banned_round(r.seq)  # showing a gait in the region now
         elif r.kind == log.UNSAFE:
             self.unsafe[p["trial"]] = (p["action"], p["reason"])
             if self.loop.flag_unsafe(p["action"]):
                 self.pending = None  # the pending query proposed a gait it now avoids
-            self._withdraw_banned_round()  # showing a gait near the flag
+            self._withdraw_banned_round(r.seq)  # showing a gait near the flag
         elif r.kind == log.UNSAFE_WITHDRAWN:
             action = self.unsafe.pop(p["trial"])[0]
             if all(a != action for a, _ in self.unsafe.values()):
                 self.loop.unflag_unsafe(action)
         elif r.kind == log.VALIDATION_STARTED:
             gaits = p["gaits"]
+            # drawn again right after the event that withdrew it: opened by the same answer
+            # (which may be undone since), not by the one now last
+            again = (
+                self.banned[1]
+                if self.banned is not None
+                and self.banned[0] == r.seq - 1
+                and self.banned[1].plan.round == p["round"]
+                and self.banned[1].opened_by == p.get("opened_by")
+                else None
+            )
             plan = ValidationPlan(
                 p["round"], tuple(BlindGait(g["label"], g["action"]) for g in gaits)
             )
@@ -610,7 +621,9 @@ class SessionState:
                     version=r.version,
                     opened_by=p.get("opened_by"),
                     opened_after=(
-                        self.told[-1].query.id
+                        again.opened_after
+                        if again is not None
+                        else self.told[-1].query.id
                         if p.get("opened_by") == "rule" and self.told
                         else None
                     ),
@@ -708,12 +721,12 @@ class SessionState:
             return self.on_demand.gait_id(self.loop.space.point(action))
         return None if self.gait_ids is None else self.gait_ids[action]
 
-    def _withdraw_banned_round(self) -> None:
+    def _withdraw_banned_round(self, seq: int) -> None:
         """Withdraw the open blind validation round (version 2 and later: drawn from the gaits
-        a query may propose) when it shows a gait no query may propose now."""
+        a query may propose) when it shows a gait no query may propose now (event ``seq``)."""
         current = self.open_round
         if current is not None and current.version >= 2 and self._shows_banned(current):
-            self.rounds.pop()
+            self.banned = (seq, self.rounds.pop())
 
     def _shows_banned(self, current: _Round) -> bool:
         """Whether ``current`` shows a gait no query may propose now.  On the line path a flag

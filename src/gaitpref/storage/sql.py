@@ -707,8 +707,10 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
         parts.append(f"--username={shlex.quote(url.username)}")
     # the URL's other libpq parameters (?sslmode=require&sslrootcert=...) were left out, and
     # pg_dump has no flag for most: the database is then a conninfo string that carries them
-    # (its values override nothing the flags give); the password is never among them
-    extra = {k: v for k, v in url.query.items() if k not in ("host", "port", "password")}
+    # (its values override nothing the flags give); the password is never among them, nor the
+    # client key's (sslpassword: libpq asks for it when it is not given)
+    secrets = ("password", "sslpassword")
+    extra = {k: v for k, v in url.query.items() if k not in ("host", "port", *secrets)}
     if extra:
         pairs = {"dbname": url.database or "", **extra}
         parts.append(shlex.quote(" ".join(f"{k}={_conninfo_value(v)}" for k, v in pairs.items())))
