@@ -5,6 +5,7 @@ withdrawn before anyone walks it."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -305,3 +306,29 @@ def test_a_round_drawn_again_keeps_the_answer_that_opened_it(tmp_path: Path) -> 
         sid = s.id
     with Session.open(url, sid) as again:
         assert [r.opened_after for r in again.validation_rounds()] == [opener]
+
+
+def test_an_undo_whose_new_query_another_writer_keeps_from_being_written_says_it_stands(
+    tmp_path: Path,
+) -> None:
+    """The undo is written; the query in place of its withdrawn one loses the compare-and-set
+    twice (another writer kept appending): the SessionBusyError says the undo is written and
+    the query not (it said 'nothing was written, try again', and the CLI and console, which
+    read it as nothing written, said so too)."""
+    from gaitpref.storage import ConflictError, SessionBusyError
+
+    url = f"sqlite:///{tmp_path / 'u.db'}"
+    s, _ = _flag_then_undo(url, pause=False)
+    append = s.storage.append
+
+    def conflicting(*args: Any, **kwargs: Any) -> Any:
+        if any(e.kind == "query_issued" for e in args[2]):
+            raise ConflictError("another writer appended first")
+        return append(*args, **kwargs)
+
+    s.storage.append = conflicting  # type: ignore[method-assign]
+    with pytest.raises(SessionBusyError, match=r"^the undo is written; the query drawn in place"):
+        s.undo()
+    s.close()
+    with Session.open(url, 1) as again:
+        assert [t.number for t in again.trials()] == [1] and again.pending is None

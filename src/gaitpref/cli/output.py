@@ -18,7 +18,10 @@ any other :class:`~gaitpref.errors.GaitprefError`, ``error: ...``      2
 ==============================================  =====================  ======
 
 Status 2 means "the input was refused; nothing was written"; status 1 means a computation could
-not finish (or a check found a problem, or a question was answered no); 130, an interrupt.  The
+not finish (or a check found a problem, or a question was answered no), and is also the status
+of an undo that is written though the query to be proposed in place of the one it withdrew was
+not (``session undo``, ``session validate --withdraw --undo``: any error then, a storage error
+too, exits 1, after the lines that say what was written); 130, an interrupt.  The
 statuses, and what goes to stdout and to stderr, are documented for scripts in
 ``docs/getting-started.md`` ("In scripts: exit statuses and output"), held to this table by
 ``tests/cli/test_scripts.py``.  The message is always ``str(exc)``: the error classes name the
@@ -80,13 +83,13 @@ def fail(message: str, code: int = 2) -> NoReturn:
     raise typer.Exit(code)
 
 
-def report(exc: BaseException, where: str = "") -> NoReturn:
+def report(exc: BaseException, where: str = "", code: int | None = None) -> NoReturn:
     """Print ``exc`` as :func:`exit_for` says (after ``where``, e.g. which run) and exit with
-    its status."""
-    line, code = exit_for(exc)
+    its status (``code``: another, e.g. 1 where a part of the command was written)."""
+    line, status = exit_for(exc)
     label, _, message = line.partition(": ")
     _print_error(label, f"{where}: {message}" if where else message)
-    raise typer.Exit(code)
+    raise typer.Exit(status if code is None else code)
 
 
 def _print_error(label: str, message: str) -> None:

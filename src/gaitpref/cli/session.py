@@ -2,7 +2,10 @@
 
 Every command takes ``--db URL`` (default: ``$GAITPREF_DB``, else ``sqlite:///gaitpref.db`` in the
 working directory; a bare path means a SQLite file).  Errors name the problem and exit with
-status 2; nothing is written when a command fails.
+status 2; nothing is written when a command fails, but for one case, which exits with status 1:
+an undo (``session undo``, ``session validate --withdraw --undo``) that is written, whose query,
+withdrawn (it proposed a gait flagged unsafe since), could not be replaced (the database failed
+to write the new query, ...): the command says what was written, then the error.
 """
 
 from __future__ import annotations
@@ -13,11 +16,20 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
-from gaitpref.cli.output import check_file_out, console, err_console, fail, guard, reported
+from gaitpref.cli.output import (
+    HANDLED,
+    check_file_out,
+    console,
+    err_console,
+    fail,
+    guard,
+    report,
+    reported,
+)
 from gaitpref.limits import MAX_SEED
 from gaitpref.wording import plural
 
@@ -457,10 +469,20 @@ def _withdraw_round(session_id: int, reason: str, undo: bool, db: str | None, ye
                 "[stop] rule opened it"
             )
         _confirm(f"{what}?", yes)
-        pending = guard(lambda: session.withdraw_validation(number, reason, undo=undo))
+        unproposed: BaseException | None = None
+        try:
+            pending = session.withdraw_validation(number, reason, undo=undo)
+        except HANDLED as exc:
+            # written when the round is no longer open: the withdrawal and the undo stand, the
+            # query to be proposed in place of the undone one, withdrawn, could not be
+            if not undo or any(r.round == number and r.open for r in session.validation_rounds()):
+                report(exc)  # nothing was written
+            pending, unproposed = None, exc
         console.print(f"validation round {number} withdrawn; its log stays")
         if undo:
             console.print(f"undone: the answer to trial {', '.join(map(str, trials))}")
+            if unproposed is not None:
+                _say_unproposed(unproposed, session, db)
             _say_undone_withdrawn(pending, opened.opened_after, session, db)
 
 
@@ -723,14 +745,27 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
         guard(lambda: session.check_change("undo"))  # nothing to undo: said before the question
         _confirm(f"Undo the last answer of session {session_id}?", yes)
 
+        before: list[Trial] = []
+
         def undo_last(s: Session) -> tuple[list[Trial], int | None, SessionQuery | None]:
             # the last answer as of the undo: another writer may have answered during the prompt
-            done = s.trials()
+            before[:] = done = s.trials()
             return done, done[-1].query if done else None, s.undo()
 
-        done, last, pending = guard(lambda: session.read(undo_last, turn=True))
+        unproposed: BaseException | None = None
+        try:
+            done, last, pending = session.read(undo_last, turn=True)
+        except HANDLED as exc:
+            # written when the answer is no longer in force: the undo stands, the query to be
+            # proposed in place of its own, withdrawn, could not be
+            last = before[-1].query if before else None
+            if last is None or any(t.query == last for t in session.trials()):
+                report(exc)  # nothing was written
+            done, pending, unproposed = before, None, exc
         trials = ", ".join(str(t.number) for t in done if t.query == last)
         console.print(f"undone: the answer to trial {trials}")
+        if unproposed is not None:
+            _say_unproposed(unproposed, session, db)
         if session.validation_plan is not None:
             number = session.validation_plan.round
             console.print(
@@ -739,6 +774,28 @@ def undo(session_id: IdArgument, db: DbOption = None, yes: YesOption = False) ->
                 "--withdraw --reason TEXT"
             )
         _say_undone_withdrawn(pending, last, session, db)
+
+
+def _say_unproposed(exc: BaseException, session: Session, db: str | None) -> NoReturn:
+    """After an undo that is written (``session undo``, ``session validate --withdraw --undo``)
+    whose query, withdrawn, could not be replaced (``exc``: the database failed to write the new
+    query, the gait generator failed, or no gait may be proposed): say so and that the next ask
+    proposes it, print ``exc`` and exit with status 1, not 2 (which says nothing was written)."""
+    from gaitpref.errors import StorageError
+
+    line = (
+        "its query proposed a gait flagged unsafe since, or in the region of avoidance now, "
+        "and was withdrawn, but "
+    )
+    if isinstance(exc, StorageError):
+        line += (
+            "the new query drawn in its place was not written (the error below says why): it is "
+            f"proposed at the next ask ({_resume_hint(session.id, db)})"
+        )
+    else:
+        line += "no new query could be proposed in its place (the error below says why)"
+    console.print(line, markup=False)
+    report(exc, code=1)
 
 
 def _say_undone_withdrawn(

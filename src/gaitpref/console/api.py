@@ -169,10 +169,10 @@ def undo(
 ) -> UndoneOut:
     """Take back the last answer; its query is pending again (or, where it proposed a gait
     flagged unsafe since or in the region of avoidance now, a new query in its place:
-    ``withdrawn``; should none be proposed, as
-    the gait generator failed or no gait may be proposed, the undo stands and
-    ``next_query_error`` says why).  With ``query_id``, refused (409) unless that query is the
-    pending one (so two clients cannot undo twice)."""
+    ``withdrawn``; should none be proposed, as the gait generator failed, no gait may be
+    proposed or the database failed to write the new query, the undo stands, the answer is 200
+    and ``next_query_error`` says why).  With ``query_id``, refused (409) unless that query is
+    the pending one (so two clients cannot undo twice)."""
     done = service_of(request).undo(session_id, None if body is None else body.query_id)
     pending = done.pending
     return UndoneOut(
@@ -311,7 +311,9 @@ def withdraw_round(
     """Withdraw the open, unanswered round (``reason`` logged); with ``undo``, also take back
     the answer after which the ``[stop]`` rule opened it (a mis-keyed answer).  409 for a round
     answered, withdrawn, not started or not the open one, and for ``undo`` of a round the rule
-    did not open or whose answer is no longer the last in force."""
+    did not open or whose answer is no longer the last in force.  When the query to be
+    proposed in place of the undone one (withdrawn) could not be (the database failed to write
+    it, ...), the withdrawal and the undo stand: 200, ``next_query_error`` says why."""
     done = service_of(request).withdraw_validation(session_id, round_, body.reason, body.undo)
     pending = done.pending
     return WithdrawnRoundOut(

@@ -44,6 +44,11 @@ request leaves the database as it was; the one is an ask that stopped (``query_s
 logged the gaits it found could not be made (and avoids them): ``InfeasibleProposalsError``, so
 that asking again goes on from there, or a ``NoSafeGaitError`` when no gait was left to propose
 after them.
+An undo (``POST .../undo``, a round withdrawn with ``undo``) is written before the query drawn
+in place of the undone one, when that one is withdrawn (it proposed a gait flagged unsafe
+since): should that query not be written (``StorageError``), made (``GaitError``) or proposed
+(``NoSafeGaitError``), the request is not refused (the undo stands): it succeeds (200, or the
+page's redirect), and the API's ``next_query_error`` says why; the next ask proposes the query.
 API requests get JSON (``{"detail": ...}``; 422 in FastAPI's shape, with ``loc`` naming the
 field), pages get an HTML page that says what happened.
 """

@@ -192,9 +192,9 @@ class UndoneOut(BaseModel):
     next_query_error: str | None = Field(
         default=None,
         description="the undo stands, but no query could be proposed in the withdrawn one's "
-        "place: why (the gait generator's error, or that no gait may be proposed); GET /query "
-        "tries again (503 while the generator fails, 409 while no gait may be proposed). Null "
-        "otherwise",
+        "place: why (the gait generator's error, that no gait may be proposed, or the database's "
+        "error writing the new query); GET /query tries again (503 while the generator or the "
+        "database fails, 409 while no gait may be proposed). Null otherwise",
     )
 
 
@@ -429,7 +429,8 @@ class WithdrawnRoundOut(BaseModel):
     next_query_error: str | None = Field(
         default=None,
         description="the withdrawal and undo stand, but no query could be proposed in place of "
-        "the undone one, withdrawn: why; null otherwise",
+        "the undone one, withdrawn: why (as UndoneOut's: the database failed to write it, ...; "
+        "GET /query tries again); null otherwise",
     )
 
 

@@ -33,6 +33,7 @@ from gaitpref.errors import (
     InfeasibleProposalsError,
     NoSafeGaitError,
     SessionStateError,
+    StorageError,
 )
 from gaitpref.sessions.records import check_printable, check_storable
 from gaitpref.sessions.session import Answered, Session, SessionQuery
@@ -59,7 +60,8 @@ class Pending:
     reason: str  # "" when there is a query; else "paused", "finished", "validation", "no-safe",
     # "no-gait" (the gait generator failed to make a proposed gait), "infeasible" (the ask
     # stopped at [gaits] max_infeasible gaits that cannot be made: logged; an explicit ask, not
-    # a reload, goes on)
+    # a reload, goes on); and, for an undo's query only (:class:`Undone`, :class:`WithdrawnRound`),
+    # "unwritten" (the database failed to write it: the next ask proposes it)
     detail: str = ""  # why, in words (the NoSafeGaitError's or GaitError's message)
 
 
@@ -76,8 +78,9 @@ class Undone:
     pending: SessionQuery | None
     discarded_query: int | None
     #: why no query is pending in the withdrawn one's place, when one was to be proposed: the
-    #: undo is written, but the gait generator failed ("no-gait") or no gait may be proposed
-    #: ("no-safe"), as :class:`Pending` says; "" otherwise
+    #: undo is written, but the gait generator failed ("no-gait"), no gait may be proposed
+    #: ("no-safe"), as :class:`Pending` says, or the database failed to write the new query
+    #: ("unwritten": the next ask proposes it); "" otherwise
     unproposed: str = ""
     detail: str = ""  # its error, in words
 
@@ -240,6 +243,12 @@ class SessionService:
             unproposed = Pending(None, "")
             try:
                 pending = session.undo()
+            except StorageError as exc:
+                # written when the answer is no longer in force as the session booked it (it
+                # books a write once it succeeded; the database may be failing: not read again)
+                if undone is None or any(t.query == undone for t in session.trials()):
+                    raise
+                pending, unproposed = None, unwritten(session_id, exc)
             except (NoSafeGaitError, GaitError) as exc:
                 # the undo is written, then its query, withdrawn, has no query to take its
                 # place (as after an answer, the page and GET .../query say why) - or nothing
@@ -352,6 +361,10 @@ class SessionService:
             unproposed = Pending(None, "")
             try:
                 pending = session.withdraw_validation(round_, text, undo=undo)
+            except StorageError as exc:  # written when the round is closed as the session booked
+                if not undo or session.validation_plan is not None:
+                    raise
+                pending, unproposed = None, unwritten(session_id, exc)
             except (NoSafeGaitError, GaitError) as exc:  # written, or not: the log says which
                 session.sync()
                 if session.validation_plan is not None:
@@ -436,6 +449,20 @@ def no_query(exc: NoSafeGaitError | GaitError) -> Pending:
     if isinstance(exc, NoSafeGaitError):
         return Pending(None, "no-safe", str(exc))
     return Pending(None, "no-gait", str(exc) or type(exc).__name__)
+
+
+def unwritten(session_id: int, exc: StorageError) -> Pending:
+    """No query, as the database failed to write the one drawn in place of an undone answer's,
+    withdrawn (``unwritten``): the undo (and a withdrawal with it) is written, and the next ask
+    (the trial page, GET .../query) proposes the query again.  Logged as a warning: the request
+    that wrote the undo succeeds."""
+    logger.warning(
+        "session %d: the undo is written; the query in place of its withdrawn one was not, and "
+        "is proposed at the next ask: %s",
+        session_id,
+        exc,
+    )
+    return Pending(None, "unwritten", str(exc) or type(exc).__name__)
 
 
 def ack_text(session: Session, query: SessionQuery) -> str:

@@ -509,7 +509,10 @@ class Session:
         place; None when none may be proposed yet (the session is
         paused, or a blind validation round is open: the next :meth:`next_query` proposes).
         Should no gait be left to propose at all, the undo stands and
-        :class:`~gaitpref.errors.NoSafeGaitError` says so.
+        :class:`~gaitpref.errors.NoSafeGaitError` says so; should the database not write the
+        new query (:class:`~gaitpref.storage.StorageFailureError`, ``StorageConnectError``,
+        ``SessionBusyError``), the undo stands too, and the error's message says so ("the undo
+        is written; the query drawn in place of the one it withdrew was not: ...").
         """
 
         def run() -> SessionQuery | None:
@@ -544,7 +547,9 @@ class Session:
             return None
         try:
             return self._next_query()
-        except (StorageFailureError, StorageConnectError) as e:  # the undo stands
+        except (StorageFailureError, StorageConnectError, SessionBusyError) as e:  # it stands
+            # (busy: another writer kept appending; its message says nothing was written, of
+            # the query alone)
             raise type(e)(
                 f"the undo is written; the query drawn in place of the one it withdrew was not: {e}"
             ) from e
