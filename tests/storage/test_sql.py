@@ -294,6 +294,26 @@ def test_every_secret_parameter_is_masked(url: str) -> None:
     )
 
 
+@pytest.mark.parametrize("password", ["Zq/Xw", "Zq?Xw", "Zq#Xw", "Zq@Xw", "Zq:Xw", "Zq=Xw"])
+@pytest.mark.parametrize("port", ["5432", "notaport"])
+def test_a_password_typed_unencoded_is_masked_whole(password: str, port: str) -> None:
+    """A URL that does not parse (a port that is not a number) was printed whole when its
+    password held a '/'; one with an '@' in it parsed as a host "ss@h", printed with half the
+    password, by the URL and by the driver's "failed to resolve host" (now refused before);
+    password "Zq@Xw" leaked "Xw"."""
+    from gaitpref.storage.sql import masked_url
+
+    url = f"postgresql://lab:{password}@nohost.invalid:{port}/db?sslmode=require"
+    shown = masked_url(url)
+    assert "Zq" not in shown and "Xw" not in shown, shown
+    assert shown.startswith("postgresql://lab:***@nohost.invalid:"), shown
+    assert shown.endswith("/db?sslmode=require"), shown
+    with pytest.raises(StorageError) as err:  # refused, or the host does not resolve
+        SQLStorage(url)
+    text = str(err.value)
+    assert "Zq" not in text and "Xw" not in text, text
+
+
 @pytest.mark.postgres
 @pytest.mark.parametrize("where", ["missing_db", "port", "host"])
 def test_postgres_connection_errors_show_no_secret(postgres_server: str, where: str) -> None:

@@ -98,6 +98,14 @@ def parse_url(url: str) -> URL:
             "sqlite:///gaitpref.db or "
             "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
+    if parsed.host is not None and "@" in parsed.host:
+        # a password with an unencoded @ ("p@ss"): the URL reads as password "p", host "ss@h",
+        # and the host (half the password) was printed, by the URL and the driver's error
+        raise StorageConnectError(
+            f"{_unparsed_masked(url)!r} has more than one @ before its host: a password or "
+            "user name with an @ in it is URL-encoded, %40 for @ (and %3A for :, %2F for /, "
+            "%3F for ?, %23 for #, %25 for %, %20 for a space)"
+        )
     if parsed.drivername in ("postgresql", "postgres"):
         parsed = parsed.set(drivername="postgresql+psycopg")
     if parsed.get_backend_name() not in ("sqlite", "postgresql"):
@@ -153,6 +161,8 @@ def masked_url(url: str) -> str:
         parsed = make_url(url)
     except (ArgumentError, ValueError):
         return _unparsed_masked(url)
+    if parsed.host is not None and "@" in parsed.host:  # "p@ss" unencoded: "ss@" in the host
+        return _unparsed_masked(url)
     return _masked(parsed) if parsed.password is not None or _secret_keys(parsed) else url
 
 
@@ -174,12 +184,16 @@ def _unparsed_masked(url: str) -> str:
     if not sep:
         return url
     rest = _SECRET_PARAMETER.sub(r"\1***", rest)
-    authority, slash, path = rest.partition("/")
-    userinfo, at, host = authority.rpartition("@")
-    if not at or ":" not in userinfo:
+    # the authority ends at the last @ before the parameters (the first = after a ?): a password
+    # typed as it is may hold / ? # @ (a '/' in it printed it whole)
+    question = rest.find("?")
+    equals = rest.find("=", question) if question >= 0 else -1
+    at = rest.rfind("@", 0, equals if equals >= 0 else len(rest))
+    userinfo, host_and_path = rest[: max(at, 0)], rest[at + 1 :]
+    if at < 0 or ":" not in userinfo:
         return f"{scheme}://{rest}"
     user = userinfo.split(":", 1)[0]
-    return f"{scheme}://{user}:***@{host}{slash}{path}"
+    return f"{scheme}://{user}:***@{host_and_path}"
 
 
 class SQLStorage(CheckedCreation):
