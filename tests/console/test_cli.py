@@ -123,3 +123,11 @@ def test_a_port_in_use_is_refused_naming_it(
     # closed: free again (an address not this machine's is left to uvicorn, not called taken)
     assert not console_cli.port_taken("127.0.0.1", port)
     assert not console_cli.port_taken("10.0.0.5", port)
+
+
+def test_requests_are_not_logged_by_default(served: dict[str, Any], db_url: str) -> None:
+    """uvicorn's access log (INFO) would write every request's address, the printed
+    ``/?token=...`` among them: the console serves at WARNING, so it writes none (no address
+    carries a subject code or a note; the token does)."""
+    run("--db", db_url, "--host", "10.0.0.5", "--token", "opt-token")
+    assert served["log_level"] == "warning"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from html import unescape as html_unescape
+
 import pytest
 from fastapi.testclient import TestClient
 
@@ -206,3 +208,49 @@ def test_the_consoles_own_origin_and_clients_without_one_may_change(
     answer_once(client, sid)
     r = client.post(f"/api/sessions/{sid}/undo", headers=headers)
     assert r.status_code == 200, r.text
+
+
+#: markup an operator might type (or paste) into a free-text field, one per field
+TYPED = {
+    "note": '<script>alert("note")</script>',
+    "unsafe": '"><img src=x onerror=alert("unsafe")>',
+    "detail": "<b onmouseover=alert('detail')>x</b>",
+    "withdraw": "</textarea><svg onload=alert('withdraw')>",
+}
+
+
+def test_free_text_typed_at_the_bench_is_escaped_on_every_page(client: TestClient) -> None:
+    """Notes, unsafe reasons, exclusion details and why a validation round was withdrawn are
+    free text: every page shows them as text, never as markup (subject codes are letters,
+    digits, '-', '_' and '.' only)."""
+    from tests.console.conftest import answer_once, new_session
+
+    sid = new_session(client)
+    for _ in range(3):
+        answer_once(client, sid)
+    opened = client.post(f"/api/sessions/{sid}/validation")
+    assert opened.is_success, opened.text
+    round_ = opened.json()["round"]
+    withdrawn = client.post(
+        f"/api/sessions/{sid}/validation/{round_}/withdraw", json={"reason": TYPED["withdraw"]}
+    )
+    assert withdrawn.is_success, withdrawn.text
+    assert client.post(f"/api/sessions/{sid}/notes", json={"text": TYPED["note"]}).is_success
+    flagged = client.post(f"/api/sessions/{sid}/trials/1/unsafe", json={"reason": TYPED["unsafe"]})
+    assert flagged.is_success, flagged.text
+    excluded = client.post(
+        f"/api/sessions/{sid}/trials/2/exclude", json={"reason": "other", "detail": TYPED["detail"]}
+    )
+    assert excluded.is_success, excluded.text
+    pages = {
+        path: client.get(path).text
+        for path in ("/", f"/sessions/{sid}", f"/sessions/{sid}?trials=all")
+    }
+    for path, html in pages.items():
+        for field, text in TYPED.items():
+            assert text not in html, (path, field)
+        for tag in ("<script>alert", "<img src=x", "<b onmouseover", "<svg onload"):
+            assert tag not in html, (path, tag)
+    shown = html_unescape("\n".join(pages.values()))  # the text the browser shows
+    for field in ("note", "unsafe"):  # shown (an exclusion's detail and a round's reason: not)
+        assert TYPED[field] in shown, field

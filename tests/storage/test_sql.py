@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
-from sqlalchemy import create_engine, text
+from sqlalchemy import create_engine, make_url, text
 
 from gaitpref.storage import (
     NewEvent,
@@ -263,6 +263,74 @@ def test_postgres_password_is_masked(postgres_server: str) -> None:
     with pytest.raises(StorageConnectError) as err:
         open_storage(postgres_server.replace("gaitpref@", "gaitpref:secret@") + "/missing_db")
     assert "secret" not in str(err.value) and "***" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "url",
+    [
+        "postgresql://lab:pw1@h/db?sslmode=require&sslpassword=k3ypass",
+        "postgresql://lab@h/db?sslpassword=k3ypass",
+        "postgresql://lab@h/db?password=pw1&sslpassword=k3ypass",
+        "postgresql://lab@h/db?SSLPassword=k3ypass",  # libpq refuses it, and said so with the URL
+        "postgresql://lab@h/db?oauth_client_secret=k3ypass",  # libpq 18
+        "postgresql://lab@h/db?sslpassword=k3ypass&sslpassword=again",
+        "postgresql://lab:pw1@h:notaport/db?sslpassword=k3ypass",  # not parsed
+    ],
+)
+def test_every_secret_parameter_is_masked(url: str) -> None:
+    """The client key's password (``sslpassword``) was shown wherever a URL is printed; the
+    one helper masks every secret libpq takes, for every caller."""
+    from gaitpref.storage.sql import masked_url
+
+    shown = masked_url(url)
+    assert "k3ypass" not in shown and "again" not in shown and "pw1" not in shown, shown
+    assert "=***" in shown and "lab" in shown
+    if "notaport" not in url:
+        with pytest.raises(StorageConnectError) as err:  # the driver is not installed: named
+            SQLStorage(url.replace("postgresql:", "postgresql+nodriver:"))
+        assert "k3ypass" not in str(err.value) and "pw1" not in str(err.value), err.value
+    assert masked_url("postgresql://lab@h/db?sslmode=require") == (
+        "postgresql://lab@h/db?sslmode=require"
+    )
+
+
+@pytest.mark.parametrize("password", ["Zq/Xw", "Zq?Xw", "Zq#Xw", "Zq@Xw", "Zq:Xw", "Zq=Xw"])
+@pytest.mark.parametrize("port", ["5432", "notaport"])
+def test_a_password_typed_unencoded_is_masked_whole(password: str, port: str) -> None:
+    """A URL that does not parse (a port that is not a number) was printed whole when its
+    password held a '/'; one with an '@' in it parsed as a host "ss@h", printed with half the
+    password, by the URL and by the driver's "failed to resolve host" (now refused before);
+    password "Zq@Xw" leaked "Xw"."""
+    from gaitpref.storage.sql import masked_url
+
+    url = f"postgresql://lab:{password}@nohost.invalid:{port}/db?sslmode=require"
+    shown = masked_url(url)
+    assert "Zq" not in shown and "Xw" not in shown, shown
+    assert shown.startswith("postgresql://lab:***@nohost.invalid:"), shown
+    assert shown.endswith("/db?sslmode=require"), shown
+    with pytest.raises(StorageError) as err:  # refused, or the host does not resolve
+        SQLStorage(url)
+    text = str(err.value)
+    assert "Zq" not in text and "Xw" not in text, text
+
+
+@pytest.mark.postgres
+@pytest.mark.parametrize("where", ["missing_db", "port", "host"])
+def test_postgres_connection_errors_show_no_secret(postgres_server: str, where: str) -> None:
+    """The real server's and psycopg's messages, for a database that does not exist, a port
+    nothing listens on and a host that does not resolve: no password, no client key's password."""
+    url = postgres_server.replace("gaitpref@", "gaitpref:pw1@") + "/gaitpref"
+    if where == "missing_db":
+        url = url.rsplit("/", 1)[0] + "/missing_db"
+    elif where == "port":
+        url = url.replace(f":{make_url(url).port}/", ":1/")
+    else:
+        url = url.replace(f"@{make_url(url).host}", "@no-such-host.invalid")
+    url += "?sslpassword=k3ypass&connect_timeout=5"
+    with pytest.raises(StorageError) as err:
+        open_storage(url)
+    text = str(err.value)
+    assert "pw1" not in text and "k3ypass" not in text and "sslpassword=***" in text, text
 
 
 @pytest.mark.parametrize(

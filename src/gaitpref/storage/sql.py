@@ -22,6 +22,7 @@ import contextlib
 import functools
 import json
 import os
+import re
 import sqlite3
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -97,6 +98,14 @@ def parse_url(url: str) -> URL:
             "sqlite:///gaitpref.db or "
             "postgresql+psycopg://user@host:5432/dbname)"
         ) from None
+    if parsed.host is not None and "@" in parsed.host:
+        # a password with an unencoded @ ("p@ss"): the URL reads as password "p", host "ss@h",
+        # and the host (half the password) was printed, by the URL and the driver's error
+        raise StorageConnectError(
+            f"{_unparsed_masked(url)!r} has more than one @ before its host: a password or "
+            "user name with an @ in it is URL-encoded, %40 for @ (and %3A for :, %2F for /, "
+            "%3F for ?, %23 for #, %25 for %, %20 for a space)"
+        )
     if parsed.drivername in ("postgresql", "postgres"):
         parsed = parsed.set(drivername="postgresql+psycopg")
     if parsed.get_backend_name() not in ("sqlite", "postgresql"):
@@ -120,22 +129,41 @@ def parse_url(url: str) -> URL:
 _TURN_SPACE = 0x67616974
 
 
+#: libpq connection parameters whose values are secrets: the server password, the client key's
+#: password (``sslpassword``) and an OAuth client's secret (libpq 18); the others are names,
+#: modes and paths (``passfile``, ``sslkey``: the files, not what they hold). Never printed, never
+#: in the pg_dump command; matched in any case (libpq refuses ``?SSLPassword=``, and the error
+#: printed the URL with it)
+SECRET_PARAMETERS = ("password", "sslpassword", "oauth_client_secret")
+
+
+def _secret_keys(url: URL) -> list[str]:
+    """The keys of ``url``'s parameters that hold a secret (see ``SECRET_PARAMETERS``)."""
+    return [key for key in url.query if key.lower() in SECRET_PARAMETERS]
+
+
 def _masked(url: URL) -> str:
-    """``url`` to print: its password as ``***``, that of a ``?password=`` parameter too
-    (libpq takes one there, and it was printed whole)."""
-    if "password" not in url.query:
+    """``url`` to print: its password as ``***``, the value of every secret parameter too
+    (``?password=``, ``?sslpassword=``: libpq takes them there, and they were printed whole)."""
+    keys = _secret_keys(url)
+    if not keys:
         return url.render_as_string(hide_password=True)
-    hidden = url.update_query_dict({"password": "***"}).render_as_string(hide_password=True)
-    return hidden.replace("password=%2A%2A%2A", "password=***")
+    hidden = url.update_query_dict(dict.fromkeys(keys, "***")).render_as_string(hide_password=True)
+    for key in keys:
+        hidden = hidden.replace(f"{key}=%2A%2A%2A", f"{key}=***")
+    return hidden
 
 
 def masked_url(url: str) -> str:
-    """``url`` to print: its password (if any) shown as ``***``, whether it parses or not."""
+    """``url`` to print: its password and secret parameters (if any) shown as ``***``, whether
+    it parses or not."""
     try:
         parsed = make_url(url)
     except (ArgumentError, ValueError):
         return _unparsed_masked(url)
-    return _masked(parsed) if _has_password(parsed) else url
+    if parsed.host is not None and "@" in parsed.host:  # "p@ss" unencoded: "ss@" in the host
+        return _unparsed_masked(url)
+    return _masked(parsed) if parsed.password is not None or _secret_keys(parsed) else url
 
 
 def _has_password(url: URL) -> bool:
@@ -143,19 +171,29 @@ def _has_password(url: URL) -> bool:
     return url.password is not None or "password" in url.query
 
 
+_SECRET_PARAMETER = re.compile(
+    r"([?&](?:" + "|".join(SECRET_PARAMETERS) + r")=)[^&#]*", flags=re.IGNORECASE
+)
+
+
 def _unparsed_masked(url: str) -> str:
     """``url``, which could not be parsed, with what may be a password (between ``user:`` and
-    the last ``@`` of its authority) shown as ``***``: a URL with a port that is not a number
-    was printed whole, password and all."""
+    the last ``@`` of its authority) and the values of its secret parameters shown as ``***``: a
+    URL with a port that is not a number was printed whole, password and all."""
     scheme, sep, rest = url.partition("://")
     if not sep:
         return url
-    authority, slash, path = rest.partition("/")
-    userinfo, at, host = authority.rpartition("@")
-    if not at or ":" not in userinfo:
-        return url
+    rest = _SECRET_PARAMETER.sub(r"\1***", rest)
+    # the authority ends at the last @ before the parameters (the first = after a ?): a password
+    # typed as it is may hold / ? # @ (a '/' in it printed it whole)
+    question = rest.find("?")
+    equals = rest.find("=", question) if question >= 0 else -1
+    at = rest.rfind("@", 0, equals if equals >= 0 else len(rest))
+    userinfo, host_and_path = rest[: max(at, 0)], rest[at + 1 :]
+    if at < 0 or ":" not in userinfo:
+        return f"{scheme}://{rest}"
     user = userinfo.split(":", 1)[0]
-    return f"{scheme}://{user}:***@{host}{slash}{path}"
+    return f"{scheme}://{user}:***@{host_and_path}"
 
 
 class SQLStorage(CheckedCreation):
@@ -707,9 +745,9 @@ def _pg_dump_hint(url: URL, out: Path) -> str:
         parts.append(f"--username={shlex.quote(url.username)}")
     # the URL's other libpq parameters (?sslmode=require&sslrootcert=...) were left out, and
     # pg_dump has no flag for most: the database is then a conninfo string that carries them
-    # (its values override nothing the flags give); the password is never among them, nor the
-    # client key's (sslpassword: libpq asks for it when it is not given)
-    secrets = ("password", "sslpassword")
+    # (its values override nothing the flags give); no secret is among them (SECRET_PARAMETERS:
+    # the password, the client key's, which libpq asks for when it is not given)
+    secrets = _secret_keys(url)
     extra = {k: v for k, v in url.query.items() if k not in ("host", "port", *secrets)}
     if extra:
         pairs = {"dbname": url.database or "", **extra}
