@@ -451,3 +451,11 @@ def test_a_refused_subject_code_is_named_in_a_short_message(code: object) -> Non
     with pytest.raises(StorageError, match="subject code") as refused:
         check_subject(code)
     assert len(str(refused.value)) < 200
+
+
+def test_a_host_that_does_not_resolve_is_a_connection_error() -> None:
+    """libpq's "failed to resolve host" has no "connect" in it, so it was reported as a failed
+    statement (StorageFailureError) rather than a server that cannot be reached."""
+    url = "postgresql+psycopg://u@no-such-host.invalid/db?connect_timeout=5"
+    with pytest.raises(StorageConnectError, match=r"cannot connect to .*no-such-host\.invalid"):
+        open_storage(url)

@@ -495,7 +495,7 @@ class SQLStorage(CheckedCreation):
                 "damaged outside gaitpref: restore it from a backup"
             ) from None
         except DBAPIError as exc:
-            if exc.connection_invalidated or "connect" in str(exc.orig).lower():
+            if exc.connection_invalidated or _unreachable(str(exc.orig)):
                 raise StorageConnectError(f"cannot connect to {self.url}: {_reason(exc)}") from None
             said = f"{self.url}: {_reason(exc)}{_hint(self._file, exc)}"
             if isinstance(exc, DatabaseError):  # OperationalError (disk I/O, locked, ...) too
@@ -505,6 +505,17 @@ class SQLStorage(CheckedCreation):
                 unwritten = "; nothing was written" if writing else ""
                 raise StorageFailureError(said + unwritten) from None
             raise StorageError(said) from None
+
+
+#: what the driver says when no connection could be made at all: a refused or lost connection,
+#: and a host name that does not resolve (libpq 16+: "failed to resolve host"; earlier: "could
+#: not translate host name"), which was reported as a failed statement
+_UNREACHABLE = ("connect", "resolve host", "translate host name")
+
+
+def _unreachable(message: str) -> bool:
+    said = message.lower()
+    return any(words in said for words in _UNREACHABLE)
 
 
 def upgrade_database(url: str) -> str:
