@@ -149,6 +149,9 @@ def test_withdrawing_an_answered_or_missing_round_is_refused_naming_it(drive: Dr
         s.withdraw_validation(1, "bad\x1b[2J")
     with pytest.raises(SessionStateError, match=r"never started \(round 1 is open"):
         s.withdraw_validation(2, "why")
+    # True == 1, but it is no round number (it said "it was withdrawn (round 1 is open)")
+    with pytest.raises(SessionStateError, match="True is not open: a round is a whole number"):
+        s.withdraw_validation(True, "why")
     with pytest.raises(SessionStateError, match="opened by the operator, not by the \\[stop\\]"):
         s.withdraw_validation(1, "why", undo=True)
     with pytest.raises(SessionStateError, match="opened by the operator"):

@@ -203,6 +203,8 @@ class SessionState:
 
     def _not_open(self, round_: object) -> str:
         """Why validation round ``round_`` is not open (for a refusal naming the problem)."""
+        if isinstance(round_, bool) or not isinstance(round_, int):  # True == 1: not a round
+            return f"validation round {round_!r} is not open: a round is a whole number"
         found = [r for r in self.rounds if r.plan.round == round_]
         current = self.open_round
         now = "none is open" if current is None else f"round {current.plan.round} is open"
