@@ -27,6 +27,12 @@ def client(db_url: str) -> Iterator[TestClient]:
         yield c
 
 
+def keys_ready(page: Any) -> None:
+    """Waits (bounded) for a freshly loaded page to take its shortcut keys: until they have
+    rested a moment after the load, Enter and the letter and digit keys do nothing."""
+    page.wait_for_selector("html[data-keys=ready]", state="attached")
+
+
 @pytest.fixture(scope="module")
 def chromium() -> Iterator[Any]:
     """Debian's Chromium through Playwright (skips, or fails under CI=true, without it)."""

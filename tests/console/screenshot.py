@@ -63,6 +63,7 @@ def main() -> None:
             page = browser.new_page(viewport={"width": 1366, "height": 1024}, device_scale_factor=1)
             page.goto(f"{base}/sessions/{sid}")
             page.wait_for_function("document.getElementById('posterior').naturalWidth > 0")
+            page.wait_for_selector("html[data-keys=ready]", state="attached")  # keys taken
             page.keyboard.press("1")  # this one
             page.keyboard.press("w")  # step length: slightly longer
             page.mouse.move(0, 0)

@@ -13,6 +13,8 @@ from typing import Any
 import httpx
 import pytest
 
+from tests.console.conftest import keys_ready
+
 pytestmark = pytest.mark.browser
 
 
@@ -44,6 +46,7 @@ def answer_by_keys(page: Any, trial: int, keys: str) -> None:
     suggestion's letter."""
     if asks_nothing(page):
         keys = keys[1:]
+    keys_ready(page)
     for key in keys:
         page.keyboard.press(key)
     page.keyboard.press("Enter")  # review
@@ -67,6 +70,7 @@ def test_a_whole_session_in_the_browser(chromium: Any, live: str, tmp_path: Path
     # trial 1 has nothing to compare with yet: a suggestion only
     answer_by_clicks(page, 1, None, "slightly longer")
     # a comparison must be answered before the review opens
+    keys_ready(page)
     page.keyboard.press("Enter")
     assert page.is_visible("#hint") and not page.is_visible("#confirm-dialog")
     nothing_asked = []
@@ -84,6 +88,7 @@ def test_a_whole_session_in_the_browser(chromium: Any, live: str, tmp_path: Path
     assert nothing_asked == [3, 6]
 
     # undo the last answer with its shortcut, then answer trial 10 again
+    keys_ready(page)
     page.keyboard.press("u")
     page.wait_for_selector("#confirm-dialog[open]")
     page.keyboard.press("Enter")
@@ -99,6 +104,7 @@ def test_a_whole_session_in_the_browser(chromium: Any, live: str, tmp_path: Path
     page.click("#validation-link")
     page.click("#start-validation")
     page.wait_for_selector("#ranking-form")
+    keys_ready(page)
     for key in ("b", "a", "c"):
         page.keyboard.press(key)
     assert page.input_value("#rank1") == "B" and page.input_value("#rank3") == "C"
@@ -136,6 +142,7 @@ def test_two_tabs_answering_the_same_query_keep_one_answer(chromium: Any, live: 
         page.goto(f"{live}/sessions/{sid}")
         page.wait_for_selector("text=Run now: trial 2")
     answer_by_keys(first, 2, "1")
+    keys_ready(second)
     for key in ("2", "Enter"):
         second.keyboard.press(key)
     second.wait_for_selector("#confirm-dialog[open]")

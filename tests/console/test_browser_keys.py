@@ -12,6 +12,7 @@ import httpx
 import pytest
 
 from gaitpref.console.trial_page import RECENT_TRIALS
+from tests.console.conftest import keys_ready
 from tests.console.test_ratings_safety import rated_config
 
 pytestmark = pytest.mark.browser
@@ -43,6 +44,8 @@ def open_page(chromium: Any, url: str, **options: Any) -> tuple[Any, Any, list[s
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     page.goto(url)
+    if options.get("java_script_enabled", True):
+        keys_ready(page)
     return context, page, errors
 
 
@@ -62,6 +65,7 @@ def test_a_held_enter_reviews_but_never_confirms(chromium: Any, live: str) -> No
     # a fresh press confirms: one answer
     page.keyboard.press("Enter")
     page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    keys_ready(page)
     # a held digit is one choice; a held U opens the undo's review and undoes nothing
     page.keyboard.down("u")
     page.wait_for_selector("#confirm-dialog[open]")
@@ -86,6 +90,7 @@ def test_flag_unsafe_by_tab_and_enter_while_typing_fires_no_shortcut(
         page.keyboard.press(key)
         page.wait_for_timeout(50)
     page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    keys_ready(page)
     # Enter on the focused "Flag trial 1 unsafe" opens it (and does not review the answer)
     page.focus("#unsafe-last summary")
     page.keyboard.press("Enter")
@@ -108,6 +113,7 @@ def test_flag_unsafe_by_tab_and_enter_while_typing_fires_no_shortcut(
     page.wait_for_selector("#flash:has-text('Trial 1 flagged unsafe')")
     info = httpx.get(f"{live}/api/sessions/{sid}").json()
     assert info["unsafe"] == {"1": "knee went 12 deg past; queue a rest, mum"}
+    keys_ready(page)
     # the note: typed text is no shortcut either, Esc leaves it and the keys work again
     page.keyboard.press("m")
     page.keyboard.type("1 2 0 u")
@@ -133,6 +139,7 @@ def test_n_opens_the_last_trials_flag_which_still_takes_a_reason_and_the_confirm
     # the button shows its key (a flex item of its own: on a line of its own in innerText)
     assert " ".join(page.inner_text("#unsafe-last summary").split()) == "Flag trial 1 unsafe N"
     assert "N flag trial 1 unsafe" in (page.text_content("details.shortcuts ul") or "")
+    keys_ready(page)
     # N while typing in a field is a letter: the note takes it, the flag stays shut
     page.keyboard.press("m")
     page.keyboard.type("no need")
@@ -166,6 +173,7 @@ def test_n_opens_the_last_trials_flag_which_still_takes_a_reason_and_the_confirm
     # the last trial is flagged: no button, no key listed, N does nothing
     assert page.locator("#unsafe-last").count() == 0
     assert "flag trial" not in (page.text_content("details.shortcuts ul") or "")
+    keys_ready(page)
     page.keyboard.press("n")
     page.wait_for_timeout(100)
     assert not page.is_visible("#confirm-dialog")
@@ -232,6 +240,7 @@ def test_every_control_is_named_and_the_figure_described(chromium: Any, live: st
     page.goto(f"{live}/sessions/{sid}/validation")
     page.click("#start-validation")
     page.wait_for_selector("#ranking-form")
+    keys_ready(page)
     assert page.evaluate(UNNAMED) == []
     # picked by clicks, then Enter on the focused pick button reviews the ranking (as documented)
     for label in ("B", "A", "C"):
@@ -297,6 +306,7 @@ def test_the_row_the_keys_answer_and_a_missing_one_are_seen_from_afar(
     for key in ("Enter", "Enter"):
         page.keyboard.press(key)
     page.wait_for_selector("#flash:has-text('Saved: trial 1.')")
+    keys_ready(page)
     group = "fieldset[data-kind=comparison]"
     style = "(el) => [getComputedStyle(el).borderTopColor, getComputedStyle(el).backgroundColor, "
     style += "getComputedStyle(el).borderTopStyle]"
@@ -378,5 +388,79 @@ def test_an_old_trial_is_excluded_from_the_list_of_every_trial(chromium: Any, li
     page.click("#recent-trials")
     page.wait_for_selector("#all-trials")
     assert page.locator("#chronology tr[data-trial]").count() == RECENT_TRIALS
+    assert errors == []
+    context.close()
+
+
+def test_rapid_enters_across_a_save_never_answer_the_next_page(chromium: Any, live: str) -> None:
+    """exo-1d-step-length asks no comparison at trial 3 (n = 1, b = 1): an empty answer is
+    valid there. Enters pressed quickly on after trial 2's confirm, across the post and its
+    redirect, land on the freshly loaded page: they review and confirm nothing, so trial 3,
+    never walked, is not saved; a deliberate press once the page is ready still works."""
+    sid = httpx.post(
+        f"{live}/api/sessions", json={"config": "exo-1d-step-length", "subject": "S09"}
+    )
+    sid = sid.json()["id"]
+    q = httpx.get(f"{live}/api/sessions/{sid}/query").json()
+    assert q["comparisons"] == []  # trial 1, by the API
+    body = {"query_id": q["query_id"], "comparisons": []}
+    assert httpx.post(f"{live}/api/sessions/{sid}/answers", json=body).status_code == 200
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")  # keys ready
+    assert page.locator("fieldset[data-kind=comparison]").count() == 1
+    page.keyboard.press("1")
+    # review, confirm, then on pressing: the next page loads among these presses
+    for gap in (40, 30, 60, 30, 80, 30, 50, 30, 70, 30, 40, 60, 30, 50, 30, 40):
+        page.keyboard.press("Enter")
+        page.wait_for_timeout(gap)
+    page.wait_for_selector("#flash:has-text('Saved: trial 2.')")
+    assert page.locator("fieldset[data-kind=comparison]").count() == 0  # trial 3: none asked
+    keys_ready(page)
+    page.wait_for_timeout(200)  # a post the presses started would have landed by now
+    assert [t["trial"] for t in trials(live, sid)] == [1, 2]
+    assert "Saved: trial 2." in page.inner_text("#flash")
+    assert not page.is_visible("#confirm-dialog")
+    # a press after the guard: the review, and a fresh press confirms
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#flash:has-text('Saved: trial 3.')")
+    assert [t["trial"] for t in trials(live, sid)] == [1, 2, 3]
+    assert errors == []
+    context.close()
+
+
+def test_an_enter_held_across_a_save_never_confirms_the_next_pages_review(
+    chromium: Any, live: str
+) -> None:
+    """Enter held down from trial 2's confirm: on the next page (trial 3, no comparison asked)
+    its repeats neither open the review nor confirm one opened by a click."""
+    sid = httpx.post(
+        f"{live}/api/sessions", json={"config": "exo-1d-step-length", "subject": "S10"}
+    )
+    sid = sid.json()["id"]
+    q = httpx.get(f"{live}/api/sessions/{sid}/query").json()
+    body = {"query_id": q["query_id"], "comparisons": []}
+    assert httpx.post(f"{live}/api/sessions/{sid}/answers", json=body).status_code == 200
+    context, page, errors = open_page(chromium, f"{live}/sessions/{sid}")
+    page.keyboard.press("1")
+    page.keyboard.press("Enter")
+    page.wait_for_selector("#confirm-dialog[open]")
+    page.keyboard.down("Enter")  # confirms, and stays down
+    page.wait_for_selector("#flash:has-text('Saved: trial 2.')")
+    page.keyboard.down("Enter")  # its repeats, on the new page
+    assert not page.is_visible("#confirm-dialog")
+    page.click("#review")  # the review, opened by a click while Enter is still down
+    page.wait_for_selector("#confirm-dialog[open]")
+    for _ in range(3):
+        page.keyboard.down("Enter")
+        page.wait_for_timeout(40)
+    page.keyboard.up("Enter")
+    keys_ready(page)
+    page.wait_for_timeout(200)  # a post the repeats started would have landed by now
+    assert page.is_visible("#confirm-dialog")
+    assert [t["trial"] for t in trials(live, sid)] == [1, 2]
+    page.keyboard.press("Enter")  # a fresh press confirms
+    page.wait_for_selector("#flash:has-text('Saved: trial 3.')")
+    assert [t["trial"] for t in trials(live, sid)] == [1, 2, 3]
     assert errors == []
     context.close()

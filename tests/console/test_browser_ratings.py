@@ -15,6 +15,7 @@ import pytest
 
 from gaitpref.config import parse_config
 from gaitpref.loop.safety import near
+from tests.console.conftest import keys_ready
 from tests.console.test_first_hour import LAYOUT_PROBLEMS
 from tests.console.test_ratings_safety import rated_config
 
@@ -48,6 +49,7 @@ def test_ratings_an_unsafe_flag_and_the_export(chromium: Any, live: str, tmp_pat
     review_and_confirm(page, "Saved: trial 1.")
     # trial 2: "1" answers the comparison, then "4" rates the gait "good" (shown on its button)
     assert page.inner_text("fieldset[data-kind=rating] label.choice:has-text('good') kbd") == "4"
+    keys_ready(page)
     for key in ("1", "4", "Enter"):
         page.keyboard.press(key)
     page.wait_for_selector("#confirm-dialog[open]")
@@ -59,6 +61,7 @@ def test_ratings_an_unsafe_flag_and_the_export(chromium: Any, live: str, tmp_pat
     assert page.locator("fieldset[data-kind=comparison]").count() == 0
     assert "Not asked: trial 3 (" in page.inner_text(".not-asked")
     assert "are the same gait: nothing to compare" in page.inner_text(".not-asked")
+    keys_ready(page)
     page.keyboard.press("Enter")
     page.wait_for_selector("#confirm-dialog[open]")
     page.keyboard.press("Enter")
@@ -88,6 +91,7 @@ def test_ratings_an_unsafe_flag_and_the_export(chromium: Any, live: str, tmp_pat
     # withdraw it
     page.click("tr[data-trial='2'] .withdraw-form button")
     page.wait_for_selector("#confirm-dialog[open]")
+    keys_ready(page)
     page.keyboard.press("Enter")
     page.wait_for_selector("#flash:has-text('flag of trial 2 was withdrawn')")
     assert httpx.get(f"{live}/api/sessions/{sid}").json()["unsafe"] == {}

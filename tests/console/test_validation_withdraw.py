@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 from gaitpref import Session
 from gaitpref.config import load_config, parse_config
 from gaitpref.sessions.demo import SimulatedSubject, bump_utility
-from tests.console.conftest import answer_once, new_session
+from tests.console.conftest import answer_once, keys_ready, new_session
 from tests.console.htmlforms import forms_of
 from tests.console.test_pages import post
 
@@ -146,6 +146,7 @@ def test_enter_on_the_withdraw_forms_controls_never_records_a_ranking(
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
     page.goto(f"{live}/sessions/{sid}/validation")
+    keys_ready(page)
     for key in "ABC":
         page.keyboard.press(key)
     assert [page.input_value(f"#rank{k}") for k in (1, 2, 3)] == ["A", "B", "C"]
@@ -161,6 +162,7 @@ def test_enter_on_the_withdraw_forms_controls_never_records_a_ranking(
     page.fill("#withdraw-round-form input[name=reason]", "mis-keyed")
     page.check("#withdraw-undo")
     page.focus("#withdraw-round")
+    keys_ready(page)
     page.keyboard.press("Enter")  # the button's own form: withdraw, after its confirm page
     page.wait_for_selector("text=Withdraw this validation round?")
     with Session.open(url, sid) as s:

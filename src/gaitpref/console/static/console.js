@@ -235,9 +235,31 @@
   }
   document.addEventListener("keyup", (event) => { if (event.code === flagHeld) flagHeld = null; });
 
+  // a freshly loaded page takes no shortcut until the keys have rested GUARD_MS: Enters pressed
+  // quickly on after a confirm land on the next page when it loads among them, and there (a
+  // query that asks no comparison may be saved empty) they would review and confirm a trial
+  // never walked. Until then Enter, Backspace and the letter and digit keys outside a text field
+  // do nothing (not even the browser's Enter on a focused button) and each such press starts
+  // the wait again; an open review is not confirmed; text fields type as ever. The page says
+  // when its keys are live: <html data-keys="ready">
+  const GUARD_MS = 500;
+  let settled = false;
+  let guard = 0;
+  function rest() {
+    clearTimeout(guard);
+    guard = setTimeout(() => { settled = true; document.documentElement.dataset.keys = "ready"; }, GUARD_MS);
+  }
+  rest();
+
   document.addEventListener("keydown", (event) => {
     if (flagHeld !== null && event.code === flagHeld && event.repeat) { event.preventDefault(); return; }
     if (event.ctrlKey || event.metaKey || event.altKey) return;
+    if (!settled && (event.key === "Enter" || event.key === "Backspace" || event.key.length === 1)
+        && ((dialog && dialog.open) || !typing(event.target))) {
+      event.preventDefault();
+      rest();
+      return;
+    }
     if (dialog && dialog.open) {
       const onBack = document.activeElement && document.activeElement.hasAttribute("data-confirm-no");
       // a held Enter repeats: the repeats never confirm (nor click the focused Confirm)
