@@ -24,11 +24,20 @@ into another database.  After every step it checks that
 and on reopening and on import that the copy equals the live session: the same posterior mean
 (exactly, as ``test_replay.py`` compares it step by step), pending query and its points, trials,
 answers of every kind, flags, notes, validation rounds, status, generator state and confidence;
-an import also carries every event.  About 20-40 s on two cores.
+an import also carries every event, and both say the same ``recommended()`` and
+``no_recommendation()``.  About 20-40 s on two cores.
+
+A second machine (:class:`LineSessionMachine`) drives the same operator on the line path:
+continuous features proposed a few points at a time along LineCoSpar lines (coactive
+suggestions steer them, ratings and a region of avoidance apply), and gaits made on demand by
+the tests' stand-in generator (``tests/sessions/gaitkit.py``'s ``FakeSteps``, which has no gait
+for short steps).  ``GAITPREF_STATEFUL_EXAMPLES`` sets its number of examples (6 on CI) for a
+longer hunt.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 import tempfile
 from datetime import datetime
@@ -56,6 +65,7 @@ from gaitpref.feedback import OUTCOMES, Rating, Suggestion
 from gaitpref.loop.safety import near
 from gaitpref.sessions import REASONS, SessionQuery, export_session, import_session
 from gaitpref.space import MOVES
+from tests.sessions.gaitkit import CONTINUOUS
 
 #: a 5 x 4 grid, two actions a query and one buffered, ratings with a region of avoidance (the
 #: risk rule with the cautious level: the defaults) and a gait declared safe, unsafe flags with a
@@ -137,6 +147,53 @@ samples = 100
 """
 )
 
+#: the line path (continuous step length and duration, LineCoSpar lines of few points, one
+#: line a query), one action a query and one buffered, coactive suggestions, ratings with a
+#: region of avoidance (the risk rule and the cautious level), unsafe flags with a radius
+LINE = parse_config(
+    """
+name = "stateful-line"
+[space.step_length]
+min = 0.08
+max = 0.18
+unit = "m"
+coactive = [0.1, 0.3]
+[space.step_duration]
+min = 0.85
+max = 1.15
+unit = "s"
+coactive = [0.1, 0.3]
+[model]
+lengthscale = { step_length = 0.03, step_duration = 0.08 }
+signal_variance = 0.005
+noise = 0.02
+jitter = 1e-6
+fit = "fixed"
+[cospar]
+n = 1
+buffer = 1
+strategy = "self-sparring"
+line_points = 4
+line_count = 1
+line_direction = "coactive"
+[feedback.rating]
+labels = ["very bad", "bad", "okay", "good"]
+[safety]
+avoid = ["very bad"]
+unsafe_radius = 0.1
+[stop]
+samples = 100
+"""
+)
+
+#: gaits on demand on the line path, made by the tests' stand-in generator (``FakeSteps``:
+#: no gait under a step length of 0.3), with ratings and a region of avoidance
+DEMAND = parse_config(
+    CONTINUOUS.replace("line_points = 12\n", "line_points = 4\nline_count = 1\nn = 1\nbuffer = 1\n")
+    + '[feedback.rating]\nlabels = ["bad", "okay", "good"]\n[safety]\navoid = ["bad"]\n'
+    + "unsafe_radius = 0.1\n[stop]\nsamples = 100\n"
+)
+
 EventKey = tuple[int, str, int, dict[str, Any], datetime]
 
 
@@ -205,7 +262,7 @@ class SessionMachine(RuleBasedStateMachine):
     # -- helpers -------------------------------------------------------------------------------
     def _banned(self) -> NDArray[np.bool_]:
         flagged = {action for action, _ in self.s.unsafe_flags().values()}
-        space = self.s.config.space
+        space = self.s.space  # the line path's grows with every line
         if not flagged:
             return np.zeros(len(space), dtype=bool)
         return near(space, flagged, self.s.config.safety.unsafe_radius)
@@ -257,15 +314,11 @@ class SessionMachine(RuleBasedStateMachine):
         assert len(self.s.events()) == before == self.s.last_seq, "a refused call wrote events"
 
     # -- rules ---------------------------------------------------------------------------------
-    @initialize(
-        config=st.sampled_from([PAIRS, SINGLES]),
-        seed=st.integers(0, 2**16),
-        answers=st.integers(0, 6),
-        data=st.data(),
-    )
-    def create(
-        self, config: ExperimentConfig, seed: int, answers: int, data: st.DataObject
-    ) -> None:
+    CONFIGS: tuple[ExperimentConfig, ...] = (PAIRS, SINGLES)
+
+    @initialize(seed=st.integers(0, 2**16), answers=st.integers(0, 6), data=st.data())
+    def create(self, seed: int, answers: int, data: st.DataObject) -> None:
+        config = data.draw(st.sampled_from(self.CONFIGS), label="config")
         self.session = Session.create(self.url, config, "S01", seed=seed)
         for _ in range(answers):
             self._answer(data)
@@ -563,6 +616,8 @@ def _same(copy: Session, live: Session) -> None:
         except NoSafeGaitError:
             sure.append(None)
     assert sure[0] == sure[1]
+    assert copy.recommended() == live.recommended()
+    assert copy.no_recommendation() == live.no_recommendation()
 
 
 SessionMachine.TestCase.settings = settings(
@@ -572,3 +627,19 @@ SessionMachine.TestCase.settings = settings(
     suppress_health_check=[HealthCheck.too_slow],
 )
 test_session_machine = SessionMachine.TestCase
+
+
+class LineSessionMachine(SessionMachine):
+    """The same operator on the line path: continuous features (the space grows by a line a
+    query), and gaits made on demand by the stand-in generator."""
+
+    CONFIGS = (LINE, DEMAND)
+
+
+LineSessionMachine.TestCase.settings = settings(
+    max_examples=int(os.environ.get("GAITPREF_STATEFUL_EXAMPLES", "6")),
+    stateful_step_count=15,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+test_line_session_machine = LineSessionMachine.TestCase
