@@ -467,7 +467,8 @@ class SessionMachine(RuleBasedStateMachine):
         try:
             sure = self.s.confidence()
         except NoSafeGaitError:  # every gait avoided, or (gaits on demand) every gait made
-            assert self.s.no_recommendation() is not None and self.s.recommended() is None
+            assert self.s.recommended() is None  # no reason on the line path with no point yet
+            assert self.s.no_recommendation() is not None or not len(self.s.space)
             return
         assert allowed is None or allowed[sure.recommended]
         assert self.s.no_recommendation() is None and self.s.recommended() == sure.recommended
