@@ -247,6 +247,8 @@ class Safety:
     def _known(self, bounds: _Bounds) -> tuple[BoolArray, BoolArray]:
         """The known-safe gaits and the ``risk`` rule's region (``cautious`` and ``risk`` set)."""
         assert self.cautious is not None and self.risk is not None
+        if not bounds.mean.size:  # the line path before its first query: no gait yet
+            return np.zeros(0, dtype=bool), np.zeros(0, dtype=bool)
         known = ~bounds.region(min(self.cautious * _unrated(bounds, self.avoid), self.risk))
         risky = bounds.region(self.risk)
         if self.start:  # declared safe: known-safe unless the ratings put them in the region

@@ -81,7 +81,7 @@ def _masks(state: SessionState) -> tuple[Mask | None, Mask | None, str | None]:
     """``loop.allowed()``, :func:`_made` and :func:`no_recommendation`'s reason (one
     ``allowed()``: the region of avoidance reads the posterior's variance)."""
     allowed = state.loop.allowed()
-    if allowed is not None and not allowed.any():
+    if allowed is not None and allowed.size and not allowed.any():  # size 0: no point yet
         return (
             allowed,
             None,
@@ -106,6 +106,8 @@ def session_confidence(state: SessionState, rule: StopRule) -> Confidence:
     (:func:`no_recommendation` says why)."""
     loop = state.loop
     allowed, made, why = _masks(state)
+    if why is None and not len(loop.space):
+        why = "the line path has no point before its first query"
     if why is not None:
         raise NoSafeGaitError(
             f"no gait may be recommended: {why}, so there is no confidence to state"

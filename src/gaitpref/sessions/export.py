@@ -487,7 +487,9 @@ def _tables(
 def _walked_gait(session: Session, action: int, walked: dict[str, Any]) -> str | None:
     """The gait id a trial was logged with (logs of 0.1.0 have none: the library's then)."""
     logged: str | None = walked.get("gait_id")
-    return logged if logged is not None else session.gait_id(action)
+    if logged is not None or (session.gait_ids is None and session.config.generator is None):
+        return logged  # no ids to look up: an undone line-path trial's point may be gone since
+    return session.gait_id(action)
 
 
 def _other_feedback(session: Session, at: dict[int, str]) -> dict[str, list[dict[str, Any]]]:
