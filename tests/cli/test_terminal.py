@@ -139,7 +139,8 @@ def test_x_states_the_confidence_after_the_flag_never_in_the_gait_about_to_be_fl
     sure = re.search(r"\n  \d+% that (\S+) is within", after)
     assert sure is not None, after
     assert sure.group(1) != flagged
-    assert sure.group(1) == gait_name(session, session.recommended())
+    best = session.recommended()
+    assert best is not None and sure.group(1) == gait_name(session, best)
     assert f"that {flagged} is" not in text
 
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
-from matplotlib.collections import PolyCollection, QuadMesh
+from matplotlib.collections import Collection, PolyCollection, QuadMesh
 from matplotlib.figure import Figure
-from matplotlib.patches import Ellipse
+from matplotlib.patches import Ellipse, Patch
 
 from gaitpref import Rating, Session
 from gaitpref.config import parse_config
@@ -125,7 +125,7 @@ def test_the_figure_shades_and_names_them(session: Session) -> None:
         legend = ax.get_legend()
         assert legend is not None
         proxy = legend.legend_handles[[t.get_text() for t in legend.texts].index(AVOID_LABEL)]
-        assert proxy is not None and proxy.get_hatch() == "//"
+        assert isinstance(proxy, Patch) and proxy.get_hatch() == "//"
     plt.close(fig)
 
 
@@ -137,7 +137,7 @@ def test_without_safety_nothing_is_shaded(session: Session) -> None:
 
 def _hatches(fig: Figure) -> set[str]:
     """Every hatch pattern drawn (the bands and cells; not the legend's proxies)."""
-    drawn = [c for ax in fig.axes for c in ax.collections]
+    drawn: list[Collection | Patch] = [c for ax in fig.axes for c in ax.collections]
     drawn += [p for ax in fig.axes for p in ax.patches]
     return {h for h in (d.get_hatch() for d in drawn) if h}
 
@@ -162,7 +162,7 @@ def test_the_session_figure_shades_and_marks_them_as_the_posterior_figure(
     ax = fig.axes[0]  # the posterior (1-D) or the heat map (2-D)
     flagged = [a for a, _ in session.unsafe_flags().values()]
     marks = [c for c in ax.collections if c.get_label() == FLAG_LABEL]
-    assert len(marks) == 1 and len(marks[0].get_offsets()) == len(flagged)
+    assert len(marks) == 1 and len(np.asarray(marks[0].get_offsets())) == len(flagged)
     if session.space.ndim == 1:
         assert _hatches(fig) == {AVOID_HATCH, NEAR_HATCH}
     else:

@@ -23,7 +23,7 @@ def test_the_confidence_table_repeats_what_was_stated_after_every_step(
     tmp_path: Path, drive: Drive
 ) -> None:
     s = Session.create(MemoryStorage(), CONFIG, "S07", seed=5)
-    stated = []
+    stated: list[tuple[int, int, int | None, float | None]] = []
     for _ in range(5):
         drive(s, 1)
         if preference_learned(s.posterior().mean):  # as the terminal and the console state it

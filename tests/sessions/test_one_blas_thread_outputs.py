@@ -24,7 +24,7 @@ from tests.sessions.sessionkit import CONFIG, Drive
 
 
 def _blas_threads() -> int:
-    return max(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+    return max(int(i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas")
 
 
 @pytest.fixture

@@ -34,7 +34,7 @@ runner = CliRunner()
 OLD = "0.12"  # the defaults before recommend = "made"
 
 
-def _drive(s: Session, stop: bool = False) -> list[object]:
+def _drive(s: Session, stop: bool = False) -> list[str | None]:
     """Three answers: each new gait preferred, then "longer" from the third (see the module)."""
     answered = []
     for k in range(3):
@@ -135,7 +135,9 @@ def test_the_export_table_and_the_stop_rule_read_the_made_gait() -> None:
         stopped = _drive(s)
         assert stopped[-1] is not None  # the rule opened blind validation at the third answer
         top = s.recommended()
-        assert top is not None and s.gait_made(top) is False and s.gait_name(top) in stopped[-1]
+        said = stopped[-1]
+        assert said is not None  # the rule opened blind validation at the third answer
+        assert top is not None and s.gait_made(top) is False and s.gait_name(top) in said
         last = s.confidence_history()[-1]
         assert last["action"] == top and last["made"] is False
 
@@ -146,7 +148,8 @@ def test_the_stop_rule_names_the_made_gait_and_validation_shows_it_as_max() -> N
         stopped = _drive(s)
         rec = s.recommended()
         assert rec is not None and s.gait_made(rec) is True
-        assert stopped[-1] is not None and s.gait_name(rec) in stopped[-1]
+        said = stopped[-1]
+        assert said is not None and s.gait_name(rec) in said
         started = [e for e in s.events() if e.kind == "validation_started"]
         assert len(started) == 1
         roles = {g["role"]: g["action"] for g in started[0].payload["gaits"]}

@@ -88,7 +88,8 @@ def test_a_rater_and_a_loop_of_different_scales_are_refused_before_any_trial(
 
 
 def _shares(rater: OrdinalRater) -> list[int]:
-    return np.bincount(rater.true_categories(), minlength=rater.categories + 1)[1:].tolist()
+    counts = np.bincount(rater.true_categories(), minlength=rater.categories + 1)[1:]
+    return [int(c) for c in counts]
 
 
 def test_a_flat_objective_is_rated_in_one_middle_category() -> None:
