@@ -27,3 +27,19 @@ def machine_description() -> dict[str, object]:
 
 def machine_markdown(info: dict[str, object]) -> str:
     return "\n".join(f"- {k}: {v}" for k, v in info.items())
+
+
+def machine_footer(what: str, seconds: float, load_before: float) -> list[str]:
+    """The closing lines of a result file: how long ``what`` took, the load before it, and the
+    machine (whose ``load_average_1min`` is the load at the end)."""
+    return [
+        "",
+        f"{what}: {seconds:.0f} s.  Load average (1 min) at the start: {load_before:.2f}; at "
+        "the end: below.  Timings on a shared two-core machine vary by a factor of 2-3 between "
+        "runs.",
+        "",
+        "Machine:",
+        "",
+        machine_markdown(machine_description()),
+        "",
+    ]

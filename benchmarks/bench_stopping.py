@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _machine import machine_description, machine_markdown
+from _machine import machine_footer
 from bench_large import _case
 
 import gaitpref.loop.stopping as stopping
@@ -117,15 +117,7 @@ def main() -> None:
     lines += [
         "",
         *PREVIOUS,
-        "",
-        f"Whole benchmark: {time.perf_counter() - started:.0f} s.  Load average (1 min) at the "
-        f"start: {load_before:.2f}; at the end: below.  Timings on a shared two-core machine "
-        "vary by a factor of 2-3 between runs.",
-        "",
-        "Machine:",
-        "",
-        machine_markdown(machine_description()),
-        "",
+        *machine_footer("Whole benchmark", time.perf_counter() - started, load_before),
     ]
     RESULT.write_text("\n".join(lines), encoding="utf-8")
 

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from _machine import machine_description, machine_markdown
+from _machine import machine_footer
 from bench_long import Subject, _drive, line_config
 
 import gaitpref.plots.session as figure_module
@@ -178,17 +178,7 @@ def main() -> None:
             f"{runs(t['True'][0])} | {runs(t['False'][0])} | {runs(t['True'][1])} | "
             f"{runs(t['False'][1])} |"
         )
-    lines += [
-        "",
-        f"Whole check: {time.perf_counter() - started:.0f} s.  Load average (1 min) at the "
-        f"start: {load_before:.2f}; at the end: below.  Timings on a shared two-core machine "
-        "vary by a factor of 2-3 between runs.",
-        "",
-        "Machine:",
-        "",
-        machine_markdown(machine_description()),
-        "",
-    ]
+    lines += machine_footer("Whole check", time.perf_counter() - started, load_before)
     RESULT.write_text("\n".join(lines), encoding="utf-8")
 
 
